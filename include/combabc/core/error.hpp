@@ -1,0 +1,45 @@
+#pragma once
+// Error channel for bad user input and configuration (see docs/architecture.md).
+// The algorithm's outcome goes in a Summary; broken invariants abort via COMBABC_CHECK.
+#include <stdexcept>
+#include <string>
+
+namespace combabc {
+
+// What went wrong, from the user's point of view. Each maps to a sysexits.h code so the CLI exits
+// with the conventional status.
+enum class ErrorKind {
+  kUsage,       // 64: bad command line
+  kData,        // 65: input data malformed (CSV, NaN, ...)
+  kNoInput,     // 66: input file missing or unreadable
+  kSoftware,    // 70: internal error, simulator crash
+  kCantCreate,  // 73: cannot create an output file
+  kIo,          // 74: I/O error while writing
+  kConfig,      // 78: configuration invalid
+};
+
+int ExitCode(ErrorKind kind);
+const char* ToString(ErrorKind kind);
+
+// A user-facing error. what() is one line: "file:line: field: message" with the parts that are
+// known (a missing file has no line; an Options field has no file).
+class Error : public std::runtime_error {
+ public:
+  Error(ErrorKind kind, std::string message, std::string file = {}, int line = 0,
+        std::string field = {});
+
+  ErrorKind kind() const { return kind_; }
+  const std::string& message() const { return message_; }
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  const std::string& field() const { return field_; }
+
+ private:
+  ErrorKind kind_;
+  std::string message_;
+  std::string file_;
+  int line_;
+  std::string field_;
+};
+
+}  // namespace combabc

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs every Debian package combabc needs to build, test and plot. Idempotent; run as root on
+# Debian 12. Nothing else is fetched: all dependencies come from Debian's archive.
+set -euo pipefail
+packages=(
+  g++ cmake ninja-build pkg-config git
+  libeigen3-dev          # dense/sparse linear algebra, LM fit (unsupported/NonLinearOptimization)
+  libtomlplusplus-dev    # TOML config parsing with line numbers
+  libcli11-dev           # command-line parsing
+  libsqlite3-dev sqlite3 # run history
+  libgtest-dev libgmock-dev libbenchmark-dev
+  clang-format clang-tidy
+  python3 python3-numpy python3-matplotlib  # report figures (Debian's python3, not a pyenv one)
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+echo "setup: all ${#packages[@]} packages present"
