@@ -3,7 +3,9 @@
 namespace combabc {
 namespace {
 
-std::string Format(const std::string& message, const std::string& file, int line,
+std::string Format(const std::string& message,
+                   const std::string& file,
+                   int line,
                    const std::string& field) {
   std::string out;
   if (!file.empty()) {
@@ -26,26 +28,40 @@ std::string Format(const std::string& message, const std::string& file, int line
 
 int ExitCode(ErrorKind kind) {
   switch (kind) {
-    case ErrorKind::kUsage: return 64;
-    case ErrorKind::kData: return 65;
-    case ErrorKind::kNoInput: return 66;
-    case ErrorKind::kSoftware: return 70;
-    case ErrorKind::kCantCreate: return 73;
-    case ErrorKind::kIo: return 74;
-    case ErrorKind::kConfig: return 78;
+    case ErrorKind::kUsage:
+      return 64;
+    case ErrorKind::kData:
+      return 65;
+    case ErrorKind::kNoInput:
+      return 66;
+    case ErrorKind::kSoftware:
+      return 70;
+    case ErrorKind::kCantCreate:
+      return 73;
+    case ErrorKind::kIo:
+      return 74;
+    case ErrorKind::kConfig:
+      return 78;
   }
   return 70;
 }
 
 const char* ToString(ErrorKind kind) {
   switch (kind) {
-    case ErrorKind::kUsage: return "usage error";
-    case ErrorKind::kData: return "data error";
-    case ErrorKind::kNoInput: return "input error";
-    case ErrorKind::kSoftware: return "internal error";
-    case ErrorKind::kCantCreate: return "cannot create output";
-    case ErrorKind::kIo: return "I/O error";
-    case ErrorKind::kConfig: return "config error";
+    case ErrorKind::kUsage:
+      return "usage error";
+    case ErrorKind::kData:
+      return "data error";
+    case ErrorKind::kNoInput:
+      return "input error";
+    case ErrorKind::kSoftware:
+      return "internal error";
+    case ErrorKind::kCantCreate:
+      return "cannot create output";
+    case ErrorKind::kIo:
+      return "I/O error";
+    case ErrorKind::kConfig:
+      return "config error";
   }
   return "error";
 }

@@ -58,7 +58,8 @@ void ThreadPool::WorkerLoop() {
   }
 }
 
-void ThreadPool::ParallelFor(std::size_t n, std::size_t chunk,
+void ThreadPool::ParallelFor(std::size_t n,
+                             std::size_t chunk,
                              const std::function<void(std::size_t, std::size_t)>& body) {
   if (n == 0) return;
   chunk = std::max<std::size_t>(1, chunk);

@@ -25,7 +25,10 @@ const char* ToString(ErrorKind kind);
 // known (a missing file has no line; an Options field has no file).
 class Error : public std::runtime_error {
  public:
-  Error(ErrorKind kind, std::string message, std::string file = {}, int line = 0,
+  Error(ErrorKind kind,
+        std::string message,
+        std::string file = {},
+        int line = 0,
         std::string field = {});
 
   ErrorKind kind() const { return kind_; }

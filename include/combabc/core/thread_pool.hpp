@@ -25,7 +25,8 @@ class ThreadPool {
   // Calls body(begin, end) over [0, n) split into chunks of at most `chunk` indices; blocks until
   // all are done. The first exception thrown by body is rethrown here (the rest of the loop is
   // still drained so no worker touches freed state).
-  void ParallelFor(std::size_t n, std::size_t chunk,
+  void ParallelFor(std::size_t n,
+                   std::size_t chunk,
                    const std::function<void(std::size_t, std::size_t)>& body);
 
  private:

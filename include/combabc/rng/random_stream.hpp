@@ -15,7 +15,8 @@ constexpr std::uint64_t Mix64(std::uint64_t x) {
 }
 
 // xoshiro256** (Blackman & Vigna 2018), keyed by a counter-style hash of (seed, stream, index).
-// Written here, not taken from <random>, so that the sequence is the same on every standard library.
+// Written here, not taken from <random>, so that the sequence is the same on every standard
+// library.
 class RandomStream {
  public:
   RandomStream(std::uint64_t seed, std::uint64_t stream, std::uint64_t index) {

@@ -1,0 +1,33 @@
+#pragma once
+// A distance D(Y, Y*) between the observed data (held by the implementation) and a simulated
+// output. It may be vector-valued (paper Eq. 6): a candidate is accepted when every threshold
+// component satisfies d_k <= eps_k and every indicator component (Eq. 7's H1, H2) equals its
+// required value.
+#include <span>
+#include <string>
+#include <vector>
+
+namespace combabc {
+
+enum class ComponentKind {
+  kThreshold,  // accepted when d_k <= eps_k (eps_k from the component's threshold schedule)
+  kIndicator,  // accepted when d_k == required (exact comparison: indicators are 0/1 values)
+};
+const char* ToString(ComponentKind kind);
+
+struct DistanceComponent {
+  std::string name;
+  ComponentKind kind = ComponentKind::kThreshold;
+  double required = 1.0;  // indicator components only
+};
+
+class Distance {
+ public:
+  virtual ~Distance() = default;
+  // Fixed for the distance's lifetime; its size is the number of components.
+  virtual std::vector<DistanceComponent> components() const = 0;
+  // Writes one value per component. Must be thread-safe (called concurrently, const).
+  virtual void Evaluate(std::span<const double> simulated, std::span<double> out) const = 0;
+};
+
+}  // namespace combabc

@@ -1,0 +1,49 @@
+#pragma once
+// Combinatorial ABC-SMC (paper section 3) and ABC rejection (paper Algorithm 1).
+#include <vector>
+
+#include "combabc/distances/distance.hpp"
+#include "combabc/params/binary_space.hpp"
+#include "combabc/samplers/observer.hpp"
+#include "combabc/samplers/run_history.hpp"
+#include "combabc/samplers/simulator.hpp"
+#include "combabc/samplers/smc_options.hpp"
+
+namespace combabc {
+
+// Where to continue a run: its completed waves and, optionally, the particles the last
+// (incomplete) wave had accepted before candidate index next_index. Because every candidate's
+// randomness is a function of (seed, wave, index), continuing from here gives the same history as
+// an uninterrupted run.
+struct ResumePoint {
+  std::vector<WaveRecord> completed;
+  bool has_partial = false;
+  int partial_wave = 0;
+  std::int64_t partial_next_index = 0;
+  std::vector<Particle> partial_accepted;
+};
+
+struct SmcProblem {
+  const BinarySpace* space = nullptr;
+  const Simulator* simulator = nullptr;
+  const Distance* distance = nullptr;
+};
+
+// Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the tempered
+// per-bit marginals of wave t (Eqs. 2-3). Throws combabc::Error for invalid options (kConfig) or
+// a simulator/distance failure (kSoftware, naming wave and candidate).
+RunHistory RunCombinatorialSmc(const SmcProblem& problem,
+                               const SmcOptions& options,
+                               SmcObserver* observer = nullptr,
+                               const ResumePoint* resume = nullptr);
+
+// ABC rejection (Algorithm 1): propose from the prior until n accepted with the given thresholds
+// (one per threshold component). One wave of the same machinery.
+RunHistory RunRejection(const SmcProblem& problem,
+                        int accepted,
+                        const std::vector<double>& thresholds,
+                        std::uint64_t seed,
+                        int threads = 1,
+                        std::int64_t max_simulations = 0);
+
+}  // namespace combabc

@@ -1,0 +1,34 @@
+#pragma once
+// Callbacks through which a run reports progress and checkpoints (the CLI's progress bar and the
+// SQLite history use them). All are called on the thread that called Run(), never concurrently.
+#include <cstdint>
+#include <span>
+
+#include "combabc/samplers/run_history.hpp"
+
+namespace combabc {
+
+struct BatchProgress {
+  int wave = 0;
+  std::int64_t next_index = 0;  // candidates [0, next_index) of this wave are done
+  std::int64_t accepted = 0;    // accepted so far in this wave
+  int accepted_needed = 0;
+  std::int64_t total_simulations = 0;
+  double elapsed_seconds = 0.0;
+};
+
+class SmcObserver {
+ public:
+  virtual ~SmcObserver() = default;
+  // A wave starts: its thresholds, phi and proposal are in `wave` (no particles yet).
+  virtual void OnWaveStart(const WaveRecord& /*wave*/) {}
+  // A batch is done; `accepted` are its newly accepted particles (weights not yet normalised).
+  // After this returns, a resumed run may restart from progress.next_index.
+  virtual void OnBatch(const BatchProgress& /*progress*/, std::span<const Particle> /*accepted*/) {}
+  // A wave ends (complete or not), with its final statistics and normalised weights.
+  virtual void OnWaveEnd(const WaveRecord& /*wave*/) {}
+  // Polled between batches: true stops the run with Termination::kInterrupted.
+  virtual bool ShouldStop() { return false; }
+};
+
+}  // namespace combabc

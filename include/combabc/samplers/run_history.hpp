@@ -1,0 +1,79 @@
+#pragma once
+// What a run produces: one record per wave with its statistics and accepted particles.
+// Everything except wall times is a deterministic function of (options, seed): that is the
+// determinism and resume contract (see SameHistory).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "combabc/samplers/smc_options.hpp"
+
+namespace combabc {
+
+struct Particle {
+  std::int64_t index = 0;          // candidate index within its wave
+  std::vector<std::uint8_t> bits;  // full parameter vector (0/1)
+  double log_weight = 0.0;         // log p(theta)/q(theta), unnormalised
+  double weight = 0.0;             // normalised weight under the run's estimator
+  std::vector<double> distance;    // one value per distance component
+  std::vector<double> output;      // simulated Y* (empty unless SmcOptions::keep_outputs)
+};
+
+struct WaveRecord {
+  int wave = 0;
+  std::vector<double> thresholds;  // eps_t per threshold component
+  double phi = 0.0;                // tempering phi(t) used by this wave's proposal
+  std::vector<double> proposal;    // P(free parameter = 1) this wave proposed with
+  std::int64_t candidates = 0;     // candidates simulated (consumed) in this wave
+  std::int64_t accepted = 0;
+  double acceptance_rate = 0.0;
+  bool complete = false;                     // reached accepted_per_wave
+  std::vector<double> marginals_paper;       // per bit: unweighted fraction of 1s (Eq. 2)
+  std::vector<double> marginals_importance;  // per bit: p/q-weighted fraction of 1s
+  double ess = 0.0;                          // effective sample size of the importance weights
+  std::int64_t distinct = 0;                 // distinct accepted configurations
+  double wall_seconds = 0.0;                 // not deterministic; excluded from SameHistory
+  std::vector<Particle> particles;
+
+  // The estimator's marginals (what the run reports and proposes from).
+  const std::vector<double>& marginals(Estimator estimator) const {
+    return estimator == Estimator::kPaper ? marginals_paper : marginals_importance;
+  }
+};
+
+enum class Termination {
+  kTargetReached,         // the final threshold of every component was reached
+  kMaxWaves,              // num_waves completed (adaptive thresholds above target)
+  kBudgetExhausted,       // max_simulations reached
+  kAcceptanceRateTooLow,  // a wave fell below min_acceptance_rate
+  kWallTimeExceeded,      // max_wall_time_s reached
+  kInterrupted,           // the observer asked to stop
+};
+const char* ToString(Termination termination);
+
+struct RunSummary {
+  Termination termination = Termination::kMaxWaves;
+  std::string message;
+  int waves_completed = 0;
+  std::int64_t simulations = 0;  // candidates consumed, all waves
+  std::int64_t simulations_discarded =
+      0;  // simulated past a wave's last acceptance (parallel overshoot)
+  double wall_seconds = 0.0;
+  std::string BriefReport() const;
+};
+
+struct RunHistory {
+  std::vector<WaveRecord> waves;  // completed waves, then at most one incomplete last wave
+  RunSummary summary;
+  std::string FullReport(Estimator estimator) const;
+};
+
+// Per-bit marginals, ESS and distinct count recomputed from a wave's particles (also used by the
+// storage layer when reloading a run).
+void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator);
+
+// True when the two histories agree in everything deterministic (all but wall times). On a
+// difference, *where says what differs first.
+bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where);
+
+}  // namespace combabc

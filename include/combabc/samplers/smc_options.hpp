@@ -1,0 +1,52 @@
+#pragma once
+// Options for combinatorial ABC-SMC (and ABC rejection, its one-wave special case).
+// Every field has a default; IsValid() checks them all before any work and names the field.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "combabc/schedules/tempering_schedule.hpp"
+#include "combabc/schedules/threshold_schedule.hpp"
+
+namespace combabc {
+
+// Which estimate of the ABC posterior a wave reports and the next wave's proposal uses.
+enum class Estimator {
+  kPaper,       // accepted particles unweighted, as in the paper (Eq. 2 fractions)
+  kImportance,  // each accepted particle weighted by p(theta)/q(theta), normalised
+};
+const char* ToString(Estimator estimator);
+std::optional<Estimator> ParseEstimator(const std::string& text);
+
+struct SmcOptions {
+  // Maximum number of waves (t = 0..num_waves-1). With list thresholds, each list has exactly
+  // this many entries.
+  int num_waves = 5;
+  // n_t: accepted particles per wave (paper: 500).
+  int accepted_per_wave = 500;
+  // One schedule per *threshold* component of the distance, in component order (indicator
+  // components need none). Empty = one default quantile schedule for each.
+  std::vector<ThresholdSchedule> thresholds;
+  TemperingSchedule tempering;
+  Estimator estimator = Estimator::kImportance;
+  // Root of every random stream: candidate i of wave t draws from RandomStream(seed, t, i).
+  std::uint64_t seed = 1;
+  // Worker threads (0 = all cores). The history does not depend on it.
+  int threads = 1;
+  // Stop once this many candidates have been simulated in all (0 = no limit).
+  std::int64_t max_simulations = 0;
+  // Give up on a wave after accepted_per_wave / min_acceptance_rate candidates (0 = never).
+  double min_acceptance_rate = 0.0;
+  // Stop at the first batch boundary after this many seconds (0 = no limit).
+  double max_wall_time_s = 0.0;
+  // Candidates simulated between two checkpoints (observer OnBatch calls). 0 = automatic,
+  // sized from the expected acceptance rate. Does not change the history.
+  int batch_size = 0;
+  // Keep each accepted particle's simulated output in the history.
+  bool keep_outputs = true;
+
+  bool IsValid(std::string* why) const;
+};
+
+}  // namespace combabc

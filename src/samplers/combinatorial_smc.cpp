@@ -1,0 +1,314 @@
+// Combinatorial ABC-SMC, Shamas et al. 2024 section 3. See docs/algorithm.md for the derivations.
+#include "combabc/samplers/combinatorial_smc.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/core/thread_pool.hpp"
+#include "combabc/proposals/bernoulli_proposal.hpp"
+#include "samplers/candidate_batch.hpp"
+
+namespace combabc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Fraction of 1s of each free parameter under the estimator's weights (Eq. 2 for kPaper).
+std::vector<double> FreeMarginals(const BinarySpace& space,
+                                  const WaveRecord& wave,
+                                  Estimator estimator) {
+  std::vector<double> out(static_cast<std::size_t>(space.num_free()), 0.0);
+  std::vector<int> seen(out.size(), 0);
+  const auto& bit_marginals = wave.marginals(estimator);
+  for (int k = 0; k < space.dimension(); ++k) {
+    const int j = space.free_of_bit(k);
+    if (!seen[j]) out[j] = std::clamp(bit_marginals[k], 0.0, 1.0);
+    seen[j] = 1;
+  }
+  return out;
+}
+
+class SmcRun {
+ public:
+  SmcRun(const SmcProblem& problem, const SmcOptions& options, SmcObserver* observer)
+      : space_(*problem.space),
+        simulator_(*problem.simulator),
+        distance_(*problem.distance),
+        options_(options),
+        observer_(observer),
+        pool_(options.threads),
+        components_(distance_.components()) {
+    for (std::size_t k = 0; k < components_.size(); ++k) {
+      if (components_[k].kind == ComponentKind::kThreshold) threshold_components_.push_back(k);
+    }
+    schedules_ = options_.thresholds;
+    if (schedules_.empty()) schedules_.resize(threshold_components_.size());
+    if (schedules_.size() != threshold_components_.size()) {
+      throw Error(ErrorKind::kConfig,
+                  "has " + std::to_string(schedules_.size()) + " schedules; the distance has " +
+                      std::to_string(threshold_components_.size()) + " threshold components",
+                  "",
+                  0,
+                  "SmcOptions::thresholds");
+    }
+    if (simulator_.output_size() < 0) {
+      throw Error(ErrorKind::kConfig, "simulator output_size() is negative");
+    }
+  }
+
+  RunHistory Run(const ResumePoint* resume) {
+    start_ = Clock::now();
+    RunHistory history;
+    int first_wave = 0;
+    if (resume) {
+      history.waves = resume->completed;
+      for (const auto& w : history.waves) {
+        total_ += w.candidates;
+        if (!w.complete) throw Error(ErrorKind::kData, "resume point holds an incomplete wave");
+      }
+      first_wave = static_cast<int>(history.waves.size());
+      if (!history.waves.empty() && AllFinal(history.waves.back())) {
+        return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
+      }
+    }
+    for (int t = first_wave; t < options_.num_waves; ++t) {
+      const WaveRecord* previous = t > 0 ? &history.waves.back() : nullptr;
+      WaveRecord wave = StartWave(t, previous);
+      std::int64_t next_index = 0;
+      if (resume && resume->has_partial && resume->partial_wave == t) {
+        wave.particles = resume->partial_accepted;
+        next_index = resume->partial_next_index;
+      }
+      const auto stop = RunWave(wave, next_index);
+      history.waves.push_back(std::move(wave));
+      if (stop) return Finish(std::move(history), stop->first, stop->second);
+      if (AllFinal(history.waves.back())) {
+        return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
+      }
+    }
+    return Finish(std::move(history),
+                  Termination::kMaxWaves,
+                  "all " + std::to_string(options_.num_waves) + " waves done above the target");
+  }
+
+ private:
+  using Stop = std::optional<std::pair<Termination, std::string>>;
+
+  bool AllFinal(const WaveRecord& wave) const {
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      if (!schedules_[s].IsFinal(wave.wave, wave.thresholds[s])) return false;
+    }
+    return true;
+  }
+
+  WaveRecord StartWave(int t, const WaveRecord* previous) {
+    WaveRecord wave;
+    wave.wave = t;
+    std::vector<double> column;
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      column.clear();
+      if (previous) {
+        for (const auto& p : previous->particles) {
+          column.push_back(p.distance[threshold_components_[s]]);
+        }
+      }
+      wave.thresholds.push_back(schedules_[s].ThresholdFor(t, column));
+    }
+    const auto& prior = space_.free_prior_one();
+    wave.phi = options_.tempering.Phi(t, options_.num_waves);
+    if (!previous) {
+      wave.proposal = prior;  // wave 0 proposes from the prior
+    } else {
+      // Eq. 2 (the estimator's per-bit fractions), tempered toward the prior by Eq. 3.
+      const auto p_hat = FreeMarginals(space_, *previous, options_.estimator);
+      wave.proposal.resize(p_hat.size());
+      for (std::size_t j = 0; j < p_hat.size(); ++j) {
+        wave.proposal[j] =
+            TemperedProbability(p_hat[j], prior[j], wave.phi, options_.tempering.form);
+      }
+    }
+    if (observer_) observer_->OnWaveStart(wave);
+    return wave;
+  }
+
+  bool Accept(std::span<const double> d, const std::vector<double>& eps) const {
+    std::size_t s = 0;
+    for (std::size_t k = 0; k < components_.size(); ++k) {
+      if (components_[k].kind == ComponentKind::kThreshold) {
+        if (!(d[k] <= eps[s++])) return false;
+      } else if (d[k] != components_[k].required) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  std::int64_t BatchSize(const WaveRecord& wave, std::int64_t next_index, double prior_rate) const {
+    if (options_.batch_size > 0) return options_.batch_size;
+    const auto needed =
+        options_.accepted_per_wave - static_cast<std::int64_t>(wave.particles.size());
+    double rate = next_index > 0
+                      ? static_cast<double>(wave.particles.size()) / static_cast<double>(next_index)
+                      : prior_rate;
+    rate = std::max(rate, 1e-4);
+    const auto expected = static_cast<std::int64_t>(std::ceil(static_cast<double>(needed) / rate));
+    // Big enough to keep every thread busy and amortise a checkpoint, small enough that a
+    // killed run loses little and the overshoot past the last acceptance stays small.
+    const std::int64_t lo = 32LL * pool_.size();
+    return std::clamp<std::int64_t>(expected + expected / 16, lo, std::max<std::int64_t>(lo, 4096));
+  }
+
+  // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires.
+  Stop RunWave(WaveRecord& wave, std::int64_t next_index) {
+    const auto wave_start = Clock::now();
+    const BernoulliProposal proposal(wave.proposal, space_.free_prior_one());
+    const int n = options_.accepted_per_wave;
+    const std::int64_t wave_cap =
+        options_.min_acceptance_rate > 0
+            ? static_cast<std::int64_t>(std::ceil(n / options_.min_acceptance_rate))
+            : std::numeric_limits<std::int64_t>::max();
+    const double prior_rate = last_rate_;
+    Stop stop;
+    CandidateBatch batch(space_, simulator_, distance_, components_.size());
+    while (static_cast<int>(wave.particles.size()) < n) {
+      std::int64_t size = BatchSize(wave, next_index, prior_rate);
+      size = std::min(size, wave_cap - next_index);
+      if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
+      if (size <= 0) {
+        stop =
+            options_.max_simulations > 0 && total_ >= options_.max_simulations
+                ? Stop({Termination::kBudgetExhausted,
+                        "simulation budget of " + std::to_string(options_.max_simulations) +
+                            " reached in wave " + std::to_string(wave.wave)})
+                : Stop({Termination::kAcceptanceRateTooLow,
+                        "wave " + std::to_string(wave.wave) + " accepted " +
+                            std::to_string(wave.particles.size()) + " of " +
+                            std::to_string(next_index) + " candidates, below min_acceptance_rate"});
+        break;
+      }
+      batch.Evaluate(pool_, options_.seed, wave.wave, next_index, size, proposal);
+      // Accept in index order, never completion order: the first n accepted candidates win.
+      const std::size_t before = wave.particles.size();
+      std::int64_t consumed = size;
+      for (std::int64_t i = 0; i < size; ++i) {
+        if (!Accept(batch.distance(i), wave.thresholds)) continue;
+        wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
+        if (static_cast<int>(wave.particles.size()) == n) {
+          consumed = i + 1;
+          break;
+        }
+      }
+      discarded_ += size - consumed;
+      next_index += consumed;
+      total_ += consumed;
+      wave.candidates = next_index;
+      if (observer_) {
+        BatchProgress progress{wave.wave,
+                               next_index,
+                               static_cast<std::int64_t>(wave.particles.size()),
+                               n,
+                               total_,
+                               Seconds(start_)};
+        observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
+      }
+      if (static_cast<int>(wave.particles.size()) >= n) break;
+      if (options_.max_wall_time_s > 0 && Seconds(start_) >= options_.max_wall_time_s) {
+        stop = Stop({Termination::kWallTimeExceeded,
+                     "wall-time limit reached in wave " + std::to_string(wave.wave)});
+        break;
+      }
+      if (observer_ && observer_->ShouldStop()) {
+        stop =
+            Stop({Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave)});
+        break;
+      }
+    }
+    wave.candidates = next_index;
+    wave.complete = static_cast<int>(wave.particles.size()) == n;
+    ComputeWaveStatistics(wave, options_.estimator);
+    wave.wall_seconds = Seconds(wave_start);
+    last_rate_ = wave.acceptance_rate;
+    if (observer_) observer_->OnWaveEnd(wave);
+    return stop;
+  }
+
+  RunHistory Finish(RunHistory history, Termination termination, std::string message) {
+    auto& s = history.summary;
+    s.termination = termination;
+    s.message = std::move(message);
+    s.waves_completed = 0;
+    s.simulations = 0;
+    for (const auto& w : history.waves) {
+      s.waves_completed += w.complete;
+      s.simulations += w.candidates;
+    }
+    s.simulations_discarded = discarded_;
+    s.wall_seconds = Seconds(start_);
+    return history;
+  }
+
+  const BinarySpace& space_;
+  const Simulator& simulator_;
+  const Distance& distance_;
+  const SmcOptions& options_;
+  SmcObserver* observer_;
+  ThreadPool pool_;
+  std::vector<DistanceComponent> components_;
+  std::vector<std::size_t> threshold_components_;
+  std::vector<ThresholdSchedule> schedules_;
+  Clock::time_point start_;
+  std::int64_t total_ = 0;
+  std::int64_t discarded_ = 0;
+  double last_rate_ = 1.0;
+};
+
+void CheckProblem(const SmcProblem& problem) {
+  if (!problem.space || !problem.simulator || !problem.distance) {
+    throw Error(
+        ErrorKind::kConfig, "space, simulator and distance must all be set", "", 0, "SmcProblem");
+  }
+}
+
+}  // namespace
+
+RunHistory RunCombinatorialSmc(const SmcProblem& problem,
+                               const SmcOptions& options,
+                               SmcObserver* observer,
+                               const ResumePoint* resume) {
+  CheckProblem(problem);
+  std::string why;
+  if (!options.IsValid(&why)) throw Error(ErrorKind::kConfig, why);
+  SmcRun run(problem, options, observer);
+  return run.Run(resume);
+}
+
+RunHistory RunRejection(const SmcProblem& problem,
+                        int accepted,
+                        const std::vector<double>& thresholds,
+                        std::uint64_t seed,
+                        int threads,
+                        std::int64_t max_simulations) {
+  SmcOptions options;
+  options.num_waves = 1;
+  options.accepted_per_wave = accepted;
+  options.seed = seed;
+  options.threads = threads;
+  options.max_simulations = max_simulations;
+  for (double eps : thresholds) {
+    ThresholdSchedule s;
+    s.kind = ThresholdKind::kList;
+    s.values = {eps};
+    options.thresholds.push_back(s);
+  }
+  return RunCombinatorialSmc(problem, options);
+}
+
+}  // namespace combabc

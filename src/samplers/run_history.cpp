@@ -1,0 +1,166 @@
+#include "combabc/samplers/run_history.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace combabc {
+
+const char* ToString(Termination termination) {
+  switch (termination) {
+    case Termination::kTargetReached:
+      return "target_reached";
+    case Termination::kMaxWaves:
+      return "max_waves";
+    case Termination::kBudgetExhausted:
+      return "budget_exhausted";
+    case Termination::kAcceptanceRateTooLow:
+      return "acceptance_rate_too_low";
+    case Termination::kWallTimeExceeded:
+      return "wall_time_exceeded";
+    case Termination::kInterrupted:
+      return "interrupted";
+  }
+  return "?";
+}
+
+std::string RunSummary::BriefReport() const {
+  char buf[256];
+  std::snprintf(buf,
+                sizeof buf,
+                "%s: %d waves, %lld simulations, %.3f s (%s)",
+                ToString(termination),
+                waves_completed,
+                static_cast<long long>(simulations),
+                wall_seconds,
+                message.c_str());
+  return buf;
+}
+
+std::string RunHistory::FullReport(Estimator estimator) const {
+  std::ostringstream out;
+  out << "combinatorial ABC-SMC, estimator = " << ToString(estimator) << "\n";
+  out << "wave  thresholds            candidates  accepted  rate      ESS      distinct  seconds\n";
+  for (const auto& w : waves) {
+    std::string eps;
+    for (double e : w.thresholds) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%s%.4g", eps.empty() ? "" : ",", e);
+      eps += b;
+    }
+    char line[256];
+    std::snprintf(line,
+                  sizeof line,
+                  "%4d  %-20s  %10lld  %8lld  %.5f  %7.1f  %8lld  %7.3f%s\n",
+                  w.wave,
+                  eps.c_str(),
+                  static_cast<long long>(w.candidates),
+                  static_cast<long long>(w.accepted),
+                  w.acceptance_rate,
+                  w.ess,
+                  static_cast<long long>(w.distinct),
+                  w.wall_seconds,
+                  w.complete ? "" : "  (incomplete)");
+    out << line;
+  }
+  out << summary.BriefReport() << "\n";
+  return out.str();
+}
+
+void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
+  const auto n = wave.particles.size();
+  wave.accepted = static_cast<std::int64_t>(n);
+  wave.acceptance_rate =
+      wave.candidates > 0 ? static_cast<double>(n) / static_cast<double>(wave.candidates) : 0.0;
+  const std::size_t d = n ? wave.particles[0].bits.size() : wave.marginals_paper.size();
+  wave.marginals_paper.assign(d, 0.0);
+  wave.marginals_importance.assign(d, 0.0);
+  if (n == 0) {
+    wave.ess = 0.0;
+    wave.distinct = 0;
+    return;
+  }
+  // Self-normalised importance weights w_i ∝ p(theta_i)/q(theta_i), in log space for range.
+  double max_lw = -INFINITY;
+  for (const auto& p : wave.particles) max_lw = std::max(max_lw, p.log_weight);
+  std::vector<double> w(n);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    w[i] = std::exp(wave.particles[i].log_weight - max_lw);
+    sum += w[i];
+  }
+  double sum_sq = 0.0;
+  for (auto& x : w) {
+    x /= sum;
+    sum_sq += x * x;
+  }
+  wave.ess = 1.0 / sum_sq;
+  const double uniform = 1.0 / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto& p = wave.particles[i];
+    p.weight = estimator == Estimator::kPaper ? uniform : w[i];
+    for (std::size_t k = 0; k < d; ++k) {
+      if (p.bits[k]) {
+        wave.marginals_paper[k] += uniform;
+        wave.marginals_importance[k] += w[i];
+      }
+    }
+  }
+  std::vector<const std::vector<std::uint8_t>*> configs;
+  configs.reserve(n);
+  for (const auto& p : wave.particles) configs.push_back(&p.bits);
+  std::sort(configs.begin(), configs.end(), [](auto* a, auto* b) { return *a < *b; });
+  wave.distinct = 1;
+  for (std::size_t i = 1; i < n; ++i) wave.distinct += *configs[i] != *configs[i - 1];
+}
+
+namespace {
+
+template <typename T>
+bool Differ(const T& a, const T& b, const std::string& what, std::string* where) {
+  if (a == b) return false;
+  if (where) *where = what;
+  return true;
+}
+
+}  // namespace
+
+bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
+  if (Differ(a.waves.size(), b.waves.size(), "number of waves", where)) return false;
+  for (std::size_t t = 0; t < a.waves.size(); ++t) {
+    const auto& x = a.waves[t];
+    const auto& y = b.waves[t];
+    const std::string w = "wave " + std::to_string(t) + ": ";
+    if (Differ(x.wave, y.wave, w + "wave", where) ||
+        Differ(x.thresholds, y.thresholds, w + "thresholds", where) ||
+        Differ(x.phi, y.phi, w + "phi", where) ||
+        Differ(x.proposal, y.proposal, w + "proposal", where) ||
+        Differ(x.candidates, y.candidates, w + "candidates", where) ||
+        Differ(x.accepted, y.accepted, w + "accepted", where) ||
+        Differ(x.complete, y.complete, w + "complete", where) ||
+        Differ(x.marginals_paper, y.marginals_paper, w + "marginals_paper", where) ||
+        Differ(x.marginals_importance, y.marginals_importance, w + "marginals_importance", where) ||
+        Differ(x.ess, y.ess, w + "ess", where) ||
+        Differ(x.distinct, y.distinct, w + "distinct", where) ||
+        Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
+      return false;
+    }
+    for (std::size_t i = 0; i < x.particles.size(); ++i) {
+      const auto& p = x.particles[i];
+      const auto& q = y.particles[i];
+      const std::string pi = w + "particle " + std::to_string(i) + ": ";
+      if (Differ(p.index, q.index, pi + "index", where) ||
+          Differ(p.bits, q.bits, pi + "bits", where) ||
+          Differ(p.log_weight, q.log_weight, pi + "log_weight", where) ||
+          Differ(p.weight, q.weight, pi + "weight", where) ||
+          Differ(p.distance, q.distance, pi + "distance", where) ||
+          Differ(p.output, q.output, pi + "output", where)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace combabc

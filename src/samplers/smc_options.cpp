@@ -1,0 +1,65 @@
+#include "combabc/samplers/smc_options.hpp"
+
+#include <cmath>
+
+namespace combabc {
+
+const char* ToString(Estimator estimator) {
+  switch (estimator) {
+    case Estimator::kPaper:
+      return "paper";
+    case Estimator::kImportance:
+      return "importance";
+  }
+  return "?";
+}
+
+std::optional<Estimator> ParseEstimator(const std::string& text) {
+  if (text == "paper") return Estimator::kPaper;
+  if (text == "importance") return Estimator::kImportance;
+  return std::nullopt;
+}
+
+bool SmcOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& msg) {
+    if (why) *why = "SmcOptions::" + msg;
+    return false;
+  };
+  if (num_waves < 1) return fail("num_waves = " + std::to_string(num_waves) + "; must be >= 1");
+  if (accepted_per_wave < 1) {
+    return fail("accepted_per_wave = " + std::to_string(accepted_per_wave) + "; must be >= 1");
+  }
+  for (std::size_t k = 0; k < thresholds.size(); ++k) {
+    if (!thresholds[k].IsValid(
+            "SmcOptions::thresholds[" + std::to_string(k) + "]", num_waves, why)) {
+      return false;
+    }
+  }
+  if (!tempering.IsValid("SmcOptions::tempering", why)) return false;
+  if (tempering.kind == TemperingKind::kList &&
+      static_cast<int>(tempering.values.size()) < num_waves - 1) {
+    return fail("tempering.values has " + std::to_string(tempering.values.size()) +
+                " entries; must have num_waves - 1 = " + std::to_string(num_waves - 1) +
+                " (one per wave after the first)");
+  }
+  if (threads < 0 || threads > 4096) {
+    return fail("threads = " + std::to_string(threads) + "; must be in [0, 4096] (0 = all cores)");
+  }
+  if (max_simulations < 0) {
+    return fail("max_simulations = " + std::to_string(max_simulations) + "; must be >= 0");
+  }
+  if (!(min_acceptance_rate >= 0.0 && min_acceptance_rate <= 1.0)) {
+    return fail("min_acceptance_rate = " + std::to_string(min_acceptance_rate) +
+                "; must be in [0, 1]");
+  }
+  if (!(max_wall_time_s >= 0.0 && std::isfinite(max_wall_time_s))) {
+    return fail("max_wall_time_s = " + std::to_string(max_wall_time_s) +
+                "; must be finite and >= 0");
+  }
+  if (batch_size < 0) {
+    return fail("batch_size = " + std::to_string(batch_size) + "; must be >= 0 (0 = automatic)");
+  }
+  return true;
+}
+
+}  // namespace combabc
