@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Builds combabc and runs every test: the Release build with warnings as errors (all labels:
+# unit, statistical, slow, packaging), the unit tests again under ASan+UBSan, and the layering and
+# formatting checks. Run scripts/setup.sh first (the README's test command does both).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+
+echo "== layering and formatting"
+bash scripts/check-layers.sh
+bash scripts/check-format.sh
+
+echo "== Release build, warnings as errors"
+cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
+cmake --build build-ci -j "$jobs"
+ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
+
+echo "== Debug build with AddressSanitizer + UndefinedBehaviorSanitizer (unit tests)"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCOMBABC_WERROR=ON \
+  -DCOMBABC_SANITIZE=ON -DCOMBABC_BUILD_BENCH=OFF
+cmake --build build-asan -j "$jobs"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
