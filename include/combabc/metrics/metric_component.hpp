@@ -1,0 +1,55 @@
+#pragma once
+// The building blocks of the paper's distances between the measured profile Y and a simulated
+// profile Y* (Shamas et al. 2024, section 5), each over a window of positions along the sensor:
+//   area           Eq. 4: |A(Y) - A(Y*)| / A(Y), A by the trapezoid rule over the window's points
+//   least_squares  Eq. 5: sum_j (y*_j - y_j)^2 over the window's points (Eq. 6 = several of them)
+//   rise           Eq. 7 H1: 1 if y*(to) - y*(from) > 0, else 0
+//   fall           Eq. 7 H2: 1 if y*(to) - y*(from) < 0, else 0
+// area and least_squares are threshold components (d_k <= eps_k); rise and fall are indicator
+// components that must equal 1.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "combabc/distances/distance.hpp"
+#include "combabc/schedules/threshold_schedule.hpp"
+
+namespace combabc {
+
+enum class MetricType { kArea, kLeastSquares, kRise, kFall };
+const char* ToString(MetricType type);  // "area", "least_squares", "rise", "fall"
+std::optional<MetricType> ParseMetricType(const std::string& text);
+// kThreshold for area / least_squares, kIndicator for rise / fall.
+ComponentKind KindOf(MetricType type);
+
+struct MetricComponentConfig {
+  MetricType type = MetricType::kLeastSquares;
+  // Window [from, to] along the sensor, metres, from < to. area / least_squares use the measured
+  // points inside it; rise / fall compare Y* interpolated at exactly `from` and `to`.
+  double from = 0.0;
+  double to = 0.0;
+  // Name reported by Distance::components() and written to the history; empty = generated from
+  // the type and window in centimetres, e.g. "least_squares[48-81cm]".
+  std::string name;
+  // Threshold schedule (threshold components only; ignored for indicators).
+  ThresholdSchedule threshold;
+  // Line of the config file that defined the component (its [[metric.component]] header or the
+  // preset key), for error messages; 0 when not read from a file.
+  int config_line = 0;
+};
+
+// The name a component reports: config.name, or the generated one.
+std::string ComponentName(const MetricComponentConfig& config);
+
+// Shorthands for the paper's three metrics (windows in metres, default threshold schedules).
+enum class MetricPreset {
+  kArea,               // Eq. 4 on 48-80 cm (Figures 3-4)
+  kLeastSquares,       // Eq. 5 on 48-81 cm (i = 0..33, Figures 5-6)
+  kSplitLeastSquares,  // Eq. 6-7: least squares on 71-75, 76-80, 81-89 cm + rise 76-78 (H1)
+                       // + fall 78-80 (H2) (Figures 10-11)
+};
+const char* ToString(MetricPreset preset);  // "area", "least_squares", "split_least_squares"
+std::optional<MetricPreset> ParseMetricPreset(const std::string& text);
+std::vector<MetricComponentConfig> PresetComponents(MetricPreset preset);
+
+}  // namespace combabc

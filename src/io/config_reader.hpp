@@ -1,0 +1,115 @@
+#pragma once
+// Private helper for config parsing: typed access to one TOML table that records which keys were
+// read, so that Finish() can reject every key nobody asked for (typos must not be silently
+// ignored), and that formats errors as "file:line: dotted.key: message".
+#include <cstdint>
+#include <initializer_list>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <toml++/toml.h>
+
+namespace combabc::config_internal {
+
+class TableReader {
+ public:
+  // prefix: the table's dotted name ("" for the root, "metric.component[0]", ...).
+  TableReader(const toml::table& table, std::string prefix, const std::string& path);
+
+  const std::string& path() const { return *path_; }
+  const std::string& prefix() const { return prefix_; }
+  int line() const;
+  // Dotted name of a key of this table.
+  std::string Key(std::string_view key) const;
+  // Line of the key's value, or of the table if the key is absent.
+  int Line(std::string_view key) const;
+  bool Has(std::string_view key) const;
+
+  // Throws combabc::Error(kConfig) at the key's line (the table's if the key is absent).
+  [[noreturn]] void Fail(std::string_view key, const std::string& message) const;
+  // Throws at a node's line with an explicit dotted name (array elements).
+  [[noreturn]] void FailAt(const toml::node& node,
+                           const std::string& dotted,
+                           const std::string& message) const;
+
+  // Typed getters: nullopt if the key is absent; a type mismatch throws. Each marks the key read.
+  std::optional<bool> Bool(std::string_view key);
+  std::optional<std::string> String(std::string_view key);
+  std::optional<double> Number(std::string_view key);  // integer or float; NaN rejected
+  std::optional<std::int64_t> Integer(std::string_view key);
+  std::optional<std::vector<double>> Numbers(std::string_view key);
+  std::optional<std::vector<std::string>> Strings(std::string_view key);
+  // Nested table (inline or [section]); nullopt if absent.
+  std::optional<TableReader> Table(std::string_view key);
+  // Array of tables ([[key]]); empty if absent.
+  std::vector<TableReader> Tables(std::string_view key);
+  // Raw node for shapes the getters do not cover (marks the key read); nullptr if absent.
+  const toml::node* Raw(std::string_view key);
+
+  // Range helpers: value within [lo, hi] or throw naming the key.
+  double NumberIn(std::string_view key, double fallback, double lo, double hi);
+  int IntegerIn(std::string_view key, int fallback, std::int64_t lo, std::int64_t hi);
+
+  // Rejects keys that were never read.
+  void Finish() const;
+
+ private:
+  const toml::node* Get(std::string_view key);
+
+  const toml::table* table_;
+  std::string prefix_;
+  const std::string* path_;
+  std::vector<std::string> read_;   // keys present and read
+  std::vector<std::string> asked_;  // every key a getter asked for: the table's vocabulary
+};
+
+const char* TypeName(const toml::node& node);
+int LineOf(const toml::node& node);
+
+}  // namespace combabc::config_internal
+
+namespace combabc {
+struct CalibrationConfig;
+}
+
+namespace combabc::config_internal {
+
+// Where a field of SmcOptions / BinarySpaceOptions / SensorOptions was set, so that a failed
+// IsValid() is reported at the config key the user wrote rather than at the C++ field.
+struct Source {
+  std::string key;
+  int line = 0;
+};
+
+struct Sources {
+  std::map<std::string, Source> smc;    // SmcOptions field ("num_waves", "tempering") -> key
+  std::map<std::string, Source> space;  // BinarySpaceOptions field -> key
+  Source sampler;                       // fallback: the [sampler] table
+};
+
+// Records that `field` was set by key `key` of `t` (if present).
+void Note(std::map<std::string, Source>& map,
+          const std::string& field,
+          const TableReader& t,
+          std::string_view key);
+// "\"a\", \"b\"" for messages listing the allowed values.
+std::string OneOf(std::initializer_list<const char*> names);
+// [from, to] in the data's position unit (from < to, finite), returned in metres.
+std::pair<double, double> WindowKey(TableReader& t, std::string_view key, double metres_per_unit);
+
+// Section parsers, each reading its table of `root` into `config` (and calling Finish on it).
+// [model] (config_model.cpp): returns the number of binary parameters, 2 x clamps per edge.
+int ParseModelSection(TableReader& root, CalibrationConfig* config);
+// [sampler] (config_sampler.cpp): needs the dimension for prior arrays and tie numbers.
+void ParseSamplerSection(TableReader& root,
+                         int dimension,
+                         CalibrationConfig* config,
+                         Sources* sources);
+// [metric] (config_metric.cpp): after [data] (position unit) and [sampler] (number of waves).
+void ParseMetricSection(TableReader& root, CalibrationConfig* config);
+
+}  // namespace combabc::config_internal

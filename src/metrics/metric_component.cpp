@@ -1,0 +1,92 @@
+#include "combabc/metrics/metric_component.hpp"
+
+#include <sstream>
+
+namespace combabc {
+namespace {
+
+// The paper states its windows in centimetres along the 90 cm sensor.
+constexpr double kCentimetre = 0.01;
+
+MetricComponentConfig Window(MetricType type, double from_cm, double to_cm) {
+  MetricComponentConfig c;
+  c.type = type;
+  c.from = from_cm * kCentimetre;
+  c.to = to_cm * kCentimetre;
+  return c;
+}
+
+}  // namespace
+
+const char* ToString(MetricType type) {
+  switch (type) {
+    case MetricType::kArea:
+      return "area";
+    case MetricType::kLeastSquares:
+      return "least_squares";
+    case MetricType::kRise:
+      return "rise";
+    case MetricType::kFall:
+      return "fall";
+  }
+  return "?";
+}
+
+std::optional<MetricType> ParseMetricType(const std::string& text) {
+  for (MetricType t :
+       {MetricType::kArea, MetricType::kLeastSquares, MetricType::kRise, MetricType::kFall}) {
+    if (text == ToString(t)) return t;
+  }
+  return std::nullopt;
+}
+
+ComponentKind KindOf(MetricType type) {
+  return type == MetricType::kRise || type == MetricType::kFall ? ComponentKind::kIndicator
+                                                                : ComponentKind::kThreshold;
+}
+
+std::string ComponentName(const MetricComponentConfig& config) {
+  if (!config.name.empty()) return config.name;
+  std::ostringstream out;
+  out << ToString(config.type) << '[' << config.from / kCentimetre << '-' << config.to / kCentimetre
+      << "cm]";
+  return out.str();
+}
+
+const char* ToString(MetricPreset preset) {
+  switch (preset) {
+    case MetricPreset::kArea:
+      return "area";
+    case MetricPreset::kLeastSquares:
+      return "least_squares";
+    case MetricPreset::kSplitLeastSquares:
+      return "split_least_squares";
+  }
+  return "?";
+}
+
+std::optional<MetricPreset> ParseMetricPreset(const std::string& text) {
+  for (MetricPreset p :
+       {MetricPreset::kArea, MetricPreset::kLeastSquares, MetricPreset::kSplitLeastSquares}) {
+    if (text == ToString(p)) return p;
+  }
+  return std::nullopt;
+}
+
+std::vector<MetricComponentConfig> PresetComponents(MetricPreset preset) {
+  switch (preset) {
+    case MetricPreset::kArea:  // Eq. 4, "calculated on the interval 48-80 cm"
+      return {Window(MetricType::kArea, 48, 80)};
+    case MetricPreset::kLeastSquares:  // Eq. 5, y_{48+i} for i = 0..33
+      return {Window(MetricType::kLeastSquares, 48, 81)};
+    case MetricPreset::kSplitLeastSquares:  // Eq. 6 windows, then Eq. 7's H1 and H2
+      return {Window(MetricType::kLeastSquares, 71, 75),
+              Window(MetricType::kLeastSquares, 76, 80),
+              Window(MetricType::kLeastSquares, 81, 89),
+              Window(MetricType::kRise, 76, 78),
+              Window(MetricType::kFall, 78, 80)};
+  }
+  return {};
+}
+
+}  // namespace combabc

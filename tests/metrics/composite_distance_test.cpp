@@ -1,0 +1,228 @@
+#include "combabc/metrics/composite_distance.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+std::vector<double> Grid(double from, double to, double step) {
+  std::vector<double> x;
+  const auto n = static_cast<int>(std::lround((to - from) / step));
+  for (int i = 0; i <= n; ++i) x.push_back(from + i * step);
+  return x;
+}
+
+MetricComponentConfig Component(MetricType type, double from, double to) {
+  MetricComponentConfig c;
+  c.type = type;
+  c.from = from;
+  c.to = to;
+  return c;
+}
+
+// Measured: a triangle on 0..4 cm peaking at 1 at 2 cm; its area is 0.04 m * 1 / 2 = 0.02 m.
+const std::vector<double> kDataX = {0.00, 0.01, 0.02, 0.03, 0.04};
+const std::vector<double> kDataY = {0.0, 0.5, 1.0, 0.5, 0.0};
+
+CompositeDistanceOptions WholeOutput() {
+  CompositeDistanceOptions options;
+  options.normalise_over = NormaliseOver::kOutput;
+  return options;
+}
+
+double Triangle(double x) { return std::max(0.0, 1.0 - std::abs(x - 0.02) / 0.02); }
+
+TEST(CompositeDistance, AreaOfIdenticalShapeIsZeroAfterNormalisation) {
+  const auto out_x = Grid(0.0, 0.10, 0.005);  // a finer, longer grid than the data
+  std::vector<double> simulated;
+  for (double x : out_x) simulated.push_back(3.0 * Triangle(x));  // same shape, other scale
+  CompositeDistance d({Component(MetricType::kArea, 0.0, 0.04)}, kDataX, kDataY, out_x);
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  EXPECT_NEAR(value, 0.0, kTol);
+}
+
+TEST(CompositeDistance, AreaHandComputed) {
+  // Y* constant -> normalised to 1 -> A(Y*) = 0.04, A(Y) = 0.02: Eq. 4 gives |0.02-0.04|/0.02 = 1.
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  const std::vector<double> simulated(out_x.size(), 7.0);
+  CompositeDistance d({Component(MetricType::kArea, 0.0, 0.04)}, kDataX, kDataY, out_x);
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  EXPECT_NEAR(value, 1.0, kTol);
+}
+
+TEST(CompositeDistance, LeastSquaresInterpolatesOffGridPositions) {
+  // Y*(x) = x on a grid offset by 2.5 mm from the data positions; linear interpolation of a
+  // linear profile is exact, so the resampled Y* at x_j is x_j / 0.1025 after normalisation by
+  // the grid's maximum, 0.1025.
+  const auto out_x = Grid(-0.0025, 0.1025, 0.005);
+  const std::vector<double> simulated = out_x;
+  CompositeDistance d(
+      {Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x, WholeOutput());
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  double expected = 0;
+  for (std::size_t j = 0; j < kDataX.size(); ++j) {
+    const double r = kDataX[j] / 0.1025 - kDataY[j];
+    expected += r * r;
+  }
+  EXPECT_NEAR(value, expected, kTol);
+}
+
+TEST(CompositeDistance, LeastSquaresExactValueOnAlignedGrid) {
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  std::vector<double> simulated;
+  for (double x : out_x) simulated.push_back(x / 0.1);
+  CompositeDistance d(
+      {Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x, WholeOutput());
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  EXPECT_NEAR(value, 1.0, kTol);
+}
+
+TEST(CompositeDistance, NormalisesSimulatedOverTheMeasuredSupportByDefault) {
+  // Y* = x on 0..10 cm peaks at 10 cm, outside the 0..4 cm data. Normalised over the data's own
+  // support (default) Y*(x_j) = x_j / 0.04, so Y* = (0, .25, .5, .75, 1) against the triangle:
+  // residuals (0, -.25, -.5, .25, 1) give 0.0625 + 0.25 + 0.0625 + 1 = 1.375. Over the whole
+  // output (0.1 maximum) the same curve gives 1.0 (LeastSquaresExactValueOnAlignedGrid).
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  std::vector<double> simulated;
+  for (double x : out_x) simulated.push_back(x / 0.1);
+  CompositeDistance d({Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x);
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  EXPECT_NEAR(value, 1.375, kTol);
+}
+
+TEST(CompositeDistance, WithoutNormalisationCompareRawValues) {
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  std::vector<double> simulated;
+  for (double x : out_x) simulated.push_back(Triangle(x) + 0.1);
+  CompositeDistanceOptions options;
+  options.normalise_simulated = false;
+  CompositeDistance d(
+      {Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x, options);
+  double value = -1;
+  d.Evaluate(simulated, std::span<double>(&value, 1));
+  EXPECT_NEAR(value, 5 * 0.01, kTol);  // five points, each off by 0.1
+}
+
+// A simulated profile over the 90 cm sensor, every 1 cm: the main peak at the 70 cm load and, if
+// `secondary`, a bump at 78 cm (the feature Eq. 7 asks for, Figure 7).
+std::vector<double> Profile(const std::vector<double>& x, bool secondary) {
+  std::vector<double> y;
+  for (double xi : x) {
+    double v = std::exp(-(xi - 0.70) * (xi - 0.70) / (2 * 0.02 * 0.02));
+    if (secondary) v += 0.4 * std::exp(-(xi - 0.78) * (xi - 0.78) / (2 * 0.008 * 0.008));
+    y.push_back(v);
+  }
+  return y;
+}
+
+TEST(CompositeDistance, SplitLeastSquaresFlagsASecondaryPeak) {
+  const auto out_x = Grid(0.0, 0.90, 0.01);
+  const auto data_x = Grid(0.70, 0.89, 0.01);
+  const auto with_peak = Profile(out_x, true);
+  std::vector<double> data_y;
+  for (std::size_t i = 70; i <= 89; ++i) data_y.push_back(with_peak[i]);
+  CompositeDistance d(PresetComponents(MetricPreset::kSplitLeastSquares), data_x, data_y, out_x);
+  std::vector<double> out(5);
+  d.Evaluate(with_peak, out);
+  EXPECT_NEAR(out[0], 0.0, kTol);
+  EXPECT_NEAR(out[1], 0.0, kTol);
+  EXPECT_NEAR(out[2], 0.0, kTol);
+  EXPECT_EQ(out[3], 1.0);  // H1: rises from 76 to 78 cm
+  EXPECT_EQ(out[4], 1.0);  // H2: falls from 78 to 80 cm
+
+  d.Evaluate(Profile(out_x, false), out);  // monotone decay past the load: no secondary peak
+  EXPECT_GT(out[1], 0.0);
+  EXPECT_EQ(out[3], 0.0);  // H1 fails
+  EXPECT_EQ(out[4], 1.0);
+}
+
+TEST(CompositeDistance, ComponentsReportKindsAndNames) {
+  const auto out_x = Grid(0.0, 0.90, 0.01);
+  const auto data_x = Grid(0.70, 0.89, 0.01);
+  const std::vector<double> data_y(data_x.size(), 0.5);
+  CompositeDistance d(PresetComponents(MetricPreset::kSplitLeastSquares), data_x, data_y, out_x);
+  const auto components = d.components();
+  ASSERT_EQ(components.size(), 5u);
+  EXPECT_EQ(components[0].name, "least_squares[71-75cm]");
+  EXPECT_EQ(components[2].name, "least_squares[81-89cm]");
+  EXPECT_EQ(components[3].name, "rise[76-78cm]");
+  EXPECT_EQ(components[4].name, "fall[78-80cm]");
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(components[k].kind, ComponentKind::kThreshold);
+  for (int k = 3; k < 5; ++k) {
+    EXPECT_EQ(components[k].kind, ComponentKind::kIndicator);
+    EXPECT_EQ(components[k].required, 1.0);
+  }
+  EXPECT_EQ(d.threshold_schedules().size(), 3u);
+}
+
+TEST(CompositeDistance, PresetsMatchThePaper) {
+  const auto area = PresetComponents(MetricPreset::kArea);
+  ASSERT_EQ(area.size(), 1u);
+  EXPECT_EQ(area[0].type, MetricType::kArea);
+  EXPECT_NEAR(area[0].from, 0.48, kTol);
+  EXPECT_NEAR(area[0].to, 0.80, kTol);
+  const auto ls = PresetComponents(MetricPreset::kLeastSquares);
+  ASSERT_EQ(ls.size(), 1u);
+  EXPECT_NEAR(ls[0].to, 0.81, kTol);  // Eq. 5: y_{48+i}, i = 0..33
+  EXPECT_EQ(ParseMetricPreset("split_least_squares"), MetricPreset::kSplitLeastSquares);
+  EXPECT_EQ(ParseMetricType("rise"), MetricType::kRise);
+  EXPECT_FALSE(ParseMetricType("Area").has_value());
+}
+
+TEST(CompositeDistance, NonFiniteOrZeroSimulationFailsEveryComponent) {
+  const auto out_x = Grid(0.0, 0.90, 0.01);
+  const auto data_x = Grid(0.70, 0.89, 0.01);
+  const std::vector<double> data_y(data_x.size(), 0.5);
+  CompositeDistance d(PresetComponents(MetricPreset::kSplitLeastSquares), data_x, data_y, out_x);
+  std::vector<double> out(5);
+  std::vector<double> simulated(out_x.size(), 0.0);
+  d.Evaluate(simulated, out);
+  EXPECT_EQ(out[0], std::numeric_limits<double>::infinity());
+  EXPECT_EQ(out[3], 0.0);
+  simulated.assign(out_x.size(), 1.0);
+  simulated[5] = std::numeric_limits<double>::quiet_NaN();
+  d.Evaluate(simulated, out);
+  EXPECT_EQ(out[2], std::numeric_limits<double>::infinity());
+  EXPECT_EQ(out[4], 0.0);
+}
+
+TEST(CompositeDistance, BadWindowsAreConfigErrorsNamingTheComponent) {
+  const auto out_x = Grid(0.0, 0.50, 0.01);
+  // Data beyond the simulator's output range.
+  try {
+    CompositeDistance d(
+        {Component(MetricType::kLeastSquares, 0.0, 0.04), Component(MetricType::kRise, 0.45, 0.60)},
+        kDataX,
+        kDataY,
+        out_x);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+    EXPECT_EQ(e.field(), "metric.component[1]");
+  }
+  // A window with no data point.
+  try {
+    CompositeDistance d({Component(MetricType::kArea, 0.2, 0.3)}, kDataX, kDataY, out_x);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+    EXPECT_NE(std::string(e.what()).find("metric.component[0]: window"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace combabc
