@@ -1,0 +1,124 @@
+#pragma once
+// The run history on disk: one SQLite file per run (RUN.db), written batch by batch while the run
+// goes, so that a killed run can be resumed and a finished one reported or exported. The schema,
+// its version and the durability guarantees are documented in docs/history.md.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "combabc/distances/distance.hpp"
+#include "combabc/samplers/combinatorial_smc.hpp"
+#include "combabc/samplers/observer.hpp"
+#include "combabc/samplers/run_history.hpp"
+
+namespace combabc {
+
+// Version of the on-disk schema this build writes; it reads this version and older ones.
+inline constexpr int kHistorySchemaVersion = 1;
+
+enum class RunStatus {
+  kRunning,      // being written, or killed before it could say otherwise
+  kFinished,     // the run ended by one of its own termination criteria
+  kFailed,       // the run stopped on an error (message in RunMetadata::summary_message)
+  kInterrupted,  // stopped on request (Ctrl-C); resumable
+};
+const char* ToString(RunStatus status);
+std::optional<RunStatus> ParseRunStatus(const std::string& text);
+
+// The measured data Y, kept so that reports can draw it over the accepted curves.
+struct StoredMeasuredData {
+  std::vector<double> positions;  // same unit as RunMetadata::position_unit
+  std::vector<double> values;
+};
+
+// Everything about a run except its waves: provenance, problem description, status and summary.
+struct RunMetadata {
+  // Provenance.
+  std::string config_text;      // the whole TOML configuration, verbatim
+  std::string config_path;      // where it was read from (may be empty)
+  std::string combabc_version;  // empty = this library's version, filled in by Create
+  std::string git_hash;         // may be empty
+  std::uint64_t seed = 0;
+  int threads = 1;
+  std::string start_time;  // ISO 8601 UTC; empty = now, filled in by Create
+  std::string end_time;    // set by Finish / MarkFailed
+
+  // Status and outcome.
+  RunStatus status = RunStatus::kRunning;
+  std::string termination;      // termination criterion, e.g. "max_waves" (empty while running)
+  std::string summary_message;  // RunSummary::message, or the error for a failed run
+  int resume_count = 0;         // how many times the run was resumed
+
+  // The problem, for reports.
+  std::string estimator;  // "paper" or "importance"
+  int dimension = 0;
+  std::vector<std::string> bit_names;                  // empty or one per bit
+  std::vector<double> bit_prior_one;                   // prior P(bit = 1); empty = 0.5 for all
+  std::vector<DistanceComponent> distance_components;  // in component order
+  std::vector<double> output_positions;                // x of each simulated output value
+  std::string position_unit = "m";                     // unit of output and measured positions
+  StoredMeasuredData measured;
+
+  int schema_version = kHistorySchemaVersion;  // as read from the file
+};
+
+// Strings stored for Termination values (the schema's own vocabulary, see docs/history.md).
+const char* HistoryName(Termination termination);
+std::optional<Termination> ParseHistoryTermination(const std::string& text);
+
+// A run history file. Create() starts a new run; Open() reads or resumes an existing one. As an
+// SmcObserver it records the run while RunCombinatorialSmc runs: each callback is one SQLite
+// transaction, so a run killed at any moment loses at most the batch in flight.
+// Errors are combabc::Error naming the file: kCantCreate, kNoInput, kData (not a history, corrupt,
+// newer schema) or kIo (a write failed).
+class HistoryStore final : public SmcObserver {
+ public:
+  // Creates `path` (its directory must exist) with status "running". Refuses an existing file
+  // unless `overwrite`. On failure no file is left behind.
+  static HistoryStore Create(const std::string& path,
+                             const RunMetadata& metadata,
+                             bool overwrite = false);
+  // Opens an existing history. read_only suits report/export: no write is attempted.
+  static HistoryStore Open(const std::string& path, bool read_only = false);
+
+  HistoryStore(HistoryStore&& other) noexcept;
+  HistoryStore& operator=(HistoryStore&& other) noexcept;
+  ~HistoryStore() override;
+
+  const std::string& path() const;
+  RunMetadata LoadMetadata() const;
+
+  // SmcObserver: OnWaveStart records the wave (again on resume: its progress is kept);
+  // OnBatch appends the accepted particles and the wave's progress in one transaction; OnWaveEnd
+  // records final statistics and normalised weights (particles it does not list are dropped).
+  void OnWaveStart(const WaveRecord& wave) override;
+  void OnBatch(const BatchProgress& progress, std::span<const Particle> accepted) override;
+  void OnWaveEnd(const WaveRecord& wave) override;
+
+  // The committed state: complete waves in full, and the first incomplete wave (if any) as the
+  // partial wave with its accepted particles and next_index.
+  ResumePoint LoadResumePoint() const;
+  // Ended waves, then the partial wave if any (its statistics are empty unless it ended), and the
+  // run summary as recorded by Finish.
+  RunHistory LoadHistory() const;
+
+  // Before resuming: drops whatever lies beyond the resume point (waves after the partial one,
+  // the partial wave's end-of-wave statistics), marks the run running again, counts the resume,
+  // and returns the resume point.
+  ResumePoint BeginResume();
+  // Records the summary and end time; status becomes finished, or interrupted for
+  // Termination::kInterrupted. Leaves a single self-contained file (no -wal beside it).
+  void Finish(const RunSummary& summary);
+  // Records a failure (status failed) with its one-line message.
+  void MarkFailed(const std::string& message);
+
+ private:
+  struct Impl;
+  explicit HistoryStore(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace combabc

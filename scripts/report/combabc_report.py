@@ -1,0 +1,583 @@
+#!/usr/bin/python3
+"""Report figures for a combabc run history (RUN.db), after Shamas et al. (Sensors 2024), section 5.
+
+    /usr/bin/python3 combabc_report.py RUN.db [--out DIR] [--estimator paper|importance]
+
+Reads the SQLite history directly (schema: docs/history.md; no export needed) and writes into
+DIR (default: report/ beside RUN.db), replacing any previous report:
+
+  wave_<k>_curves.{png,svg}     accepted simulated curves of wave k, measured data as circles
+                                (paper Figures 3, 5, 8, 10)
+  wave_<k>_marginals.{png,svg}  probability of each clamp being fixed, one panel per edge
+                                (paper Figures 4, 6, 9, 11)
+  overview.{png,svg}            one row per wave: curves and marginals side by side
+  summary.{png,svg}             thresholds, acceptance rate and simulations per wave
+  index.html                    all of the above with the run's provenance and per-wave table
+
+Waves are numbered from 1 in the figures, as in the paper (wave t = 0 of the engine is "Wave 1").
+Works on a run still in progress or killed (its last wave is shown as incomplete) and on runs
+that did not keep simulated outputs (no curve figures). Needs numpy and matplotlib only.
+"""
+
+import argparse
+import html
+import multiprocessing
+import os
+import shutil
+import sqlite3
+import sys
+import tomllib
+
+import numpy as np
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never needs a display
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator  # noqa: E402
+
+SCHEMA_VERSION = 1
+APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
+CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
+DPI = 150
+
+STYLE = {
+    "font.size": 10,
+    "axes.titlesize": 11,
+    "axes.labelsize": 10,
+    "xtick.labelsize": 9,
+    "ytick.labelsize": 9,
+    "legend.fontsize": 9,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "svg.fonttype": "none",  # keep text as text in SVG: smaller, editable
+}
+CURVE_COLOUR = "#1f5fa8"
+BAR_COLOUR = "#3a7d44"
+MEASURED_STYLE = dict(marker="o", markersize=4.5, markerfacecolor="white", markeredgecolor="black",
+                      markeredgewidth=0.9, linestyle="none", zorder=5)
+
+
+class ReportError(Exception):
+    pass
+
+
+# --- reading the history ------------------------------------------------------------------------
+
+def doubles(blob):
+    return np.frombuffer(blob, dtype="<f8") if blob else np.zeros(0)
+
+
+def connect(path):
+    if not os.path.isfile(path):
+        raise ReportError(f"{path}: no such run history")
+    # mode=ro: a report never writes. A WAL-mode history (run in progress or killed) needs its
+    # -shm file, which a read-only connection cannot create; then fall back to a normal one.
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        con.execute("PRAGMA user_version").fetchone()
+    except sqlite3.Error:
+        con = sqlite3.connect(path)
+    try:
+        app = con.execute("PRAGMA application_id").fetchone()[0]
+        version = con.execute("PRAGMA user_version").fetchone()[0]
+    except sqlite3.DatabaseError as error:
+        raise ReportError(f"{path}: not a combabc run history ({error})")
+    if app != APPLICATION_ID or version < 1:
+        raise ReportError(f"{path}: not a combabc run history")
+    if version > SCHEMA_VERSION:
+        raise ReportError(f"{path}: run history schema version {version} is newer than this "
+                          f"script reads ({SCHEMA_VERSION})")
+    return con
+
+
+class Wave:
+    def __init__(self):
+        self.number = 0  # engine's wave index t (0-based)
+        self.thresholds = np.zeros(0)
+        self.candidates = 0
+        self.accepted = 0
+        self.acceptance_rate = float("nan")
+        self.complete = False
+        self.ended = False
+        self.ess = float("nan")
+        self.distinct = 0
+        self.wall_seconds = float("nan")
+        self.marginals = {}
+        self.bits = None      # (n, d) uint8
+        self.curves = None    # (n, points) float or None
+
+
+def load_run(con):
+    cols = ["status", "config_text", "config_path", "combabc_version", "git_hash", "seed", "threads",
+            "start_time", "end_time", "termination", "message", "resume_count", "estimator",
+            "dimension", "position_unit", "waves_completed", "simulations",
+            "simulations_discarded", "wall_seconds"]
+    row = con.execute(f"SELECT {', '.join(cols)} FROM run WHERE id = 1").fetchone()
+    if row is None:
+        raise ReportError("corrupt run history: no run row")
+    run = dict(zip(cols, row))
+    bits = con.execute("SELECT name, prior FROM bit ORDER BY bit").fetchall()
+    run["bit_names"] = [name for name, _ in bits]
+    run["prior"] = np.array([prior for _, prior in bits], dtype=float)
+    run["components"] = con.execute(
+        "SELECT name, kind FROM component ORDER BY component").fetchall()
+    scale = CM_PER_UNIT.get(run["position_unit"], 1.0)
+    run["x_cm"] = np.array([r[0] for r in con.execute(
+        "SELECT position FROM output_position ORDER BY i")], dtype=float) * scale
+    measured = np.array(con.execute("SELECT position, value FROM measured ORDER BY i").fetchall(),
+                        dtype=float).reshape(-1, 2)
+    run["measured_x_cm"] = measured[:, 0] * scale
+    run["measured_y"] = measured[:, 1]
+    return run
+
+
+def load_waves(con, dimension):
+    rows = con.execute("""
+        SELECT wave, thresholds, next_index, accepted_so_far, ended, complete, candidates,
+               accepted, acceptance_rate, marginals_paper, marginals_importance, ess,
+               distinct_count, wall_seconds
+        FROM wave ORDER BY wave""").fetchall()
+    waves = []
+    for (t, thresholds, next_index, accepted_so_far, ended, complete, candidates, accepted, rate,
+         m_paper, m_importance, ess, distinct, wall) in rows:
+        if not ended and next_index == 0:
+            break  # started, nothing committed: not part of the history
+        w = Wave()
+        w.number, w.thresholds, w.ended, w.complete = t, doubles(thresholds), bool(ended), bool(complete)
+        if ended:
+            w.candidates, w.accepted = candidates, accepted
+            w.acceptance_rate = rate if rate is not None else float("nan")
+            w.ess = ess if ess is not None else float("nan")
+            w.distinct, w.wall_seconds = distinct, wall if wall is not None else float("nan")
+            w.marginals = {"paper": doubles(m_paper), "importance": doubles(m_importance)}
+        else:
+            w.candidates, w.accepted = next_index, accepted_so_far
+            w.acceptance_rate = accepted_so_far / next_index if next_index else float("nan")
+        load_particles(con, w, dimension)
+        waves.append(w)
+        if not (ended and complete):
+            break  # at most one incomplete wave, and it is the last
+    return waves
+
+
+def load_particles(con, wave, dimension):
+    rows = con.execute("SELECT bits, log_weight, output FROM particle WHERE wave = ? "
+                       "ORDER BY candidate", (wave.number,)).fetchall()
+    n = len(rows)
+    nbytes = (dimension + 7) // 8
+    packed = np.frombuffer(b"".join(r[0] for r in rows), dtype=np.uint8).reshape(n, nbytes)
+    wave.bits = np.unpackbits(packed, axis=1, bitorder="little")[:, :dimension]
+    outputs = [r[2] for r in rows if r[2]]
+    if n and len(outputs) == n:
+        wave.curves = np.frombuffer(b"".join(outputs), dtype="<f8").reshape(n, -1)
+    if not wave.marginals.get("paper", np.zeros(0)).size and n:
+        # A wave cut short before its end: marginals from the particles, as the engine computes
+        # them (paper Eq. 2 unweighted; importance weights p/q self-normalised).
+        log_w = np.array([r[1] if r[1] is not None else -np.inf for r in rows])
+        weights = np.exp(log_w - np.max(log_w))
+        weights /= weights.sum()
+        wave.marginals = {"paper": wave.bits.mean(axis=0), "importance": weights @ wave.bits}
+        wave.accepted = n
+        wave.ess = 1.0 / np.sum(weights ** 2)
+        wave.distinct = len({row.tobytes() for row in wave.bits})
+
+
+def scale_like_the_metric(run, waves):
+    """Draws Y* as the metric compares it: when the data are normalised, each simulated curve is
+    divided by its maximum over the measured positions (CompositeDistance's NormaliseOver::kData),
+    so curves and circles share one scale even if the peak lies outside the measured window."""
+    try:
+        normalise = tomllib.loads(run["config_text"] or "").get("data", {}).get("normalise", True)
+    except tomllib.TOMLDecodeError:
+        normalise = True
+    if not normalise or not run["measured_x_cm"].size:
+        return
+    for w in waves:
+        if w.curves is None or not len(w.curves):
+            continue
+        at_data = np.array([np.interp(run["measured_x_cm"], run["x_cm"], c) for c in w.curves])
+        peak = np.max(np.abs(at_data), axis=1)
+        peak[peak <= 0] = 1.0
+        w.curves = w.curves / peak[:, None]
+
+
+# --- figures ------------------------------------------------------------------------------------
+
+def wave_label(w):
+    label = f"Wave {w.number + 1}"
+    return label if w.complete else label + " (incomplete)"
+
+
+def thresholds_text(w, run, prefix=", "):
+    if not w.thresholds.size:
+        return ""
+    return prefix + _thresholds(w, run)
+
+
+def _thresholds(w, run):
+    names = [name for name, kind in run["components"] if kind == "threshold"]
+    if len(names) != len(w.thresholds):
+        names = [f"ε{k + 1}" for k in range(len(w.thresholds))]
+    if len(w.thresholds) == 1:
+        return f"ε = {w.thresholds[0]:.3g}"
+    return ", ".join(f"ε[{n}] = {e:.3g}" for n, e in zip(names, w.thresholds))
+
+
+def curve_handles(n, run):
+    handles = [Line2D([], [], color=CURVE_COLOUR, linewidth=1.2,
+                      label=f"Accepted simulations (n = {n})" if n else "Accepted simulations")]
+    if run["measured_x_cm"].size:
+        handles.append(Line2D([], [], label="Measured data", **MEASURED_STYLE))
+    return handles
+
+
+def draw_curves(ax, w, run):
+    curves = w.curves
+    x = run["x_cm"]
+    if curves.shape[1] != x.size:
+        x = np.arange(curves.shape[1], dtype=float)
+    n = curves.shape[0]
+    # Dense sets need fainter lines to show where curves concentrate (Figures 3/5: 500 curves).
+    alpha = float(np.clip(25.0 / max(n, 1), 0.04, 0.5))
+    segments = np.stack([np.broadcast_to(x, curves.shape), curves], axis=-1)
+    ax.add_collection(LineCollection(segments, colors=CURVE_COLOUR, linewidths=0.6, alpha=alpha,
+                                     rasterized=n > 200))
+    if run["measured_x_cm"].size:
+        ax.plot(run["measured_x_cm"], run["measured_y"], **MEASURED_STYLE)
+    ax.set_xlim(x.min(), x.max())
+    top = max(1.0, float(np.nanmax(curves)) if n else 1.0,
+              float(run["measured_y"].max()) if run["measured_y"].size else 1.0)
+    ax.set_ylim(0.0, 1.05 * top)
+    ax.set_xlabel("Position along sensor (cm)")
+    ax.set_ylabel("Normalised |w|")
+    ax.grid(True, linewidth=0.4, alpha=0.4)
+
+
+def edges(run):
+    """Bit index ranges, one per panel: two edges of clamps when the names say so."""
+    d = run["dimension"]
+    names = run["bit_names"]
+    clamps = d % 2 == 0 and d >= 2 and names and all("clamp" in n.lower() for n in names)
+    if clamps:
+        h = d // 2
+        return [(f"Edge 1 (clamps 1–{h})", range(0, h)), (f"Edge 2 (clamps {h + 1}–{d})", range(h, d))], True
+    return [("All parameters", range(0, d))], False
+
+
+def uniform_prior(run):
+    """The common prior P(bit = 1), or None when bits differ (then drawn per bar)."""
+    prior = run["prior"]
+    return float(prior[0]) if prior.size and np.all(prior == prior[0]) else None
+
+
+def marginal_handles(run):
+    common = uniform_prior(run)
+    label = f"Prior ({common:g})" if common is not None else "Prior"
+    return [Patch(color=BAR_COLOUR, label="Posterior estimate"),
+            Line2D([], [], color="black", linestyle="--", linewidth=0.9, label=label)]
+
+
+def draw_marginals(axes, w, run, estimator, tick_step=1, titles=True, title_loc="center"):
+    probabilities = w.marginals.get(estimator, np.zeros(0))
+    panels, clamps = edges(run)
+    for ax, (title, bits) in zip(axes, panels):
+        numbers = np.array(bits) + 1
+        values = probabilities[list(bits)] if probabilities.size else np.full(len(bits), np.nan)
+        ax.bar(numbers, values, width=0.75, color=BAR_COLOUR, edgecolor="none")
+        if uniform_prior(run) is not None:
+            ax.axhline(uniform_prior(run), color="black", linestyle="--", linewidth=0.9, zorder=3)
+        else:
+            ax.hlines(run["prior"][list(bits)], numbers - 0.45, numbers + 0.45, colors="black",
+                      linestyles="--", linewidth=0.9, zorder=3)
+        ax.set_ylim(0.0, 1.0)
+        ax.set_xlim(numbers[0] - 0.7, numbers[-1] + 0.7)
+        step = tick_step * (1 if len(numbers) <= 20 else max(1, len(numbers) // 18))
+        ax.set_xticks(numbers[::step])
+        ax.set_xlabel("Clamp number" if clamps else "Parameter number")
+        ax.set_ylabel("P(fixed)" if clamps else "P(bit = 1)")
+        if titles:
+            ax.set_title(title, fontsize=10, loc=title_loc)
+        ax.grid(True, axis="y", linewidth=0.4, alpha=0.4)
+
+
+def save(fig, out, name):
+    # compress_level 3: PNGs a little larger than the default 6, written in a fraction of the time.
+    fig.savefig(os.path.join(out, f"{name}.png"), dpi=DPI, pil_kwargs={"compress_level": 3})
+    fig.savefig(os.path.join(out, f"{name}.svg"), dpi=DPI)
+    plt.close(fig)
+    return name
+
+
+def curves_figure(w, run, estimator, out):
+    fig, ax = plt.subplots(figsize=(6.4, 4.3))
+    draw_curves(ax, w, run)
+    ax.set_title(f"{wave_label(w)}: accepted curves{thresholds_text(w, run)}")
+    # Below the axes: inside, it would hide curves or data wherever the peak happens to be.
+    ax.legend(handles=curve_handles(w.curves.shape[0], run), loc="upper center",
+              bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
+    fig.tight_layout()
+    return save(fig, out, f"wave_{w.number + 1}_curves")
+
+
+def marginals_figure(w, run, estimator, out):
+    panels, clamps = edges(run)
+    width = 5.0 * len(panels) + 0.6 if clamps else max(7.0, 0.2 * run["dimension"] + 1.5)
+    fig, axes = plt.subplots(1, len(panels), figsize=(width, 3.4), sharey=True, squeeze=False)
+    draw_marginals(axes[0], w, run, estimator)
+    what = "probability of each clamp being fixed" if clamps else "P(bit = 1) per parameter"
+    fig.suptitle(f"{wave_label(w)}: {what} ({estimator} estimator, n = {w.accepted})",
+                 fontsize=11)
+    fig.legend(handles=marginal_handles(run), loc="lower center", ncol=2, frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    return save(fig, out, f"wave_{w.number + 1}_marginals")
+
+
+def overview_figure(waves, run, estimator, out):
+    """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side."""
+    panels, _ = edges(run)
+    has_curves = any(w.curves is not None and w.curves.size for w in waves)
+    columns = len(panels) + (1 if has_curves else 0)
+    widths = ([1.3] if has_curves else []) + [1.0] * len(panels)
+    # Shared x per column: one set of tick labels at the bottom keeps the grid legible (and fast).
+    fig, axes = plt.subplots(len(waves), columns, figsize=(4.2 * columns, 2.6 * len(waves) + 0.5),
+                             squeeze=False, sharex="col", gridspec_kw={"width_ratios": widths})
+    tick_step = 2 if max(len(bits) for _, bits in panels) > 12 else 1
+    for row, w in enumerate(waves):
+        label = f"({'abcdefghijklmnopqrstuvwxyz'[row % 26]}) {wave_label(w)}"
+        if has_curves:
+            ax = axes[row][0]
+            if w.curves is not None and w.curves.size:
+                draw_curves(ax, w, run)
+            else:
+                ax.text(0.5, 0.5, "no curves stored", ha="center", va="center",
+                        transform=ax.transAxes)
+            ax.set_title(f"{label}{thresholds_text(w, run)}", loc="left")
+        bar_axes = axes[row][1 if has_curves else 0:]
+        # Without a curve column the wave label takes the left of the first title line.
+        draw_marginals(bar_axes, w, run, estimator, tick_step=tick_step, titles=row == 0,
+                       title_loc="center" if has_curves else "right")
+        if not has_curves:
+            bar_axes[0].set_title(label, loc="left")
+        if row != len(waves) - 1:
+            for ax in axes[row]:
+                ax.set_xlabel("")
+    handles = (curve_handles(0, run) if has_curves else []) + marginal_handles(run)
+    fig.legend(handles=handles, loc="upper center", ncol=len(handles), frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.45 / fig.get_figheight()))
+    return save(fig, out, "overview")
+
+
+def summary_figure(waves, run, estimator, out):
+    numbers = np.array([w.number + 1 for w in waves])
+    complete = np.array([w.complete for w in waves])
+    fig, axes = plt.subplots(1, 3, figsize=(12.0, 3.4))
+
+    ax = axes[0]
+    k = max((w.thresholds.size for w in waves), default=0)
+    names = [name for name, kind in run["components"] if kind == "threshold"]
+    if len(names) != k:
+        names = [f"component {i + 1}" for i in range(k)]
+    for i in range(k):
+        eps = np.array([w.thresholds[i] if i < w.thresholds.size else np.nan for w in waves])
+        ok = np.isfinite(eps) & (eps > 0)
+        ax.plot(numbers[ok], eps[ok], marker="o", label=names[i])
+    ax.set_yscale("log")
+    # Thresholds often span less than two decades: label the 2x and 5x ticks too.
+    ax.yaxis.set_minor_locator(LogLocator(base=10.0, subs=(2.0, 5.0)))
+    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.set_ylabel("Threshold ε (log scale)")
+    ax.set_title("Thresholds")
+    if k > 1:
+        ax.legend(frameon=False)
+
+    ax = axes[1]
+    rate = np.array([w.acceptance_rate for w in waves], dtype=float) * 100.0
+    ax.plot(numbers, rate, color="black", linewidth=1.0)
+    ax.plot(numbers[complete], rate[complete], "o", color="black", label="complete")
+    if (~complete).any():
+        ax.plot(numbers[~complete], rate[~complete], "o", markerfacecolor="white",
+                color="black", label="incomplete")
+        ax.legend(frameon=False)
+    ax.set_ylim(0.0, max(1.0, np.nanmax(rate) * 1.15) if rate.size else 1.0)
+    ax.set_ylabel("Acceptance rate (%)")
+    ax.set_title("Acceptance rate")
+
+    ax = axes[2]
+    sims = np.array([w.candidates for w in waves], dtype=float)
+    bars = ax.bar(numbers, sims, color="#7a6fa8", width=0.6)
+    for bar, done in zip(bars, complete):
+        if not done:
+            bar.set_hatch("//")
+            bar.set_facecolor("white")
+            bar.set_edgecolor("#7a6fa8")
+    ax.set_ylabel("Simulations")
+    ax.set_title(f"Simulations per wave (total {int(sims.sum()):,})")
+
+    for ax in axes:
+        ax.set_xlabel("Wave")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.grid(True, linewidth=0.4, alpha=0.4)
+    fig.tight_layout()
+    return save(fig, out, "summary")
+
+
+# --- index.html ---------------------------------------------------------------------------------
+
+def fmt(value, spec=".4g"):
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return "" if np.isnan(value) else format(value, spec)
+    return str(value)
+
+
+def write_index(waves, run, estimator, out, written, db_path):
+    e = html.escape
+    provenance = [
+        ("Run history", os.path.abspath(db_path)), ("Status", run["status"]),
+        ("Termination", run["termination"] or "—"), ("Message", run["message"] or "—"),
+        ("Config", run["config_path"] or "—"), ("Seed", run["seed"]), ("Threads", run["threads"]),
+        ("Estimator", run["estimator"]), ("Estimator shown", estimator),
+        ("Dimension", run["dimension"]),
+        ("Simulations", run["simulations"] if run["simulations"] is not None
+         else sum(w.candidates for w in waves)),
+        ("Wall time (s)", fmt(run["wall_seconds"], ".1f")),
+        ("Started", run["start_time"]), ("Ended", run["end_time"] or "—"),
+        ("Resumed", f"{run['resume_count']} times"),
+        ("combabc", f"{run['combabc_version']} {run['git_hash']}".strip()),
+    ]
+    rows = "\n".join(f"<tr><th>{e(str(k))}</th><td>{e(str(v))}</td></tr>" for k, v in provenance)
+    head = ("<tr><th>Wave</th><th>Thresholds</th><th>Candidates</th><th>Accepted</th>"
+            "<th>Acceptance rate</th><th>ESS</th><th>Distinct</th><th>Wall time (s)</th>"
+            "<th>Complete</th></tr>")
+    body = "\n".join(
+        f"<tr><td>{w.number + 1}</td><td>{e(', '.join(format(x, '.4g') for x in w.thresholds))}</td>"
+        f"<td>{w.candidates}</td><td>{w.accepted}</td><td>{fmt(w.acceptance_rate)}</td>"
+        f"<td>{fmt(float(w.ess), '.1f')}</td><td>{w.distinct}</td>"
+        f"<td>{fmt(w.wall_seconds, '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
+        for w in waves)
+    figures = "\n".join(
+        f'<figure><a href="{n}.svg"><img src="{n}.png" alt="{n}"></a>'
+        f"<figcaption>{e(n)} (<a href=\"{n}.svg\">SVG</a>)</figcaption></figure>"
+        for n in written)
+    note = ("" if any(w.curves is not None for w in waves)
+            else "<p>This run did not keep simulated outputs: no curve figures.</p>")
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>combabc report</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; max-width: 1400px; }}
+table {{ border-collapse: collapse; margin-bottom: 1.5em; }}
+th, td {{ border: 1px solid #ccc; padding: 3px 8px; text-align: left; font-size: 0.9em; }}
+figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
+img {{ max-width: 680px; border: 1px solid #eee; }}
+pre {{ background: #f6f6f6; padding: 1em; overflow-x: auto; }}
+</style></head><body>
+<h1>combabc run report</h1>
+<h2>Run</h2><table>{rows}</table>
+<h2>Waves</h2><table>{head}{body}</table>
+{note}
+<h2>Figures</h2>
+{figures}
+<h2>Configuration</h2><pre>{e(run["config_text"])}</pre>
+</body></html>
+"""
+    with open(os.path.join(out, "index.html"), "w", encoding="utf-8") as f:
+        f.write(page)
+
+
+# --- rendering in parallel -----------------------------------------------------------------------
+
+_JOB = {}  # what the forked workers render from (inherited, not pickled)
+
+
+def _render(task):
+    kind, index = task
+    waves, run, estimator, out = _JOB["waves"], _JOB["run"], _JOB["estimator"], _JOB["out"]
+    with plt.rc_context(STYLE):
+        if kind == "overview":
+            return overview_figure(waves, run, estimator, out)
+        if kind == "summary":
+            return summary_figure(waves, run, estimator, out)
+        figure = curves_figure if kind == "curves" else marginals_figure
+        return figure(waves[index], run, estimator, out)
+
+
+def render_all(waves, run, estimator, out):
+    """Renders every figure; returns their names in display order. Figures are independent, so
+    they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
+    single-threaded and dominate the time)."""
+    tasks = [("summary", None), ("overview", None)]
+    for i, w in enumerate(waves):
+        if w.curves is not None and w.curves.size:
+            tasks.append(("curves", i))
+        tasks.append(("marginals", i))
+    _JOB.update(waves=waves, run=run, estimator=estimator, out=out)
+    workers = min(len(tasks), os.cpu_count() or 1, 8)
+    if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+        # Longest first (the overview) so that the pool finishes together; results keep task order.
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            return pool.map(_render, tasks, chunksize=1)
+    return [_render(task) for task in tasks]
+
+
+# --- main ---------------------------------------------------------------------------------------
+
+def make_report(db_path, out, estimator=None):
+    con = connect(db_path)
+    try:
+        run = load_run(con)
+        waves = load_waves(con, run["dimension"])
+        scale_like_the_metric(run, waves)
+    finally:
+        con.close()
+    if not waves:
+        raise ReportError(f"{db_path}: the run has no committed wave yet")
+    estimator = estimator or run["estimator"] or "paper"
+    out = os.path.abspath(out)
+    parent = os.path.dirname(out)
+    if not os.path.isdir(parent):
+        raise ReportError(f"{out}: directory {parent} does not exist")
+    # Build beside the target and rename at the end: a failure never leaves half a report.
+    temp = os.path.join(parent, f".{os.path.basename(out)}.tmp-{os.getpid()}")
+    shutil.rmtree(temp, ignore_errors=True)
+    os.mkdir(temp)
+    try:
+        written = render_all(waves, run, estimator, temp)
+        write_index(waves, run, estimator, temp, written, db_path)
+        if os.path.exists(out):
+            old = os.path.join(parent, f".{os.path.basename(out)}.old-{os.getpid()}")
+            os.rename(out, old)
+            os.rename(temp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(temp, out)
+    except BaseException:
+        shutil.rmtree(temp, ignore_errors=True)
+        raise
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="Figures and an HTML page for a combabc run.")
+    parser.add_argument("history", help="the run history, RUN.db")
+    parser.add_argument("--out", help="output directory (default: report/ beside RUN.db)")
+    parser.add_argument("--estimator", choices=["paper", "importance"],
+                        help="marginals to plot (default: the run's estimator)")
+    args = parser.parse_args(argv)
+    out = args.out or os.path.join(os.path.dirname(os.path.abspath(args.history)), "report")
+    try:
+        out = make_report(args.history, out, args.estimator)
+    except (ReportError, sqlite3.Error, OSError) as error:
+        print(f"combabc_report: {error}", file=sys.stderr)
+        return 65 if isinstance(error, (ReportError, sqlite3.DatabaseError)) else 74
+    print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
