@@ -1,0 +1,39 @@
+#pragma once
+// The Bogner-Fox-Schmit (BFS) rectangle: a conforming (C1) Kirchhoff plate element with the
+// 4 degrees of freedom (w, w_x, w_y, w_xy) at each corner and tensor-product cubic Hermite shape
+// functions (Bogner, Fox & Schmit 1965). Conforming, so its energy bounds converge monotonically,
+// and free of shear locking because it has no transverse shear (docs/model.md, "Element").
+//
+// Local numbering: corner (a, b), a, b in {0, 1}, sits at (a hx, b hy) from the element's lower
+// left corner; local dof 4 (a + 2 b) + k with k = 0 w, 1 w_x, 2 w_y, 3 w_xy.
+#include <Eigen/Dense>
+
+namespace combabc::plate {
+
+inline constexpr int kDofsPerNode = 4;
+inline constexpr int kElementDofs = 16;
+
+using ElementMatrix = Eigen::Matrix<double, kElementDofs, kElementDofs>;
+using ElementVector = Eigen::Matrix<double, kElementDofs, 1>;
+
+// The three real matrices from which every complex dynamic stiffness is combined:
+//   K_dyn = stiffness_real + i stiffness_imag + (k_f (1 + i eta_f) - omega^2 rho h) mass_unit.
+struct ElementMatrices {
+  ElementMatrix stiffness_real;  // integral of B^T D_real B, B = (d_xx, d_yy, 2 d_xy) N
+  ElementMatrix stiffness_imag;  // integral of B^T D_imag B
+  ElementMatrix mass_unit;       // integral of N^T N (consistent mass for unit mass per area)
+};
+
+ElementMatrices ComputeElementMatrices(double hx,
+                                       double hy,
+                                       const Eigen::Matrix3d& bending_real,
+                                       const Eigen::Matrix3d& bending_imag);
+
+// Shape function values at local coordinates (x, y) in [0, hx] x [0, hy].
+ElementVector ShapeValues(double hx, double hy, double x, double y);
+
+// Integral of N over the sub-rectangle [x0, x1] x [y0, y1] of the element (local coordinates):
+// the consistent load vector of a unit uniform pressure on that part of the element.
+ElementVector ShapeIntegral(double hx, double hy, double x0, double x1, double y0, double y1);
+
+}  // namespace combabc::plate

@@ -1,0 +1,157 @@
+#pragma once
+// A rectangular Kirchhoff plate on a structured grid of Bogner-Fox-Schmit elements, with
+// per-edge-segment supports, an optional Winkler foundation, point or patch loads, and static,
+// harmonic and modal solves. The sensor simulator (sensor_model.hpp) is built on this; the
+// validation tests use it directly.
+//
+// Degrees of freedom: node (i, j) at (grid.x[i], grid.y[j]) has index i (ny + 1) + j and dofs
+// 4 node + k, k = 0 w, 1 w_x, 2 w_y, 3 w_xy (cross-section-major, so the dofs of one cross-section
+// x = grid.x[i] are contiguous, which the section condensation relies on).
+#include <complex>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+
+#include "combabc/plate/bfs_element.hpp"
+#include "combabc/plate/laminate.hpp"
+
+namespace combabc::plate {
+
+enum class Support {
+  kFree,             // no constraint
+  kSimplySupported,  // w = 0 and the tangential slope = 0 along the edge
+  kClamped,          // w = 0 and both slopes = 0 (so all four BFS dofs vanish on the edge)
+};
+const char* ToString(Support support);
+bool FromString(std::string_view text, Support* support);
+
+enum class Edge {
+  kBottom,  // y = 0   (the sensor's edge A, clamps 1..18)
+  kTop,     // y = W   (edge B, clamps 19..36)
+  kLeft,    // x = 0
+  kRight,   // x = L
+};
+
+// Node coordinates, strictly increasing, in metres; grid.x.front() = grid.y.front() = 0.
+struct Grid {
+  std::vector<double> x;
+  std::vector<double> y;
+  int nx() const { return static_cast<int>(x.size()) - 1; }  // elements along x
+  int ny() const { return static_cast<int>(y.size()) - 1; }  // elements along y
+};
+Grid UniformGrid(double length, double width, int nx, int ny);
+
+// Which dofs are fixed: one bit mask per node (bit k fixes dof k).
+class Constraints {
+ public:
+  explicit Constraints(const Grid& grid);
+
+  // Supports the nodes of `edge` whose coordinate along the edge lies in the closed interval
+  // [from, to] (a tolerance of 1e-9 of the edge length). Masks are OR-ed, so a node shared by a
+  // clamped and a free segment is clamped, and a corner gets the union of both edges.
+  void AddEdgeSupport(Edge edge, double from, double to, Support support);
+  void AddEdgeSupport(Edge edge, Support support);
+  void FixNode(int node, std::uint8_t mask) { masks_[node] |= mask; }
+
+  std::uint8_t mask(int node) const { return masks_[node]; }
+  bool IsFixed(int dof) const {
+    return ((masks_[dof / kDofsPerNode] >> (dof % kDofsPerNode)) & 1) != 0;
+  }
+  int num_fixed() const;
+
+ private:
+  std::vector<double> x_;
+  std::vector<double> y_;
+  std::vector<std::uint8_t> masks_;
+};
+
+// Mask of the dofs fixed by `support` on a node of `edge` (see Support).
+std::uint8_t SupportMask(Edge edge, Support support);
+
+// A transverse force of amplitude `force` (N) at (x, y): a point load when patch_length and
+// patch_width are 0, else a uniform pressure on the patch_length x patch_width rectangle centred
+// there (clipped to the plate).
+struct Load {
+  double x = 0.0;
+  double y = 0.0;
+  double force = 1.0;
+  double patch_length = 0.0;
+  double patch_width = 0.0;
+};
+
+struct Modes {
+  std::vector<double> frequencies_hz;  // ascending
+  Eigen::MatrixXd shapes;              // num_dofs x count, mass-normalised, zero on fixed dofs
+};
+
+class Plate {
+ public:
+  // foundation_stiffness: Winkler modulus k_f (N/m^3) acting on the whole plate, with loss factor
+  // eta_f (reaction k_f (1 + i eta_f) w).
+  Plate(Grid grid,
+        PlateSection section,
+        double foundation_stiffness = 0.0,
+        double foundation_loss_factor = 0.0);
+
+  const Grid& grid() const { return grid_; }
+  const PlateSection& section() const { return section_; }
+  double foundation_stiffness() const { return foundation_stiffness_; }
+  double foundation_loss_factor() const { return foundation_loss_factor_; }
+  int num_nodes() const { return (grid_.nx() + 1) * (grid_.ny() + 1); }
+  int num_dofs() const { return kDofsPerNode * num_nodes(); }
+  int Node(int i, int j) const { return i * (grid_.ny() + 1) + j; }
+  // Global dof of local dof `local` of element (ex, ey).
+  int ElementDof(int ex, int ey, int local) const;
+  const ElementMatrices& Element(int ex, int ey) const {
+    return unique_elements_[element_kind_[ex * grid_.ny() + ey]];
+  }
+
+  // Coefficient of mass_unit in the dynamic stiffness at `frequency_hz`:
+  // k_f (1 + i eta_f) - omega^2 rho h.
+  std::complex<double> MassCoefficient(double frequency_hz) const;
+
+  // Consistent load vector (num_dofs).
+  Eigen::VectorXd LoadVector(const Load& load) const;
+
+  // Dynamic stiffness K (1 + i eta) + k_f (1 + i eta_f) M_1 - omega^2 rho h M_1 restricted to the
+  // free dofs; free_dofs receives their global indices in order.
+  Eigen::SparseMatrix<std::complex<double>> DynamicStiffness(const Constraints& constraints,
+                                                             double frequency_hz,
+                                                             std::vector<int>* free_dofs) const;
+
+  // Static solve with the real stiffness (+ real foundation); throws if the plate is not
+  // supported. Returns all num_dofs (zero on fixed dofs).
+  Eigen::VectorXd SolveStatic(const Constraints& constraints, const Load& load) const;
+  // Harmonic solve of (K(1 + i eta) + k_f(1 + i eta_f)M_1 - omega^2 M) u = f by sparse LU (the
+  // matrix is complex symmetric, not Hermitian, so no Cholesky/LDL^H).
+  Eigen::VectorXcd SolveHarmonic(const Constraints& constraints,
+                                 const Load& load,
+                                 double frequency_hz) const;
+  Eigen::VectorXcd SolveHarmonic(const Constraints& constraints,
+                                 const Eigen::VectorXd& load_vector,
+                                 double frequency_hz) const;
+
+  // Undamped natural frequencies (real parts of the stiffnesses) and mass-normalised mode shapes
+  // by shift-invert subspace iteration; `count` lowest.
+  Modes ComputeModes(const Constraints& constraints, int count) const;
+
+  // Deflection w at (x, y) interpolated with the element shape functions.
+  double Deflection(const Eigen::VectorXd& u, double x, double y) const;
+  std::complex<double> Deflection(const Eigen::VectorXcd& u, double x, double y) const;
+  // Interpolation row: w(x, y) = row . u over the returned 16 global dofs.
+  void InterpolationRow(double x, double y, int dofs[kElementDofs], ElementVector* row) const;
+
+ private:
+  Grid grid_;
+  PlateSection section_;
+  double foundation_stiffness_;
+  double foundation_loss_factor_;
+  std::vector<ElementMatrices> unique_elements_;  // one per distinct (hx, hy)
+  std::vector<int> element_kind_;                 // ex * ny + ey -> index into unique_elements_
+};
+
+}  // namespace combabc::plate

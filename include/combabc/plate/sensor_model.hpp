@@ -1,0 +1,141 @@
+#pragma once
+// The built-in simulator of the paper's fibre-optic sensor (Shamas et al. 2024, section 4): a
+// layered strip with 36 switchable clamp sections along its long edges, driven harmonically, whose
+// output is the displacement amplitude |w| along the top centreline. Every default below is a
+// stated assumption (docs/model.md, "Defaults"); the paper gives none of the dimensions except the
+// 90 cm length, the 18 + 18 clamp sections of 5 cm, the 0.04 N load at 45 cm and 5 Hz.
+//
+// Fast re-analysis (docs/model.md, "Section condensation"): each clamp section's interior is
+// condensed onto its two end cross-sections once for each of its 4 (edge A, edge B) clamp states,
+// groups of 3 sections are composed for each of their 64 states, and a configuration then costs
+// one block-tridiagonal solve over the 5 inner group boundaries. This is exact: it equals the
+// full sparse solve of the same mesh to round-off (tests: < 1e-10 relative at the default mesh).
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/plate.hpp"
+
+namespace combabc::plate {
+
+class SectionCondensation;  // src/plate/section_condensation.hpp
+
+// Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
+// elastomer core carrying the fibre, a polyurethane cover.
+std::vector<Layer> DefaultSensorLayers();
+// 0, 0.01, ..., 0.90 m: the paper's LDV grid extended over the whole length.
+std::vector<double> DefaultOutputPositions();
+
+struct SensorOptions {
+  // Geometry (m).
+  double length = 0.90;  // paper section 4
+  double width = 0.04;   // assumption: a strip a few centimetres wide
+  std::vector<Layer> layers = DefaultSensorLayers();
+
+  // Winkler foundation of the pipe bottom under the strip: pressure k_f (1 + i eta_f) w.
+  double foundation_stiffness = 5.0e4;  // N/m^3, >= 0 (assumption)
+  double foundation_loss_factor = 0.1;  // >= 0 (assumption)
+
+  // Clamp layout: each long edge split into `clamps_per_edge` equal sections; clamp k (1-based)
+  // is section k of edge A (y = 0) for k <= clamps_per_edge, else section k - clamps_per_edge of
+  // edge B (y = width); sections counted from x = 0 (paper figure 2).
+  int clamps_per_edge = 18;
+  // A fixed clamp section clamps its edge (w = 0, normal slope = 0); this lets validation runs
+  // model a simply supported fixing instead. Must not be kFree.
+  Support fixed_support = Support::kClamped;
+  Support short_edge_start = Support::kFree;  // edge x = 0
+  Support short_edge_end = Support::kFree;    // edge x = length
+
+  // Harmonic load: amplitude `load_force` at (load_x, load_y_fraction * width), as a uniform
+  // pressure on a load_patch_length x load_patch_width patch (a point load when either is 0).
+  double load_force = 0.04;  // N (paper: 0.041-0.044 N)
+  double load_x = 0.45;      // m (paper)
+  double load_y_fraction = 0.5;
+  double load_patch_length = 0.01;  // m (assumption: a shaker contact pad about 1 cm across)
+  double load_patch_width = 0.01;   // m
+  double frequency_hz = 5.0;        // paper
+
+  // Output: |w| along y = output_y_fraction * width at these x positions (m, within [0, length]).
+  std::vector<double> output_positions = DefaultOutputPositions();
+  double output_y_fraction = 0.5;  // the top centreline
+  bool normalise = true;           // divide by the maximum, as in the paper's figures
+
+  // Mesh: elements per clamp section along x and across the width (docs/model.md, "Convergence
+  // study": with the gradings below, within 2 % of the peak of a 4x finer mesh over 200 random
+  // configurations).
+  int elements_per_section = 10;
+  int elements_across_width = 6;
+  // Grading exponents p in [1, 3]: node t in [0, 1] of each section (along x) and of the width
+  // (along y) is placed at (2t)^p / 2 for t <= 1/2 and symmetrically above, so elements shrink
+  // towards the section ends and the edges, where clamped/free transitions are singular points
+  // (the singularity slows the convergence of uniform meshes). 1 = uniform. Stronger grading
+  // along x costs conditioning (the fast path equals the full solve to ~1e-9 at p = 3).
+  double length_grading = 2.0;
+  double width_grading = 3.0;
+  // Per-configuration solver: false = unpivoted complex-symmetric block LDL^T with a residual
+  // check and a pivoting-LU fallback (fast); true = always the dense partial-pivoting LU of the
+  // condensed system (slower; a cross-check).
+  bool always_pivot = false;
+
+  bool IsValid(std::string* why) const;
+};
+
+// Modal analysis of one clamp configuration.
+struct SensorModes {
+  std::vector<double> frequencies_hz;  // undamped, ascending
+  Eigen::MatrixXd shapes;              // num_outputs x count: w of each mass-normalised mode
+};
+
+class SensorModel {
+ public:
+  explicit SensorModel(const SensorOptions& options);  // throws combabc::Error if invalid
+  ~SensorModel();
+  SensorModel(const SensorModel&) = delete;
+  SensorModel& operator=(const SensorModel&) = delete;
+
+  int num_clamps() const { return 2 * options_.clamps_per_edge; }
+  int num_outputs() const { return static_cast<int>(options_.output_positions.size()); }
+  const std::vector<double>& output_positions() const { return options_.output_positions; }
+  const SensorOptions& options() const { return options_; }
+  const Plate& plate() const { return *plate_; }
+  // Bytes held by the precomputed section pieces (the per-configuration state is on the stack).
+  std::size_t PrecomputedBytes() const;
+
+  // clamps[k] = 1: clamp k + 1 fixed; 0: free (paper section 5). Writes |w| (m, or normalised to
+  // a maximum of 1) at the output positions. Thread-safe.
+  void Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const;
+  // The same from a sparse LU of the whole plate (reference path).
+  void ProfileFullSolve(std::span<const std::uint8_t> clamps, std::span<double> out) const;
+  // n configurations, row-major (n x num_clamps in, n x num_outputs out), on `threads` threads.
+  void ProfileBatch(std::span<const std::uint8_t> clamps,
+                    std::size_t n,
+                    std::span<double> out,
+                    int threads = 1) const;
+
+  // Complex centreline deflection (m) from the fast path, before |.| and normalisation.
+  void ComplexProfile(std::span<const std::uint8_t> clamps,
+                      std::span<std::complex<double>> out) const;
+  // The full complex field (all dofs of plate()) of a configuration, by the full solve.
+  Eigen::VectorXcd Field(std::span<const std::uint8_t> clamps) const;
+  // Constraints of the whole plate for a configuration (used by the full solve and modes).
+  Constraints ConfigurationConstraints(std::span<const std::uint8_t> clamps) const;
+  // First `count` natural frequencies (real part of the stiffness, real foundation) and shapes.
+  SensorModes Modes(std::span<const std::uint8_t> clamps, int count) const;
+
+ private:
+  void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
+  void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
+
+  SensorOptions options_;
+  std::unique_ptr<Plate> plate_;
+  std::unique_ptr<SectionCondensation> condensation_;
+};
+
+}  // namespace combabc::plate

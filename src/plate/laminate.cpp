@@ -1,0 +1,89 @@
+#include "combabc/plate/laminate.hpp"
+
+#include <sstream>
+
+#include "combabc/core/check.hpp"
+
+namespace combabc::plate {
+namespace {
+
+bool Fail(std::string* why,
+          const std::string& prefix,
+          const char* field,
+          double value,
+          const char* constraint) {
+  if (why != nullptr) {
+    std::ostringstream os;
+    os << prefix << "::" << field << " = " << value << "; " << constraint;
+    *why = os.str();
+  }
+  return false;
+}
+
+// Plane-stress reduced stiffness of an isotropic layer per unit modulus.
+Eigen::Matrix3d ReducedStiffnessShape(double nu) {
+  Eigen::Matrix3d q;
+  q << 1.0, nu, 0.0, nu, 1.0, 0.0, 0.0, 0.0, 0.5 * (1.0 - nu);
+  return q / (1.0 - nu * nu);
+}
+
+}  // namespace
+
+bool Layer::IsValid(std::string* why, const std::string& prefix) const {
+  if (!(thickness > 0.0)) return Fail(why, prefix, "thickness", thickness, "must be > 0");
+  if (!(youngs_modulus > 0.0)) {
+    return Fail(why, prefix, "youngs_modulus", youngs_modulus, "must be > 0");
+  }
+  if (!(poisson_ratio > -1.0 && poisson_ratio < 0.5)) {
+    return Fail(why, prefix, "poisson_ratio", poisson_ratio, "must be in (-1, 0.5)");
+  }
+  if (!(density > 0.0)) return Fail(why, prefix, "density", density, "must be > 0");
+  if (!(loss_factor >= 0.0)) return Fail(why, prefix, "loss_factor", loss_factor, "must be >= 0");
+  return true;
+}
+
+PlateSection EquivalentSingleLayer(const std::vector<Layer>& layers) {
+  COMBABC_CHECK(!layers.empty());
+  // Neutral plane: the height where the E/(1-nu^2)-weighted first moment vanishes.
+  double weight = 0.0;
+  double first_moment = 0.0;
+  double z = 0.0;
+  PlateSection section;
+  for (const Layer& layer : layers) {
+    const double q11 = layer.youngs_modulus / (1.0 - layer.poisson_ratio * layer.poisson_ratio);
+    weight += q11 * layer.thickness;
+    first_moment += q11 * layer.thickness * (z + 0.5 * layer.thickness);
+    section.mass_per_area += layer.density * layer.thickness;
+    z += layer.thickness;
+  }
+  section.thickness = z;
+  section.neutral_plane = first_moment / weight;
+  z = 0.0;
+  for (const Layer& layer : layers) {
+    const double bottom = z - section.neutral_plane;
+    const double top = bottom + layer.thickness;
+    const double second_moment = (top * top * top - bottom * bottom * bottom) / 3.0;
+    const Eigen::Matrix3d d =
+        layer.youngs_modulus * second_moment * ReducedStiffnessShape(layer.poisson_ratio);
+    section.bending_real += d;
+    section.bending_imag += layer.loss_factor * d;
+    z += layer.thickness;
+  }
+  return section;
+}
+
+PlateSection IsotropicSection(double thickness,
+                              double youngs_modulus,
+                              double poisson_ratio,
+                              double density,
+                              double loss_factor) {
+  Layer layer;
+  layer.thickness = thickness;
+  layer.youngs_modulus = youngs_modulus;
+  layer.poisson_ratio = poisson_ratio;
+  layer.density = density;
+  layer.loss_factor = loss_factor;
+  return EquivalentSingleLayer({layer});
+}
+
+}  // namespace combabc::plate

@@ -1,0 +1,339 @@
+#include "combabc/plate/plate.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <utility>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+
+namespace combabc::plate {
+namespace {
+
+// Index of the interval [v[k], v[k+1]] that contains t (clamped to the ends).
+int Locate(const std::vector<double>& v, double t) {
+  const auto it = std::upper_bound(v.begin(), v.end(), t);
+  int k = static_cast<int>(it - v.begin()) - 1;
+  return std::clamp(k, 0, static_cast<int>(v.size()) - 2);
+}
+
+void CheckAxis(const std::vector<double>& v, const char* name) {
+  if (v.size() < 2) {
+    throw Error(ErrorKind::kConfig, "a grid axis needs at least 2 nodes", "", 0, name);
+  }
+  for (std::size_t k = 1; k < v.size(); ++k) {
+    if (!(v[k] > v[k - 1])) {
+      throw Error(ErrorKind::kConfig, "grid coordinates must increase strictly", "", 0, name);
+    }
+  }
+}
+
+}  // namespace
+
+const char* ToString(Support support) {
+  switch (support) {
+    case Support::kFree:
+      return "free";
+    case Support::kSimplySupported:
+      return "simply_supported";
+    case Support::kClamped:
+      return "clamped";
+  }
+  return "unknown";
+}
+
+bool FromString(std::string_view text, Support* support) {
+  for (Support s : {Support::kFree, Support::kSimplySupported, Support::kClamped}) {
+    if (text == ToString(s)) {
+      *support = s;
+      return true;
+    }
+  }
+  return false;
+}
+
+Grid UniformGrid(double length, double width, int nx, int ny) {
+  COMBABC_CHECK(nx > 0 && ny > 0 && length > 0.0 && width > 0.0);
+  Grid grid;
+  for (int i = 0; i <= nx; ++i) grid.x.push_back(length * i / nx);
+  for (int j = 0; j <= ny; ++j) grid.y.push_back(width * j / ny);
+  return grid;
+}
+
+std::uint8_t SupportMask(Edge edge, Support support) {
+  switch (support) {
+    case Support::kFree:
+      return 0;
+    case Support::kClamped:
+      return 0xF;
+    case Support::kSimplySupported:
+      // w = 0 along the edge also makes its tangential derivative vanish: w_x on y = const edges
+      // (bit 1), w_y on x = const edges (bit 2). The normal slope and the twist stay free.
+      return (edge == Edge::kBottom || edge == Edge::kTop) ? 0x3 : 0x5;
+  }
+  return 0;
+}
+
+Constraints::Constraints(const Grid& grid)
+    : x_(grid.x), y_(grid.y), masks_(grid.x.size() * grid.y.size(), 0) {}
+
+void Constraints::AddEdgeSupport(Edge edge, Support support) {
+  const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
+  const std::vector<double>& axis = along_x ? x_ : y_;
+  AddEdgeSupport(edge, axis.front(), axis.back(), support);
+}
+
+void Constraints::AddEdgeSupport(Edge edge, double from, double to, Support support) {
+  const std::uint8_t mask = SupportMask(edge, support);
+  const int ny1 = static_cast<int>(y_.size());
+  const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
+  const std::vector<double>& axis = along_x ? x_ : y_;
+  const double tol = 1e-9 * (axis.back() - axis.front());
+  for (std::size_t k = 0; k < axis.size(); ++k) {
+    if (axis[k] < from - tol || axis[k] > to + tol) continue;
+    const int kk = static_cast<int>(k);
+    int node = 0;
+    switch (edge) {
+      case Edge::kBottom:
+        node = kk * ny1;
+        break;
+      case Edge::kTop:
+        node = kk * ny1 + ny1 - 1;
+        break;
+      case Edge::kLeft:
+        node = kk;
+        break;
+      case Edge::kRight:
+        node = static_cast<int>(x_.size() - 1) * ny1 + kk;
+        break;
+    }
+    masks_[node] |= mask;
+  }
+}
+
+int Constraints::num_fixed() const {
+  int n = 0;
+  for (std::uint8_t m : masks_) n += std::popcount(m);
+  return n;
+}
+
+Plate::Plate(Grid grid,
+             PlateSection section,
+             double foundation_stiffness,
+             double foundation_loss_factor)
+    : grid_(std::move(grid)),
+      section_(std::move(section)),
+      foundation_stiffness_(foundation_stiffness),
+      foundation_loss_factor_(foundation_loss_factor) {
+  CheckAxis(grid_.x, "Grid::x");
+  CheckAxis(grid_.y, "Grid::y");
+  const int nx = grid_.nx();
+  const int ny = grid_.ny();
+  element_kind_.resize(static_cast<std::size_t>(nx) * ny);
+  std::vector<std::pair<double, double>> sizes;
+  for (int ex = 0; ex < nx; ++ex) {
+    for (int ey = 0; ey < ny; ++ey) {
+      const double hx = grid_.x[ex + 1] - grid_.x[ex];
+      const double hy = grid_.y[ey + 1] - grid_.y[ey];
+      // Elements of equal size (to 1e-12 relative) share one set of matrices.
+      int kind = -1;
+      for (std::size_t k = 0; k < sizes.size(); ++k) {
+        if (std::abs(sizes[k].first - hx) <= 1e-12 * hx &&
+            std::abs(sizes[k].second - hy) <= 1e-12 * hy) {
+          kind = static_cast<int>(k);
+          break;
+        }
+      }
+      if (kind < 0) {
+        kind = static_cast<int>(sizes.size());
+        sizes.emplace_back(hx, hy);
+        unique_elements_.push_back(
+            ComputeElementMatrices(hx, hy, section_.bending_real, section_.bending_imag));
+      }
+      element_kind_[ex * ny + ey] = kind;
+    }
+  }
+}
+
+int Plate::ElementDof(int ex, int ey, int local) const {
+  const int corner = local / kDofsPerNode;
+  const int a = corner & 1;
+  const int b = corner >> 1;
+  return kDofsPerNode * Node(ex + a, ey + b) + local % kDofsPerNode;
+}
+
+std::complex<double> Plate::MassCoefficient(double frequency_hz) const {
+  const double omega = 2.0 * M_PI * frequency_hz;
+  return {foundation_stiffness_ - omega * omega * section_.mass_per_area,
+          foundation_stiffness_ * foundation_loss_factor_};
+}
+
+Eigen::VectorXd Plate::LoadVector(const Load& load) const {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(num_dofs());
+  const double length = grid_.x.back();
+  const double width = grid_.y.back();
+  if (load.patch_length <= 0.0 || load.patch_width <= 0.0) {
+    int dofs[kElementDofs];
+    ElementVector row;
+    InterpolationRow(load.x, load.y, dofs, &row);
+    for (int k = 0; k < kElementDofs; ++k) f(dofs[k]) += load.force * row(k);
+    return f;
+  }
+  const double x0 = std::max(0.0, load.x - 0.5 * load.patch_length);
+  const double x1 = std::min(length, load.x + 0.5 * load.patch_length);
+  const double y0 = std::max(0.0, load.y - 0.5 * load.patch_width);
+  const double y1 = std::min(width, load.y + 0.5 * load.patch_width);
+  COMBABC_CHECK(x1 > x0 && y1 > y0);
+  const double pressure = load.force / ((x1 - x0) * (y1 - y0));
+  for (int ex = 0; ex < grid_.nx(); ++ex) {
+    const double ax = std::max(x0, grid_.x[ex]);
+    const double bx = std::min(x1, grid_.x[ex + 1]);
+    if (bx <= ax) continue;
+    for (int ey = 0; ey < grid_.ny(); ++ey) {
+      const double ay = std::max(y0, grid_.y[ey]);
+      const double by = std::min(y1, grid_.y[ey + 1]);
+      if (by <= ay) continue;
+      const ElementVector fe = ShapeIntegral(grid_.x[ex + 1] - grid_.x[ex],
+                                             grid_.y[ey + 1] - grid_.y[ey],
+                                             ax - grid_.x[ex],
+                                             bx - grid_.x[ex],
+                                             ay - grid_.y[ey],
+                                             by - grid_.y[ey]);
+      for (int k = 0; k < kElementDofs; ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
+    }
+  }
+  return f;
+}
+
+Eigen::SparseMatrix<std::complex<double>> Plate::DynamicStiffness(
+    const Constraints& constraints, double frequency_hz, std::vector<int>* free_dofs) const {
+  std::vector<int> map(num_dofs(), -1);
+  free_dofs->clear();
+  for (int d = 0; d < num_dofs(); ++d) {
+    if (!constraints.IsFixed(d)) {
+      map[d] = static_cast<int>(free_dofs->size());
+      free_dofs->push_back(d);
+    }
+  }
+  const std::complex<double> mass_coefficient = MassCoefficient(frequency_hz);
+  const std::complex<double> i_unit(0.0, 1.0);
+  std::vector<Eigen::Triplet<std::complex<double>>> triplets;
+  triplets.reserve(static_cast<std::size_t>(grid_.nx()) * grid_.ny() * kElementDofs * kElementDofs);
+  for (int ex = 0; ex < grid_.nx(); ++ex) {
+    for (int ey = 0; ey < grid_.ny(); ++ey) {
+      const ElementMatrices& e = Element(ex, ey);
+      int global[kElementDofs];
+      for (int k = 0; k < kElementDofs; ++k) global[k] = map[ElementDof(ex, ey, k)];
+      for (int c = 0; c < kElementDofs; ++c) {
+        if (global[c] < 0) continue;
+        for (int r = 0; r < kElementDofs; ++r) {
+          if (global[r] < 0) continue;
+          triplets.emplace_back(global[r],
+                                global[c],
+                                e.stiffness_real(r, c) + i_unit * e.stiffness_imag(r, c) +
+                                    mass_coefficient * e.mass_unit(r, c));
+        }
+      }
+    }
+  }
+  const int n = static_cast<int>(free_dofs->size());
+  Eigen::SparseMatrix<std::complex<double>> a(n, n);
+  a.setFromTriplets(triplets.begin(), triplets.end());
+  return a;
+}
+
+Eigen::VectorXd Plate::SolveStatic(const Constraints& constraints, const Load& load) const {
+  std::vector<int> free_dofs;
+  // Static: zero frequency; keep only the real parts (no damping in a static solve).
+  const Eigen::SparseMatrix<double> a = DynamicStiffness(constraints, 0.0, &free_dofs).real();
+  const Eigen::VectorXd f_all = LoadVector(load);
+  Eigen::VectorXd f(static_cast<Eigen::Index>(free_dofs.size()));
+  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+    f(static_cast<Eigen::Index>(k)) = f_all(free_dofs[k]);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);  // real SPD: LDL^T is right here
+  if (solver.info() != Eigen::Success || (solver.vectorD().array() <= 0.0).any()) {
+    throw Error(ErrorKind::kConfig, "static stiffness is singular: the plate is not supported");
+  }
+  const Eigen::VectorXd x = solver.solve(f);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(num_dofs());
+  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+    u(free_dofs[k]) = x(static_cast<Eigen::Index>(k));
+  return u;
+}
+
+Eigen::VectorXcd Plate::SolveHarmonic(const Constraints& constraints,
+                                      const Load& load,
+                                      double frequency_hz) const {
+  return SolveHarmonic(constraints, LoadVector(load), frequency_hz);
+}
+
+Eigen::VectorXcd Plate::SolveHarmonic(const Constraints& constraints,
+                                      const Eigen::VectorXd& load_vector,
+                                      double frequency_hz) const {
+  std::vector<int> free_dofs;
+  Eigen::SparseMatrix<std::complex<double>> a =
+      DynamicStiffness(constraints, frequency_hz, &free_dofs);
+  a.makeCompressed();
+  Eigen::VectorXcd f(static_cast<Eigen::Index>(free_dofs.size()));
+  for (std::size_t k = 0; k < free_dofs.size(); ++k) {
+    f(static_cast<Eigen::Index>(k)) = load_vector(free_dofs[k]);
+  }
+  // Symmetric Jacobi scaling: the BFS dofs w, w_x, w_y, w_xy carry different units, so on graded
+  // meshes the unscaled matrix is badly conditioned; S A S with S = |diag A|^{-1/2} is not.
+  const Eigen::VectorXd scale = a.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+  a = scale.asDiagonal() * a * scale.asDiagonal();
+  a.makeCompressed();
+  Eigen::SparseLU<Eigen::SparseMatrix<std::complex<double>>, Eigen::COLAMDOrdering<int>> solver;
+  solver.compute(a);
+  if (solver.info() != Eigen::Success) {
+    throw Error(ErrorKind::kSoftware,
+                "sparse LU of the dynamic stiffness failed: " + solver.lastErrorMessage());
+  }
+  const Eigen::VectorXcd scaled_f = scale.asDiagonal() * f;
+  Eigen::VectorXcd y = solver.solve(scaled_f);
+  // Two steps of iterative refinement: cheap next to the factorization, and they take the
+  // reference path to round-off even on strongly graded meshes.
+  for (int step = 0; step < 2; ++step) {
+    const Eigen::VectorXcd residual = scaled_f - a * y;
+    y += solver.solve(residual);
+  }
+  const Eigen::VectorXcd x = scale.asDiagonal() * y;
+  Eigen::VectorXcd u = Eigen::VectorXcd::Zero(num_dofs());
+  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+    u(free_dofs[k]) = x(static_cast<Eigen::Index>(k));
+  return u;
+}
+
+void Plate::InterpolationRow(double x, double y, int dofs[kElementDofs], ElementVector* row) const {
+  const int ex = Locate(grid_.x, x);
+  const int ey = Locate(grid_.y, y);
+  *row = ShapeValues(grid_.x[ex + 1] - grid_.x[ex],
+                     grid_.y[ey + 1] - grid_.y[ey],
+                     x - grid_.x[ex],
+                     y - grid_.y[ey]);
+  for (int k = 0; k < kElementDofs; ++k) dofs[k] = ElementDof(ex, ey, k);
+}
+
+double Plate::Deflection(const Eigen::VectorXd& u, double x, double y) const {
+  int dofs[kElementDofs];
+  ElementVector row;
+  InterpolationRow(x, y, dofs, &row);
+  double w = 0.0;
+  for (int k = 0; k < kElementDofs; ++k) w += row(k) * u(dofs[k]);
+  return w;
+}
+
+std::complex<double> Plate::Deflection(const Eigen::VectorXcd& u, double x, double y) const {
+  int dofs[kElementDofs];
+  ElementVector row;
+  InterpolationRow(x, y, dofs, &row);
+  std::complex<double> w = 0.0;
+  for (int k = 0; k < kElementDofs; ++k) w += row(k) * u(dofs[k]);
+  return w;
+}
+
+}  // namespace combabc::plate

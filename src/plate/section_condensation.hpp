@@ -1,0 +1,100 @@
+#pragma once
+// Exact fast re-analysis of a plate whose only varying boundary conditions are switchable edge
+// sections (docs/model.md, "Section condensation").
+//
+// The mesh has node lines on the section boundaries x_0 < ... < x_S. For each section s and each
+// of its 4 clamp states (edge A fixed?, edge B fixed?) the section's interior dofs (nodes strictly
+// between x_s and x_{s+1}, less those fixed by the state) are condensed, by a sparse LU, onto the
+// dofs of its two end cross-sections, which are all kept:
+//   C = S_BB - S_BI S_II^{-1} S_IB,  g = -S_BI S_II^{-1} f_I,
+// together with the map from the end cross-sections to the outputs inside the section,
+//   w_out = r_I S_II^{-1} f_I + (r_B - r_I S_II^{-1} S_IB) u_B.
+// Pieces of `group_size` consecutive sections are then composed, for each of their 4^group_size
+// states, by eliminating the cross-sections inside the group (dense Schur complements of the
+// section pieces), so a configuration's system has num_sections / group_size + 1 block rows.
+// The plate's two end cross-sections are folded into the first and last groups (their
+// constraints depend only on those groups' states and the short edges), leaving the
+// num_sections / group_size - 1 inner group boundaries as unknowns.
+// A configuration then assembles the block-tridiagonal system on the S + 1 cross-sections from the
+// cached pieces, removes the cross-section dofs that either adjoining section fixes (and those of
+// the short edges), solves it by block elimination and recovers the outputs. Every step is exact
+// algebra on the same discrete system as the full solve.
+#include <array>
+#include <complex>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "combabc/plate/plate.hpp"
+
+namespace combabc::plate {
+
+class SectionCondensation {
+ public:
+  // `plate` must have num_sections * elements_per_section elements along x. Masks: dofs fixed on
+  // an edge-A / edge-B node by a fixed section, and on every node of the first / last
+  // cross-section by the short edges.
+  // group_size must divide num_sections (1 disables grouping).
+  SectionCondensation(const Plate& plate,
+                      int num_sections,
+                      int elements_per_section,
+                      int group_size,
+                      std::uint8_t fixed_mask_a,
+                      std::uint8_t fixed_mask_b,
+                      std::uint8_t start_mask,
+                      std::uint8_t end_mask,
+                      const Eigen::VectorXd& load_vector,
+                      double frequency_hz,
+                      const std::vector<double>& output_x,
+                      double output_y,
+                      bool always_pivot = false);
+
+  // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at the outputs.
+  void Solve(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
+
+  int num_pieces() const { return static_cast<int>(group_pieces_.size()); }
+  std::size_t MemoryBytes() const;
+
+ private:
+  struct Piece {
+    Eigen::MatrixXcd condensed;      // 2 nc x 2 nc, [left; right] cross-section dofs
+    Eigen::VectorXcd load;           // 2 nc
+    Eigen::MatrixXcd output_map;     // outputs in the section x 2 nc
+    Eigen::VectorXcd output_offset;  // outputs in the section
+    int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
+    int right_size = 0;  // likewise for the right end
+  };
+  Piece Condense(const Plate& plate,
+                 int section,
+                 int state,
+                 const Eigen::VectorXd& load_vector,
+                 double frequency_hz,
+                 const std::vector<double>& output_x,
+                 double output_y) const;
+  Piece ComposeGroup(int group, int state) const;
+  const Piece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
+  // Free dofs (0..nc-1) of a cross-section between sections with edge-A / edge-B flags.
+  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const;
+
+  int num_sections_;
+  int elements_per_section_;
+  int ny_;
+  int nc_;  // dofs per cross-section, 4 (ny + 1)
+  std::uint8_t fixed_mask_a_;
+  std::uint8_t fixed_mask_b_;
+  std::uint8_t start_mask_;
+  std::uint8_t end_mask_;
+  std::vector<Piece> pieces_;
+  std::vector<std::array<int, 4>> piece_index_;  // [section][state] -> pieces_ (deduplicated)
+  std::vector<std::vector<int>> section_outputs_;
+  int group_size_;
+  bool always_pivot_;
+  std::vector<Piece> group_pieces_;
+  std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
+  std::vector<std::vector<int>> group_outputs_;
+  std::vector<Eigen::VectorXcd> boundary_load_;  // load vector on each cross-section
+};
+
+}  // namespace combabc::plate

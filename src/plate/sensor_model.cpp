@@ -1,0 +1,198 @@
+#include "combabc/plate/sensor_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/core/thread_pool.hpp"
+#include "section_condensation.hpp"
+
+namespace combabc::plate {
+namespace {
+
+// Graded position of node k of n in [0, 1] (SensorOptions::length_grading).
+double Graded(int k, int n, double grading) {
+  const double t = static_cast<double>(k) / n;
+  return t <= 0.5 ? 0.5 * std::pow(2.0 * t, grading) : 1.0 - 0.5 * std::pow(2.0 - 2.0 * t, grading);
+}
+
+// Node lines on every section boundary, `elements_per_section` elements in each section.
+Grid SensorGrid(const SensorOptions& o) {
+  Grid grid;
+  const double section = o.length / o.clamps_per_edge;
+  for (int s = 0; s < o.clamps_per_edge; ++s) {
+    for (int e = 0; e < o.elements_per_section; ++e) {
+      grid.x.push_back(section * (s + Graded(e, o.elements_per_section, o.length_grading)));
+    }
+  }
+  grid.x.push_back(o.length);
+  for (int j = 0; j <= o.elements_across_width; ++j) {
+    grid.y.push_back(o.width * Graded(j, o.elements_across_width, o.width_grading));
+  }
+  grid.y.back() = o.width;
+  return grid;
+}
+
+Load SensorLoad(const SensorOptions& o) {
+  Load load;
+  load.x = o.load_x;
+  load.y = o.load_y_fraction * o.width;
+  load.force = o.load_force;
+  if (o.load_patch_length > 0.0 && o.load_patch_width > 0.0) {
+    load.patch_length = o.load_patch_length;
+    load.patch_width = o.load_patch_width;
+  }
+  return load;
+}
+
+}  // namespace
+
+SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
+  std::string why;
+  if (!options_.IsValid(&why)) {
+    const std::string field = why.substr(0, why.find(' '));
+    throw Error(ErrorKind::kConfig, why, "", 0, field);
+  }
+  plate_ = std::make_unique<Plate>(SensorGrid(options_),
+                                   EquivalentSingleLayer(options_.layers),
+                                   options_.foundation_stiffness,
+                                   options_.foundation_loss_factor);
+  condensation_ = std::make_unique<SectionCondensation>(
+      *plate_,
+      options_.clamps_per_edge,
+      options_.elements_per_section,
+      // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
+      // cross-sections per configuration, ~18 MiB of pieces (docs/model.md).
+      options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
+      SupportMask(Edge::kBottom, options_.fixed_support),
+      SupportMask(Edge::kTop, options_.fixed_support),
+      SupportMask(Edge::kLeft, options_.short_edge_start),
+      SupportMask(Edge::kRight, options_.short_edge_end),
+      plate_->LoadVector(SensorLoad(options_)),
+      options_.frequency_hz,
+      options_.output_positions,
+      options_.output_y_fraction * options_.width,
+      options_.always_pivot);
+}
+
+SensorModel::~SensorModel() = default;
+
+std::size_t SensorModel::PrecomputedBytes() const { return condensation_->MemoryBytes(); }
+
+void SensorModel::CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const {
+  if (clamps.size() != static_cast<std::size_t>(num_clamps())) {
+    throw Error(ErrorKind::kConfig,
+                "clamps must have num_clamps() = " + std::to_string(num_clamps()) + " entries",
+                "",
+                0,
+                "clamps");
+  }
+  if (out_size != static_cast<std::size_t>(num_outputs())) {
+    throw Error(ErrorKind::kConfig,
+                "out must have num_outputs() = " + std::to_string(num_outputs()) + " entries",
+                "",
+                0,
+                "out");
+  }
+}
+
+void SensorModel::Finish(std::span<const std::complex<double>> w, std::span<double> out) const {
+  double peak = 0.0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    out[k] = std::abs(w[k]);
+    peak = std::max(peak, out[k]);
+  }
+  if (options_.normalise && peak > 0.0) {
+    for (double& v : out) v /= peak;
+  }
+}
+
+void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
+                                 std::span<std::complex<double>> out) const {
+  CheckSpans(clamps, out.size());
+  condensation_->Solve(clamps, out);
+}
+
+void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const {
+  CheckSpans(clamps, out.size());
+  std::vector<std::complex<double>> w(out.size());
+  condensation_->Solve(clamps, w);
+  Finish(w, out);
+}
+
+Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> clamps) const {
+  const int n = options_.clamps_per_edge;
+  COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
+  Constraints c(plate_->grid());
+  const std::vector<double>& x = plate_->grid().x;
+  const int m = options_.elements_per_section;
+  for (int s = 0; s < n; ++s) {
+    // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
+    if (clamps[s] != 0)
+      c.AddEdgeSupport(Edge::kBottom, x[s * m], x[(s + 1) * m], options_.fixed_support);
+    if (clamps[n + s] != 0)
+      c.AddEdgeSupport(Edge::kTop, x[s * m], x[(s + 1) * m], options_.fixed_support);
+  }
+  c.AddEdgeSupport(Edge::kLeft, options_.short_edge_start);
+  c.AddEdgeSupport(Edge::kRight, options_.short_edge_end);
+  return c;
+}
+
+Eigen::VectorXcd SensorModel::Field(std::span<const std::uint8_t> clamps) const {
+  CheckSpans(clamps, static_cast<std::size_t>(num_outputs()));
+  return plate_->SolveHarmonic(
+      ConfigurationConstraints(clamps), SensorLoad(options_), options_.frequency_hz);
+}
+
+void SensorModel::ProfileFullSolve(std::span<const std::uint8_t> clamps,
+                                   std::span<double> out) const {
+  CheckSpans(clamps, out.size());
+  const Eigen::VectorXcd u = Field(clamps);
+  std::vector<std::complex<double>> w(out.size());
+  const double y = options_.output_y_fraction * options_.width;
+  for (std::size_t k = 0; k < w.size(); ++k)
+    w[k] = plate_->Deflection(u, options_.output_positions[k], y);
+  Finish(w, out);
+}
+
+void SensorModel::ProfileBatch(std::span<const std::uint8_t> clamps,
+                               std::size_t n,
+                               std::span<double> out,
+                               int threads) const {
+  const std::size_t nk = static_cast<std::size_t>(num_clamps());
+  const std::size_t no = static_cast<std::size_t>(num_outputs());
+  if (clamps.size() != n * nk || out.size() != n * no) {
+    throw Error(ErrorKind::kConfig,
+                "ProfileBatch: clamps must be n x num_clamps and out n x num_outputs",
+                "",
+                0,
+                "clamps");
+  }
+  if (threads < 0) throw Error(ErrorKind::kConfig, "threads must be >= 0", "", 0, "threads");
+  // Each configuration writes only its own row, so the result does not depend on the schedule.
+  ThreadPool pool(threads);
+  pool.ParallelFor(n, 16, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Profile(clamps.subspan(i * nk, nk), out.subspan(i * no, no));
+    }
+  });
+}
+
+SensorModes SensorModel::Modes(std::span<const std::uint8_t> clamps, int count) const {
+  CheckSpans(clamps, static_cast<std::size_t>(num_outputs()));
+  const plate::Modes modes = plate_->ComputeModes(ConfigurationConstraints(clamps), count);
+  SensorModes result;
+  result.frequencies_hz = modes.frequencies_hz;
+  result.shapes.resize(num_outputs(), count);
+  const double y = options_.output_y_fraction * options_.width;
+  for (int c = 0; c < count; ++c) {
+    const Eigen::VectorXd shape = modes.shapes.col(c);
+    for (int k = 0; k < num_outputs(); ++k) {
+      result.shapes(k, c) = plate_->Deflection(shape, options_.output_positions[k], y);
+    }
+  }
+  return result;
+}
+
+}  // namespace combabc::plate
