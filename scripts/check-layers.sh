@@ -13,7 +13,7 @@ declare -A allowed=(
   [samplers]="core rng params proposals distances schedules samplers"
   [plate]="core plate"
   [io]="core rng params proposals distances schedules samplers plate io metrics"
-  [metrics]="core rng distances metrics io"
+  [metrics]="core rng params distances schedules samplers plate metrics io"
   [services]="core rng params proposals distances schedules samplers plate io metrics services"
 )
 status=0

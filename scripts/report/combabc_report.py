@@ -212,18 +212,20 @@ def wave_label(w):
     return label if w.complete else label + " (incomplete)"
 
 
-def thresholds_text(w, run, prefix=", "):
+def thresholds_text(w, run, prefix=", ", compact=False):
     if not w.thresholds.size:
         return ""
-    return prefix + _thresholds(w, run)
+    return prefix + _thresholds(w, run, compact)
 
 
-def _thresholds(w, run):
+def _thresholds(w, run, compact=False):
     names = [name for name, kind in run["components"] if kind == "threshold"]
     if len(names) != len(w.thresholds):
         names = [f"ε{k + 1}" for k in range(len(w.thresholds))]
     if len(w.thresholds) == 1:
         return f"ε = {w.thresholds[0]:.3g}"
+    if compact:  # panel titles: the component names are in the per-wave figures and the table
+        return "ε = (" + ", ".join(f"{e:.3g}" for e in w.thresholds) + ")"
     return ", ".join(f"ε[{n}] = {e:.3g}" for n, e in zip(names, w.thresholds))
 
 
@@ -315,7 +317,7 @@ def save(fig, out, name):
 def curves_figure(w, run, estimator, out):
     fig, ax = plt.subplots(figsize=(6.4, 4.3))
     draw_curves(ax, w, run)
-    ax.set_title(f"{wave_label(w)}: accepted curves{thresholds_text(w, run)}")
+    ax.set_title(f"{wave_label(w)}: accepted curves{thresholds_text(w, run, compact=True)}")
     # Below the axes: inside, it would hide curves or data wherever the peak happens to be.
     ax.legend(handles=curve_handles(w.curves.shape[0], run), loc="upper center",
               bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
@@ -355,7 +357,7 @@ def overview_figure(waves, run, estimator, out):
             else:
                 ax.text(0.5, 0.5, "no curves stored", ha="center", va="center",
                         transform=ax.transAxes)
-            ax.set_title(f"{label}{thresholds_text(w, run)}", loc="left")
+            ax.set_title(f"{label}{thresholds_text(w, run, compact=True)}", loc="left")
         bar_axes = axes[row][1 if has_curves else 0:]
         # Without a curve column the wave label takes the left of the first title line.
         draw_marginals(bar_axes, w, run, estimator, tick_step=tick_step, titles=row == 0,

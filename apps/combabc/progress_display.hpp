@@ -1,0 +1,87 @@
+#pragma once
+// The run's progress on stderr: on a terminal a single updating line per wave (wave, accepted /
+// needed, acceptance rate, ETA); otherwise one line per finished wave, so logs stay readable.
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+
+#include "combabc/samplers/observer.hpp"
+
+namespace combabc::cli {
+
+class ProgressDisplay : public SmcObserver {
+ public:
+  ProgressDisplay(const std::atomic<bool>* interrupted, bool terminal)
+      : interrupted_(interrupted), terminal_(terminal) {}
+
+  void OnWaveStart(const WaveRecord& wave) override {
+    wave_start_ = std::chrono::steady_clock::now();
+    wave_ = wave.wave;
+  }
+
+  void OnBatch(const BatchProgress& p, std::span<const Particle>) override {
+    if (!terminal_) return;
+    const double elapsed = Elapsed();
+    const auto accepted = static_cast<double>(p.accepted);
+    const double rate = p.next_index > 0 ? accepted / static_cast<double>(p.next_index) : 0.0;
+    const double eta = p.accepted > 0 ? elapsed * (p.accepted_needed - accepted) / accepted : 0.0;
+    constexpr int kWidth = 24;
+    const int filled = static_cast<int>(kWidth * p.accepted / std::max(1, p.accepted_needed));
+    char bar[kWidth + 1];
+    for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
+    bar[kWidth] = '\0';
+    std::fprintf(stderr,
+                 "\rwave %d [%s] %lld/%d accepted  rate %.4f  %lld sims  %.1f s  ETA %.1f s  ",
+                 p.wave,
+                 bar,
+                 static_cast<long long>(p.accepted),
+                 p.accepted_needed,
+                 rate,
+                 static_cast<long long>(p.total_simulations),
+                 elapsed,
+                 eta);
+    std::fflush(stderr);
+    dirty_ = true;
+  }
+
+  void OnWaveEnd(const WaveRecord& w) override {
+    Clear();
+    std::string eps;
+    for (double e : w.thresholds) eps += (eps.empty() ? "" : ",") + Format(e);
+    std::fprintf(stderr,
+                 "wave %d: eps %s  %lld/%lld accepted (rate %.4f)  ESS %.0f  %.2f s%s\n",
+                 w.wave,
+                 eps.c_str(),
+                 static_cast<long long>(w.accepted),
+                 static_cast<long long>(w.candidates),
+                 w.acceptance_rate,
+                 w.ess,
+                 w.wall_seconds,
+                 w.complete ? "" : "  (incomplete)");
+  }
+
+  bool ShouldStop() override { return interrupted_ && interrupted_->load(); }
+
+  void Clear() {
+    if (dirty_) std::fputs("\r\033[K", stderr);
+    dirty_ = false;
+  }
+
+ private:
+  static std::string Format(double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", x);
+    return b;
+  }
+  double Elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wave_start_).count();
+  }
+
+  const std::atomic<bool>* interrupted_;
+  bool terminal_;
+  bool dirty_ = false;
+  int wave_ = 0;
+  std::chrono::steady_clock::time_point wave_start_;
+};
+
+}  // namespace combabc::cli

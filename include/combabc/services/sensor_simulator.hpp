@@ -1,0 +1,27 @@
+#pragma once
+// The built-in plate model of the sensor as an engine Simulator: bits are the 36 clamps
+// (1 = fixed), the output is |w| along the centreline at the model's output positions.
+#include <memory>
+
+#include "combabc/plate/sensor_model.hpp"
+#include "combabc/samplers/simulator.hpp"
+
+namespace combabc::services {
+
+class SensorSimulator : public Simulator {
+ public:
+  explicit SensorSimulator(const plate::SensorOptions& options);
+  int output_size() const override { return model_.num_outputs(); }
+  void Simulate(std::span<const std::uint8_t> bits,
+                RandomStream& rng,
+                std::span<double> out) const override;
+  void SimulateBatch(std::span<const std::uint8_t> bits,
+                     std::span<RandomStream> rngs,
+                     std::span<double> out) const override;
+  const plate::SensorModel& model() const { return model_; }
+
+ private:
+  plate::SensorModel model_;
+};
+
+}  // namespace combabc::services

@@ -1,0 +1,152 @@
+#include "combabc/services/calibration.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <optional>
+#include <thread>
+
+#include "combabc/core/error.hpp"
+#include "combabc/io/history_store.hpp"
+#include "combabc/io/measured_data.hpp"
+#include "combabc/metrics/composite_distance.hpp"
+#include "combabc/params/binary_space.hpp"
+#include "combabc/samplers/combinatorial_smc.hpp"
+#include "combabc/services/sensor_simulator.hpp"
+#include "services/fan_out_observer.hpp"
+
+#ifndef COMBABC_GIT_HASH
+#define COMBABC_GIT_HASH ""
+#endif
+
+namespace combabc::services {
+namespace fs = std::filesystem;
+namespace {
+
+// Everything a run needs besides its history: built identically for a new run and a resume,
+// which is what makes a resumed history equal to an uninterrupted one.
+struct Problem {
+  CalibrationConfig config;
+  std::vector<double> data_positions;  // metres
+  std::vector<double> data_values;
+  std::unique_ptr<SensorSimulator> simulator;
+  std::unique_ptr<CompositeDistance> distance;
+  std::optional<BinarySpace> space;
+
+  SmcProblem view() const { return {&*space, simulator.get(), distance.get()}; }
+};
+
+void BuildModel(Problem& p) {
+  p.simulator = std::make_unique<SensorSimulator>(p.config.model);
+  const int clamps = p.simulator->model().num_clamps();
+  if (p.config.space.dimension != clamps) {
+    throw Error(ErrorKind::kConfig,
+                "the sampler has " + std::to_string(p.config.space.dimension) +
+                    " bits; the model has " + std::to_string(clamps) + " clamps",
+                p.config.path,
+                0,
+                "model");
+  }
+  p.space.emplace(p.config.space);
+  CompositeDistanceOptions distance_options;
+  distance_options.normalise_simulated = p.config.data.normalise;
+  p.distance = std::make_unique<CompositeDistance>(p.config.metric.components,
+                                                   p.data_positions,
+                                                   p.data_values,
+                                                   p.simulator->model().output_positions(),
+                                                   distance_options);
+}
+
+RunMetadata Describe(const Problem& p) {
+  RunMetadata m;
+  m.config_text = p.config.text;
+  m.config_path = p.config.path;
+  m.git_hash = COMBABC_GIT_HASH;
+  m.seed = p.config.smc.seed;
+  // 0 means all cores (as ThreadPool resolves it): record how many that was.
+  m.threads = p.config.smc.threads > 0
+                  ? p.config.smc.threads
+                  : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  m.estimator = ToString(p.config.smc.estimator);
+  m.dimension = p.space->dimension();
+  for (int k = 0; k < p.space->dimension(); ++k) m.bit_names.push_back(p.space->name(k));
+  m.bit_prior_one = p.space->bit_prior_one();
+  m.distance_components = p.distance->components();
+  m.output_positions = p.simulator->model().output_positions();
+  m.position_unit = "m";
+  m.measured.positions = p.data_positions;
+  m.measured.values = p.data_values;
+  return m;
+}
+
+RunOutcome Execute(Problem& problem,
+                   HistoryStore& store,
+                   const ResumePoint* resume,
+                   bool report,
+                   SmcObserver* progress) {
+  FanOutObserver observer({&store, progress});
+  RunOutcome outcome;
+  outcome.history_path = store.path();
+  try {
+    outcome.history = RunCombinatorialSmc(problem.view(), problem.config.smc, &observer, resume);
+  } catch (const std::exception& e) {
+    try {
+      store.MarkFailed(e.what());
+    } catch (const std::exception&) {
+      // The store itself may be what failed (disk full); the first error is the one to report.
+    }
+    throw;
+  }
+  store.Finish(outcome.history.summary);
+  if (report) outcome.report_directory = WriteReport(store.path());
+  return outcome;
+}
+
+}  // namespace
+
+RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
+  Problem p;
+  p.config = LoadConfig(request.config_path);
+  if (request.threads >= 0) p.config.smc.threads = request.threads;
+  const auto data = LoadMeasuredData(p.config.data, p.config.directory);
+  p.data_positions = data.positions;
+  p.data_values = data.displacements;
+  BuildModel(p);
+
+  std::string directory = request.output_directory.empty()
+                              ? ResolvePath(p.config.directory, p.config.output.directory)
+                              : request.output_directory;
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) {
+    throw Error(
+        ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+  }
+  const std::string history_path = (fs::path(directory) / p.config.output.database).string();
+  auto store = HistoryStore::Create(history_path, Describe(p), request.overwrite);
+  return Execute(p, store, nullptr, request.report, progress);
+}
+
+RunOutcome ResumeCalibration(const std::string& history_path,
+                             int threads,
+                             bool report,
+                             SmcObserver* progress) {
+  auto store = HistoryStore::Open(history_path);
+  const auto metadata = store.LoadMetadata();
+  if (metadata.status == RunStatus::kFinished) {
+    throw Error(ErrorKind::kUsage,
+                "the run has already finished (" + metadata.termination +
+                    "); nothing to resume. Use 'combabc report' or 'combabc export'",
+                history_path);
+  }
+  Problem p;
+  p.config = ParseConfig(metadata.config_text, metadata.config_path);
+  if (threads >= 0) p.config.smc.threads = threads;
+  // The measured data as the run first used them, not as the CSV reads today.
+  p.data_positions = metadata.measured.positions;
+  p.data_values = metadata.measured.values;
+  BuildModel(p);
+  const auto resume = store.BeginResume();
+  return Execute(p, store, &resume, report, progress);
+}
+
+}  // namespace combabc::services
