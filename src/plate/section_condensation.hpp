@@ -65,6 +65,10 @@ class SectionCondensation {
     Eigen::VectorXcd output_offset;  // outputs in the section
     int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
     int right_size = 0;  // likewise for the right end
+    // Pieces with both ends kept: the coupling block condensed(left, right) = coupling_left *
+    // coupling_right^T (nc x rank each), from its SVD less the singular values at round-off level.
+    Eigen::MatrixXcd coupling_left;
+    Eigen::MatrixXcd coupling_right;
   };
   Piece Condense(const Plate& plate,
                  int section,

@@ -23,8 +23,9 @@ constexpr double kPivotTol = 1e-13;     // |d_j| below this times max |a_ij| cou
 constexpr double kResidualTol = 1e-10;  // relative residual accepted from the LDL^T path
 
 // In place A = L D L^T (unit lower L below the diagonal, D on it), no pivoting and no conjugation.
-// Reads only the lower triangle of A.
-bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a, Eigen::Ref<Eigen::VectorXcd> tmp) {
+// Reads only the lower triangle of A. Right-looking: each step is a rank-1 update of the trailing
+// lower triangle, column by column (contiguous axpys, no small gemv calls).
+bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a) {
   const Eigen::Index n = a.rows();
   // Squared moduli: no hypot calls on the hot path.
   double scale2 = 0.0;
@@ -32,13 +33,14 @@ bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a, Eigen::Ref<Eigen::VectorXcd> tmp
     scale2 = std::max(scale2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
   }
   for (Eigen::Index j = 0; j < n; ++j) {
-    if (j > 0) {
-      tmp.head(j) = a.row(j).head(j).transpose().cwiseProduct(a.diagonal().head(j));
-      a.col(j).tail(n - j).noalias() -= a.block(j, 0, n - j, j) * tmp.head(j);
-    }
     const std::complex<double> d = a(j, j);
     if (!(std::norm(d) > kPivotTol * kPivotTol * scale2)) return false;
     const std::complex<double> inverse = std::conj(d) / std::norm(d);
+    // a(k:n, k) -= a(k:n, j) l_kj with l_kj = a(k, j) / d, for the trailing columns k > j.
+    for (Eigen::Index k = j + 1; k < n; ++k) {
+      const std::complex<double> l = a(k, j) * inverse;
+      a.col(k).segment(k, n - k) -= l * a.col(j).segment(k, n - k);
+    }
     a.col(j).tail(n - j - 1) *= inverse;
   }
   return true;
@@ -49,15 +51,21 @@ struct Workspace {
   int rows = -1;
   std::vector<Eigen::MatrixXcd> factor;    // pivot blocks, LDL^T in place
   std::vector<Eigen::MatrixXcd> diagonal;  // assembled diagonal blocks (for the residual)
-  std::vector<Eigen::MatrixXcd> coupling;  // U_i between rows i and i + 1
-  std::vector<Eigen::MatrixXcd> reduced;   // W_i = L_i^{-1} U_i
+  // Coupling U_i between rows i and i + 1 as P_i Q_i^T (n_i x r_i and n_{i+1} x r_i).
+  std::vector<Eigen::MatrixXcd> p;
+  std::vector<Eigen::MatrixXcd> q;
+  std::vector<Eigen::MatrixXcd> y;  // Y_i = L_i^{-1} P_i
+  std::vector<Eigen::Index> rank;
   std::vector<Eigen::VectorXcd> rhs;
   std::vector<Eigen::VectorXcd> z;
   std::vector<Eigen::VectorXcd> u;
   std::vector<std::vector<int>> free;
   std::vector<std::vector<int>> free_shifted;  // free + nc: the right half of a piece
-  Eigen::MatrixXcd scaled;
+  Eigen::MatrixXcd v;                          // D^{-1} Y
+  Eigen::MatrixXcd s;                          // Y^T D^{-1} Y
+  Eigen::MatrixXcd t;                          // Q S
   Eigen::VectorXcd tmp;
+  Eigen::VectorXcd small;
   Eigen::VectorXcd ends;
   Eigen::VectorXcd values;
 
@@ -67,15 +75,20 @@ struct Workspace {
     rows = std::max(rows_, rows);
     factor.assign(rows, Eigen::MatrixXcd(nc, nc));
     diagonal.assign(rows, Eigen::MatrixXcd(nc, nc));
-    coupling.assign(rows, Eigen::MatrixXcd(nc, nc));
-    reduced.assign(rows, Eigen::MatrixXcd(nc, nc));
+    p.assign(rows, Eigen::MatrixXcd(nc, nc));
+    q.assign(rows, Eigen::MatrixXcd(nc, nc));
+    y.assign(rows, Eigen::MatrixXcd(nc, nc));
+    rank.assign(rows, 0);
     rhs.assign(rows, Eigen::VectorXcd(nc));
     z.assign(rows, Eigen::VectorXcd(nc));
     u.assign(rows + 2, Eigen::VectorXcd(nc));
     free.assign(rows, {});
     free_shifted.assign(rows, {});
-    scaled.resize(nc, nc);
+    v.resize(nc, nc);
+    s.resize(nc, nc);
+    t.resize(nc, nc);
     tmp.resize(nc);
+    small.resize(nc);
     ends.resize(2 * nc);
   }
 };
@@ -101,7 +114,8 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     ws.free_shifted[i] = ws.free[i];
     for (int& d : ws.free_shifted[i]) d += nc;
   }
-  // Assemble: row i gets the right block of group i and the left block of group i + 1.
+  // Assemble: row i gets the right block of group i and the left block of group i + 1; the
+  // coupling of rows i and i + 1 is group i + 1's, in its factored form.
   for (int i = 0; i < rows; ++i) {
     const Piece& left = GroupPieceOf(i, clamps);
     const Piece& right = GroupPieceOf(i + 1, clamps);
@@ -115,10 +129,15 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     ws.rhs[i].head(n) += boundary_load_[(i + 1) * group_size_](f);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      ws.coupling[i].topLeftCorner(n, m) = right.condensed(f, ws.free_shifted[i + 1]);
+      const Eigen::Index r = right.coupling_left.cols();
+      ws.rank[i] = r;
+      ws.p[i].topLeftCorner(n, r) = right.coupling_left(f, Eigen::all);
+      ws.q[i].topLeftCorner(m, r) = right.coupling_right(ws.free[i + 1], Eigen::all);
     }
   }
-  // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - W_i^T D_i^{-1} W_i; z = L^{-1} r'.
+  // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i; z = L^{-1} r'.
+  // With U_i = P_i Q_i^T and Y_i = L_i^{-1} P_i: U_i^T F_i^{-1} U_i = Q_i (Y_i^T D_i^{-1} Y_i)
+  // Q_i^T.
   bool ok = !always_pivot_;
   for (int i = 0; i < rows && ok; ++i) {
     const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
@@ -127,28 +146,36 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       f = ws.diagonal[0].topLeftCorner(n, n);
       ws.z[0].head(n) = ws.rhs[0].head(n);
     }
-    ok = FactorLdlt(f, ws.tmp.head(n));
+    ok = FactorLdlt(f);
     if (!ok) break;
     auto z = ws.z[i].head(n);
     f.triangularView<Eigen::UnitLower>().solveInPlace(z);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      auto wr = ws.reduced[i].topLeftCorner(n, m);
-      wr = ws.coupling[i].topLeftCorner(n, m);
-      f.triangularView<Eigen::UnitLower>().solveInPlace(wr);
-      auto v = ws.scaled.topLeftCorner(n, m);
+      const Eigen::Index r = ws.rank[i];
+      auto yi = ws.y[i].topLeftCorner(n, r);
+      yi = ws.p[i].topLeftCorner(n, r);
+      f.triangularView<Eigen::UnitLower>().solveInPlace(yi);
+      auto v = ws.v.topLeftCorner(n, r);
       for (Eigen::Index k = 0; k < n; ++k) {
-        v.row(k) = (std::conj(f(k, k)) / std::norm(f(k, k))) * wr.row(k);
+        v.row(k) = (std::conj(f(k, k)) / std::norm(f(k, k))) * yi.row(k);
       }
+      auto sm = ws.s.topLeftCorner(r, r);
+      sm.noalias() = yi.transpose() * v;
+      auto qi = ws.q[i].topLeftCorner(m, r);
+      auto t = ws.t.topLeftCorner(m, r);
+      t.noalias() = qi * sm;
       auto next = ws.factor[i + 1].topLeftCorner(m, m);
       // The Schur complement is symmetric and FactorLdlt reads only the lower triangle.
       next = ws.diagonal[i + 1].topLeftCorner(m, m);
-      next.triangularView<Eigen::Lower>() -= wr.transpose() * v;
+      next.triangularView<Eigen::Lower>() -= t * qi.transpose();
+      auto c = ws.small.head(r);
+      c.noalias() = v.transpose() * z;
       ws.z[i + 1].head(m) = ws.rhs[i + 1].head(m);
-      ws.z[i + 1].head(m).noalias() -= v.transpose() * z;
+      ws.z[i + 1].head(m).noalias() -= qi * c;
     }
   }
-  // Back substitution: u_i = L_i^{-T} D_i^{-1} (z_i - W_i u_{i+1}).
+  // Back substitution: u_i = L_i^{-T} D_i^{-1} (z_i - Y_i Q_i^T u_{i+1}).
   for (int i = rows - 1; i >= 0 && ok; --i) {
     const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
     auto f = ws.factor[i].topLeftCorner(n, n);
@@ -156,7 +183,10 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     y = ws.z[i].head(n);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      y.noalias() -= ws.reduced[i].topLeftCorner(n, m) * ws.u[i + 1].head(m);
+      const Eigen::Index r = ws.rank[i];
+      auto c = ws.small.head(r);
+      c.noalias() = ws.q[i].topLeftCorner(m, r).transpose() * ws.u[i + 1].head(m);
+      y.noalias() -= ws.y[i].topLeftCorner(n, r) * c;
     }
     for (Eigen::Index k = 0; k < n; ++k) y(k) *= std::conj(f(k, k)) / std::norm(f(k, k));
     f.transpose().triangularView<Eigen::UnitUpper>().solveInPlace(y);
@@ -173,11 +203,17 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       r -= ws.rhs[i].head(n);
       if (i + 1 < rows) {
         const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-        r.noalias() += ws.coupling[i].topLeftCorner(n, m) * ws.u[i + 1].head(m);
+        const Eigen::Index k = ws.rank[i];
+        auto c = ws.small.head(k);
+        c.noalias() = ws.q[i].topLeftCorner(m, k).transpose() * ws.u[i + 1].head(m);
+        r.noalias() += ws.p[i].topLeftCorner(n, k) * c;
       }
       if (i > 0) {
         const Eigen::Index p = static_cast<Eigen::Index>(ws.free[i - 1].size());
-        r.noalias() += ws.coupling[i - 1].topLeftCorner(p, n).transpose() * ws.u[i - 1].head(p);
+        const Eigen::Index k = ws.rank[i - 1];
+        auto c = ws.small.head(k);
+        c.noalias() = ws.p[i - 1].topLeftCorner(p, k).transpose() * ws.u[i - 1].head(p);
+        r.noalias() += ws.q[i - 1].topLeftCorner(n, k) * c;
       }
       // Squared moduli (max |.|^2) to keep hypot off the hot path.
       residual = std::max(residual, r.cwiseAbs2().maxCoeff());
@@ -189,7 +225,8 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     ok = std::sqrt(residual) <= kResidualTol * scale;
   }
   if (!ok) {
-    // Fallback: dense partial-pivoting LU of the whole condensed system.
+    // Fallback: dense partial-pivoting LU of the whole condensed system, with the couplings
+    // taken from the pieces as computed (not their factored form).
     std::vector<Eigen::Index> offset(rows + 1, 0);
     for (int i = 0; i < rows; ++i)
       offset[i + 1] = offset[i] + static_cast<Eigen::Index>(ws.free[i].size());
@@ -201,8 +238,10 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       big_rhs.segment(offset[i], n) = ws.rhs[i].head(n);
       if (i + 1 < rows) {
         const Eigen::Index m = offset[i + 2] - offset[i + 1];
-        big.block(offset[i], offset[i + 1], n, m) = ws.coupling[i].topLeftCorner(n, m);
-        big.block(offset[i + 1], offset[i], m, n) = ws.coupling[i].topLeftCorner(n, m).transpose();
+        const Piece& right = GroupPieceOf(i + 1, clamps);
+        const Eigen::MatrixXcd coupling = right.condensed(ws.free[i], ws.free_shifted[i + 1]);
+        big.block(offset[i], offset[i + 1], n, m) = coupling;
+        big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
       }
     }
     const Eigen::VectorXcd solution = big.partialPivLu().solve(big_rhs);

@@ -116,7 +116,9 @@ void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
 
 void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const {
   CheckSpans(clamps, out.size());
-  std::vector<std::complex<double>> w(out.size());
+  // Reused per thread: no allocation per configuration.
+  thread_local std::vector<std::complex<double>> w;
+  w.resize(out.size());
   condensation_->Solve(clamps, w);
   Finish(w, out);
 }
