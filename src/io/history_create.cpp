@@ -184,38 +184,6 @@ std::optional<RunStatus> ParseRunStatus(const std::string& text) {
   return std::nullopt;
 }
 
-// The history keeps its own names so that the file format does not change if the engine's
-// ToString(Termination) wording does.
-const char* HistoryName(Termination termination) {
-  switch (termination) {
-    case Termination::kTargetReached:
-      return "target_reached";
-    case Termination::kMaxWaves:
-      return "max_waves";
-    case Termination::kBudgetExhausted:
-      return "budget_exhausted";
-    case Termination::kAcceptanceRateTooLow:
-      return "acceptance_rate_too_low";
-    case Termination::kWallTimeExceeded:
-      return "wall_time_exceeded";
-    case Termination::kInterrupted:
-      return "interrupted";
-  }
-  return "max_waves";
-}
-
-std::optional<Termination> ParseHistoryTermination(const std::string& text) {
-  for (Termination t : {Termination::kTargetReached,
-                        Termination::kMaxWaves,
-                        Termination::kBudgetExhausted,
-                        Termination::kAcceptanceRateTooLow,
-                        Termination::kWallTimeExceeded,
-                        Termination::kInterrupted}) {
-    if (text == HistoryName(t)) return t;
-  }
-  return std::nullopt;
-}
-
 HistoryStore::HistoryStore(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HistoryStore::HistoryStore(HistoryStore&& other) noexcept = default;
 HistoryStore& HistoryStore::operator=(HistoryStore&& other) noexcept = default;

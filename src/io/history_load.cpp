@@ -226,7 +226,7 @@ RunHistory HistoryStore::LoadHistory() const {
     summary.simulations = simulations;
   }
   run.Reset();
-  if (const auto termination = ParseHistoryTermination(metadata.termination)) {
+  if (const auto termination = ParseTermination(metadata.termination)) {
     summary.termination = *termination;
   } else if (metadata.status == RunStatus::kInterrupted) {
     summary.termination = Termination::kInterrupted;

@@ -162,7 +162,7 @@ void HistoryStore::Finish(const RunSummary& summary) {
         simulations = ?5, simulations_discarded = ?6, wall_seconds = ?7, end_time = ?8
       WHERE id = 1)sql");
     s.Bind(1, std::string(ToString(status)))
-        .Bind(2, std::string(HistoryName(summary.termination)))
+        .Bind(2, std::string(ToString(summary.termination)))
         .Bind(3, summary.message)
         .Bind(4, summary.waves_completed)
         .Bind(5, summary.simulations)

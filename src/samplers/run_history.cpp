@@ -25,6 +25,18 @@ const char* ToString(Termination termination) {
   return "?";
 }
 
+std::optional<Termination> ParseTermination(const std::string& text) {
+  for (Termination t : {Termination::kTargetReached,
+                        Termination::kMaxWaves,
+                        Termination::kBudgetExhausted,
+                        Termination::kAcceptanceRateTooLow,
+                        Termination::kWallTimeExceeded,
+                        Termination::kInterrupted}) {
+    if (text == ToString(t)) return t;
+  }
+  return std::nullopt;
+}
+
 std::string RunSummary::BriefReport() const {
   char buf[256];
   std::snprintf(buf,

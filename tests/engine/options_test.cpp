@@ -122,6 +122,14 @@ TEST(Enums, RoundTripThroughStrings) {
   for (auto k : {ThresholdKind::kList, ThresholdKind::kQuantile}) {
     EXPECT_EQ(ParseThresholdKind(ToString(k)), k);
   }
+  for (auto t : {Termination::kTargetReached,
+                 Termination::kMaxWaves,
+                 Termination::kBudgetExhausted,
+                 Termination::kAcceptanceRateTooLow,
+                 Termination::kWallTimeExceeded,
+                 Termination::kInterrupted}) {
+    EXPECT_EQ(ParseTermination(ToString(t)), t);
+  }
   EXPECT_EQ(ParseEstimator("weighted"), std::nullopt);
 }
 

@@ -464,7 +464,7 @@ TEST(RunStatusTest, NamesRoundTrip) {
     EXPECT_EQ(ParseRunStatus(ToString(s)), s);
   }
   EXPECT_FALSE(ParseRunStatus("done").has_value());
-  EXPECT_EQ(ParseHistoryTermination(HistoryName(Termination::kBudgetExhausted)),
+  EXPECT_EQ(ParseTermination(ToString(Termination::kBudgetExhausted)),
             Termination::kBudgetExhausted);
 }
 

@@ -65,10 +65,6 @@ struct RunMetadata {
   int schema_version = kHistorySchemaVersion;  // as read from the file
 };
 
-// Strings stored for Termination values (the schema's own vocabulary, see docs/history.md).
-const char* HistoryName(Termination termination);
-std::optional<Termination> ParseHistoryTermination(const std::string& text);
-
 // A run history file. Create() starts a new run; Open() reads or resumes an existing one. As an
 // SmcObserver it records the run while RunCombinatorialSmc runs: each callback is one SQLite
 // transaction, so a run killed at any moment loses at most the batch in flight.

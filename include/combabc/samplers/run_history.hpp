@@ -3,6 +3,7 @@
 // Everything except wall times is a deterministic function of (options, seed): that is the
 // determinism and resume contract (see SameHistory).
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,7 @@ enum class Termination {
   kInterrupted,           // the observer asked to stop
 };
 const char* ToString(Termination termination);
+std::optional<Termination> ParseTermination(const std::string& text);
 
 struct RunSummary {
   Termination termination = Termination::kMaxWaves;
