@@ -158,8 +158,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   for (Piece& piece : group_pieces_) {
     if (piece.left_size == 0 || piece.right_size == 0) continue;
     const Eigen::MatrixXcd coupling = piece.condensed.topRightCorner(nc_, nc_);
-    const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(coupling,
-                                                 Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::BDCSVD<Eigen::MatrixXcd> svd(coupling, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const double cutoff = kRankTol * piece.condensed.cwiseAbs().maxCoeff();
     Eigen::Index rank = 0;
     while (rank < nc_ && svd.singularValues()(rank) > cutoff) ++rank;
@@ -167,6 +166,11 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     piece.coupling_left =
         svd.matrixU().leftCols(rank) * svd.singularValues().head(rank).asDiagonal();
     piece.coupling_right = svd.matrixV().leftCols(rank).conjugate();
+  }
+  for (Piece& piece : group_pieces_) {
+    if (piece.left_size > 0) piece.left_block = piece.condensed.topLeftCorner(nc_, nc_);
+    if (piece.right_size > 0) piece.right_block = piece.condensed.bottomRightCorner(nc_, nc_);
+    piece.condensed.resize(0, 0);
   }
 }
 
@@ -415,7 +419,8 @@ std::size_t SectionCondensation::MemoryBytes() const {
     bytes += sizeof(std::complex<double>) *
              static_cast<std::size_t>(p.condensed.size() + p.load.size() + p.output_map.size() +
                                       p.output_offset.size() + p.coupling_left.size() +
-                                      p.coupling_right.size());
+                                      p.coupling_right.size() + p.left_block.size() +
+                                      p.right_block.size());
   }
   for (const auto& b : boundary_load_)
     bytes += sizeof(std::complex<double>) * static_cast<std::size_t>(b.size());

@@ -69,6 +69,10 @@ class SectionCondensation {
     // coupling_right^T (nc x rank each), from its SVD less the singular values at round-off level.
     Eigen::MatrixXcd coupling_left;
     Eigen::MatrixXcd coupling_right;
+    // Group pieces keep only what the solve reads, contiguous: the diagonal blocks of their kept
+    // ends (nc x nc each, empty when folded in; `condensed` is then released).
+    Eigen::MatrixXcd left_block;
+    Eigen::MatrixXcd right_block;
   };
   Piece Condense(const Plate& plate,
                  int section,

@@ -9,6 +9,12 @@
 // positive definite (the default: 5 Hz is below every resonance), but not in general, so every
 // solve is followed by a residual check, and a dense partial-pivoting LU of the whole condensed
 // system is the fallback.
+//
+// Performance (docs/benchmarks.md): the coupling between neighbouring rows is a group's
+// end-to-end block, numerically of low rank (SectionCondensation's constructor factors it as
+// P Q^T), so a Schur complement costs O(n^2 r) rather than O(n^3); the triangular solves with
+// P and the right-hand side ride along inside the factorization's matrix-vector products; the
+// workspace is per thread and reused, and the cached blocks are read as contiguous columns.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -22,26 +28,28 @@ namespace {
 constexpr double kPivotTol = 1e-13;     // |d_j| below this times max |a_ij| counts as breakdown
 constexpr double kResidualTol = 1e-10;  // relative residual accepted from the LDL^T path
 
-// In place A = L D L^T (unit lower L below the diagonal, D on it), no pivoting and no conjugation.
-// Reads only the lower triangle of A. Right-looking: each step is a rank-1 update of the trailing
-// lower triangle, column by column (contiguous axpys, no small gemv calls).
-bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a) {
-  const Eigen::Index n = a.rows();
+// In place A = L D L^T (unit lower L below the diagonal, D on it), no pivoting and no conjugation,
+// of the leading n x n block of the rows x n matrix `a` (rows >= n); reads only its lower
+// triangle. Rows below it, B (rows - n x n), are carried along and become B L^{-T} D^{-1}: with
+// B = [P^T; b^T] that is (D^{-1} L^{-1} P)^T and (D^{-1} L^{-1} b)^T, the triangular solves the
+// block elimination needs, done inside the factorization's matrix-vector products.
+bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a, Eigen::Ref<Eigen::VectorXcd> tmp) {
+  const Eigen::Index n = a.cols();
+  const Eigen::Index rows = a.rows();
   // Squared moduli: no hypot calls on the hot path.
   double scale2 = 0.0;
   for (Eigen::Index j = 0; j < n; ++j) {
-    scale2 = std::max(scale2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
+    scale2 = std::max(scale2, a.col(j).segment(j, n - j).cwiseAbs2().maxCoeff());
   }
   for (Eigen::Index j = 0; j < n; ++j) {
+    if (j > 0) {
+      tmp.head(j) = a.row(j).head(j).transpose().cwiseProduct(a.diagonal().head(j));
+      a.col(j).tail(rows - j).noalias() -= a.block(j, 0, rows - j, j) * tmp.head(j);
+    }
     const std::complex<double> d = a(j, j);
     if (!(std::norm(d) > kPivotTol * kPivotTol * scale2)) return false;
     const std::complex<double> inverse = std::conj(d) / std::norm(d);
-    // a(k:n, k) -= a(k:n, j) l_kj with l_kj = a(k, j) / d, for the trailing columns k > j.
-    for (Eigen::Index k = j + 1; k < n; ++k) {
-      const std::complex<double> l = a(k, j) * inverse;
-      a.col(k).segment(k, n - k) -= l * a.col(j).segment(k, n - k);
-    }
-    a.col(j).tail(n - j - 1) *= inverse;
+    a.col(j).tail(rows - j - 1) *= inverse;
   }
   return true;
 }
@@ -49,21 +57,19 @@ bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a) {
 struct Workspace {
   int nc = -1;
   int rows = -1;
-  std::vector<Eigen::MatrixXcd> factor;    // pivot blocks, LDL^T in place
+  // Pivot blocks F_i, LDL^T in place, with P_i^T and the right-hand side carried below them.
+  std::vector<Eigen::MatrixXcd> factor;
   std::vector<Eigen::MatrixXcd> diagonal;  // assembled diagonal blocks (for the residual)
   // Coupling U_i between rows i and i + 1 as P_i Q_i^T (n_i x r_i and n_{i+1} x r_i).
   std::vector<Eigen::MatrixXcd> p;
   std::vector<Eigen::MatrixXcd> q;
-  std::vector<Eigen::MatrixXcd> y;  // Y_i = L_i^{-1} P_i
   std::vector<Eigen::Index> rank;
   std::vector<Eigen::VectorXcd> rhs;
-  std::vector<Eigen::VectorXcd> z;
   std::vector<Eigen::VectorXcd> u;
   std::vector<std::vector<int>> free;
-  std::vector<std::vector<int>> free_shifted;  // free + nc: the right half of a piece
-  Eigen::MatrixXcd v;                          // D^{-1} Y
-  Eigen::MatrixXcd s;                          // Y^T D^{-1} Y
-  Eigen::MatrixXcd t;                          // Q S
+  Eigen::MatrixXcd v;  // D V
+  Eigen::MatrixXcd s;  // S = V^T D V
+  Eigen::MatrixXcd t;  // Q S
   Eigen::VectorXcd tmp;
   Eigen::VectorXcd small;
   Eigen::VectorXcd ends;
@@ -73,17 +79,14 @@ struct Workspace {
     if (nc_ == nc && rows_ <= rows) return;
     nc = nc_;
     rows = std::max(rows_, rows);
-    factor.assign(rows, Eigen::MatrixXcd(nc, nc));
+    factor.assign(rows, Eigen::MatrixXcd(2 * nc + 1, nc));
     diagonal.assign(rows, Eigen::MatrixXcd(nc, nc));
     p.assign(rows, Eigen::MatrixXcd(nc, nc));
     q.assign(rows, Eigen::MatrixXcd(nc, nc));
-    y.assign(rows, Eigen::MatrixXcd(nc, nc));
     rank.assign(rows, 0);
     rhs.assign(rows, Eigen::VectorXcd(nc));
-    z.assign(rows, Eigen::VectorXcd(nc));
     u.assign(rows + 2, Eigen::VectorXcd(nc));
     free.assign(rows, {});
-    free_shifted.assign(rows, {});
     v.resize(nc, nc);
     s.resize(nc, nc);
     t.resize(nc, nc);
@@ -111,21 +114,25 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     const bool a = clamps[x - 1] != 0 || clamps[x] != 0;
     const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
     FreeDofs(x, a, b, &ws.free[i]);
-    ws.free_shifted[i] = ws.free[i];
-    for (int& d : ws.free_shifted[i]) d += nc;
   }
-  // Assemble: row i gets the right block of group i and the left block of group i + 1; the
-  // coupling of rows i and i + 1 is group i + 1's, in its factored form.
+  // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
+  // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
+  // i + 1's, in its factored form.
   for (int i = 0; i < rows; ++i) {
     const Piece& left = GroupPieceOf(i, clamps);
     const Piece& right = GroupPieceOf(i + 1, clamps);
     const std::vector<int>& f = ws.free[i];
-    const std::vector<int>& from_left = left.left_size == 0 ? f : ws.free_shifted[i];
     const Eigen::Index n = static_cast<Eigen::Index>(f.size());
-    ws.diagonal[i].topLeftCorner(n, n) = left.condensed(from_left, from_left);
-    ws.diagonal[i].topLeftCorner(n, n) += right.condensed(f, f);
-    ws.rhs[i].head(n) = left.load(from_left);
-    ws.rhs[i].head(n) += right.load(f);
+    auto a = ws.diagonal[i].topLeftCorner(n, n);
+    for (Eigen::Index c = 0; c < n; ++c) {
+      const std::complex<double>* lc =
+          left.right_block.data() + static_cast<Eigen::Index>(f[c]) * nc;
+      const std::complex<double>* rc =
+          right.left_block.data() + static_cast<Eigen::Index>(f[c]) * nc;
+      for (Eigen::Index r = c; r < n; ++r) a(r, c) = lc[f[r]] + rc[f[r]];
+    }
+    ws.rhs[i].head(n) = left.load.tail(nc)(f);
+    ws.rhs[i].head(n) += right.load.head(nc)(f);
     ws.rhs[i].head(n) += boundary_load_[(i + 1) * group_size_](f);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
@@ -135,61 +142,72 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       ws.q[i].topLeftCorner(m, r) = right.coupling_right(ws.free[i + 1], Eigen::all);
     }
   }
-  // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i; z = L^{-1} r'.
-  // With U_i = P_i Q_i^T and Y_i = L_i^{-1} P_i: U_i^T F_i^{-1} U_i = Q_i (Y_i^T D_i^{-1} Y_i)
-  // Q_i^T.
+  // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i. With
+  // U_i = P_i Q_i^T, V_i = D_i^{-1} L_i^{-1} P_i (from FactorLdlt's carried rows) and
+  // S_i = V_i^T D_i V_i: U_i^T F_i^{-1} U_i = Q_i S_i Q_i^T. The right-hand side is eliminated
+  // alongside: row i's carried last row becomes w_i = D_i^{-1} L_i^{-1} r'_i, and
+  // r'_{i+1} = r_{i+1} - Q_i V_i^T D_i w_i.
+  const auto carried = [&](int i) { return i + 1 < rows ? ws.rank[i] : Eigen::Index{0}; };
   bool ok = !always_pivot_;
   for (int i = 0; i < rows && ok; ++i) {
     const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
-    auto f = ws.factor[i].topLeftCorner(n, n);
+    const Eigen::Index r = carried(i);
+    auto ext = ws.factor[i].topLeftCorner(n + r + 1, n);
     if (i == 0) {
-      f = ws.diagonal[0].topLeftCorner(n, n);
-      ws.z[0].head(n) = ws.rhs[0].head(n);
+      ext.topRows(n).triangularView<Eigen::Lower>() = ws.diagonal[0].topLeftCorner(n, n);
+      ext.row(n + r) = ws.rhs[0].head(n).transpose();
     }
-    ok = FactorLdlt(f);
+    if (r > 0) ext.middleRows(n, r) = ws.p[i].topLeftCorner(n, r).transpose();
+    ok = FactorLdlt(ext, ws.tmp.head(n));
     if (!ok) break;
-    auto z = ws.z[i].head(n);
-    f.triangularView<Eigen::UnitLower>().solveInPlace(z);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      const Eigen::Index r = ws.rank[i];
-      auto yi = ws.y[i].topLeftCorner(n, r);
-      yi = ws.p[i].topLeftCorner(n, r);
-      f.triangularView<Eigen::UnitLower>().solveInPlace(yi);
-      auto v = ws.v.topLeftCorner(n, r);
-      for (Eigen::Index k = 0; k < n; ++k) {
-        v.row(k) = (std::conj(f(k, k)) / std::norm(f(k, k))) * yi.row(k);
-      }
+      const Eigen::Index rn = carried(i + 1);
+      const auto vt = ext.middleRows(n, r);  // V_i^T
+      auto dv = ws.v.topLeftCorner(n, r);    // D_i V_i
+      dv.noalias() = ext.diagonal().asDiagonal() * vt.transpose();
       auto sm = ws.s.topLeftCorner(r, r);
-      sm.noalias() = yi.transpose() * v;
+      sm.noalias() = vt.lazyProduct(dv);
       auto qi = ws.q[i].topLeftCorner(m, r);
       auto t = ws.t.topLeftCorner(m, r);
-      t.noalias() = qi * sm;
-      auto next = ws.factor[i + 1].topLeftCorner(m, m);
+      t.noalias() = qi.lazyProduct(sm);
+      auto next = ws.factor[i + 1].topLeftCorner(m + rn + 1, m);
       // The Schur complement is symmetric and FactorLdlt reads only the lower triangle.
-      next = ws.diagonal[i + 1].topLeftCorner(m, m);
-      next.triangularView<Eigen::Lower>() -= t * qi.transpose();
+      next.topRows(m).triangularView<Eigen::Lower>() = ws.diagonal[i + 1].topLeftCorner(m, m);
+      for (Eigen::Index c = 0; c < m; ++c) {
+        double* col = reinterpret_cast<double*>(&next(c, c));
+        for (Eigen::Index k = 0; k < r; ++k) {
+          const double qr = qi(c, k).real();
+          const double qm = qi(c, k).imag();
+          const double* tk = reinterpret_cast<const double*>(&t(c, k));
+          for (Eigen::Index e = 0; e < 2 * (m - c); e += 2) {
+            col[e] -= tk[e] * qr - tk[e + 1] * qm;
+            col[e + 1] -= tk[e] * qm + tk[e + 1] * qr;
+          }
+        }
+      }
       auto c = ws.small.head(r);
-      c.noalias() = v.transpose() * z;
-      ws.z[i + 1].head(m) = ws.rhs[i + 1].head(m);
-      ws.z[i + 1].head(m).noalias() -= qi * c;
+      c.noalias() = dv.transpose() * ext.row(n + r).transpose();
+      auto b = ws.tmp.head(m);
+      b = ws.rhs[i + 1].head(m);
+      b.noalias() -= qi * c;
+      next.row(m + rn) = b.transpose();
     }
   }
-  // Back substitution: u_i = L_i^{-T} D_i^{-1} (z_i - Y_i Q_i^T u_{i+1}).
+  // Back substitution: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
   for (int i = rows - 1; i >= 0 && ok; --i) {
     const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
-    auto f = ws.factor[i].topLeftCorner(n, n);
+    const Eigen::Index r = carried(i);
+    const auto ext = ws.factor[i].topLeftCorner(n + r + 1, n);
     auto y = ws.tmp.head(n);
-    y = ws.z[i].head(n);
-    if (i + 1 < rows) {
+    y = ext.row(n + r).transpose();
+    if (r > 0) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      const Eigen::Index r = ws.rank[i];
       auto c = ws.small.head(r);
       c.noalias() = ws.q[i].topLeftCorner(m, r).transpose() * ws.u[i + 1].head(m);
-      y.noalias() -= ws.y[i].topLeftCorner(n, r) * c;
+      y.noalias() -= ext.middleRows(n, r).transpose() * c;
     }
-    for (Eigen::Index k = 0; k < n; ++k) y(k) *= std::conj(f(k, k)) / std::norm(f(k, k));
-    f.transpose().triangularView<Eigen::UnitUpper>().solveInPlace(y);
+    ext.topRows(n).transpose().triangularView<Eigen::UnitUpper>().solveInPlace(y);
     ws.u[i].head(n) = y;
   }
   // Residual of the assembled system; the unpivoted path must earn its result.
@@ -199,7 +217,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     for (int i = 0; i < rows; ++i) {
       const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
       auto r = ws.tmp.head(n);
-      r.noalias() = ws.diagonal[i].topLeftCorner(n, n) * ws.u[i].head(n);
+      const auto a = ws.diagonal[i].topLeftCorner(n, n);  // lower triangle of a symmetric block
+      r.noalias() = a.triangularView<Eigen::Lower>() * ws.u[i].head(n);
+      r.noalias() += a.triangularView<Eigen::StrictlyLower>().transpose() * ws.u[i].head(n);
       r -= ws.rhs[i].head(n);
       if (i + 1 < rows) {
         const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
@@ -217,7 +237,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       }
       // Squared moduli (max |.|^2) to keep hypot off the hot path.
       residual = std::max(residual, r.cwiseAbs2().maxCoeff());
-      const double a2 = ws.diagonal[i].topLeftCorner(n, n).cwiseAbs2().maxCoeff();
+      double a2 = 0.0;
+      for (Eigen::Index j = 0; j < n; ++j)
+        a2 = std::max(a2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
       scale = std::max(scale,
                        std::sqrt(ws.rhs[i].head(n).cwiseAbs2().maxCoeff()) +
                            std::sqrt(a2 * ws.u[i].head(n).cwiseAbs2().maxCoeff()));
@@ -225,8 +247,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     ok = std::sqrt(residual) <= kResidualTol * scale;
   }
   if (!ok) {
-    // Fallback: dense partial-pivoting LU of the whole condensed system, with the couplings
-    // taken from the pieces as computed (not their factored form).
+    // Fallback: dense partial-pivoting LU of the whole condensed system.
     std::vector<Eigen::Index> offset(rows + 1, 0);
     for (int i = 0; i < rows; ++i)
       offset[i + 1] = offset[i] + static_cast<Eigen::Index>(ws.free[i].size());
@@ -234,12 +255,16 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     Eigen::VectorXcd big_rhs(offset[rows]);
     for (int i = 0; i < rows; ++i) {
       const Eigen::Index n = offset[i + 1] - offset[i];
-      big.block(offset[i], offset[i], n, n) = ws.diagonal[i].topLeftCorner(n, n);
+      const auto a = ws.diagonal[i].topLeftCorner(n, n);
+      auto block = big.block(offset[i], offset[i], n, n);
+      block.triangularView<Eigen::Lower>() = a;
+      block.triangularView<Eigen::StrictlyUpper>() = a.transpose();
       big_rhs.segment(offset[i], n) = ws.rhs[i].head(n);
       if (i + 1 < rows) {
         const Eigen::Index m = offset[i + 2] - offset[i + 1];
-        const Piece& right = GroupPieceOf(i + 1, clamps);
-        const Eigen::MatrixXcd coupling = right.condensed(ws.free[i], ws.free_shifted[i + 1]);
+        const Eigen::Index r = ws.rank[i];
+        const Eigen::MatrixXcd coupling =
+            ws.p[i].topLeftCorner(n, r) * ws.q[i].topLeftCorner(m, r).transpose();
         big.block(offset[i], offset[i + 1], n, m) = coupling;
         big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
       }

@@ -63,7 +63,7 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
       options_.clamps_per_edge,
       options_.elements_per_section,
       // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
-      // cross-sections per configuration, ~18 MiB of pieces (docs/model.md).
+      // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
       options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
       SupportMask(Edge::kBottom, options_.fixed_support),
       SupportMask(Edge::kTop, options_.fixed_support),
