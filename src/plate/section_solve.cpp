@@ -174,18 +174,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       auto next = ws.factor[i + 1].topLeftCorner(m + rn + 1, m);
       // The Schur complement is symmetric and FactorLdlt reads only the lower triangle.
       next.topRows(m).triangularView<Eigen::Lower>() = ws.diagonal[i + 1].topLeftCorner(m, m);
-      for (Eigen::Index c = 0; c < m; ++c) {
-        double* col = reinterpret_cast<double*>(&next(c, c));
-        for (Eigen::Index k = 0; k < r; ++k) {
-          const double qr = qi(c, k).real();
-          const double qm = qi(c, k).imag();
-          const double* tk = reinterpret_cast<const double*>(&t(c, k));
-          for (Eigen::Index e = 0; e < 2 * (m - c); e += 2) {
-            col[e] -= tk[e] * qr - tk[e + 1] * qm;
-            col[e + 1] -= tk[e] * qm + tk[e + 1] * qr;
-          }
-        }
-      }
+      next.topRows(m).triangularView<Eigen::Lower>() -= t * qi.transpose();
       auto c = ws.small.head(r);
       c.noalias() = dv.transpose() * ext.row(n + r).transpose();
       auto b = ws.tmp.head(m);
