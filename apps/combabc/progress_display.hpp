@@ -1,6 +1,8 @@
 #pragma once
 // The run's progress on stderr: on a terminal a single updating line per wave (wave, accepted /
 // needed, acceptance rate, ETA); otherwise one line per finished wave, so logs stay readable.
+// Waves are numbered from 1 here, like the paper and the report's figures (the engine, the
+// history file and the export count from 0).
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -32,7 +34,7 @@ class ProgressDisplay : public SmcObserver {
     bar[kWidth] = '\0';
     std::fprintf(stderr,
                  "\rwave %d [%s] %lld/%d accepted  rate %.4f  %lld sims  %.1f s  ETA %.1f s  ",
-                 p.wave,
+                 p.wave + 1,
                  bar,
                  static_cast<long long>(p.accepted),
                  p.accepted_needed,
@@ -50,7 +52,7 @@ class ProgressDisplay : public SmcObserver {
     for (double e : w.thresholds) eps += (eps.empty() ? "" : ",") + Format(e);
     std::fprintf(stderr,
                  "wave %d: eps %s  %lld/%lld accepted (rate %.4f)  ESS %.0f  %.2f s%s\n",
-                 w.wave,
+                 w.wave + 1,
                  eps.c_str(),
                  static_cast<long long>(w.accepted),
                  static_cast<long long>(w.candidates),
