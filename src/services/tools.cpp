@@ -10,8 +10,8 @@
 #include "combabc/core/error.hpp"
 #include "combabc/io/export.hpp"
 #include "combabc/io/history_store.hpp"
+#include "combabc/plate/sensor_model.hpp"
 #include "combabc/services/calibration.hpp"
-#include "combabc/services/sensor_simulator.hpp"
 
 extern char** environ;
 
@@ -60,12 +60,14 @@ void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
                            const std::string& output_csv) {
   const auto config = LoadConfig(config_path);
-  const SensorSimulator simulator(config.model);
-  const auto& model = simulator.model();
-  if (static_cast<int>(clamps.size()) != model.num_clamps()) {
+  // The raw amplitude in metres; the normalised column is derived below. One precompute only.
+  auto options = config.model;
+  options.normalise = false;
+  const int num_clamps = 2 * options.clamps_per_edge;  // checked before the costly precompute
+  if (static_cast<int>(clamps.size()) != num_clamps) {
     throw Error(ErrorKind::kUsage,
                 "has " + std::to_string(clamps.size()) + " characters; the model has " +
-                    std::to_string(model.num_clamps()) + " clamps (one 0/1 per clamp, 1 = fixed)",
+                    std::to_string(num_clamps) + " clamps (one 0/1 per clamp, 1 = fixed)",
                 "",
                 0,
                 "--clamps");
@@ -81,8 +83,6 @@ void SimulateConfiguration(const std::string& config_path,
     }
     bits[k] = clamps[k] == '1';
   }
-  auto options = config.model;
-  options.normalise = false;
   const plate::SensorModel raw(options);
   std::vector<double> w(static_cast<std::size_t>(raw.num_outputs()));
   raw.Profile(bits, w);
