@@ -21,15 +21,8 @@ using config_internal::TableReader;
 using config_internal::WindowKey;
 
 LengthUnit UnitKey(TableReader& t, std::string_view key, LengthUnit fallback) {
-  const auto text = t.String(key);
-  if (!text) return fallback;
-  const auto unit = ParseLengthUnit(*text);
-  if (!unit) {
-    t.Fail(
-        key,
-        "unknown unit \"" + *text + "\"; expected one of " + OneOf({"m", "cm", "mm", "um", "nm"}));
-  }
-  return *unit;
+  return t.Choice<LengthUnit>(key, ParseLengthUnit, "unit", {"m", "cm", "mm", "um", "nm"})
+      .value_or(fallback);
 }
 
 // ---------------------------------------------------------------------------------------- data

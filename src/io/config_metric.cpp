@@ -111,14 +111,9 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
   for (TableReader& ct : components) {
     MetricComponentConfig component;
     component.config_line = ct.line();
-    const auto type_text = ct.String("type");
-    if (!type_text) ct.Fail("type", "missing required key");
-    const auto type = ParseMetricType(*type_text);
-    if (!type) {
-      ct.Fail("type",
-              "unknown component type \"" + *type_text + "\"; expected one of " +
-                  OneOf({"area", "least_squares", "rise", "fall"}));
-    }
+    const auto type = ct.Choice<MetricType>(
+        "type", ParseMetricType, "component type", {"area", "least_squares", "rise", "fall"});
+    if (!type) ct.Fail("type", "missing required key");
     component.type = *type;
     if (!ct.Has("window")) ct.Fail("window", "missing required key [from, to]");
     std::tie(component.from, component.to) = WindowKey(ct, "window", unit);

@@ -37,15 +37,13 @@ void InRange(TableReader& t,
 }
 
 plate::Support SupportKey(TableReader& t, std::string_view key, plate::Support fallback) {
-  const auto text = t.String(key);
-  if (!text) return fallback;
-  plate::Support support = fallback;
-  if (!plate::FromString(*text, &support)) {
-    t.Fail(key,
-           "unknown support \"" + *text +
-               "\"; expected one of \"free\", \"simply_supported\", \"clamped\"");
-  }
-  return support;
+  auto parse = [](const std::string& text) -> std::optional<plate::Support> {
+    plate::Support support{};
+    if (!plate::FromString(text, &support)) return std::nullopt;
+    return support;
+  };
+  return t.Choice<plate::Support>(key, parse, "support", {"free", "simply_supported", "clamped"})
+      .value_or(fallback);
 }
 
 plate::Layer ParseLayer(TableReader& t) {

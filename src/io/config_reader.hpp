@@ -15,6 +15,9 @@
 
 namespace combabc::config_internal {
 
+// "\"a\", \"b\"" for messages listing the allowed values.
+std::string OneOf(std::initializer_list<const char*> names);
+
 class TableReader {
  public:
   // prefix: the table's dotted name ("" for the root, "metric.component[0]", ...).
@@ -49,6 +52,25 @@ class TableReader {
   std::vector<TableReader> Tables(std::string_view key);
   // Raw node for shapes the getters do not cover (marks the key read); nullptr if absent.
   const toml::node* Raw(std::string_view key);
+
+  // A string naming one of an enum's values, read through the enum's own Parse function
+  // (parse(text) -> std::optional<T>): nullopt if absent; an unknown value throws, listing
+  // `choices`, as 'unknown <what> "text"; expected one of ...'.
+  template <typename T, typename Parse>
+  std::optional<T> Choice(std::string_view key,
+                          Parse parse,
+                          const char* what,
+                          std::initializer_list<const char*> choices) {
+    const auto text = String(key);
+    if (!text) return std::nullopt;
+    const std::optional<T> value = parse(*text);
+    if (!value) {
+      Fail(
+          key,
+          "unknown " + std::string(what) + " \"" + *text + "\"; expected one of " + OneOf(choices));
+    }
+    return value;
+  }
 
   // Range helpers: value within [lo, hi] or throw naming the key.
   double NumberIn(std::string_view key, double fallback, double lo, double hi);
@@ -96,8 +118,6 @@ void Note(std::map<std::string, Source>& map,
           const std::string& field,
           const TableReader& t,
           std::string_view key);
-// "\"a\", \"b\"" for messages listing the allowed values.
-std::string OneOf(std::initializer_list<const char*> names);
 // [from, to] in the data's position unit (from < to, finite), returned in metres.
 std::pair<double, double> WindowKey(TableReader& t, std::string_view key, double metres_per_unit);
 

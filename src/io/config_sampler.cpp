@@ -17,24 +17,12 @@ void ParseTempering(TableReader& s, SmcOptions* smc, Sources* sources) {
   if (!t) return;
   sources->smc["tempering"] = {t->prefix(), t->line()};
   TemperingSchedule& temper = smc->tempering;
-  if (const auto kind = t->String("kind")) {
-    const auto parsed = ParseTemperingKind(*kind);
-    if (!parsed) {
-      t->Fail("kind",
-              "unknown tempering kind \"" + *kind + "\"; expected one of " +
-                  OneOf({"none", "linear", "list"}));
-    }
-    temper.kind = *parsed;
-  }
-  if (const auto form = t->String("form")) {
-    const auto parsed = ParseTemperingForm(*form);
-    if (!parsed) {
-      t->Fail("form",
-              "unknown tempering form \"" + *form + "\"; expected one of " +
-                  OneOf({"geometric", "mixture"}));
-    }
-    temper.form = *parsed;
-  }
+  temper.kind = t->Choice<TemperingKind>(
+                     "kind", ParseTemperingKind, "tempering kind", {"none", "linear", "list"})
+                    .value_or(temper.kind);
+  temper.form = t->Choice<TemperingForm>(
+                     "form", ParseTemperingForm, "tempering form", {"geometric", "mixture"})
+                    .value_or(temper.form);
   temper.phi0 = t->NumberIn("phi0", temper.phi0, 0.0, 1.0);
   if (const auto values = t->Numbers("values")) {
     if (temper.kind != TemperingKind::kList) t->Fail("values", "only used with kind = \"list\"");
@@ -108,15 +96,9 @@ void ParseSamplerSection(TableReader& root, int dimension, CalibrationConfig* c,
   Note(sources->smc, "num_waves", *t, "waves");
   smc.accepted_per_wave = t->IntegerIn("accepted_per_wave", smc.accepted_per_wave, 1, 1000000000);
   Note(sources->smc, "accepted_per_wave", *t, "accepted_per_wave");
-  if (const auto estimator = t->String("estimator")) {
-    const auto parsed = ParseEstimator(*estimator);
-    if (!parsed) {
-      t->Fail("estimator",
-              "unknown estimator \"" + *estimator + "\"; expected one of " +
-                  OneOf({"paper", "importance"}));
-    }
-    smc.estimator = *parsed;
-  }
+  smc.estimator =
+      t->Choice<Estimator>("estimator", ParseEstimator, "estimator", {"paper", "importance"})
+          .value_or(smc.estimator);
   if (const auto seed = t->Integer("seed")) {
     if (*seed < 0) t->Fail("seed", "must be >= 0");
     smc.seed = static_cast<std::uint64_t>(*seed);
