@@ -8,8 +8,8 @@
 #include <fstream>
 
 #include "combabc/core/error.hpp"
-#include "combabc/io/export.hpp"
-#include "combabc/io/history_store.hpp"
+#include "combabc/export/export.hpp"
+#include "combabc/history/history_store.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/services/calibration.hpp"
 

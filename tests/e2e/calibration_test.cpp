@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "cli_runner.hpp"
-#include "combabc/io/history_store.hpp"
+#include "combabc/history/history_store.hpp"
 
 namespace combabc::testing {
 namespace {

@@ -4,7 +4,7 @@
 // combabc::Error with the ErrorKind the CLI maps to a sysexits code.
 #include <string>
 
-#include "combabc/io/config.hpp"
+#include "combabc/config/config.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
 

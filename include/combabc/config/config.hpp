@@ -1,0 +1,63 @@
+#pragma once
+// The TOML configuration of a whole calibration run (docs/config.md lists every key): the sensor
+// model, the measured data, the metric (paper Eqs. 4-7), the sampler and the outputs.
+//
+// Every problem in the file -- malformed TOML, an unknown key (in any table), a value of the
+// wrong type or out of range, an inconsistency such as a list threshold with the wrong number of
+// waves -- is thrown as combabc::Error(ErrorKind::kConfig) whose what() reads
+// "file:line: dotted.key: message", so the CLI can print it as is and exit with 78.
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "combabc/data/measured_data.hpp"
+#include "combabc/metrics/metric_component.hpp"
+#include "combabc/params/binary_space.hpp"
+#include "combabc/plate/sensor_model.hpp"
+#include "combabc/samplers/smc_options.hpp"
+
+namespace combabc {
+
+struct OutputConfig {
+  // Where the run writes; relative paths are resolved against the config file's directory.
+  std::string directory = "results";
+  std::string database = "history.sqlite";            // file name inside `directory`
+  std::vector<std::string> figure_formats = {"png"};  // each "png", "svg" or "pdf"
+  // Keep each accepted particle's simulated curve Y* in the history (SmcOptions::keep_outputs).
+  bool keep_simulated_curves = true;
+};
+
+struct MetricConfig {
+  // The preset named in the file, if any (its components are expanded into `components`).
+  std::optional<MetricPreset> preset;
+  // In distance-vector order; windows in metres.
+  std::vector<MetricComponentConfig> components;
+};
+
+struct CalibrationConfig {
+  std::string path;         // the config file as given ("<string>" for ParseConfig without a file)
+  std::string directory;    // its directory: data.csv and output.directory are relative to it
+  std::string text;         // the TOML text verbatim (provenance for the run history)
+  std::string description;  // free text, top-level `description`
+
+  // The sensor simulator, from [model]; every key not given keeps SensorOptions' default, and
+  // model.normalise mirrors data.normalise so Y and Y* are scaled alike.
+  plate::SensorOptions model;
+  DataConfig data;
+  MetricConfig metric;
+  // Filled from [sampler]; smc.thresholds holds one schedule per threshold component of the
+  // metric, in order, and smc.keep_outputs mirrors output.keep_simulated_curves.
+  SmcOptions smc;
+  // Filled from [sampler] (prior, tie) and the model's clamp count (dimension = 2 x
+  // model.clamps_per_edge, names "clamp 1", ...).
+  BinarySpaceOptions space;
+  OutputConfig output;
+};
+
+// Parses and validates `text`; `path` names the file in messages and sets `directory`.
+CalibrationConfig ParseConfig(std::string_view text, const std::string& path);
+// Reads `path` and parses it; a missing or unreadable file is combabc::Error(kNoInput).
+CalibrationConfig LoadConfig(const std::string& path);
+
+}  // namespace combabc

@@ -1,0 +1,142 @@
+// [metric]: the distance's components (paper Eqs. 4-7) and their threshold schedules (Eq. 1).
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "combabc/core/error.hpp"
+#include "combabc/config/config.hpp"
+#include "config_reader.hpp"
+
+namespace combabc::config_internal {
+namespace {
+
+struct ScheduleSpec {
+  ThresholdSchedule schedule;
+  Source source;  // where it was written (empty key = defaults)
+};
+
+bool HasScheduleKeys(const TableReader& t) {
+  return t.Has("threshold") || t.Has("quantile") || t.Has("initial") || t.Has("target");
+}
+
+ScheduleSpec ParseSchedule(TableReader& t, const ScheduleSpec& fallback) {
+  // Every key is read (not just the ones present) so that the table's vocabulary is complete.
+  const auto list = t.Numbers("threshold");
+  const auto quantile = t.Number("quantile");
+  const auto initial = t.Number("initial");
+  const auto target = t.Number("target");
+  const bool quantile_keys = quantile || initial || target;
+  if (list && quantile_keys) {
+    t.Fail("threshold", "give either threshold = [...] or quantile / initial / target, not both");
+  }
+  ScheduleSpec spec;
+  if (list) {
+    spec.schedule.kind = ThresholdKind::kList;
+    spec.schedule.values = *list;
+    spec.source = {t.Key("threshold"), t.Line("threshold")};
+    return spec;
+  }
+  if (!quantile_keys) return fallback;
+  spec.schedule.kind = ThresholdKind::kQuantile;
+  const char* first = quantile ? "quantile" : initial ? "initial" : "target";
+  spec.source = {t.Key(first), t.Line(first)};
+  if (quantile) {
+    if (!(*quantile > 0.0 && *quantile <= 1.0)) t.Fail("quantile", "must be in (0, 1]");
+    spec.schedule.quantile = *quantile;
+  }
+  if (initial) {
+    if (!(*initial >= 0.0)) t.Fail("initial", "must be >= 0 (inf = accept everything)");
+    spec.schedule.initial = *initial;
+  }
+  if (target) {
+    if (!(*target >= 0.0) || !std::isfinite(*target)) t.Fail("target", "must be finite and >= 0");
+    spec.schedule.target = *target;
+  }
+  return spec;
+}
+
+void ValidateSchedule(const ScheduleSpec& spec,
+                      int num_waves,
+                      const std::string& path,
+                      const std::string& fallback_key,
+                      int fallback_line) {
+  std::string why;
+  if (spec.schedule.IsValid("schedule", num_waves, &why)) return;
+  if (why.rfind("schedule.", 0) == 0) why.erase(0, 9);
+  const bool known = !spec.source.key.empty();
+  throw Error(ErrorKind::kConfig,
+              why,
+              path,
+              known ? spec.source.line : fallback_line,
+              known ? spec.source.key : fallback_key);
+}
+
+}  // namespace
+
+void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
+  auto t = root.Table("metric");
+  if (!t) throw Error(ErrorKind::kConfig, "missing required table [metric]", c->path, 1, "metric");
+  const ScheduleSpec base = ParseSchedule(*t, ScheduleSpec{});
+  const auto preset_text = t->String("preset");
+  auto components = t->Tables("component");
+  if (preset_text && !components.empty()) {
+    t->Fail("preset", "give either preset or [[metric.component]] tables, not both");
+  }
+  if (!preset_text && components.empty()) {
+    throw Error(ErrorKind::kConfig,
+                "give preset = \"area\" | \"least_squares\" | \"split_least_squares\" or one or "
+                "more [[metric.component]] tables",
+                c->path,
+                t->line(),
+                "metric");
+  }
+  const int num_waves = c->smc.num_waves;
+  if (preset_text) {
+    const auto preset = ParseMetricPreset(*preset_text);
+    if (!preset) {
+      t->Fail("preset",
+              "unknown preset \"" + *preset_text + "\"; expected one of " +
+                  OneOf({"area", "least_squares", "split_least_squares"}));
+    }
+    c->metric.preset = *preset;
+    c->metric.components = PresetComponents(*preset);
+    for (auto& component : c->metric.components) {
+      component.config_line = t->Line("preset");
+      if (KindOf(component.type) != ComponentKind::kThreshold) continue;
+      ValidateSchedule(base, num_waves, c->path, t->Key("preset"), t->Line("preset"));
+      component.threshold = base.schedule;
+    }
+  }
+  const double unit = MetresPer(c->data.position_unit);
+  for (TableReader& ct : components) {
+    MetricComponentConfig component;
+    component.config_line = ct.line();
+    const auto type = ct.Choice<MetricType>(
+        "type", ParseMetricType, "component type", {"area", "least_squares", "rise", "fall"});
+    if (!type) ct.Fail("type", "missing required key");
+    component.type = *type;
+    if (!ct.Has("window")) ct.Fail("window", "missing required key [from, to]");
+    std::tie(component.from, component.to) = WindowKey(ct, "window", unit);
+    component.name = ct.String("name").value_or("");
+    if (KindOf(component.type) == ComponentKind::kIndicator) {
+      if (HasScheduleKeys(ct)) {
+        const char* key = ct.Has("threshold")  ? "threshold"
+                          : ct.Has("quantile") ? "quantile"
+                          : ct.Has("initial")  ? "initial"
+                                               : "target";
+        ct.Fail(key,
+                std::string("a ") + ToString(component.type) +
+                    " indicator must equal 1 and takes no threshold");
+      }
+    } else {
+      const ScheduleSpec spec = ParseSchedule(ct, base);
+      ValidateSchedule(spec, num_waves, c->path, ct.prefix(), ct.line());
+      component.threshold = spec.schedule;
+    }
+    ct.Finish();
+    c->metric.components.push_back(std::move(component));
+  }
+  t->Finish();
+}
+
+}  // namespace combabc::config_internal

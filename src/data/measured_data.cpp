@@ -1,0 +1,269 @@
+#include "combabc/data/measured_data.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string_view>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+// Window edges are compared with this slack (metres) so that a window written in the data's own
+// unit (48 cm) matches the converted positions despite rounding in the unit conversion.
+constexpr double kPositionTolerance = 1e-9;
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
+    s.remove_suffix(1);
+  }
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return s;
+}
+
+std::vector<std::string_view> SplitCells(std::string_view line) {
+  std::vector<std::string_view> cells;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    cells.push_back(Trim(line.substr(start, comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return cells;
+}
+
+// Blank lines and lines starting with '#' (provenance notes above the header) are skipped.
+bool IsBlank(std::string_view line) {
+  const std::string_view t = Trim(line);
+  return t.empty() || t.front() == '#';
+}
+
+double ParseCell(std::string_view cell,
+                 const std::string& path,
+                 int line,
+                 const std::string& column) {
+  if (cell.empty()) throw Error(ErrorKind::kData, "empty cell", path, line, column);
+  if (cell.front() == '+') cell.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
+  if (ec != std::errc() || end != cell.data() + cell.size()) {
+    throw Error(ErrorKind::kData, "not a number: '" + std::string(cell) + "'", path, line, column);
+  }
+  if (std::isnan(value)) throw Error(ErrorKind::kData, "value is NaN", path, line, column);
+  if (std::isinf(value)) throw Error(ErrorKind::kData, "value is infinite", path, line, column);
+  return value;
+}
+
+std::string FormatMetres(double x) {
+  std::ostringstream out;
+  out << x << " m";
+  return out.str();
+}
+
+}  // namespace
+
+const char* ToString(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::kMetre:
+      return "m";
+    case LengthUnit::kCentimetre:
+      return "cm";
+    case LengthUnit::kMillimetre:
+      return "mm";
+    case LengthUnit::kMicrometre:
+      return "um";
+    case LengthUnit::kNanometre:
+      return "nm";
+  }
+  return "?";
+}
+
+std::optional<LengthUnit> ParseLengthUnit(const std::string& text) {
+  for (LengthUnit unit : {LengthUnit::kMetre,
+                          LengthUnit::kCentimetre,
+                          LengthUnit::kMillimetre,
+                          LengthUnit::kMicrometre,
+                          LengthUnit::kNanometre}) {
+    if (text == ToString(unit)) return unit;
+  }
+  return std::nullopt;
+}
+
+double MetresPer(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::kMetre:
+      return 1.0;
+    case LengthUnit::kCentimetre:
+      return 1e-2;
+    case LengthUnit::kMillimetre:
+      return 1e-3;
+    case LengthUnit::kMicrometre:
+      return 1e-6;
+    case LengthUnit::kNanometre:
+      return 1e-9;
+  }
+  return 1.0;
+}
+
+std::string ResolvePath(const std::string& base_dir, const std::string& path) {
+  const std::filesystem::path p(path);
+  if (p.is_absolute() || base_dir.empty()) return path;
+  return (std::filesystem::path(base_dir) / p).string();
+}
+
+MeasuredData ParseMeasuredData(const std::string& text,
+                               const std::string& path,
+                               const DataConfig& config) {
+  std::istringstream in(text);
+  std::string raw;
+  int line = 0;
+  // Header: the first non-blank line.
+  std::vector<std::string_view> header;
+  std::string header_line;
+  int header_number = 0;
+  while (std::getline(in, raw)) {
+    ++line;
+    if (line == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw.erase(0, 3);  // UTF-8 BOM
+    if (IsBlank(raw)) continue;
+    header_line = raw;
+    header_number = line;
+    header = SplitCells(header_line);
+    break;
+  }
+  if (header.empty()) throw Error(ErrorKind::kData, "empty file (no header row)", path, 1);
+
+  auto find_column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), std::string_view(name));
+    if (it == header.end()) {
+      std::string have;
+      for (auto h : header) have += (have.empty() ? "" : ", ") + std::string(h);
+      throw Error(ErrorKind::kData,
+                  "missing column '" + name + "' (header has: " + have + ")",
+                  path,
+                  header_number,
+                  name);
+    }
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  const std::size_t x_col = find_column(config.position_column);
+  const std::size_t y_col = find_column(config.displacement_column);
+  const std::size_t needed = std::max(x_col, y_col) + 1;
+
+  const double x_scale = MetresPer(config.position_unit);
+  const double y_scale = MetresPer(config.displacement_unit);
+  std::vector<double> xs, ys;
+  std::vector<int> lines;
+  while (std::getline(in, raw)) {
+    ++line;
+    if (IsBlank(raw)) continue;
+    const auto cells = SplitCells(raw);
+    if (cells.size() < needed) {
+      const std::string& column =
+          cells.size() <= x_col ? config.position_column : config.displacement_column;
+      throw Error(ErrorKind::kData,
+                  "row has " + std::to_string(cells.size()) + " cells; the column is missing",
+                  path,
+                  line,
+                  column);
+    }
+    const double x = ParseCell(cells[x_col], path, line, config.position_column) * x_scale;
+    const double y = ParseCell(cells[y_col], path, line, config.displacement_column) * y_scale;
+    if (!xs.empty() && x <= xs.back()) {
+      throw Error(
+          ErrorKind::kData,
+          std::string(x == xs.back() ? "duplicate position " : "positions must increase: ") +
+              std::string(cells[x_col]) + " after line " + std::to_string(lines.back()),
+          path,
+          line,
+          config.position_column);
+    }
+    xs.push_back(x);
+    ys.push_back(y);
+    lines.push_back(line);
+  }
+  if (xs.empty()) throw Error(ErrorKind::kData, "no data rows after the header", path, line);
+
+  MeasuredData data;
+  data.source = path;
+  // Window: kept rows are those inside [window_min, window_max]; the window must lie inside the
+  // measured range, otherwise the metric would silently compare over less than was asked for.
+  const double lo = config.window_min.value_or(xs.front());
+  const double hi = config.window_max.value_or(xs.back());
+  if (lo < xs.front() - kPositionTolerance || hi > xs.back() + kPositionTolerance) {
+    throw Error(ErrorKind::kData,
+                "window [" + FormatMetres(lo) + ", " + FormatMetres(hi) +
+                    "] lies outside the measured range [" + FormatMetres(xs.front()) + ", " +
+                    FormatMetres(xs.back()) + "]",
+                path,
+                0,
+                "data.window");
+  }
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    if (xs[i] >= lo - kPositionTolerance && xs[i] <= hi + kPositionTolerance) {
+      data.positions.push_back(xs[i]);
+      data.displacements.push_back(ys[i]);
+    }
+  }
+  if (data.positions.empty()) {
+    throw Error(ErrorKind::kData, "no data rows inside the window", path, 0, "data.window");
+  }
+  data.synthetic.assign(data.positions.size(), 0);
+
+  if (config.gaussian_extension.enabled) {
+    GaussianExtension extension;
+    try {
+      extension = ExtendWithGaussian(config.gaussian_extension, data.positions, data.displacements);
+    } catch (const Error& e) {
+      throw Error(ErrorKind::kData, e.message(), path, 0, "data.gaussian_extension");
+    }
+    const bool before =
+        extension.positions.empty() || extension.positions.front() < data.positions.front();
+    const auto n = extension.positions.size();
+    const auto at = before ? std::ptrdiff_t{0} : static_cast<std::ptrdiff_t>(data.size());
+    data.positions.insert(
+        data.positions.begin() + at, extension.positions.begin(), extension.positions.end());
+    data.displacements.insert(
+        data.displacements.begin() + at, extension.values.begin(), extension.values.end());
+    data.synthetic.insert(data.synthetic.begin() + at, n, std::uint8_t{1});
+    data.gaussian_fit = extension.fit;
+  }
+
+  if (config.normalise) {
+    double peak = 0.0;
+    for (double y : data.displacements) peak = std::max(peak, std::abs(y));
+    if (!(peak > 0.0)) {
+      throw Error(ErrorKind::kData,
+                  "all displacements are zero; cannot normalise",
+                  path,
+                  0,
+                  config.displacement_column);
+    }
+    for (double& y : data.displacements) y /= peak;
+    data.normalised = true;
+    data.scale = peak;
+  }
+  return data;
+}
+
+MeasuredData LoadMeasuredData(const DataConfig& config, const std::string& config_dir) {
+  const std::string path = ResolvePath(config_dir, config.csv);
+  if (config.csv.empty()) throw Error(ErrorKind::kNoInput, "no CSV file given", {}, 0, "data.csv");
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw Error(ErrorKind::kNoInput, "is a directory, not a data file", path);
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw Error(ErrorKind::kNoInput, "cannot open data file", path);
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) throw Error(ErrorKind::kNoInput, "cannot read data file", path);
+  return ParseMeasuredData(text.str(), path, config);
+}
+
+}  // namespace combabc

@@ -1,0 +1,364 @@
+// Export of a run history to CSV + JSON (files and columns: docs/history.md, "Export").
+#include "combabc/export/export.hpp"
+
+#include <unistd.h>
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Shortest text that reads back to the same double; Inf / -Inf / NaN as pandas and MATLAB read
+// them.
+std::string Number(double value) {
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "Inf" : "-Inf";
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, result.ptr);
+}
+
+std::string JsonNumber(double value) { return std::isfinite(value) ? Number(value) : "null"; }
+
+// Quoted only when needed (RFC 4180), so plain names stay plain for MATLAB.
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string JsonString(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char escaped[8];
+          std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
+          out += escaped;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string JsonArray(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + JsonNumber(values[i]);
+  return out + "]";
+}
+
+// A column-name-safe version of a component name: "least squares" -> "least_squares".
+std::string Identifier(const std::string& name) {
+  std::string out;
+  for (char c : name) {
+    const bool word = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (word) {
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else if (!out.empty() && out.back() != '_') {
+      out += '_';
+    }
+  }
+  while (!out.empty() && out.back() == '_') out.pop_back();
+  return out;
+}
+
+// Column names for the thresholds (one per threshold component) and distances (one per component).
+std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t count) {
+  std::vector<std::string> names;
+  for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
+    if (m.distance_components[c].kind == ComponentKind::kThreshold) {
+      names.push_back("eps_" + Identifier(m.distance_components[c].name));
+    }
+  }
+  if (names.size() != count) {
+    names.clear();
+    for (std::size_t k = 0; k < count; ++k) names.push_back("eps_" + std::to_string(k));
+  }
+  return names;
+}
+
+std::vector<std::string> DistanceColumns(const RunMetadata& m, std::size_t count) {
+  std::vector<std::string> names;
+  for (const DistanceComponent& c : m.distance_components)
+    names.push_back("d_" + Identifier(c.name));
+  if (names.size() != count) {
+    names.clear();
+    for (std::size_t k = 0; k < count; ++k) names.push_back("d_" + std::to_string(k));
+  }
+  return names;
+}
+
+class FileWriter {
+ public:
+  FileWriter(const fs::path& path) : path_(path), out_(path) {
+    if (!out_) throw Error(ErrorKind::kCantCreate, "cannot create export file", path_.string());
+  }
+  std::ofstream& out() { return out_; }
+  void Close() {
+    out_.close();
+    if (!out_) throw Error(ErrorKind::kIo, "cannot write export file", path_.string());
+  }
+
+ private:
+  fs::path path_;
+  std::ofstream out_;
+};
+
+void WriteWaves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+  FileWriter file(dir / "waves.csv");
+  std::ostream& out = file.out();
+  const std::size_t k = h.waves.empty() ? 0 : h.waves.front().thresholds.size();
+  out << "wave";
+  for (const std::string& name : ThresholdColumns(m, k)) out << ',' << name;
+  out << ",phi,candidates,accepted,acceptance_rate,ess,distinct,wall_seconds,complete\n";
+  for (const WaveRecord& w : h.waves) {
+    out << w.wave;
+    for (std::size_t i = 0; i < k; ++i) {
+      out << ',' << (i < w.thresholds.size() ? Number(w.thresholds[i]) : "NaN");
+    }
+    out << ',' << Number(w.phi) << ',' << w.candidates << ',' << w.accepted << ','
+        << Number(w.acceptance_rate) << ',' << Number(w.ess) << ',' << w.distinct << ','
+        << Number(w.wall_seconds) << ',' << (w.complete ? 1 : 0) << '\n';
+  }
+  file.Close();
+}
+
+void WriteMarginals(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+  FileWriter file(dir / "marginals.csv");
+  std::ostream& out = file.out();
+  out << "wave,bit,name,prob_paper,prob_importance\n";
+  for (const WaveRecord& w : h.waves) {
+    for (std::size_t b = 0; b < w.marginals_paper.size(); ++b) {
+      const std::string name =
+          b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
+      const double importance =
+          b < w.marginals_importance.size() ? w.marginals_importance[b] : std::nan("");
+      out << w.wave << ',' << b << ',' << CsvField(name) << ',' << Number(w.marginals_paper[b])
+          << ',' << Number(importance) << '\n';
+    }
+  }
+  file.Close();
+}
+
+void WriteParticles(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+  FileWriter file(dir / "particles.csv");
+  std::ostream& out = file.out();
+  std::size_t components = m.distance_components.size();
+  for (const WaveRecord& w : h.waves) {
+    if (!w.particles.empty()) components = w.particles.front().distance.size();
+  }
+  out << "wave,index,bits";
+  for (int b = 0; b < m.dimension; ++b) out << ",bit_" << b;
+  out << ",log_weight,weight";
+  for (const std::string& name : DistanceColumns(m, components)) out << ',' << name;
+  out << '\n';
+  std::string bits;
+  for (const WaveRecord& w : h.waves) {
+    for (const Particle& p : w.particles) {
+      bits.clear();
+      for (std::uint8_t bit : p.bits) bits += bit ? '1' : '0';
+      out << w.wave << ',' << p.index << ',' << bits;
+      for (std::uint8_t bit : p.bits) out << ',' << (bit ? '1' : '0');
+      out << ',' << Number(p.log_weight) << ',' << Number(p.weight);
+      for (std::size_t c = 0; c < components; ++c) {
+        out << ',' << (c < p.distance.size() ? Number(p.distance[c]) : "NaN");
+      }
+      out << '\n';
+    }
+  }
+  file.Close();
+}
+
+// Wide: one row per curve; the x of column y_i is row i of positions.csv.
+void WriteCurves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+  const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
+  {
+    FileWriter file(dir / "positions.csv");
+    file.out() << "column,position_" << unit << '\n';
+    for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
+      file.out() << "y_" << i << ',' << Number(m.output_positions[i]) << '\n';
+    }
+    file.Close();
+  }
+  bool any = false;
+  for (const WaveRecord& w : h.waves) {
+    for (const Particle& p : w.particles) any = any || !p.output.empty();
+  }
+  if (!any) return;  // the run did not keep outputs
+  FileWriter file(dir / "curves.csv");
+  std::ostream& out = file.out();
+  out << "wave,index";
+  for (std::size_t i = 0; i < m.output_positions.size(); ++i) out << ",y_" << i;
+  out << '\n';
+  for (const WaveRecord& w : h.waves) {
+    for (const Particle& p : w.particles) {
+      if (p.output.empty()) continue;
+      out << w.wave << ',' << p.index;
+      for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
+        out << ',' << (i < p.output.size() ? Number(p.output[i]) : "NaN");
+      }
+      out << '\n';
+    }
+  }
+  file.Close();
+}
+
+void WriteMeasured(const fs::path& dir, const RunMetadata& m) {
+  const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
+  FileWriter file(dir / "measured.csv");
+  file.out() << "position_" << unit << ",value\n";
+  for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
+    file.out() << Number(m.measured.positions[i]) << ',' << Number(m.measured.values[i]) << '\n';
+  }
+  file.Close();
+}
+
+void WriteSummary(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+  FileWriter file(dir / "summary.json");
+  std::ostream& out = file.out();
+  out << "{\n  \"format\": \"combabc-export\",\n  \"schema_version\": " << m.schema_version
+      << ",\n";
+  out << "  \"run\": {\n";
+  out << "    \"status\": " << JsonString(ToString(m.status)) << ",\n";
+  out << "    \"termination\": " << JsonString(m.termination) << ",\n";
+  out << "    \"message\": " << JsonString(m.summary_message) << ",\n";
+  out << "    \"config_path\": " << JsonString(m.config_path) << ",\n";
+  out << "    \"combabc_version\": " << JsonString(m.combabc_version) << ",\n";
+  out << "    \"git_hash\": " << JsonString(m.git_hash) << ",\n";
+  out << "    \"seed\": " << m.seed << ",\n";
+  out << "    \"threads\": " << m.threads << ",\n";
+  out << "    \"start_time\": " << JsonString(m.start_time) << ",\n";
+  out << "    \"end_time\": " << JsonString(m.end_time) << ",\n";
+  out << "    \"resume_count\": " << m.resume_count << ",\n";
+  out << "    \"estimator\": " << JsonString(m.estimator) << ",\n";
+  out << "    \"dimension\": " << m.dimension << ",\n";
+  out << "    \"position_unit\": " << JsonString(m.position_unit) << ",\n";
+  out << "    \"waves_completed\": " << h.summary.waves_completed << ",\n";
+  out << "    \"simulations\": " << h.summary.simulations << ",\n";
+  out << "    \"simulations_discarded\": " << h.summary.simulations_discarded << ",\n";
+  out << "    \"wall_seconds\": " << JsonNumber(h.summary.wall_seconds) << "\n  },\n";
+  out << "  \"config_text\": " << JsonString(m.config_text) << ",\n";
+  out << "  \"bit_names\": [";
+  for (std::size_t b = 0; b < m.bit_names.size(); ++b)
+    out << (b ? ", " : "") << JsonString(m.bit_names[b]);
+  out << "],\n  \"bit_prior_one\": " << JsonArray(m.bit_prior_one);
+  out << ",\n  \"distance_components\": [";
+  for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
+    const DistanceComponent& dc = m.distance_components[c];
+    out << (c ? ", " : "") << "{\"name\": " << JsonString(dc.name)
+        << ", \"kind\": " << JsonString(ToString(dc.kind))
+        << ", \"required\": " << JsonNumber(dc.required) << "}";
+  }
+  out << "],\n  \"waves\": [";
+  for (std::size_t t = 0; t < h.waves.size(); ++t) {
+    const WaveRecord& w = h.waves[t];
+    out << (t ? "," : "") << "\n    {\"wave\": " << w.wave
+        << ", \"thresholds\": " << JsonArray(w.thresholds) << ", \"phi\": " << JsonNumber(w.phi)
+        << ", \"candidates\": " << w.candidates << ", \"accepted\": " << w.accepted
+        << ", \"acceptance_rate\": " << JsonNumber(w.acceptance_rate)
+        << ", \"complete\": " << (w.complete ? "true" : "false")
+        << ", \"ess\": " << JsonNumber(w.ess) << ", \"distinct\": " << w.distinct
+        << ", \"wall_seconds\": " << JsonNumber(w.wall_seconds)
+        << ",\n     \"marginals_paper\": " << JsonArray(w.marginals_paper)
+        << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance) << "}";
+  }
+  out << "\n  ]\n}\n";
+  file.Close();
+}
+
+void WriteAll(const fs::path& dir, const HistoryStore& store, const ExportOptions& options) {
+  const RunMetadata m = store.LoadMetadata();
+  const RunHistory h = store.LoadHistory();
+  if (options.csv) {
+    WriteWaves(dir, m, h);
+    WriteMarginals(dir, m, h);
+    if (options.particles) WriteParticles(dir, m, h);
+    if (options.curves) WriteCurves(dir, m, h);
+    WriteMeasured(dir, m);
+  }
+  if (options.json) WriteSummary(dir, m, h);
+}
+
+}  // namespace
+
+void ExportRun(const HistoryStore& store,
+               const std::string& out_dir,
+               const ExportOptions& options) {
+  fs::path target(out_dir);
+  if (target.filename().empty()) target = target.parent_path();  // "out/" -> "out"
+  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(parent, ec)) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot export: directory " + parent.string() + " does not exist",
+                out_dir);
+  }
+  const bool replace = fs::exists(target, ec);
+  if (replace && !options.overwrite) {
+    throw Error(
+        ErrorKind::kCantCreate, "cannot export: already exists (refusing to overwrite)", out_dir);
+  }
+  const std::string suffix = ".tmp-" + std::to_string(::getpid());
+  const fs::path temp = parent / ("." + target.filename().string() + suffix);
+  fs::remove_all(temp, ec);
+  if (!fs::create_directory(temp, ec)) {
+    throw Error(ErrorKind::kCantCreate, "cannot export: " + ec.message(), temp.string());
+  }
+  try {
+    WriteAll(temp, store, options);
+    if (replace) {
+      const fs::path old = parent / ("." + target.filename().string() + ".old" + suffix);
+      fs::rename(target, old);
+      fs::rename(temp, target);
+      fs::remove_all(old, ec);
+    } else {
+      fs::rename(temp, target);
+    }
+  } catch (const fs::filesystem_error& error) {
+    fs::remove_all(temp, ec);
+    throw Error(ErrorKind::kIo, std::string("cannot export: ") + error.code().message(), out_dir);
+  } catch (...) {
+    fs::remove_all(temp, ec);
+    throw;
+  }
+}
+
+void ExportRun(const std::string& history_path,
+               const std::string& out_dir,
+               const ExportOptions& options) {
+  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
+  ExportRun(store, out_dir, options);
+}
+
+}  // namespace combabc

@@ -1,0 +1,304 @@
+// Creating and opening a run history, and the schema itself (docs/history.md, version 1).
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
+#include "combabc/core/error.hpp"
+#include "history/history_impl.hpp"
+
+#ifndef COMBABC_VERSION
+#define COMBABC_VERSION "unknown"
+#endif
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+using history::Statement;
+using history::Transaction;
+
+// Version 1 of the schema. Vectors of doubles are BLOBs of little-endian binary64 (exact, and
+// +-inf / NaN survive, which REAL columns and JSON would not guarantee); bits are packed.
+constexpr const char* kSchemaV1 = R"sql(
+CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE run (
+  id INTEGER PRIMARY KEY CHECK (id = 1),
+  status TEXT NOT NULL,
+  config_text TEXT NOT NULL,
+  config_path TEXT NOT NULL,
+  combabc_version TEXT NOT NULL,
+  git_hash TEXT NOT NULL,
+  seed TEXT NOT NULL,
+  threads INTEGER NOT NULL,
+  start_time TEXT NOT NULL,
+  end_time TEXT NOT NULL,
+  termination TEXT NOT NULL,
+  message TEXT NOT NULL,
+  resume_count INTEGER NOT NULL,
+  estimator TEXT NOT NULL,
+  dimension INTEGER NOT NULL,
+  position_unit TEXT NOT NULL,
+  waves_completed INTEGER,
+  simulations INTEGER,
+  simulations_discarded INTEGER,
+  wall_seconds REAL
+);
+CREATE TABLE bit (bit INTEGER PRIMARY KEY, name TEXT NOT NULL, prior REAL NOT NULL);
+CREATE TABLE component (
+  component INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  kind TEXT NOT NULL,
+  required REAL NOT NULL
+);
+CREATE TABLE output_position (i INTEGER PRIMARY KEY, position REAL NOT NULL);
+CREATE TABLE measured (i INTEGER PRIMARY KEY, position REAL NOT NULL, value REAL NOT NULL);
+CREATE TABLE wave (
+  wave INTEGER PRIMARY KEY,
+  thresholds BLOB,
+  phi REAL,
+  proposal BLOB,
+  started_at TEXT NOT NULL,
+  accepted_needed INTEGER NOT NULL DEFAULT 0,
+  next_index INTEGER NOT NULL DEFAULT 0,
+  accepted_so_far INTEGER NOT NULL DEFAULT 0,
+  total_simulations INTEGER NOT NULL DEFAULT 0,
+  ended INTEGER NOT NULL DEFAULT 0,
+  complete INTEGER NOT NULL DEFAULT 0,
+  candidates INTEGER,
+  accepted INTEGER,
+  acceptance_rate REAL,
+  marginals_paper BLOB,
+  marginals_importance BLOB,
+  ess REAL,
+  distinct_count INTEGER,
+  wall_seconds REAL,
+  ended_at TEXT
+);
+CREATE TABLE particle (
+  wave INTEGER NOT NULL REFERENCES wave (wave),
+  candidate INTEGER NOT NULL,
+  bits BLOB NOT NULL,
+  log_weight REAL,
+  weight REAL,
+  distance BLOB,
+  output BLOB,
+  PRIMARY KEY (wave, candidate)
+);
+)sql";
+
+const char* KindName(ComponentKind kind) {
+  return kind == ComponentKind::kIndicator ? "indicator" : "threshold";
+}
+
+void RemoveRunFiles(const std::string& path) {
+  std::error_code ignored;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) fs::remove(path + suffix, ignored);
+}
+
+void WriteMetadata(history::Database& db, const RunMetadata& m) {
+  Statement meta(db, "INSERT INTO meta (key, value) VALUES (?1, ?2)");
+  meta.Bind(1, std::string("format")).Bind(2, std::string("combabc-history")).Run();
+  meta.Bind(1, std::string("schema_version")).Bind(2, std::to_string(kHistorySchemaVersion)).Run();
+
+  Statement run(db, R"sql(
+    INSERT INTO run (id, status, config_text, config_path, combabc_version, git_hash, seed,
+      threads, start_time, end_time, termination, message, resume_count, estimator, dimension,
+      position_unit)
+    VALUES (1, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, '', '', '', 0, ?9, ?10, ?11))sql");
+  run.Bind(1, std::string(ToString(RunStatus::kRunning)))
+      .Bind(2, m.config_text)
+      .Bind(3, m.config_path)
+      .Bind(4, m.combabc_version.empty() ? std::string(COMBABC_VERSION) : m.combabc_version)
+      .Bind(5, m.git_hash)
+      .Bind(6, std::to_string(m.seed))  // TEXT: a uint64 seed does not fit SQLite's int64
+      .Bind(7, m.threads)
+      .Bind(8, m.start_time.empty() ? history::UtcNow() : m.start_time)
+      .Bind(9, m.estimator)
+      .Bind(10, m.dimension)
+      .Bind(11, m.position_unit)
+      .Run();
+
+  Statement bit(db, "INSERT INTO bit (bit, name, prior) VALUES (?1, ?2, ?3)");
+  for (int k = 0; k < m.dimension; ++k) {
+    const auto K = static_cast<std::size_t>(k);
+    bit.Bind(1, k)
+        .Bind(2, K < m.bit_names.size() ? m.bit_names[K] : "bit " + std::to_string(k + 1))
+        .Bind(3, K < m.bit_prior_one.size() ? m.bit_prior_one[K] : 0.5)
+        .Run();
+  }
+  Statement component(
+      db, "INSERT INTO component (component, name, kind, required) VALUES (?1, ?2, ?3, ?4)");
+  for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
+    const DistanceComponent& dc = m.distance_components[c];
+    component.Bind(1, static_cast<std::int64_t>(c))
+        .Bind(2, dc.name)
+        .Bind(3, std::string(KindName(dc.kind)))
+        .Bind(4, dc.required)
+        .Run();
+  }
+  Statement position(db, "INSERT INTO output_position (i, position) VALUES (?1, ?2)");
+  for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
+    position.Bind(1, static_cast<std::int64_t>(i)).Bind(2, m.output_positions[i]).Run();
+  }
+  Statement measured(db, "INSERT INTO measured (i, position, value) VALUES (?1, ?2, ?3)");
+  for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
+    measured.Bind(1, static_cast<std::int64_t>(i))
+        .Bind(2, m.measured.positions[i])
+        .Bind(3, m.measured.values[i])
+        .Run();
+  }
+}
+
+// WAL: a commit appends to the -wal file, so a process killed at any moment leaves every committed
+// batch readable (the next open replays the WAL). synchronous=NORMAL skips the fsync per commit:
+// committed batches survive a process kill, though not a power loss, which we accept for speed.
+void SetWriteMode(history::Database& db) {
+  db.Exec("PRAGMA journal_mode = WAL");
+  db.Exec("PRAGMA synchronous = NORMAL");
+}
+
+}  // namespace
+
+const char* ToString(RunStatus status) {
+  switch (status) {
+    case RunStatus::kRunning:
+      return "running";
+    case RunStatus::kFinished:
+      return "finished";
+    case RunStatus::kFailed:
+      return "failed";
+    case RunStatus::kInterrupted:
+      return "interrupted";
+  }
+  return "running";
+}
+
+std::optional<RunStatus> ParseRunStatus(const std::string& text) {
+  for (RunStatus s :
+       {RunStatus::kRunning, RunStatus::kFinished, RunStatus::kFailed, RunStatus::kInterrupted}) {
+    if (text == ToString(s)) return s;
+  }
+  return std::nullopt;
+}
+
+HistoryStore::HistoryStore(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+HistoryStore::HistoryStore(HistoryStore&& other) noexcept = default;
+HistoryStore& HistoryStore::operator=(HistoryStore&& other) noexcept = default;
+HistoryStore::~HistoryStore() = default;
+
+const std::string& HistoryStore::path() const { return impl_->db.path(); }
+
+HistoryStore HistoryStore::Create(const std::string& path,
+                                  const RunMetadata& metadata,
+                                  bool overwrite) {
+  if (metadata.dimension < 1) {
+    throw Error(ErrorKind::kSoftware, "RunMetadata::dimension must be >= 1", path);
+  }
+  if (!metadata.bit_prior_one.empty() &&
+      metadata.bit_prior_one.size() != static_cast<std::size_t>(metadata.dimension)) {
+    throw Error(
+        ErrorKind::kSoftware, "RunMetadata::bit_prior_one must be empty or one per bit", path);
+  }
+  if (metadata.measured.positions.size() != metadata.measured.values.size()) {
+    throw Error(ErrorKind::kSoftware, "measured positions and values differ in length", path);
+  }
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot create run history: directory " + dir.string() + " does not exist",
+                path);
+  }
+  if (fs::exists(target, ec) && !overwrite) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot create run history: file exists (refusing to overwrite)",
+                path);
+  }
+  // Built under a temporary name and moved into place complete: a process killed while creating
+  // never leaves a half-made RUN.db (at worst a stray .creating file).
+  const std::string temp =
+      (dir / ("." + target.filename().string() + ".creating-" + std::to_string(::getpid())))
+          .string();
+  RemoveRunFiles(temp);
+  // Creating the file ourselves gives the OS's reason (permission, read-only file system, ...),
+  // which SQLite reduces to "unable to open database file".
+  std::FILE* file = std::fopen(temp.c_str(), "wx");
+  if (file == nullptr) {
+    throw Error(ErrorKind::kCantCreate,
+                std::string("cannot create run history: ") + std::strerror(errno),
+                path);
+  }
+  std::fclose(file);
+  try {
+    {
+      history::Database db(temp, /*create=*/true, /*read_only=*/false);
+      Transaction transaction(db);
+      db.Exec(kSchemaV1);
+      WriteMetadata(db, metadata);
+      db.Exec(("PRAGMA application_id = " + std::to_string(kHistoryApplicationId)).c_str());
+      db.Exec(("PRAGMA user_version = " + std::to_string(kHistorySchemaVersion)).c_str());
+      transaction.Commit();
+    }
+    // A -wal left by an older file of this name must not be replayed into the new one.
+    for (const char* suffix : {"-wal", "-shm", "-journal"}) fs::remove(path + suffix, ec);
+    if (overwrite) {
+      fs::rename(temp, target);
+    } else if (::link(temp.c_str(), path.c_str()) != 0) {
+      // link() fails if the name was taken meanwhile: two runs cannot both claim one file.
+      const int error = errno;
+      if (error == EEXIST) {
+        throw Error(ErrorKind::kCantCreate,
+                    "cannot create run history: file exists (refusing to overwrite)",
+                    path);
+      }
+      fs::rename(temp, target);  // a file system without hard links
+    }
+    RemoveRunFiles(temp);
+  } catch (const Error& error) {
+    RemoveRunFiles(temp);
+    throw Error(ErrorKind::kCantCreate, error.message(), path);
+  } catch (const fs::filesystem_error& error) {
+    RemoveRunFiles(temp);
+    throw Error(
+        ErrorKind::kCantCreate, "cannot create run history: " + error.code().message(), path);
+  } catch (...) {
+    RemoveRunFiles(temp);
+    throw;
+  }
+  auto impl = std::make_unique<Impl>(path, /*create=*/false, /*read_only=*/false);
+  SetWriteMode(impl->db);
+  impl->dimension = metadata.dimension;
+  return HistoryStore(std::move(impl));
+}
+
+HistoryStore HistoryStore::Open(const std::string& path, bool read_only) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(ErrorKind::kNoInput, "no such run history", path);
+  if (fs::is_directory(path, ec)) {
+    throw Error(ErrorKind::kNoInput, "is a directory, not a run history", path);
+  }
+  auto impl = std::make_unique<Impl>(path, /*create=*/false, read_only);
+  history::Database& db = impl->db;
+  const std::int64_t application_id = db.QueryInt("PRAGMA application_id");
+  const std::int64_t version = db.QueryInt("PRAGMA user_version");
+  if (application_id != kHistoryApplicationId || version < 1) {
+    throw Error(ErrorKind::kData, "not a combabc run history", path);
+  }
+  if (version > kHistorySchemaVersion) {
+    throw Error(ErrorKind::kData,
+                "run history schema version " + std::to_string(version) +
+                    " is newer than this combabc reads (" + std::to_string(kHistorySchemaVersion) +
+                    "); use a newer combabc",
+                path);
+  }
+  if (!read_only) SetWriteMode(db);
+  impl->dimension = static_cast<int>(db.QueryInt("SELECT dimension FROM run WHERE id = 1"));
+  if (impl->dimension < 1) throw Error(ErrorKind::kData, "corrupt run history: no run row", path);
+  return HistoryStore(std::move(impl));
+}
+
+}  // namespace combabc

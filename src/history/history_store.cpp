@@ -1,0 +1,197 @@
+// Recording a run into its history: the SmcObserver callbacks, Finish and MarkFailed.
+#include <set>
+
+#include "combabc/core/error.hpp"
+#include "history/history_impl.hpp"
+
+namespace combabc {
+namespace {
+
+using history::PackBits;
+using history::PackDoubles;
+using history::Statement;
+using history::Transaction;
+
+constexpr const char* kUpsertWave = R"sql(
+INSERT INTO wave (wave, thresholds, phi, proposal, started_at) VALUES (?1, ?2, ?3, ?4, ?5)
+ON CONFLICT (wave) DO UPDATE SET
+  thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal
+)sql";
+
+// Re-sending a particle (OnWaveEnd's normalised weights) replaces it, but an output already stored
+// is kept when the new record carries none.
+constexpr const char* kUpsertParticle = R"sql(
+INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)
+ON CONFLICT (wave, candidate) DO UPDATE SET
+  bits = excluded.bits, log_weight = excluded.log_weight, weight = excluded.weight,
+  distance = excluded.distance, output = COALESCE(excluded.output, particle.output)
+)sql";
+
+constexpr const char* kUpdateProgress = R"sql(
+UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
+  total_simulations = ?5 WHERE wave = ?1
+)sql";
+
+void BindParticle(Statement& s, int wave, const Particle& p) {
+  s.Bind(1, wave)
+      .Bind(2, p.index)
+      .BindBlob(3, PackBits(p.bits))
+      .Bind(4, p.log_weight)
+      .Bind(5, p.weight)
+      .BindBlob(6, PackDoubles(p.distance))
+      .BindBlob(7, PackDoubles(p.output));
+}
+
+// A wrong bit count would only surface when the run is read back; refuse it when written.
+void CheckBits(int dimension, const std::string& path, std::span<const Particle> particles) {
+  for (const Particle& p : particles) {
+    if (p.bits.size() != static_cast<std::size_t>(dimension)) {
+      throw Error(ErrorKind::kSoftware,
+                  "particle " + std::to_string(p.index) + " has " + std::to_string(p.bits.size()) +
+                      " bits, the run has " + std::to_string(dimension),
+                  path);
+    }
+  }
+}
+
+void UpsertWave(history::Database& db, const WaveRecord& wave) {
+  Statement s(db, kUpsertWave);
+  s.Bind(1, wave.wave)
+      .BindBlob(2, PackDoubles(wave.thresholds))
+      .Bind(3, wave.phi)
+      .BindBlob(4, PackDoubles(wave.proposal))
+      .Bind(5, history::UtcNow())
+      .Run();
+}
+
+}  // namespace
+
+void HistoryStore::Impl::RequireWritable(const char* what) const {
+  if (read_only) {
+    throw Error(ErrorKind::kSoftware,
+                std::string("run history opened read-only; cannot ") + what,
+                db.path());
+  }
+}
+
+void HistoryStore::OnWaveStart(const WaveRecord& wave) {
+  impl_->RequireWritable("record a wave");
+  Transaction transaction(impl_->db);
+  UpsertWave(impl_->db, wave);
+  transaction.Commit();
+}
+
+void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Particle> accepted) {
+  Impl& impl = *impl_;
+  impl.RequireWritable("record a batch");
+  if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
+  if (!impl.update_progress) impl.update_progress.emplace(impl.db, kUpdateProgress);
+  CheckBits(impl.dimension, impl.db.path(), accepted);
+  // Particles and progress commit together: after this, next_index is a valid restart point.
+  Transaction transaction(impl.db);
+  impl.update_progress->Bind(1, progress.wave)
+      .Bind(2, progress.next_index)
+      .Bind(3, progress.accepted)
+      .Bind(4, progress.accepted_needed)
+      .Bind(5, progress.total_simulations)
+      .Run();
+  if (impl.db.Changes() == 0) {
+    throw Error(ErrorKind::kSoftware,
+                "batch for wave " + std::to_string(progress.wave) + " before its OnWaveStart",
+                impl.db.path());
+  }
+  for (const Particle& p : accepted) {
+    BindParticle(*impl.upsert_particle, progress.wave, p);
+    impl.upsert_particle->Run();
+  }
+  transaction.Commit();
+}
+
+void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
+  Impl& impl = *impl_;
+  impl.RequireWritable("record a wave");
+  if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
+  CheckBits(impl.dimension, impl.db.path(), wave.particles);
+  Transaction transaction(impl.db);
+  UpsertWave(impl.db, wave);
+  Statement end(impl.db, R"sql(
+    UPDATE wave SET ended = 1, complete = ?2, candidates = ?3, accepted = ?4,
+      acceptance_rate = ?5, marginals_paper = ?6, marginals_importance = ?7, ess = ?8,
+      distinct_count = ?9, wall_seconds = ?10, ended_at = ?11 WHERE wave = ?1)sql");
+  end.Bind(1, wave.wave)
+      .Bind(2, wave.complete ? 1 : 0)
+      .Bind(3, wave.candidates)
+      .Bind(4, wave.accepted)
+      .Bind(5, wave.acceptance_rate)
+      .BindBlob(6, PackDoubles(wave.marginals_paper))
+      .BindBlob(7, PackDoubles(wave.marginals_importance))
+      .Bind(8, wave.ess)
+      .Bind(9, wave.distinct)
+      .Bind(10, wave.wall_seconds)
+      .Bind(11, history::UtcNow())
+      .Run();
+  std::set<std::int64_t> kept;
+  for (const Particle& p : wave.particles) {
+    BindParticle(*impl.upsert_particle, wave.wave, p);
+    impl.upsert_particle->Run();
+    kept.insert(p.index);
+  }
+  // The wave's final list is the truth: drop batch particles it did not keep (parallel overshoot).
+  Statement stored(impl.db, "SELECT candidate FROM particle WHERE wave = ?1");
+  stored.Bind(1, wave.wave);
+  std::vector<std::int64_t> dropped;
+  while (stored.Step()) {
+    if (kept.count(stored.Int(0)) == 0) dropped.push_back(stored.Int(0));
+  }
+  Statement drop(impl.db, "DELETE FROM particle WHERE wave = ?1 AND candidate = ?2");
+  for (std::int64_t index : dropped) drop.Bind(1, wave.wave).Bind(2, index).Run();
+  transaction.Commit();
+}
+
+void HistoryStore::Finish(const RunSummary& summary) {
+  Impl& impl = *impl_;
+  impl.RequireWritable("finish the run");
+  const RunStatus status = summary.termination == Termination::kInterrupted
+                               ? RunStatus::kInterrupted
+                               : RunStatus::kFinished;
+  {
+    Transaction transaction(impl.db);
+    Statement s(impl.db, R"sql(
+      UPDATE run SET status = ?1, termination = ?2, message = ?3, waves_completed = ?4,
+        simulations = ?5, simulations_discarded = ?6, wall_seconds = ?7, end_time = ?8
+      WHERE id = 1)sql");
+    s.Bind(1, std::string(ToString(status)))
+        .Bind(2, std::string(ToString(summary.termination)))
+        .Bind(3, summary.message)
+        .Bind(4, summary.waves_completed)
+        .Bind(5, summary.simulations)
+        .Bind(6, summary.simulations_discarded)
+        .Bind(7, summary.wall_seconds)
+        .Bind(8, history::UtcNow())
+        .Run();
+    transaction.Commit();
+  }
+  // Fold the WAL back into the file and leave rollback-journal mode, so the finished RUN.db is
+  // one self-contained file that can be copied or opened read-only anywhere.
+  impl.upsert_particle.reset();
+  impl.update_progress.reset();
+  // Best effort: the summary is committed already, and a reader holding the file open (a report
+  // of the running run) only means the WAL stays until the next open.
+  impl.db.TryExec("PRAGMA wal_checkpoint(TRUNCATE)");
+  impl.db.TryExec("PRAGMA journal_mode = DELETE");
+}
+
+void HistoryStore::MarkFailed(const std::string& message) {
+  Impl& impl = *impl_;
+  impl.RequireWritable("mark the run failed");
+  Transaction transaction(impl.db);
+  Statement s(impl.db, "UPDATE run SET status = ?1, message = ?2, end_time = ?3 WHERE id = 1");
+  s.Bind(1, std::string(ToString(RunStatus::kFailed)))
+      .Bind(2, message)
+      .Bind(3, history::UtcNow())
+      .Run();
+  transaction.Commit();
+}
+
+}  // namespace combabc

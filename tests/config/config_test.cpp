@@ -1,0 +1,456 @@
+#include "combabc/config/config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "combabc/core/error.hpp"
+#include "combabc/metrics/composite_distance.hpp"
+#include "combabc/config/distance_from_config.hpp"
+
+namespace combabc {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+std::string Fixture(const std::string& name) {
+  return std::string(COMBABC_SOURCE_DIR) + "/tests/config/testdata/" + name;
+}
+
+// The error ParseConfig throws for `text` (fails the test if none).
+Error ConfigError(const std::string& text) {
+  try {
+    ParseConfig(text, "inline.toml");
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return Error(ErrorKind::kSoftware, "none");
+}
+
+Error LoadError(const std::string& path) {
+  try {
+    LoadConfig(path);
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for " << path;
+  return Error(ErrorKind::kSoftware, "none");
+}
+
+// what() must read "file:line: key: ..." with exactly this prefix.
+void ExpectLocated(const Error& e, const std::string& file, int line, const std::string& key) {
+  EXPECT_EQ(e.kind(), ErrorKind::kConfig) << e.what();
+  EXPECT_EQ(e.line(), line) << e.what();
+  EXPECT_EQ(e.field(), key) << e.what();
+  const std::string prefix = file + ":" + std::to_string(line) + ": " + key + ": ";
+  EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what() << "\nexpected " << prefix;
+}
+
+const std::string kMinimal =
+    "[data]\n"
+    "csv = \"p.csv\"\n"
+    "[metric]\n"
+    "preset = \"area\"\n";
+
+// ------------------------------------------------------------------------------ valid files
+
+TEST(Config, PaperLeastSquaresFixtureFillsEveryOption) {
+  const CalibrationConfig c = LoadConfig(Fixture("paper_45cm_least_squares.toml"));
+  EXPECT_EQ(c.description, "45 cm load, Eq. 5 least squares");
+  EXPECT_EQ(c.directory, std::string(COMBABC_SOURCE_DIR) + "/tests/config/testdata");
+  EXPECT_NE(c.text.find("[sampler.tempering]"), std::string::npos);
+  // data
+  EXPECT_EQ(c.data.csv, "profile_45cm.csv");
+  EXPECT_EQ(c.data.position_column, "position_cm");
+  EXPECT_EQ(c.data.position_unit, LengthUnit::kCentimetre);
+  EXPECT_EQ(c.data.displacement_unit, LengthUnit::kMicrometre);
+  ASSERT_TRUE(c.data.window_min && c.data.window_max);
+  EXPECT_NEAR(*c.data.window_min, 0.48, kTol);
+  EXPECT_NEAR(*c.data.window_max, 0.80, kTol);
+  EXPECT_TRUE(c.data.normalise);
+  EXPECT_FALSE(c.data.gaussian_extension.enabled);
+  // metric
+  ASSERT_TRUE(c.metric.preset.has_value());
+  EXPECT_EQ(*c.metric.preset, MetricPreset::kLeastSquares);
+  ASSERT_EQ(c.metric.components.size(), 1u);
+  EXPECT_EQ(c.metric.components[0].type, MetricType::kLeastSquares);
+  EXPECT_NEAR(c.metric.components[0].to, 0.81, kTol);
+  // sampler -> SmcOptions
+  EXPECT_EQ(c.smc.num_waves, 5);
+  EXPECT_EQ(c.smc.accepted_per_wave, 500);
+  EXPECT_EQ(c.smc.estimator, Estimator::kPaper);
+  EXPECT_EQ(c.smc.seed, 2024u);
+  EXPECT_EQ(c.smc.threads, 0);
+  EXPECT_EQ(c.smc.max_simulations, 2000000);
+  ASSERT_EQ(c.smc.thresholds.size(), 1u);
+  EXPECT_EQ(c.smc.thresholds[0].kind, ThresholdKind::kList);
+  EXPECT_EQ(c.smc.thresholds[0].values, (std::vector<double>{2.0, 1.0, 0.5, 0.25, 0.1}));
+  EXPECT_EQ(c.smc.tempering.kind, TemperingKind::kLinear);
+  EXPECT_EQ(c.smc.tempering.form, TemperingForm::kGeometric);
+  EXPECT_EQ(c.smc.tempering.phi0, 0.5);
+  EXPECT_TRUE(c.smc.keep_outputs);
+  std::string why;
+  EXPECT_TRUE(c.smc.IsValid(&why)) << why;
+  // sampler -> BinarySpaceOptions
+  EXPECT_EQ(c.space.dimension, 36);
+  EXPECT_EQ(c.space.default_prior_one, 0.5);
+  EXPECT_EQ(c.space.tied, (std::vector<std::vector<int>>{{0, 18}, {1, 19}}));
+  ASSERT_EQ(c.space.names.size(), 36u);
+  EXPECT_EQ(c.space.names[18], "clamp 19");
+  // output
+  EXPECT_EQ(c.output.directory, "results-45cm");
+  EXPECT_EQ(c.output.database, "history.sqlite");
+  EXPECT_EQ(c.output.figure_formats, (std::vector<std::string>{"png", "svg"}));
+}
+
+TEST(Config, PaperLeastSquaresEndToEndDistance) {
+  const CalibrationConfig c = LoadConfig(Fixture("paper_45cm_least_squares.toml"));
+  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
+  ASSERT_EQ(data.size(), 33u);  // 48..80 cm
+  std::vector<double> out_x;
+  for (int cm = 0; cm <= 90; ++cm) out_x.push_back(cm * 0.01);
+  CompositeDistance distance(c.metric.components,
+                             data.positions,
+                             data.displacements,
+                             out_x,
+                             {.normalise_simulated = c.data.normalise});
+  EXPECT_EQ(distance.threshold_schedules().size(), c.smc.thresholds.size());
+  // Feeding the data back (zero elsewhere) reproduces them exactly: D = 0.
+  std::vector<double> simulated(out_x.size(), 0.0);
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    simulated[static_cast<std::size_t>(std::lround(data.positions[j] * 100))] =
+        data.displacements[j] * 7.0;
+  }
+  double d = -1;
+  distance.Evaluate(simulated, std::span<double>(&d, 1));
+  EXPECT_NEAR(d, 0.0, 1e-20);
+}
+
+TEST(Config, SplitPresetWithGaussianExtension) {
+  const CalibrationConfig c = LoadConfig(Fixture("paper_70cm_split.toml"));
+  EXPECT_TRUE(c.data.gaussian_extension.enabled);  // the table's presence enables it
+  EXPECT_NEAR(c.data.gaussian_extension.impact_position, 0.70, kTol);
+  EXPECT_NEAR(c.data.gaussian_extension.spacing, 0.01, kTol);
+  ASSERT_EQ(c.metric.components.size(), 5u);
+  ASSERT_EQ(c.smc.thresholds.size(), 3u);  // indicators take no schedule
+  for (const auto& s : c.smc.thresholds) {
+    EXPECT_EQ(s.kind, ThresholdKind::kQuantile);
+    EXPECT_EQ(s.quantile, 0.5);
+    EXPECT_EQ(s.target, 0.01);
+    EXPECT_TRUE(std::isinf(s.initial));
+  }
+  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
+  EXPECT_EQ(data.size(), 20u);  // 70..73 synthetic + 74..89 measured
+  EXPECT_NEAR(data.positions.front(), 0.70, kTol);
+  // The measured profile itself satisfies Eq. 7: a secondary peak in 76-80 cm.
+  std::vector<double> out_x(data.positions.begin(), data.positions.end());
+  CompositeDistance distance(c.metric.components, data.positions, data.displacements, out_x);
+  std::vector<double> d(5);
+  distance.Evaluate(data.displacements, d);
+  EXPECT_EQ(d, (std::vector<double>{0, 0, 0, 1, 1}));
+}
+
+TEST(Config, MakeDistanceUsesTheModelOutputPositions) {
+  const CalibrationConfig c = LoadConfig(Fixture("paper_70cm_split.toml"));
+  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
+  const auto distance = MakeDistance(c, data);
+  EXPECT_EQ(distance->output_size(), c.model.output_positions.size());
+  EXPECT_EQ(distance->components().size(), 5u);
+  // A model whose output stops short of the data is a config error naming the file.
+  CalibrationConfig short_model = c;
+  short_model.model.output_positions = {0.0, 0.1, 0.2};
+  try {
+    MakeDistance(short_model, data);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+    EXPECT_EQ(e.file(), c.path);
+    EXPECT_EQ(e.line(), 19);  // the preset key
+    EXPECT_EQ(e.field(), "metric.component[0]");
+  }
+}
+
+TEST(Config, ComponentsWithOwnAndInheritedSchedules) {
+  const CalibrationConfig c = LoadConfig(Fixture("custom_components.toml"));
+  ASSERT_EQ(c.metric.components.size(), 5u);
+  EXPECT_FALSE(c.metric.preset.has_value());
+  EXPECT_EQ(c.metric.components[1].name, "secondary peak");
+  EXPECT_EQ(c.metric.components[3].type, MetricType::kRise);
+  EXPECT_NEAR(c.metric.components[4].from, 0.78, kTol);
+  ASSERT_EQ(c.smc.thresholds.size(), 3u);
+  EXPECT_EQ(c.smc.thresholds[0].kind, ThresholdKind::kList);
+  EXPECT_EQ(c.smc.thresholds[1].quantile, 0.4);  // inherited from [metric]
+  EXPECT_EQ(c.smc.thresholds[2].quantile, 0.7);
+  EXPECT_EQ(c.smc.thresholds[2].initial, 5.0);
+  ASSERT_EQ(c.space.prior_one.size(), 36u);
+  EXPECT_EQ(c.space.prior_one[35], 0.9);
+  EXPECT_EQ(c.smc.tempering.kind, TemperingKind::kList);
+  EXPECT_EQ(c.smc.tempering.form, TemperingForm::kMixture);
+  EXPECT_TRUE(c.data.gaussian_extension.enabled);
+}
+
+TEST(Config, DefaultsComeFromTheOptionStructs) {
+  const CalibrationConfig c = ParseConfig(kMinimal, "dir/minimal.toml");
+  EXPECT_EQ(c.directory, "dir");
+  const SmcOptions defaults;
+  EXPECT_EQ(c.smc.num_waves, defaults.num_waves);
+  EXPECT_EQ(c.smc.accepted_per_wave, defaults.accepted_per_wave);
+  EXPECT_EQ(c.smc.estimator, defaults.estimator);
+  EXPECT_EQ(c.smc.seed, defaults.seed);
+  EXPECT_EQ(c.data.position_column, "position");
+  EXPECT_EQ(c.data.position_unit, LengthUnit::kCentimetre);
+  EXPECT_EQ(c.output.figure_formats, (std::vector<std::string>{"png"}));
+  EXPECT_EQ(c.space.dimension, 36);
+  EXPECT_TRUE(c.space.tied.empty());
+}
+
+TEST(Config, ModelSectionFillsSensorOptions) {
+  const CalibrationConfig c = LoadConfig(Fixture("paper_45cm_least_squares.toml"));
+  const plate::SensorOptions& m = c.model;
+  EXPECT_EQ(m.length, 0.90);
+  EXPECT_EQ(m.width, 0.04);
+  ASSERT_EQ(m.layers.size(), 3u);
+  EXPECT_EQ(m.layers[1].youngs_modulus, 5.0e6);
+  EXPECT_EQ(m.layers[1].loss_factor, 0.15);
+  EXPECT_EQ(m.clamps_per_edge, 18);
+  EXPECT_EQ(m.fixed_support, plate::Support::kClamped);
+  EXPECT_EQ(m.short_edge_end, plate::Support::kFree);
+  EXPECT_EQ(m.load_x, 0.45);
+  EXPECT_EQ(m.load_force, 0.042);
+  EXPECT_EQ(m.frequency_hz, 5.0);
+  ASSERT_EQ(m.output_positions.size(), 91u);
+  EXPECT_NEAR(m.output_positions.back(), 0.90, kTol);
+  EXPECT_TRUE(m.normalise);
+  std::string why;
+  EXPECT_TRUE(m.IsValid(&why)) << why;
+}
+
+TEST(Config, ModelKeysAreOptionalAndDefaultsComeFromSensorOptions) {
+  const CalibrationConfig c = ParseConfig(kMinimal +
+                                              "[model.clamps]\nper_edge = 9\n"
+                                              "[model.load]\ntype = \"point\"\nx = 0.3\n"
+                                              "[data.gaussian_extension]\n",
+                                          "inline.toml");
+  const plate::SensorOptions defaults;
+  EXPECT_EQ(c.model.length, defaults.length);
+  EXPECT_EQ(c.model.layers.size(), defaults.layers.size());
+  EXPECT_EQ(c.model.output_positions, defaults.output_positions);
+  EXPECT_EQ(c.model.clamps_per_edge, 9);
+  EXPECT_EQ(c.space.dimension, 18);           // 2 x 9 clamps
+  EXPECT_EQ(c.model.load_patch_length, 0.0);  // point load
+  EXPECT_EQ(c.model.load_x, 0.3);
+  // The Gaussian extension is centred at the model's load unless told otherwise.
+  EXPECT_EQ(c.data.gaussian_extension.impact_position, 0.3);
+}
+
+TEST(Config, ModelErrorsNameTheKey) {
+  ExpectLocated(ConfigError(kMinimal + "[model]\nlength = -1\n"), "inline.toml", 6, "model.length");
+  ExpectLocated(ConfigError(kMinimal + "[model.short_edges]\nstart = \"pinned\"\n"),
+                "inline.toml",
+                6,
+                "model.short_edges.start");
+  ExpectLocated(ConfigError(kMinimal + "[[model.layer]]\nthickness = 1e-3\ndensity = 1000\n"),
+                "inline.toml",
+                5,
+                "model.layer[0].young_modulus");
+  ExpectLocated(ConfigError(kMinimal + "[model.clamps]\nsection_length = 0.07\n"),
+                "inline.toml",
+                6,
+                "model.clamps.section_length");
+  // The load beyond the plate is caught by SensorOptions::IsValid and reported at its key.
+  ExpectLocated(
+      ConfigError(kMinimal + "[model.load]\nx = 1.2\n"), "inline.toml", 6, "model.load.x");
+  // The clamp count bounds the tie numbers.
+  ExpectLocated(ConfigError(kMinimal + "[model.clamps]\nper_edge = 2\n[sampler]\ntie = [[1, 5]]\n"),
+                "inline.toml",
+                8,
+                "sampler.tie[0][1]");
+}
+
+TEST(Config, DocumentedExampleIsTheTestedFixture) {
+  // docs/config.md's complete example must stay identical to the fixture parsed above.
+  std::ifstream doc(std::string(COMBABC_SOURCE_DIR) + "/docs/config.md");
+  std::ifstream fixture(Fixture("paper_45cm_least_squares.toml"));
+  ASSERT_TRUE(doc && fixture);
+  std::stringstream doc_text, fixture_text;
+  doc_text << doc.rdbuf();
+  fixture_text << fixture.rdbuf();
+  const std::string text = doc_text.str();
+  const std::size_t begin = text.find("```toml\n");
+  ASSERT_NE(begin, std::string::npos);
+  const std::size_t end = text.find("```", begin + 8);
+  EXPECT_EQ(text.substr(begin + 8, end - begin - 8), fixture_text.str());
+}
+
+// ------------------------------------------------------------------------------ bad fixtures
+
+TEST(Config, MalformedTomlNamesFileAndLine) {
+  const std::string path = Fixture("bad_malformed.toml");
+  const Error e = LoadError(path);
+  EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+  EXPECT_EQ(e.line(), 5) << e.what();
+  EXPECT_EQ(std::string(e.what()).rfind(path + ":5: malformed TOML", 0), 0u) << e.what();
+}
+
+TEST(Config, UnknownNestedKeyNamesFileLineAndDottedKey) {
+  const std::string path = Fixture("bad_unknown_key.toml");
+  const Error e = LoadError(path);
+  ExpectLocated(e, path, 10, "sampler.tempering.phi_0");
+  EXPECT_NE(std::string(e.what()).find("unknown key; expected one of: kind, form, phi0, values"),
+            std::string::npos)
+      << e.what();
+}
+
+TEST(Config, WrongTypeNamesFileLineAndKey) {
+  const std::string path = Fixture("bad_wrong_type.toml");
+  const Error e = LoadError(path);
+  ExpectLocated(e, path, 8, "sampler.waves");
+  EXPECT_NE(std::string(e.what()).find("expected an integer, got a string"), std::string::npos);
+}
+
+TEST(Config, OutOfRangeNamesFileLineAndKey) {
+  const std::string path = Fixture("bad_out_of_range.toml");
+  const Error e = LoadError(path);
+  ExpectLocated(e, path, 9, "sampler.min_acceptance_rate");
+  EXPECT_NE(std::string(e.what()).find("must be in [0, 1]"), std::string::npos) << e.what();
+}
+
+TEST(Config, MissingFileIsNoInput) {
+  const Error e = [] {
+    try {
+      LoadConfig(Fixture("no_such_config.toml"));
+    } catch (const Error& err) {
+      return err;
+    }
+    return Error(ErrorKind::kSoftware, "none");
+  }();
+  EXPECT_EQ(e.kind(), ErrorKind::kNoInput);
+  EXPECT_NE(std::string(e.what()).find("no_such_config.toml"), std::string::npos);
+}
+
+// ------------------------------------------------------------------------------ inline cases
+
+TEST(Config, UnknownKeysAnywhere) {
+  ExpectLocated(ConfigError("colour = 1\n" + kMinimal), "inline.toml", 1, "colour");
+  ExpectLocated(
+      ConfigError(kMinimal + "[output]\nformat = \"png\"\n"), "inline.toml", 6, "output.format");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[data.gaussian_extension]\n"
+                            "impact_position = 70\nfit = 3\n[metric]\npreset = \"area\"\n"),
+                "inline.toml",
+                5,
+                "data.gaussian_extension.fit");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\n"
+                            "[[metric.component]]\ntype = \"area\"\nwindow = [48, 80]\n"
+                            "[[metric.component]]\ntype = \"area\"\nwindow = [48, 80]\n"
+                            "windw = [1, 2]\n"),
+                "inline.toml",
+                10,
+                "metric.component[1].windw");
+}
+
+TEST(Config, WrongTypes) {
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\nnormalise = \"yes\"\n[metric]\n"
+                            "preset = \"area\"\n"),
+                "inline.toml",
+                3,
+                "data.normalise");
+  ExpectLocated(
+      ConfigError(kMinimal + "[sampler]\nthreads = 1.5\n"), "inline.toml", 6, "sampler.threads");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\ntie = [[1, \"two\"]]\n"),
+                "inline.toml",
+                6,
+                "sampler.tie[0][1]");
+  ExpectLocated(
+      ConfigError("[data]\ncsv = 3\n[metric]\npreset = \"area\"\n"), "inline.toml", 2, "data.csv");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\nwindow = [48, \"80\"]\n[metric]\n"
+                            "preset = \"area\"\n"),
+                "inline.toml",
+                3,
+                "data.window[1]");
+}
+
+TEST(Config, OutOfRangeAndInconsistentValues) {
+  ExpectLocated(
+      ConfigError(kMinimal + "[sampler]\nwaves = 0\n"), "inline.toml", 6, "sampler.waves");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\nseed = -1\n"), "inline.toml", 6, "sampler.seed");
+  ExpectLocated(
+      ConfigError(kMinimal + "[sampler]\nprior = 1.2\n"), "inline.toml", 6, "sampler.prior");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\ntie = [[1, 37]]\n"),
+                "inline.toml",
+                6,
+                "sampler.tie[0][1]");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\ntie = [[1, 2], [3, 1]]\n"),
+                "inline.toml",
+                6,
+                "sampler.tie[1][1]");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\nestimator = \"weighted\"\n"),
+                "inline.toml",
+                6,
+                "sampler.estimator");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\nwindow = [80, 48]\n[metric]\n"
+                            "preset = \"area\"\n"),
+                "inline.toml",
+                3,
+                "data.window");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\nposition_unit = \"inch\"\n[metric]\n"
+                            "preset = \"area\"\n"),
+                "inline.toml",
+                3,
+                "data.position_unit");
+  // A list threshold must have one value per wave (checked by ThresholdSchedule::IsValid and
+  // reported at the key that set it).
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\n"
+                            "threshold = [0.5, 0.2]\n"),
+                "inline.toml",
+                5,
+                "metric.threshold");
+  // Increasing thresholds violate Eq. 1.
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\n[[metric.component]]\n"
+                            "type = \"least_squares\"\nwindow = [48, 80]\n"
+                            "threshold = [1, 2, 0.5, 0.2, 0.1]\n"),
+                "inline.toml",
+                7,
+                "metric.component[0].threshold");
+  // Tempering list with the wrong length: SmcOptions::IsValid, attributed to the key.
+  ExpectLocated(ConfigError(kMinimal + "[sampler.tempering]\nkind = \"list\"\nvalues = [0.5]\n"),
+                "inline.toml",
+                7,
+                "sampler.tempering.values");
+}
+
+TEST(Config, MetricShapeErrors) {
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"eq5\"\n"),
+                "inline.toml",
+                4,
+                "metric.preset");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\n"
+                            "[[metric.component]]\ntype = \"area\"\nwindow = [1, 2]\n"),
+                "inline.toml",
+                4,
+                "metric.preset");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\n[[metric.component]]\n"
+                            "type = \"rise\"\nwindow = [76, 78]\nthreshold = [1, 1, 1, 1, 1]\n"),
+                "inline.toml",
+                7,
+                "metric.component[0].threshold");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\n[[metric.component]]\n"
+                            "type = \"peak\"\nwindow = [76, 78]\n"),
+                "inline.toml",
+                5,
+                "metric.component[0].type");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\n[[metric.component]]\n"
+                            "type = \"area\"\n"),
+                "inline.toml",
+                4,
+                "metric.component[0].window");
+  const Error e = ConfigError("[data]\ncsv = \"p.csv\"\n");
+  EXPECT_EQ(e.field(), "metric");
+}
+
+}  // namespace
+}  // namespace combabc

@@ -1,0 +1,186 @@
+#include "combabc/data/measured_data.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+DataConfig CentimetreConfig() {
+  DataConfig c;
+  c.position_column = "x_cm";
+  c.displacement_column = "u";
+  c.position_unit = LengthUnit::kCentimetre;
+  c.displacement_unit = LengthUnit::kMicrometre;
+  return c;
+}
+
+// Runs ParseMeasuredData and returns the error it throws (fails the test if none).
+Error ParseError(const std::string& text, const DataConfig& config = CentimetreConfig()) {
+  try {
+    ParseMeasuredData(text, "profile.csv", config);
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return Error(ErrorKind::kSoftware, "none");
+}
+
+TEST(MeasuredData, ReadsAnyColumnOrderConvertsUnitsAndNormalises) {
+  const std::string text =
+      "extra,u,x_cm\n"
+      "a,1.0,48\n"
+      "\n"
+      "b,4.0,49\n"
+      "c,2.0,50\n";
+  const MeasuredData d = ParseMeasuredData(text, "profile.csv", CentimetreConfig());
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_NEAR(d.positions[0], 0.48, kTol);
+  EXPECT_NEAR(d.positions[2], 0.50, kTol);
+  EXPECT_TRUE(d.normalised);
+  EXPECT_NEAR(d.scale, 4.0e-6, 1e-18);  // the maximum, in metres
+  EXPECT_NEAR(d.displacements[0], 0.25, kTol);
+  EXPECT_NEAR(d.displacements[1], 1.0, kTol);
+  EXPECT_EQ(d.synthetic, (std::vector<std::uint8_t>{0, 0, 0}));
+}
+
+TEST(MeasuredData, WithoutNormalisationKeepsMetres) {
+  DataConfig c = CentimetreConfig();
+  c.normalise = false;
+  const MeasuredData d = ParseMeasuredData("x_cm,u\n1,2\n2,3\n", "p.csv", c);
+  EXPECT_FALSE(d.normalised);
+  EXPECT_NEAR(d.displacements[1], 3e-6, 1e-18);
+}
+
+TEST(MeasuredData, WindowKeepsRowsInside) {
+  DataConfig c = CentimetreConfig();
+  c.window_min = 0.49;
+  c.window_max = 0.50;
+  const MeasuredData d = ParseMeasuredData("x_cm,u\n48,1\n49,2\n50,3\n51,4\n", "p.csv", c);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NEAR(d.positions[0], 0.49, kTol);
+  EXPECT_NEAR(d.displacements[0], 2.0 / 3.0, kTol);  // normalised over the window
+}
+
+TEST(MeasuredData, MissingColumnNamesFileLineAndColumn) {
+  const Error e = ParseError("x_cm,v\n1,2\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_EQ(e.field(), "u");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:1: u: missing column"), std::string::npos)
+      << e.what();
+}
+
+TEST(MeasuredData, NonNumericNanAndInfiniteCells) {
+  Error e = ParseError("x_cm,u\n1,2\n2,abc\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3: u: not a number"), std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1,2\n2,3\nnan,4\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:4: x_cm: value is NaN"), std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1,inf\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u: value is infinite"), std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1,\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u: empty cell"), std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u:"), std::string::npos) << e.what();
+}
+
+TEST(MeasuredData, UnsortedAndDuplicatePositions) {
+  Error e = ParseError("x_cm,u\n1,2\n3,3\n2,4\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(std::string(e.what()).find("profile.csv:4: x_cm: positions must increase"),
+            std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1,2\n1,3\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3: x_cm: duplicate position"),
+            std::string::npos)
+      << e.what();
+}
+
+TEST(MeasuredData, EmptyFileAndNoRows) {
+  Error e = ParseError("");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_NE(std::string(e.what()).find("profile.csv:1: empty file"), std::string::npos) << e.what();
+  e = ParseError("x_cm,u\n\n");
+  EXPECT_NE(std::string(e.what()).find("no data rows"), std::string::npos) << e.what();
+}
+
+TEST(MeasuredData, WindowOutsideDataIsAnError) {
+  DataConfig c = CentimetreConfig();
+  c.window_min = 0.47;
+  c.window_max = 0.50;
+  const Error e = ParseError("x_cm,u\n48,1\n49,2\n50,3\n", c);
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_EQ(e.field(), "data.window");
+  EXPECT_NE(std::string(e.what()).find("profile.csv: data.window: window"), std::string::npos)
+      << e.what();
+}
+
+TEST(MeasuredData, AllZeroCannotBeNormalised) {
+  const Error e = ParseError("x_cm,u\n48,0\n49,0\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+}
+
+TEST(MeasuredData, LoadsRelativeToConfigDirAndReportsMissingFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "combabc_measured_data_test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream f(dir / "p.csv");
+    f << "x_cm,u\n1,1\n2,2\n";
+  }
+  DataConfig c = CentimetreConfig();
+  c.csv = "p.csv";
+  const MeasuredData d = LoadMeasuredData(c, dir.string());
+  EXPECT_EQ(d.size(), 2u);
+  EXPECT_EQ(d.source, (dir / "p.csv").string());
+
+  c.csv = "does_not_exist.csv";
+  try {
+    LoadMeasuredData(c, dir.string());
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kNoInput);
+    EXPECT_NE(std::string(e.what()).find("does_not_exist.csv"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MeasuredData, GaussianExtensionFillsTheGapToTheImpact) {
+  // Exact Gaussian samples at 74..80 cm, impact at 70 cm (the paper's Figure 7 situation).
+  const double a = 3.0, s = 0.03, x0 = 0.70;
+  std::string text = "x_cm,u\n";
+  for (int cm = 74; cm <= 80; ++cm) {
+    const double x = cm * 0.01;
+    text += std::to_string(cm) + "," +
+            std::to_string(a * std::exp(-(x - x0) * (x - x0) / (2 * s * s))) + "\n";
+  }
+  DataConfig c = CentimetreConfig();
+  c.gaussian_extension.enabled = true;
+  c.gaussian_extension.impact_position = x0;
+  c.gaussian_extension.fit_points = 3;
+  c.gaussian_extension.spacing = 0.01;
+  const MeasuredData d = ParseMeasuredData(text, "p.csv", c);
+  ASSERT_EQ(d.size(), 11u);  // 70, 71, 72, 73 synthetic + 74..80 measured
+  EXPECT_NEAR(d.positions[0], 0.70, kTol);
+  EXPECT_NEAR(d.positions[3], 0.73, kTol);
+  EXPECT_EQ(d.synthetic[3], 1);
+  EXPECT_EQ(d.synthetic[4], 0);
+  EXPECT_NEAR(d.displacements[0], 1.0, 1e-6);  // the peak is at the impact
+  ASSERT_TRUE(d.gaussian_fit.has_value());
+  EXPECT_NEAR(d.gaussian_fit->width, s, 1e-4);  // the CSV text carries 6 significant digits
+}
+
+}  // namespace
+}  // namespace combabc

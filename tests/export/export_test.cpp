@@ -1,0 +1,159 @@
+// ExportRun: the files, their headers and row counts, and the all-or-nothing directory.
+#include "combabc/export/export.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "combabc/core/error.hpp"
+#include "history/fake_run.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> Lines(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::size_t Fields(const std::string& line) {
+  return static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+}
+
+class ExportTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("combabc_export_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    options_.waves = 2;
+    options_.per_wave = 5;
+    options_.dimension = 6;
+    options_.points = 7;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string WriteRun(bool outputs) {
+    options_.outputs = outputs;
+    const std::string path = (dir_ / "RUN.db").string();
+    HistoryStore store = HistoryStore::Create(path, testing::MakeFakeMetadata(options_));
+    const RunHistory history = testing::MakeFakeHistory(options_);
+    for (const WaveRecord& wave : history.waves) testing::RecordWave(store, wave, 4);
+    store.Finish(history.summary);
+    return path;
+  }
+
+  fs::path dir_;
+  testing::FakeRunOptions options_;
+};
+
+TEST_F(ExportTest, WritesEveryTableWithHeaders) {
+  const std::string db = WriteRun(/*outputs=*/true);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+
+  const auto waves = Lines(out / "waves.csv");
+  ASSERT_EQ(waves.size(), 3u);
+  EXPECT_EQ(waves[0],
+            "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
+            "wall_seconds,complete");
+  EXPECT_EQ(Fields(waves[1]), Fields(waves[0]));
+
+  const auto marginals = Lines(out / "marginals.csv");
+  EXPECT_EQ(marginals[0], "wave,bit,name,prob_paper,prob_importance");
+  EXPECT_EQ(marginals.size(), 1u + 2u * 6u);
+  EXPECT_EQ(marginals[1].rfind("0,0,clamp 1,", 0), 0u) << marginals[1];
+
+  const auto particles = Lines(out / "particles.csv");
+  EXPECT_EQ(particles[0],
+            "wave,index,bits,bit_0,bit_1,bit_2,bit_3,bit_4,bit_5,log_weight,weight,"
+            "d_least_squares,d_secondary_peak");
+  EXPECT_EQ(particles.size(), 1u + 2u * 5u);
+  EXPECT_EQ(Fields(particles[1]), Fields(particles[0]));
+
+  const auto curves = Lines(out / "curves.csv");
+  EXPECT_EQ(curves[0], "wave,index,y_0,y_1,y_2,y_3,y_4,y_5,y_6");
+  EXPECT_EQ(curves.size(), 1u + 2u * 5u);
+  const auto positions = Lines(out / "positions.csv");
+  EXPECT_EQ(positions[0], "column,position_m");
+  EXPECT_EQ(positions[1], "y_0,0");
+  EXPECT_EQ(positions.size(), 8u);
+  const auto measured = Lines(out / "measured.csv");
+  EXPECT_EQ(measured[0], "position_m,value");
+
+  std::ifstream json(out / "summary.json");
+  std::stringstream text;
+  text << json.rdbuf();
+  EXPECT_NE(text.str().find("\"termination\": \"max_waves\""), std::string::npos);
+  EXPECT_NE(text.str().find("\"marginals_importance\""), std::string::npos);
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
+        << "temporary directory left behind";
+  }
+}
+
+TEST_F(ExportTest, KilledRunExportsItsPartialWave) {
+  const std::string path = (dir_ / "RUN.db").string();
+  const RunHistory history = testing::MakeFakeHistory(options_);
+  {
+    HistoryStore store = HistoryStore::Create(path, testing::MakeFakeMetadata(options_));
+    testing::RecordWave(store, history.waves[0], 4);
+    testing::RecordWave(store, history.waves[1], 2, /*stop_after_batches=*/2);
+  }
+  const fs::path out = dir_ / "export";
+  ExportRun(path, out.string());
+  const auto waves = Lines(out / "waves.csv");
+  ASSERT_EQ(waves.size(), 3u);
+  EXPECT_EQ(waves[1].back(), '1');
+  EXPECT_EQ(waves[2].back(), '0') << "the cut wave is exported as incomplete: " << waves[2];
+  EXPECT_EQ(waves[2].rfind("1,", 0), 0u);
+}
+
+TEST_F(ExportTest, RunWithoutOutputsHasNoCurves) {
+  const std::string db = WriteRun(/*outputs=*/false);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+  EXPECT_FALSE(fs::exists(out / "curves.csv"));
+  EXPECT_TRUE(fs::exists(out / "particles.csv"));
+}
+
+TEST_F(ExportTest, RefusesAnExistingDirectoryUnlessOverwrite) {
+  const std::string db = WriteRun(/*outputs=*/true);
+  const fs::path out = dir_ / "export";
+  fs::create_directories(out);
+  std::ofstream(out / "keep.txt") << "x";
+  try {
+    ExportRun(db, out.string());
+    ADD_FAILURE() << "no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::kCantCreate);
+  }
+  EXPECT_TRUE(fs::exists(out / "keep.txt"));
+  ExportOptions options;
+  options.overwrite = true;
+  ExportRun(db, out.string(), options);
+  EXPECT_FALSE(fs::exists(out / "keep.txt"));
+  EXPECT_TRUE(fs::exists(out / "waves.csv"));
+}
+
+TEST_F(ExportTest, MissingHistoryIsNoInput) {
+  try {
+    ExportRun((dir_ / "none.db").string(), (dir_ / "export").string());
+    ADD_FAILURE() << "no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::kNoInput);
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "export"));
+}
+
+}  // namespace
+}  // namespace combabc

@@ -1,0 +1,35 @@
+#pragma once
+// A synthetic but realistic-looking run (clamped-plate style: 2 x 18 clamps, normalised
+// displacement curves peaking at the impact point) for history, export and report tests. Not a
+// simulation: curves come from a cheap closed form so that tests need no engine or FE model.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "combabc/history/history_store.hpp"
+#include "combabc/samplers/run_history.hpp"
+
+namespace combabc::testing {
+
+struct FakeRunOptions {
+  int waves = 3;
+  int per_wave = 20;
+  int dimension = 36;   // even with "clamp" names: two edges of dimension/2 clamps
+  int points = 91;      // output positions 0 .. 0.9 m
+  bool outputs = true;  // store curves
+  std::uint64_t seed = 7;
+};
+
+RunMetadata MakeFakeMetadata(const FakeRunOptions& options);
+// Complete waves with statistics from ComputeWaveStatistics (paper estimator).
+RunHistory MakeFakeHistory(const FakeRunOptions& options);
+
+// Feeds `wave` to the observer as the engine would: OnWaveStart, then OnBatch per `batch`
+// candidates (particles grouped by candidate index), then OnWaveEnd unless stop_after_batches >= 0,
+// in which case it stops (as if killed) after that many batches.
+void RecordWave(SmcObserver& observer,
+                const WaveRecord& wave,
+                std::int64_t batch,
+                int stop_after_batches = -1);
+
+}  // namespace combabc::testing
