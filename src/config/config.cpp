@@ -21,8 +21,7 @@ using config_internal::TableReader;
 using config_internal::WindowKey;
 
 LengthUnit UnitKey(TableReader& t, std::string_view key, LengthUnit fallback) {
-  return t.Choice<LengthUnit>(key, ParseLengthUnit, "unit", {"m", "cm", "mm", "um", "nm"})
-      .value_or(fallback);
+  return t.Choice<LengthUnit>(key, "unit").value_or(fallback);
 }
 
 // ---------------------------------------------------------------------------------------- data

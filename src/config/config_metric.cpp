@@ -3,8 +3,8 @@
 #include <limits>
 #include <string>
 
-#include "combabc/core/error.hpp"
 #include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -92,11 +92,11 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
   }
   const int num_waves = c->smc.num_waves;
   if (preset_text) {
-    const auto preset = ParseMetricPreset(*preset_text);
+    const auto preset = ParseEnum<MetricPreset>(*preset_text);
     if (!preset) {
       t->Fail("preset",
               "unknown preset \"" + *preset_text + "\"; expected one of " +
-                  OneOf({"area", "least_squares", "split_least_squares"}));
+                  EnumChoices<MetricPreset>());
     }
     c->metric.preset = *preset;
     c->metric.components = PresetComponents(*preset);
@@ -111,8 +111,7 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
   for (TableReader& ct : components) {
     MetricComponentConfig component;
     component.config_line = ct.line();
-    const auto type = ct.Choice<MetricType>(
-        "type", ParseMetricType, "component type", {"area", "least_squares", "rise", "fall"});
+    const auto type = ct.Choice<MetricType>("type", "component type");
     if (!type) ct.Fail("type", "missing required key");
     component.type = *type;
     if (!ct.Has("window")) ct.Fail("window", "missing required key [from, to]");

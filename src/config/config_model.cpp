@@ -3,8 +3,8 @@
 #include <limits>
 #include <map>
 
-#include "combabc/core/error.hpp"
 #include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -37,13 +37,7 @@ void InRange(TableReader& t,
 }
 
 plate::Support SupportKey(TableReader& t, std::string_view key, plate::Support fallback) {
-  auto parse = [](const std::string& text) -> std::optional<plate::Support> {
-    plate::Support support{};
-    if (!plate::FromString(text, &support)) return std::nullopt;
-    return support;
-  };
-  return t.Choice<plate::Support>(key, parse, "support", {"free", "simply_supported", "clamped"})
-      .value_or(fallback);
+  return t.Choice<plate::Support>(key, "support").value_or(fallback);
 }
 
 plate::Layer ParseLayer(TableReader& t) {

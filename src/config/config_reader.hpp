@@ -13,6 +13,8 @@
 
 #include <toml++/toml.h>
 
+#include "combabc/core/enum_names.hpp"
+
 namespace combabc::config_internal {
 
 // "\"a\", \"b\"" for messages listing the allowed values.
@@ -53,21 +55,17 @@ class TableReader {
   // Raw node for shapes the getters do not cover (marks the key read); nullptr if absent.
   const toml::node* Raw(std::string_view key);
 
-  // A string naming one of an enum's values, read through the enum's own Parse function
-  // (parse(text) -> std::optional<T>): nullopt if absent; an unknown value throws, listing
-  // `choices`, as 'unknown <what> "text"; expected one of ...'.
-  template <typename T, typename Parse>
-  std::optional<T> Choice(std::string_view key,
-                          Parse parse,
-                          const char* what,
-                          std::initializer_list<const char*> choices) {
+  // A string naming one of an enum's values (core/enum_names.hpp): nullopt if absent; an unknown
+  // value throws 'unknown <what> "text"; expected one of "a", "b"' from the enum's own table.
+  template <NamedEnum T>
+  std::optional<T> Choice(std::string_view key, const char* what) {
     const auto text = String(key);
     if (!text) return std::nullopt;
-    const std::optional<T> value = parse(*text);
+    const std::optional<T> value = ParseEnum<T>(*text);
     if (!value) {
-      Fail(
-          key,
-          "unknown " + std::string(what) + " \"" + *text + "\"; expected one of " + OneOf(choices));
+      Fail(key,
+           "unknown " + std::string(what) + " \"" + *text + "\"; expected one of " +
+               EnumChoices<T>());
     }
     return value;
   }

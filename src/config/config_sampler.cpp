@@ -3,8 +3,8 @@
 #include <limits>
 #include <string>
 
-#include "combabc/core/error.hpp"
 #include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -17,12 +17,8 @@ void ParseTempering(TableReader& s, SmcOptions* smc, Sources* sources) {
   if (!t) return;
   sources->smc["tempering"] = {t->prefix(), t->line()};
   TemperingSchedule& temper = smc->tempering;
-  temper.kind = t->Choice<TemperingKind>(
-                     "kind", ParseTemperingKind, "tempering kind", {"none", "linear", "list"})
-                    .value_or(temper.kind);
-  temper.form = t->Choice<TemperingForm>(
-                     "form", ParseTemperingForm, "tempering form", {"geometric", "mixture"})
-                    .value_or(temper.form);
+  temper.kind = t->Choice<TemperingKind>("kind", "tempering kind").value_or(temper.kind);
+  temper.form = t->Choice<TemperingForm>("form", "tempering form").value_or(temper.form);
   temper.phi0 = t->NumberIn("phi0", temper.phi0, 0.0, 1.0);
   if (const auto values = t->Numbers("values")) {
     if (temper.kind != TemperingKind::kList) t->Fail("values", "only used with kind = \"list\"");
@@ -96,9 +92,7 @@ void ParseSamplerSection(TableReader& root, int dimension, CalibrationConfig* c,
   Note(sources->smc, "num_waves", *t, "waves");
   smc.accepted_per_wave = t->IntegerIn("accepted_per_wave", smc.accepted_per_wave, 1, 1000000000);
   Note(sources->smc, "accepted_per_wave", *t, "accepted_per_wave");
-  smc.estimator =
-      t->Choice<Estimator>("estimator", ParseEstimator, "estimator", {"paper", "importance"})
-          .value_or(smc.estimator);
+  smc.estimator = t->Choice<Estimator>("estimator", "estimator").value_or(smc.estimator);
   if (const auto seed = t->Integer("seed")) {
     if (*seed < 0) t->Fail("seed", "must be >= 0");
     smc.seed = static_cast<std::uint64_t>(*seed);

@@ -46,26 +46,6 @@ int ExitCode(ErrorKind kind) {
   return 70;
 }
 
-const char* ToString(ErrorKind kind) {
-  switch (kind) {
-    case ErrorKind::kUsage:
-      return "usage error";
-    case ErrorKind::kData:
-      return "data error";
-    case ErrorKind::kNoInput:
-      return "input error";
-    case ErrorKind::kSoftware:
-      return "internal error";
-    case ErrorKind::kCantCreate:
-      return "cannot create output";
-    case ErrorKind::kIo:
-      return "I/O error";
-    case ErrorKind::kConfig:
-      return "config error";
-  }
-  return "error";
-}
-
 Error::Error(ErrorKind kind, std::string message, std::string file, int line, std::string field)
     : std::runtime_error(Format(message, file, line, field)),
       kind_(kind),

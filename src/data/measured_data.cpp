@@ -68,33 +68,6 @@ std::string FormatMetres(double x) {
 
 }  // namespace
 
-const char* ToString(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::kMetre:
-      return "m";
-    case LengthUnit::kCentimetre:
-      return "cm";
-    case LengthUnit::kMillimetre:
-      return "mm";
-    case LengthUnit::kMicrometre:
-      return "um";
-    case LengthUnit::kNanometre:
-      return "nm";
-  }
-  return "?";
-}
-
-std::optional<LengthUnit> ParseLengthUnit(const std::string& text) {
-  for (LengthUnit unit : {LengthUnit::kMetre,
-                          LengthUnit::kCentimetre,
-                          LengthUnit::kMillimetre,
-                          LengthUnit::kMicrometre,
-                          LengthUnit::kNanometre}) {
-    if (text == ToString(unit)) return unit;
-  }
-  return std::nullopt;
-}
-
 double MetresPer(LengthUnit unit) {
   switch (unit) {
     case LengthUnit::kMetre:

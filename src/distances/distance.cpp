@@ -1,15 +1,3 @@
 #include "combabc/distances/distance.hpp"
 
-namespace combabc {
-
-const char* ToString(ComponentKind kind) {
-  switch (kind) {
-    case ComponentKind::kThreshold:
-      return "threshold";
-    case ComponentKind::kIndicator:
-      return "indicator";
-  }
-  return "?";
-}
-
-}  // namespace combabc
+namespace combabc {}  // namespace combabc

@@ -162,28 +162,6 @@ void SetWriteMode(history::Database& db) {
 
 }  // namespace
 
-const char* ToString(RunStatus status) {
-  switch (status) {
-    case RunStatus::kRunning:
-      return "running";
-    case RunStatus::kFinished:
-      return "finished";
-    case RunStatus::kFailed:
-      return "failed";
-    case RunStatus::kInterrupted:
-      return "interrupted";
-  }
-  return "running";
-}
-
-std::optional<RunStatus> ParseRunStatus(const std::string& text) {
-  for (RunStatus s :
-       {RunStatus::kRunning, RunStatus::kFinished, RunStatus::kFailed, RunStatus::kInterrupted}) {
-    if (text == ToString(s)) return s;
-  }
-  return std::nullopt;
-}
-
 HistoryStore::HistoryStore(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HistoryStore::HistoryStore(HistoryStore&& other) noexcept = default;
 HistoryStore& HistoryStore::operator=(HistoryStore&& other) noexcept = default;

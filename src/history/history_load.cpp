@@ -105,7 +105,7 @@ RunMetadata HistoryStore::LoadMetadata() const {
       position_unit FROM run WHERE id = 1)sql");
   if (!run.Step()) throw Error(ErrorKind::kData, "corrupt run history: no run row", db.path());
   const std::string status = run.Text(0);
-  const std::optional<RunStatus> parsed = ParseRunStatus(status);
+  const std::optional<RunStatus> parsed = ParseEnum<RunStatus>(status);
   if (!parsed) {
     throw Error(
         ErrorKind::kData, "corrupt run history: unknown status '" + status + "'", db.path());
@@ -207,7 +207,8 @@ RunHistory HistoryStore::LoadHistory() const {
       !history.waves.back().particles.empty()) {
     // A wave cut short before OnWaveEnd has no stored statistics: derive them from its particles,
     // as the engine does, so that reports can show it.
-    const Estimator estimator = ParseEstimator(metadata.estimator).value_or(Estimator::kPaper);
+    const Estimator estimator =
+        ParseEnum<Estimator>(metadata.estimator).value_or(Estimator::kPaper);
     ComputeWaveStatistics(history.waves.back(), estimator);
   }
   RunSummary& summary = history.summary;
@@ -226,7 +227,7 @@ RunHistory HistoryStore::LoadHistory() const {
     summary.simulations = simulations;
   }
   run.Reset();
-  if (const auto termination = ParseTermination(metadata.termination)) {
+  if (const auto termination = ParseEnum<Termination>(metadata.termination)) {
     summary.termination = *termination;
   } else if (metadata.status == RunStatus::kInterrupted) {
     summary.termination = Termination::kInterrupted;

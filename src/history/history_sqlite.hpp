@@ -1,6 +1,6 @@
 #pragma once
-// Thin RAII wrappers over the SQLite C API for the run history (private to src/history). Every failure
-// becomes a one-line combabc::Error naming the history file.
+// Thin RAII wrappers over the SQLite C API for the run history (private to src/history). Every
+// failure becomes a one-line combabc::Error naming the history file.
 #include <cstdint>
 #include <span>
 #include <string>

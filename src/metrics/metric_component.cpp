@@ -18,28 +18,6 @@ MetricComponentConfig Window(MetricType type, double from_cm, double to_cm) {
 
 }  // namespace
 
-const char* ToString(MetricType type) {
-  switch (type) {
-    case MetricType::kArea:
-      return "area";
-    case MetricType::kLeastSquares:
-      return "least_squares";
-    case MetricType::kRise:
-      return "rise";
-    case MetricType::kFall:
-      return "fall";
-  }
-  return "?";
-}
-
-std::optional<MetricType> ParseMetricType(const std::string& text) {
-  for (MetricType t :
-       {MetricType::kArea, MetricType::kLeastSquares, MetricType::kRise, MetricType::kFall}) {
-    if (text == ToString(t)) return t;
-  }
-  return std::nullopt;
-}
-
 ComponentKind KindOf(MetricType type) {
   return type == MetricType::kRise || type == MetricType::kFall ? ComponentKind::kIndicator
                                                                 : ComponentKind::kThreshold;
@@ -51,26 +29,6 @@ std::string ComponentName(const MetricComponentConfig& config) {
   out << ToString(config.type) << '[' << config.from / kCentimetre << '-' << config.to / kCentimetre
       << "cm]";
   return out.str();
-}
-
-const char* ToString(MetricPreset preset) {
-  switch (preset) {
-    case MetricPreset::kArea:
-      return "area";
-    case MetricPreset::kLeastSquares:
-      return "least_squares";
-    case MetricPreset::kSplitLeastSquares:
-      return "split_least_squares";
-  }
-  return "?";
-}
-
-std::optional<MetricPreset> ParseMetricPreset(const std::string& text) {
-  for (MetricPreset p :
-       {MetricPreset::kArea, MetricPreset::kLeastSquares, MetricPreset::kSplitLeastSquares}) {
-    if (text == ToString(p)) return p;
-  }
-  return std::nullopt;
 }
 
 std::vector<MetricComponentConfig> PresetComponents(MetricPreset preset) {

@@ -34,28 +34,6 @@ void CheckAxis(const std::vector<double>& v, const char* name) {
 
 }  // namespace
 
-const char* ToString(Support support) {
-  switch (support) {
-    case Support::kFree:
-      return "free";
-    case Support::kSimplySupported:
-      return "simply_supported";
-    case Support::kClamped:
-      return "clamped";
-  }
-  return "unknown";
-}
-
-bool FromString(std::string_view text, Support* support) {
-  for (Support s : {Support::kFree, Support::kSimplySupported, Support::kClamped}) {
-    if (text == ToString(s)) {
-      *support = s;
-      return true;
-    }
-  }
-  return false;
-}
-
 Grid UniformGrid(double length, double width, int nx, int ny) {
   COMBABC_CHECK(nx > 0 && ny > 0 && length > 0.0 && width > 0.0);
   Grid grid;

@@ -7,36 +7,6 @@
 
 namespace combabc {
 
-const char* ToString(Termination termination) {
-  switch (termination) {
-    case Termination::kTargetReached:
-      return "target_reached";
-    case Termination::kMaxWaves:
-      return "max_waves";
-    case Termination::kBudgetExhausted:
-      return "budget_exhausted";
-    case Termination::kAcceptanceRateTooLow:
-      return "acceptance_rate_too_low";
-    case Termination::kWallTimeExceeded:
-      return "wall_time_exceeded";
-    case Termination::kInterrupted:
-      return "interrupted";
-  }
-  return "?";
-}
-
-std::optional<Termination> ParseTermination(const std::string& text) {
-  for (Termination t : {Termination::kTargetReached,
-                        Termination::kMaxWaves,
-                        Termination::kBudgetExhausted,
-                        Termination::kAcceptanceRateTooLow,
-                        Termination::kWallTimeExceeded,
-                        Termination::kInterrupted}) {
-    if (text == ToString(t)) return t;
-  }
-  return std::nullopt;
-}
-
 std::string RunSummary::BriefReport() const {
   char buf[256];
   std::snprintf(buf,

@@ -4,22 +4,6 @@
 
 namespace combabc {
 
-const char* ToString(Estimator estimator) {
-  switch (estimator) {
-    case Estimator::kPaper:
-      return "paper";
-    case Estimator::kImportance:
-      return "importance";
-  }
-  return "?";
-}
-
-std::optional<Estimator> ParseEstimator(const std::string& text) {
-  if (text == "paper") return Estimator::kPaper;
-  if (text == "importance") return Estimator::kImportance;
-  return std::nullopt;
-}
-
 bool SmcOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& msg) {
     if (why) *why = "SmcOptions::" + msg;

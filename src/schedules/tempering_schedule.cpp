@@ -4,41 +4,6 @@
 
 namespace combabc {
 
-const char* ToString(TemperingKind kind) {
-  switch (kind) {
-    case TemperingKind::kNone:
-      return "none";
-    case TemperingKind::kLinear:
-      return "linear";
-    case TemperingKind::kList:
-      return "list";
-  }
-  return "?";
-}
-
-std::optional<TemperingKind> ParseTemperingKind(const std::string& text) {
-  if (text == "none") return TemperingKind::kNone;
-  if (text == "linear") return TemperingKind::kLinear;
-  if (text == "list") return TemperingKind::kList;
-  return std::nullopt;
-}
-
-const char* ToString(TemperingForm form) {
-  switch (form) {
-    case TemperingForm::kGeometric:
-      return "geometric";
-    case TemperingForm::kMixture:
-      return "mixture";
-  }
-  return "?";
-}
-
-std::optional<TemperingForm> ParseTemperingForm(const std::string& text) {
-  if (text == "geometric") return TemperingForm::kGeometric;
-  if (text == "mixture") return TemperingForm::kMixture;
-  return std::nullopt;
-}
-
 bool TemperingSchedule::IsValid(const std::string& where, std::string* why) const {
   auto fail = [&](const std::string& msg) {
     if (why) *why = where + "." + msg;

@@ -7,22 +7,6 @@
 
 namespace combabc {
 
-const char* ToString(ThresholdKind kind) {
-  switch (kind) {
-    case ThresholdKind::kList:
-      return "list";
-    case ThresholdKind::kQuantile:
-      return "quantile";
-  }
-  return "?";
-}
-
-std::optional<ThresholdKind> ParseThresholdKind(const std::string& text) {
-  if (text == "list") return ThresholdKind::kList;
-  if (text == "quantile") return ThresholdKind::kQuantile;
-  return std::nullopt;
-}
-
 bool ThresholdSchedule::IsValid(const std::string& where, int num_waves, std::string* why) const {
   auto fail = [&](const std::string& msg) {
     if (why) *why = where + "." + msg;

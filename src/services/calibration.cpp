@@ -6,8 +6,8 @@
 #include <thread>
 
 #include "combabc/core/error.hpp"
-#include "combabc/history/history_store.hpp"
 #include "combabc/data/measured_data.hpp"
+#include "combabc/history/history_store.hpp"
 #include "combabc/metrics/composite_distance.hpp"
 #include "combabc/params/binary_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "combabc/config/distance_from_config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/metrics/composite_distance.hpp"
-#include "combabc/config/distance_from_config.hpp"
 
 namespace combabc {
 namespace {

@@ -117,10 +117,10 @@ TEST(SmcOptions, RunRejectsInvalidOptionsBeforeAnyWork) {
 
 TEST(Enums, RoundTripThroughStrings) {
   for (auto e : {Estimator::kPaper, Estimator::kImportance}) {
-    EXPECT_EQ(ParseEstimator(ToString(e)), e);
+    EXPECT_EQ(ParseEnum<Estimator>(ToString(e)), e);
   }
   for (auto k : {ThresholdKind::kList, ThresholdKind::kQuantile}) {
-    EXPECT_EQ(ParseThresholdKind(ToString(k)), k);
+    EXPECT_EQ(ParseEnum<ThresholdKind>(ToString(k)), k);
   }
   for (auto t : {Termination::kTargetReached,
                  Termination::kMaxWaves,
@@ -128,9 +128,9 @@ TEST(Enums, RoundTripThroughStrings) {
                  Termination::kAcceptanceRateTooLow,
                  Termination::kWallTimeExceeded,
                  Termination::kInterrupted}) {
-    EXPECT_EQ(ParseTermination(ToString(t)), t);
+    EXPECT_EQ(ParseEnum<Termination>(ToString(t)), t);
   }
-  EXPECT_EQ(ParseEstimator("weighted"), std::nullopt);
+  EXPECT_EQ(ParseEnum<Estimator>("weighted"), std::nullopt);
 }
 
 }  // namespace

@@ -84,9 +84,9 @@ TEST(TemperingSchedule, LinearFallsFromPhi0ToZeroOverThePlannedWaves) {
   s.kind = TemperingKind::kList;
   s.values = {0.9, 0.1};
   EXPECT_EQ(s.Phi(2, 3), 0.1);
-  EXPECT_EQ(ParseTemperingKind("linear"), TemperingKind::kLinear);
-  EXPECT_EQ(ParseTemperingKind("Linear"), std::nullopt);
-  EXPECT_EQ(ParseTemperingForm(ToString(TemperingForm::kMixture)), TemperingForm::kMixture);
+  EXPECT_EQ(ParseEnum<TemperingKind>("linear"), TemperingKind::kLinear);
+  EXPECT_EQ(ParseEnum<TemperingKind>("Linear"), std::nullopt);
+  EXPECT_EQ(ParseEnum<TemperingForm>(ToString(TemperingForm::kMixture)), TemperingForm::kMixture);
 }
 
 }  // namespace

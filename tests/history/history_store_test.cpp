@@ -461,10 +461,10 @@ TEST_F(HistoryStoreTest, ReadOnlyStoreRefusesWrites) {
 TEST(RunStatusTest, NamesRoundTrip) {
   for (RunStatus s :
        {RunStatus::kRunning, RunStatus::kFinished, RunStatus::kFailed, RunStatus::kInterrupted}) {
-    EXPECT_EQ(ParseRunStatus(ToString(s)), s);
+    EXPECT_EQ(ParseEnum<RunStatus>(ToString(s)), s);
   }
-  EXPECT_FALSE(ParseRunStatus("done").has_value());
-  EXPECT_EQ(ParseTermination(ToString(Termination::kBudgetExhausted)),
+  EXPECT_FALSE(ParseEnum<RunStatus>("done").has_value());
+  EXPECT_EQ(ParseEnum<Termination>(ToString(Termination::kBudgetExhausted)),
             Termination::kBudgetExhausted);
 }
 

@@ -177,9 +177,9 @@ TEST(CompositeDistance, PresetsMatchThePaper) {
   const auto ls = PresetComponents(MetricPreset::kLeastSquares);
   ASSERT_EQ(ls.size(), 1u);
   EXPECT_NEAR(ls[0].to, 0.81, kTol);  // Eq. 5: y_{48+i}, i = 0..33
-  EXPECT_EQ(ParseMetricPreset("split_least_squares"), MetricPreset::kSplitLeastSquares);
-  EXPECT_EQ(ParseMetricType("rise"), MetricType::kRise);
-  EXPECT_FALSE(ParseMetricType("Area").has_value());
+  EXPECT_EQ(ParseEnum<MetricPreset>("split_least_squares"), MetricPreset::kSplitLeastSquares);
+  EXPECT_EQ(ParseEnum<MetricType>("rise"), MetricType::kRise);
+  EXPECT_FALSE(ParseEnum<MetricType>("Area").has_value());
 }
 
 TEST(CompositeDistance, NonFiniteOrZeroSimulationFailsEveryComponent) {

@@ -3,6 +3,7 @@
 // The algorithm's outcome goes in a Summary; broken invariants abort via COMBABC_CHECK.
 #include <stdexcept>
 #include <string>
+#include "combabc/core/enum_names.hpp"
 
 namespace combabc {
 
@@ -19,7 +20,18 @@ enum class ErrorKind {
 };
 
 int ExitCode(ErrorKind kind);
-const char* ToString(ErrorKind kind);
+template <>
+struct EnumNames<ErrorKind> {
+  static constexpr std::pair<ErrorKind, const char*> kNames[] = {
+      {ErrorKind::kUsage, "usage error"},
+      {ErrorKind::kData, "data error"},
+      {ErrorKind::kNoInput, "input error"},
+      {ErrorKind::kSoftware, "internal error"},
+      {ErrorKind::kCantCreate, "cannot create output"},
+      {ErrorKind::kIo, "I/O error"},
+      {ErrorKind::kConfig, "config error"},
+  };
+};
 
 // A user-facing error. what() is one line: "file:line: field: message" with the parts that are
 // known (a missing file has no line; an Options field has no file).

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include "combabc/data/gaussian_extension.hpp"
 
@@ -14,8 +15,16 @@ namespace combabc {
 
 // Length units accepted at the I/O edge; everything inside is metres.
 enum class LengthUnit { kMetre, kCentimetre, kMillimetre, kMicrometre, kNanometre };
-const char* ToString(LengthUnit unit);  // "m", "cm", "mm", "um", "nm"
-std::optional<LengthUnit> ParseLengthUnit(const std::string& text);
+template <>
+struct EnumNames<LengthUnit> {
+  static constexpr std::pair<LengthUnit, const char*> kNames[] = {
+      {LengthUnit::kMetre, "m"},
+      {LengthUnit::kCentimetre, "cm"},
+      {LengthUnit::kMillimetre, "mm"},
+      {LengthUnit::kMicrometre, "um"},
+      {LengthUnit::kNanometre, "nm"},
+  };
+};
 double MetresPer(LengthUnit unit);  // e.g. 0.01 for kCentimetre
 
 struct DataConfig {

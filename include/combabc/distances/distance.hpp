@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 namespace combabc {
 
@@ -13,7 +14,13 @@ enum class ComponentKind {
   kThreshold,  // accepted when d_k <= eps_k (eps_k from the component's threshold schedule)
   kIndicator,  // accepted when d_k == required (exact comparison: indicators are 0/1 values)
 };
-const char* ToString(ComponentKind kind);
+template <>
+struct EnumNames<ComponentKind> {
+  static constexpr std::pair<ComponentKind, const char*> kNames[] = {
+      {ComponentKind::kThreshold, "threshold"},
+      {ComponentKind::kIndicator, "indicator"},
+  };
+};
 
 struct DistanceComponent {
   std::string name;

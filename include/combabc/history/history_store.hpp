@@ -8,6 +8,7 @@
 #include <span>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include "combabc/distances/distance.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
@@ -25,8 +26,15 @@ enum class RunStatus {
   kFailed,       // the run stopped on an error (message in RunMetadata::summary_message)
   kInterrupted,  // stopped on request (Ctrl-C); resumable
 };
-const char* ToString(RunStatus status);
-std::optional<RunStatus> ParseRunStatus(const std::string& text);
+template <>
+struct EnumNames<RunStatus> {
+  static constexpr std::pair<RunStatus, const char*> kNames[] = {
+      {RunStatus::kRunning, "running"},
+      {RunStatus::kFinished, "finished"},
+      {RunStatus::kFailed, "failed"},
+      {RunStatus::kInterrupted, "interrupted"},
+  };
+};
 
 // The measured data Y, kept so that reports can draw it over the accepted curves.
 struct StoredMeasuredData {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include "combabc/distances/distance.hpp"
 #include "combabc/schedules/threshold_schedule.hpp"
@@ -17,8 +18,15 @@
 namespace combabc {
 
 enum class MetricType { kArea, kLeastSquares, kRise, kFall };
-const char* ToString(MetricType type);  // "area", "least_squares", "rise", "fall"
-std::optional<MetricType> ParseMetricType(const std::string& text);
+template <>
+struct EnumNames<MetricType> {
+  static constexpr std::pair<MetricType, const char*> kNames[] = {
+      {MetricType::kArea, "area"},
+      {MetricType::kLeastSquares, "least_squares"},
+      {MetricType::kRise, "rise"},
+      {MetricType::kFall, "fall"},
+  };
+};
 // kThreshold for area / least_squares, kIndicator for rise / fall.
 ComponentKind KindOf(MetricType type);
 
@@ -48,8 +56,14 @@ enum class MetricPreset {
   kSplitLeastSquares,  // Eq. 6-7: least squares on 71-75, 76-80, 81-89 cm + rise 76-78 (H1)
                        // + fall 78-80 (H2) (Figures 10-11)
 };
-const char* ToString(MetricPreset preset);  // "area", "least_squares", "split_least_squares"
-std::optional<MetricPreset> ParseMetricPreset(const std::string& text);
+template <>
+struct EnumNames<MetricPreset> {
+  static constexpr std::pair<MetricPreset, const char*> kNames[] = {
+      {MetricPreset::kArea, "area"},
+      {MetricPreset::kLeastSquares, "least_squares"},
+      {MetricPreset::kSplitLeastSquares, "split_least_squares"},
+  };
+};
 std::vector<MetricComponentConfig> PresetComponents(MetricPreset preset);
 
 }  // namespace combabc

@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
@@ -26,8 +27,22 @@ enum class Support {
   kSimplySupported,  // w = 0 and the tangential slope = 0 along the edge
   kClamped,          // w = 0 and both slopes = 0 (so all four BFS dofs vanish on the edge)
 };
-const char* ToString(Support support);
-bool FromString(std::string_view text, Support* support);
+}  // namespace combabc::plate
+
+namespace combabc {
+
+template <>
+struct EnumNames<plate::Support> {
+  static constexpr std::pair<plate::Support, const char*> kNames[] = {
+      {plate::Support::kFree, "free"},
+      {plate::Support::kSimplySupported, "simply_supported"},
+      {plate::Support::kClamped, "clamped"},
+  };
+};
+
+}  // namespace combabc
+
+namespace combabc::plate {
 
 enum class Edge {
   kBottom,  // y = 0   (the sensor's edge A, clamps 1..18)

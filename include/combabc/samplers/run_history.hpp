@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include "combabc/samplers/smc_options.hpp"
 
@@ -50,8 +51,17 @@ enum class Termination {
   kWallTimeExceeded,      // max_wall_time_s reached
   kInterrupted,           // the observer asked to stop
 };
-const char* ToString(Termination termination);
-std::optional<Termination> ParseTermination(const std::string& text);
+template <>
+struct EnumNames<Termination> {
+  static constexpr std::pair<Termination, const char*> kNames[] = {
+      {Termination::kTargetReached, "target_reached"},
+      {Termination::kMaxWaves, "max_waves"},
+      {Termination::kBudgetExhausted, "budget_exhausted"},
+      {Termination::kAcceptanceRateTooLow, "acceptance_rate_too_low"},
+      {Termination::kWallTimeExceeded, "wall_time_exceeded"},
+      {Termination::kInterrupted, "interrupted"},
+  };
+};
 
 struct RunSummary {
   Termination termination = Termination::kMaxWaves;

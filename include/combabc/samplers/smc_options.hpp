@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 #include "combabc/schedules/tempering_schedule.hpp"
 #include "combabc/schedules/threshold_schedule.hpp"
@@ -16,8 +17,13 @@ enum class Estimator {
   kPaper,       // accepted particles unweighted, as in the paper (Eq. 2 fractions)
   kImportance,  // each accepted particle weighted by p(theta)/q(theta), normalised
 };
-const char* ToString(Estimator estimator);
-std::optional<Estimator> ParseEstimator(const std::string& text);
+template <>
+struct EnumNames<Estimator> {
+  static constexpr std::pair<Estimator, const char*> kNames[] = {
+      {Estimator::kPaper, "paper"},
+      {Estimator::kImportance, "importance"},
+  };
+};
 
 struct SmcOptions {
   // Maximum number of waves (t = 0..num_waves-1). With list thresholds, each list has exactly

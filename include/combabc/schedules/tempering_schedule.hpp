@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 namespace combabc {
 
@@ -14,15 +15,26 @@ enum class TemperingKind {
   kLinear,  // phi(1) = phi0 falling linearly to phi(T-1) = 0 over the planned waves
   kList,    // phi(t) = values[t - 1] for t >= 1
 };
-const char* ToString(TemperingKind kind);
-std::optional<TemperingKind> ParseTemperingKind(const std::string& text);
+template <>
+struct EnumNames<TemperingKind> {
+  static constexpr std::pair<TemperingKind, const char*> kNames[] = {
+      {TemperingKind::kNone, "none"},
+      {TemperingKind::kLinear, "linear"},
+      {TemperingKind::kList, "list"},
+  };
+};
 
 enum class TemperingForm {
   kGeometric,  // Eq. 3 exactly: q ∝ q~^(1-phi) p^phi. A bit with p^ = 0 stays 0 unless phi = 1.
   kMixture,    // q = (1 - phi) q~ + phi p: an extension that does unstick p^ = 0 or 1 bits.
 };
-const char* ToString(TemperingForm form);
-std::optional<TemperingForm> ParseTemperingForm(const std::string& text);
+template <>
+struct EnumNames<TemperingForm> {
+  static constexpr std::pair<TemperingForm, const char*> kNames[] = {
+      {TemperingForm::kGeometric, "geometric"},
+      {TemperingForm::kMixture, "mixture"},
+  };
+};
 
 struct TemperingSchedule {
   TemperingKind kind = TemperingKind::kNone;

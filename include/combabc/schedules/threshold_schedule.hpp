@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 #include <vector>
+#include "combabc/core/enum_names.hpp"
 
 namespace combabc {
 
@@ -13,8 +14,13 @@ enum class ThresholdKind {
   kList,      // eps_t = values[t]; the last value is the target
   kQuantile,  // eps_0 = initial; eps_t = max(target, alpha-quantile of wave t-1's distances)
 };
-const char* ToString(ThresholdKind kind);
-std::optional<ThresholdKind> ParseThresholdKind(const std::string& text);
+template <>
+struct EnumNames<ThresholdKind> {
+  static constexpr std::pair<ThresholdKind, const char*> kNames[] = {
+      {ThresholdKind::kList, "list"},
+      {ThresholdKind::kQuantile, "quantile"},
+  };
+};
 
 struct ThresholdSchedule {
   ThresholdKind kind = ThresholdKind::kQuantile;
