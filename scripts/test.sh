@@ -9,6 +9,8 @@ jobs=$(nproc)
 echo "== layering and formatting"
 bash scripts/check-layers.sh
 bash scripts/check-format.sh
+echo "== configure with the CLI off (the library and its tests stand without it)"
+cmake -S . -B build-noapps -G Ninja -DCOMBABC_BUILD_APPS=OFF -DCOMBABC_BUILD_BENCH=OFF > /dev/null
 
 echo "== Release build, warnings as errors"
 cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
