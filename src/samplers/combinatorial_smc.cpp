@@ -193,9 +193,9 @@ class SmcRun {
             options_.max_simulations > 0 && total_ >= options_.max_simulations
                 ? Stop({Termination::kBudgetExhausted,
                         "simulation budget of " + std::to_string(options_.max_simulations) +
-                            " reached in wave " + std::to_string(wave.wave)})
+                            " reached in wave " + std::to_string(wave.wave + 1)})
                 : Stop({Termination::kAcceptanceRateTooLow,
-                        "wave " + std::to_string(wave.wave) + " accepted " +
+                        "wave " + std::to_string(wave.wave + 1) + " accepted " +
                             std::to_string(wave.particles.size()) + " of " +
                             std::to_string(next_index) + " candidates, below min_acceptance_rate"});
         break;
@@ -230,12 +230,12 @@ class SmcRun {
       if (static_cast<int>(wave.particles.size()) >= n) break;
       if (options_.max_wall_time_s > 0 && Seconds(start_) >= options_.max_wall_time_s) {
         stop = Stop({Termination::kWallTimeExceeded,
-                     "wall-time limit reached in wave " + std::to_string(wave.wave)});
+                     "wall-time limit reached in wave " + std::to_string(wave.wave + 1)});
         break;
       }
       if (observer_ && observer_->ShouldStop()) {
         stop = Stop(
-            {Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave)});
+            {Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave + 1)});
         break;
       }
     }
