@@ -20,6 +20,9 @@ struct HistoryShape {
   std::size_t components = 0;            // distance values per particle
   std::size_t threshold_components = 0;  // thresholds per wave
   std::size_t outputs = 0;               // output values per particle, when kept
+  // Free parameters (proposal length): not in the metadata, so taken from wave 1's proposal,
+  // which every later wave's must match. Waves are always read in order from the first.
+  std::size_t free_parameters = 0;
 };
 
 struct HistoryStore::Impl {

@@ -142,8 +142,22 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   wave.thresholds = check.Doubles(
       row, kThresholds, k, k, "thresholds", std::to_string(k) + " (one per threshold component)");
   wave.phi = row.Real(kPhi);
-  wave.proposal = check.Doubles(
-      row, kProposal, 1, d, "proposal", "1 to " + std::to_string(d) + " (one per free parameter)");
+  if (expected_wave == 0) shape.free_parameters = 0;
+  const std::size_t f = shape.free_parameters;
+  wave.proposal = f == 0
+                      ? check.Doubles(row,
+                                      kProposal,
+                                      1,
+                                      d,
+                                      "proposal",
+                                      "1 to " + std::to_string(d) + " (one per free parameter)")
+                      : check.Doubles(row,
+                                      kProposal,
+                                      f,
+                                      f,
+                                      "proposal",
+                                      std::to_string(f) + " (one per free parameter, as wave 1)");
+  shape.free_parameters = wave.proposal.size();
   const std::int64_t next_index = check.Count(row, kNextIndex, "next_index");
   wave.discarded = check.Count(row, kDiscarded, "discarded");
   const bool ended = row.Int(kEnded) != 0;

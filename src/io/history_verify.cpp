@@ -56,8 +56,16 @@ std::vector<std::string> HistoryStore::Impl::StorageProblems(bool full) {
   try {
     Statement check(db, full ? "PRAGMA integrity_check(100)" : "PRAGMA quick_check(1)");
     while (check.Step()) {
-      const std::string line = check.Text(0);
-      if (line != "ok") problems.push_back(line);
+      std::string line = check.Text(0);
+      if (line == "ok") continue;
+      // SQLite's report may span lines ("*** in database main ***\n..."): one line each here.
+      const std::string banner = "*** in database main ***";
+      if (line.rfind(banner, 0) == 0) line.erase(0, banner.size());
+      for (char& c : line) {
+        if (c == '\n' || c == '\r') c = ' ';
+      }
+      problems.push_back(line.substr(
+          line.find_first_not_of(' ') == std::string::npos ? 0 : line.find_first_not_of(' ')));
     }
   } catch (const Error& error) {
     problems.push_back(error.message());
