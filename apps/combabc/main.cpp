@@ -73,6 +73,10 @@ int main(int argc, char** argv) {
   exporter->add_option("-o,--output", out_dir, "Directory (default: export/ beside the history)");
   exporter->add_flag("--overwrite", overwrite_export, "Replace an existing export directory");
 
+  auto* verify = app.add_subcommand(
+      "verify", "Check a history's integrity (structure, checksums); exit 0 if sound, 65 if not");
+  verify->add_option("RUN_DB", history, "History file of the run")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -105,6 +109,13 @@ int main(int argc, char** argv) {
     } else if (*report) {
       std::cout << "report: " << combabc::services::WriteReport(history, out_dir)
                 << "/index.html\n";
+    } else if (*verify) {
+      const auto outcome = combabc::services::VerifyHistory(history);
+      for (const std::string& line : outcome.lines) {
+        (outcome.ok ? std::cout : std::cerr)
+            << (outcome.ok ? "" : "combabc: data error: ") << line << "\n";
+      }
+      if (!outcome.ok) return combabc::ExitCode(combabc::ErrorKind::kData);
     } else if (*exporter) {
       std::cout << "export: "
                 << combabc::services::ExportHistory(history, out_dir, overwrite_export) << "\n";

@@ -39,7 +39,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator  # noqa: E402
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # v2 only adds wave.discarded, wave.content_hash and checksum rows in meta
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150

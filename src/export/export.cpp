@@ -135,6 +135,10 @@ class FileWriter {
   std::ofstream out_;
 };
 
+// Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
+// database keeps the engine's 0-based numbers).
+int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
+
 void WriteWaves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
   FileWriter file(dir / "waves.csv");
   std::ostream& out = file.out();
@@ -143,7 +147,7 @@ void WriteWaves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) 
   for (const std::string& name : ThresholdColumns(m, k)) out << ',' << name;
   out << ",phi,candidates,accepted,acceptance_rate,ess,distinct,wall_seconds,complete\n";
   for (const WaveRecord& w : h.waves) {
-    out << w.wave;
+    out << WaveNumber(w);
     for (std::size_t i = 0; i < k; ++i) {
       out << ',' << (i < w.thresholds.size() ? Number(w.thresholds[i]) : "NaN");
     }
@@ -164,8 +168,8 @@ void WriteMarginals(const fs::path& dir, const RunMetadata& m, const RunHistory&
           b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
       const double importance =
           b < w.marginals_importance.size() ? w.marginals_importance[b] : std::nan("");
-      out << w.wave << ',' << b << ',' << CsvField(name) << ',' << Number(w.marginals_paper[b])
-          << ',' << Number(importance) << '\n';
+      out << WaveNumber(w) << ',' << b << ',' << CsvField(name) << ','
+          << Number(w.marginals_paper[b]) << ',' << Number(importance) << '\n';
     }
   }
   file.Close();
@@ -188,7 +192,7 @@ void WriteParticles(const fs::path& dir, const RunMetadata& m, const RunHistory&
     for (const Particle& p : w.particles) {
       bits.clear();
       for (std::uint8_t bit : p.bits) bits += bit ? '1' : '0';
-      out << w.wave << ',' << p.index << ',' << bits;
+      out << WaveNumber(w) << ',' << p.index << ',' << bits;
       for (std::uint8_t bit : p.bits) out << ',' << (bit ? '1' : '0');
       out << ',' << Number(p.log_weight) << ',' << Number(p.weight);
       for (std::size_t c = 0; c < components; ++c) {
@@ -224,7 +228,7 @@ void WriteCurves(const fs::path& dir, const RunMetadata& m, const RunHistory& h)
   for (const WaveRecord& w : h.waves) {
     for (const Particle& p : w.particles) {
       if (p.output.empty()) continue;
-      out << w.wave << ',' << p.index;
+      out << WaveNumber(w) << ',' << p.index;
       for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
         out << ',' << (i < p.output.size() ? Number(p.output[i]) : "NaN");
       }
@@ -283,7 +287,7 @@ void WriteSummary(const fs::path& dir, const RunMetadata& m, const RunHistory& h
   out << "],\n  \"waves\": [";
   for (std::size_t t = 0; t < h.waves.size(); ++t) {
     const WaveRecord& w = h.waves[t];
-    out << (t ? "," : "") << "\n    {\"wave\": " << w.wave
+    out << (t ? "," : "") << "\n    {\"wave\": " << WaveNumber(w)
         << ", \"thresholds\": " << JsonArray(w.thresholds) << ", \"phi\": " << JsonNumber(w.phi)
         << ", \"candidates\": " << w.candidates << ", \"accepted\": " << w.accepted
         << ", \"acceptance_rate\": " << JsonNumber(w.acceptance_rate)

@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 1).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 2).
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,9 +20,10 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 1 of the schema. Vectors of doubles are BLOBs of little-endian binary64 (exact, and
-// +-inf / NaN survive, which REAL columns and JSON would not guarantee); bits are packed.
-constexpr const char* kSchemaV1 = R"sql(
+// Version 2 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// meta). Vectors of doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive,
+// which REAL columns and JSON would not guarantee); bits are packed.
+constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE run (
   id INTEGER PRIMARY KEY CHECK (id = 1),
@@ -75,7 +76,9 @@ CREATE TABLE wave (
   ess REAL,
   distinct_count INTEGER,
   wall_seconds REAL,
-  ended_at TEXT
+  ended_at TEXT,
+  discarded INTEGER NOT NULL DEFAULT 0,
+  content_hash TEXT
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -152,6 +155,16 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
   }
 }
 
+void WriteRunHashes(history::Database& db) {
+  Statement store(db, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)");
+  store.Bind(1, std::string("metadata_hash"))
+      .Bind(2, history::HexDigest(history::MetadataHash(db)))
+      .Run();
+  store.Bind(1, std::string("run_state_hash"))
+      .Bind(2, history::HexDigest(history::RunStateHash(db)))
+      .Run();
+}
+
 // WAL: a commit appends to the -wal file, so a process killed at any moment leaves every committed
 // batch readable (the next open replays the WAL). synchronous=NORMAL skips the fsync per commit:
 // committed batches survive a process kill, though not a power loss, which we accept for speed.
@@ -211,12 +224,18 @@ HistoryStore HistoryStore::Create(const std::string& path,
                 path);
   }
   std::fclose(file);
+  // Locked before it gets its name: the file is never visible unlocked while this run writes it.
+  history::RunLock lock = history::RunLock::Acquire(temp);
+  // Replacing a history that another process is still writing would pull it from under that run.
+  history::RunLock replaced;
   try {
+    if (overwrite && fs::exists(target, ec)) replaced = history::RunLock::Acquire(path);
     {
       history::Database db(temp, /*create=*/true, /*read_only=*/false);
       Transaction transaction(db);
-      db.Exec(kSchemaV1);
+      db.Exec(kSchema);
       WriteMetadata(db, metadata);
+      WriteRunHashes(db);
       db.Exec(("PRAGMA application_id = " + std::to_string(kHistoryApplicationId)).c_str());
       db.Exec(("PRAGMA user_version = " + std::to_string(kHistorySchemaVersion)).c_str());
       transaction.Commit();
@@ -238,7 +257,8 @@ HistoryStore HistoryStore::Create(const std::string& path,
     RemoveRunFiles(temp);
   } catch (const Error& error) {
     RemoveRunFiles(temp);
-    throw Error(ErrorKind::kCantCreate, error.message(), path);
+    throw Error(
+        ErrorKind::kCantCreate, error.message(), error.file().empty() ? path : error.file());
   } catch (const fs::filesystem_error& error) {
     RemoveRunFiles(temp);
     throw Error(
@@ -247,19 +267,25 @@ HistoryStore HistoryStore::Create(const std::string& path,
     RemoveRunFiles(temp);
     throw;
   }
-  auto impl = std::make_unique<Impl>(path, /*create=*/false, /*read_only=*/false);
+  auto impl = std::make_unique<Impl>(path, /*read_only=*/false, std::move(lock));
   SetWriteMode(impl->db);
-  impl->dimension = metadata.dimension;
+  impl->CheckMetadata();
   return HistoryStore(std::move(impl));
 }
 
 HistoryStore HistoryStore::Open(const std::string& path, bool read_only) {
+  return OpenFile(path, read_only, /*check=*/true);
+}
+
+HistoryStore HistoryStore::OpenFile(const std::string& path, bool read_only, bool check) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(ErrorKind::kNoInput, "no such run history", path);
   if (fs::is_directory(path, ec)) {
     throw Error(ErrorKind::kNoInput, "is a directory, not a run history", path);
   }
-  auto impl = std::make_unique<Impl>(path, /*create=*/false, read_only);
+  // A writer (resume) takes the run's lock before anything else; readers need none.
+  history::RunLock lock = read_only ? history::RunLock() : history::RunLock::Acquire(path);
+  auto impl = std::make_unique<Impl>(path, read_only, std::move(lock));
   history::Database& db = impl->db;
   const std::int64_t application_id = db.QueryInt("PRAGMA application_id");
   const std::int64_t version = db.QueryInt("PRAGMA user_version");
@@ -273,10 +299,43 @@ HistoryStore HistoryStore::Open(const std::string& path, bool read_only) {
                     "); use a newer combabc",
                 path);
   }
-  if (!read_only) SetWriteMode(db);
-  impl->dimension = static_cast<int>(db.QueryInt("SELECT dimension FROM run WHERE id = 1"));
-  if (impl->dimension < 1) throw Error(ErrorKind::kData, "corrupt run history: no run row", path);
+  impl->schema_version = static_cast<int>(version);
+  if (!check) return HistoryStore(std::move(impl));
+  const std::vector<std::string> problems = impl->StorageProblems(/*full=*/false);
+  if (!problems.empty()) {
+    throw Error(
+        ErrorKind::kData, "corrupt run history (SQLite check: " + problems.front() + ")", path);
+  }
+  {
+    history::ReadSnapshot snapshot(db);
+    impl->CheckMetadata();
+    impl->CheckRunState();
+  }
+  if (!read_only) {
+    SetWriteMode(db);
+    if (!impl->checksummed()) impl->MigrateToV2();
+  }
   return HistoryStore(std::move(impl));
+}
+
+void HistoryStore::Impl::StoreRunHashes() { WriteRunHashes(db); }
+
+void HistoryStore::Impl::MigrateToV2() {
+  // Only what a v1 file can be trusted with: its structure was checked on open; the checksums
+  // protect it from here on. A v1 run's earlier waves did not record their overshoot (0).
+  Transaction transaction(db);
+  db.Exec(R"sql(
+    ALTER TABLE wave ADD COLUMN discarded INTEGER NOT NULL DEFAULT 0;
+    ALTER TABLE wave ADD COLUMN content_hash TEXT;
+    UPDATE meta SET value = '2' WHERE key = 'schema_version';
+    PRAGMA user_version = 2;)sql");
+  schema_version = 2;
+  std::vector<int> waves;
+  Statement rows(db, "SELECT wave FROM wave ORDER BY wave");
+  while (rows.Step()) waves.push_back(static_cast<int>(rows.Int(0)));
+  for (int wave : waves) StoreWaveHash(wave);
+  StoreRunHashes();
+  transaction.Commit();
 }
 
 }  // namespace combabc

@@ -1,10 +1,12 @@
 #pragma once
-// HistoryStore's state, shared by history_store.cpp (create, open, record) and history_load.cpp
-// (load, resume). Private to src/history.
+// HistoryStore's state, shared by history_create.cpp (create, open), history_store.cpp (record),
+// history_load.cpp (load, resume) and history_verify.cpp (checks). Private to src/history.
 #include <optional>
 #include <string>
 
 #include "combabc/history/history_store.hpp"
+#include "history/history_hash.hpp"
+#include "history/history_lock.hpp"
 #include "history/history_sqlite.hpp"
 
 namespace combabc {
@@ -12,18 +14,58 @@ namespace combabc {
 // 'CBAB' in the SQLite header's application_id: tells a combabc history from any other database.
 inline constexpr int kHistoryApplicationId = 0x43424142;
 
-struct HistoryStore::Impl {
-  Impl(const std::string& path, bool create, bool read_only_in)
-      : db(path, create, read_only_in), read_only(read_only_in) {}
+// What every stored vector must measure, from the run's metadata.
+struct HistoryShape {
+  int dimension = 0;
+  std::size_t components = 0;            // distance values per particle
+  std::size_t threshold_components = 0;  // thresholds per wave
+  std::size_t outputs = 0;               // output values per particle, when kept
+  // Free parameters (proposal length): not in the metadata, so taken from wave 1's proposal,
+  // which every later wave's must match. Waves are always read in order from the first.
+  std::size_t free_parameters = 0;
+};
 
-  // The database outlives the statements prepared on it (members are destroyed in reverse order).
+struct HistoryStore::Impl {
+  Impl(const std::string& path, bool read_only_in, history::RunLock lock_in)
+      : lock(std::move(lock_in)),
+        db(path, /*create=*/false, read_only_in),
+        read_only(read_only_in) {}
+
+  // The writer's lock outlives the connection: closing the lock's descriptor while SQLite still
+  // had the file open would drop SQLite's own locks (members are destroyed in reverse order). The
+  // database outlives the statements prepared on it.
+  history::RunLock lock;
   history::Database db;
   bool read_only = false;
-  int dimension = 0;
+  int schema_version = kHistorySchemaVersion;
+  HistoryShape shape;
   std::optional<history::Statement> upsert_particle;
   std::optional<history::Statement> update_progress;
 
+  // The checksum state of the wave being written: its particles so far, in candidate order.
+  struct WaveChain {
+    int wave = -1;
+    std::int64_t next_candidate = 0;  // particles below this are in `hasher`
+    history::WaveHasher hasher;
+  };
+  WaveChain chain;
+
+  bool checksummed() const { return schema_version >= 2; }
   void RequireWritable(const char* what) const;
+
+  // Open's checks (they throw the first problem, kData): PRAGMA quick_check (or the slower full
+  // integrity_check), then the metadata's checksum and shape. Verify runs them one by one.
+  std::vector<std::string> StorageProblems(bool full);
+  void CheckMetadata();
+  void CheckRunState();
+
+  // The wave row's SELECT (kWaveColumns, or their v1 equivalent) without WHERE / ORDER BY.
+  std::string WaveSelect() const;
+  // One wave read from a row of WaveSelect(): every vector checked against the shape, its
+  // particles loaded (all of them, in candidate order) and its checksum verified. Errors are
+  // kData naming the wave (from 1) and the field. expected_wave: the 0-based number it must have.
+  WaveRecord ReadWave(history::Statement& row, int expected_wave);
+
   // The first wave that is not complete and its next_index; nullopt when every wave is complete.
   struct PartialWave {
     int wave = 0;
@@ -31,8 +73,13 @@ struct HistoryStore::Impl {
     bool ended = false;
   };
   std::optional<PartialWave> FindPartial();
-  WaveRecord LoadWave(history::Statement& row, bool with_statistics);
-  std::vector<Particle> LoadParticles(int wave, std::int64_t below_index);
+
+  // Writers: recompute / extend the wave's checksum and store it, and the run-level ones.
+  void StoreWaveHash(int wave);
+  void ExtendWaveChain(int wave);
+  void StoreRunHashes();
+  // A v1 file opened for writing becomes v2: new columns, checksums of what it holds.
+  void MigrateToV2();
 };
 
 }  // namespace combabc

@@ -1,4 +1,6 @@
 // Reading a run history back: metadata, waves, the resume point, and truncation for resume.
+#include <sqlite3.h>
+
 #include <cstdlib>
 
 #include "combabc/core/error.hpp"
@@ -8,22 +10,18 @@ namespace combabc {
 namespace {
 
 using history::Statement;
-using history::UnpackBits;
-using history::UnpackDoubles;
 
-constexpr const char* kWaveColumns = R"sql(
-SELECT wave, thresholds, phi, proposal, next_index, accepted_so_far, ended, complete,
-  candidates, accepted, acceptance_rate, marginals_paper, marginals_importance, ess,
-  distinct_count, wall_seconds
-FROM wave)sql";
-
+// Columns of Impl::WaveSelect(), in history::kWaveColumns order.
 enum WaveColumn {
   kWave,
   kThresholds,
   kPhi,
   kProposal,
+  kStartedAt,
+  kAcceptedNeeded,
   kNextIndex,
   kAcceptedSoFar,
+  kTotalSimulations,
   kEnded,
   kComplete,
   kCandidates,
@@ -34,9 +32,90 @@ enum WaveColumn {
   kEss,
   kDistinct,
   kWallSeconds,
+  kEndedAt,
+  kDiscarded,
+  kContentHash,
+};
+
+// Columns of history::kParticleColumns.
+enum ParticleColumn { kCandidate, kBits, kLogWeight, kWeight, kDistance, kOutput };
+
+// Reads one wave's fields, each checked against what the run's metadata say it must measure.
+// Errors name the file, the wave (numbered from 1, as users see it) and the field.
+class WaveReader {
+ public:
+  WaveReader(const std::string& path, int wave) : path_(path), wave_(wave) {}
+
+  [[noreturn]] void Corrupt(const std::string& field, const std::string& what) const {
+    throw Error(ErrorKind::kData,
+                "corrupt run history: " + what,
+                path_,
+                0,
+                "wave " + std::to_string(wave_ + 1) + ", " + field);
+  }
+
+  std::int64_t Count(const Statement& row, int column, const char* field) const {
+    if (row.IsNull(column)) Corrupt(field, "is NULL");
+    const std::int64_t value = row.Int(column);
+    if (value < 0) Corrupt(field, "is negative (" + std::to_string(value) + ")");
+    return value;
+  }
+
+  // A vector of doubles of `min` to `max` values; NULL is the empty vector.
+  std::vector<double> Doubles(const Statement& row,
+                              int column,
+                              std::size_t min,
+                              std::size_t max,
+                              const std::string& field,
+                              const std::string& expected) const {
+    const int type = row.Type(column);
+    if (type != SQLITE_BLOB && type != SQLITE_NULL) Corrupt(field, "is not a BLOB of doubles");
+    const auto bytes = row.Bytes(column);
+    if (bytes.size() % sizeof(double) != 0) {
+      Corrupt(field,
+              "has " + std::to_string(bytes.size()) + " bytes, not a whole number of doubles");
+    }
+    const std::size_t n = bytes.size() / sizeof(double);
+    if (n < min || n > max) {
+      Corrupt(field,
+              (n == 0 ? std::string("is NULL") : "has " + std::to_string(n) + " values") +
+                  ", expected " + expected);
+    }
+    return history::UnpackDoubles(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), path_);
+  }
+
+  std::vector<std::uint8_t> Bits(const Statement& row,
+                                 int column,
+                                 int dimension,
+                                 const std::string& field) const {
+    const auto bytes = row.Bytes(column);
+    const auto needed = (static_cast<std::size_t>(dimension) + 7) / 8;
+    if (row.Type(column) != SQLITE_BLOB || bytes.size() != needed) {
+      Corrupt(field,
+              (row.IsNull(column) ? std::string("is NULL")
+                                  : "has " + std::to_string(bytes.size()) + " bytes") +
+                  ", expected " + std::to_string(needed) + " (" + std::to_string(dimension) +
+                  " bits)");
+    }
+    return history::UnpackBits(
+        std::vector<std::uint8_t>(bytes.begin(), bytes.end()), dimension, path_);
+  }
+
+ private:
+  const std::string& path_;
+  int wave_;
 };
 
 }  // namespace
+
+std::string HistoryStore::Impl::WaveSelect() const {
+  std::string columns = history::kWaveColumns;
+  if (!checksummed()) {
+    // Version 1 had neither column: no overshoot recorded, no checksum.
+    columns.replace(columns.find("discarded, content_hash"), std::string::npos, "0, NULL");
+  }
+  return "SELECT " + columns + " FROM wave";
+}
 
 std::optional<HistoryStore::Impl::PartialWave> HistoryStore::Impl::FindPartial() {
   Statement s(db, "SELECT wave, next_index, ended, complete FROM wave ORDER BY wave");
@@ -49,55 +128,111 @@ std::optional<HistoryStore::Impl::PartialWave> HistoryStore::Impl::FindPartial()
   return std::nullopt;
 }
 
-std::vector<Particle> HistoryStore::Impl::LoadParticles(int wave, std::int64_t below_index) {
-  Statement s(db, R"sql(
-    SELECT candidate, bits, log_weight, weight, distance, output FROM particle
-    WHERE wave = ?1 AND candidate < ?2 ORDER BY candidate)sql");
-  s.Bind(1, wave).Bind(2, below_index);
-  std::vector<Particle> particles;
-  while (s.Step()) {
-    Particle p;
-    p.index = s.Int(0);
-    p.bits = UnpackBits(s.Blob(1), dimension, db.path());
-    p.log_weight = s.Real(2);
-    p.weight = s.Real(3);
-    p.distance = UnpackDoubles(s.Blob(4), db.path());
-    p.output = UnpackDoubles(s.Blob(5), db.path());
-    particles.push_back(std::move(p));
+WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
+  const WaveReader check(db.path(), expected_wave);
+  if (row.Type(kWave) != SQLITE_INTEGER || row.Int(kWave) != expected_wave) {
+    check.Corrupt("wave",
+                  "waves are not numbered 1, 2, 3, ... (found " + row.Text(kWave) + " where wave " +
+                      std::to_string(expected_wave) + " was due, 0-based)");
   }
-  return particles;
-}
-
-WaveRecord HistoryStore::Impl::LoadWave(Statement& row, bool with_statistics) {
+  const auto d = static_cast<std::size_t>(shape.dimension);
+  const std::size_t k = shape.threshold_components;
   WaveRecord wave;
-  wave.wave = static_cast<int>(row.Int(kWave));
-  wave.thresholds = UnpackDoubles(row.Blob(kThresholds), db.path());
+  wave.wave = expected_wave;
+  wave.thresholds = check.Doubles(
+      row, kThresholds, k, k, "thresholds", std::to_string(k) + " (one per threshold component)");
   wave.phi = row.Real(kPhi);
-  wave.proposal = UnpackDoubles(row.Blob(kProposal), db.path());
-  if (with_statistics) {
+  if (expected_wave == 0) shape.free_parameters = 0;
+  const std::size_t f = shape.free_parameters;
+  wave.proposal = f == 0
+                      ? check.Doubles(row,
+                                      kProposal,
+                                      1,
+                                      d,
+                                      "proposal",
+                                      "1 to " + std::to_string(d) + " (one per free parameter)")
+                      : check.Doubles(row,
+                                      kProposal,
+                                      f,
+                                      f,
+                                      "proposal",
+                                      std::to_string(f) + " (one per free parameter, as wave 1)");
+  shape.free_parameters = wave.proposal.size();
+  const std::int64_t next_index = check.Count(row, kNextIndex, "next_index");
+  wave.discarded = check.Count(row, kDiscarded, "discarded");
+  const bool ended = row.Int(kEnded) != 0;
+  if (ended) {
     wave.complete = row.Int(kComplete) != 0;
-    wave.candidates = row.Int(kCandidates);
-    wave.accepted = row.Int(kAccepted);
+    wave.candidates = check.Count(row, kCandidates, "candidates");
+    wave.accepted = check.Count(row, kAccepted, "accepted");
     wave.acceptance_rate = row.Real(kAcceptanceRate);
-    wave.marginals_paper = UnpackDoubles(row.Blob(kMarginalsPaper), db.path());
-    wave.marginals_importance = UnpackDoubles(row.Blob(kMarginalsImportance), db.path());
+    // A wave that accepted nothing has no marginals.
+    const std::size_t min = wave.accepted == 0 ? 0 : d;
+    const std::string per_bit = std::to_string(d) + " (one per bit)";
+    wave.marginals_paper = check.Doubles(row, kMarginalsPaper, min, d, "marginals_paper", per_bit);
+    wave.marginals_importance =
+        check.Doubles(row, kMarginalsImportance, min, d, "marginals_importance", per_bit);
     wave.ess = row.Real(kEss);
-    wave.distinct = row.Int(kDistinct);
+    wave.distinct = check.Count(row, kDistinct, "distinct_count");
     wave.wall_seconds = row.Real(kWallSeconds);
   } else {
     // A wave cut short before OnWaveEnd: only its progress is known (LoadHistory derives the
     // rest from the particles).
-    wave.candidates = row.Int(kNextIndex);
-    wave.accepted = row.Int(kAcceptedSoFar);
+    wave.candidates = next_index;
+    wave.accepted = check.Count(row, kAcceptedSoFar, "accepted_so_far");
     wave.acceptance_rate = wave.candidates > 0 ? static_cast<double>(wave.accepted) /
                                                      static_cast<double>(wave.candidates)
                                                : 0.0;
+  }
+
+  Statement particles(db,
+                      (std::string("SELECT ") + history::kParticleColumns +
+                       " FROM particle WHERE wave = ?1 ORDER BY candidate")
+                          .c_str());
+  particles.Bind(1, expected_wave);
+  history::WaveHasher hasher;
+  const std::string distance_count =
+      std::to_string(shape.components) + " (one per distance component)";
+  const std::string output_count =
+      "0 or " + std::to_string(shape.outputs) + " (one per output position)";
+  while (particles.Step()) {
+    hasher.AddParticle(particles);
+    Particle p;
+    p.index = particles.Int(kCandidate);
+    const std::string who = "particle " + std::to_string(p.index);
+    if (p.index < 0 || p.index >= wave.candidates) {
+      check.Corrupt(who,
+                    "lies outside the wave's " + std::to_string(wave.candidates) + " candidates");
+    }
+    p.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
+    p.log_weight = particles.Real(kLogWeight);
+    p.weight = particles.Real(kWeight);
+    p.distance = check.Doubles(particles,
+                               kDistance,
+                               shape.components,
+                               shape.components,
+                               who + " distance",
+                               distance_count);
+    p.output = check.Doubles(particles, kOutput, 0, shape.outputs, who + " output", output_count);
+    if (!p.output.empty() && p.output.size() != shape.outputs) {
+      check.Corrupt(who + " output",
+                    "has " + std::to_string(p.output.size()) + " values, expected " + output_count);
+    }
+    wave.particles.push_back(std::move(p));
+  }
+  if (checksummed()) {
+    const auto stored = history::ParseHexDigest(row.Text(kContentHash));
+    if (!stored) check.Corrupt("content_hash", "the wave's checksum is missing or malformed");
+    if (*stored != hasher.Finish(row)) {
+      check.Corrupt("content_hash", "the wave's rows and particles do not match its checksum");
+    }
   }
   return wave;
 }
 
 RunMetadata HistoryStore::LoadMetadata() const {
   history::Database& db = impl_->db;
+  history::ReadSnapshot snapshot(db);
   RunMetadata m;
   Statement run(db, R"sql(
     SELECT status, config_text, config_path, combabc_version, git_hash, seed, threads,
@@ -154,53 +289,52 @@ RunMetadata HistoryStore::LoadMetadata() const {
 
 ResumePoint HistoryStore::LoadResumePoint() const {
   Impl& impl = *impl_;
+  history::ReadSnapshot snapshot(impl.db);
   ResumePoint point;
-  Statement rows(impl.db, (std::string(kWaveColumns) + " ORDER BY wave").c_str());
+  Statement rows(impl.db, (impl.WaveSelect() + " ORDER BY wave").c_str());
   while (rows.Step()) {
     const bool ended = rows.Int(kEnded) != 0;
     const bool complete = rows.Int(kComplete) != 0;
+    const int expected = static_cast<int>(point.completed.size());
     if (ended && complete) {
-      point.completed.push_back(impl.LoadWave(rows, /*with_statistics=*/true));
+      point.completed.push_back(impl.ReadWave(rows, expected));
       continue;
     }
     // The first incomplete wave is where the run continues; nothing after it counts. A wave
     // started without any committed batch is simply started again.
-    const std::int64_t next_index = rows.Int(kNextIndex);
-    if (next_index > 0) {
+    if (rows.Int(kNextIndex) > 0) {
+      WaveRecord partial = impl.ReadWave(rows, expected);
       point.has_partial = true;
-      point.partial_wave = static_cast<int>(rows.Int(kWave));
-      point.partial_next_index = next_index;
+      point.partial_wave = expected;
+      point.partial_next_index = rows.Int(kNextIndex);
+      point.partial_accepted = std::move(partial.particles);
+      point.partial_discarded = partial.discarded;
     }
     rows.Reset();
     break;
-  }
-  for (WaveRecord& wave : point.completed) {
-    wave.particles = impl.LoadParticles(wave.wave, INT64_MAX);
-  }
-  if (point.has_partial) {
-    point.partial_accepted = impl.LoadParticles(point.partial_wave, point.partial_next_index);
   }
   return point;
 }
 
 RunHistory HistoryStore::LoadHistory() const {
   Impl& impl = *impl_;
+  history::ReadSnapshot snapshot(impl.db);
   RunHistory history;
-  Statement rows(impl.db, (std::string(kWaveColumns) + " ORDER BY wave").c_str());
+  Statement rows(impl.db, (impl.WaveSelect() + " ORDER BY wave").c_str());
   std::int64_t simulations = 0;
+  std::int64_t discarded = 0;
   while (rows.Step()) {
     const bool ended = rows.Int(kEnded) != 0;
     if (!ended && rows.Int(kNextIndex) == 0) break;  // started, nothing committed yet
-    WaveRecord wave = impl.LoadWave(rows, ended);
+    WaveRecord wave = impl.ReadWave(rows, static_cast<int>(history.waves.size()));
     simulations += wave.candidates;
+    discarded += wave.discarded;
     history.waves.push_back(std::move(wave));
     if (!ended || !history.waves.back().complete) {
       rows.Reset();
       break;  // at most one incomplete wave, and it is the last
     }
   }
-  // OnBatch commits particles with their progress, so every stored particle lies below next_index.
-  for (WaveRecord& wave : history.waves) wave.particles = impl.LoadParticles(wave.wave, INT64_MAX);
 
   const RunMetadata metadata = LoadMetadata();
   if (!history.waves.empty() && history.waves.back().marginals_paper.empty() &&
@@ -225,6 +359,7 @@ RunHistory HistoryStore::LoadHistory() const {
     // Not finished (still running, killed or failed): summarise what was committed.
     for (const WaveRecord& wave : history.waves) summary.waves_completed += wave.complete ? 1 : 0;
     summary.simulations = simulations;
+    summary.simulations_discarded = discarded;
   }
   run.Reset();
   if (const auto termination = ParseEnum<Termination>(metadata.termination)) {
@@ -241,6 +376,9 @@ ResumePoint HistoryStore::BeginResume() {
   impl.RequireWritable("resume the run");
   {
     history::Transaction transaction(impl.db);
+    // Everything the resume keeps is checked before anything is rewritten: re-hashing a corrupt
+    // partial wave would make its corruption look valid.
+    LoadResumePoint();
     const std::optional<Impl::PartialWave> partial = impl.FindPartial();
     if (partial) {
       // Waves after the partial one cannot be valid (the engine writes them in order).
@@ -263,12 +401,15 @@ ResumePoint HistoryStore::BeginResume() {
             ess = NULL, distinct_count = NULL, wall_seconds = NULL, ended_at = NULL
           WHERE wave = ?1)sql");
         reopen.Bind(1, partial->wave).Run();
+        impl.chain.wave = -1;
+        impl.StoreWaveHash(partial->wave);
       }
     }
     impl.db.Exec(R"sql(
       UPDATE run SET status = 'running', resume_count = resume_count + 1, end_time = '',
         termination = '', message = '', waves_completed = NULL, simulations = NULL,
         simulations_discarded = NULL, wall_seconds = NULL WHERE id = 1)sql");
+    impl.StoreRunHashes();
     transaction.Commit();
   }
   return LoadResumePoint();

@@ -87,6 +87,8 @@ std::int64_t Database::QueryInt(const char* sql) {
 
 int Database::Changes() { return sqlite3_changes(db_); }
 
+bool Database::InTransaction() { return sqlite3_get_autocommit(db_) == 0; }
+
 Statement::Statement(Database& db, const char* sql) : db_(&db) {
   const int rc = sqlite3_prepare_v2(db.handle(), sql, -1, &stmt_, nullptr);
   if (rc != SQLITE_OK) db.Fail(rc, "cannot read run history");
@@ -171,6 +173,17 @@ bool Statement::IsNull(int column) const {
   return sqlite3_column_type(stmt_, column) == SQLITE_NULL;
 }
 
+int Statement::Type(int column) const { return sqlite3_column_type(stmt_, column); }
+
+std::span<const std::uint8_t> Statement::Bytes(int column) const {
+  const void* data = Type(column) == SQLITE_TEXT
+                         ? static_cast<const void*>(sqlite3_column_text(stmt_, column))
+                         : sqlite3_column_blob(stmt_, column);
+  const int size = sqlite3_column_bytes(stmt_, column);
+  if (data == nullptr || size <= 0) return {};
+  return {static_cast<const std::uint8_t*>(data), static_cast<std::size_t>(size)};
+}
+
 Transaction::Transaction(Database& db) : db_(&db) {
   // IMMEDIATE takes the write lock up front, so a concurrent reader cannot make COMMIT fail.
   db.Exec("BEGIN IMMEDIATE");
@@ -183,6 +196,16 @@ Transaction::~Transaction() {
 void Transaction::Commit() {
   db_->Exec("COMMIT");
   done_ = true;
+}
+
+ReadSnapshot::ReadSnapshot(Database& db) {
+  if (db.InTransaction()) return;
+  db.Exec("BEGIN");
+  db_ = &db;
+}
+
+ReadSnapshot::~ReadSnapshot() {
+  if (db_ != nullptr) sqlite3_exec(db_->handle(), "COMMIT", nullptr, nullptr, nullptr);
 }
 
 std::vector<std::uint8_t> PackDoubles(std::span<const double> values) {

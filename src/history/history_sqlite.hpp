@@ -41,6 +41,10 @@ class Statement {
   std::string Text(int column) const;
   std::vector<std::uint8_t> Blob(int column) const;
   bool IsNull(int column) const;
+  // The column's storage class (SQLITE_INTEGER ... SQLITE_NULL) and its bytes (TEXT or BLOB), as
+  // the checksums see them.
+  int Type(int column) const;
+  std::span<const std::uint8_t> Bytes(int column) const;
 
  private:
   Database* db_;
@@ -60,6 +64,8 @@ class Database {
   std::int64_t QueryInt(const char* sql);
   // Rows changed by the last INSERT / UPDATE / DELETE.
   int Changes();
+  // Inside BEGIN ... COMMIT (ours or a caller's).
+  bool InTransaction();
   sqlite3* handle() { return db_; }
   const std::string& path() const { return path_; }
   // Throws the Error for SQLite result code `rc` (kData for corrupt / not a database, else kIo).
@@ -82,6 +88,19 @@ class Transaction {
  private:
   Database* db_;
   bool done_ = false;
+};
+
+// One consistent snapshot for a multi-statement read, so that a reader never mixes two commits
+// of a run being written (each wave's checksum must match the rows read with it). A no-op inside
+// a transaction already open.
+class ReadSnapshot {
+ public:
+  explicit ReadSnapshot(Database& db);
+  ReadSnapshot(const ReadSnapshot&) = delete;
+  ~ReadSnapshot();
+
+ private:
+  Database* db_ = nullptr;
 };
 
 // Vectors as BLOBs: doubles as little-endian IEEE-754 binary64, bits packed 8 per byte with bit k

@@ -1,4 +1,5 @@
 // Recording a run into its history: the SmcObserver callbacks, Finish and MarkFailed.
+#include <cstdint>
 #include <set>
 
 #include "combabc/core/error.hpp"
@@ -30,7 +31,7 @@ ON CONFLICT (wave, candidate) DO UPDATE SET
 
 constexpr const char* kUpdateProgress = R"sql(
 UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
-  total_simulations = ?5 WHERE wave = ?1
+  total_simulations = ?5, discarded = ?6 WHERE wave = ?1
 )sql";
 
 void BindParticle(Statement& s, int wave, const Particle& p) {
@@ -67,6 +68,35 @@ void UpsertWave(history::Database& db, const WaveRecord& wave) {
 
 }  // namespace
 
+void HistoryStore::Impl::ExtendWaveChain(int wave) {
+  if (chain.wave != wave) {
+    chain = WaveChain{};
+    chain.wave = wave;
+    chain.next_candidate = INT64_MIN;
+  }
+  Statement rows(db,
+                 (std::string("SELECT ") + history::kParticleColumns +
+                  " FROM particle WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate")
+                     .c_str());
+  rows.Bind(1, wave).Bind(2, chain.next_candidate);
+  while (rows.Step()) {
+    chain.hasher.AddParticle(rows);
+    chain.next_candidate = rows.Int(0) + 1;
+  }
+}
+
+// Called inside the transaction that changed the wave, so that the checksum commits with it.
+void HistoryStore::Impl::StoreWaveHash(int wave) {
+  ExtendWaveChain(wave);
+  Statement row(db, (WaveSelect() + " WHERE wave = ?1").c_str());
+  row.Bind(1, wave);
+  if (!row.Step()) return;
+  const std::string digest = history::HexDigest(chain.hasher.Finish(row));
+  row.Reset();
+  Statement store(db, "UPDATE wave SET content_hash = ?2 WHERE wave = ?1");
+  store.Bind(1, wave).Bind(2, digest).Run();
+}
+
 void HistoryStore::Impl::RequireWritable(const char* what) const {
   if (read_only) {
     throw Error(ErrorKind::kSoftware,
@@ -79,6 +109,7 @@ void HistoryStore::OnWaveStart(const WaveRecord& wave) {
   impl_->RequireWritable("record a wave");
   Transaction transaction(impl_->db);
   UpsertWave(impl_->db, wave);
+  impl_->StoreWaveHash(wave.wave);
   transaction.Commit();
 }
 
@@ -87,7 +118,7 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
   impl.RequireWritable("record a batch");
   if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
   if (!impl.update_progress) impl.update_progress.emplace(impl.db, kUpdateProgress);
-  CheckBits(impl.dimension, impl.db.path(), accepted);
+  CheckBits(impl.shape.dimension, impl.db.path(), accepted);
   // Particles and progress commit together: after this, next_index is a valid restart point.
   Transaction transaction(impl.db);
   impl.update_progress->Bind(1, progress.wave)
@@ -95,6 +126,7 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
       .Bind(3, progress.accepted)
       .Bind(4, progress.accepted_needed)
       .Bind(5, progress.total_simulations)
+      .Bind(6, progress.discarded)
       .Run();
   if (impl.db.Changes() == 0) {
     throw Error(ErrorKind::kSoftware,
@@ -104,7 +136,11 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
   for (const Particle& p : accepted) {
     BindParticle(*impl.upsert_particle, progress.wave, p);
     impl.upsert_particle->Run();
+    // The checksum extends over new particles only; one sent again means hashing the wave anew.
+    if (impl.chain.wave == progress.wave && p.index < impl.chain.next_candidate)
+      impl.chain.wave = -1;
   }
+  impl.StoreWaveHash(progress.wave);
   transaction.Commit();
 }
 
@@ -112,13 +148,14 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
   Impl& impl = *impl_;
   impl.RequireWritable("record a wave");
   if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
-  CheckBits(impl.dimension, impl.db.path(), wave.particles);
+  CheckBits(impl.shape.dimension, impl.db.path(), wave.particles);
   Transaction transaction(impl.db);
   UpsertWave(impl.db, wave);
   Statement end(impl.db, R"sql(
     UPDATE wave SET ended = 1, complete = ?2, candidates = ?3, accepted = ?4,
       acceptance_rate = ?5, marginals_paper = ?6, marginals_importance = ?7, ess = ?8,
-      distinct_count = ?9, wall_seconds = ?10, ended_at = ?11 WHERE wave = ?1)sql");
+      distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12
+    WHERE wave = ?1)sql");
   end.Bind(1, wave.wave)
       .Bind(2, wave.complete ? 1 : 0)
       .Bind(3, wave.candidates)
@@ -130,6 +167,7 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
       .Bind(9, wave.distinct)
       .Bind(10, wave.wall_seconds)
       .Bind(11, history::UtcNow())
+      .Bind(12, wave.discarded)
       .Run();
   std::set<std::int64_t> kept;
   for (const Particle& p : wave.particles) {
@@ -146,6 +184,10 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
   }
   Statement drop(impl.db, "DELETE FROM particle WHERE wave = ?1 AND candidate = ?2");
   for (std::int64_t index : dropped) drop.Bind(1, wave.wave).Bind(2, index).Run();
+  // Weights were rewritten and particles dropped: the final checksum is computed afresh.
+  impl.chain.wave = -1;
+  impl.StoreWaveHash(wave.wave);
+  impl.chain.wave = -1;
   transaction.Commit();
 }
 
@@ -170,6 +212,7 @@ void HistoryStore::Finish(const RunSummary& summary) {
         .Bind(7, summary.wall_seconds)
         .Bind(8, history::UtcNow())
         .Run();
+    impl.StoreRunHashes();
     transaction.Commit();
   }
   // Fold the WAL back into the file and leave rollback-journal mode, so the finished RUN.db is
@@ -191,6 +234,7 @@ void HistoryStore::MarkFailed(const std::string& message) {
       .Bind(2, message)
       .Bind(3, history::UtcNow())
       .Run();
+  impl.StoreRunHashes();
   transaction.Commit();
 }
 

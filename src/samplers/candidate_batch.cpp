@@ -58,7 +58,7 @@ void CandidateBatch::EvaluateRange(std::size_t begin,
     space_.Expand(free, span_of(bits_, i, d_));
     log_weights_[i] = proposal.LogWeight(free);
   }
-  const std::string which = "wave " + std::to_string(wave) + ", candidates " +
+  const std::string which = "wave " + std::to_string(wave + 1) + ", candidates " +
                             std::to_string(first + static_cast<std::int64_t>(begin)) + "-" +
                             std::to_string(first + static_cast<std::int64_t>(end) - 1);
   try {
@@ -83,7 +83,7 @@ void CandidateBatch::EvaluateRange(std::size_t begin,
                         " is NaN (the simulated output holds NaN or the distance is undefined)",
                     "",
                     0,
-                    "wave " + std::to_string(wave) + ", candidate " +
+                    "wave " + std::to_string(wave + 1) + ", candidate " +
                         std::to_string(first + static_cast<std::int64_t>(i)));
       }
     }

@@ -72,9 +72,12 @@ class SmcRun {
       history.waves = resume->completed;
       for (const auto& w : history.waves) {
         total_ += w.candidates;
+        discarded_ += w.discarded;
         if (!w.complete) throw Error(ErrorKind::kData, "resume point holds an incomplete wave");
       }
       first_wave = static_cast<int>(history.waves.size());
+      // The next wave sizes its first batch from this rate, as the uninterrupted run did.
+      if (!history.waves.empty()) last_rate_ = history.waves.back().acceptance_rate;
       if (!history.waves.empty() && AllFinal(history.waves.back())) {
         return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
       }
@@ -86,6 +89,9 @@ class SmcRun {
       if (resume && resume->has_partial && resume->partial_wave == t) {
         wave.particles = resume->partial_accepted;
         next_index = resume->partial_next_index;
+        // Killed after the wave's last batch but before it ended: its overshoot still counts.
+        wave.discarded = resume->partial_discarded;
+        discarded_ += wave.discarded;
       }
       const auto stop = RunWave(wave, next_index);
       history.waves.push_back(std::move(wave));
@@ -187,9 +193,9 @@ class SmcRun {
             options_.max_simulations > 0 && total_ >= options_.max_simulations
                 ? Stop({Termination::kBudgetExhausted,
                         "simulation budget of " + std::to_string(options_.max_simulations) +
-                            " reached in wave " + std::to_string(wave.wave)})
+                            " reached in wave " + std::to_string(wave.wave + 1)})
                 : Stop({Termination::kAcceptanceRateTooLow,
-                        "wave " + std::to_string(wave.wave) + " accepted " +
+                        "wave " + std::to_string(wave.wave + 1) + " accepted " +
                             std::to_string(wave.particles.size()) + " of " +
                             std::to_string(next_index) + " candidates, below min_acceptance_rate"});
         break;
@@ -206,6 +212,7 @@ class SmcRun {
           break;
         }
       }
+      wave.discarded += size - consumed;
       discarded_ += size - consumed;
       next_index += consumed;
       total_ += consumed;
@@ -214,6 +221,7 @@ class SmcRun {
         BatchProgress progress{wave.wave,
                                next_index,
                                static_cast<std::int64_t>(wave.particles.size()),
+                               wave.discarded,
                                n,
                                total_,
                                Seconds(start_)};
@@ -222,12 +230,12 @@ class SmcRun {
       if (static_cast<int>(wave.particles.size()) >= n) break;
       if (options_.max_wall_time_s > 0 && Seconds(start_) >= options_.max_wall_time_s) {
         stop = Stop({Termination::kWallTimeExceeded,
-                     "wall-time limit reached in wave " + std::to_string(wave.wave)});
+                     "wall-time limit reached in wave " + std::to_string(wave.wave + 1)});
         break;
       }
       if (observer_ && observer_->ShouldStop()) {
-        stop =
-            Stop({Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave)});
+        stop = Stop(
+            {Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave + 1)});
         break;
       }
     }

@@ -35,7 +35,7 @@ std::string RunHistory::FullReport(Estimator estimator) const {
     std::snprintf(line,
                   sizeof line,
                   "%4d  %-20s  %10lld  %8lld  %.5f  %7.1f  %8lld  %7.3f%s\n",
-                  w.wave,
+                  w.wave + 1,  // users number waves from 1, as the paper does
                   eps.c_str(),
                   static_cast<long long>(w.candidates),
                   static_cast<long long>(w.accepted),

@@ -114,8 +114,9 @@ void SimulateConfiguration(const std::string& config_path,
 }
 
 std::string WriteReport(const std::string& history_path, const std::string& directory) {
-  // Opening first gives the usual one-line errors for a missing or foreign file.
-  { HistoryStore::Open(history_path, /*read_only=*/true); }
+  // Reading it all first gives the usual one-line errors for a missing, foreign or corrupt file
+  // (the script itself trusts what it reads).
+  { HistoryStore::Open(history_path, /*read_only=*/true).LoadHistory(); }
   const std::string out = directory.empty() ? Sibling(history_path, "report") : directory;
   const char* python = std::getenv("COMBABC_PYTHON");
   const int rc = RunProcess({python && *python ? python : "/usr/bin/python3",
@@ -130,6 +131,23 @@ std::string WriteReport(const std::string& history_path, const std::string& dire
         history_path);
   }
   return out;
+}
+
+VerifyOutcome VerifyHistory(const std::string& history_path) {
+  const HistoryCheck check = HistoryStore::Verify(history_path);
+  VerifyOutcome outcome;
+  outcome.ok = check.problems.empty();
+  if (!outcome.ok) {
+    outcome.lines = check.problems;
+    return outcome;
+  }
+  const std::string waves = std::to_string(check.waves) + (check.waves == 1 ? " wave" : " waves");
+  outcome.lines.push_back(history_path + ": OK (" + waves +
+                          (check.checksummed
+                               ? ", checksums verified)"
+                               : "; no checksums (schema v" + std::to_string(check.schema_version) +
+                                     "): structure checked only)"));
+  return outcome;
 }
 
 std::string ExportHistory(const std::string& history_path,

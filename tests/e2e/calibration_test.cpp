@@ -1,6 +1,7 @@
 // The product end to end through the CLI: simulate -> run -> report -> export, the posterior of
 // clamps near the load, and resume after SIGKILL giving the uninterrupted run's history.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <chrono>
 #include <filesystem>
@@ -61,6 +62,47 @@ void WriteData(const ScratchDir& dir) {
 }
 
 RunHistory Load(const std::string& path) { return HistoryStore::Open(path, true).LoadHistory(); }
+
+// On copies of a killed run: damaged vectors (which once crashed the engine, exit 139) are a
+// one-line data error, and a run held by another process is refused, before anything runs.
+// A killed run's committed batches may live in its -wal: copied along.
+void CopyRun(const std::string& from, const std::string& to) {
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(to + suffix);
+  fs::copy_file(from, to);
+  if (fs::exists(from + "-wal")) fs::copy_file(from + "-wal", to + "-wal");
+}
+
+void ExpectResumeRefusesDamageAndASecondWriter(const ScratchDir& dir, const std::string& killed) {
+  const std::vector<std::string> damages = {
+      "UPDATE particle SET distance = NULL WHERE wave = 0",
+      "UPDATE wave SET thresholds = substr(thresholds, 1, 4) WHERE wave = 0",
+      "UPDATE wave SET thresholds = thresholds || zeroblob(8) WHERE wave = 1"};
+  for (const std::string& damage : damages) {
+    const std::string copy = dir / "damaged.sqlite";
+    CopyRun(killed, copy);
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(copy.c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, damage.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << damage;
+    sqlite3_close(db);
+    const auto r = RunCli({"resume", copy, "--no-report"}, dir.path());
+    EXPECT_EQ(r.exit_code, 65) << damage << ": " << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(copy + ": wave "), std::string::npos) << r.err;
+    const auto v = RunCli({"verify", copy}, dir.path());
+    EXPECT_EQ(v.exit_code, 65) << v.out;
+  }
+  const std::string copy = dir / "held.sqlite";
+  CopyRun(killed, copy);
+  {
+    HistoryStore writer = HistoryStore::Open(copy);  // this process is writing the run
+    const auto r = RunCli({"resume", copy, "--no-report"}, dir.path());
+    EXPECT_EQ(r.exit_code, 73) << r.err;
+    EXPECT_NE(r.err.find("another process (pid " + std::to_string(::getpid()) + ")"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  }
+}
 
 TEST(Calibration, RunReportExportAndPosteriorNearTheLoad) {
   ScratchDir dir("e2e-run");
@@ -132,10 +174,20 @@ TEST(Calibration, ResumeAfterSigkillEqualsTheUninterruptedRun) {
   ASSERT_TRUE(killed) << "the run finished before it could be killed";
   ASSERT_EQ(dead.exit_code, 128 + SIGKILL);
 
+  ExpectResumeRefusesDamageAndASecondWriter(dir, killed_db);
+
   const auto resumed = RunCli({"resume", killed_db, "--no-report", "-j", "2"}, dir.path());
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
   std::string where;
-  EXPECT_TRUE(SameHistory(Load(dir / "whole/history.sqlite"), Load(killed_db), &where)) << where;
+  const RunHistory uninterrupted = Load(dir / "whole/history.sqlite");
+  const RunHistory resumed_history = Load(killed_db);
+  EXPECT_TRUE(SameHistory(uninterrupted, resumed_history, &where)) << where;
+  ASSERT_GT(uninterrupted.summary.simulations_discarded, 0) << "batches of 8 overshoot";
+  EXPECT_EQ(resumed_history.summary.simulations_discarded,
+            uninterrupted.summary.simulations_discarded);
+  const auto verified = RunCli({"verify", killed_db}, dir.path());
+  EXPECT_EQ(verified.exit_code, 0) << verified.err;
+  EXPECT_NE(verified.out.find("OK"), std::string::npos) << verified.out;
   // Resuming a finished run is a usage error, not a silent re-run.
   EXPECT_EQ(RunCli({"resume", killed_db}, dir.path()).exit_code, 64);
 }

@@ -80,10 +80,15 @@ class Checkpoints : public SmcObserver {
     r.partial_wave = wave_;
     r.partial_next_index = p.next_index;
     r.partial_accepted = current_;
+    r.partial_discarded = p.discarded;
     points.push_back(std::move(r));
   }
   void OnWaveEnd(const WaveRecord& w) override {
-    if (w.complete) completed_.push_back(w);
+    if (!w.complete) return;
+    completed_.push_back(w);
+    ResumePoint between_waves;  // killed after the wave ended, before the next one's first batch
+    between_waves.completed = completed_;
+    points.push_back(std::move(between_waves));
   }
   std::vector<ResumePoint> points;
 
@@ -107,6 +112,25 @@ TEST(Determinism, ResumingFromAnyCheckpointReproducesTheUninterruptedRun) {
     const auto h = s.Run(resumed_options, nullptr, &checkpoints.points[i]);
     std::string where;
     EXPECT_TRUE(SameHistory(reference, h, &where)) << "checkpoint " << i << ": " << where;
+  }
+}
+
+// The summary's overshoot count is part of the run's outcome: a resumed run must count the waves
+// before the resume too, and size its batches as the uninterrupted run did.
+TEST(Determinism, ResumedRunCountsTheSameDiscardedSimulations) {
+  ToyRun s;
+  const auto o = s.options(Estimator::kPaper, 2);  // adaptive batch sizes (batch_size = 0)
+  Checkpoints checkpoints;
+  const auto reference = s.Run(o, &checkpoints);
+  ASSERT_GT(reference.summary.simulations_discarded, 0) << "the toy run must overshoot";
+  std::int64_t per_wave = 0;
+  for (const auto& w : reference.waves) per_wave += w.discarded;
+  EXPECT_EQ(per_wave, reference.summary.simulations_discarded);
+  for (std::size_t i = 0; i < checkpoints.points.size(); ++i) {
+    const auto h = s.Run(o, nullptr, &checkpoints.points[i]);
+    EXPECT_EQ(h.summary.simulations_discarded, reference.summary.simulations_discarded)
+        << "checkpoint " << i << " (" << checkpoints.points[i].completed.size()
+        << " waves complete)";
   }
 }
 

@@ -71,7 +71,8 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   const auto marginals = Lines(out / "marginals.csv");
   EXPECT_EQ(marginals[0], "wave,bit,name,prob_paper,prob_importance");
   EXPECT_EQ(marginals.size(), 1u + 2u * 6u);
-  EXPECT_EQ(marginals[1].rfind("0,0,clamp 1,", 0), 0u) << marginals[1];
+  EXPECT_EQ(marginals[1].rfind("1,0,clamp 1,", 0), 0u)
+      << "waves from 1, bits from 0: " << marginals[1];
 
   const auto particles = Lines(out / "particles.csv");
   EXPECT_EQ(particles[0],
@@ -79,10 +80,13 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
             "d_least_squares,d_secondary_peak");
   EXPECT_EQ(particles.size(), 1u + 2u * 5u);
   EXPECT_EQ(Fields(particles[1]), Fields(particles[0]));
+  EXPECT_EQ(particles[1].rfind("1,", 0), 0u) << particles[1];
+  EXPECT_EQ(particles.back().rfind("2,", 0), 0u) << particles.back();
 
   const auto curves = Lines(out / "curves.csv");
   EXPECT_EQ(curves[0], "wave,index,y_0,y_1,y_2,y_3,y_4,y_5,y_6");
   EXPECT_EQ(curves.size(), 1u + 2u * 5u);
+  EXPECT_EQ(curves[1].rfind("1,", 0), 0u) << curves[1];
   const auto positions = Lines(out / "positions.csv");
   EXPECT_EQ(positions[0], "column,position_m");
   EXPECT_EQ(positions[1], "y_0,0");
@@ -95,6 +99,8 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   text << json.rdbuf();
   EXPECT_NE(text.str().find("\"termination\": \"max_waves\""), std::string::npos);
   EXPECT_NE(text.str().find("\"marginals_importance\""), std::string::npos);
+  EXPECT_NE(text.str().find("{\"wave\": 1,"), std::string::npos) << "waves from 1";
+  EXPECT_EQ(text.str().find("{\"wave\": 0,"), std::string::npos);
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
         << "temporary directory left behind";
@@ -115,7 +121,8 @@ TEST_F(ExportTest, KilledRunExportsItsPartialWave) {
   ASSERT_EQ(waves.size(), 3u);
   EXPECT_EQ(waves[1].back(), '1');
   EXPECT_EQ(waves[2].back(), '0') << "the cut wave is exported as incomplete: " << waves[2];
-  EXPECT_EQ(waves[2].rfind("1,", 0), 0u);
+  EXPECT_EQ(waves[1].rfind("1,", 0), 0u) << "waves are numbered from 1, as users see them";
+  EXPECT_EQ(waves[2].rfind("2,", 0), 0u);
 }
 
 TEST_F(ExportTest, RunWithoutOutputsHasNoCurves) {

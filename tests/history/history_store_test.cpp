@@ -444,7 +444,8 @@ TEST_F(HistoryStoreTest, OpenForeignOrNewerDatabaseIsDataError) {
   const std::string newer = Path("newer.db");
   HistoryStore::Create(newer, MakeFakeMetadata(SmallRun()));
   ASSERT_EQ(sqlite3_open(newer.c_str(), &db), SQLITE_OK);
-  sqlite3_exec(db, "PRAGMA user_version = 2", nullptr, nullptr, nullptr);
+  const std::string newer_version = std::to_string(kHistorySchemaVersion + 1);
+  sqlite3_exec(db, ("PRAGMA user_version = " + newer_version).c_str(), nullptr, nullptr, nullptr);
   sqlite3_close(db);
   error = Catch([&] { HistoryStore::Open(newer); });
   EXPECT_EQ(error.kind(), ErrorKind::kData);

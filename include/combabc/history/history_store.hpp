@@ -18,7 +18,8 @@
 namespace combabc {
 
 // Version of the on-disk schema this build writes; it reads this version and older ones.
-inline constexpr int kHistorySchemaVersion = 1;
+// Version 2 added checksums and each wave's overshoot; a v1 file opened for writing is upgraded.
+inline constexpr int kHistorySchemaVersion = 2;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise
@@ -73,11 +74,21 @@ struct RunMetadata {
   int schema_version = kHistorySchemaVersion;  // as read from the file
 };
 
+// What HistoryStore::Verify found: every problem, one line each (none = the file is sound).
+struct HistoryCheck {
+  int schema_version = kHistorySchemaVersion;
+  bool checksummed = true;  // false for schema v1, which had no checksums to verify
+  int waves = 0;            // wave rows checked
+  std::vector<std::string> problems;
+};
+
 // A run history file. Create() starts a new run; Open() reads or resumes an existing one. As an
 // SmcObserver it records the run while RunCombinatorialSmc runs: each callback is one SQLite
 // transaction, so a run killed at any moment loses at most the batch in flight.
-// Errors are combabc::Error naming the file: kCantCreate, kNoInput, kData (not a history, corrupt,
-// newer schema) or kIo (a write failed).
+// Errors are combabc::Error naming the file: kCantCreate (also: another process is writing the
+// run), kNoInput, kData (not a history, corrupt, newer schema) or kIo (a write failed).
+// Every read is checked: each vector against the run's metadata, and (schema v2) each wave and the
+// metadata against their checksums; see docs/history.md, "Integrity".
 class HistoryStore final : public SmcObserver {
  public:
   // Creates `path` (its directory must exist) with status "running". Refuses an existing file
@@ -85,8 +96,14 @@ class HistoryStore final : public SmcObserver {
   static HistoryStore Create(const std::string& path,
                              const RunMetadata& metadata,
                              bool overwrite = false);
-  // Opens an existing history. read_only suits report/export: no write is attempted.
+  // Opens an existing history after SQLite's quick_check and the metadata's checks. read_only
+  // suits report/export: no write is attempted, no lock taken. Otherwise (resume) the file is
+  // locked for this process until the store is destroyed, and a v1 file is upgraded to v2.
   static HistoryStore Open(const std::string& path, bool read_only = false);
+  // Checks everything, without stopping at the first problem: SQLite's integrity_check, the
+  // metadata, every wave's vectors, particles and checksum. Throws only when the file cannot be
+  // read as a run history at all (missing, not SQLite, not ours, newer schema).
+  static HistoryCheck Verify(const std::string& path);
 
   HistoryStore(HistoryStore&& other) noexcept;
   HistoryStore& operator=(HistoryStore&& other) noexcept;
@@ -122,6 +139,7 @@ class HistoryStore final : public SmcObserver {
  private:
   struct Impl;
   explicit HistoryStore(std::unique_ptr<Impl> impl);
+  static HistoryStore OpenFile(const std::string& path, bool read_only, bool check);
   std::unique_ptr<Impl> impl_;
 };
 

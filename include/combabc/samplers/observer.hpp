@@ -12,6 +12,7 @@ struct BatchProgress {
   int wave = 0;
   std::int64_t next_index = 0;  // candidates [0, next_index) of this wave are done
   std::int64_t accepted = 0;    // accepted so far in this wave
+  std::int64_t discarded = 0;   // simulated in this wave past its last acceptance (final batch)
   int accepted_needed = 0;
   std::int64_t total_simulations = 0;
   double elapsed_seconds = 0.0;

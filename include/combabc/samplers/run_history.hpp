@@ -34,7 +34,8 @@ struct WaveRecord {
   std::vector<double> marginals_importance;  // per bit: p/q-weighted fraction of 1s
   double ess = 0.0;                          // effective sample size of the importance weights
   std::int64_t distinct = 0;                 // distinct accepted configurations
-  double wall_seconds = 0.0;                 // not deterministic; excluded from SameHistory
+  std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
+  double wall_seconds = 0.0;   // not deterministic; excluded from SameHistory
   std::vector<Particle> particles;
 
   // The estimator's marginals (what the run reports and proposes from).

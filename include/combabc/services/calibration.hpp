@@ -3,6 +3,7 @@
 // Each function does one user-level job end to end and reports through callbacks; errors are
 // combabc::Error with the ErrorKind the CLI maps to a sysexits code.
 #include <string>
+#include <vector>
 
 #include "combabc/config/config.hpp"
 #include "combabc/samplers/observer.hpp"
@@ -43,6 +44,16 @@ void SimulateConfiguration(const std::string& config_path,
 // Figures (PNG, SVG) and index.html for a run, into `directory` (default: report/ beside the
 // history). Returns the directory.
 std::string WriteReport(const std::string& history_path, const std::string& directory = {});
+
+// The result of `combabc verify`: one "OK" line, or one line per problem found.
+struct VerifyOutcome {
+  bool ok = true;
+  std::vector<std::string> lines;
+};
+
+// Checks a history end to end (SQLite integrity_check, metadata, every wave's vectors and
+// checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
+VerifyOutcome VerifyHistory(const std::string& history_path);
 
 // CSV + JSON export (docs/history.md); default directory: export/ beside the history.
 std::string ExportHistory(const std::string& history_path,

@@ -1,0 +1,135 @@
+#include "history/history_hash.hpp"
+
+#include <sqlite3.h>
+
+#include <cstdio>
+#include <cstring>
+
+namespace combabc::history {
+namespace {
+
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+// Every row of `sql`, then the row count (so that rows cannot shift between tables unnoticed).
+void AddRows(Fnv1a64& hash, Database& db, const char* sql, int columns) {
+  Statement rows(db, sql);
+  std::int64_t count = 0;
+  while (rows.Step()) {
+    hash.AddColumns(rows, 0, columns);
+    ++count;
+  }
+  hash.AddInt(count);
+}
+
+}  // namespace
+
+void Fnv1a64::Add(const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    hash_ ^= bytes[i];
+    hash_ *= kFnvPrime;
+  }
+}
+
+void Fnv1a64::AddInt(std::int64_t value) {
+  std::uint8_t bytes[8];
+  for (int i = 0; i < 8; ++i)
+    bytes[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(value) >> (8 * i));
+  Add(bytes, sizeof bytes);
+}
+
+void Fnv1a64::AddColumn(const Statement& row, int column) {
+  const int type = row.Type(column);
+  const auto tag = static_cast<std::uint8_t>(type);
+  Add(&tag, 1);
+  switch (type) {
+    case SQLITE_INTEGER:
+      AddInt(row.Int(column));
+      break;
+    case SQLITE_FLOAT: {
+      const double value = row.Real(column);
+      std::int64_t bits = 0;
+      std::memcpy(&bits, &value, sizeof bits);
+      AddInt(bits);
+      break;
+    }
+    case SQLITE_TEXT:
+    case SQLITE_BLOB: {
+      const auto bytes = row.Bytes(column);
+      AddInt(static_cast<std::int64_t>(bytes.size()));
+      Add(bytes.data(), bytes.size());
+      break;
+    }
+    default:  // NULL: the tag says it all
+      break;
+  }
+}
+
+void Fnv1a64::AddColumns(const Statement& row, int first, int count) {
+  for (int c = first; c < first + count; ++c) AddColumn(row, c);
+}
+
+std::string HexDigest(std::uint64_t hash) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
+}
+
+std::optional<std::uint64_t> ParseHexDigest(const std::string& text) {
+  if (text.size() != 16) return std::nullopt;
+  std::uint64_t value = 0;
+  for (char c : text) {
+    int digit = 0;
+    if (c >= '0' && c <= '9') {
+      digit = c - '0';
+    } else if (c >= 'a' && c <= 'f') {
+      digit = c - 'a' + 10;
+    } else {
+      return std::nullopt;
+    }
+    value = (value << 4) | static_cast<std::uint64_t>(digit);
+  }
+  return value;
+}
+
+std::uint64_t MetadataHash(Database& db) {
+  Fnv1a64 hash;
+  AddRows(hash,
+          db,
+          "SELECT config_text, config_path, combabc_version, git_hash, seed, threads, start_time, "
+          "estimator, dimension, position_unit FROM run WHERE id = 1",
+          10);
+  AddRows(hash, db, "SELECT bit, name, prior FROM bit ORDER BY bit", 3);
+  AddRows(hash, db, "SELECT component, name, kind, required FROM component ORDER BY component", 4);
+  AddRows(hash, db, "SELECT i, position FROM output_position ORDER BY i", 2);
+  AddRows(hash, db, "SELECT i, position, value FROM measured ORDER BY i", 3);
+  AddRows(hash,
+          db,
+          "SELECT key, value FROM meta WHERE key IN ('format', 'schema_version') ORDER BY key",
+          2);
+  return hash.value();
+}
+
+std::uint64_t RunStateHash(Database& db) {
+  Fnv1a64 hash;
+  AddRows(hash,
+          db,
+          "SELECT status, end_time, termination, message, resume_count, waves_completed, "
+          "simulations, simulations_discarded, wall_seconds FROM run WHERE id = 1",
+          9);
+  return hash.value();
+}
+
+void WaveHasher::AddParticle(const Statement& particle_row) {
+  hash_.AddColumns(particle_row, 0, kParticleColumnCount);
+  ++count_;
+}
+
+std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
+  Fnv1a64 hash = hash_;
+  hash.AddInt(count_);
+  hash.AddColumns(wave_row, 0, kWaveHashedColumnCount);
+  return hash.value();
+}
+
+}  // namespace combabc::history

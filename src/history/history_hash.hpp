@@ -1,0 +1,62 @@
+#pragma once
+// Checksums of a run history (schema v2, private to src/history): 64-bit FNV-1a over a canonical
+// serialisation of the rows as SQLite returns them. The algorithm and what each checksum covers
+// are documented in docs/history.md, "Checksums"; history_load.cpp verifies them and
+// history_store.cpp keeps them current.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "history/history_sqlite.hpp"
+
+namespace combabc::history {
+
+class Fnv1a64 {
+ public:
+  void Add(const void* data, std::size_t size);
+  void AddInt(std::int64_t value);
+  // One column of the current row: a storage-class tag byte, then the value (8 little-endian
+  // bytes for INTEGER and REAL; an 8-byte length and the bytes for TEXT and BLOB; nothing for
+  // NULL).
+  void AddColumn(const Statement& row, int column);
+  void AddColumns(const Statement& row, int first, int count);
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 14695981039346656037ull;  // FNV-1a 64-bit offset basis
+};
+
+// As stored: 16 lower-case hex digits. nullopt for anything else.
+std::string HexDigest(std::uint64_t hash);
+std::optional<std::uint64_t> ParseHexDigest(const std::string& text);
+
+// The immutable description of the run: provenance, problem, bits, components, positions, data.
+std::uint64_t MetadataHash(Database& db);
+// The run row's mutable part: status, end time, termination, message, resume count, summary.
+std::uint64_t RunStateHash(Database& db);
+
+// The particle rows of one wave, fed in candidate order (the state a wave's checksum starts from).
+inline constexpr const char* kParticleColumns =
+    "candidate, bits, log_weight, weight, distance, output";
+inline constexpr int kParticleColumnCount = 6;
+// The wave row's columns in checksum order; content_hash itself comes last and is not hashed.
+inline constexpr const char* kWaveColumns =
+    "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
+    "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
+    "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash";
+inline constexpr int kWaveHashedColumnCount = 21;
+
+// A wave's checksum, built as its particles are read: AddParticle per particle row (in candidate
+// order), then Finish with the wave row.
+class WaveHasher {
+ public:
+  void AddParticle(const Statement& particle_row);
+  std::uint64_t Finish(const Statement& wave_row) const;
+  std::int64_t particles() const { return count_; }
+
+ private:
+  Fnv1a64 hash_;
+  std::int64_t count_ = 0;
+};
+
+}  // namespace combabc::history

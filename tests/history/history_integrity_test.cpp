@@ -1,0 +1,382 @@
+// HistoryStore against damaged files: wrong-length and NULL columns, single-bit flips, schema v1
+// files, and a second writer. Every damage must give a one-line error (or be provably harmless),
+// never a crash or a silently different history.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+
+#include "combabc/core/error.hpp"
+#include "combabc/export/export.hpp"
+#include "combabc/history/history_store.hpp"
+#include "history/fake_run.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::FakeRunOptions;
+using testing::MakeFakeHistory;
+using testing::MakeFakeMetadata;
+using testing::RecordWave;
+
+FakeRunOptions SmallRun() {
+  FakeRunOptions options;
+  options.waves = 3;
+  options.per_wave = 12;
+  options.dimension = 10;
+  options.points = 8;
+  return options;
+}
+
+class HistoryIntegrityTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("combabc_integrity_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // A finished run (one self-contained file), or one killed in wave 2 (0-based 1).
+  std::string WriteFinished(const std::string& name) {
+    const std::string path = Path(name);
+    const RunHistory history = MakeFakeHistory(SmallRun());
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
+    for (const WaveRecord& wave : history.waves) RecordWave(store, wave, 5);
+    store.Finish(history.summary);
+    return path;
+  }
+  std::string WriteKilled(const std::string& name) {
+    const std::string path = Path(name);
+    const RunHistory history = MakeFakeHistory(SmallRun());
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
+    RecordWave(store, history.waves[0], 5);
+    RecordWave(store, history.waves[1], 5, /*stop_after_batches=*/3);
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+void Sql(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* message = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  const std::string text = message ? message : "";
+  sqlite3_free(message);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
+}
+
+// What a v1 file (no checksums, no overshoot column) looks like, made from a v2 one.
+void DowngradeToV1(const std::string& path) {
+  Sql(path, R"sql(
+    ALTER TABLE wave DROP COLUMN content_hash;
+    ALTER TABLE wave DROP COLUMN discarded;
+    DELETE FROM meta WHERE key IN ('metadata_hash', 'run_state_hash');
+    UPDATE meta SET value = '1' WHERE key = 'schema_version';
+    PRAGMA user_version = 1;)sql");
+}
+
+template <typename F>
+Error Catch(F&& f) {
+  try {
+    f();
+  } catch (const Error& error) {
+    return error;
+  }
+  ADD_FAILURE() << "no combabc::Error thrown";
+  return Error(ErrorKind::kSoftware, "none");
+}
+
+// A clean data error: kind kData (exit 65), one line, naming the file and what it says.
+void ExpectDataError(const Error& error, const std::string& path, const std::string& mentions) {
+  const std::string what = error.what();
+  EXPECT_EQ(error.kind(), ErrorKind::kData) << what;
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  EXPECT_EQ(what.rfind(path, 0), 0u) << what;
+  EXPECT_NE(what.find(mentions), std::string::npos) << "expected '" << mentions << "' in: " << what;
+}
+
+struct Corruption {
+  std::string column;  // table.column
+  std::string where;
+  std::string field;  // as the error names it
+  const char* mode;   // NULL, short, long
+};
+
+std::string Damage(const Corruption& c) {
+  const std::string table = c.column.substr(0, c.column.find('.'));
+  const std::string column = c.column.substr(c.column.find('.') + 1);
+  // Bits are bytes; everything else is doubles, 8 bytes each.
+  const std::string unit = column == "bits" ? "1" : "8";
+  // bits is NOT NULL in the schema: the empty BLOB is as missing as NULL can be there.
+  std::string value = column == "bits" ? "x''" : "NULL";
+  if (std::string(c.mode) == "short")
+    value = "substr(" + column + ", 1, length(" + column + ") - " + unit + ")";
+  if (std::string(c.mode) == "long") value = column + " || zeroblob(" + unit + ")";
+  return "UPDATE " + table + " SET " + column + " = " + value + " WHERE " + c.where;
+}
+
+// Each vector column the engine or the exporter indexes, in a complete wave and in the partial
+// wave of a killed run, made NULL, one element short and one element long.
+std::vector<Corruption> Corruptions(bool killed) {
+  const std::string particle =
+      "wave = 1 AND candidate = (SELECT min(candidate) FROM particle WHERE wave = 1)";
+  const std::string first =
+      "wave = 0 AND candidate = (SELECT min(candidate) FROM particle WHERE wave = 0)";
+  std::vector<Corruption> out;
+  for (const char* mode : {"NULL", "short", "long"}) {
+    out.push_back({"wave.thresholds", "wave = 0", "wave 1, thresholds", mode});
+    out.push_back({"wave.proposal", "wave = 1", "wave 2, proposal", mode});
+    out.push_back({"wave.marginals_paper", "wave = 0", "wave 1, marginals_paper", mode});
+    out.push_back({"wave.marginals_importance", "wave = 0", "wave 1, marginals_importance", mode});
+    out.push_back({"particle.bits", first, "bits", mode});
+    out.push_back({"particle.distance", first, "distance", mode});
+    out.push_back({"particle.distance", particle, "wave 2, particle", mode});
+    out.push_back({"wave.thresholds", "wave = 1", "wave 2, thresholds", mode});
+    // NULL is a valid output (not kept); a wrong length is not.
+    if (std::string(mode) != "NULL") out.push_back({"particle.output", particle, "output", mode});
+  }
+  if (!killed) {
+    for (const char* mode : {"NULL", "short", "long"})
+      out.push_back({"wave.marginals_paper", "wave = 2", "wave 3, marginals_paper", mode});
+  }
+  return out;
+}
+
+// Resume, report-side loading and export of every damaged copy stop with a clean kData error;
+// verify lists the problem. Schema v1 files (no checksums) rely on the length checks alone.
+TEST_F(HistoryIntegrityTest, WrongLengthOrNullColumnsAreDataErrorsNamingWaveAndField) {
+  for (const bool v1 : {false, true}) {
+    for (const bool killed : {false, true}) {
+      const std::string original = killed ? WriteKilled("killed.db") : WriteFinished("finished.db");
+      if (v1) DowngradeToV1(original);
+      for (const Corruption& c : Corruptions(killed)) {
+        SCOPED_TRACE(c.column + " " + c.mode + " where " + c.where + (v1 ? " (v1)" : "") +
+                     (killed ? " (killed run)" : ""));
+        const std::string path = Path("damaged.db");
+        for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
+        fs::copy_file(original, path);
+        if (fs::exists(original + "-wal")) fs::copy_file(original + "-wal", path + "-wal");
+        Sql(path, Damage(c));
+
+        ExpectDataError(
+            Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, c.field);
+        ExpectDataError(
+            Catch([&] { HistoryStore::Open(path, true).LoadResumePoint(); }), path, c.field);
+        const std::string out = Path("export");
+        ExpectDataError(Catch([&] { ExportRun(path, out); }), path, c.field);
+        EXPECT_FALSE(fs::exists(out)) << "no partial export";
+        const HistoryCheck check = HistoryStore::Verify(path);
+        ASSERT_FALSE(check.problems.empty());
+        EXPECT_NE(check.problems.front().find(c.field), std::string::npos)
+            << check.problems.front();
+        if (killed && !v1) {
+          // The resume refuses before it rewrites anything.
+          ExpectDataError(Catch([&] { HistoryStore::Open(path).BeginResume(); }), path, c.field);
+          EXPECT_EQ(HistoryStore::Open(path, true).LoadMetadata().resume_count, 0);
+        }
+      }
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(original + suffix);
+    }
+  }
+}
+
+std::string Describe(const RunMetadata& m) {
+  std::ostringstream out;
+  out << m.config_text << '|' << m.config_path << '|' << m.combabc_version << '|' << m.git_hash
+      << '|' << m.seed << '|' << m.threads << '|' << m.start_time << '|' << m.end_time << '|'
+      << ToString(m.status) << '|' << m.termination << '|' << m.summary_message << '|'
+      << m.resume_count << '|' << m.estimator << '|' << m.dimension << '|' << m.position_unit << '|'
+      << m.schema_version;
+  for (const auto& name : m.bit_names) out << '|' << name;
+  for (double p : m.bit_prior_one) out << '|' << p;
+  for (const auto& c : m.distance_components)
+    out << '|' << c.name << ToString(c.kind) << c.required;
+  for (double x : m.output_positions) out << '|' << x;
+  for (std::size_t i = 0; i < m.measured.positions.size(); ++i)
+    out << '|' << m.measured.positions[i] << ',' << m.measured.values[i];
+  return out.str();
+}
+
+bool SameLoad(const RunHistory& a, const RunHistory& b, std::string* where) {
+  if (!SameHistory(a, b, where)) return false;
+  for (std::size_t t = 0; t < a.waves.size(); ++t) {
+    const double x = a.waves[t].wall_seconds, y = b.waves[t].wall_seconds;
+    if (!(x == y || (std::isnan(x) && std::isnan(y))) ||
+        a.waves[t].acceptance_rate != b.waves[t].acceptance_rate ||
+        a.waves[t].discarded != b.waves[t].discarded) {
+      *where = "wave " + std::to_string(t) + " statistics";
+      return false;
+    }
+  }
+  const RunSummary &s = a.summary, &r = b.summary;
+  if (s.termination != r.termination || s.message != r.message ||
+      s.waves_completed != r.waves_completed || s.simulations != r.simulations ||
+      s.simulations_discarded != r.simulations_discarded || s.wall_seconds != r.wall_seconds) {
+    *where = "summary";
+    return false;
+  }
+  return true;
+}
+
+// Single-bit flips across the whole file, at a fixed list of positions: each is detected (an
+// error on open / load, or a problem from verify) or provably harmless (the loaded history and
+// metadata are exactly the original's). None may go unnoticed and change what is read.
+TEST_F(HistoryIntegrityTest, EverySingleBitFlipIsDetectedOrHarmless) {
+  const std::string original = WriteFinished("finished.db");
+  std::ifstream in(original, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 4096u);
+  const RunHistory expected = HistoryStore::Open(original, true).LoadHistory();
+  const std::string expected_metadata = Describe(HistoryStore::Open(original, true).LoadMetadata());
+
+  const std::string path = Path("flipped.db");
+  int flips = 0, detected = 0, harmless = 0;
+  for (std::size_t position = 3; position < bytes.size(); position += 41, ++flips) {
+    std::vector<char> damaged = bytes;
+    damaged[position] = static_cast<char>(damaged[position] ^ (1 << (flips % 8)));
+    fs::remove(path);
+    std::ofstream(path, std::ios::binary)
+        .write(damaged.data(), static_cast<std::streamsize>(damaged.size()));
+    bool caught = false;
+    RunHistory loaded;
+    std::string metadata;
+    try {
+      const HistoryStore store = HistoryStore::Open(path, true);
+      loaded = store.LoadHistory();
+      metadata = Describe(store.LoadMetadata());
+    } catch (const Error& error) {
+      caught = true;
+      EXPECT_EQ(std::string(error.what()).find('\n'), std::string::npos) << error.what();
+    }
+    bool reported = caught;
+    try {
+      reported = reported || !HistoryStore::Verify(path).problems.empty();
+    } catch (const Error&) {
+      reported = true;
+    }
+    std::string where;
+    if (!caught && SameLoad(expected, loaded, &where) && metadata == expected_metadata) {
+      ++harmless;
+      continue;
+    }
+    EXPECT_TRUE(caught) << "flip of bit " << flips % 8 << " at byte " << position
+                        << " was read silently: " << where;
+    EXPECT_TRUE(reported) << "verify missed the flip at byte " << position;
+    detected += caught;
+  }
+  // Most of this small file is free space; the flips that land in live rows are all detected.
+  EXPECT_GT(detected, 100);
+  std::cout << flips << " flips: " << detected << " detected, " << harmless << " harmless\n";
+}
+
+TEST_F(HistoryIntegrityTest, VerifyAcceptsSoundFilesAndSaysWhenThereAreNoChecksums) {
+  const std::string finished = WriteFinished("finished.db");
+  HistoryCheck check = HistoryStore::Verify(finished);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_TRUE(check.checksummed);
+  EXPECT_EQ(check.waves, 3);
+  const std::string killed = WriteKilled("killed.db");
+  check = HistoryStore::Verify(killed);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+
+  DowngradeToV1(finished);
+  const RunHistory v1 = HistoryStore::Open(finished, true).LoadHistory();
+  EXPECT_EQ(v1.waves.size(), 3u) << "a v1 file still reads";
+  check = HistoryStore::Verify(finished);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_FALSE(check.checksummed);
+  EXPECT_EQ(check.schema_version, 1);
+}
+
+TEST_F(HistoryIntegrityTest, AV1RunResumedIsUpgradedToChecksummedV2) {
+  const std::string path = WriteKilled("killed.db");
+  DowngradeToV1(path);
+  const ResumePoint v1 = HistoryStore::Open(path, true).LoadResumePoint();
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    const ResumePoint point = store.BeginResume();
+    EXPECT_EQ(point.partial_next_index, v1.partial_next_index);
+    EXPECT_EQ(point.partial_accepted.size(), v1.partial_accepted.size());
+  }
+  const HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.checksummed);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  // And the upgraded checksums protect it: a changed weight is caught.
+  Sql(path,
+      "UPDATE particle SET weight = 0.5 WHERE wave = 0 AND candidate = (SELECT min(candidate) FROM "
+      "particle WHERE wave = 0)");
+  ExpectDataError(
+      Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, "wave 1, content_hash");
+}
+
+TEST_F(HistoryIntegrityTest, MetadataAndRunStateAreChecksummed) {
+  const std::string path = WriteFinished("finished.db");
+  Sql(path, "UPDATE measured SET value = value + 1e-9 WHERE i = 0");
+  ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "meta.metadata_hash");
+  const std::string other = WriteFinished("other.db");
+  Sql(other, "UPDATE run SET simulations = simulations + 1");
+  ExpectDataError(Catch([&] { HistoryStore::Open(other, true); }), other, "meta.run_state_hash");
+  EXPECT_FALSE(HistoryStore::Verify(other).problems.empty());
+}
+
+// Two processes: the one writing the run holds it; a second writer is refused with the first's
+// pid, readers are not, and the lock goes when the holder dies (even by SIGKILL).
+TEST_F(HistoryIntegrityTest, ASecondWriterIsRefusedWhileTheFirstHoldsTheRun) {
+  const std::string path = WriteKilled("killed.db");
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t holder = ::fork();
+  ASSERT_NE(holder, -1);
+  if (holder == 0) {
+    ::close(ready[0]);
+    HistoryStore store = HistoryStore::Open(path);
+    store.BeginResume();
+    const char byte = 1;
+    (void)!::write(ready[1], &byte, 1);
+    ::pause();  // until killed
+    ::_exit(0);
+  }
+  ::close(ready[1]);
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ::close(ready[0]);
+
+  Error error = Catch([&] { HistoryStore::Open(path); });
+  EXPECT_EQ(error.kind(), ErrorKind::kCantCreate);
+  EXPECT_NE(std::string(error.what()).find("another process (pid " + std::to_string(holder) + ")"),
+            std::string::npos)
+      << error.what();
+  EXPECT_EQ(std::string(error.what()).find('\n'), std::string::npos);
+  error =
+      Catch([&] { HistoryStore::Create(path, MakeFakeMetadata(SmallRun()), /*overwrite=*/true); });
+  EXPECT_EQ(error.kind(), ErrorKind::kCantCreate);
+  EXPECT_NE(std::string(error.what()).find("another process"), std::string::npos) << error.what();
+  EXPECT_EQ(HistoryStore::Open(path, true).LoadMetadata().resume_count, 1) << "readers may read";
+
+  ::kill(holder, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(holder, &status, 0), holder);
+  HistoryStore store = HistoryStore::Open(path);
+  EXPECT_EQ(store.BeginResume().partial_wave, 1);
+}
+
+}  // namespace
+}  // namespace combabc
