@@ -118,6 +118,7 @@ def generate(example, cli):
     noisy = np.abs(w_um + rng.normal(0.0, sigma, size=w_um.shape))  # an LDV reports amplitudes
     lines = [
         f"# Synthetic measurement for combabc's {example['dir']} example (examples/generate_data.py):",
+        # tests/examples/posterior_test.cpp reads the truth from this line: keep "# truth <bits>".
         f"# truth {example['truth']} (1 = fixed), finer mesh, perturbed materials, "
         f"noise sigma {sigma:.4f} um.",
         "position_cm,max_displacement_um",

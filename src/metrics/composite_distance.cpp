@@ -8,15 +8,14 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "metrics/window_checks.hpp"
 
 namespace combabc {
 namespace {
 
-// Slack (metres) when deciding whether a position lies in a window or inside the simulator's
-// output range: positions converted from centimetres differ from the preset windows by rounding.
-constexpr double kPositionTolerance = 1e-9;
+using metrics_internal::kPositionTolerance;
 
-std::string Field(std::size_t i) { return "metric.component[" + std::to_string(i) + "]"; }
+std::string Field(std::size_t i) { return metrics_internal::ComponentField(i); }
 
 std::string Metres(double x) {
   std::ostringstream out;
@@ -90,9 +89,19 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
                   c.config_line,
                   Field(i));
     }
+    // A window must lie where both Y* and Y exist: past the model's outputs Y* is not simulated,
+    // and past the data a component would silently compare fewer points than its window says.
+    metrics_internal::CheckWindowWithin(c, i, out_lo, out_hi, "the model's outputs");
+    if (!data_positions.empty()) {
+      metrics_internal::CheckWindowWithin(
+          c, i, data_positions.front(), data_positions.back(), "the measured data");
+    }
     Compiled compiled;
     compiled.type = c.type;
     if (KindOf(c.type) == ComponentKind::kIndicator) {
+      if (!data_positions.empty()) {
+        metrics_internal::CheckIndicatorHoldsForData(c, i, data_positions, data_values);
+      }
       compiled.samples = {sample_at(c.from, i), sample_at(c.to, i)};
     } else {
       for (std::size_t j = 0; j < data_positions.size(); ++j) {

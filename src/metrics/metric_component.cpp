@@ -35,8 +35,11 @@ std::vector<MetricComponentConfig> PresetComponents(MetricPreset preset) {
   switch (preset) {
     case MetricPreset::kArea:  // Eq. 4, "calculated on the interval 48-80 cm"
       return {Window(MetricType::kArea, 48, 80)};
-    case MetricPreset::kLeastSquares:  // Eq. 5, y_{48+i} for i = 0..33
-      return {Window(MetricType::kLeastSquares, 48, 81)};
+    case MetricPreset::kLeastSquares:
+      // Eq. 5 sums y_{48+i} for i = 0..33, i.e. to 81 cm, but the paper's LDV measured only
+      // 48-80 cm (section 4): the window is the measured points, i = 0..32. A window past the
+      // data is an error (CompositeDistance), so the paper's 81 would reject the paper's data.
+      return {Window(MetricType::kLeastSquares, 48, 80)};
     case MetricPreset::kSplitLeastSquares:  // Eq. 6 windows, then Eq. 7's H1 and H2
       return {Window(MetricType::kLeastSquares, 71, 75),
               Window(MetricType::kLeastSquares, 76, 80),

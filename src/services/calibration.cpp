@@ -5,6 +5,7 @@
 #include <optional>
 #include <thread>
 
+#include "combabc/config/distance_from_config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/data/measured_data.hpp"
 #include "combabc/history/history_store.hpp"
@@ -36,6 +37,9 @@ struct Problem {
 };
 
 void BuildModel(Problem& p) {
+  // First, as it is cheap: checks the metric's windows and indicators against the model's output
+  // positions and the data before the model is assembled or anything simulated or stored.
+  p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
   p.simulator = std::make_unique<SensorSimulator>(p.config.model);
   const int clamps = p.simulator->model().num_clamps();
   if (p.config.space.dimension != clamps) {
@@ -47,13 +51,6 @@ void BuildModel(Problem& p) {
                 "model");
   }
   p.space.emplace(p.config.space);
-  CompositeDistanceOptions distance_options;
-  distance_options.normalise_simulated = p.config.data.normalise;
-  p.distance = std::make_unique<CompositeDistance>(p.config.metric.components,
-                                                   p.data_positions,
-                                                   p.data_values,
-                                                   p.simulator->model().output_positions(),
-                                                   distance_options);
 }
 
 RunMetadata Describe(const Problem& p) {

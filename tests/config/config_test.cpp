@@ -79,7 +79,7 @@ TEST(Config, PaperLeastSquaresFixtureFillsEveryOption) {
   EXPECT_EQ(*c.metric.preset, MetricPreset::kLeastSquares);
   ASSERT_EQ(c.metric.components.size(), 1u);
   EXPECT_EQ(c.metric.components[0].type, MetricType::kLeastSquares);
-  EXPECT_NEAR(c.metric.components[0].to, 0.81, kTol);
+  EXPECT_NEAR(c.metric.components[0].to, 0.80, kTol);
   // sampler -> SmcOptions
   EXPECT_EQ(c.smc.num_waves, 5);
   EXPECT_EQ(c.smc.accepted_per_wave, 500);

@@ -152,7 +152,7 @@ TEST(CompositeDistance, SplitLeastSquaresFlagsASecondaryPeak) {
 TEST(CompositeDistance, ComponentsReportKindsAndNames) {
   const auto out_x = Grid(0.0, 0.90, 0.01);
   const auto data_x = Grid(0.70, 0.89, 0.01);
-  const std::vector<double> data_y(data_x.size(), 0.5);
+  const auto data_y = Profile(data_x, true);
   CompositeDistance d(PresetComponents(MetricPreset::kSplitLeastSquares), data_x, data_y, out_x);
   const auto components = d.components();
   ASSERT_EQ(components.size(), 5u);
@@ -176,7 +176,9 @@ TEST(CompositeDistance, PresetsMatchThePaper) {
   EXPECT_NEAR(area[0].to, 0.80, kTol);
   const auto ls = PresetComponents(MetricPreset::kLeastSquares);
   ASSERT_EQ(ls.size(), 1u);
-  EXPECT_NEAR(ls[0].to, 0.81, kTol);  // Eq. 5: y_{48+i}, i = 0..33
+  // Eq. 5 sums to 81 cm, but the paper measured 48-80 cm: the preset is the measured points.
+  EXPECT_NEAR(ls[0].from, 0.48, kTol);
+  EXPECT_NEAR(ls[0].to, 0.80, kTol);
   EXPECT_EQ(ParseEnum<MetricPreset>("split_least_squares"), MetricPreset::kSplitLeastSquares);
   EXPECT_EQ(ParseEnum<MetricType>("rise"), MetricType::kRise);
   EXPECT_FALSE(ParseEnum<MetricType>("Area").has_value());
@@ -185,7 +187,7 @@ TEST(CompositeDistance, PresetsMatchThePaper) {
 TEST(CompositeDistance, NonFiniteOrZeroSimulationFailsEveryComponent) {
   const auto out_x = Grid(0.0, 0.90, 0.01);
   const auto data_x = Grid(0.70, 0.89, 0.01);
-  const std::vector<double> data_y(data_x.size(), 0.5);
+  const auto data_y = Profile(data_x, true);
   CompositeDistance d(PresetComponents(MetricPreset::kSplitLeastSquares), data_x, data_y, out_x);
   std::vector<double> out(5);
   std::vector<double> simulated(out_x.size(), 0.0);
@@ -197,6 +199,111 @@ TEST(CompositeDistance, NonFiniteOrZeroSimulationFailsEveryComponent) {
   d.Evaluate(simulated, out);
   EXPECT_EQ(out[2], std::numeric_limits<double>::infinity());
   EXPECT_EQ(out[4], 0.0);
+}
+
+// The error a constructor throws, or an empty one when it throws none.
+template <typename Make>
+Error ErrorOf(Make make) {
+  try {
+    make();
+  } catch (const Error& e) {
+    return e;
+  }
+  return Error(ErrorKind::kSoftware, "no error thrown");
+}
+
+TEST(CompositeDistance, WindowBeyondTheModelOutputsIsAConfigErrorGivingTheRange) {
+  // The data (0-4 cm) all lie inside the 0-10 cm outputs, but the window asks for 0-20 cm.
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  const Error e = ErrorOf([&] {
+    CompositeDistance({Component(MetricType::kLeastSquares, 0.0, 0.20)}, kDataX, kDataY, out_x);
+  });
+  EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+  EXPECT_EQ(e.field(), "metric.component[0]");
+  EXPECT_EQ(e.message(), "window 0-20 cm reaches beyond the model's outputs, 0-10 cm");
+}
+
+TEST(CompositeDistance, WindowBeyondTheDataIsAConfigErrorGivingTheRange) {
+  const auto out_x = Grid(0.0, 0.10, 0.01);
+  for (const MetricType type : {MetricType::kLeastSquares, MetricType::kArea, MetricType::kFall}) {
+    const Error e = ErrorOf([&] {
+      CompositeDistance(
+          {Component(MetricType::kLeastSquares, 0.0, 0.04), Component(type, 0.02, 0.06)},
+          kDataX,
+          kDataY,
+          out_x);
+    });
+    EXPECT_EQ(e.kind(), ErrorKind::kConfig) << ToString(type);
+    EXPECT_EQ(e.field(), "metric.component[1]");
+    EXPECT_EQ(e.message(), "window 2-6 cm reaches beyond the measured data, 0-4 cm");
+  }
+}
+
+// Measured 70-89 cm with a secondary peak at 77 cm, as the shipped 70 cm example's data: they
+// fall from 76 to 78 cm by 3.1 % of the peak, so the paper's H1 window (76-78 cm) fails on them.
+std::vector<double> PeakAt77(const std::vector<double>& x) {
+  std::vector<double> y;
+  for (double xi : x) y.push_back(std::exp(-(xi - 0.70) * (xi - 0.70) / (2 * 0.015 * 0.015)));
+  y[6] = 0.200;   // 76 cm
+  y[7] = 0.250;   // 77 cm
+  y[8] = 0.169;   // 78 cm
+  y[9] = 0.100;   // 79 cm
+  y[10] = 0.050;  // 80 cm
+  return y;
+}
+
+TEST(CompositeDistance, AnIndicatorTheDataFailIsAConfigErrorSayingByHowMuch) {
+  const auto out_x = Grid(0.0, 0.90, 0.01);
+  const auto data_x = Grid(0.70, 0.89, 0.01);
+  const auto data_y = PeakAt77(data_x);
+  auto components = PresetComponents(MetricPreset::kSplitLeastSquares);
+  components[3].config_line = 12;
+  Error e = ErrorOf([&] { CompositeDistance(components, data_x, data_y, out_x); });
+  EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+  EXPECT_EQ(e.line(), 12);
+  EXPECT_EQ(e.field(), "metric.component[3]");
+  EXPECT_EQ(e.message(),
+            "rise 76-78 cm (Eq. 7 H1): the measured data fall by 3.1 % of their peak over this "
+            "window, so the indicator would reject the truth; choose a window over which the "
+            "data rise");
+
+  // Windows that fit these data are accepted: rise to the peak at 77 cm, fall after it.
+  components[3] = Component(MetricType::kRise, 0.75, 0.77);
+  components[4] = Component(MetricType::kFall, 0.77, 0.80);
+  CompositeDistance fitted(components, data_x, data_y, out_x);
+  std::vector<double> out(5);
+  std::vector<double> simulated(out_x.size(), 0.0);
+  for (std::size_t i = 0; i < data_x.size(); ++i) simulated[70 + i] = data_y[i];
+  fitted.Evaluate(simulated, out);  // the data themselves pass every component
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(out[k], 0.0, kTol);
+  EXPECT_EQ(out[3], 1.0);
+  EXPECT_EQ(out[4], 1.0);
+
+  // A fall over a rising stretch, and flat data.
+  components[4] = Component(MetricType::kFall, 0.76, 0.77);
+  e = ErrorOf([&] { CompositeDistance(components, data_x, data_y, out_x); });
+  EXPECT_EQ(e.field(), "metric.component[4]");
+  EXPECT_NE(e.message().find("fall 76-77 cm (Eq. 7 H2): the measured data rise by 5 % of"),
+            std::string::npos)
+      << e.message();
+  const std::vector<double> flat(data_x.size(), 0.5);
+  e = ErrorOf(
+      [&] { CompositeDistance({Component(MetricType::kRise, 0.75, 0.77)}, data_x, flat, out_x); });
+  EXPECT_NE(e.message().find("the measured data are flat over this window"), std::string::npos)
+      << e.message();
+}
+
+TEST(CompositeDistance, IndicatorsReadTheDataBetweenMeasuredPoints) {
+  // Data every 2 cm; a rise window ending between two points is judged on the interpolated data,
+  // as Y* is: 0.1 at 76 cm, 0.3 at 78 cm, read at 77 cm as 0.2 > 0.1.
+  const auto out_x = Grid(0.0, 0.90, 0.01);
+  const std::vector<double> data_x = {0.74, 0.76, 0.78, 0.80};
+  const std::vector<double> data_y = {1.0, 0.1, 0.3, 0.0};
+  CompositeDistance ok({Component(MetricType::kRise, 0.76, 0.77)}, data_x, data_y, out_x);
+  const Error e = ErrorOf([&] {
+    CompositeDistance({Component(MetricType::kRise, 0.75, 0.77)}, data_x, data_y, out_x);
+  });  // 0.55 at 75 cm, 0.2 at 77 cm
+  EXPECT_NE(e.message().find("fall by 35 %"), std::string::npos) << e.message();
 }
 
 TEST(CompositeDistance, BadWindowsAreConfigErrorsNamingTheComponent) {

@@ -35,8 +35,10 @@ class CompositeDistance : public Distance {
   // normalised if it is to be. output_positions (metres, strictly increasing): where the
   // simulator reports Y*; Y* is resampled onto the data positions by linear interpolation, with
   // the indices and weights computed here once. Throws combabc::Error(kConfig, field =
-  // "metric.component[i]") if a window holds too few data points, reaches outside the simulator's
-  // output positions, or the measured area of an area component is not positive.
+  // "metric.component[i]") if a window reaches outside the simulator's output positions or the
+  // data positions, holds too few data points, if the measured area of an area component is not
+  // positive, or if the measured data themselves fail a rise / fall indicator (Eq. 7) -- such an
+  // indicator would reject the true configuration.
   CompositeDistance(std::vector<MetricComponentConfig> components,
                     std::span<const double> data_positions,
                     std::span<const double> data_values,

@@ -37,7 +37,7 @@ struct MetricComponentConfig {
   double from = 0.0;
   double to = 0.0;
   // Name reported by Distance::components() and written to the history; empty = generated from
-  // the type and window in centimetres, e.g. "least_squares[48-81cm]".
+  // the type and window in centimetres, e.g. "least_squares[48-80cm]".
   std::string name;
   // Threshold schedule (threshold components only; ignored for indicators).
   ThresholdSchedule threshold;
@@ -52,7 +52,7 @@ std::string ComponentName(const MetricComponentConfig& config);
 // Shorthands for the paper's three metrics (windows in metres, default threshold schedules).
 enum class MetricPreset {
   kArea,               // Eq. 4 on 48-80 cm (Figures 3-4)
-  kLeastSquares,       // Eq. 5 on 48-81 cm (i = 0..33, Figures 5-6)
+  kLeastSquares,       // Eq. 5 on 48-80 cm, the measured points (Figures 5-6)
   kSplitLeastSquares,  // Eq. 6-7: least squares on 71-75, 76-80, 81-89 cm + rise 76-78 (H1)
                        // + fall 78-80 (H2) (Figures 10-11)
 };

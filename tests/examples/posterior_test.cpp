@@ -1,0 +1,107 @@
+// Every shipped example config (examples/*/*.toml), run as shipped (its seed), must never be
+// confidently wrong: no clamp may end with |P(fixed) - 0.5| > 0.4 on the wrong side of the ground
+// truth its data were generated from. The truth is read from the data file's header, which
+// examples/generate_data.py writes ("# truth <one 0/1 per clamp> ..."), so it is stated once.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "combabc/config/config.hpp"
+#include "combabc/data/measured_data.hpp"
+#include "combabc/services/calibration.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A clamp is "confidently" placed when its marginal is this far from the prior's 0.5.
+constexpr double kConfident = 0.4;
+
+std::vector<fs::path> ExampleConfigs() {
+  std::vector<fs::path> configs;
+  for (const auto& dir : fs::directory_iterator(fs::path(COMBABC_SOURCE_DIR) / "examples")) {
+    if (!dir.is_directory()) continue;
+    for (const auto& file : fs::directory_iterator(dir.path())) {
+      if (file.path().extension() == ".toml") configs.push_back(file.path());
+    }
+  }
+  std::sort(configs.begin(), configs.end());
+  return configs;
+}
+
+// The "# truth 0110..." header line generate_data.py writes; empty if there is none.
+std::string TruthOf(const std::string& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  while (std::getline(in, line) && line.rfind('#', 0) == 0) {
+    std::istringstream words(line);
+    std::string hash, key, bits;
+    words >> hash >> key >> bits;
+    if (key == "truth") return bits;
+  }
+  return {};
+}
+
+std::string List(const std::vector<int>& clamps) {
+  if (clamps.empty()) return "none";
+  std::string out;
+  for (int c : clamps) out += (out.empty() ? "" : ", ") + std::to_string(c);
+  return out;
+}
+
+TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
+  const auto configs = ExampleConfigs();
+  ASSERT_GE(configs.size(), 4u) << "examples/*/*.toml not found";
+  const fs::path scratch =
+      fs::temp_directory_path() / ("combabc-example-posteriors-" + std::to_string(::getpid()));
+  for (const fs::path& path : configs) {
+    const std::string name =
+        path.parent_path().filename().string() + "/" + path.filename().string();
+    SCOPED_TRACE(name);
+    const CalibrationConfig config = LoadConfig(path.string());
+    const std::string truth = TruthOf(ResolvePath(config.directory, config.data.csv));
+    ASSERT_EQ(static_cast<int>(truth.size()), config.space.dimension)
+        << "no '# truth' header with one bit per clamp in " << config.data.csv;
+
+    services::RunRequest request;
+    request.config_path = path.string();
+    request.output_directory = (scratch / name).string();
+    request.threads = 2;
+    request.report = false;
+    services::RunOutcome outcome;
+    try {
+      outcome = services::RunCalibration(request);
+    } catch (const std::exception& e) {  // e.g. a config error: report it, go on with the others
+      ADD_FAILURE() << e.what();
+      continue;
+    }
+    ASSERT_FALSE(outcome.history.waves.empty());
+    const auto& marginals = outcome.history.waves.back().marginals(config.smc.estimator);
+    ASSERT_EQ(marginals.size(), truth.size());
+
+    std::vector<int> recovered, wrong;
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      if (std::abs(marginals[k] - 0.5) <= kConfident) continue;
+      const bool says_fixed = marginals[k] > 0.5;
+      (says_fixed == (truth[k] == '1') ? recovered : wrong).push_back(static_cast<int>(k) + 1);
+    }
+    std::cout << name << ": recovered clamps " << List(recovered) << "; confidently wrong "
+              << List(wrong) << " (" << outcome.history.summary.simulations << " simulations)\n";
+    EXPECT_TRUE(wrong.empty()) << "confidently wrong about clamps " << List(wrong);
+    // And not merely uninformative: each example identifies the clamps next to its load.
+    EXPECT_GE(recovered.size(), 2u) << "recovered only " << List(recovered);
+  }
+  fs::remove_all(scratch);
+}
+
+}  // namespace
+}  // namespace combabc::testing
