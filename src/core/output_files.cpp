@@ -53,6 +53,15 @@ void SyncDirectory(const fs::path& dir) {
   ::close(fd);
 }
 
+[[noreturn]] void ThrowExists(const std::string& path) {
+  throw Error(
+      ErrorKind::kCantCreate, "file exists (refusing to replace it; use --overwrite)", path);
+}
+
+[[noreturn]] void ThrowIsADirectory(const std::string& path) {
+  throw Error(ErrorKind::kCantCreate, "is a directory (refusing to replace it)", path);
+}
+
 // What is at an output directory's path now; throws for what can never be used.
 struct DirectoryState {
   bool exists = false;
@@ -98,13 +107,14 @@ DirectoryState Inspect(const fs::path& dir, const std::string& shown) {
   return state;
 }
 
-void RefuseForeign(const DirectoryState& state, bool overwrite, const std::string& shown) {
+void RefuseForeign(const DirectoryState& state,
+                   bool overwrite,
+                   const std::string& shown,
+                   const std::string& hint) {
   if (state.exists && !state.has_manifest && !state.empty && !overwrite) {
     throw Error(ErrorKind::kCantCreate,
                 "directory exists, is not empty and was not written by combabc (it has no " +
-                    std::string(OutputDirectory::kManifest) +
-                    "); choose another directory, or use --overwrite to add combabc's files to "
-                    "it",
+                    std::string(OutputDirectory::kManifest) + "); " + hint,
                 shown);
   }
 }
@@ -113,10 +123,15 @@ void RefuseForeign(const DirectoryState& state, bool overwrite, const std::strin
 
 // ------------------------------------------------------------------------------------ AtomicFile
 
-AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
+AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)), replace_(replace) {
   const fs::path target(path_);
   if (target.filename().empty() || target.filename() == "." || target.filename() == "..") {
     throw Error(ErrorKind::kCantCreate, "not a file name", path_);
+  }
+  struct stat st {};
+  if (Lstat(target, &st)) {
+    if (S_ISDIR(st.st_mode)) ThrowIsADirectory(path_);
+    if (!replace_) ThrowExists(path_);
   }
   const fs::path dir = target.parent_path();
   for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
@@ -137,7 +152,7 @@ AtomicFile::~AtomicFile() {
   if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
 }
 
-void AtomicFile::Commit(bool replace) {
+void AtomicFile::Commit() {
   const std::string text = buffer_.str();
   for (std::size_t done = 0; done < text.size();) {
     const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
@@ -151,7 +166,7 @@ void AtomicFile::Commit(bool replace) {
   if (closed != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
 
   int renamed = 0;
-  if (replace) {
+  if (replace_) {
     renamed = ::rename(temp_path_.c_str(), path_.c_str());
   } else {
     // Atomic "create, never replace"; file systems without RENAME_NOREPLACE get link + unlink,
@@ -163,13 +178,8 @@ void AtomicFile::Commit(bool replace) {
     }
   }
   if (renamed != 0) {
-    if (errno == EEXIST) {
-      throw Error(
-          ErrorKind::kCantCreate, "file exists (refusing to replace it; use --overwrite)", path_);
-    }
-    if (errno == EISDIR || errno == ENOTEMPTY) {
-      throw Error(ErrorKind::kCantCreate, "is a directory (refusing to replace it)", path_);
-    }
+    if (errno == EEXIST) ThrowExists(path_);
+    if (errno == EISDIR || errno == ENOTEMPTY) ThrowIsADirectory(path_);
     throw Error(ErrorKind::kCantCreate, "cannot write: " + SystemError(), path_);
   }
   temp_path_.clear();
@@ -177,22 +187,22 @@ void AtomicFile::Commit(bool replace) {
 }
 
 void WriteFileAtomically(const std::string& path, std::string_view text, bool overwrite) {
-  AtomicFile file(path);
+  AtomicFile file(path, overwrite);
   file.out() << text;
-  file.Commit(overwrite);
+  file.Commit();
 }
 
 // ------------------------------------------------------------------------------- OutputDirectory
 
-void OutputDirectory::Check(const std::string& path, bool overwrite) {
-  RefuseForeign(Inspect(WithoutTrailingSlash(path), path), overwrite, path);
+void OutputDirectory::Check(const std::string& path, bool overwrite, const std::string& hint) {
+  RefuseForeign(Inspect(WithoutTrailingSlash(path), path), overwrite, path, hint);
 }
 
 OutputDirectory::OutputDirectory(std::string path, bool overwrite)
     : path_(std::move(path)), overwrite_(overwrite) {
   const fs::path dir = WithoutTrailingSlash(path_);
   const DirectoryState state = Inspect(dir, path_);
-  RefuseForeign(state, overwrite_, path_);
+  RefuseForeign(state, overwrite_, path_, kDefaultHint);
   previous_ = state.manifest;
   if (!state.exists) {
     if (::mkdir(dir.c_str(), 0777) != 0) {
@@ -214,30 +224,29 @@ std::ostream& OutputDirectory::Add(const std::string& name) {
   for (const auto& [staged, file] : staged_) {
     if (staged == name) throw Error(ErrorKind::kSoftware, "written twice: " + name, path_);
   }
-  staged_.emplace_back(name,
-                       std::make_unique<AtomicFile>((WithoutTrailingSlash(path_) / name).string()));
+  // combabc's own files (listed in the manifest) may be replaced; others only with overwrite.
+  const bool replace = overwrite_ || previous_.count(name) != 0;
+  staged_.emplace_back(
+      name, std::make_unique<AtomicFile>((WithoutTrailingSlash(path_) / name).string(), replace));
   return staged_.back().second->out();
 }
 
 void OutputDirectory::Commit() {
   const fs::path dir = WithoutTrailingSlash(path_);
-  // Every check first, so that a refusal changes nothing.
-  std::vector<bool> exists;
+  // Every check again (the directory may have changed since Add), so that a refusal changes
+  // nothing: no file is renamed into place before all of them are known to be allowed.
   std::set<std::string> written;
   for (const auto& [name, file] : staged_) {
     struct stat st {};
-    const bool here = Lstat(dir / name, &st);
-    if (here && S_ISDIR(st.st_mode)) {
-      throw Error(ErrorKind::kCantCreate, "is a directory (refusing to replace it)", file->path());
+    if (Lstat(dir / name, &st)) {
+      if (S_ISDIR(st.st_mode)) ThrowIsADirectory(file->path());
+      if (!overwrite_ && !(previous_.count(name) != 0 && S_ISREG(st.st_mode))) {
+        throw Error(ErrorKind::kCantCreate,
+                    "file exists and was not written by combabc (refusing to replace it; use "
+                    "--overwrite)",
+                    file->path());
+      }
     }
-    const bool ours = previous_.count(name) != 0 && S_ISREG(st.st_mode);
-    if (here && !ours && !overwrite_) {
-      throw Error(ErrorKind::kCantCreate,
-                  "file exists and was not written by combabc (refusing to replace it; use "
-                  "--overwrite)",
-                  file->path());
-    }
-    exists.push_back(here);
     written.insert(name);
   }
   // The manifest lists old and new files while they are swapped, so that an interrupted commit
@@ -251,7 +260,7 @@ void OutputDirectory::Commit() {
   std::set<std::string> both = previous_;
   both.insert(written.begin(), written.end());
   write_manifest(both);
-  for (std::size_t i = 0; i < staged_.size(); ++i) staged_[i].second->Commit(exists[i]);
+  for (const auto& [name, file] : staged_) file->Commit();
   for (const std::string& name : previous_) {
     struct stat st {};
     if (written.count(name) == 0 && Lstat(dir / name, &st) && S_ISREG(st.st_mode)) {

@@ -22,7 +22,9 @@ namespace combabc {
 // (kCantCreate, kIo) naming the target.
 class AtomicFile {
  public:
-  explicit AtomicFile(std::string path);  // creates the temporary
+  // Creates the temporary. An existing `path` is replaced only when `replace`; without it, a file
+  // already there is refused now (before any work) and again, atomically, at Commit().
+  AtomicFile(std::string path, bool replace);
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
   ~AtomicFile();  // removes the temporary unless committed
@@ -30,13 +32,14 @@ class AtomicFile {
   std::ostream& out() { return buffer_; }
   const std::string& path() const { return path_; }
 
-  // Writes the buffered text and renames it onto path(). An existing path() is replaced only when
-  // `replace`; otherwise the commit fails (kCantCreate) and the existing file is left as it was.
-  void Commit(bool replace);
+  // Writes the buffered text, fsyncs it and renames it onto path(); a refusal (kCantCreate) leaves
+  // what is at path() as it was.
+  void Commit();
 
  private:
   std::string path_;
   std::string temp_path_;
+  bool replace_;
   int fd_ = -1;
   std::ostringstream buffer_;
 };
@@ -60,6 +63,10 @@ class OutputDirectory {
  public:
   static constexpr const char* kManifest = ".combabc-manifest";
 
+  // What a refusal of a foreign directory suggests (the report of `run` has no --overwrite).
+  static constexpr const char* kDefaultHint =
+      "choose another directory, or use --overwrite to add combabc's files to it";
+
   OutputDirectory(std::string path, bool overwrite);
   OutputDirectory(const OutputDirectory&) = delete;
   OutputDirectory& operator=(const OutputDirectory&) = delete;
@@ -67,7 +74,9 @@ class OutputDirectory {
 
   // The same checks as the constructor, changing nothing: lets a long job (a calibration run)
   // find out before it starts that its output directory would be refused at the end.
-  static void Check(const std::string& path, bool overwrite);
+  static void Check(const std::string& path,
+                    bool overwrite,
+                    const std::string& hint = kDefaultHint);
 
   const std::string& path() const { return path_; }
   // A stream for file `name` (a plain file name), written at Commit().
