@@ -99,7 +99,7 @@ TEST_F(OutputFilesTest, AtomicFileNeverReplacesADirectoryAndCleansUpWhenAbandone
             ErrorKind::kCantCreate);
   EXPECT_TRUE(fs::is_directory(dir_ / "results" / "inner"));
   {
-    AtomicFile abandoned((dir_ / "never.csv").string());
+    AtomicFile abandoned((dir_ / "never.csv").string(), false);
     abandoned.out() << "half";
   }
   EXPECT_EQ(Listing(dir_), std::set<std::string>{"results"});
@@ -182,18 +182,23 @@ TEST_F(OutputFilesTest, RewriteReplacesOnlyWhatTheManifestLists) {
   EXPECT_EQ(Read(out / "notes.txt"), "the user's notes");
   EXPECT_EQ(Read(out / ".combabc-manifest").find("wave_2.png"), std::string::npos);
 
-  // A file the manifest does not list, where combabc now wants to write: refused, untouched.
+  // A file the manifest does not list, where combabc now wants to write: refused, untouched,
+  // whether it was there before the files were staged or appeared while they were written.
   Write(out / "summary.png", "the user's figure");
   {
     OutputDirectory directory(out.string(), false);
     directory.Add("wave_1.png") << "newer 1";
-    directory.Add("summary.png") << "combabc summary";
+    EXPECT_EQ(KindOf([&] { directory.Add("summary.png"); }), ErrorKind::kCantCreate);
+    directory.Add("overview.png") << "combabc overview";
+    Write(out / "overview.png", "the user's overview");
     EXPECT_EQ(KindOf([&] { directory.Commit(); }), ErrorKind::kCantCreate);
   }
+  EXPECT_EQ(Read(out / "overview.png"), "the user's overview");
   EXPECT_EQ(Read(out / "summary.png"), "the user's figure");
   EXPECT_EQ(Read(out / "wave_1.png"), "new 1") << "a refused commit changed a file";
   EXPECT_EQ(Listing(out),
-            (std::set<std::string>{"wave_1.png", "notes.txt", "summary.png", ".combabc-manifest"}));
+            (std::set<std::string>{
+                "wave_1.png", "notes.txt", "summary.png", "overview.png", ".combabc-manifest"}));
 }
 
 TEST_F(OutputFilesTest, ManifestCannotNameAnythingOutsideTheDirectory) {
