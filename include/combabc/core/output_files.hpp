@@ -1,7 +1,7 @@
 #pragma once
 // How every combabc command writes files, under one rule: no command deletes, truncates or
 // replaces a file or directory it did not create, unless the user named that path with
-// --overwrite, and then only that path (docs/architecture.md, "Output files").
+// --overwrite, and then only that path (docs/history.md, "Output files").
 //
 // Single files (simulate's CSV) go through AtomicFile; directories of results (export, and the
 // report, whose Python script implements the same rules) through OutputDirectory, which records
