@@ -626,11 +626,17 @@ def write_manifest(out, names):
 
 
 def move_without_replacing(source, target):
+    exists = ReportError(f"{target}: file exists and was not written by combabc (refusing to "
+                         "replace it; use --overwrite)", EX_CANTCREAT)
     try:
         os.link(source, target)  # fails if anything is at target: nothing is ever replaced
     except FileExistsError:
-        raise ReportError(f"{target}: file exists and was not written by combabc (refusing to "
-                          "replace it; use --overwrite)", EX_CANTCREAT) from None
+        raise exists from None
+    except OSError:  # a file system without hard links: checked, then renamed
+        if os.path.lexists(target):
+            raise exists from None
+        os.rename(source, target)
+        return
     os.unlink(source)
 
 
