@@ -62,6 +62,7 @@ CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150
 FORMATS = ("png", "svg", "pdf")  # what [output] figures may list
 MANIFEST = ".combabc-manifest"   # the files combabc wrote in a directory (core/output_files.hpp)
+TEMPORARY_PREFIX = ".combabc-tmp-"  # every combabc temporary; alone, they leave a directory empty
 
 STYLE = {
     "font.size": 10,
@@ -604,7 +605,8 @@ def open_output_directory(out, overwrite):
         raise ReportError(f"{out}: exists and is not a directory (refusing to replace it; choose "
                           "another path)", EX_CANTCREAT)
     previous = read_manifest(out)
-    if previous is None and os.listdir(out) and not overwrite:
+    others = [n for n in os.listdir(out) if not n.startswith(TEMPORARY_PREFIX)]
+    if previous is None and others and not overwrite:
         raise ReportError(f"{out}: directory exists, is not empty and was not written by combabc "
                           f"(it has no {MANIFEST}); choose another directory, or use --overwrite "
                           "to add combabc's files to it", EX_CANTCREAT)
@@ -612,7 +614,7 @@ def open_output_directory(out, overwrite):
 
 
 def write_manifest(out, names):
-    fd, temp = tempfile.mkstemp(prefix=f"{MANIFEST}.tmp-", dir=out)
+    fd, temp = tempfile.mkstemp(prefix=TEMPORARY_PREFIX, suffix=MANIFEST, dir=out)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write("# Files combabc wrote in this directory; combabc replaces only these here.\n")
@@ -691,7 +693,7 @@ def make_report(db_path, out, estimator=None, overwrite=False, formats=None):
     # a failure leaves DIR as it was, and removes it only if this call created it.
     staging, published = None, False
     try:
-        staging = tempfile.mkdtemp(prefix=".combabc-tmp-", dir=out)
+        staging = tempfile.mkdtemp(prefix=TEMPORARY_PREFIX, dir=out)
         written = render_all(waves, run, estimator, staging, formats)
         write_index(waves, run, estimator, staging, written, db_path, formats)
         publish(staging, out, previous, overwrite)

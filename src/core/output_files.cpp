@@ -102,7 +102,13 @@ DirectoryState Inspect(const fs::path& dir, const std::string& shown) {
       if (!line.empty() && line[0] != '#' && IsPlainFileName(line)) state.manifest.insert(line);
     }
   }
-  state.empty = fs::is_empty(dir, ec);
+  state.empty = true;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().filename().string().rfind(OutputDirectory::kTemporaryPrefix, 0) != 0) {
+      state.empty = false;
+      break;
+    }
+  }
   if (ec) throw Error(ErrorKind::kCantCreate, "cannot read directory: " + ec.message(), shown);
   return state;
 }
@@ -135,8 +141,9 @@ AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)),
   }
   const fs::path dir = target.parent_path();
   for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
-    const std::string temp =
-        (dir / ("." + target.filename().string() + ".tmp-" + RandomSuffix())).string();
+    const std::string temp = (dir / (OutputDirectory::kTemporaryPrefix + RandomSuffix() + "-" +
+                                     target.filename().string()))
+                                 .string();
     fd_ = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd_ >= 0) {
       temp_path_ = temp;

@@ -132,6 +132,15 @@ TEST_F(OutputFilesTest, UncommittedDirectoryLeavesNothingBehind) {
   EXPECT_TRUE(fs::is_empty(dir_ / "mine"));
 }
 
+TEST_F(OutputFilesTest, LeftoversOfAKilledCommandDoNotMakeADirectoryForeign) {
+  const fs::path out = dir_ / "export";
+  fs::create_directories(out);
+  Write(out / ".combabc-tmp-k1ll3d00-waves.csv", "half");
+  OutputDirectory::Check(out.string(), false);
+  Write(out / "user.txt", "x");
+  EXPECT_EQ(KindOf([&] { OutputDirectory::Check(out.string(), false); }), ErrorKind::kCantCreate);
+}
+
 TEST_F(OutputFilesTest, ForeignDirectoryIsRefusedAndLeftAlone) {
   // What `report -o .` met: the user's working directory.
   Write(dir_ / "thesis.tex", "years of work");

@@ -62,6 +62,9 @@ void WriteFileAtomically(const std::string& path, std::string_view text, bool ov
 class OutputDirectory {
  public:
   static constexpr const char* kManifest = ".combabc-manifest";
+  // Every temporary combabc makes (AtomicFile's, the report script's staging directory) starts
+  // with this. A directory holding nothing else (left by a killed command) counts as empty.
+  static constexpr const char* kTemporaryPrefix = ".combabc-tmp-";
 
   // What a refusal of a foreign directory suggests (the report of `run` has no --overwrite).
   static constexpr const char* kDefaultHint =
