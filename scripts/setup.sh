@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy
   python3 python3-numpy python3-matplotlib  # report figures (Debian's python3, not a pyenv one)
+  chromium               # the report page's browser test (ctest -L browser), headless
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging), the unit tests again under ASan+UBSan, and the layering and
+# unit, statistical, slow, packaging, browser), the unit tests again under ASan+UBSan, and the layering and
 # formatting checks. Run scripts/setup.sh first (the README's test command does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."

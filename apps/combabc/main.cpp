@@ -56,22 +56,28 @@ int main(int argc, char** argv) {
   resume->add_flag("-q,--quiet", quiet, "No progress display");
 
   std::string sim_config, clamps, sim_out = "profile.csv";
+  bool overwrite_profile = false;
   auto* simulate = app.add_subcommand("simulate", "Simulate one clamp configuration to CSV");
   simulate->add_option("CONFIG", sim_config, "Config file (its [model] is used)")->required();
   simulate->add_option("--clamps", clamps, "One 0/1 per clamp, 1 = fixed, e.g. 0110...")
       ->required();
   simulate->add_option("-o,--output", sim_out, "CSV to write (default profile.csv)");
+  simulate->add_flag("--overwrite", overwrite_profile, "Replace an existing CSV at that path");
 
   std::string out_dir;
-  bool overwrite_export = false;
-  auto* report = app.add_subcommand("report", "Write figures (PNG, SVG) and index.html of a run");
+  bool overwrite_dir = false;
+  constexpr const char* kOverwriteDir =
+      "Write into DIR even if combabc did not create it (replaces only same-named files)";
+  auto* report = app.add_subcommand(
+      "report", "Write figures ([output] figures: png, svg, pdf) and index.html of a run");
   report->add_option("RUN_DB", history, "History file of the run")->required();
   report->add_option("-o,--output", out_dir, "Directory (default: report/ beside the history)");
+  report->add_flag("--overwrite", overwrite_dir, kOverwriteDir);
 
   auto* exporter = app.add_subcommand("export", "Export a run to CSV and JSON (pandas, MATLAB)");
   exporter->add_option("RUN_DB", history, "History file of the run")->required();
   exporter->add_option("-o,--output", out_dir, "Directory (default: export/ beside the history)");
-  exporter->add_flag("--overwrite", overwrite_export, "Replace an existing export directory");
+  exporter->add_flag("--overwrite", overwrite_dir, kOverwriteDir);
 
   auto* verify = app.add_subcommand(
       "verify", "Check a history's integrity (structure, checksums); exit 0 if sound, 65 if not");
@@ -104,11 +110,12 @@ int main(int argc, char** argv) {
       PrintOutcome(
           combabc::services::ResumeCalibration(history, resume_threads, !no_report, observer));
     } else if (*simulate) {
-      combabc::services::SimulateConfiguration(sim_config, clamps, sim_out);
+      combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);
       std::cout << "wrote " << sim_out << "\n";
     } else if (*report) {
-      std::cout << "report: " << combabc::services::WriteReport(history, out_dir)
-                << "/index.html\n";
+      // Written first, printed after: a failure prints no half line on stdout.
+      const auto directory = combabc::services::WriteReport(history, out_dir, overwrite_dir);
+      std::cout << "report: " << directory << "/index.html\n";
     } else if (*verify) {
       const auto outcome = combabc::services::VerifyHistory(history);
       for (const std::string& line : outcome.lines) {
@@ -117,8 +124,8 @@ int main(int argc, char** argv) {
       }
       if (!outcome.ok) return combabc::ExitCode(combabc::ErrorKind::kData);
     } else if (*exporter) {
-      std::cout << "export: "
-                << combabc::services::ExportHistory(history, out_dir, overwrite_export) << "\n";
+      const auto directory = combabc::services::ExportHistory(history, out_dir, overwrite_dir);
+      std::cout << "export: " << directory << "\n";
     }
   } catch (const combabc::Error& e) {
     progress.Clear();

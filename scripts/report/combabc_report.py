@@ -1,18 +1,25 @@
 #!/usr/bin/python3
 """Report figures for a combabc run history (RUN.db), after Shamas et al. (Sensors 2024), section 5.
 
-    /usr/bin/python3 combabc_report.py RUN.db [--out DIR] [--estimator paper|importance]
+    /usr/bin/python3 combabc_report.py [--out DIR] [--overwrite] [--estimator paper|importance]
+                                       [--formats png,svg,pdf] [--] RUN.db
 
 Reads the SQLite history directly (schema: docs/history.md; no export needed) and writes into
-DIR (default: report/ beside RUN.db), replacing any previous report:
+DIR (default: report/ beside RUN.db), in each format of the run's [output] figures (default png):
 
-  wave_<k>_curves.{png,svg}     accepted simulated curves of wave k, measured data as circles
+  wave_<k>_curves.<fmt>         accepted simulated curves of wave k, measured data as circles
                                 (paper Figures 3, 5, 8, 10)
-  wave_<k>_marginals.{png,svg}  probability of each clamp being fixed, one panel per edge
+  wave_<k>_marginals.<fmt>      probability of each clamp being fixed, one panel per edge
                                 (paper Figures 4, 6, 9, 11)
-  overview.{png,svg}            one row per wave: curves and marginals side by side
-  summary.{png,svg}             thresholds, acceptance rate and simulations per wave
+  overview.<fmt>                one row per wave: curves and marginals side by side
+  summary.<fmt>                 thresholds, acceptance rate and simulations per wave
   index.html                    all of the above with the run's provenance and per-wave table
+
+DIR follows combabc's rule for output directories (docs/history.md, "Output files"): created if
+missing; a previous report there (listed in its .combabc-manifest) is replaced file by file; a
+non-empty directory combabc did not write is refused unless --overwrite, which then replaces only
+same-named files. Nothing else is ever deleted. Every failure is one line on stderr and a sysexits
+status: 65 not a history, 66 missing, 69 numpy/matplotlib missing, 73 DIR refused, 74 I/O, 70 bug.
 
 Waves are numbered from 1 in the figures, as in the paper (wave t = 0 of the engine is "Wave 1").
 Works on a run still in progress or killed (its last wave is shown as incomplete) and on runs
@@ -26,23 +33,36 @@ import os
 import shutil
 import sqlite3
 import sys
+import tempfile
 import tomllib
 
-import numpy as np
+# sysexits.h, as combabc uses them (combabc maps the script's status to its own error kinds).
+EX_DATAERR, EX_NOINPUT, EX_UNAVAILABLE, EX_SOFTWARE, EX_CANTCREAT, EX_IOERR = 65, 66, 69, 70, 73, 74
 
-import matplotlib
+try:
+    import numpy as np
 
-matplotlib.use("Agg")  # files only; never needs a display
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Patch  # noqa: E402
-from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator  # noqa: E402
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only; never needs a display
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator
+except ImportError as missing:
+    print(f"combabc_report: the report needs numpy and matplotlib for {sys.executable} "
+          f"({missing}); on Debian: apt-get install python3-numpy python3-matplotlib, "
+          "or set COMBABC_PYTHON to a python that has them", file=sys.stderr)
+    sys.exit(EX_UNAVAILABLE)
 
 SCHEMA_VERSION = 2  # v2 only adds wave.discarded, wave.content_hash and checksum rows in meta
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150
+FORMATS = ("png", "svg", "pdf")  # what [output] figures may list
+MANIFEST = ".combabc-manifest"   # the files combabc wrote in a directory (core/output_files.hpp)
+TEMPORARY_PREFIX = ".combabc-tmp-"  # every combabc temporary; alone, they leave a directory empty
 
 STYLE = {
     "font.size": 10,
@@ -54,6 +74,8 @@ STYLE = {
     "axes.spines.top": False,
     "axes.spines.right": False,
     "svg.fonttype": "none",  # keep text as text in SVG: smaller, editable
+    # Names come from the user's config: "$x$" in a clamp or metric name is text, not TeX.
+    "text.parse_math": False,
 }
 CURVE_COLOUR = "#1f5fa8"
 BAR_COLOUR = "#3a7d44"
@@ -62,7 +84,11 @@ MEASURED_STYLE = dict(marker="o", markersize=4.5, markerfacecolor="white", marke
 
 
 class ReportError(Exception):
-    pass
+    """A failure to report as one line, with the sysexits status to exit with."""
+
+    def __init__(self, message, status=EX_DATAERR):
+        super().__init__(message)
+        self.status = status
 
 
 # --- reading the history ------------------------------------------------------------------------
@@ -73,7 +99,7 @@ def doubles(blob):
 
 def connect(path):
     if not os.path.isfile(path):
-        raise ReportError(f"{path}: no such run history")
+        raise ReportError(f"{path}: no such run history", EX_NOINPUT)
     # mode=ro: a report never writes. A WAL-mode history (run in progress or killed) needs its
     # -shm file, which a read-only connection cannot create; then fall back to a normal one.
     try:
@@ -186,14 +212,25 @@ def load_particles(con, wave, dimension):
         wave.distinct = len({row.tobytes() for row in wave.bits})
 
 
+def run_config(run):
+    """The run's TOML config as stored in the history (a config combabc already validated)."""
+    try:
+        return tomllib.loads(run["config_text"] or "")
+    except tomllib.TOMLDecodeError:
+        return {}
+
+
+def figure_formats(run):
+    """[output] figures of the run's config: the formats `combabc run` was asked for."""
+    formats = run_config(run).get("output", {}).get("figures", ["png"])
+    return [f for f in dict.fromkeys(formats) if f in FORMATS] or ["png"]
+
+
 def scale_like_the_metric(run, waves):
     """Draws Y* as the metric compares it: when the data are normalised, each simulated curve is
     divided by its maximum over the measured positions (CompositeDistance's NormaliseOver::kData),
     so curves and circles share one scale even if the peak lies outside the measured window."""
-    try:
-        normalise = tomllib.loads(run["config_text"] or "").get("data", {}).get("normalise", True)
-    except tomllib.TOMLDecodeError:
-        normalise = True
+    normalise = run_config(run).get("data", {}).get("normalise", True)
     if not normalise or not run["measured_x_cm"].size:
         return
     for w in waves:
@@ -307,9 +344,11 @@ def draw_marginals(axes, w, run, estimator, tick_step=1, titles=True, title_loc=
 
 
 def save(fig, out, name):
-    # compress_level 3: PNGs a little larger than the default 6, written in a fraction of the time.
-    fig.savefig(os.path.join(out, f"{name}.png"), dpi=DPI, pil_kwargs={"compress_level": 3})
-    fig.savefig(os.path.join(out, f"{name}.svg"), dpi=DPI)
+    for fmt in _JOB["formats"]:
+        # compress_level 3: PNGs a little larger than the default 6, written in a fraction of the
+        # time.
+        extra = {"pil_kwargs": {"compress_level": 3}} if fmt == "png" else {}
+        fig.savefig(os.path.join(out, f"{name}.{fmt}"), dpi=DPI, **extra)
     plt.close(fig)
     return name
 
@@ -438,7 +477,17 @@ def fmt(value, spec=".4g"):
     return str(value)
 
 
-def write_index(waves, run, estimator, out, written, db_path):
+def figure_html(name, formats):
+    """A figure shown as PNG (or SVG, which browsers also draw inline), linked in every format."""
+    e = html.escape
+    links = ", ".join(f'<a href="{e(name)}.{f}">{f.upper()}</a>' for f in formats)
+    shown = next((f for f in ("png", "svg") if f in formats), None)
+    image = (f'<a href="{e(name)}.{shown}"><img src="{e(name)}.{shown}" alt="{e(name)}"></a>'
+             if shown else "")
+    return f"<figure>{image}<figcaption>{e(name)} ({links})</figcaption></figure>"
+
+
+def write_index(waves, run, estimator, out, written, db_path, formats):
     e = html.escape
     provenance = [
         ("Run history", os.path.abspath(db_path)), ("Status", run["status"]),
@@ -463,10 +512,7 @@ def write_index(waves, run, estimator, out, written, db_path):
         f"<td>{fmt(float(w.ess), '.1f')}</td><td>{w.distinct}</td>"
         f"<td>{fmt(w.wall_seconds, '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
         for w in waves)
-    figures = "\n".join(
-        f'<figure><a href="{n}.svg"><img src="{n}.png" alt="{n}"></a>'
-        f"<figcaption>{e(n)} (<a href=\"{n}.svg\">SVG</a>)</figcaption></figure>"
-        for n in written)
+    figures = "\n".join(figure_html(n, formats) for n in written)
     note = ("" if any(w.curves is not None for w in waves)
             else "<p>This run did not keep simulated outputs: no curve figures.</p>")
     page = f"""<!DOCTYPE html>
@@ -509,7 +555,7 @@ def _render(task):
         return figure(waves[index], run, estimator, out)
 
 
-def render_all(waves, run, estimator, out):
+def render_all(waves, run, estimator, out, formats):
     """Renders every figure; returns their names in display order. Figures are independent, so
     they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
     single-threaded and dominate the time)."""
@@ -518,7 +564,7 @@ def render_all(waves, run, estimator, out):
         if w.curves is not None and w.curves.size:
             tasks.append(("curves", i))
         tasks.append(("marginals", i))
-    _JOB.update(waves=waves, run=run, estimator=estimator, out=out)
+    _JOB.update(waves=waves, run=run, estimator=estimator, out=out, formats=formats)
     workers = min(len(tasks), os.cpu_count() or 1, 8)
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
         # Longest first (the overview) so that the pool finishes together; results keep task order.
@@ -527,9 +573,109 @@ def render_all(waves, run, estimator, out):
     return [_render(task) for task in tasks]
 
 
+# --- the output directory ------------------------------------------------------------------------
+# The rules of combabc's OutputDirectory (include/combabc/core/output_files.hpp), which export uses:
+# never delete, truncate or replace what combabc did not write, unless --overwrite, and then only
+# files of the same names. The manifest lists what combabc wrote in a directory.
+
+def plain_name(name):
+    return name not in ("", ".", "..", MANIFEST) and not any(c in name for c in "/\n\r")
+
+
+def read_manifest(out):
+    """The names a previous combabc output listed in `out`, or None when it has no manifest."""
+    path = os.path.join(out, MANIFEST)
+    if os.path.islink(path) or not os.path.isfile(path):
+        return None
+    with open(path, encoding="utf-8") as f:
+        lines = [line.rstrip("\n") for line in f]
+    return {n for n in lines if n and not n.startswith("#") and plain_name(n)}
+
+
+def open_output_directory(out, overwrite):
+    """Checks `out` and creates it when missing; returns (created, names of the previous
+    report's files). Changes nothing when it refuses."""
+    if not os.path.lexists(out):
+        parent = os.path.dirname(out)
+        if not os.path.isdir(parent):
+            raise ReportError(f"{out}: directory {parent} does not exist", EX_CANTCREAT)
+        os.mkdir(out)
+        return True, set()
+    if not os.path.isdir(out):  # a symlink to a directory the user named is that directory
+        raise ReportError(f"{out}: exists and is not a directory (refusing to replace it; choose "
+                          "another path)", EX_CANTCREAT)
+    previous = read_manifest(out)
+    others = [n for n in os.listdir(out) if not n.startswith(TEMPORARY_PREFIX)]
+    if previous is None and others and not overwrite:
+        raise ReportError(f"{out}: directory exists, is not empty and was not written by combabc "
+                          f"(it has no {MANIFEST}); choose another directory, or use --overwrite "
+                          "to add combabc's files to it", EX_CANTCREAT)
+    return False, previous or set()
+
+
+def write_manifest(out, names):
+    fd, temp = tempfile.mkstemp(prefix=TEMPORARY_PREFIX, suffix=MANIFEST, dir=out)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write("# Files combabc wrote in this directory; combabc replaces only these here.\n")
+            f.writelines(n + "\n" for n in sorted(names))
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(temp, os.path.join(out, MANIFEST))
+    except BaseException:
+        os.unlink(temp)
+        raise
+
+
+def move_without_replacing(source, target):
+    exists = ReportError(f"{target}: file exists and was not written by combabc (refusing to "
+                         "replace it; use --overwrite)", EX_CANTCREAT)
+    try:
+        os.link(source, target)  # fails if anything is at target: nothing is ever replaced
+    except FileExistsError:
+        raise exists from None
+    except OSError:  # a file system without hard links: checked, then renamed
+        if os.path.lexists(target):
+            raise exists from None
+        os.rename(source, target)
+        return
+    os.unlink(source)
+
+
+def publish(staging, out, previous, overwrite):
+    """Moves the staged files into `out`: files of the previous report (listed in its manifest)
+    are replaced and, when not written again, removed; any other file of the same name only with
+    `overwrite`; nothing else is touched."""
+    names = sorted(os.listdir(staging))
+    for name in names:  # every check first, so that a refusal changes nothing
+        target = os.path.join(out, name)
+        if not os.path.lexists(target):
+            continue
+        if os.path.isdir(target) and not os.path.islink(target):
+            raise ReportError(f"{target}: is a directory (refusing to replace it)", EX_CANTCREAT)
+        ours = name in previous and os.path.isfile(target) and not os.path.islink(target)
+        if not (ours or overwrite):
+            raise ReportError(f"{target}: file exists and was not written by combabc (refusing to "
+                              "replace it; use --overwrite)", EX_CANTCREAT)
+    # Old and new names are listed while files are swapped, so an interrupted report leaves every
+    # combabc file listed; then only the new ones.
+    write_manifest(out, previous | set(names))
+    for name in names:
+        source, target = os.path.join(staging, name), os.path.join(out, name)
+        if os.path.lexists(target):
+            os.replace(source, target)
+        else:
+            move_without_replacing(source, target)
+    for name in previous - set(names):  # a previous report's file not written now (more waves)
+        stale = os.path.join(out, name)
+        if os.path.isfile(stale) and not os.path.islink(stale):
+            os.unlink(stale)
+    write_manifest(out, set(names))
+
+
 # --- main ---------------------------------------------------------------------------------------
 
-def make_report(db_path, out, estimator=None):
+def make_report(db_path, out, estimator=None, overwrite=False, formats=None):
     con = connect(db_path)
     try:
         run = load_run(con)
@@ -540,43 +686,78 @@ def make_report(db_path, out, estimator=None):
     if not waves:
         raise ReportError(f"{db_path}: the run has no committed wave yet")
     estimator = estimator or run["estimator"] or "paper"
+    formats = formats or figure_formats(run)
     out = os.path.abspath(out)
-    parent = os.path.dirname(out)
-    if not os.path.isdir(parent):
-        raise ReportError(f"{out}: directory {parent} does not exist")
-    # Build beside the target and rename at the end: a failure never leaves half a report.
-    temp = os.path.join(parent, f".{os.path.basename(out)}.tmp-{os.getpid()}")
-    shutil.rmtree(temp, ignore_errors=True)
-    os.mkdir(temp)
+    created, previous = open_output_directory(out, overwrite)
+    # Rendered into a private directory inside DIR (same file system, so files move by rename);
+    # a failure leaves DIR as it was, and removes it only if this call created it.
+    staging, published = None, False
     try:
-        written = render_all(waves, run, estimator, temp)
-        write_index(waves, run, estimator, temp, written, db_path)
-        if os.path.exists(out):
-            old = os.path.join(parent, f".{os.path.basename(out)}.old-{os.getpid()}")
-            os.rename(out, old)
-            os.rename(temp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(temp, out)
-    except BaseException:
-        shutil.rmtree(temp, ignore_errors=True)
-        raise
+        staging = tempfile.mkdtemp(prefix=TEMPORARY_PREFIX, dir=out)
+        written = render_all(waves, run, estimator, staging, formats)
+        write_index(waves, run, estimator, staging, written, db_path, formats)
+        publish(staging, out, previous, overwrite)
+        published = True
+    finally:
+        if staging:
+            shutil.rmtree(staging, ignore_errors=True)  # made by mkdtemp above: only our files
+        if created and not published:
+            try:
+                os.rmdir(out)
+            except OSError:
+                pass
     return out
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Usage errors as one line, like every other error of the script and of combabc."""
+
+    def error(self, message):
+        print(f"combabc_report: usage error: {message} (see --help)", file=sys.stderr)
+        sys.exit(64)
+
+
+def one_line(error):
+    return " ".join(str(error).split())
+
+
 def main(argv=None):
-    parser = argparse.ArgumentParser(description="Figures and an HTML page for a combabc run.")
-    parser.add_argument("history", help="the run history, RUN.db")
+    parser = OneLineParser(description="Figures and an HTML page for a combabc run.")
+    parser.add_argument("history", help="the run history, RUN.db (after --, if it starts with -)")
     parser.add_argument("--out", help="output directory (default: report/ beside RUN.db)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="write into --out even if combabc did not create it (replaces only "
+                             "same-named files; nothing is deleted)")
     parser.add_argument("--estimator", choices=["paper", "importance"],
                         help="marginals to plot (default: the run's estimator)")
+    parser.add_argument("--formats",
+                        help="comma-separated figure formats among png, svg, pdf "
+                             "(default: the run's [output] figures, else png)")
     args = parser.parse_args(argv)
+    formats = None
+    if args.formats is not None:
+        formats = list(dict.fromkeys(f.strip() for f in args.formats.split(",") if f.strip()))
+        unknown = [f for f in formats if f not in FORMATS]
+        if unknown or not formats:
+            parser.error(f"--formats: expected png, svg or pdf, got {args.formats!r}")
     out = args.out or os.path.join(os.path.dirname(os.path.abspath(args.history)), "report")
     try:
-        out = make_report(args.history, out, args.estimator)
-    except (ReportError, sqlite3.Error, OSError) as error:
-        print(f"combabc_report: {error}", file=sys.stderr)
-        return 65 if isinstance(error, (ReportError, sqlite3.DatabaseError)) else 74
+        out = make_report(args.history, out, args.estimator, args.overwrite, formats)
+    except ReportError as error:
+        print(f"combabc_report: {one_line(error)}", file=sys.stderr)
+        return error.status
+    except sqlite3.DatabaseError as error:
+        print(f"combabc_report: {args.history}: {one_line(error)}", file=sys.stderr)
+        return EX_DATAERR
+    except OSError as error:
+        print(f"combabc_report: {one_line(error)}", file=sys.stderr)
+        return EX_IOERR
+    except KeyboardInterrupt:
+        return 130
+    except Exception as error:  # a bug: still one line, never a traceback
+        print(f"combabc_report: internal error: {type(error).__name__}: {one_line(error)}",
+              file=sys.stderr)
+        return EX_SOFTWARE
     print(out)
     return 0
 

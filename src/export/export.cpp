@@ -1,21 +1,16 @@
 // Export of a run history to CSV + JSON (files and columns: docs/history.md, "Export").
 #include "combabc/export/export.hpp"
 
-#include <unistd.h>
-
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/output_files.hpp"
 
 namespace combabc {
 namespace {
-
-namespace fs = std::filesystem;
 
 // Shortest text that reads back to the same double; Inf / -Inf / NaN as pandas and MATLAB read
 // them.
@@ -119,29 +114,12 @@ std::vector<std::string> DistanceColumns(const RunMetadata& m, std::size_t count
   return names;
 }
 
-class FileWriter {
- public:
-  FileWriter(const fs::path& path) : path_(path), out_(path) {
-    if (!out_) throw Error(ErrorKind::kCantCreate, "cannot create export file", path_.string());
-  }
-  std::ofstream& out() { return out_; }
-  void Close() {
-    out_.close();
-    if (!out_) throw Error(ErrorKind::kIo, "cannot write export file", path_.string());
-  }
-
- private:
-  fs::path path_;
-  std::ofstream out_;
-};
-
 // Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
 // database keeps the engine's 0-based numbers).
 int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
 
-void WriteWaves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
-  FileWriter file(dir / "waves.csv");
-  std::ostream& out = file.out();
+void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+  std::ostream& out = dir.Add("waves.csv");
   const std::size_t k = h.waves.empty() ? 0 : h.waves.front().thresholds.size();
   out << "wave";
   for (const std::string& name : ThresholdColumns(m, k)) out << ',' << name;
@@ -155,12 +133,10 @@ void WriteWaves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) 
         << Number(w.acceptance_rate) << ',' << Number(w.ess) << ',' << w.distinct << ','
         << Number(w.wall_seconds) << ',' << (w.complete ? 1 : 0) << '\n';
   }
-  file.Close();
 }
 
-void WriteMarginals(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
-  FileWriter file(dir / "marginals.csv");
-  std::ostream& out = file.out();
+void WriteMarginals(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+  std::ostream& out = dir.Add("marginals.csv");
   out << "wave,bit,name,prob_paper,prob_importance\n";
   for (const WaveRecord& w : h.waves) {
     for (std::size_t b = 0; b < w.marginals_paper.size(); ++b) {
@@ -172,12 +148,10 @@ void WriteMarginals(const fs::path& dir, const RunMetadata& m, const RunHistory&
           << Number(w.marginals_paper[b]) << ',' << Number(importance) << '\n';
     }
   }
-  file.Close();
 }
 
-void WriteParticles(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
-  FileWriter file(dir / "particles.csv");
-  std::ostream& out = file.out();
+void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+  std::ostream& out = dir.Add("particles.csv");
   std::size_t components = m.distance_components.size();
   for (const WaveRecord& w : h.waves) {
     if (!w.particles.empty()) components = w.particles.front().distance.size();
@@ -201,27 +175,24 @@ void WriteParticles(const fs::path& dir, const RunMetadata& m, const RunHistory&
       out << '\n';
     }
   }
-  file.Close();
 }
 
 // Wide: one row per curve; the x of column y_i is row i of positions.csv.
-void WriteCurves(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
+void WriteCurves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
   const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
   {
-    FileWriter file(dir / "positions.csv");
-    file.out() << "column,position_" << unit << '\n';
+    std::ostream& out = dir.Add("positions.csv");
+    out << "column,position_" << unit << '\n';
     for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
-      file.out() << "y_" << i << ',' << Number(m.output_positions[i]) << '\n';
+      out << "y_" << i << ',' << Number(m.output_positions[i]) << '\n';
     }
-    file.Close();
   }
   bool any = false;
   for (const WaveRecord& w : h.waves) {
     for (const Particle& p : w.particles) any = any || !p.output.empty();
   }
   if (!any) return;  // the run did not keep outputs
-  FileWriter file(dir / "curves.csv");
-  std::ostream& out = file.out();
+  std::ostream& out = dir.Add("curves.csv");
   out << "wave,index";
   for (std::size_t i = 0; i < m.output_positions.size(); ++i) out << ",y_" << i;
   out << '\n';
@@ -235,22 +206,19 @@ void WriteCurves(const fs::path& dir, const RunMetadata& m, const RunHistory& h)
       out << '\n';
     }
   }
-  file.Close();
 }
 
-void WriteMeasured(const fs::path& dir, const RunMetadata& m) {
+void WriteMeasured(OutputDirectory& dir, const RunMetadata& m) {
   const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
-  FileWriter file(dir / "measured.csv");
-  file.out() << "position_" << unit << ",value\n";
+  std::ostream& out = dir.Add("measured.csv");
+  out << "position_" << unit << ",value\n";
   for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
-    file.out() << Number(m.measured.positions[i]) << ',' << Number(m.measured.values[i]) << '\n';
+    out << Number(m.measured.positions[i]) << ',' << Number(m.measured.values[i]) << '\n';
   }
-  file.Close();
 }
 
-void WriteSummary(const fs::path& dir, const RunMetadata& m, const RunHistory& h) {
-  FileWriter file(dir / "summary.json");
-  std::ostream& out = file.out();
+void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+  std::ostream& out = dir.Add("summary.json");
   out << "{\n  \"format\": \"combabc-export\",\n  \"schema_version\": " << m.schema_version
       << ",\n";
   out << "  \"run\": {\n";
@@ -298,10 +266,9 @@ void WriteSummary(const fs::path& dir, const RunMetadata& m, const RunHistory& h
         << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance) << "}";
   }
   out << "\n  ]\n}\n";
-  file.Close();
 }
 
-void WriteAll(const fs::path& dir, const HistoryStore& store, const ExportOptions& options) {
+void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptions& options) {
   const RunMetadata m = store.LoadMetadata();
   const RunHistory h = store.LoadHistory();
   if (options.csv) {
@@ -319,43 +286,10 @@ void WriteAll(const fs::path& dir, const HistoryStore& store, const ExportOption
 void ExportRun(const HistoryStore& store,
                const std::string& out_dir,
                const ExportOptions& options) {
-  fs::path target(out_dir);
-  if (target.filename().empty()) target = target.parent_path();  // "out/" -> "out"
-  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(parent, ec)) {
-    throw Error(ErrorKind::kCantCreate,
-                "cannot export: directory " + parent.string() + " does not exist",
-                out_dir);
-  }
-  const bool replace = fs::exists(target, ec);
-  if (replace && !options.overwrite) {
-    throw Error(
-        ErrorKind::kCantCreate, "cannot export: already exists (refusing to overwrite)", out_dir);
-  }
-  const std::string suffix = ".tmp-" + std::to_string(::getpid());
-  const fs::path temp = parent / ("." + target.filename().string() + suffix);
-  fs::remove_all(temp, ec);
-  if (!fs::create_directory(temp, ec)) {
-    throw Error(ErrorKind::kCantCreate, "cannot export: " + ec.message(), temp.string());
-  }
-  try {
-    WriteAll(temp, store, options);
-    if (replace) {
-      const fs::path old = parent / ("." + target.filename().string() + ".old" + suffix);
-      fs::rename(target, old);
-      fs::rename(temp, target);
-      fs::remove_all(old, ec);
-    } else {
-      fs::rename(temp, target);
-    }
-  } catch (const fs::filesystem_error& error) {
-    fs::remove_all(temp, ec);
-    throw Error(ErrorKind::kIo, std::string("cannot export: ") + error.code().message(), out_dir);
-  } catch (...) {
-    fs::remove_all(temp, ec);
-    throw;
-  }
+  // Checked before the history is read; the files appear together at Commit().
+  OutputDirectory directory(out_dir, options.overwrite);
+  WriteAll(directory, store, options);
+  directory.Commit();
 }
 
 void ExportRun(const std::string& history_path,

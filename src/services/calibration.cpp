@@ -14,6 +14,7 @@
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/sensor_simulator.hpp"
 #include "services/fan_out_observer.hpp"
+#include "services/report_checks.hpp"
 
 #ifndef COMBABC_GIT_HASH
 #define COMBABC_GIT_HASH ""
@@ -94,7 +95,17 @@ RunOutcome Execute(Problem& problem,
     throw;
   }
   store.Finish(outcome.history.summary);
-  if (report) outcome.report_directory = WriteReport(store.path());
+  if (report) {
+    try {
+      outcome.report_directory = WriteReport(store.path(), ReportDirectory(store.path()));
+    } catch (const Error& e) {
+      // One line still, but saying that the run itself is safe and how to retry the report.
+      throw Error(e.kind(),
+                  "the run is saved in " + store.path() +
+                      " ('combabc report' retries the report), " +
+                      "but its report failed: " + e.what());
+    }
+  }
   return outcome;
 }
 
@@ -112,13 +123,14 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   std::string directory = request.output_directory.empty()
                               ? ResolvePath(p.config.directory, p.config.output.directory)
                               : request.output_directory;
+  const std::string history_path = (fs::path(directory) / p.config.output.database).string();
+  if (request.report) CheckReportPossible(ReportDirectory(history_path));
   std::error_code ec;
   fs::create_directories(directory, ec);
   if (ec) {
     throw Error(
         ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
   }
-  const std::string history_path = (fs::path(directory) / p.config.output.database).string();
   auto store = HistoryStore::Create(history_path, Describe(p), request.overwrite);
   return Execute(p, store, nullptr, request.report, progress);
 }
@@ -142,6 +154,7 @@ RunOutcome ResumeCalibration(const std::string& history_path,
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
   BuildModel(p);
+  if (report) CheckReportPossible(ReportDirectory(history_path));
   const auto resume = store.BeginResume();
   return Execute(p, store, &resume, report, progress);
 }

@@ -1,26 +1,12 @@
-// The non-sampling jobs: simulate one configuration, write the report, export a history.
-#include <spawn.h>
-#include <sys/wait.h>
-
-#include <cstdio>
-#include <cstdlib>
+// The non-sampling jobs: simulate one configuration, export a history (the report: report.cpp).
+#include <algorithm>
 #include <filesystem>
-#include <fstream>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/output_files.hpp"
 #include "combabc/export/export.hpp"
-#include "combabc/history/history_store.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/services/calibration.hpp"
-
-extern char** environ;
-
-#ifndef COMBABC_REPORT_SCRIPT_SOURCE
-#define COMBABC_REPORT_SCRIPT_SOURCE ""
-#endif
-#ifndef COMBABC_REPORT_SCRIPT_INSTALLED
-#define COMBABC_REPORT_SCRIPT_INSTALLED ""
-#endif
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -31,34 +17,12 @@ std::string Sibling(const std::string& history_path, const std::string& name) {
   return (parent.empty() ? fs::path(name) : parent / name).string();
 }
 
-// The plotting script: $COMBABC_REPORT_SCRIPT, else the source tree's, else the installed one.
-std::string ReportScript() {
-  if (const char* env = std::getenv("COMBABC_REPORT_SCRIPT"); env && *env) return env;
-  for (const char* candidate : {COMBABC_REPORT_SCRIPT_SOURCE, COMBABC_REPORT_SCRIPT_INSTALLED}) {
-    if (*candidate && fs::exists(candidate)) return candidate;
-  }
-  throw Error(ErrorKind::kSoftware,
-              "report script combabc_report.py not found; set COMBABC_REPORT_SCRIPT");
-}
-
-int RunProcess(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
-    throw Error(ErrorKind::kSoftware, "cannot start " + args[0]);
-  }
-  int status = 0;
-  if (waitpid(pid, &status, 0) < 0) throw Error(ErrorKind::kSoftware, "waitpid failed");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 }  // namespace
 
 void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
-                           const std::string& output_csv) {
+                           const std::string& output_csv,
+                           bool overwrite) {
   const auto config = LoadConfig(config_path);
   // The raw amplitude in metres; the normalised column is derived below. One precompute only.
   auto options = config.model;
@@ -83,54 +47,22 @@ void SimulateConfiguration(const std::string& config_path,
     }
     bits[k] = clamps[k] == '1';
   }
+  // A unique temporary beside the target, renamed at the end: no partial CSV, nothing followed,
+  // and an existing file refused before the precompute rather than after it.
+  AtomicFile out(output_csv, overwrite);
   const plate::SensorModel raw(options);
   std::vector<double> w(static_cast<std::size_t>(raw.num_outputs()));
   raw.Profile(bits, w);
   double peak = 0.0;
   for (double v : w) peak = std::max(peak, v);
 
-  // Written beside the target and renamed, so a failure leaves no partial CSV.
-  const std::string tmp = output_csv + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error(ErrorKind::kCantCreate, "cannot write", output_csv);
-    out.precision(10);
-    out << "position_m,displacement_m,normalised\n";
-    for (std::size_t i = 0; i < w.size(); ++i) {
-      out << raw.output_positions()[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0)
-          << '\n';
-    }
-    if (!out.flush()) {
-      fs::remove(tmp);
-      throw Error(ErrorKind::kIo, "write failed", output_csv);
-    }
+  out.out().precision(10);
+  out.out() << "position_m,displacement_m,normalised\n";
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    out.out() << raw.output_positions()[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0)
+              << '\n';
   }
-  std::error_code ec;
-  fs::rename(tmp, output_csv, ec);
-  if (ec) {
-    fs::remove(tmp);
-    throw Error(ErrorKind::kCantCreate, "cannot write: " + ec.message(), output_csv);
-  }
-}
-
-std::string WriteReport(const std::string& history_path, const std::string& directory) {
-  // Reading it all first gives the usual one-line errors for a missing, foreign or corrupt file
-  // (the script itself trusts what it reads).
-  { HistoryStore::Open(history_path, /*read_only=*/true).LoadHistory(); }
-  const std::string out = directory.empty() ? Sibling(history_path, "report") : directory;
-  const char* python = std::getenv("COMBABC_PYTHON");
-  const int rc = RunProcess({python && *python ? python : "/usr/bin/python3",
-                             ReportScript(),
-                             history_path,
-                             "--out",
-                             out});
-  if (rc != 0) {
-    throw Error(
-        ErrorKind::kSoftware,
-        "report script failed with status " + std::to_string(rc) + " (see its message above)",
-        history_path);
-  }
-  return out;
+  out.Commit();
 }
 
 VerifyOutcome VerifyHistory(const std::string& history_path) {

@@ -42,9 +42,9 @@ class ExportTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  std::string WriteRun(bool outputs) {
+  std::string WriteRun(bool outputs, const std::string& name = "RUN.db") {
     options_.outputs = outputs;
-    const std::string path = (dir_ / "RUN.db").string();
+    const std::string path = (dir_ / name).string();
     HistoryStore store = HistoryStore::Create(path, testing::MakeFakeMetadata(options_));
     const RunHistory history = testing::MakeFakeHistory(options_);
     for (const WaveRecord& wave : history.waves) testing::RecordWave(store, wave, 4);
@@ -133,11 +133,12 @@ TEST_F(ExportTest, RunWithoutOutputsHasNoCurves) {
   EXPECT_TRUE(fs::exists(out / "particles.csv"));
 }
 
-TEST_F(ExportTest, RefusesAnExistingDirectoryUnlessOverwrite) {
+TEST_F(ExportTest, RefusesAForeignDirectoryAndOverwriteKeepsTheUsersFiles) {
   const std::string db = WriteRun(/*outputs=*/true);
   const fs::path out = dir_ / "export";
   fs::create_directories(out);
   std::ofstream(out / "keep.txt") << "x";
+  std::ofstream(out / "waves.csv") << "the user's own waves.csv";
   try {
     ExportRun(db, out.string());
     ADD_FAILURE() << "no error";
@@ -145,11 +146,40 @@ TEST_F(ExportTest, RefusesAnExistingDirectoryUnlessOverwrite) {
     EXPECT_EQ(error.kind(), ErrorKind::kCantCreate);
   }
   EXPECT_TRUE(fs::exists(out / "keep.txt"));
+  EXPECT_EQ(Lines(out / "waves.csv").front(), "the user's own waves.csv");
+  // --overwrite writes combabc's files into it: same-named files replaced, nothing removed.
   ExportOptions options;
   options.overwrite = true;
   ExportRun(db, out.string(), options);
-  EXPECT_FALSE(fs::exists(out / "keep.txt"));
+  EXPECT_TRUE(fs::exists(out / "keep.txt")) << "overwrite removed a file combabc did not write";
+  EXPECT_EQ(Lines(out / "waves.csv").front().rfind("wave,", 0), 0u);
+}
+
+TEST_F(ExportTest, OverwriteNeverRemovesAFileAtTheTarget) {
+  const std::string db = WriteRun(/*outputs=*/true);
+  const fs::path out = dir_ / "export";
+  std::ofstream(out) << "a file, not a directory";
+  ExportOptions options;
+  options.overwrite = true;
+  try {
+    ExportRun(db, out.string(), options);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::kCantCreate);
+  }
+  EXPECT_EQ(Lines(out), std::vector<std::string>{"a file, not a directory"});
+}
+
+TEST_F(ExportTest, ReExportReplacesItsOwnFilesOnly) {
+  const std::string db = WriteRun(/*outputs=*/true);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+  std::ofstream(out / "analysis.m") << "% the user's script";
+  const std::string plain = WriteRun(/*outputs=*/false, "PLAIN.db");  // no curves
+  ExportRun(plain, out.string());  // its own previous export: no --overwrite needed
+  EXPECT_FALSE(fs::exists(out / "curves.csv")) << "a stale file of the previous export remains";
   EXPECT_TRUE(fs::exists(out / "waves.csv"));
+  EXPECT_TRUE(fs::exists(out / "analysis.m"));
 }
 
 TEST_F(ExportTest, MissingHistoryIsNoInput) {

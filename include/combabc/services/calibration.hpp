@@ -16,7 +16,7 @@ struct RunRequest {
   std::string output_directory;  // overrides [output] directory when not empty
   int threads = -1;              // overrides [sampler] threads when >= 0
   bool overwrite = false;        // replace an existing history file
-  bool report = true;            // write the report when the run ends
+  bool report = true;            // write the report (report/ beside the history) when it ends
 };
 
 struct RunOutcome {
@@ -37,13 +37,21 @@ RunOutcome ResumeCalibration(const std::string& history_path,
 
 // One clamp configuration ("0110..." with one character per clamp, 1 = fixed) through the
 // config's sensor model, written as CSV (position_m, displacement, and the normalised profile).
+// An existing output_csv is refused (kCantCreate) unless `overwrite`.
 void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
-                           const std::string& output_csv);
+                           const std::string& output_csv,
+                           bool overwrite = false);
 
-// Figures (PNG, SVG) and index.html for a run, into `directory` (default: report/ beside the
-// history). Returns the directory.
-std::string WriteReport(const std::string& history_path, const std::string& directory = {});
+// Figures (in the formats of the run's [output] figures) and index.html for a run, into
+// `directory` (default: report/ beside the history), by scripts/report/combabc_report.py run with
+// $COMBABC_PYTHON (default /usr/bin/python3); $COMBABC_REPORT_SCRIPT overrides the script. The
+// directory follows OutputDirectory's rules (core/output_files.hpp): a previous report there is
+// replaced, a non-empty directory combabc did not write is refused unless `overwrite`. A failure
+// is one combabc::Error line. Returns the directory.
+std::string WriteReport(const std::string& history_path,
+                        const std::string& directory = {},
+                        bool overwrite = false);
 
 // The result of `combabc verify`: one "OK" line, or one line per problem found.
 struct VerifyOutcome {
@@ -55,7 +63,8 @@ struct VerifyOutcome {
 // checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
 VerifyOutcome VerifyHistory(const std::string& history_path);
 
-// CSV + JSON export (docs/history.md); default directory: export/ beside the history.
+// CSV + JSON export (docs/history.md); default directory: export/ beside the history; directory
+// rules as for the report (`overwrite`: write into a directory combabc did not write).
 std::string ExportHistory(const std::string& history_path,
                           const std::string& directory = {},
                           bool overwrite = false);

@@ -1,0 +1,98 @@
+#pragma once
+// How every combabc command writes files, under one rule: no command deletes, truncates or
+// replaces a file or directory it did not create, unless the user named that path with
+// --overwrite, and then only that path (docs/history.md, "Output files").
+//
+// Single files (simulate's CSV) go through AtomicFile; directories of results (export, and the
+// report, whose Python script implements the same rules) through OutputDirectory, which records
+// what combabc wrote in a manifest so that a later run replaces only those files.
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace combabc {
+
+// A file written under a unique temporary name in its target's directory, then fsync'd and renamed
+// onto the target. The temporary is created with O_CREAT | O_EXCL | O_NOFOLLOW, so nothing that
+// already exists (a file, or a symlink planted at a guessable name) is ever opened or truncated;
+// the rename replaces a path, never what a symlink there points to. Errors are combabc::Error
+// (kCantCreate, kIo) naming the target.
+class AtomicFile {
+ public:
+  // Creates the temporary. An existing `path` is replaced only when `replace`; without it, a file
+  // already there is refused now (before any work) and again, atomically, at Commit().
+  AtomicFile(std::string path, bool replace);
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  ~AtomicFile();  // removes the temporary unless committed
+
+  std::ostream& out() { return buffer_; }
+  const std::string& path() const { return path_; }
+
+  // Writes the buffered text, fsyncs it and renames it onto path(); a refusal (kCantCreate) leaves
+  // what is at path() as it was.
+  void Commit();
+
+ private:
+  std::string path_;
+  std::string temp_path_;
+  bool replace_;
+  int fd_ = -1;
+  std::ostringstream buffer_;
+};
+
+// `text` into `path` through an AtomicFile: an existing `path` is replaced only when `overwrite`.
+void WriteFileAtomically(const std::string& path, std::string_view text, bool overwrite);
+
+// A directory combabc writes its own set of files into (an export, a report). Files are staged as
+// AtomicFiles and appear together at Commit(); a failure before that leaves the directory as it
+// was (and removes it if this object created it). The directory's manifest (kManifest, one file
+// name a line) lists the files combabc wrote there:
+//  - missing: the directory is created (its parent must exist);
+//  - with a manifest: Commit() replaces the files it lists, and removes those it lists that this
+//    commit does not write again (a previous report's extra waves), nothing else;
+//  - empty, without a manifest: used as if created;
+//  - not empty, without a manifest: refused (kCantCreate) unless `overwrite`: then combabc's files
+//    replace same-named files and nothing else is touched.
+// A file of the same name as one being written that the manifest does not list is replaced only
+// with `overwrite`. The directory itself is never removed unless this object created it.
+class OutputDirectory {
+ public:
+  static constexpr const char* kManifest = ".combabc-manifest";
+  // Every temporary combabc makes (AtomicFile's, the report script's staging directory) starts
+  // with this. A directory holding nothing else (left by a killed command) counts as empty.
+  static constexpr const char* kTemporaryPrefix = ".combabc-tmp-";
+
+  // What a refusal of a foreign directory suggests (the report of `run` has no --overwrite).
+  static constexpr const char* kDefaultHint =
+      "choose another directory, or use --overwrite to add combabc's files to it";
+
+  OutputDirectory(std::string path, bool overwrite);
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+  ~OutputDirectory();
+
+  // The same checks as the constructor, changing nothing: lets a long job (a calibration run)
+  // find out before it starts that its output directory would be refused at the end.
+  static void Check(const std::string& path,
+                    bool overwrite,
+                    const std::string& hint = kDefaultHint);
+
+  const std::string& path() const { return path_; }
+  // A stream for file `name` (a plain file name), written at Commit().
+  std::ostream& Add(const std::string& name);
+  void Commit();
+
+ private:
+  std::string path_;
+  bool overwrite_;
+  bool created_ = false;
+  bool committed_ = false;
+  std::set<std::string> previous_;  // the manifest's names when the directory was opened
+  std::vector<std::pair<std::string, std::unique_ptr<AtomicFile>>> staged_;
+};
+
+}  // namespace combabc

@@ -1,0 +1,281 @@
+#include "combabc/core/output_files.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string SystemError() { return std::strerror(errno); }
+
+// "out/" names the directory "out": without this its file name would be empty.
+fs::path WithoutTrailingSlash(const std::string& path) {
+  fs::path p(path);
+  if (p.filename().empty() && p.has_parent_path()) p = p.parent_path();
+  return p;
+}
+
+std::string RandomSuffix() {
+  static constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+  std::random_device device;
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(sizeof kAlphabet) - 2);
+  std::string suffix(8, ' ');
+  for (char& c : suffix) c = kAlphabet[pick(device)];
+  return suffix;
+}
+
+// lstat: a symlink is reported as itself, never as what it points to.
+bool Lstat(const fs::path& path, struct stat* st) { return ::lstat(path.c_str(), st) == 0; }
+
+// A manifest entry names a file directly inside the directory, nothing else.
+bool IsPlainFileName(const std::string& name) {
+  return !name.empty() && name != "." && name != ".." &&
+         name.find_first_of("/\n\r") == std::string::npos && name != OutputDirectory::kManifest;
+}
+
+void SyncDirectory(const fs::path& dir) {
+  // Makes the renames durable; best effort, as some file systems refuse fsync on a directory.
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+[[noreturn]] void ThrowExists(const std::string& path) {
+  throw Error(
+      ErrorKind::kCantCreate, "file exists (refusing to replace it; use --overwrite)", path);
+}
+
+[[noreturn]] void ThrowIsADirectory(const std::string& path) {
+  throw Error(ErrorKind::kCantCreate, "is a directory (refusing to replace it)", path);
+}
+
+// What is at an output directory's path now; throws for what can never be used.
+struct DirectoryState {
+  bool exists = false;
+  bool has_manifest = false;
+  bool empty = false;
+  std::set<std::string> manifest;
+};
+
+DirectoryState Inspect(const fs::path& dir, const std::string& shown) {
+  DirectoryState state;
+  struct stat st {};
+  if (!Lstat(dir, &st)) {
+    if (errno != ENOENT) {
+      throw Error(ErrorKind::kCantCreate, "cannot use output directory: " + SystemError(), shown);
+    }
+    const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec)) {
+      throw Error(
+          ErrorKind::kCantCreate, "directory " + parent.string() + " does not exist", shown);
+    }
+    return state;
+  }
+  std::error_code ec;
+  // The user named this path, so a symlink to a directory is used as that directory.
+  if (!fs::is_directory(dir, ec)) {
+    throw Error(ErrorKind::kCantCreate,
+                "exists and is not a directory (refusing to replace it; choose another path)",
+                shown);
+  }
+  state.exists = true;
+  const fs::path manifest = dir / OutputDirectory::kManifest;
+  if (Lstat(manifest, &st) && S_ISREG(st.st_mode)) {
+    state.has_manifest = true;
+    std::ifstream in(manifest);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && IsPlainFileName(line)) state.manifest.insert(line);
+    }
+  }
+  state.empty = true;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().filename().string().rfind(OutputDirectory::kTemporaryPrefix, 0) != 0) {
+      state.empty = false;
+      break;
+    }
+  }
+  if (ec) throw Error(ErrorKind::kCantCreate, "cannot read directory: " + ec.message(), shown);
+  return state;
+}
+
+void RefuseForeign(const DirectoryState& state,
+                   bool overwrite,
+                   const std::string& shown,
+                   const std::string& hint) {
+  if (state.exists && !state.has_manifest && !state.empty && !overwrite) {
+    throw Error(ErrorKind::kCantCreate,
+                "directory exists, is not empty and was not written by combabc (it has no " +
+                    std::string(OutputDirectory::kManifest) + "); " + hint,
+                shown);
+  }
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------ AtomicFile
+
+AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)), replace_(replace) {
+  const fs::path target(path_);
+  if (target.filename().empty() || target.filename() == "." || target.filename() == "..") {
+    throw Error(ErrorKind::kCantCreate, "not a file name", path_);
+  }
+  struct stat st {};
+  if (Lstat(target, &st)) {
+    if (S_ISDIR(st.st_mode)) ThrowIsADirectory(path_);
+    if (!replace_) ThrowExists(path_);
+  }
+  const fs::path dir = target.parent_path();
+  for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
+    const std::string temp = (dir / (OutputDirectory::kTemporaryPrefix + RandomSuffix() + "-" +
+                                     target.filename().string()))
+                                 .string();
+    fd_ = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd_ >= 0) {
+      temp_path_ = temp;
+    } else if (errno != EEXIST) {
+      throw Error(ErrorKind::kCantCreate, "cannot create file: " + SystemError(), path_);
+    }
+  }
+  if (fd_ < 0) throw Error(ErrorKind::kCantCreate, "cannot create a temporary file", path_);
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
+}
+
+void AtomicFile::Commit() {
+  const std::string text = buffer_.str();
+  for (std::size_t done = 0; done < text.size();) {
+    const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd_) != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
+  const int closed = ::close(fd_);
+  fd_ = -1;
+  if (closed != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
+
+  int renamed = 0;
+  if (replace_) {
+    renamed = ::rename(temp_path_.c_str(), path_.c_str());
+  } else {
+    // Atomic "create, never replace"; file systems without RENAME_NOREPLACE get link + unlink,
+    // which is just as exclusive.
+    renamed = ::renameat2(AT_FDCWD, temp_path_.c_str(), AT_FDCWD, path_.c_str(), RENAME_NOREPLACE);
+    if (renamed != 0 && (errno == EINVAL || errno == ENOSYS)) {
+      renamed = ::link(temp_path_.c_str(), path_.c_str());
+      if (renamed == 0) ::unlink(temp_path_.c_str());
+    }
+  }
+  if (renamed != 0) {
+    if (errno == EEXIST) ThrowExists(path_);
+    if (errno == EISDIR || errno == ENOTEMPTY) ThrowIsADirectory(path_);
+    throw Error(ErrorKind::kCantCreate, "cannot write: " + SystemError(), path_);
+  }
+  temp_path_.clear();
+  SyncDirectory(fs::path(path_).parent_path());
+}
+
+void WriteFileAtomically(const std::string& path, std::string_view text, bool overwrite) {
+  AtomicFile file(path, overwrite);
+  file.out() << text;
+  file.Commit();
+}
+
+// ------------------------------------------------------------------------------- OutputDirectory
+
+void OutputDirectory::Check(const std::string& path, bool overwrite, const std::string& hint) {
+  RefuseForeign(Inspect(WithoutTrailingSlash(path), path), overwrite, path, hint);
+}
+
+OutputDirectory::OutputDirectory(std::string path, bool overwrite)
+    : path_(std::move(path)), overwrite_(overwrite) {
+  const fs::path dir = WithoutTrailingSlash(path_);
+  const DirectoryState state = Inspect(dir, path_);
+  RefuseForeign(state, overwrite_, path_, kDefaultHint);
+  previous_ = state.manifest;
+  if (!state.exists) {
+    if (::mkdir(dir.c_str(), 0777) != 0) {
+      throw Error(ErrorKind::kCantCreate, "cannot create directory: " + SystemError(), path_);
+    }
+    created_ = true;
+  }
+}
+
+OutputDirectory::~OutputDirectory() {
+  staged_.clear();  // removes the temporaries of an uncommitted directory
+  if (created_ && !committed_) ::rmdir(WithoutTrailingSlash(path_).c_str());
+}
+
+std::ostream& OutputDirectory::Add(const std::string& name) {
+  if (!IsPlainFileName(name)) {
+    throw Error(ErrorKind::kSoftware, "not a plain file name: \"" + name + "\"", path_);
+  }
+  for (const auto& [staged, file] : staged_) {
+    if (staged == name) throw Error(ErrorKind::kSoftware, "written twice: " + name, path_);
+  }
+  // combabc's own files (listed in the manifest) may be replaced; others only with overwrite.
+  const bool replace = overwrite_ || previous_.count(name) != 0;
+  staged_.emplace_back(
+      name, std::make_unique<AtomicFile>((WithoutTrailingSlash(path_) / name).string(), replace));
+  return staged_.back().second->out();
+}
+
+void OutputDirectory::Commit() {
+  const fs::path dir = WithoutTrailingSlash(path_);
+  // Every check again (the directory may have changed since Add), so that a refusal changes
+  // nothing: no file is renamed into place before all of them are known to be allowed.
+  std::set<std::string> written;
+  for (const auto& [name, file] : staged_) {
+    struct stat st {};
+    if (Lstat(dir / name, &st)) {
+      if (S_ISDIR(st.st_mode)) ThrowIsADirectory(file->path());
+      if (!overwrite_ && !(previous_.count(name) != 0 && S_ISREG(st.st_mode))) {
+        throw Error(ErrorKind::kCantCreate,
+                    "file exists and was not written by combabc (refusing to replace it; use "
+                    "--overwrite)",
+                    file->path());
+      }
+    }
+    written.insert(name);
+  }
+  // The manifest lists old and new files while they are swapped, so that an interrupted commit
+  // still leaves every combabc file listed; then only the new ones.
+  const auto write_manifest = [&](const std::set<std::string>& names) {
+    std::string text =
+        "# Files combabc wrote in this directory; combabc replaces only these here.\n";
+    for (const std::string& name : names) text += name + '\n';
+    WriteFileAtomically((dir / kManifest).string(), text, /*overwrite=*/true);
+  };
+  std::set<std::string> both = previous_;
+  both.insert(written.begin(), written.end());
+  write_manifest(both);
+  for (const auto& [name, file] : staged_) file->Commit();
+  for (const std::string& name : previous_) {
+    struct stat st {};
+    if (written.count(name) == 0 && Lstat(dir / name, &st) && S_ISREG(st.st_mode)) {
+      ::unlink((dir / name).c_str());  // a file of combabc's previous output, not written now
+    }
+  }
+  write_manifest(written);
+  committed_ = true;
+}
+
+}  // namespace combabc

@@ -1,0 +1,234 @@
+#!/usr/bin/python3
+"""Opens a report's index.html in headless Chromium and checks that every image loads
+(complete, naturalWidth > 0) and that nothing is logged as an error (console.error, an uncaught
+exception, a resource that failed to load).
+
+    check_report_page.py INDEX_HTML [--min-images N]
+    check_report_page.py --self-test --combabc CLI --fake-history EXE --workdir DIR
+
+The first form prints each problem on one line and exits 1 if there is any. The second is the
+CTest test (label browser): it writes a synthetic run's report with the real CLI, checks it, and
+then proves that the check can fail, on scratch copies with one image broken and with an error
+logged to the console. Exit 77 (CTest SKIP_RETURN_CODE) only when Chromium is not installed.
+
+Chromium is driven through the DevTools protocol over --remote-debugging-pipe (fd 3: commands
+in, fd 4: replies out, messages separated by NUL), so nothing listens on a port; Python stdlib
+only.
+"""
+
+import argparse
+import fcntl
+import json
+import os
+import pathlib
+import select
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+SKIP = 77
+TIMEOUT_S = 60.0
+
+
+def moved_above(fd, lowest):
+    moved = fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, lowest)
+    os.close(fd)
+    return moved
+
+
+class Browser:
+    """One headless Chromium with a DevTools pipe; a context manager."""
+
+    def __init__(self, executable, profile):
+        commands_r, self._commands_w = os.pipe()
+        self._replies_r, replies_w = os.pipe()
+        # The child's ends moved above 10, so that dup2 onto 3 and 4 never meets its own source
+        # (dup2 of an fd onto itself would keep close-on-exec, and Chromium would see no pipe).
+        commands_r, replies_w = moved_above(commands_r, 10), moved_above(replies_w, 10)
+
+        def wire_fds():  # in the child, before exec: Chromium expects the pipe on fds 3 and 4
+            os.dup2(commands_r, 3)
+            os.dup2(replies_w, 4)
+
+        self._log = open(os.path.join(profile, "chromium.log"), "wb")
+        self._process = subprocess.Popen(
+            [executable, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+             "--no-default-browser-check", "--disable-extensions", "--mute-audio",
+             f"--user-data-dir={profile}", "--remote-debugging-pipe", "about:blank"],
+            stdin=subprocess.DEVNULL, stdout=self._log, stderr=self._log,
+            preexec_fn=wire_fds, close_fds=False)
+        os.close(commands_r)
+        os.close(replies_w)
+        self._buffer = b""
+        self._next_id = 0
+        self.events = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        try:
+            self.send("Browser.close")
+        except Exception:  # already gone: only cleanup is left
+            pass
+        try:
+            self._process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            self._process.wait()
+        os.close(self._commands_w)
+        os.close(self._replies_r)
+        self._log.close()
+
+    def _read_message(self, deadline):
+        while b"\0" not in self._buffer:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("no reply from Chromium")
+            ready, _, _ = select.select([self._replies_r], [], [], left)
+            if ready:
+                chunk = os.read(self._replies_r, 1 << 16)
+                if not chunk:
+                    raise RuntimeError("Chromium closed its DevTools pipe")
+                self._buffer += chunk
+        message, self._buffer = self._buffer.split(b"\0", 1)
+        return json.loads(message)
+
+    def send(self, method, params=None, session=None, timeout=TIMEOUT_S):
+        """Sends a command and returns its result; events seen meanwhile go to self.events."""
+        self._next_id += 1
+        message = {"id": self._next_id, "method": method, "params": params or {}}
+        if session:
+            message["sessionId"] = session
+        os.write(self._commands_w, json.dumps(message).encode() + b"\0")
+        deadline = time.monotonic() + timeout
+        while True:
+            reply = self._read_message(deadline)
+            if reply.get("id") == self._next_id:
+                if "error" in reply:
+                    raise RuntimeError(f"{method}: {reply['error']}")
+                return reply.get("result", {})
+            self.events.append(reply)
+
+    def wait_for(self, method, timeout=TIMEOUT_S):
+        deadline = time.monotonic() + timeout
+        while not any(e.get("method") == method for e in self.events):
+            self.events.append(self._read_message(deadline))
+
+
+IMAGES_JS = """JSON.stringify(Array.from(document.images).map(i => ({
+    src: i.getAttribute("src"), complete: i.complete, width: i.naturalWidth})))"""
+
+
+def find_chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def check_page(index_html, chromium, min_images=1):
+    """Returns the problems found on the page, one line each."""
+    url = pathlib.Path(index_html).resolve().as_uri()
+    with tempfile.TemporaryDirectory(prefix="combabc-chromium-") as profile:
+        with Browser(chromium, profile) as browser:
+            target = browser.send("Target.createTarget", {"url": "about:blank"})["targetId"]
+            session = browser.send("Target.attachToTarget",
+                                   {"targetId": target, "flatten": True})["sessionId"]
+            for domain in ("Page", "Runtime", "Log"):
+                browser.send(f"{domain}.enable", session=session)
+            browser.send("Page.navigate", {"url": url}, session=session)
+            browser.wait_for("Page.loadEventFired")
+            images = json.loads(browser.send(
+                "Runtime.evaluate", {"expression": IMAGES_JS, "returnByValue": True},
+                session=session)["result"]["value"])
+            # A round trip after the load, so that messages logged during it have arrived.
+            browser.send("Runtime.evaluate", {"expression": "1"}, session=session)
+            events = list(browser.events)
+    problems = []
+    if len(images) < min_images:
+        problems.append(f"{index_html}: {len(images)} images, expected at least {min_images}")
+    for image in images:
+        if not image["complete"] or image["width"] <= 0:
+            problems.append(f"{index_html}: image {image['src']} did not load")
+    for event in events:
+        method, params = event.get("method"), event.get("params", {})
+        if method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
+            text = " ".join(str(a.get("value", a.get("description", ""))) for a in params["args"])
+            problems.append(f"{index_html}: console.{params['type']}: {text}")
+        elif method == "Runtime.exceptionThrown":
+            details = params.get("exceptionDetails", {})
+            text = details.get("exception", {}).get("description") or details.get("text")
+            problems.append(f"{index_html}: uncaught exception: {text}")
+        elif method == "Log.entryAdded" and params["entry"].get("level") == "error":
+            entry = params["entry"]
+            problems.append(f"{index_html}: logged error: {entry.get('text')} {entry.get('url', '')}")
+    return problems
+
+
+def self_test(args, chromium):
+    work = pathlib.Path(args.workdir)
+    shutil.rmtree(work, ignore_errors=True)  # this test's own scratch directory in the build tree
+    work.mkdir(parents=True)
+    db = work / "RUN.db"
+    subprocess.run([args.fake_history, str(db), "--waves", "3", "--per-wave", "40"], check=True)
+    report = work / "report"
+    subprocess.run([args.combabc, "report", str(db), "-o", str(report)], check=True)
+    figures = len(list(report.glob("*.png")))
+    problems = check_page(report / "index.html", chromium, min_images=figures)
+    for line in problems:
+        print(line)
+    if problems:
+        return 1
+    print(f"report page: {figures} images loaded, no console errors")
+
+    # The check must be able to fail: one image broken, then an error logged by the page.
+    broken = work / "broken_image"
+    shutil.copytree(report, broken)
+    (broken / "summary.png").write_bytes(b"not a PNG")
+    found = check_page(broken / "index.html", chromium, min_images=figures)
+    if not any("summary.png did not load" in p for p in found):
+        print(f"the check missed a broken image (it found: {found})")
+        return 1
+    logged = work / "console_error"
+    shutil.copytree(report, logged)
+    page = (logged / "index.html").read_text(encoding="utf-8")
+    (logged / "index.html").write_text(
+        page.replace("</body>", "<script>console.error('planted error');</script></body>"),
+        encoding="utf-8")
+    found = check_page(logged / "index.html", chromium, min_images=figures)
+    if not any("planted error" in p for p in found):
+        print(f"the check missed a console error (it found: {found})")
+        return 1
+    print("negative controls: a broken image and a console error are both caught")
+    return 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("index_html", nargs="?")
+    parser.add_argument("--min-images", type=int, default=1)
+    parser.add_argument("--self-test", action="store_true")
+    parser.add_argument("--combabc")
+    parser.add_argument("--fake-history")
+    parser.add_argument("--workdir")
+    args = parser.parse_args()
+    chromium = find_chromium()
+    if not chromium:
+        print("SKIP: chromium is not installed (apt-get install chromium; scripts/setup.sh)")
+        return SKIP
+    if args.self_test:
+        return self_test(args, chromium)
+    if not args.index_html:
+        parser.error("INDEX_HTML or --self-test")
+    problems = check_page(args.index_html, chromium, args.min_images)
+    for line in problems:
+        print(line)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

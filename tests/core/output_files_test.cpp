@@ -1,0 +1,231 @@
+// AtomicFile and OutputDirectory: combabc never deletes, truncates or replaces a file or
+// directory it did not create, unless asked to with overwrite, and then only that path.
+#include "combabc/core/output_files.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Read(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void Write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+// The names in a directory, so a test can assert that nothing else appeared or vanished.
+std::set<std::string> Listing(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    names.insert(entry.path().filename().string());
+  }
+  return names;
+}
+
+ErrorKind KindOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& error) {
+    return error.kind();
+  }
+  ADD_FAILURE() << "no combabc::Error";
+  return ErrorKind::kSoftware;
+}
+
+class OutputFilesTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("combabc_output_files_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(OutputFilesTest, AtomicFileCreatesAndRefusesToReplaceUnlessAsked) {
+  const fs::path target = dir_ / "profile.csv";
+  WriteFileAtomically(target.string(), "one\n", /*overwrite=*/false);
+  EXPECT_EQ(Read(target), "one\n");
+  EXPECT_EQ(KindOf([&] { WriteFileAtomically(target.string(), "two\n", false); }),
+            ErrorKind::kCantCreate);
+  EXPECT_EQ(Read(target), "one\n") << "an existing file was replaced without overwrite";
+  WriteFileAtomically(target.string(), "three\n", /*overwrite=*/true);
+  EXPECT_EQ(Read(target), "three\n");
+  EXPECT_EQ(Listing(dir_), std::set<std::string>{"profile.csv"}) << "temporary left behind";
+}
+
+TEST_F(OutputFilesTest, AtomicFileNeverFollowsAPlantedSymlink) {
+  const fs::path victim = dir_ / "victim.txt";
+  Write(victim, "precious\n");
+  const fs::path target = dir_ / "out.csv";
+  // The old implementation wrote through "<target>.tmp"; a link there must stay untouched.
+  fs::create_symlink(victim, dir_ / "out.csv.tmp");
+  WriteFileAtomically(target.string(), "data\n", false);
+  EXPECT_EQ(Read(victim), "precious\n");
+  EXPECT_EQ(Read(target), "data\n");
+  EXPECT_TRUE(fs::is_symlink(dir_ / "out.csv.tmp"));
+
+  // A symlink at the target itself: refused without overwrite; with it, the link (the path the
+  // user named) is replaced, never the file it points to.
+  const fs::path link = dir_ / "link.csv";
+  fs::create_symlink(victim, link);
+  EXPECT_EQ(KindOf([&] { WriteFileAtomically(link.string(), "x\n", false); }),
+            ErrorKind::kCantCreate);
+  WriteFileAtomically(link.string(), "x\n", true);
+  EXPECT_FALSE(fs::is_symlink(link));
+  EXPECT_EQ(Read(link), "x\n");
+  EXPECT_EQ(Read(victim), "precious\n");
+}
+
+TEST_F(OutputFilesTest, AtomicFileNeverReplacesADirectoryAndCleansUpWhenAbandoned) {
+  fs::create_directories(dir_ / "results" / "inner");
+  EXPECT_EQ(KindOf([&] { WriteFileAtomically((dir_ / "results").string(), "x", true); }),
+            ErrorKind::kCantCreate);
+  EXPECT_TRUE(fs::is_directory(dir_ / "results" / "inner"));
+  {
+    AtomicFile abandoned((dir_ / "never.csv").string(), false);
+    abandoned.out() << "half";
+  }
+  EXPECT_EQ(Listing(dir_), std::set<std::string>{"results"});
+}
+
+TEST_F(OutputFilesTest, NewDirectoryIsCreatedWithAManifest) {
+  const fs::path out = dir_ / "export";
+  {
+    OutputDirectory directory(out.string(), false);
+    directory.Add("a.csv") << "a";
+    directory.Add("b.csv") << "b";
+    directory.Commit();
+  }
+  EXPECT_EQ(Listing(out), (std::set<std::string>{"a.csv", "b.csv", ".combabc-manifest"}));
+  EXPECT_NE(Read(out / ".combabc-manifest").find("\na.csv\nb.csv\n"), std::string::npos);
+}
+
+TEST_F(OutputFilesTest, UncommittedDirectoryLeavesNothingBehind) {
+  {
+    OutputDirectory directory((dir_ / "export").string(), false);
+    directory.Add("a.csv") << "a";
+  }
+  EXPECT_TRUE(fs::is_empty(dir_)) << "a directory combabc created and did not fill remains";
+  fs::create_directories(dir_ / "mine");
+  {
+    OutputDirectory directory((dir_ / "mine").string(), false);
+    directory.Add("a.csv") << "a";
+  }
+  EXPECT_TRUE(fs::is_directory(dir_ / "mine")) << "the user's empty directory was removed";
+  EXPECT_TRUE(fs::is_empty(dir_ / "mine"));
+}
+
+TEST_F(OutputFilesTest, LeftoversOfAKilledCommandDoNotMakeADirectoryForeign) {
+  const fs::path out = dir_ / "export";
+  fs::create_directories(out);
+  Write(out / ".combabc-tmp-k1ll3d00-waves.csv", "half");
+  OutputDirectory::Check(out.string(), false);
+  Write(out / "user.txt", "x");
+  EXPECT_EQ(KindOf([&] { OutputDirectory::Check(out.string(), false); }), ErrorKind::kCantCreate);
+}
+
+TEST_F(OutputFilesTest, ForeignDirectoryIsRefusedAndLeftAlone) {
+  // What `report -o .` met: the user's working directory.
+  Write(dir_ / "thesis.tex", "years of work");
+  Write(dir_ / "a.csv", "the user's own a.csv");
+  const auto before = Listing(dir_);
+  EXPECT_EQ(KindOf([&] { OutputDirectory::Check(dir_.string(), false); }), ErrorKind::kCantCreate);
+  EXPECT_EQ(KindOf([&] { OutputDirectory directory(dir_.string() + "/", false); }),
+            ErrorKind::kCantCreate);
+  EXPECT_EQ(Listing(dir_), before);
+  // A file is not a directory, with or without overwrite.
+  EXPECT_EQ(KindOf([&] { OutputDirectory directory((dir_ / "thesis.tex").string(), true); }),
+            ErrorKind::kCantCreate);
+  EXPECT_EQ(Read(dir_ / "thesis.tex"), "years of work");
+}
+
+TEST_F(OutputFilesTest, OverwriteReplacesOnlySameNamedFiles) {
+  Write(dir_ / "thesis.tex", "years of work");
+  Write(dir_ / "a.csv", "the user's own a.csv");
+  OutputDirectory::Check(dir_.string(), true);
+  {
+    OutputDirectory directory(dir_.string(), /*overwrite=*/true);
+    directory.Add("a.csv") << "combabc a";
+    directory.Add("b.csv") << "combabc b";
+    directory.Commit();
+  }
+  EXPECT_EQ(Read(dir_ / "thesis.tex"), "years of work");
+  EXPECT_EQ(Read(dir_ / "a.csv"), "combabc a");
+  EXPECT_EQ(Listing(dir_),
+            (std::set<std::string>{"thesis.tex", "a.csv", "b.csv", ".combabc-manifest"}));
+}
+
+TEST_F(OutputFilesTest, RewriteReplacesOnlyWhatTheManifestLists) {
+  const fs::path out = dir_ / "report";
+  {
+    OutputDirectory directory(out.string(), false);
+    directory.Add("wave_1.png") << "old 1";
+    directory.Add("wave_2.png") << "old 2";
+    directory.Commit();
+  }
+  Write(out / "notes.txt", "the user's notes");
+  {
+    OutputDirectory directory(out.string(), false);  // has a manifest: no overwrite needed
+    directory.Add("wave_1.png") << "new 1";
+    directory.Commit();
+  }
+  EXPECT_EQ(Read(out / "wave_1.png"), "new 1");
+  EXPECT_FALSE(fs::exists(out / "wave_2.png")) << "combabc's own stale file should go";
+  EXPECT_EQ(Read(out / "notes.txt"), "the user's notes");
+  EXPECT_EQ(Read(out / ".combabc-manifest").find("wave_2.png"), std::string::npos);
+
+  // A file the manifest does not list, where combabc now wants to write: refused, untouched,
+  // whether it was there before the files were staged or appeared while they were written.
+  Write(out / "summary.png", "the user's figure");
+  {
+    OutputDirectory directory(out.string(), false);
+    directory.Add("wave_1.png") << "newer 1";
+    EXPECT_EQ(KindOf([&] { directory.Add("summary.png"); }), ErrorKind::kCantCreate);
+    directory.Add("overview.png") << "combabc overview";
+    Write(out / "overview.png", "the user's overview");
+    EXPECT_EQ(KindOf([&] { directory.Commit(); }), ErrorKind::kCantCreate);
+  }
+  EXPECT_EQ(Read(out / "overview.png"), "the user's overview");
+  EXPECT_EQ(Read(out / "summary.png"), "the user's figure");
+  EXPECT_EQ(Read(out / "wave_1.png"), "new 1") << "a refused commit changed a file";
+  EXPECT_EQ(Listing(out),
+            (std::set<std::string>{
+                "wave_1.png", "notes.txt", "summary.png", "overview.png", ".combabc-manifest"}));
+}
+
+TEST_F(OutputFilesTest, ManifestCannotNameAnythingOutsideTheDirectory) {
+  const fs::path out = dir_ / "report";
+  fs::create_directories(out);
+  Write(dir_ / "outside.txt", "keep");
+  fs::create_directories(out / "sub");
+  Write(out / "sub" / "inside.txt", "keep");
+  Write(out / ".combabc-manifest", "../outside.txt\nsub/inside.txt\nsub\n..\n");
+  {
+    OutputDirectory directory(out.string(), false);
+    directory.Add("a.png") << "a";
+    directory.Commit();
+  }
+  EXPECT_EQ(Read(dir_ / "outside.txt"), "keep");
+  EXPECT_EQ(Read(out / "sub" / "inside.txt"), "keep");
+  EXPECT_TRUE(fs::exists(out / "a.png"));
+}
+
+}  // namespace
+}  // namespace combabc

@@ -1,0 +1,100 @@
+// What commands write, through the CLI: no command deletes, truncates or replaces a file or
+// directory it did not create, unless the user named that path with --overwrite, and then only
+// that path. (The report's own cases, which need Python, are in report_test.cpp.)
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "cli_runner.hpp"
+#include "output_test_support.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kCantCreate = 73;
+
+std::string PaperConfig() {
+  return std::string(COMBABC_SOURCE_DIR) + "/tests/config/testdata/paper_45cm_least_squares.toml";
+}
+
+const std::string kAllFree(36, '0');
+
+class OutputSafety : public ::testing::Test {
+ protected:
+  OutputSafety()
+      : dir_("output-safety-" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())) {}
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
+  ScratchDir dir_;
+};
+
+TEST_F(OutputSafety, SimulateRefusesAnExistingFileUnlessOverwrite) {
+  Write("profile.csv", "the user's measurements\n");
+  auto r = RunCli({"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv"},
+                  dir_.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("profile.csv"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--overwrite"), std::string::npos) << r.err;
+  EXPECT_EQ(ReadFile(dir_ / "profile.csv"), "the user's measurements\n");
+
+  r = RunCli(
+      {"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv", "--overwrite"},
+      dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir_ / "profile.csv").rfind("position_m,", 0), 0u);
+}
+
+TEST_F(OutputSafety, SimulateNeverFollowsASymlinkPlantedAtTheTemporaryName) {
+  Write("victim.txt", "precious\n");
+  fs::create_symlink(dir_.path() / "victim.txt", dir_.path() / "profile.csv.tmp");
+  const auto r = RunCli(
+      {"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir_ / "victim.txt"), "precious\n") << "the symlink's target was clobbered";
+  EXPECT_TRUE(fs::is_symlink(dir_.path() / "profile.csv.tmp"));
+  EXPECT_EQ(ReadFile(dir_ / "profile.csv").rfind("position_m,", 0), 0u);
+  EXPECT_EQ(Listing(dir_.path()),
+            (std::set<std::string>{
+                "victim.txt", "profile.csv.tmp", "profile.csv", "cli.stdout", "cli.stderr"}));
+}
+
+TEST_F(OutputSafety, ExportOverwriteKeepsEverythingElseInTheDirectory) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  fs::create_directories(dir_.path() / "analysis");
+  Write("analysis/fit.m", "% the user's script");
+  auto r = RunCli({"export", db, "-o", dir_ / "analysis"}, dir_.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_EQ(Listing(dir_.path() / "analysis"), std::set<std::string>{"fit.m"});
+
+  r = RunCli({"export", db, "-o", dir_ / "analysis", "--overwrite"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir_ / "analysis/fit.m"), "% the user's script");
+  EXPECT_TRUE(fs::exists(dir_.path() / "analysis" / "waves.csv"));
+
+  // A file at the target is never deleted, not even with --overwrite.
+  Write("export", "a file named export");
+  r = RunCli({"export", db, "-o", dir_ / "export", "--overwrite"}, dir_.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_EQ(ReadFile(dir_ / "export"), "a file named export");
+}
+
+TEST_F(OutputSafety, RunRefusesAForeignReportDirectoryBeforeSampling) {
+  fs::create_directories(dir_.path() / "out" / "report");
+  Write("out/report/draft.md", "the user's draft");
+  const auto r = RunCli({"run", PaperConfig(), "-o", dir_ / "out", "-q"}, dir_.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "out" / "history.sqlite")) << "it sampled first";
+  EXPECT_EQ(Listing(dir_.path() / "out" / "report"), std::set<std::string>{"draft.md"});
+}
+
+}  // namespace
+}  // namespace combabc::testing

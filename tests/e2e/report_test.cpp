@@ -1,0 +1,177 @@
+// `combabc report` through the CLI: its directory rules (never replace what the user wrote),
+// names drawn literally, the configured figure formats, and every failure as one line.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "cli_runner.hpp"
+#include "output_test_support.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kData = 65, kSoftware = 70, kCantCreate = 73;
+
+bool HavePlotting() {
+  static const bool have =
+      std::system("/usr/bin/python3 -c 'import numpy, matplotlib' > /dev/null 2>&1") == 0;
+  return have;
+}
+
+class Report : public ::testing::Test {
+ protected:
+  Report()
+      : dir_("report-" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())) {}
+  void SetUp() override {
+    if (!HavePlotting()) {
+      GTEST_SKIP() << "/usr/bin/python3 lacks numpy or matplotlib (scripts/setup.sh installs them)";
+    }
+  }
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
+  // Runs the CLI expecting one failure line and exit `code`; returns the line.
+  std::string ExpectFailure(const std::vector<std::string>& args, int code) {
+    const auto r = RunCli(args, dir_.path());
+    EXPECT_EQ(r.exit_code, code) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_EQ(r.err.find("Traceback"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "") << "partial output on stdout";
+    return r.err;
+  }
+  ScratchDir dir_;
+};
+
+TEST_F(Report, IntoTheWorkingDirectoryIsRefusedAndDeletesNothing) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  fs::create_directories(dir_.path() / "work");
+  Write("work/thesis.tex", "years of work");
+  const auto before = Listing(dir_.path() / "work");
+  {
+    ScopedWorkingDirectory cwd(dir_.path() / "work");
+    const auto err = ExpectFailure({"report", db, "-o", "."}, kCantCreate);
+    EXPECT_NE(err.find("--overwrite"), std::string::npos) << err;
+  }
+  EXPECT_EQ(Listing(dir_.path() / "work"), before);
+  EXPECT_EQ(ReadFile(dir_.path() / "work" / "thesis.tex"), "years of work");
+}
+
+TEST_F(Report, RewritesItsOwnReportAndOverwriteKeepsTheUsersFiles) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  const fs::path out = dir_.path() / "report";
+  auto r = RunCli({"report", db}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / ".combabc-manifest"));
+  Write("report/notes.txt", "the user's notes");
+  r = RunCli({"report", db}, dir_.path());  // its own report: replaced without --overwrite
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(out / "notes.txt"), "the user's notes");
+  EXPECT_TRUE(fs::exists(out / "wave_2_marginals.png"));
+
+  // Someone else's directory: refused; with --overwrite, only same-named files are replaced.
+  fs::create_directories(dir_.path() / "figures");
+  Write("figures/summary.png", "the user's own summary");
+  Write("figures/keep.txt", "keep");
+  ExpectFailure({"report", db, "-o", dir_ / "figures"}, kCantCreate);
+  EXPECT_EQ(ReadFile(dir_.path() / "figures" / "summary.png"), "the user's own summary");
+  r = RunCli({"report", db, "-o", dir_ / "figures", "--overwrite"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir_.path() / "figures" / "keep.txt"), "keep");
+  EXPECT_EQ(ReadFile(dir_.path() / "figures" / "summary.png").rfind("\x89PNG", 0), 0u);
+  for (const auto& name : Listing(dir_.path() / "figures")) {
+    EXPECT_EQ(name.find(".combabc-tmp"), std::string::npos) << "staging left behind: " << name;
+  }
+}
+
+TEST_F(Report, MathtextInNamesIsDrawnLiterally) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db", [](RunMetadata& m, RunHistory& h) {
+    // Two threshold components, so that their names reach the figures (summary legend).
+    m.distance_components = {{"$\\frac{$", ComponentKind::kThreshold, 1.0},
+                             {"$x_{$ and $", ComponentKind::kThreshold, 1.0}};
+    m.bit_names[0] = "$\\frac{$";
+    for (WaveRecord& w : h.waves) {
+      w.thresholds.push_back(w.thresholds.front() / 2);
+      for (Particle& p : w.particles) p.distance.resize(2, 0.0);
+    }
+  });
+  const auto r = RunCli({"report", db}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_.path() / "report" / "summary.png")) << r.err;
+}
+
+TEST_F(Report, HistoryNamedLikeAnOptionIsStillTheHistory) {
+  MakeHistory(dir_.path() / "-h");
+  ScopedWorkingDirectory cwd(dir_.path());
+  const auto r = RunCli({"report", "--", "-h"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("usage"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir_.path() / "report" / "index.html")) << r.out << r.err;
+}
+
+TEST_F(Report, FiguresFollowTheConfiguredFormats) {
+  const auto with_figures = [](const std::string& list) {
+    return [list](RunMetadata& m, RunHistory&) {
+      m.config_text += "\n[output]\nfigures = " + list + "\n";
+    };
+  };
+  const std::string pdf = MakeHistory(dir_.path() / "PDF.db", with_figures("[\"pdf\"]"));
+  auto r = RunCli({"report", pdf, "-o", dir_ / "pdf"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_.path() / "pdf" / "wave_2_curves.pdf"));
+  EXPECT_FALSE(fs::exists(dir_.path() / "pdf" / "wave_2_curves.png"));
+  EXPECT_FALSE(fs::exists(dir_.path() / "pdf" / "wave_2_curves.svg"));
+  EXPECT_NE(ReadFile(dir_.path() / "pdf" / "index.html").find("href=\"summary.pdf\""),
+            std::string::npos);
+
+  const std::string both = MakeHistory(dir_.path() / "BOTH.db", with_figures("[\"svg\", \"png\"]"));
+  r = RunCli({"report", both, "-o", dir_ / "both"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_.path() / "both" / "overview.svg"));
+  EXPECT_TRUE(fs::exists(dir_.path() / "both" / "overview.png"));
+  EXPECT_FALSE(fs::exists(dir_.path() / "both" / "overview.pdf"));
+  // The page shows the raster format.
+  EXPECT_NE(ReadFile(dir_.path() / "both" / "index.html").find("<img src=\"overview.png\""),
+            std::string::npos);
+}
+
+TEST_F(Report, FailuresAreOneLineAndLeaveNothingBehind) {
+  {  // the script's own error: a history with no committed wave
+    const fs::path path = dir_.path() / "EMPTY.db";
+    FakeRunOptions options;
+    HistoryStore::Create(path.string(), MakeFakeMetadata(options));
+    const auto err = ExpectFailure({"report", path.string(), "-o", dir_ / "r1"}, kData);
+    EXPECT_NE(err.find("no committed wave"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir_.path() / "r1"));
+  }
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  {  // matplotlib missing: a module that fails to import stands in for it
+    fs::create_directories(dir_.path() / "fake" / "matplotlib");
+    Write("fake/matplotlib/__init__.py", "raise ImportError('No module named matplotlib')\n");
+    ScopedEnv path("PYTHONPATH", dir_ / "fake");
+    const auto err = ExpectFailure({"report", db, "-o", dir_ / "r2"}, kCantCreate);
+    EXPECT_NE(err.find("matplotlib"), std::string::npos) << err;
+    EXPECT_NE(err.find("COMBABC_PYTHON"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir_.path() / "r2"));
+  }
+  {  // no python at all
+    ScopedEnv python("COMBABC_PYTHON", dir_ / "no-such-python3");
+    const auto err = ExpectFailure({"report", db, "-o", dir_ / "r3"}, kCantCreate);
+    EXPECT_NE(err.find("no-such-python3"), std::string::npos) << err;
+    EXPECT_NE(err.find("COMBABC_PYTHON"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir_.path() / "r3"));
+  }
+  {  // a script that dies with a multi-line traceback still gives one combabc line
+    Write("broken.py", "raise RuntimeError('the script broke')\n");
+    ScopedEnv script("COMBABC_REPORT_SCRIPT", dir_ / "broken.py");
+    const auto err = ExpectFailure({"report", db, "-o", dir_ / "r4"}, kSoftware);
+    EXPECT_NE(err.find("the script broke"), std::string::npos) << err;
+  }
+}
+
+}  // namespace
+}  // namespace combabc::testing
