@@ -34,8 +34,8 @@ for layer in "${order[@]}"; do
   done
 done
 # Every folder under include/combabc and src must be a declared layer (src/internal excepted).
-for dir in include/combabc/* src/*; do
-  [[ -d "$dir" ]] || continue
+for dir in $(git ls-files include/combabc src | awk -F/ '$1 == "src" && NF > 2 {print $1 "/" $2}
+    $1 == "include" && NF > 3 {print $1 "/" $2 "/" $3}' | sort -u); do
   name=$(basename "$dir")
   [[ "$name" == internal ]] && continue
   if [[ -z "${rank[$name]+x}" ]]; then echo "layering: $dir is not a declared layer"; status=1; fi
