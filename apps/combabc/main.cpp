@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   std::string history;
   int resume_threads = -1;
   auto* resume = app.add_subcommand("resume", "Continue a killed or interrupted run");
-  resume->add_option("RUN_DB", history, "History file of the run")->required();
+  resume->add_option("RUN.sqlite", history, "History file of the run")->required();
   resume->add_option("-j,--threads", resume_threads, "Threads (default: the run's own)");
   resume->add_flag("--no-report", no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", quiet, "No progress display");
@@ -70,18 +70,18 @@ int main(int argc, char** argv) {
       "Write into DIR even if combabc did not create it (replaces only same-named files)";
   auto* report = app.add_subcommand(
       "report", "Write figures ([output] figures: png, svg, pdf) and index.html of a run");
-  report->add_option("RUN_DB", history, "History file of the run")->required();
+  report->add_option("RUN.sqlite", history, "History file of the run")->required();
   report->add_option("-o,--output", out_dir, "Directory (default: report/ beside the history)");
   report->add_flag("--overwrite", overwrite_dir, kOverwriteDir);
 
   auto* exporter = app.add_subcommand("export", "Export a run to CSV and JSON (pandas, MATLAB)");
-  exporter->add_option("RUN_DB", history, "History file of the run")->required();
+  exporter->add_option("RUN.sqlite", history, "History file of the run")->required();
   exporter->add_option("-o,--output", out_dir, "Directory (default: export/ beside the history)");
   exporter->add_flag("--overwrite", overwrite_dir, kOverwriteDir);
 
   auto* verify = app.add_subcommand(
       "verify", "Check a history's integrity (structure, checksums); exit 0 if sound, 65 if not");
-  verify->add_option("RUN_DB", history, "History file of the run")->required();
+  verify->add_option("RUN.sqlite", history, "History file of the run")->required();
 
   try {
     app.parse(argc, argv);
@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
     if (*run) {
       request.report = !no_report;
       PrintOutcome(combabc::services::RunCalibration(request, observer));
-      if (g_interrupted) std::cerr << "interrupted; continue with: combabc resume <RUN_DB>\n";
+      if (g_interrupted) std::cerr << "interrupted; continue with: combabc resume <RUN.sqlite>\n";
     } else if (*resume) {
       PrintOutcome(
           combabc::services::ResumeCalibration(history, resume_threads, !no_report, observer));

@@ -1,11 +1,11 @@
 #!/usr/bin/python3
-"""Report figures for a combabc run history (RUN.db), after Shamas et al. (Sensors 2024), section 5.
+"""Report figures for a combabc run history (RUN.sqlite), after Shamas et al. (Sensors 2024), section 5.
 
     /usr/bin/python3 combabc_report.py [--out DIR] [--overwrite] [--estimator paper|importance]
-                                       [--formats png,svg,pdf] [--] RUN.db
+                                       [--formats png,svg,pdf] [--] RUN.sqlite
 
 Reads the SQLite history directly (schema: docs/history.md; no export needed) and writes into
-DIR (default: report/ beside RUN.db), in each format of the run's [output] figures (default png):
+DIR (default: report/ beside RUN.sqlite), in each format of the run's [output] figures (default png):
 
   wave_<k>_curves.<fmt>         accepted simulated curves of wave k, measured data as circles
                                 (paper Figures 3, 5, 8, 10)
@@ -723,8 +723,8 @@ def one_line(error):
 
 def main(argv=None):
     parser = OneLineParser(description="Figures and an HTML page for a combabc run.")
-    parser.add_argument("history", help="the run history, RUN.db (after --, if it starts with -)")
-    parser.add_argument("--out", help="output directory (default: report/ beside RUN.db)")
+    parser.add_argument("history", help="the run history, RUN.sqlite (after --, if it starts with -)")
+    parser.add_argument("--out", help="output directory (default: report/ beside RUN.sqlite)")
     parser.add_argument("--overwrite", action="store_true",
                         help="write into --out even if combabc did not create it (replaces only "
                              "same-named files; nothing is deleted)")

@@ -210,7 +210,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
                 path);
   }
   // Built under a temporary name and moved into place complete: a process killed while creating
-  // never leaves a half-made RUN.db (at worst a stray .creating file).
+  // never leaves a half-made RUN.sqlite (at worst a stray .creating file).
   const std::string temp =
       (dir / ("." + target.filename().string() + ".creating-" + std::to_string(::getpid())))
           .string();

@@ -215,7 +215,7 @@ void HistoryStore::Finish(const RunSummary& summary) {
     impl.StoreRunHashes();
     transaction.Commit();
   }
-  // Fold the WAL back into the file and leave rollback-journal mode, so the finished RUN.db is
+  // Fold the WAL back into the file and leave rollback-journal mode, so the finished RUN.sqlite is
   // one self-contained file that can be copied or opened read-only anywhere.
   impl.upsert_particle.reset();
   impl.update_progress.reset();
