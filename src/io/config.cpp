@@ -3,11 +3,10 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
-#include <sstream>
 
+#include "bounded_read.hpp"
 #include "combabc/core/error.hpp"
 #include "config_reader.hpp"
 
@@ -165,16 +164,9 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
 }
 
 CalibrationConfig LoadConfig(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw Error(ErrorKind::kNoInput, "is a directory, not a config file", path);
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(ErrorKind::kNoInput, "cannot open config file", path);
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) throw Error(ErrorKind::kNoInput, "cannot read config file", path);
-  return ParseConfig(text.str(), path);
+  const std::string text =
+      io_internal::ReadBoundedFile(path, kMaxConfigBytes, "config file", ErrorKind::kConfig);
+  return ParseConfig(text, path);
 }
 
 }  // namespace combabc

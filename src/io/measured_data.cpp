@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "bounded_read.hpp"
 #include "combabc/core/error.hpp"
 
 namespace combabc {
@@ -254,16 +255,9 @@ MeasuredData ParseMeasuredData(const std::string& text,
 MeasuredData LoadMeasuredData(const DataConfig& config, const std::string& config_dir) {
   const std::string path = ResolvePath(config_dir, config.csv);
   if (config.csv.empty()) throw Error(ErrorKind::kNoInput, "no CSV file given", {}, 0, "data.csv");
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw Error(ErrorKind::kNoInput, "is a directory, not a data file", path);
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(ErrorKind::kNoInput, "cannot open data file", path);
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) throw Error(ErrorKind::kNoInput, "cannot read data file", path);
-  return ParseMeasuredData(text.str(), path, config);
+  const std::string text =
+      io_internal::ReadBoundedFile(path, kMaxCsvBytes, "data file", ErrorKind::kData);
+  return ParseMeasuredData(text, path, config);
 }
 
 }  // namespace combabc

@@ -156,5 +156,29 @@ TEST_F(InputLimits, NegativeThreadCountIsAUsageError) {
   EXPECT_NE(err.find("sampler.threads"), std::string::npos) << err;
 }
 
+// Regression: `run /dev/zero` read without bound (8.8 GB before the OOM killer).
+TEST_F(InputLimits, EndlessOrOversizedConfigIsRefusedWhileReading) {
+  auto err = Expect({"run", "/dev/zero"}, kConfig);
+  EXPECT_NE(err.find("/dev/zero: config file is larger than the 1 MiB limit"), std::string::npos)
+      << err;
+  Write("big.toml", std::string(kConfigText) + "# " + std::string(1 << 20, 'x') + "\n");
+  err = Expect({"run", dir_ / "big.toml"}, kConfig);
+  EXPECT_NE(err.find("1 MiB"), std::string::npos) << err;
+}
+
+TEST_F(InputLimits, EndlessOrOversizedCsvIsRefusedWhileReading) {
+  Write("config.toml", Replace(kConfigText, "csv = \"data.csv\"", "csv = \"/dev/zero\""));
+  auto err = Expect({"run", config()}, kData);
+  EXPECT_NE(err.find("/dev/zero: data file is larger than the 64 MiB limit"), std::string::npos)
+      << err;
+  std::string big = GoodCsv();
+  big += "# " + std::string((std::size_t{64} << 20) - big.size(), 'x') + "\n";
+  Write("data.csv", big);
+  Write("config.toml", kConfigText);
+  err = Expect({"run", config()}, kData);
+  EXPECT_NE(err.find("data.csv: data file is larger than the 64 MiB limit"), std::string::npos)
+      << err;
+}
+
 }  // namespace
 }  // namespace combabc::testing
