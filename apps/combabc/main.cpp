@@ -84,7 +84,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // One line, like every other error; the full usage is one --help away.
-    std::cerr << "combabc: usage error: " << e.what() << " (see combabc --help)\n";
+    std::cerr << "combabc: usage error: " << combabc::Printable(e.what(), 400)
+              << " (see combabc --help)\n";
     return kExitUsage;
   }
 
@@ -119,7 +120,7 @@ int main(int argc, char** argv) {
     return combabc::ExitCode(e.kind());
   } catch (const std::exception& e) {
     progress.Clear();
-    std::cerr << "combabc: internal error: " << e.what() << "\n";
+    std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";
     return kExitSoftware;
   }
   return interrupted ? 130 : 0;

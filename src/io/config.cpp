@@ -83,8 +83,9 @@ void ParseOutput(TableReader& root, CalibrationConfig* c) {
   if (const auto formats = t->Strings("figures")) {
     for (const std::string& f : *formats) {
       if (f != "png" && f != "svg" && f != "pdf") {
-        t->Fail("figures",
-                "unknown figure format \"" + f + "\"; expected " + OneOf({"png", "svg", "pdf"}));
+        t->Fail(
+            "figures",
+            "unknown figure format " + Excerpt(f) + "; expected " + OneOf({"png", "svg", "pdf"}));
       }
     }
     o.figure_formats = *formats;

@@ -95,7 +95,7 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
     const auto preset = ParseMetricPreset(*preset_text);
     if (!preset) {
       t->Fail("preset",
-              "unknown preset \"" + *preset_text + "\"; expected one of " +
+              "unknown preset " + Excerpt(*preset_text) + "; expected one of " +
                   OneOf({"area", "least_squares", "split_least_squares"}));
     }
     c->metric.preset = *preset;

@@ -138,7 +138,8 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
       InRange(*l, "frequency", 0.0, kHuge, &m.frequency_hz, &sources, "frequency_hz");
       const auto type = l->String("type");
       if (type && *type != "point" && *type != "patch") {
-        l->Fail("type", "unknown load type \"" + *type + "\"; expected \"point\" or \"patch\"");
+        l->Fail("type",
+                "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
       }
       InRange(*l, "patch_length", 0.0, kHuge, &m.load_patch_length, &sources, "load_patch_length");
       InRange(*l, "patch_width", 0.0, kHuge, &m.load_patch_width, &sources, "load_patch_width");

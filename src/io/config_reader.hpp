@@ -13,6 +13,8 @@
 
 #include <toml++/toml.h>
 
+#include "combabc/core/error.hpp"
+
 namespace combabc::config_internal {
 
 // "\"a\", \"b\"" for messages listing the allowed values.
@@ -65,9 +67,9 @@ class TableReader {
     if (!text) return std::nullopt;
     const std::optional<T> value = parse(*text);
     if (!value) {
-      Fail(
-          key,
-          "unknown " + std::string(what) + " \"" + *text + "\"; expected one of " + OneOf(choices));
+      Fail(key,
+           "unknown " + std::string(what) + " " + Excerpt(*text) + "; expected one of " +
+               OneOf(choices));
     }
     return value;
   }

@@ -180,5 +180,21 @@ TEST_F(InputLimits, EndlessOrOversizedCsvIsRefusedWhileReading) {
       << err;
 }
 
+// Regression: errors echoed raw input, so a config or CSV could drive the user's terminal.
+TEST_F(InputLimits, ErrorsEscapeControlCharactersAndQuoteOnlyExcerpts) {
+  Write("config.toml",
+        Replace(kConfigText, "window = [48, 80]", "position_unit = \"\\u001b[2J\\u0000cm\""));
+  auto err = Expect({"run", config()}, kConfig);
+  EXPECT_EQ(err.find('\x1b'), std::string::npos) << err;
+  EXPECT_NE(err.find("data.position_unit: unknown unit '\\x1b[2J\\0cm'"), std::string::npos) << err;
+
+  Write("config.toml", kConfigText);
+  Write("data.csv", Replace(GoodCsv(), "50,", "50," + std::string(5000, 'z') + "\x1b[31m\r\n51,"));
+  err = Expect({"run", config()}, kData);
+  EXPECT_EQ(err.find('\x1b'), std::string::npos) << err;
+  EXPECT_NE(err.find("data.csv:4:2: w_m: not a number: 'zzz"), std::string::npos) << err;
+  EXPECT_LT(err.size(), 300u) << err;
+}
+
 }  // namespace
 }  // namespace combabc::testing
