@@ -95,7 +95,7 @@ class InputLimits : public ::testing::Test {
     Write("config.toml",
           Replace(Replace(kConfigText, "waves = 2", "waves = 1"),
                   "accepted_per_wave = 20",
-                  "accepted_per_wave = 100000000\nbatch_size = 64"));
+                  "accepted_per_wave = 1000000\nbatch_size = 64"));
     std::vector<std::string> args = {"run", config(), "--no-report"};
     args.insert(args.end(), extra_args.begin(), extra_args.end());
     const pid_t pid = SpawnCli(args, dir_.path());
@@ -194,6 +194,126 @@ TEST_F(InputLimits, ErrorsEscapeControlCharactersAndQuoteOnlyExcerpts) {
   EXPECT_EQ(err.find('\x1b'), std::string::npos) << err;
   EXPECT_NE(err.find("data.csv:4:2: w_m: not a number: 'zzz"), std::string::npos) << err;
   EXPECT_LT(err.size(), 300u) << err;
+}
+
+// Regression: sizes that fit the old ranges exhausted memory (elements_across_width = 1000 took
+// 5.5-10 GB, an output spacing of 1e-7 9.6 GB, batch_size = 1e9 threw bad_alloc). Each is refused
+// before anything is built, at its key, with the memory estimate.
+TEST_F(InputLimits, SizesThatWouldExhaustMemoryAreRefusedWithTheEstimate) {
+  const std::string clamps(36, '0');
+  const std::string csv = "[data]\ncsv = \"data.csv\"\n";
+  Write("wide.toml", "[model.mesh]\nelements_across_width = 1000\n" + csv);
+  auto err = Expect({"simulate", dir_ / "wide.toml", "--clamps", clamps}, kConfig);
+  EXPECT_NE(err.find("wide.toml:2: model.mesh.elements_across_width: is 1000; the model would "
+                     "need about "),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("(limit 4 GB)"), std::string::npos) << err;
+
+  // The limit is a documented key; with no size above its default, the limit itself is blamed.
+  Write("tight.toml", "memory_limit_gb = 0.01\n" + csv);
+  err = Expect({"simulate", dir_ / "tight.toml", "--clamps", clamps}, kConfig);
+  EXPECT_NE(err.find("tight.toml:1: memory_limit_gb: is 0.01; the model would need about"),
+            std::string::npos)
+      << err;
+
+  Write("fine.toml", "[model.output]\nspacing = 1e-7\n" + csv);
+  err = Expect({"simulate", dir_ / "fine.toml", "--clamps", clamps}, kConfig);
+  EXPECT_NE(err.find("fine.toml:2: model.output.spacing: gives 9e+06 output positions; at most "
+                     "100000"),
+            std::string::npos)
+      << err;
+
+  Write("config.toml", Replace(kConfigText, "waves = 2", "waves = 2\nbatch_size = 1000000000"));
+  err = Expect({"run", config()}, kConfig);
+  EXPECT_NE(err.find("config.toml:12: sampler.batch_size: is 1000000000; the run would need about"),
+            std::string::npos)
+      << err;
+}
+
+// Regression: errors named C++ fields (SensorOptions::load_x) instead of the config key.
+TEST_F(InputLimits, ModelErrorsNameTheConfigKey) {
+  Write("config.toml", "[model]\nlength = 0.3\n" + std::string(kConfigText));
+  auto err = Expect({"run", config()}, kConfig);
+  EXPECT_NE(err.find("config.toml:1: model.load.x: is 0.45 (the default); must lie on the plate, "
+                     "in [0, 0.3] m"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("SensorOptions"), std::string::npos) << err;
+  EXPECT_EQ(err.find("load_x"), std::string::npos) << err;
+  Write("config.toml",
+        "[[model.layer]]\nthickness = 1e-3\nyoung_modulus = 1e30\ndensity = 1000\n" +
+            std::string(kConfigText));
+  err = Expect({"run", config()}, kConfig);
+  EXPECT_NE(err.find("config.toml:3: model.layer[0].young_modulus: is 1e+30; must be in [1, 1e13]"),
+            std::string::npos)
+      << err;
+}
+
+// Regression: width = 1e300 passed validation and aborted in the plate code, and other extreme
+// values exited 70. Every numeric model key, set to each extreme, must give a clean config error
+// at its key (78) or a result (0): never a crash, an internal error or a hang.
+TEST_F(InputLimits, EveryNumericModelKeyAtEveryExtremeIsAConfigErrorOrWorks) {
+  struct Key {
+    std::string table;  // TOML table header the key goes under ("" = top level)
+    std::string name;
+    std::string dotted;
+  };
+  const std::string layer =
+      "[[model.layer]]\nthickness = 1e-3\nyoung_modulus = 1e7\n"
+      "density = 1000\n";
+  std::vector<Key> keys = {
+      {"[model]", "length", "model.length"},
+      {"[model]", "width", "model.width"},
+      {"[model]", "foundation_stiffness", "model.foundation_stiffness"},
+      {"[model]", "foundation_loss_factor", "model.foundation_loss_factor"},
+      {"[model.clamps]", "per_edge", "model.clamps.per_edge"},
+      {"[model.clamps]", "section_length", "model.clamps.section_length"},
+      {"[model.load]", "x", "model.load.x"},
+      {"[model.load]", "y_fraction", "model.load.y_fraction"},
+      {"[model.load]", "amplitude", "model.load.amplitude"},
+      {"[model.load]", "frequency", "model.load.frequency"},
+      {"[model.load]", "patch_length", "model.load.patch_length"},
+      {"[model.load]", "patch_width", "model.load.patch_width"},
+      {"[model.output]", "spacing", "model.output.spacing"},
+      {"[model.output]", "y_fraction", "model.output.y_fraction"},
+      {"[model.mesh]", "elements_per_section", "model.mesh.elements_per_section"},
+      {"[model.mesh]", "elements_across_width", "model.mesh.elements_across_width"},
+      {layer, "thickness", "model.layer[0].thickness"},
+      {layer, "young_modulus", "model.layer[0].young_modulus"},
+      {layer, "density", "model.layer[0].density"},
+      {layer, "poisson_ratio", "model.layer[0].poisson_ratio"},
+      {layer, "loss_factor", "model.layer[0].loss_factor"},
+      {"", "memory_limit_gb", "memory_limit_gb"},
+  };
+  const std::string clamps(36, '1');
+  for (const Key& key : keys) {
+    for (const char* value : {"0", "-1", "1e300", "-1e300", "1e-300"}) {
+      std::string text = key.table;
+      // A [[model.layer]] fixture already sets thickness etc.: replace the line rather than add.
+      const std::string assignment = key.name + " = " + value + "\n";
+      const auto at = text.find("\n" + key.name + " = ");
+      if (at != std::string::npos) {
+        text.replace(at + 1, text.find('\n', at + 1) - at, assignment);
+      } else {
+        text += (text.empty() ? "" : "\n") + assignment;
+      }
+      Write("sweep.toml",
+            text + "[data]\ncsv = \"data.csv\"\n[metric]\npreset = \"least_squares\"\n");
+      const auto r = WaitAtMost(
+          SpawnCli({"simulate", dir_ / "sweep.toml", "--clamps", clamps, "-o", dir_ / "p.csv"},
+                   dir_.path()),
+          dir_.path(),
+          60s);
+      const std::string where = key.dotted + " = " + value + ": " + r.err;
+      EXPECT_TRUE(r.exit_code == 0 || r.exit_code == kConfig) << r.exit_code << " " << where;
+      if (r.exit_code == kConfig) {
+        EXPECT_EQ(CountLines(r.err), 1) << where;
+        EXPECT_NE(r.err.find("sweep.toml:"), std::string::npos) << where;
+        EXPECT_NE(r.err.find(key.dotted), std::string::npos) << where;
+      }
+    }
+  }
 }
 
 }  // namespace
