@@ -3,23 +3,21 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 
 #include "combabc/core/error.hpp"
 #include "combabc/services/calibration.hpp"
+#include "interrupt.hpp"
 #include "progress_display.hpp"
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void OnSigint(int) { g_interrupted = true; }
-
 // sysexits.h codes for failures that are not combabc::Error.
 constexpr int kExitUsage = 64;
 constexpr int kExitSoftware = 70;
+// The same bound as [sampler] threads (SmcOptions::IsValid).
+constexpr int kMaxThreads = 4096;
 
 void PrintOutcome(const combabc::services::RunOutcome& outcome) {
   std::cout << outcome.history.summary.BriefReport() << "\n"
@@ -42,7 +40,9 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run a calibration from a TOML config (docs/config.md)");
   run->add_option("CONFIG", request.config_path, "Config file")->required();
   run->add_option("-o,--output", request.output_directory, "Output directory (overrides [output])");
-  run->add_option("-j,--threads", request.threads, "Threads (overrides [sampler] threads)");
+  // -1 (the default) means "not given"; a user may only ask for 0 (all cores) .. kMaxThreads.
+  run->add_option("-j,--threads", request.threads, "Threads, 0 = all cores (overrides [sampler])")
+      ->check(CLI::Range(0, kMaxThreads));
   run->add_flag("--overwrite", request.overwrite, "Replace an existing history file");
   run->add_flag("--no-report", no_report, "Do not write figures at the end");
   run->add_flag("-q,--quiet", quiet, "No progress display");
@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
   int resume_threads = -1;
   auto* resume = app.add_subcommand("resume", "Continue a killed or interrupted run");
   resume->add_option("RUN.sqlite", history, "History file of the run")->required();
-  resume->add_option("-j,--threads", resume_threads, "Threads (default: the run's own)");
+  resume->add_option("-j,--threads", resume_threads, "Threads, 0 = all cores (default: the run's)")
+      ->check(CLI::Range(0, kMaxThreads));
   resume->add_flag("--no-report", no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", quiet, "No progress display");
 
@@ -93,22 +94,26 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // One line, like every other error; the full usage is one --help away.
-    std::cerr << "combabc: usage error: " << e.what() << " (see combabc --help)\n";
+    std::cerr << "combabc: usage error: " << combabc::Printable(e.what(), 400)
+              << " (see combabc --help)\n";
     return kExitUsage;
   }
 
-  std::signal(SIGINT, OnSigint);
-  std::signal(SIGTERM, OnSigint);
-  combabc::cli::ProgressDisplay progress(&g_interrupted, isatty(STDERR_FILENO) != 0);
-  combabc::SmcObserver* observer = quiet ? nullptr : &progress;
+  combabc::cli::ProgressDisplay progress(isatty(STDERR_FILENO) != 0);
+  combabc::cli::InterruptObserver interrupt(quiet ? nullptr : &progress);
+  combabc::SmcObserver* observer = &interrupt;
+  bool interrupted = false;
   try {
-    if (*run) {
+    if (*run || *resume) {
       request.report = !no_report;
-      PrintOutcome(combabc::services::RunCalibration(request, observer));
-      if (g_interrupted) std::cerr << "interrupted; continue with: combabc resume <RUN.sqlite>\n";
-    } else if (*resume) {
-      PrintOutcome(
-          combabc::services::ResumeCalibration(history, resume_threads, !no_report, observer));
+      const auto outcome = *run ? combabc::services::RunCalibration(request, observer)
+                                : combabc::services::ResumeCalibration(
+                                      history, resume_threads, !no_report, observer);
+      PrintOutcome(outcome);
+      interrupted = outcome.history.summary.termination == combabc::Termination::kInterrupted;
+      if (interrupted) {
+        std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path << "\n";
+      }
     } else if (*simulate) {
       combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);
       std::cout << "wrote " << sim_out << "\n";
@@ -133,8 +138,8 @@ int main(int argc, char** argv) {
     return combabc::ExitCode(e.kind());
   } catch (const std::exception& e) {
     progress.Clear();
-    std::cerr << "combabc: internal error: " << e.what() << "\n";
+    std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";
     return kExitSoftware;
   }
-  return g_interrupted ? 130 : 0;
+  return interrupted ? 130 : 0;
 }

@@ -3,7 +3,6 @@
 // needed, acceptance rate, ETA); otherwise one line per finished wave, so logs stay readable.
 // Waves are numbered from 1 here, like the paper and the report's figures (the engine, the
 // history file and the export count from 0).
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 
@@ -13,8 +12,7 @@ namespace combabc::cli {
 
 class ProgressDisplay : public SmcObserver {
  public:
-  ProgressDisplay(const std::atomic<bool>* interrupted, bool terminal)
-      : interrupted_(interrupted), terminal_(terminal) {}
+  explicit ProgressDisplay(bool terminal) : terminal_(terminal) {}
 
   void OnWaveStart(const WaveRecord& wave) override {
     wave_start_ = std::chrono::steady_clock::now();
@@ -62,8 +60,6 @@ class ProgressDisplay : public SmcObserver {
                  w.complete ? "" : "  (incomplete)");
   }
 
-  bool ShouldStop() override { return interrupted_ && interrupted_->load(); }
-
   void Clear() {
     if (dirty_) std::fputs("\r\033[K", stderr);
     dirty_ = false;
@@ -79,7 +75,6 @@ class ProgressDisplay : public SmcObserver {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wave_start_).count();
   }
 
-  const std::atomic<bool>* interrupted_;
   bool terminal_;
   bool dirty_ = false;
   int wave_ = 0;

@@ -3,11 +3,11 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <sstream>
 
+#include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
 #include "config_reader.hpp"
 
@@ -83,8 +83,9 @@ void ParseOutput(TableReader& root, CalibrationConfig* c) {
   if (const auto formats = t->Strings("figures")) {
     for (const std::string& f : *formats) {
       if (f != "png" && f != "svg" && f != "pdf") {
-        t->Fail("figures",
-                "unknown figure format \"" + f + "\"; expected " + OneOf({"png", "svg", "pdf"}));
+        t->Fail(
+            "figures",
+            "unknown figure format " + Excerpt(f) + "; expected " + OneOf({"png", "svg", "pdf"}));
       }
     }
     o.figure_formats = *formats;
@@ -93,26 +94,113 @@ void ParseOutput(TableReader& root, CalibrationConfig* c) {
   t->Finish();
 }
 
-// A failed IsValid() message starts "SmcOptions::field..." or "BinarySpaceOptions::field...":
-// report it at the config key that set that field.
+// The config key of an SmcOptions / BinarySpaceOptions field the user did not set.
+std::string SamplerKeyOf(const std::string& field) {
+  static const std::map<std::string, std::string> keys = {
+      {"num_waves", "sampler.waves"},
+      {"accepted_per_wave", "sampler.accepted_per_wave"},
+      {"threads", "sampler.threads"},
+      {"max_simulations", "sampler.max_simulations"},
+      {"min_acceptance_rate", "sampler.min_acceptance_rate"},
+      {"max_wall_time_s", "sampler.max_wall_time"},
+      {"batch_size", "sampler.batch_size"},
+      {"tempering", "sampler.tempering"},
+      {"thresholds", "metric"},
+      {"default_prior_one", "sampler.prior"},
+      {"prior_one", "sampler.prior"},
+      {"tied", "sampler.tie"},
+  };
+  const auto it = keys.find(field);
+  return it != keys.end() ? it->second : "sampler";
+}
+
+// A failed IsValid() message reads "SmcOptions::field = value; constraint" (or "...::field.sub
+// has ..."): report it at the config key that set that field, in the config's words, so C++
+// field names never reach the user ("sampler.waves: is 0; must be >= 1").
 [[noreturn]] void ThrowAttributed(const std::string& why,
                                   const std::string& prefix,
                                   const std::map<std::string, Source>& map,
                                   const Source& fallback,
                                   const std::string& path) {
-  std::string field;
-  if (why.rfind(prefix, 0) == 0) {
-    std::size_t end = prefix.size();
-    while (end < why.size() && (std::isalnum(static_cast<unsigned char>(why[end])) ||
-                                why[end] == '_' || why[end] == '[' || why[end] == ']')) {
-      ++end;
-    }
-    field = why.substr(prefix.size(), end - prefix.size());
+  std::size_t end = why.rfind(prefix, 0) == 0 ? prefix.size() : 0;
+  const std::size_t begin = end;
+  while (end < why.size() && (std::isalnum(static_cast<unsigned char>(why[end])) ||
+                              why[end] == '_' || why[end] == '[' || why[end] == ']')) {
+    ++end;
   }
+  const std::string field = why.substr(begin, end - begin);
+  const std::string base = field.substr(0, field.find('['));
   auto it = map.find(field);
-  if (it == map.end()) it = map.find(field.substr(0, field.find('[')));
-  const Source& source = it != map.end() ? it->second : fallback;
-  throw Error(ErrorKind::kConfig, why, path, source.line, source.key);
+  if (it == map.end()) it = map.find(base);
+  const bool set_by_user = it != map.end();
+  const std::string key = set_by_user ? it->second.key : SamplerKeyOf(base);
+  const int line = set_by_user ? it->second.line : fallback.line;
+  std::string detail = why.substr(end);
+  if (detail.rfind(" = ", 0) == 0) {
+    detail = "is " + detail.substr(3);
+  } else {
+    // "[2] = ...", ".values has ...": keep the part below the key.
+    if (!detail.empty() && (detail.front() == '.' || detail.front() == ' ')) detail.erase(0, 1);
+    if (field != base) detail = field.substr(base.size()) + " " + detail;
+  }
+  throw Error(ErrorKind::kConfig, detail, path, line, key);
+}
+
+// The sampler's share of memory (bytes): the candidate batch's buffers and, for every wave, its
+// accepted particles (bits, distances, and outputs when kept), which the run keeps until it ends.
+struct SamplerMemory {
+  double batch = 0.0;
+  double particles = 0.0;
+};
+
+SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
+  const auto d = static_cast<double>(c.space.dimension);
+  const auto m = static_cast<double>(c.model.output_positions.size());
+  const auto components = static_cast<double>(c.metric.components.size());
+  constexpr double kOverheadBytes = 160.0;  // vector headers, allocator slack, RNG state
+  const int threads = c.smc.threads > 0 ? c.smc.threads : 4096;
+  const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : std::max(4096.0, 32.0 * threads);
+  SamplerMemory memory;
+  memory.batch = batch * (2.0 * d + 8.0 * (m + components) + kOverheadBytes);
+  memory.particles = static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
+                     (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes);
+  return memory;
+}
+
+std::string Gigabytes(double bytes) {
+  std::ostringstream os;
+  os.precision(bytes < 1e8 ? 2 : 3);
+  os << bytes / 1e9 << " GB";
+  return os.str();
+}
+
+// The model's precompute and the sampler's buffers together must fit memory_limit_gb; blamed on
+// the sampler key that asks for the larger share.
+void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
+  const double model = c.model.EstimatedMemoryBytes();
+  const SamplerMemory sampler = EstimateSamplerMemory(c);
+  const double total = model + sampler.batch + sampler.particles;
+  if (total <= c.model.memory_limit_bytes) return;
+  std::string field = sampler.batch > sampler.particles ? "batch_size" : "accepted_per_wave";
+  if (field == "accepted_per_wave" && sources.smc.count("num_waves") &&
+      c.smc.num_waves > c.smc.accepted_per_wave) {
+    field = "num_waves";
+  }
+  const auto it = sources.smc.find(field);
+  const Source source = it != sources.smc.end() ? it->second : sources.sampler;
+  const double value = field == "batch_size"  ? c.smc.batch_size
+                       : field == "num_waves" ? c.smc.num_waves
+                                              : c.smc.accepted_per_wave;
+  throw Error(ErrorKind::kConfig,
+              "is " + std::to_string(static_cast<long long>(value)) +
+                  "; the run would need about " + Gigabytes(total) + " of memory (limit " +
+                  Gigabytes(c.model.memory_limit_bytes) + "): model " + Gigabytes(model) +
+                  ", candidate batch " + Gigabytes(sampler.batch) + ", accepted particles " +
+                  Gigabytes(sampler.particles) +
+                  "; lower it or raise memory_limit_gb (docs/config.md, \"Limits\")",
+              c.path,
+              source.line,
+              it != sources.smc.end() ? source.key : SamplerKeyOf(field));
 }
 
 }  // namespace
@@ -160,20 +248,14 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   if (!c.space.IsValid(&why)) {
     ThrowAttributed(why, "BinarySpaceOptions::", sources.space, sources.sampler, c.path);
   }
+  CheckRunMemory(c, sources);
   return c;
 }
 
 CalibrationConfig LoadConfig(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw Error(ErrorKind::kNoInput, "is a directory, not a config file", path);
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(ErrorKind::kNoInput, "cannot open config file", path);
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) throw Error(ErrorKind::kNoInput, "cannot read config file", path);
-  return ParseConfig(text.str(), path);
+  const std::string text =
+      ReadBoundedFile(path, kMaxConfigBytes, "config file", ErrorKind::kConfig);
+  return ParseConfig(text, path);
 }
 
 }  // namespace combabc

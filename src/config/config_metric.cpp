@@ -95,7 +95,7 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
     const auto preset = ParseEnum<MetricPreset>(*preset_text);
     if (!preset) {
       t->Fail("preset",
-              "unknown preset \"" + *preset_text + "\"; expected one of " +
+              "unknown preset " + Excerpt(*preset_text) + "; expected one of " +
                   EnumChoices<MetricPreset>());
     }
     c->metric.preset = *preset;

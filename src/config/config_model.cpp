@@ -2,6 +2,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <sstream>
+#include <string>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
@@ -36,12 +38,96 @@ void InRange(TableReader& t,
   *value = t.NumberIn(key, *value, lo, hi);
 }
 
+std::string Number(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+// The config key of a SensorOptions field, for fields the user did not set (their line is the
+// [model] table's). Layer fields are "layers[k]::name".
+std::string ModelKeyOf(const std::string& field) {
+  static const std::map<std::string, std::string> keys = {
+      {"length", "model.length"},
+      {"width", "model.width"},
+      {"layers", "model.layer"},
+      {"foundation_stiffness", "model.foundation_stiffness"},
+      {"foundation_loss_factor", "model.foundation_loss_factor"},
+      {"clamps_per_edge", "model.clamps.per_edge"},
+      {"fixed_support", "model.clamps.fixed_support"},
+      {"load_force", "model.load.amplitude"},
+      {"load_x", "model.load.x"},
+      {"load_y_fraction", "model.load.y_fraction"},
+      {"load_patch_length", "model.load.patch_length"},
+      {"load_patch_width", "model.load.patch_width"},
+      {"frequency_hz", "model.load.frequency"},
+      {"output_positions", "model.output.positions"},
+      {"output_y_fraction", "model.output.y_fraction"},
+      {"elements_per_section", "model.mesh.elements_per_section"},
+      {"elements_across_width", "model.mesh.elements_across_width"},
+      {"memory_limit_bytes", "memory_limit_gb"},
+  };
+  if (field.rfind("layers[", 0) == 0) {
+    const std::size_t close = field.find(']');
+    std::string name = field.substr(close + 3);  // after "]::"
+    if (name == "youngs_modulus") name = "young_modulus";
+    return "model.layer" + field.substr(6, close - 5) + "." + name;
+  }
+  const auto it = keys.find(field);
+  return it != keys.end() ? it->second : "model";
+}
+
+// Reports a failed SensorOptions::IsValid ("SensorOptions::field = value; constraint") at the
+// config key the user wrote (or would write), in the config's words: "file:line: model.load.x: is
+// 1.2; must lie on the plate, in [0, 0.9] m". C++ field names never reach the user.
+[[noreturn]] void ThrowModelError(const std::string& why,
+                                  const std::map<std::string, Source>& sources,
+                                  int model_line,
+                                  const std::string& path) {
+  const std::string prefix = "SensorOptions::";
+  const std::size_t equals = why.find(" = ");
+  std::string field = why.substr(prefix.size(), equals - prefix.size());
+  std::string detail = why.substr(equals + 3);  // "value; constraint"
+  // output_positions[12] and output_positions.size() are both set by positions or spacing.
+  std::string base = field;
+  if (base.rfind("output_positions", 0) == 0) base = "output_positions";
+  const auto it = sources.find(base);
+  const bool set_by_user = it != sources.end();
+  const std::string key = set_by_user ? it->second.key : ModelKeyOf(base);
+  const int line = set_by_user ? it->second.line : model_line;
+  if (field.rfind("output_positions[", 0) == 0) {
+    detail = "entry " + field.substr(17, field.find(']') - 17) + " is " + detail;
+  } else if (field == "output_positions.size()") {
+    detail = "gives " + detail.substr(0, detail.find(';')) + " positions" +
+             detail.substr(detail.find(';'));
+  } else if (field == "memory_limit_bytes") {  // bytes inside, GB in the config
+    const std::size_t semicolon = detail.find(';');
+    detail = "is " + Number(std::stod(detail.substr(0, semicolon)) / 1e9) +
+             (set_by_user ? "" : " (the default)") + detail.substr(semicolon);
+  } else {
+    const std::size_t semicolon = detail.find(';');
+    detail = "is " + detail.substr(0, semicolon) + (set_by_user ? "" : " (the default)") +
+             detail.substr(semicolon);
+  }
+  if (detail.find("of memory") != std::string::npos) {
+    detail += "; lower it or raise memory_limit_gb (docs/config.md, \"Limits\")";
+  }
+  throw Error(ErrorKind::kConfig, detail, path, line, key);
+}
+
 plate::Support SupportKey(TableReader& t, std::string_view key, plate::Support fallback) {
   return t.Choice<plate::Support>(key, "support").value_or(fallback);
 }
 
-plate::Layer ParseLayer(TableReader& t) {
+plate::Layer ParseLayer(TableReader& t, int index, std::map<std::string, Source>* sources) {
   plate::Layer layer;
+  // SensorOptions::IsValid names layer fields "layers[k]::youngs_modulus" (the C++ names).
+  const std::string field = "layers[" + std::to_string(index) + "]::";
+  Note(*sources, field + "thickness", t, "thickness");
+  Note(*sources, field + "youngs_modulus", t, "young_modulus");
+  Note(*sources, field + "density", t, "density");
+  Note(*sources, field + "poisson_ratio", t, "poisson_ratio");
+  Note(*sources, field + "loss_factor", t, "loss_factor");
   for (const char* required : {"thickness", "young_modulus", "density"}) {
     if (!t.Has(required)) t.Fail(required, "missing required key");
   }
@@ -63,6 +149,11 @@ plate::Layer ParseLayer(TableReader& t) {
 int ParseModelSection(TableReader& root, CalibrationConfig* config) {
   plate::SensorOptions& m = config->model;
   std::map<std::string, Source> sources;  // SensorOptions field -> config key
+  // The memory budget is a top-level key: it bounds the whole run, the sampler's buffers too.
+  if (root.Has("memory_limit_gb")) {
+    Note(sources, "memory_limit_bytes", root, "memory_limit_gb");
+    m.memory_limit_bytes = root.NumberIn("memory_limit_gb", 0.0, 0.01, 1e4) * 1e9;
+  }
   auto t = root.Table("model");
   if (t) {
     sources[""] = {t->prefix(), t->line()};
@@ -86,17 +177,28 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
     auto layers = t->Tables("layer");
     if (!layers.empty()) {
       m.layers.clear();
-      for (TableReader& lt : layers) m.layers.push_back(ParseLayer(lt));
+      for (TableReader& lt : layers) {
+        m.layers.push_back(ParseLayer(lt, static_cast<int>(m.layers.size()), &sources));
+      }
       sources["layers"] = {t->Key("layer"), t->Line("layer")};
     }
 
     if (auto c = t->Table("clamps")) {
       const bool per_edge_given = c->Has("per_edge");
-      m.clamps_per_edge = c->IntegerIn("per_edge", m.clamps_per_edge, 1, 10000);
+      Note(sources, "clamps_per_edge", *c, "per_edge");
+      m.clamps_per_edge = c->IntegerIn("per_edge", m.clamps_per_edge, 1, plate::kMaxClampsPerEdge);
       if (const auto section = c->Number("section_length")) {
         // An alternative way to state the layout; it must tile the length exactly.
-        if (!(*section > 0.0)) c->Fail("section_length", "must be > 0");
+        if (!(*section > 0.0) || !std::isfinite(*section)) {
+          c->Fail("section_length", "must be finite and > 0");
+        }
+        // Checked as a double before the conversion to int (which could overflow).
         const double sections = m.length / *section;
+        if (!(sections <= plate::kMaxClampsPerEdge)) {
+          c->Fail("section_length",
+                  "gives " + Number(sections) + " sections per edge; at most " +
+                      std::to_string(plate::kMaxClampsPerEdge));
+        }
         const auto rounded = std::lround(sections);
         if (rounded < 1 || std::abs(sections - static_cast<double>(rounded)) > 1e-6) {
           c->Fail("section_length", "must divide model.length into a whole number of sections");
@@ -107,6 +209,7 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
                       ")");
         }
         m.clamps_per_edge = static_cast<int>(rounded);
+        Note(sources, "clamps_per_edge", *c, "section_length");
       }
       m.fixed_support = SupportKey(*c, "fixed_support", m.fixed_support);
       if (m.fixed_support == plate::Support::kFree) {
@@ -125,6 +228,7 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
       if (l->Has("x")) sources["load_x"] = {l->Key("x"), l->Line("x")};
       m.load_x = l->NumberIn("x", m.load_x, 0.0, kHuge);
       InRange(*l, "y_fraction", 0.0, 1.0, &m.load_y_fraction, &sources, "load_y_fraction");
+      Note(sources, "load_force", *l, "amplitude");
       if (const auto force = l->Number("amplitude")) {
         if (!std::isfinite(*force)) l->Fail("amplitude", "must be finite");
         m.load_force = *force;
@@ -132,7 +236,8 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
       InRange(*l, "frequency", 0.0, kHuge, &m.frequency_hz, &sources, "frequency_hz");
       const auto type = l->String("type");
       if (type && *type != "point" && *type != "patch") {
-        l->Fail("type", "unknown load type \"" + *type + "\"; expected \"point\" or \"patch\"");
+        l->Fail("type",
+                "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
       }
       InRange(*l, "patch_length", 0.0, kHuge, &m.load_patch_length, &sources, "load_patch_length");
       InRange(*l, "patch_width", 0.0, kHuge, &m.load_patch_width, &sources, "load_patch_width");
@@ -154,6 +259,11 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
       }
       if (const auto positions = o->Numbers("positions")) {
         if (positions->empty()) o->Fail("positions", "must not be empty");
+        if (positions->size() > plate::kMaxOutputPositions) {
+          o->Fail("positions",
+                  "has " + std::to_string(positions->size()) + " entries; at most " +
+                      std::to_string(plate::kMaxOutputPositions));
+        }
         for (std::size_t k = 1; k < positions->size(); ++k) {
           if (!((*positions)[k] > (*positions)[k - 1])) {
             o->Fail("positions", "must be strictly increasing (entry " + std::to_string(k) + ")");
@@ -166,8 +276,15 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
         if (!(*spacing > 0.0) || *spacing > m.length) {
           o->Fail("spacing", "must be in (0, model.length]");
         }
-        // 0, h, 2h, ... up to the length (inclusive within rounding).
-        const auto n = static_cast<int>(std::floor(m.length / *spacing + 1e-9));
+        // 0, h, 2h, ... up to the length (inclusive within rounding). The count is checked as a
+        // double before the conversion (a tiny spacing would overflow an int, or exhaust memory).
+        const double intervals = std::floor(m.length / *spacing + 1e-9);
+        if (!(intervals + 1 <= static_cast<double>(plate::kMaxOutputPositions))) {
+          o->Fail("spacing",
+                  "gives " + Number(intervals + 1) + " output positions; at most " +
+                      std::to_string(plate::kMaxOutputPositions) + " (use a larger spacing)");
+        }
+        const auto n = static_cast<int>(intervals);
         m.output_positions.clear();
         for (int k = 0; k <= n; ++k) m.output_positions.push_back(k * *spacing);
         sources["output_positions"] = {o->Key("spacing"), o->Line("spacing")};
@@ -177,26 +294,19 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
     }
 
     if (auto mesh = t->Table("mesh")) {
-      m.elements_per_section =
-          mesh->IntegerIn("elements_per_section", m.elements_per_section, 1, 10000);
-      m.elements_across_width =
-          mesh->IntegerIn("elements_across_width", m.elements_across_width, 1, 10000);
+      Note(sources, "elements_per_section", *mesh, "elements_per_section");
+      Note(sources, "elements_across_width", *mesh, "elements_across_width");
+      m.elements_per_section = mesh->IntegerIn(
+          "elements_per_section", m.elements_per_section, 1, plate::kMaxElementsPerSection);
+      m.elements_across_width = mesh->IntegerIn(
+          "elements_across_width", m.elements_across_width, 1, plate::kMaxElementsAcrossWidth);
       mesh->Finish();
     }
     t->Finish();
   }
 
   std::string why;
-  if (!m.IsValid(&why)) {
-    // "SensorOptions::field = value; constraint": report at the key that set the field.
-    const std::string prefix = "SensorOptions::";
-    std::string field = why.rfind(prefix, 0) == 0 ? why.substr(prefix.size()) : why;
-    field = field.substr(0, field.find_first_of(" .["));
-    auto it = sources.find(field);
-    if (it == sources.end()) it = sources.find("");
-    const Source source = it != sources.end() ? it->second : Source{"model", 1};
-    throw Error(ErrorKind::kConfig, why, config->path, source.line, source.key);
-  }
+  if (!m.IsValid(&why)) ThrowModelError(why, sources, t ? t->line() : 1, config->path);
   return 2 * m.clamps_per_edge;
 }
 

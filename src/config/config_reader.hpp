@@ -14,6 +14,7 @@
 #include <toml++/toml.h>
 
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/error.hpp"
 
 namespace combabc::config_internal {
 
@@ -64,7 +65,7 @@ class TableReader {
     const std::optional<T> value = ParseEnum<T>(*text);
     if (!value) {
       Fail(key,
-           "unknown " + std::string(what) + " \"" + *text + "\"; expected one of " +
+           "unknown " + std::string(what) + " " + Excerpt(*text) + "; expected one of " +
                EnumChoices<T>());
     }
     return value;

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <string>
 #include <unsupported/Eigen/NonLinearOptimization>
@@ -75,6 +76,12 @@ Eigen::VectorXd InitialGuess(const Eigen::VectorXd& d, const Eigen::VectorXd& y,
   return p;
 }
 
+std::string Metres(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g m", x);
+  return text;
+}
+
 }  // namespace
 
 double GaussianFit::operator()(double x) const {
@@ -145,10 +152,13 @@ GaussianExtension ExtendWithGaussian(const GaussianExtensionOptions& options,
   if (positions.empty() || positions.size() != values.size()) {
     throw Error(ErrorKind::kData, "Gaussian extension: no data to extend");
   }
-  if (!(options.spacing > 0.0)) {
-    throw Error(ErrorKind::kData, "Gaussian extension: spacing must be > 0");
+  if (!(options.spacing > 0.0) || !std::isfinite(options.spacing)) {
+    throw Error(ErrorKind::kData, "Gaussian extension: spacing must be finite and > 0");
   }
   const double x0 = options.impact_position;
+  if (!std::isfinite(x0)) {
+    throw Error(ErrorKind::kData, "Gaussian extension: impact position must be finite");
+  }
   const bool below = x0 < positions.front();
   if (!below && !(x0 > positions.back())) {
     throw Error(ErrorKind::kData,
@@ -161,6 +171,18 @@ GaussianExtension ExtendWithGaussian(const GaussianExtensionOptions& options,
                 "Gaussian extension: fit_points = " + std::to_string(options.fit_points) +
                     " but only " + std::to_string(positions.size()) + " points are available");
   }
+  const double nearest = below ? positions.front() : positions.back();
+  const double gap = std::abs(nearest - x0);
+  // Synthesise x0, x0 +- h, ... while at least h/2 away from the nearest measurement. The count is
+  // range-checked as a double before any conversion: a tiny spacing or a far impact would
+  // otherwise overflow the integer (undefined behaviour) or exhaust memory.
+  const double steps = std::floor((gap - 0.5 * options.spacing) / options.spacing) + 1.0;
+  if (!(steps <= static_cast<double>(kMaxSyntheticPoints))) {
+    throw Error(ErrorKind::kData,
+                "Gaussian extension: spacing " + Metres(options.spacing) + " over the gap of " +
+                    Metres(gap) + " to the impact would " + "synthesise more than " +
+                    std::to_string(kMaxSyntheticPoints) + " points; use a larger spacing");
+  }
   // The impact lies outside the data, so the k nearest points are the k at that end.
   const auto k = static_cast<std::size_t>(options.fit_points);
   const std::size_t first = below ? 0 : positions.size() - k;
@@ -168,12 +190,8 @@ GaussianExtension ExtendWithGaussian(const GaussianExtensionOptions& options,
   out.fit =
       FitGaussian(positions.subspan(first, k), values.subspan(first, k), x0, options.fit_offset);
 
-  const double nearest = below ? positions.front() : positions.back();
-  const double gap = std::abs(nearest - x0);
-  // Synthesise x0, x0 +- h, ... while at least h/2 away from the nearest measurement.
-  const auto count =
-      static_cast<int>(std::floor((gap - 0.5 * options.spacing) / options.spacing)) + 1;
-  for (int i = 0; i < std::max(count, 0); ++i) {
+  const auto count = static_cast<int>(std::max(steps, 0.0));
+  for (int i = 0; i < count; ++i) {
     const double step = i * options.spacing;
     out.positions.push_back(below ? x0 + step : x0 - step);
   }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
 
 namespace combabc {
@@ -44,21 +45,54 @@ bool IsBlank(std::string_view line) {
   return t.empty() || t.front() == '#';
 }
 
+// Splits text into lines at LF, CRLF or a lone CR (old Mac exports), so every convention gives the
+// same rows and line numbers.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+  bool Next(std::string_view* line) {
+    if (at_ >= text_.size()) return false;
+    const std::size_t end = std::min(text_.find_first_of("\r\n", at_), text_.size());
+    *line = text_.substr(at_, end - at_);
+    at_ = end;
+    if (at_ < text_.size() && text_[at_] == '\r') ++at_;  // CR, or the CR of CRLF
+    if (at_ < text_.size() && text_[at_] == '\n') ++at_;  // LF, or the LF of CRLF
+    ++number_;
+    return true;
+  }
+  int number() const { return number_; }
+
+ private:
+  std::string_view text_;
+  std::size_t at_ = 0;
+  int number_ = 0;
+};
+
+// A whole (trimmed) cell as a finite number: "12", "-1.5e-6", "+3". Anything else, "12abc",
+// "1 2", "0x10", text, is refused rather than read as a prefix or as 0. `column` is 1-based.
 double ParseCell(std::string_view cell,
                  const std::string& path,
                  int line,
-                 const std::string& column) {
-  if (cell.empty()) throw Error(ErrorKind::kData, "empty cell", path, line, column);
-  if (cell.front() == '+') cell.remove_prefix(1);
+                 int column,
+                 const std::string& column_name) {
+  auto fail = [&](const std::string& message) {
+    throw Error(ErrorKind::kData, message, path, line, column_name, column);
+  };
+  if (cell.empty()) fail("empty cell");
+  std::string_view digits = cell;
+  if (digits.front() == '+') digits.remove_prefix(1);
   double value = 0.0;
-  const auto [end, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
-  if (ec != std::errc() || end != cell.data() + cell.size()) {
-    throw Error(ErrorKind::kData, "not a number: '" + std::string(cell) + "'", path, line, column);
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  if (ec == std::errc::result_out_of_range) fail("number out of range: " + Excerpt(cell));
+  if (ec != std::errc() || end != digits.data() + digits.size() || digits.empty()) {
+    fail("not a number: " + Excerpt(cell));
   }
-  if (std::isnan(value)) throw Error(ErrorKind::kData, "value is NaN", path, line, column);
-  if (std::isinf(value)) throw Error(ErrorKind::kData, "value is infinite", path, line, column);
+  if (std::isnan(value)) fail("value is NaN");
+  if (std::isinf(value)) fail("value is infinite");
   return value;
 }
+
+int ColumnNumber(std::size_t index) { return static_cast<int>(index) + 1; }
 
 std::string FormatMetres(double x) {
   std::ostringstream out;
@@ -93,20 +127,16 @@ std::string ResolvePath(const std::string& base_dir, const std::string& path) {
 MeasuredData ParseMeasuredData(const std::string& text,
                                const std::string& path,
                                const DataConfig& config) {
-  std::istringstream in(text);
-  std::string raw;
-  int line = 0;
+  LineReader in(text);
+  std::string_view raw;
   // Header: the first non-blank line.
   std::vector<std::string_view> header;
-  std::string header_line;
   int header_number = 0;
-  while (std::getline(in, raw)) {
-    ++line;
-    if (line == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw.erase(0, 3);  // UTF-8 BOM
+  while (in.Next(&raw)) {
+    if (in.number() == 1 && raw.starts_with("\xEF\xBB\xBF")) raw.remove_prefix(3);  // UTF-8 BOM
     if (IsBlank(raw)) continue;
-    header_line = raw;
-    header_number = line;
-    header = SplitCells(header_line);
+    header_number = in.number();
+    header = SplitCells(raw);
     break;
   }
   if (header.empty()) throw Error(ErrorKind::kData, "empty file (no header row)", path, 1);
@@ -114,10 +144,15 @@ MeasuredData ParseMeasuredData(const std::string& text,
   auto find_column = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), std::string_view(name));
     if (it == header.end()) {
+      // A few names only: the file may not be the one intended, and is echoed in excerpts.
+      constexpr std::size_t kNamesShown = 6;
       std::string have;
-      for (auto h : header) have += (have.empty() ? "" : ", ") + std::string(h);
+      for (std::size_t k = 0; k < std::min(header.size(), kNamesShown); ++k) {
+        have += (have.empty() ? "" : ", ") + Excerpt(header[k]);
+      }
+      if (header.size() > kNamesShown) have += ", ...";
       throw Error(ErrorKind::kData,
-                  "missing column '" + name + "' (header has: " + have + ")",
+                  "missing column " + Excerpt(name) + " (header has: " + have + ")",
                   path,
                   header_number,
                   name);
@@ -132,8 +167,8 @@ MeasuredData ParseMeasuredData(const std::string& text,
   const double y_scale = MetresPer(config.displacement_unit);
   std::vector<double> xs, ys;
   std::vector<int> lines;
-  while (std::getline(in, raw)) {
-    ++line;
+  while (in.Next(&raw)) {
+    const int line = in.number();
     if (IsBlank(raw)) continue;
     const auto cells = SplitCells(raw);
     if (cells.size() < needed) {
@@ -145,22 +180,28 @@ MeasuredData ParseMeasuredData(const std::string& text,
                   line,
                   column);
     }
-    const double x = ParseCell(cells[x_col], path, line, config.position_column) * x_scale;
-    const double y = ParseCell(cells[y_col], path, line, config.displacement_column) * y_scale;
+    const double x =
+        ParseCell(cells[x_col], path, line, ColumnNumber(x_col), config.position_column) * x_scale;
+    const double y =
+        ParseCell(cells[y_col], path, line, ColumnNumber(y_col), config.displacement_column) *
+        y_scale;
     if (!xs.empty() && x <= xs.back()) {
       throw Error(
           ErrorKind::kData,
           std::string(x == xs.back() ? "duplicate position " : "positions must increase: ") +
-              std::string(cells[x_col]) + " after line " + std::to_string(lines.back()),
+              Excerpt(cells[x_col]) + " after line " + std::to_string(lines.back()),
           path,
           line,
-          config.position_column);
+          config.position_column,
+          ColumnNumber(x_col));
     }
     xs.push_back(x);
     ys.push_back(y);
     lines.push_back(line);
   }
-  if (xs.empty()) throw Error(ErrorKind::kData, "no data rows after the header", path, line);
+  if (xs.empty()) {
+    throw Error(ErrorKind::kData, "no data rows after the header", path, header_number);
+  }
 
   MeasuredData data;
   data.source = path;
@@ -227,16 +268,8 @@ MeasuredData ParseMeasuredData(const std::string& text,
 MeasuredData LoadMeasuredData(const DataConfig& config, const std::string& config_dir) {
   const std::string path = ResolvePath(config_dir, config.csv);
   if (config.csv.empty()) throw Error(ErrorKind::kNoInput, "no CSV file given", {}, 0, "data.csv");
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw Error(ErrorKind::kNoInput, "is a directory, not a data file", path);
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(ErrorKind::kNoInput, "cannot open data file", path);
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) throw Error(ErrorKind::kNoInput, "cannot read data file", path);
-  return ParseMeasuredData(text.str(), path, config);
+  const std::string text = ReadBoundedFile(path, kMaxCsvBytes, "data file", ErrorKind::kData);
+  return ParseMeasuredData(text, path, config);
 }
 
 }  // namespace combabc

@@ -30,15 +30,23 @@ Eigen::Matrix3d ReducedStiffnessShape(double nu) {
 }  // namespace
 
 bool Layer::IsValid(std::string* why, const std::string& prefix) const {
-  if (!(thickness > 0.0)) return Fail(why, prefix, "thickness", thickness, "must be > 0");
-  if (!(youngs_modulus > 0.0)) {
-    return Fail(why, prefix, "youngs_modulus", youngs_modulus, "must be > 0");
+  // Physical ranges, generous enough for any laminate (from foams to steel, nanometre films to
+  // metre-thick slabs) and tight enough that the stiffness and mass stay finite doubles.
+  if (!(thickness >= 1e-9 && thickness <= 1.0)) {
+    return Fail(why, prefix, "thickness", thickness, "must be in [1e-9, 1] m");
+  }
+  if (!(youngs_modulus >= 1.0 && youngs_modulus <= 1e13)) {
+    return Fail(why, prefix, "youngs_modulus", youngs_modulus, "must be in [1, 1e13] Pa");
   }
   if (!(poisson_ratio > -1.0 && poisson_ratio < 0.5)) {
     return Fail(why, prefix, "poisson_ratio", poisson_ratio, "must be in (-1, 0.5)");
   }
-  if (!(density > 0.0)) return Fail(why, prefix, "density", density, "must be > 0");
-  if (!(loss_factor >= 0.0)) return Fail(why, prefix, "loss_factor", loss_factor, "must be >= 0");
+  if (!(density >= 1e-3 && density <= 1e5)) {
+    return Fail(why, prefix, "density", density, "must be in [1e-3, 1e5] kg/m^3");
+  }
+  if (!(loss_factor >= 0.0 && loss_factor <= 10.0)) {
+    return Fail(why, prefix, "loss_factor", loss_factor, "must be in [0, 10]");
+  }
   return true;
 }
 

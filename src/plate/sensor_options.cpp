@@ -43,60 +43,143 @@ std::vector<double> DefaultOutputPositions() {
   return x;
 }
 
+namespace {
+
+// "about 7.2 GB": memory for messages, in 10^9 bytes.
+std::string Gigabytes(double bytes) {
+  std::ostringstream os;
+  os.precision(bytes < 1e8 ? 2 : 3);
+  os << bytes / 1e9 << " GB";
+  return os.str();
+}
+
+bool InRange(double value, double lo, double hi) { return value >= lo && value <= hi; }
+
+}  // namespace
+
 bool SensorOptions::IsValid(std::string* why) const {
-  if (!(length > 0.0)) return Fail(why, "length", length, "must be > 0");
-  if (!(width > 0.0)) return Fail(why, "width", width, "must be > 0");
-  if (layers.empty()) return Fail(why, "layers.size()", 0, "must be >= 1");
+  // Physical ranges (docs/config.md, "[model]"): generous for any strip sensor, tight enough that
+  // every derived quantity (stiffness, mass, omega^2, element sizes) stays a finite double.
+  if (!InRange(length, 1e-3, 1e3)) return Fail(why, "length", length, "must be in [1e-3, 1e3] m");
+  if (!InRange(width, 1e-4, 1e2)) return Fail(why, "width", width, "must be in [1e-4, 1e2] m");
+  if (layers.empty() || layers.size() > 100) {
+    return Fail(why, "layers.size()", layers.size(), "must be in [1, 100]");
+  }
   for (std::size_t k = 0; k < layers.size(); ++k) {
     if (!layers[k].IsValid(why, "SensorOptions::layers[" + std::to_string(k) + "]")) return false;
   }
-  if (!(foundation_stiffness >= 0.0)) {
-    return Fail(why, "foundation_stiffness", foundation_stiffness, "must be >= 0");
+  if (!InRange(foundation_stiffness, 0.0, 1e15)) {
+    return Fail(why, "foundation_stiffness", foundation_stiffness, "must be in [0, 1e15] N/m^3");
   }
-  if (!(foundation_loss_factor >= 0.0)) {
-    return Fail(why, "foundation_loss_factor", foundation_loss_factor, "must be >= 0");
+  if (!InRange(foundation_loss_factor, 0.0, 10.0)) {
+    return Fail(why, "foundation_loss_factor", foundation_loss_factor, "must be in [0, 10]");
   }
-  if (clamps_per_edge < 1) return Fail(why, "clamps_per_edge", clamps_per_edge, "must be >= 1");
+  if (clamps_per_edge < 1 || clamps_per_edge > kMaxClampsPerEdge) {
+    return Fail(why,
+                "clamps_per_edge",
+                clamps_per_edge,
+                ("must be in [1, " + std::to_string(kMaxClampsPerEdge) + "]").c_str());
+  }
   if (fixed_support == Support::kFree) {
     return Fail(why, "fixed_support", ToString(fixed_support), "must not be free");
   }
-  if (!std::isfinite(load_force)) return Fail(why, "load_force", load_force, "must be finite");
-  if (!(load_x >= 0.0 && load_x <= length)) {
-    return Fail(why, "load_x", load_x, "must be in [0, length]");
+  if (!InRange(load_force, -1e6, 1e6)) {
+    return Fail(why, "load_force", load_force, "must be in [-1e6, 1e6] N");
   }
-  if (!(load_y_fraction >= 0.0 && load_y_fraction <= 1.0)) {
+  std::ostringstream plate_range;
+  plate_range << "must lie on the plate, in [0, " << length << "] m";
+  const std::string on_plate = plate_range.str();
+  if (!InRange(load_x, 0.0, length)) return Fail(why, "load_x", load_x, on_plate.c_str());
+  if (!InRange(load_y_fraction, 0.0, 1.0)) {
     return Fail(why, "load_y_fraction", load_y_fraction, "must be in [0, 1]");
   }
-  if (!(load_patch_length >= 0.0)) {
-    return Fail(why, "load_patch_length", load_patch_length, "must be >= 0");
+  // A patch is 0 (a point load) or at least a nanometre: thinner patches round to zero width at
+  // the load position and the patch integral breaks down.
+  auto patch_ok = [](double size, double most) { return size == 0.0 || InRange(size, 1e-9, most); };
+  if (!patch_ok(load_patch_length, length)) {
+    return Fail(why,
+                "load_patch_length",
+                load_patch_length,
+                "must be 0 or in [1e-9, the plate's length] m");
   }
-  if (!(load_patch_width >= 0.0)) {
-    return Fail(why, "load_patch_width", load_patch_width, "must be >= 0");
+  if (!patch_ok(load_patch_width, width)) {
+    return Fail(
+        why, "load_patch_width", load_patch_width, "must be 0 or in [1e-9, the plate's width] m");
   }
-  if (!(frequency_hz >= 0.0 && std::isfinite(frequency_hz))) {
-    return Fail(why, "frequency_hz", frequency_hz, "must be finite and >= 0");
+  if (!InRange(frequency_hz, 0.0, 1e6)) {
+    return Fail(why, "frequency_hz", frequency_hz, "must be in [0, 1e6] Hz");
   }
-  if (output_positions.empty()) return Fail(why, "output_positions.size()", 0, "must be >= 1");
+  if (output_positions.empty() || output_positions.size() > kMaxOutputPositions) {
+    return Fail(why,
+                "output_positions.size()",
+                output_positions.size(),
+                ("must be in [1, " + std::to_string(kMaxOutputPositions) + "]").c_str());
+  }
   for (std::size_t k = 0; k < output_positions.size(); ++k) {
-    if (!(output_positions[k] >= 0.0 && output_positions[k] <= length)) {
+    if (!InRange(output_positions[k], 0.0, length)) {
       const std::string field = "output_positions[" + std::to_string(k) + "]";
-      return Fail(why, field.c_str(), output_positions[k], "must be in [0, length]");
+      return Fail(why, field.c_str(), output_positions[k], on_plate.c_str());
     }
   }
-  if (!(output_y_fraction >= 0.0 && output_y_fraction <= 1.0)) {
+  if (!InRange(output_y_fraction, 0.0, 1.0)) {
     return Fail(why, "output_y_fraction", output_y_fraction, "must be in [0, 1]");
   }
-  if (elements_per_section < 1) {
-    return Fail(why, "elements_per_section", elements_per_section, "must be >= 1");
+  if (elements_per_section < 1 || elements_per_section > kMaxElementsPerSection) {
+    return Fail(why,
+                "elements_per_section",
+                elements_per_section,
+                ("must be in [1, " + std::to_string(kMaxElementsPerSection) + "]").c_str());
   }
-  if (elements_across_width < 1) {
-    return Fail(why, "elements_across_width", elements_across_width, "must be >= 1");
+  if (elements_across_width < 1 || elements_across_width > kMaxElementsAcrossWidth) {
+    return Fail(why,
+                "elements_across_width",
+                elements_across_width,
+                ("must be in [1, " + std::to_string(kMaxElementsAcrossWidth) + "]").c_str());
   }
-  if (!(length_grading >= 1.0 && length_grading <= 3.0)) {
+  if (!InRange(length_grading, 1.0, 3.0)) {
     return Fail(why, "length_grading", length_grading, "must be in [1, 3]");
   }
-  if (!(width_grading >= 1.0 && width_grading <= 3.0)) {
+  if (!InRange(width_grading, 1.0, 3.0)) {
     return Fail(why, "width_grading", width_grading, "must be in [1, 3]");
+  }
+  if (!(memory_limit_bytes > 0.0) || !std::isfinite(memory_limit_bytes)) {
+    return Fail(why, "memory_limit_bytes", memory_limit_bytes, "must be finite and > 0");
+  }
+  const double needed = EstimatedMemoryBytes();
+  if (needed > memory_limit_bytes) {
+    // Blame the size whose default would save the most, so the message names what to lower.
+    // With every size at or below its default, the limit itself is what to change.
+    const SensorOptions defaults;
+    const char* culprit = "memory_limit_bytes";
+    double best = needed;
+    auto consider = [&](const char* field, SensorOptions smaller) {
+      const double bytes = smaller.EstimatedMemoryBytes();
+      if (bytes < best) {
+        best = bytes;
+        culprit = field;
+      }
+    };
+    SensorOptions o = *this;
+    o.elements_across_width = std::min(elements_across_width, defaults.elements_across_width);
+    consider("elements_across_width", o);
+    o = *this;
+    o.elements_per_section = std::min(elements_per_section, defaults.elements_per_section);
+    consider("elements_per_section", o);
+    o = *this;
+    o.clamps_per_edge = std::min(clamps_per_edge, defaults.clamps_per_edge);
+    consider("clamps_per_edge", o);
+    o = *this;
+    o.output_positions.resize(std::min<std::size_t>(output_positions.size(), 101));
+    consider("output_positions.size()", o);
+    const std::string field = culprit;
+    double value = static_cast<double>(output_positions.size());
+    if (field == "elements_across_width") value = elements_across_width;
+    if (field == "elements_per_section") value = elements_per_section;
+    if (field == "clamps_per_edge") value = clamps_per_edge;
+    if (field == "memory_limit_bytes") value = memory_limit_bytes;
+    const std::string message = "the model would need about " + Gigabytes(needed) +
+                                " of memory (limit " + Gigabytes(memory_limit_bytes) + ")";
+    return Fail(why, culprit, value, message.c_str());
   }
   return true;
 }

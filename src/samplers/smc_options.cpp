@@ -23,7 +23,7 @@ bool SmcOptions::IsValid(std::string* why) const {
   if (tempering.kind == TemperingKind::kList &&
       static_cast<int>(tempering.values.size()) < num_waves - 1) {
     return fail("tempering.values has " + std::to_string(tempering.values.size()) +
-                " entries; must have num_waves - 1 = " + std::to_string(num_waves - 1) +
+                " entries; must have " + std::to_string(num_waves - 1) +
                 " (one per wave after the first)");
   }
   if (threads < 0 || threads > 4096) {

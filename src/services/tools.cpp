@@ -40,7 +40,8 @@ void SimulateConfiguration(const std::string& config_path,
   for (std::size_t k = 0; k < clamps.size(); ++k) {
     if (clamps[k] != '0' && clamps[k] != '1') {
       throw Error(ErrorKind::kUsage,
-                  "character " + std::to_string(k + 1) + " is '" + clamps[k] + "'; must be 0 or 1",
+                  "character " + std::to_string(k + 1) + " is " + Excerpt(clamps.substr(k, 1)) +
+                      "; must be 0 or 1",
                   "",
                   0,
                   "--clamps");

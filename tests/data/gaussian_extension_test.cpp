@@ -102,5 +102,45 @@ TEST(GaussianExtension, ImpactInsideTheDataIsAnError) {
   EXPECT_THROW(ExtendWithGaussian(options, x, y), Error);
 }
 
+// Regression: the number of synthetic points was a double cast to int, which overflowed (undefined
+// behaviour) for a tiny spacing or a far impact; it is range-checked before the conversion.
+TEST(GaussianExtension, TooManySyntheticPointsIsADataErrorNotAnOverflow) {
+  const std::vector<double> x = {0.40, 0.41, 0.42};
+  const auto y = Gaussian(x, 1.0, 0.45, 0.02);
+  for (const auto& [impact, spacing] : {std::pair{0.45, 1e-12},     // 3e10 points
+                                        std::pair{1e300, 0.01},     // gap of 1e300 m
+                                        std::pair{-1e308, 1e-300},  // inf points
+                                        std::pair{0.45, 0.03 / 100001}}) {
+    GaussianExtensionOptions options;
+    options.impact_position = impact;
+    options.spacing = spacing;
+    try {
+      ExtendWithGaussian(options, x, y);
+      ADD_FAILURE() << "no error for impact " << impact << ", spacing " << spacing;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kData);
+      EXPECT_NE(std::string(e.what()).find("more than 100000 points"), std::string::npos)
+          << e.what();
+    }
+  }
+  // Exactly at the limit is fine: the gap 0.03 m in 99999.5 spacings gives 100000 points.
+  GaussianExtensionOptions options;
+  options.impact_position = 0.45;
+  options.spacing = 0.03 / 99999.5;
+  EXPECT_EQ(ExtendWithGaussian(options, x, y).positions.size(),
+            static_cast<std::size_t>(kMaxSyntheticPoints));
+}
+
+TEST(GaussianExtension, NonFiniteOptionsAreDataErrors) {
+  const std::vector<double> x = {0.40, 0.41, 0.42};
+  const auto y = Gaussian(x, 1.0, 0.45, 0.02);
+  GaussianExtensionOptions options;
+  options.impact_position = INFINITY;
+  EXPECT_THROW(ExtendWithGaussian(options, x, y), Error);
+  options.impact_position = 0.45;
+  options.spacing = INFINITY;
+  EXPECT_THROW(ExtendWithGaussian(options, x, y), Error);
+}
+
 }  // namespace
 }  // namespace combabc

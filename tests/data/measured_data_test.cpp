@@ -81,30 +81,88 @@ TEST(MeasuredData, MissingColumnNamesFileLineAndColumn) {
 TEST(MeasuredData, NonNumericNanAndInfiniteCells) {
   Error e = ParseError("x_cm,u\n1,2\n2,abc\n");
   EXPECT_EQ(e.kind(), ErrorKind::kData);
-  EXPECT_NE(std::string(e.what()).find("profile.csv:3: u: not a number"), std::string::npos)
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3:2: u: not a number"), std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1,2\n2,3\nnan,4\n");
-  EXPECT_NE(std::string(e.what()).find("profile.csv:4: x_cm: value is NaN"), std::string::npos)
+  EXPECT_NE(std::string(e.what()).find("profile.csv:4:1: x_cm: value is NaN"), std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1,inf\n");
-  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u: value is infinite"), std::string::npos)
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2:2: u: value is infinite"), std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1,\n");
-  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u: empty cell"), std::string::npos)
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2:2: u: empty cell"), std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1\n");
   EXPECT_NE(std::string(e.what()).find("profile.csv:2: u:"), std::string::npos) << e.what();
+}
+
+// Regression: a number followed by text, text in a numeric column, hex and inner blanks are each
+// refused naming file:line:column, never read as a prefix or as 0.
+TEST(MeasuredData, OnlyWholeNumbersAreNumbers) {
+  for (const char* cell : {"abc", "1.5abc", "0x10", "1 2", "--1", "+", "1e", "1.2.3"}) {
+    const Error e = ParseError(std::string("x_cm,extra,u\n1,a,2\n2,b,") + cell + "\n");
+    EXPECT_EQ(e.kind(), ErrorKind::kData) << cell;
+    EXPECT_EQ(e.column(), 3) << cell;
+    EXPECT_NE(std::string(e.what()).find("profile.csv:3:3: u: not a number"), std::string::npos)
+        << cell << ": " << e.what();
+  }
+  const Error e = ParseError("x_cm,u\n1,2\n2,1e999\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3:2: u: number out of range"),
+            std::string::npos)
+      << e.what();
+  // Leading '+' and surrounding blanks are fine.
+  const auto data = ParseMeasuredData("x_cm,u\n1, +2 \n2,\t-1e-1\n", "p.csv", CentimetreConfig());
+  ASSERT_EQ(data.size(), 2u);
+  EXPECT_NEAR(data.displacements[0], 1.0, kTol);
+}
+
+// Regression: a CSV with CR-only line ends (classic Mac exports) was one long header line and
+// reported as having no data; CRLF and LF must read the same.
+TEST(MeasuredData, CrLfAndCrOnlyLineEndsReadLikeLf) {
+  const std::string lf = "# note\nx_cm,u\n1,1\n\n2,2\n3,4\n";
+  const auto reference = ParseMeasuredData(lf, "p.csv", CentimetreConfig());
+  for (const char* end : {"\r\n", "\r"}) {
+    std::string text;
+    for (char c : lf) {
+      if (c == '\n') {
+        text += end;
+      } else {
+        text += c;
+      }
+    }
+    const auto data = ParseMeasuredData(text, "p.csv", CentimetreConfig());
+    EXPECT_EQ(data.positions, reference.positions) << ::testing::PrintToString(end);
+    EXPECT_EQ(data.displacements, reference.displacements);
+    // Line numbers count the same way: row "3,x" is line 6 whatever the line end.
+    const Error e = ParseError(text + "3.5,x" + end);
+    EXPECT_NE(std::string(e.what()).find("profile.csv:7:2: u:"), std::string::npos) << e.what();
+  }
+  // The last line needs no line end.
+  EXPECT_EQ(ParseMeasuredData("x_cm,u\r1,1\r2,2", "p.csv", CentimetreConfig()).size(), 2u);
+}
+
+// Regression: a missing column echoed the whole header line, which for a mistaken path may be a
+// line of another file; only a few short excerpts are quoted now.
+TEST(MeasuredData, MissingColumnQuotesOnlyShortExcerptsOfTheHeader) {
+  std::string header = std::string(200, 's') + ",\x1b[31mred";
+  for (int k = 0; k < 20; ++k) header += ",c" + std::to_string(k);
+  const Error e = ParseError(header + "\n1,2\n");
+  const std::string what = e.what();
+  EXPECT_LT(what.size(), 400u) << what;
+  EXPECT_EQ(what.find('\x1b'), std::string::npos) << what;
+  EXPECT_NE(what.find("\\x1b[31mred"), std::string::npos) << what;
+  EXPECT_NE(what.find(", ..."), std::string::npos) << what;
 }
 
 TEST(MeasuredData, UnsortedAndDuplicatePositions) {
   Error e = ParseError("x_cm,u\n1,2\n3,3\n2,4\n");
   EXPECT_EQ(e.kind(), ErrorKind::kData);
   EXPECT_EQ(e.line(), 4);
-  EXPECT_NE(std::string(e.what()).find("profile.csv:4: x_cm: positions must increase"),
+  EXPECT_NE(std::string(e.what()).find("profile.csv:4:1: x_cm: positions must increase"),
             std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1,2\n1,3\n");
-  EXPECT_NE(std::string(e.what()).find("profile.csv:3: x_cm: duplicate position"),
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3:1: x_cm: duplicate position"),
             std::string::npos)
       << e.what();
 }

@@ -79,8 +79,7 @@ TEST(SmcOptions, EachInvalidOptionIsRejectedWithItsMessage) {
          o.tempering.kind = TemperingKind::kList;
          o.tempering.values = {0.5};
        },
-       "SmcOptions::tempering.values has 1 entries; must have num_waves - 1 = 4 (one per wave "
-       "after the first)"},
+       "SmcOptions::tempering.values has 1 entries; must have 4 (one per wave after the first)"},
   };
   for (const auto& c : cases) {
     SmcOptions o;

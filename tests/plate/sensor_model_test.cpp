@@ -103,7 +103,7 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   o.length = -1.0;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_EQ(why, "SensorOptions::length = -1; must be > 0");
+  EXPECT_EQ(why, "SensorOptions::length = -1; must be in [1e-3, 1e3] m");
   try {
     SensorModel model(o);
     FAIL() << "expected combabc::Error";
@@ -118,8 +118,29 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   o = SensorOptions{};
   o.output_positions.push_back(1.0);
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_EQ(why, "SensorOptions::output_positions[91] = 1; must be in [0, length]");
+  EXPECT_EQ(why, "SensorOptions::output_positions[91] = 1; must lie on the plate, in [0, 0.9] m");
   EXPECT_TRUE(SensorOptions{}.IsValid(&why));
+}
+
+// The estimate that refuses oversized models must track what the precompute really keeps: above
+// it (it also counts transients) but not so far above that useful meshes are refused.
+TEST(PlateSensorModel, MemoryEstimateBoundsThePrecompute) {
+  for (const int across : {6, 12}) {
+    SensorOptions o;
+    o.elements_across_width = across;
+    const SensorModel model(o);
+    const auto kept = static_cast<double>(model.PrecomputedBytes());
+    EXPECT_GE(o.EstimatedMemoryBytes(), kept) << across;
+    EXPECT_LE(o.EstimatedMemoryBytes(), 2.5 * kept) << across;
+  }
+  // Regression: elements_across_width = 1000 was accepted and needed 5.5-10 GB.
+  SensorOptions o;
+  o.elements_across_width = 1000;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why.rfind("SensorOptions::elements_across_width = 1000; the model would need about", 0),
+            0u)
+      << why;
 }
 
 TEST(PlateSensorModel, DefaultLayoutAndSpans) {

@@ -6,6 +6,7 @@
 // wrong type or out of range, an inconsistency such as a list threshold with the wrong number of
 // waves -- is thrown as combabc::Error(ErrorKind::kConfig) whose what() reads
 // "file:line: dotted.key: message", so the CLI can print it as is and exit with 78.
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -55,9 +56,13 @@ struct CalibrationConfig {
   OutputConfig output;
 };
 
+// Largest config file accepted (docs/config.md, "Limits"): a real config is a few KiB.
+inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;  // 1 MiB
+
 // Parses and validates `text`; `path` names the file in messages and sets `directory`.
 CalibrationConfig ParseConfig(std::string_view text, const std::string& path);
-// Reads `path` and parses it; a missing or unreadable file is combabc::Error(kNoInput).
+// Reads `path` and parses it; a missing or unreadable file is combabc::Error(kNoInput), one over
+// kMaxConfigBytes (checked while reading, so FIFOs and devices too) kConfig.
 CalibrationConfig LoadConfig(const std::string& path);
 
 }  // namespace combabc

@@ -43,6 +43,9 @@ GaussianFit FitGaussian(std::span<const double> x,
                         double centre,
                         bool fit_offset);
 
+// Most points an extension may synthesise (docs/config.md, "Limits"); the paper's needs about 5.
+inline constexpr int kMaxSyntheticPoints = 100000;
+
 struct GaussianExtension {
   GaussianFit fit;
   std::vector<double> positions;  // synthesised positions, metres, ascending
@@ -53,7 +56,8 @@ struct GaussianExtension {
 // points from the impact toward the nearest measured point, every options.spacing metres,
 // stopping at least spacing/2 short of that measured point so no synthetic point duplicates or
 // crowds a measurement. positions must be strictly increasing (metres). Throws
-// combabc::Error(kData) if the impact lies inside the measured range or the fit fails.
+// combabc::Error(kData) if the impact lies inside the measured range, the fit fails, or more than
+// kMaxSyntheticPoints points would be synthesised.
 GaussianExtension ExtendWithGaussian(const GaussianExtensionOptions& options,
                                      std::span<const double> positions,
                                      std::span<const double> values);

@@ -3,6 +3,7 @@
 // sensor and displacements, converted to SI (metres) at this I/O edge, optionally windowed,
 // extended toward the load by a Gaussian fit (section 5) and normalised to [0, 1] by its maximum
 // (section 5: "both datasets are normalised by the maximum value").
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -57,9 +58,13 @@ struct MeasuredData {
   std::size_t size() const { return positions.size(); }
 };
 
+// Largest measured-data CSV accepted (docs/config.md, "Limits"): about three million rows.
+inline constexpr std::size_t kMaxCsvBytes = std::size_t{64} << 20;  // 64 MiB
+
 // Reads, converts, windows, extends and normalises the profile described by `config`. Throws
-// combabc::Error(kNoInput) if the file cannot be read, and kData naming file:line and the column
-// for a missing column, a non-numeric / NaN / infinite cell, an empty file, unsorted or duplicate
+// combabc::Error(kNoInput) if the file cannot be read; kData for a file over kMaxCsvBytes
+// (checked while reading, so FIFOs and devices too) and, naming file:line and the column, for a
+// missing column, a non-numeric / NaN / infinite cell, an empty file, unsorted or duplicate
 // positions, a window outside the data or a failed Gaussian extension.
 MeasuredData LoadMeasuredData(const DataConfig& config, const std::string& config_dir);
 

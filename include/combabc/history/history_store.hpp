@@ -1,7 +1,7 @@
 #pragma once
-// The run history on disk: one SQLite file per run (RUN.sqlite), written batch by batch while the run
-// goes, so that a killed run can be resumed and a finished one reported or exported. The schema,
-// its version and the durability guarantees are documented in docs/history.md.
+// The run history on disk: one SQLite file per run (RUN.sqlite), written batch by batch while the
+// run goes, so that a killed run can be resumed and a finished one reported or exported. The
+// schema, its version and the durability guarantees are documented in docs/history.md.
 #include <cstdint>
 #include <memory>
 #include <optional>

@@ -12,11 +12,11 @@ namespace combabc::plate {
 
 // One isotropic layer; SI units.
 struct Layer {
-  double thickness = 1.0e-3;      // m, > 0
-  double youngs_modulus = 1.0e7;  // Pa, > 0
+  double thickness = 1.0e-3;      // m, in [1e-9, 1]
+  double youngs_modulus = 1.0e7;  // Pa, in [1, 1e13]
   double poisson_ratio = 0.3;     // in (-1, 0.5)
-  double density = 1000.0;        // kg/m^3, > 0
-  double loss_factor = 0.0;       // eta >= 0: hysteretic damping, complex modulus E(1 + i eta)
+  double density = 1000.0;        // kg/m^3, in [1e-3, 1e5]
+  double loss_factor = 0.0;  // eta in [0, 10]: hysteretic damping, complex modulus E(1 + i eta)
 
   // Names the field and the violated constraint; `prefix` names the owner ("layers[1]").
   bool IsValid(std::string* why, const std::string& prefix = "Layer") const;

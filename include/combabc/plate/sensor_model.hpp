@@ -33,6 +33,15 @@ std::vector<Layer> DefaultSensorLayers();
 // 0, 0.01, ..., 0.90 m: the paper's LDV grid extended over the whole length.
 std::vector<double> DefaultOutputPositions();
 
+// Size maxima (docs/config.md, "Limits"). Each is far above any useful sensor model; the binding
+// limit is usually SensorOptions::memory_limit_bytes, which EstimatedMemoryBytes() checks.
+inline constexpr int kMaxClampsPerEdge = 1000;
+inline constexpr int kMaxElementsPerSection = 1000;
+inline constexpr int kMaxElementsAcrossWidth = 1000;
+inline constexpr std::size_t kMaxOutputPositions = 100000;
+// Default memory budget of a model: 4 GB (10^9 bytes each, as messages print them).
+inline constexpr double kDefaultMemoryLimitBytes = 4e9;
+
 struct SensorOptions {
   // Geometry (m).
   double length = 0.90;  // paper section 4
@@ -84,6 +93,20 @@ struct SensorOptions {
   // condensed system (slower; a cross-check).
   bool always_pivot = false;
 
+  // The precompute may use at most this much memory (bytes): options whose EstimatedMemoryBytes()
+  // exceed it are invalid, so an oversized mesh is refused before anything is allocated.
+  double memory_limit_bytes = kDefaultMemoryLimitBytes;
+
+  // Peak memory (bytes) of building the model, from the mesh size (dofs per cross-section,
+  // sections, elements), the distinct section and group pieces the precompute will condense, and
+  // the outputs. Measured: 0.95-1.6 x the peak RSS (less the program itself) for widths of 6 to
+  // 24 elements, about 2 x what the finished model keeps. Needs the sizes in range (IsValid
+  // checks them first).
+  double EstimatedMemoryBytes() const;
+
+  // Checks every field: finite values in physical ranges (docs/config.md), sizes within the
+  // kMax* limits, the estimated memory within memory_limit_bytes. On failure `why` reads
+  // "SensorOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 
