@@ -18,13 +18,32 @@ TEST(RandomStream, SameKeySameSequenceDifferentKeyDifferentSequence) {
   }
 }
 
-TEST(RandomStream, FixedReferenceValuesPinTheGenerator) {
-  // Changing the generator or the key derivation changes every run history: this must fail then.
-  RandomStream r(1, 0, 0);
-  const std::uint64_t first = r.Next();
-  RandomStream again(1, 0, 0);
-  EXPECT_EQ(first, again.Next());
+TEST(RandomStream, GeneratorMatchesTheAuthorsReferenceSequence) {
+  // xoshiro256** from state {1, 2, 3, 4}: the first outputs of Blackman & Vigna's reference C code
+  // (prng.di.unimi.it, xoshiro256starstar.c). Any change to the generator's shifts, rotations or
+  // multipliers fails here.
+  auto r = RandomStream::FromState(1, 2, 3, 4);
+  EXPECT_EQ(r.Next(), 11520ULL);
+  EXPECT_EQ(r.Next(), 0ULL);
+  EXPECT_EQ(r.Next(), 1509978240ULL);
+  EXPECT_EQ(r.Next(), 1215971899390074240ULL);
   EXPECT_EQ(Mix64(0), 0xE220A8397B1DCDAFULL);  // SplitMix64's first output from state 0
+}
+
+TEST(RandomStream, GoldenValuesPinTheStreamDerivation) {
+  // Recorded from this implementation (2026-11): changing how (seed, wave, index) key a stream,
+  // or the uniform / normal transforms, changes every run history, and must fail here.
+  RandomStream a(1, 0, 0);
+  EXPECT_EQ(a.Next(), 0xD5C4477AD760C652ULL);
+  EXPECT_EQ(a.Next(), 0xDC168A365F39047EULL);
+  EXPECT_EQ(a.Next(), 0xA35E0935D3A50D68ULL);
+  RandomStream b(2024, 4, 499);
+  EXPECT_EQ(b.Next(), 0xEF6708182505061CULL);
+  EXPECT_EQ(b.Next(), 0x51E456DD939367D5ULL);
+  EXPECT_EQ(b.Next(), 0x7F0C994B9EC0D40DULL);
+  RandomStream c(7, 1, 2);
+  EXPECT_EQ(c.Uniform(), 0.3329874431900719);
+  EXPECT_EQ(c.Normal(), 0.53917587269161449);
 }
 
 TEST(RandomStream, BernoulliRatesMatchAcrossStreams) {

@@ -29,6 +29,20 @@ class RandomStream {
     }
   }
 
+  // A stream started from a raw xoshiro256** state, for checking the generator against its
+  // authors' reference sequence; runs always use the keyed constructor above.
+  static RandomStream FromState(std::uint64_t s0,
+                                std::uint64_t s1,
+                                std::uint64_t s2,
+                                std::uint64_t s3) {
+    RandomStream r(0, 0, 0);
+    r.state_[0] = s0;
+    r.state_[1] = s1;
+    r.state_[2] = s2;
+    r.state_[3] = s3;
+    return r;
+  }
+
   std::uint64_t Next() {
     const std::uint64_t result = Rotl(state_[1] * 5, 7) * 9;
     const std::uint64_t t = state_[1] << 17;
