@@ -1,0 +1,23 @@
+#pragma once
+// What the history fuzzers run on a file: everything `combabc report` / `export` / `resume` read,
+// through the read-only path. A combabc::Error is the expected outcome for a bad file; anything
+// else is a finding (see fuzz_util.hpp).
+#include <string>
+
+#include "combabc/core/error.hpp"
+#include "combabc/io/history_store.hpp"
+
+namespace combabc::fuzz {
+
+inline void ReadHistory(const std::string& path) {
+  try {
+    const HistoryStore store = HistoryStore::Open(path, /*read_only=*/true);
+    (void)store.LoadMetadata();
+    (void)store.LoadHistory();
+    (void)store.LoadResumePoint();
+  } catch (const Error&) {
+    // Expected: not a history, corrupt, or a newer schema.
+  }
+}
+
+}  // namespace combabc::fuzz
