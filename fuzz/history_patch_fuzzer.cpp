@@ -15,10 +15,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "combabc/core/error.hpp"
@@ -27,6 +29,13 @@
 #include "history_seed.hpp"
 
 namespace {
+
+// COMBABC_FUZZ_VERBOSE=1: print each edit (SQL with its values) and copy the edited history to
+// ./history_patch_last.sqlite before reading it, to see what an input does (docs/fuzzing.md).
+bool Verbose() {
+  static const bool verbose = std::getenv("COMBABC_FUZZ_VERBOSE") != nullptr;
+  return verbose;
+}
 
 struct Table {
   std::string name;
@@ -223,7 +232,15 @@ void Edit(FuzzedDataProvider& in, sqlite3* db, const Template& t) {
   if (sqlite3_bind_parameter_count(stmt) >= 2) {
     sqlite3_bind_int(stmt, 2, in.ConsumeIntegralInRange(0, 7));
   }
-  sqlite3_step(stmt);
+  const int rc = sqlite3_step(stmt);
+  if (Verbose()) {
+    char* expanded = sqlite3_expanded_sql(stmt);
+    std::fprintf(stderr,
+                 "history_patch_fuzzer: %s -> %s\n",
+                 expanded != nullptr ? expanded : sql.c_str(),
+                 rc == SQLITE_DONE ? "done" : sqlite3_errmsg(db));
+    sqlite3_free(expanded);
+  }
   sqlite3_finalize(stmt);
 }
 
@@ -244,11 +261,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
     Die("cannot open the copy of the template");
   }
-  sqlite3_exec(db, "PRAGMA journal_mode = MEMORY; BEGIN", nullptr, nullptr, nullptr);
+  sqlite3_exec(db,
+               "PRAGMA journal_mode = MEMORY; PRAGMA synchronous = OFF; BEGIN",
+               nullptr,
+               nullptr,
+               nullptr);
   FuzzedDataProvider in(data, size);
   for (int edits = 0; edits < 32 && in.remaining_bytes() > 0; ++edits) Edit(in, db, t);
   sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
   sqlite3_close(db);
+  if (Verbose()) {
+    std::error_code ignored;
+    std::filesystem::copy_file(path,
+                               "history_patch_last.sqlite",
+                               std::filesystem::copy_options::overwrite_existing,
+                               ignored);
+  }
 
   combabc::fuzz::ReadHistory(path);
   return 0;

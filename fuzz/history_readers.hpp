@@ -1,11 +1,14 @@
 #pragma once
 // What the history fuzzers run on a file: everything `combabc report` / `export` / `resume` read,
-// through the read-only path. A combabc::Error is the expected outcome for a bad file; anything
-// else is a finding (see fuzz_util.hpp).
+// through the read-only path, and then the export itself (CSV + JSON into the scratch
+// directory), the first consumer of what was read. A combabc::Error is the expected outcome for a
+// bad file; anything else is a finding (see fuzz_util.hpp).
 #include <string>
 
 #include "combabc/core/error.hpp"
+#include "combabc/io/export.hpp"
 #include "combabc/io/history_store.hpp"
+#include "fuzz_util.hpp"
 
 namespace combabc::fuzz {
 
@@ -15,6 +18,9 @@ inline void ReadHistory(const std::string& path) {
     (void)store.LoadMetadata();
     (void)store.LoadHistory();
     (void)store.LoadResumePoint();
+    ExportOptions options;
+    options.overwrite = true;
+    ExportRun(store, ScratchDir() + "/export", options);
   } catch (const Error&) {
     // Expected: not a history, corrupt, or a newer schema.
   }
