@@ -43,7 +43,7 @@ for target in "${targets[@]}"; do
   else
     status=1
     echo "   FINDING in $target (last lines of its log; the input is in $findings/$target/):"
-    summary=$(grep -E 'ERROR|SUMMARY|terminate called|what\(\)|Test unit written|broken promise|#[0-9]+ 0x' \
+    summary=$(grep -E 'ERROR|runtime error|SUMMARY|terminate called|what\(\)|Test unit written|broken promise|#[0-3] 0x' \
       "$work/log" | head -40 || true)
     [ -n "$summary" ] || summary=$(tail -15 "$work/log")
     sed 's/^/   | /' <<< "$summary"
