@@ -3,6 +3,18 @@ if(COMBABC_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=address,undefined)
 endif()
+# Fuzzing (docs/fuzzing.md): everything is instrumented for libFuzzer's coverage feedback and
+# checked by ASan + UBSan (UB aborts, so it counts as a finding); only the targets in fuzz/ link
+# libFuzzer itself (-fsanitize=fuzzer, which brings its main).
+if(COMBABC_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "COMBABC_FUZZ needs clang (libFuzzer): configure with CC=clang-14 "
+      "CXX=clang++-14 (Debian packages clang-14 and libclang-rt-14-dev)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+    -fno-sanitize-recover=all -g)
+  add_link_options(-fsanitize=address,undefined)
+endif()
 
 function(combabc_set_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion

@@ -10,6 +10,7 @@ packages=(
   libsqlite3-dev sqlite3 # run history
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy
+  clang-14 libclang-rt-14-dev  # libFuzzer + sanitizer runtimes for scripts/fuzz.sh (docs/fuzzing.md)
   python3 python3-numpy python3-matplotlib  # report figures (Debian's python3, not a pyenv one)
   chromium               # the report page's browser test (ctest -L browser), headless
 )

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging, browser), the unit tests again under ASan+UBSan, and the layering and
-# formatting checks. Run scripts/setup.sh first (the README's test command does both).
+# unit, statistical, slow, packaging,
+# browser), the unit tests again under ASan+UBSan, the layering and
+# formatting checks, and a bounded fuzzing run of the input readers (COMBABC_FUZZ_SECONDS per
+# target, default 30; 0 skips it; docs/fuzzing.md). Run scripts/setup.sh first (the README's test
+# command does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -23,3 +26,9 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCOMBABC_WERROR=ON \
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
+
+fuzz_seconds=${COMBABC_FUZZ_SECONDS:-30}
+if [ "$fuzz_seconds" -gt 0 ]; then
+  echo "== Fuzzing the config, CSV and history readers (${fuzz_seconds} s per target)"
+  bash scripts/fuzz.sh "$fuzz_seconds"
+fi
