@@ -31,7 +31,7 @@ void PrintOutcome(const combabc::services::RunOutcome& outcome) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"combabc " COMBABC_VERSION
                " - combinatorial ABC-SMC calibration of binary (on/off) simulator parameters"};
   app.require_subcommand(1);
@@ -119,4 +119,11 @@ int main(int argc, char** argv) {
     return kExitSoftware;
   }
   return g_interrupted ? 130 : 0;
+} catch (const std::exception& e) {
+  // Setting up the command line (CLI11, the progress display) can throw too: exit 70, no abort.
+  std::cerr << "combabc: internal error: " << e.what() << "\n";
+  return kExitSoftware;
+} catch (...) {
+  std::cerr << "combabc: internal error: unknown exception\n";
+  return kExitSoftware;
 }

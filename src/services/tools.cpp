@@ -43,6 +43,7 @@ std::string ReportScript() {
 
 int RunProcess(std::vector<std::string> args) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
@@ -116,7 +117,7 @@ void SimulateConfiguration(const std::string& config_path,
 std::string WriteReport(const std::string& history_path, const std::string& directory) {
   // Opening first gives the usual one-line errors for a missing or foreign file.
   { HistoryStore::Open(history_path, /*read_only=*/true); }
-  const std::string out = directory.empty() ? Sibling(history_path, "report") : directory;
+  std::string out = directory.empty() ? Sibling(history_path, "report") : directory;
   const char* python = std::getenv("COMBABC_PYTHON");
   const int rc = RunProcess({python && *python ? python : "/usr/bin/python3",
                              ReportScript(),
@@ -135,7 +136,7 @@ std::string WriteReport(const std::string& history_path, const std::string& dire
 std::string ExportHistory(const std::string& history_path,
                           const std::string& directory,
                           bool overwrite) {
-  const std::string out = directory.empty() ? Sibling(history_path, "export") : directory;
+  std::string out = directory.empty() ? Sibling(history_path, "export") : directory;
   ExportOptions options;
   options.overwrite = overwrite;
   ExportRun(history_path, out, options);
