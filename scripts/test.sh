@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging), the unit tests again under ASan+UBSan, and the layering and
-# formatting checks. Run scripts/setup.sh first (the README's test command does both).
+# unit, statistical, slow, packaging) and clang-tidy on it, the unit tests again under ASan+UBSan,
+# and the layering and formatting checks. Run scripts/setup.sh first (the README's test command
+# does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -14,6 +15,9 @@ echo "== Release build, warnings as errors"
 cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
 cmake --build build-ci -j "$jobs"
 ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
+
+echo "== clang-tidy on the Release build's sources (.clang-tidy; any warning fails)"
+bash scripts/check-tidy.sh build-ci
 
 echo "== Debug build with AddressSanitizer + UndefinedBehaviorSanitizer (unit tests)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCOMBABC_WERROR=ON \
