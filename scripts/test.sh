@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
 # unit, statistical, slow, packaging) and clang-tidy on it, the unit tests again under ASan+UBSan,
-# and the layering and formatting checks. Run scripts/setup.sh first (the README's test command
-# does both).
+# the tests labelled threads under ThreadSanitizer, and the layering and formatting checks. Run
+# scripts/setup.sh first (the README's test command does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -25,3 +25,10 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCOMBABC_WERROR=ON \
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
+
+echo "== ThreadSanitizer build (tests labelled threads)"
+cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOMBABC_WERROR=ON \
+  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF
+cmake --build build-tsan -j "$jobs" --target combabc_threads_tests
+TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  ctest --test-dir build-tsan -j "$jobs" -L threads --no-tests=error --output-on-failure --timeout 900
