@@ -15,6 +15,13 @@ if(COMBABC_FUZZ)
     -fno-sanitize-recover=all -g)
   add_link_options(-fsanitize=address,undefined)
 endif()
+if(COMBABC_TSAN)
+  if(COMBABC_SANITIZE)
+    message(FATAL_ERROR "COMBABC_TSAN and COMBABC_SANITIZE exclude each other: use two build dirs")
+  endif()
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
+endif()
 
 function(combabc_set_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion

@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging,
-# browser), the unit tests again under ASan+UBSan, the layering and
-# formatting checks, and a bounded fuzzing run of the input readers (COMBABC_FUZZ_SECONDS per
-# target, default 30; 0 skips it; docs/fuzzing.md). Run scripts/setup.sh first (the README's test
-# command does both).
+# unit, statistical, slow, packaging, browser) and clang-tidy on it, the unit tests again under
+# ASan+UBSan, the tests labelled threads under ThreadSanitizer, the layering and formatting checks,
+# and a bounded fuzzing run of the input readers (COMBABC_FUZZ_SECONDS per target, default 30; 0
+# skips it; docs/fuzzing.md). Run scripts/setup.sh first (the README's test command does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -20,12 +19,22 @@ cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
 cmake --build build-ci -j "$jobs"
 ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
 
+echo "== clang-tidy on the Release build's sources (.clang-tidy; any warning fails)"
+bash scripts/check-tidy.sh build-ci
+
 echo "== Debug build with AddressSanitizer + UndefinedBehaviorSanitizer (unit tests)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCOMBABC_WERROR=ON \
   -DCOMBABC_SANITIZE=ON -DCOMBABC_BUILD_BENCH=OFF
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
+
+echo "== ThreadSanitizer build (tests labelled threads)"
+cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOMBABC_WERROR=ON \
+  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF
+cmake --build build-tsan -j "$jobs" --target combabc_threads_tests
+TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  ctest --test-dir build-tsan -j "$jobs" -L threads --no-tests=error --output-on-failure --timeout 900
 
 fuzz_seconds=${COMBABC_FUZZ_SECONDS:-30}
 if [ "$fuzz_seconds" -gt 0 ]; then

@@ -29,7 +29,7 @@ void PrintOutcome(const combabc::services::RunOutcome& outcome) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"combabc " COMBABC_VERSION
                " - combinatorial ABC-SMC calibration of binary (on/off) simulator parameters"};
   app.require_subcommand(1);
@@ -142,4 +142,11 @@ int main(int argc, char** argv) {
     return kExitSoftware;
   }
   return interrupted ? 130 : 0;
+} catch (const std::exception& e) {
+  // Setting up the command line (CLI11, the progress display) can throw too: exit 70, no abort.
+  std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";
+  return kExitSoftware;
+} catch (...) {
+  std::cerr << "combabc: internal error: unknown exception\n";
+  return kExitSoftware;
 }

@@ -105,8 +105,9 @@ std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t coun
 
 std::vector<std::string> DistanceColumns(const RunMetadata& m, std::size_t count) {
   std::vector<std::string> names;
-  for (const DistanceComponent& c : m.distance_components)
+  for (const DistanceComponent& c : m.distance_components) {
     names.push_back("d_" + Identifier(c.name));
+  }
   if (names.size() != count) {
     names.clear();
     for (std::size_t k = 0; k < count; ++k) names.push_back("d_" + std::to_string(k));
@@ -242,8 +243,9 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
   out << "    \"wall_seconds\": " << JsonNumber(h.summary.wall_seconds) << "\n  },\n";
   out << "  \"config_text\": " << JsonString(m.config_text) << ",\n";
   out << "  \"bit_names\": [";
-  for (std::size_t b = 0; b < m.bit_names.size(); ++b)
+  for (std::size_t b = 0; b < m.bit_names.size(); ++b) {
     out << (b ? ", " : "") << JsonString(m.bit_names[b]);
+  }
   out << "],\n  \"bit_prior_one\": " << JsonArray(m.bit_prior_one);
   out << ",\n  \"distance_components\": [";
   for (std::size_t c = 0; c < m.distance_components.size(); ++c) {

@@ -243,8 +243,9 @@ std::vector<std::uint8_t> UnpackBits(const std::vector<std::uint8_t>& bytes,
                 path);
   }
   std::vector<std::uint8_t> bits(d);
-  for (std::size_t k = 0; k < d; ++k)
+  for (std::size_t k = 0; k < d; ++k) {
     bits[k] = static_cast<std::uint8_t>((bytes[k / 8] >> (k % 8)) & 1u);
+  }
   return bits;
 }
 

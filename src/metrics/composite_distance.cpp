@@ -176,8 +176,9 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
   bool finite = true;
   for (double y : simulated) finite = finite && std::isfinite(y);
   if (options_.normalise_over == NormaliseOver::kData && !data_samples_.empty()) {
-    for (const Sample& s : data_samples_)
+    for (const Sample& s : data_samples_) {
       peak = std::max(peak, std::abs(Interpolate(simulated, s, 1.0)));
+    }
   } else {
     for (double y : simulated) peak = std::max(peak, std::abs(y));
   }

@@ -230,16 +230,18 @@ Eigen::VectorXd Plate::SolveStatic(const Constraints& constraints, const Load& l
   const Eigen::SparseMatrix<double> a = DynamicStiffness(constraints, 0.0, &free_dofs).real();
   const Eigen::VectorXd f_all = LoadVector(load);
   Eigen::VectorXd f(static_cast<Eigen::Index>(free_dofs.size()));
-  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+  for (std::size_t k = 0; k < free_dofs.size(); ++k) {
     f(static_cast<Eigen::Index>(k)) = f_all(free_dofs[k]);
+  }
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);  // real SPD: LDL^T is right here
   if (solver.info() != Eigen::Success || (solver.vectorD().array() <= 0.0).any()) {
     throw Error(ErrorKind::kConfig, "static stiffness is singular: the plate is not supported");
   }
   const Eigen::VectorXd x = solver.solve(f);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(num_dofs());
-  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+  for (std::size_t k = 0; k < free_dofs.size(); ++k) {
     u(free_dofs[k]) = x(static_cast<Eigen::Index>(k));
+  }
   return u;
 }
 
@@ -281,8 +283,9 @@ Eigen::VectorXcd Plate::SolveHarmonic(const Constraints& constraints,
   }
   const Eigen::VectorXcd x = scale.asDiagonal() * y;
   Eigen::VectorXcd u = Eigen::VectorXcd::Zero(num_dofs());
-  for (std::size_t k = 0; k < free_dofs.size(); ++k)
+  for (std::size_t k = 0; k < free_dofs.size(); ++k) {
     u(free_dofs[k]) = x(static_cast<Eigen::Index>(k));
+  }
   return u;
 }
 

@@ -47,7 +47,9 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     const int cross_section = (dofs[0] / kDofsPerNode) / (ny_ + 1);
     const int section = cross_section / elements_per_section;
     section_outputs_[section].push_back(static_cast<int>(o));
-    relative_x[section].push_back(output_x[o] - grid.x[section * elements_per_section]);
+    const auto first_node =
+        static_cast<std::size_t>(section) * static_cast<std::size_t>(elements_per_section);
+    relative_x[section].push_back(output_x[o] - grid.x[first_node]);
   }
   for (int c = 0; c <= num_sections; ++c) {
     boundary_load_.push_back(
@@ -422,8 +424,9 @@ std::size_t SectionCondensation::MemoryBytes() const {
                                       p.coupling_right.size() + p.left_block.size() +
                                       p.right_block.size());
   }
-  for (const auto& b : boundary_load_)
+  for (const auto& b : boundary_load_) {
     bytes += sizeof(std::complex<double>) * static_cast<std::size_t>(b.size());
+  }
   return bytes;
 }
 

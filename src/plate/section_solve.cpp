@@ -92,7 +92,7 @@ struct Workspace {
     t.resize(nc, nc);
     tmp.resize(nc);
     small.resize(nc);
-    ends.resize(2 * nc);
+    ends.resize(2 * static_cast<Eigen::Index>(nc));
   }
 };
 
@@ -106,8 +106,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
   const int rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
   thread_local Workspace ws;
   ws.Reserve(nc, std::max(rows, 1));
-  if (ws.values.size() < static_cast<Eigen::Index>(w.size()))
+  if (ws.values.size() < static_cast<Eigen::Index>(w.size())) {
     ws.values.resize(static_cast<Eigen::Index>(w.size()));
+  }
   // Free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes it.
   for (int i = 0; i < rows; ++i) {
     const int x = (i + 1) * group_size_;
@@ -133,7 +134,8 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     }
     ws.rhs[i].head(n) = left.load.tail(nc)(f);
     ws.rhs[i].head(n) += right.load.head(nc)(f);
-    ws.rhs[i].head(n) += boundary_load_[(i + 1) * group_size_](f);
+    const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
+    ws.rhs[i].head(n) += boundary_load_[boundary](f);
     if (i + 1 < rows) {
       const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
       const Eigen::Index r = right.coupling_left.cols();
@@ -227,8 +229,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       // Squared moduli (max |.|^2) to keep hypot off the hot path.
       residual = std::max(residual, r.cwiseAbs2().maxCoeff());
       double a2 = 0.0;
-      for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index j = 0; j < n; ++j) {
         a2 = std::max(a2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
+      }
       scale = std::max(scale,
                        std::sqrt(ws.rhs[i].head(n).cwiseAbs2().maxCoeff()) +
                            std::sqrt(a2 * ws.u[i].head(n).cwiseAbs2().maxCoeff()));
@@ -238,8 +241,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
   if (!ok) {
     // Fallback: dense partial-pivoting LU of the whole condensed system.
     std::vector<Eigen::Index> offset(rows + 1, 0);
-    for (int i = 0; i < rows; ++i)
+    for (int i = 0; i < rows; ++i) {
       offset[i + 1] = offset[i] + static_cast<Eigen::Index>(ws.free[i].size());
+    }
     Eigen::MatrixXcd big = Eigen::MatrixXcd::Zero(offset[rows], offset[rows]);
     Eigen::VectorXcd big_rhs(offset[rows]);
     for (int i = 0; i < rows; ++i) {
@@ -259,9 +263,10 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       }
     }
     const Eigen::VectorXcd solution = big.partialPivLu().solve(big_rhs);
-    for (int i = 0; i < rows; ++i)
+    for (int i = 0; i < rows; ++i) {
       ws.u[i].head(offset[i + 1] - offset[i]) =
           solution.segment(offset[i], offset[i + 1] - offset[i]);
+    }
   }
   // Outputs of group g from its kept end cross-sections (rows g - 1 and g).
   for (int g = 0; g < ng; ++g) {
@@ -270,8 +275,9 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     const Piece& piece = GroupPieceOf(g, clamps);
     auto ends = ws.ends.head(piece.left_size + piece.right_size);
     ends.setZero();
-    if (piece.left_size > 0)
+    if (piece.left_size > 0) {
       ends(ws.free[g - 1]) = ws.u[g - 1].head(static_cast<Eigen::Index>(ws.free[g - 1].size()));
+    }
     if (piece.right_size > 0) {
       ends.tail(nc)(ws.free[g]) = ws.u[g].head(static_cast<Eigen::Index>(ws.free[g].size()));
     }

@@ -128,13 +128,13 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
   COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
   Constraints c(plate_->grid());
   const std::vector<double>& x = plate_->grid().x;
-  const int m = options_.elements_per_section;
+  const auto m = static_cast<std::size_t>(options_.elements_per_section);
   for (int s = 0; s < n; ++s) {
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
-    if (clamps[s] != 0)
-      c.AddEdgeSupport(Edge::kBottom, x[s * m], x[(s + 1) * m], options_.fixed_support);
-    if (clamps[n + s] != 0)
-      c.AddEdgeSupport(Edge::kTop, x[s * m], x[(s + 1) * m], options_.fixed_support);
+    const double start = x[static_cast<std::size_t>(s) * m];
+    const double end = x[static_cast<std::size_t>(s + 1) * m];
+    if (clamps[s] != 0) c.AddEdgeSupport(Edge::kBottom, start, end, options_.fixed_support);
+    if (clamps[n + s] != 0) c.AddEdgeSupport(Edge::kTop, start, end, options_.fixed_support);
   }
   c.AddEdgeSupport(Edge::kLeft, options_.short_edge_start);
   c.AddEdgeSupport(Edge::kRight, options_.short_edge_end);
@@ -153,8 +153,9 @@ void SensorModel::ProfileFullSolve(std::span<const std::uint8_t> clamps,
   const Eigen::VectorXcd u = Field(clamps);
   std::vector<std::complex<double>> w(out.size());
   const double y = options_.output_y_fraction * options_.width;
-  for (std::size_t k = 0; k < w.size(); ++k)
+  for (std::size_t k = 0; k < w.size(); ++k) {
     w[k] = plate_->Deflection(u, options_.output_positions[k], y);
+  }
   Finish(w, out);
 }
 

@@ -8,7 +8,7 @@ namespace combabc::services {
 
 class FanOutObserver : public SmcObserver {
  public:
-  explicit FanOutObserver(std::vector<SmcObserver*> observers) {
+  explicit FanOutObserver(const std::vector<SmcObserver*>& observers) {
     for (auto* o : observers) {
       if (o) observers_.push_back(o);
     }

@@ -86,7 +86,7 @@ VerifyOutcome VerifyHistory(const std::string& history_path) {
 std::string ExportHistory(const std::string& history_path,
                           const std::string& directory,
                           bool overwrite) {
-  const std::string out = directory.empty() ? Sibling(history_path, "export") : directory;
+  std::string out = directory.empty() ? Sibling(history_path, "export") : directory;
   ExportOptions options;
   options.overwrite = overwrite;
   ExportRun(history_path, out, options);

@@ -15,6 +15,7 @@ constexpr double kParameterTol = 1e-6;
 std::vector<double> Gaussian(
     const std::vector<double>& x, double a, double x0, double s, double c = 0.0) {
   std::vector<double> y;
+  y.reserve(x.size());
   for (double xi : x) y.push_back(a * std::exp(-(xi - x0) * (xi - x0) / (2 * s * s)) + c);
   return y;
 }

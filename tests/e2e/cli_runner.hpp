@@ -51,6 +51,7 @@ inline pid_t SpawnCli(const std::vector<std::string>& args, const std::filesyste
   std::vector<std::string> all = {COMBABC_CLI};
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(all.size() + 1);
   for (auto& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;

@@ -46,7 +46,7 @@ struct Case {
       double p = 1.0;
       for (int k = 0; k < kBits; ++k) {
         y[k] = (c >> k) & 1;
-        p *= y[k] ? prior[k] : 1.0 - prior[k];
+        p *= y[k] != 0.0 ? prior[k] : 1.0 - prior[k];
       }
       dist.Evaluate(y, std::span(&d, 1));
       if (d > kFinalEps) continue;

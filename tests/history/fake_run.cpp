@@ -85,8 +85,9 @@ RunMetadata MakeFakeMetadata(const FakeRunOptions& options) {
   m.threads = 2;
   m.estimator = "paper";
   m.dimension = options.dimension;
-  for (int k = 0; k < options.dimension; ++k)
+  for (int k = 0; k < options.dimension; ++k) {
     m.bit_names.push_back("clamp " + std::to_string(k + 1));
+  }
   m.distance_components = {{"least squares", ComponentKind::kThreshold, 1.0},
                            {"secondary peak", ComponentKind::kIndicator, 1.0}};
   m.output_positions = Positions(options.points);
@@ -166,8 +167,9 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
     std::vector<double> distances;
     for (const Particle& p : wave.particles) distances.push_back(p.distance[0]);
     threshold = median(distances);
-    for (std::size_t k = 0; k < d; ++k)
+    for (std::size_t k = 0; k < d; ++k) {
       proposal[k] = std::clamp(wave.marginals_paper[k], 0.05, 0.95);
+    }
     const bool complete = wave.complete;
     history.waves.push_back(std::move(wave));
     if (!complete) break;

@@ -280,8 +280,9 @@ TEST_F(HistoryStoreTest, ResumedRunStoresTheSameHistoryAsAnUninterruptedOne) {
     store.OnBatch(progress, batch);
   }
   store.OnWaveEnd(wave1);
-  for (std::size_t t = 2; t < history.waves.size(); ++t)
+  for (std::size_t t = 2; t < history.waves.size(); ++t) {
     RecordWave(store, history.waves[t], kBatch);
+  }
   store.Finish(history.summary);
 
   ExpectSame(HistoryStore::Open(whole).LoadHistory(), store.LoadHistory());

@@ -43,6 +43,7 @@ double Triangle(double x) { return std::max(0.0, 1.0 - std::abs(x - 0.02) / 0.02
 TEST(CompositeDistance, AreaOfIdenticalShapeIsZeroAfterNormalisation) {
   const auto out_x = Grid(0.0, 0.10, 0.005);  // a finer, longer grid than the data
   std::vector<double> simulated;
+  simulated.reserve(out_x.size());
   for (double x : out_x) simulated.push_back(3.0 * Triangle(x));  // same shape, other scale
   CompositeDistance d({Component(MetricType::kArea, 0.0, 0.04)}, kDataX, kDataY, out_x);
   double value = -1;
@@ -65,7 +66,7 @@ TEST(CompositeDistance, LeastSquaresInterpolatesOffGridPositions) {
   // linear profile is exact, so the resampled Y* at x_j is x_j / 0.1025 after normalisation by
   // the grid's maximum, 0.1025.
   const auto out_x = Grid(-0.0025, 0.1025, 0.005);
-  const std::vector<double> simulated = out_x;
+  const std::vector<double>& simulated = out_x;
   CompositeDistance d(
       {Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x, WholeOutput());
   double value = -1;
@@ -81,6 +82,7 @@ TEST(CompositeDistance, LeastSquaresInterpolatesOffGridPositions) {
 TEST(CompositeDistance, LeastSquaresExactValueOnAlignedGrid) {
   const auto out_x = Grid(0.0, 0.10, 0.01);
   std::vector<double> simulated;
+  simulated.reserve(out_x.size());
   for (double x : out_x) simulated.push_back(x / 0.1);
   CompositeDistance d(
       {Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x, WholeOutput());
@@ -96,6 +98,7 @@ TEST(CompositeDistance, NormalisesSimulatedOverTheMeasuredSupportByDefault) {
   // output (0.1 maximum) the same curve gives 1.0 (LeastSquaresExactValueOnAlignedGrid).
   const auto out_x = Grid(0.0, 0.10, 0.01);
   std::vector<double> simulated;
+  simulated.reserve(out_x.size());
   for (double x : out_x) simulated.push_back(x / 0.1);
   CompositeDistance d({Component(MetricType::kLeastSquares, 0.0, 0.04)}, kDataX, kDataY, out_x);
   double value = -1;
@@ -106,6 +109,7 @@ TEST(CompositeDistance, NormalisesSimulatedOverTheMeasuredSupportByDefault) {
 TEST(CompositeDistance, WithoutNormalisationCompareRawValues) {
   const auto out_x = Grid(0.0, 0.10, 0.01);
   std::vector<double> simulated;
+  simulated.reserve(out_x.size());
   for (double x : out_x) simulated.push_back(Triangle(x) + 0.1);
   CompositeDistanceOptions options;
   options.normalise_simulated = false;

@@ -28,8 +28,9 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
     model.Profile(clamps, fast);
     model.ProfileFullSolve(clamps, full);
     double diff = 0.0;
-    for (std::size_t k = 0; k < fast.size(); ++k)
+    for (std::size_t k = 0; k < fast.size(); ++k) {
       diff = std::max(diff, std::abs(fast[k] - full[k]));
+    }
     worst = std::max(worst, diff / *std::max_element(full.begin(), full.end()));
   }
   std::printf("default mesh: worst relative difference over %d configurations: %.2e\n",
