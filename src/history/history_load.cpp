@@ -54,10 +54,15 @@ class WaveReader {
                 "wave " + std::to_string(wave_ + 1) + ", " + field);
   }
 
+  static constexpr std::int64_t kMaxCount = std::int64_t{1} << 40;
   std::int64_t Count(const Statement& row, int column, const char* field) const {
     if (row.IsNull(column)) Corrupt(field, "is NULL");
+    // SQLite converts a REAL (9.3e18, Inf) to the nearest int64 on read: only a stored integer is
+    // a count, and no wave gets near 2^40 (10^12) simulations, so larger values are damage.
+    if (row.Type(column) != SQLITE_INTEGER) Corrupt(field, "is not an integer");
     const std::int64_t value = row.Int(column);
     if (value < 0) Corrupt(field, "is negative (" + std::to_string(value) + ")");
+    if (value > kMaxCount) Corrupt(field, "is implausibly large (" + std::to_string(value) + ")");
     return value;
   }
 
@@ -327,8 +332,11 @@ RunHistory HistoryStore::LoadHistory() const {
     const bool ended = rows.Int(kEnded) != 0;
     if (!ended && rows.Int(kNextIndex) == 0) break;  // started, nothing committed yet
     WaveRecord wave = impl.ReadWave(rows, static_cast<int>(history.waves.size()));
-    simulations += wave.candidates;
-    discarded += wave.discarded;
+    if (__builtin_add_overflow(simulations, wave.candidates, &simulations) ||
+        __builtin_add_overflow(discarded, wave.discarded, &discarded)) {
+      throw Error(
+          ErrorKind::kData, "corrupt run history: simulation counts overflow", impl.db.path());
+    }
     history.waves.push_back(std::move(wave));
     if (!ended || !history.waves.back().complete) {
       rows.Reset();

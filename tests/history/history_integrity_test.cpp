@@ -196,6 +196,24 @@ TEST_F(HistoryIntegrityTest, WrongLengthOrNullColumnsAreDataErrorsNamingWaveAndF
   }
 }
 
+// Found by the history_patch fuzzer: a count stored as a REAL (9.3e18, Inf) reads as INT64_MAX and
+// summing the waves' counts overflowed (undefined behaviour). Without checksums (schema v1) only
+// the value checks stand between such a file and the sums.
+TEST_F(HistoryIntegrityTest, HugeOrNonIntegerCountsAreDataErrors) {
+  const std::string original = WriteFinished("finished.db");
+  DowngradeToV1(original);
+  for (const char* value : {"9.3e18", "9e999", "-9e999", "2.5", "1099511627777"}) {
+    for (const char* column : {"candidates", "accepted", "next_index"}) {
+      SCOPED_TRACE(std::string(column) + " = " + value);
+      const std::string path = Path("damaged.db");
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
+      fs::copy_file(original, path);
+      Sql(path, std::string("UPDATE wave SET ") + column + " = " + value + " WHERE wave = 1");
+      ExpectDataError(Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, column);
+    }
+  }
+}
+
 std::string Describe(const RunMetadata& m) {
   std::ostringstream out;
   out << m.config_text << '|' << m.config_path << '|' << m.combabc_version << '|' << m.git_hash
