@@ -33,8 +33,9 @@ void Fnv1a64::Add(const void* data, std::size_t size) {
 
 void Fnv1a64::AddInt(std::int64_t value) {
   std::uint8_t bytes[8];
-  for (int i = 0; i < 8; ++i)
+  for (int i = 0; i < 8; ++i) {
     bytes[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(value) >> (8 * i));
+  }
   Add(bytes, sizeof bytes);
 }
 

@@ -137,8 +137,9 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
     BindParticle(*impl.upsert_particle, progress.wave, p);
     impl.upsert_particle->Run();
     // The checksum extends over new particles only; one sent again means hashing the wave anew.
-    if (impl.chain.wave == progress.wave && p.index < impl.chain.next_candidate)
+    if (impl.chain.wave == progress.wave && p.index < impl.chain.next_candidate) {
       impl.chain.wave = -1;
+    }
   }
   impl.StoreWaveHash(progress.wave);
   transaction.Commit();

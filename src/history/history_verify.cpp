@@ -25,8 +25,9 @@ void CheckDigest(history::Database& db, const char* key, std::uint64_t computed,
     digest = history::ParseHexDigest(stored.Text(0));
     stored.Reset();
   }
-  if (!digest)
+  if (!digest) {
     Corrupt(db.path(), std::string("meta.") + key, "the checksum is missing or malformed");
+  }
   if (*digest != computed) {
     Corrupt(
         db.path(), std::string("meta.") + key, std::string(what) + " do not match their checksum");
@@ -113,8 +114,9 @@ void HistoryStore::Impl::CheckMetadata() {
 }
 
 void HistoryStore::Impl::CheckRunState() {
-  if (checksummed())
+  if (checksummed()) {
     CheckDigest(db, "run_state_hash", history::RunStateHash(db), "the run's status and summary");
+  }
 }
 
 HistoryCheck HistoryStore::Verify(const std::string& path) {
@@ -132,7 +134,9 @@ HistoryCheck HistoryStore::Verify(const std::string& path) {
     }
   };
   for (const std::string& line : impl.StorageProblems(/*full=*/true)) {
-    result.problems.push_back(path + ": SQLite integrity_check: " + line);
+    result.problems.push_back(path);
+    result.problems.back() += ": SQLite integrity_check: ";
+    result.problems.back() += line;
   }
   history::ReadSnapshot snapshot(impl.db);
   bool metadata_ok = false;

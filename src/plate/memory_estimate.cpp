@@ -53,8 +53,9 @@ double SensorOptions::EstimatedMemoryBytes() const {
     const auto [it, inserted] =
         section_kinds.emplace(signature, static_cast<int>(section_kinds.size()));
     section_kind[s] = it->second;
-    if (inserted)
+    if (inserted) {
       bytes += 4.0 * (piece_bytes + static_cast<double>(relative[s].size()) * output_row_bytes);
+    }
   }
   // Groups: the two end groups and loaded groups are unique, the others shared by signature.
   std::map<std::vector<int>, int> group_kinds;
@@ -82,7 +83,10 @@ double SensorOptions::EstimatedMemoryBytes() const {
   bytes += std::max(condense, compose);
   // The plate: dofs and the distinct element sizes of the graded mesh.
   const double dofs = nc * (static_cast<double>(sections) * elements_per_section + 1);
-  const double element_kinds = (elements_per_section / 2 + 1.0) * (elements_across_width / 2 + 1.0);
+  // Integer halves on purpose: the graded mesh mirrors about the middle, so about half its
+  // element sizes are distinct.
+  const double element_kinds = (static_cast<double>(elements_per_section / 2) + 1.0) *
+                               (static_cast<double>(elements_across_width / 2) + 1.0);
   bytes += dofs * kBytesPerDof + element_kinds * kBytesPerElementKind;
   return bytes;
 }

@@ -152,7 +152,7 @@ bool SensorOptions::IsValid(std::string* why) const {
     const SensorOptions defaults;
     const char* culprit = "memory_limit_bytes";
     double best = needed;
-    auto consider = [&](const char* field, SensorOptions smaller) {
+    auto consider = [&](const char* field, const SensorOptions& smaller) {
       const double bytes = smaller.EstimatedMemoryBytes();
       if (bytes < best) {
         best = bytes;

@@ -108,6 +108,7 @@ struct ProcessResult {
 // Runs argv[0] with stdout discarded and stderr captured.
 ProcessResult RunProcess(std::vector<std::string> args) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   int pipe_fds[2];
@@ -168,7 +169,7 @@ std::string WriteReport(const std::string& history_path,
   // Reading it all first gives the usual one-line errors for a missing, foreign or corrupt file
   // (the script itself trusts what it reads).
   { HistoryStore::Open(history_path, /*read_only=*/true).LoadHistory(); }
-  const std::string out = directory.empty() ? ReportDirectory(history_path) : directory;
+  std::string out = directory.empty() ? ReportDirectory(history_path) : directory;
   const ReportTools tools = FindReportTools();
   std::vector<std::string> args = {tools.python, tools.script, "--out", out};
   if (overwrite) args.push_back("--overwrite");

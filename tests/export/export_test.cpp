@@ -44,7 +44,7 @@ class ExportTest : public ::testing::Test {
 
   std::string WriteRun(bool outputs, const std::string& name = "RUN.db") {
     options_.outputs = outputs;
-    const std::string path = (dir_ / name).string();
+    std::string path = (dir_ / name).string();
     HistoryStore store = HistoryStore::Create(path, testing::MakeFakeMetadata(options_));
     const RunHistory history = testing::MakeFakeHistory(options_);
     for (const WaveRecord& wave : history.waves) testing::RecordWave(store, wave, 4);

@@ -51,7 +51,7 @@ class HistoryIntegrityTest : public ::testing::Test {
 
   // A finished run (one self-contained file), or one killed in wave 2 (0-based 1).
   std::string WriteFinished(const std::string& name) {
-    const std::string path = Path(name);
+    std::string path = Path(name);
     const RunHistory history = MakeFakeHistory(SmallRun());
     HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
     for (const WaveRecord& wave : history.waves) RecordWave(store, wave, 5);
@@ -59,7 +59,7 @@ class HistoryIntegrityTest : public ::testing::Test {
     return path;
   }
   std::string WriteKilled(const std::string& name) {
-    const std::string path = Path(name);
+    std::string path = Path(name);
     const RunHistory history = MakeFakeHistory(SmallRun());
     HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
     RecordWave(store, history.waves[0], 5);
@@ -125,8 +125,9 @@ std::string Damage(const Corruption& c) {
   const std::string unit = column == "bits" ? "1" : "8";
   // bits is NOT NULL in the schema: the empty BLOB is as missing as NULL can be there.
   std::string value = column == "bits" ? "x''" : "NULL";
-  if (std::string(c.mode) == "short")
+  if (std::string(c.mode) == "short") {
     value = "substr(" + column + ", 1, length(" + column + ") - " + unit + ")";
+  }
   if (std::string(c.mode) == "long") value = column + " || zeroblob(" + unit + ")";
   return "UPDATE " + table + " SET " + column + " = " + value + " WHERE " + c.where;
 }
@@ -152,8 +153,9 @@ std::vector<Corruption> Corruptions(bool killed) {
     if (std::string(mode) != "NULL") out.push_back({"particle.output", particle, "output", mode});
   }
   if (!killed) {
-    for (const char* mode : {"NULL", "short", "long"})
+    for (const char* mode : {"NULL", "short", "long"}) {
       out.push_back({"wave.marginals_paper", "wave = 2", "wave 3, marginals_paper", mode});
+    }
   }
   return out;
 }
@@ -223,11 +225,13 @@ std::string Describe(const RunMetadata& m) {
       << m.schema_version;
   for (const auto& name : m.bit_names) out << '|' << name;
   for (double p : m.bit_prior_one) out << '|' << p;
-  for (const auto& c : m.distance_components)
+  for (const auto& c : m.distance_components) {
     out << '|' << c.name << ToString(c.kind) << c.required;
+  }
   for (double x : m.output_positions) out << '|' << x;
-  for (std::size_t i = 0; i < m.measured.positions.size(); ++i)
+  for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
     out << '|' << m.measured.positions[i] << ',' << m.measured.values[i];
+  }
   return out.str();
 }
 

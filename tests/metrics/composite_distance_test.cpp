@@ -247,6 +247,7 @@ TEST(CompositeDistance, WindowBeyondTheDataIsAConfigErrorGivingTheRange) {
 // fall from 76 to 78 cm by 3.1 % of the peak, so the paper's H1 window (76-78 cm) fails on them.
 std::vector<double> PeakAt77(const std::vector<double>& x) {
   std::vector<double> y;
+  y.reserve(x.size());
   for (double xi : x) y.push_back(std::exp(-(xi - 0.70) * (xi - 0.70) / (2 * 0.015 * 0.015)));
   y[6] = 0.200;   // 76 cm
   y[7] = 0.250;   // 77 cm
