@@ -85,8 +85,9 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const double dofs = nc * (static_cast<double>(sections) * elements_per_section + 1);
   // Integer halves on purpose: the graded mesh mirrors about the middle, so about half its
   // element sizes are distinct.
-  const double element_kinds = (static_cast<double>(elements_per_section / 2) + 1.0) *
-                               (static_cast<double>(elements_across_width / 2) + 1.0);
+  const int distinct_along = elements_per_section / 2 + 1;
+  const int distinct_across = elements_across_width / 2 + 1;
+  const double element_kinds = static_cast<double>(distinct_along) * distinct_across;
   bytes += dofs * kBytesPerDof + element_kinds * kBytesPerElementKind;
   return bytes;
 }
