@@ -5,13 +5,13 @@
 # test-math-dependencies: a cheap grep that fails CI. There is no exception list.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-order=(core rng params proposals distances schedules samplers plate data metrics config history
+order=(core rng params schedules proposals distances samplers plate data metrics config history
   export services)
 declare -A deps=(
   [core]=""
   [rng]="core"
   [params]="core rng"
-  [proposals]="core rng params"
+  [proposals]="core rng params schedules"
   [distances]="core rng"
   [schedules]="core"
   [samplers]="core rng params proposals distances schedules"

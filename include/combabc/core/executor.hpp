@@ -1,0 +1,37 @@
+#pragma once
+// Where a batch of candidates is evaluated: the seam between the sampler and the machines. The
+// sampler hands an executor a BatchTask over candidate indices [0, n); the executor makes sure
+// EvaluateRange has run over every index and that every result buffer holds every candidate's
+// results when Execute returns. A shared-memory executor (ThreadPoolExecutor) just runs the
+// ranges on its threads; an executor whose workers do not share memory (MPI, issue 10) runs a
+// slice per worker and then gathers the slices of each result buffer.
+#include <cstddef>
+#include <span>
+#include <vector>
+
+namespace combabc {
+
+class BatchTask {
+ public:
+  virtual ~BatchTask() = default;
+  // Evaluates candidates [begin, end): writes only their rows of the result buffers.
+  virtual void EvaluateRange(std::size_t begin, std::size_t end) = 0;
+  // The per-candidate results, each a row-major array of `row_bytes` per candidate; rows of one
+  // candidate are what a distributed executor gathers.
+  struct Buffer {
+    void* data = nullptr;
+    std::size_t row_bytes = 0;
+  };
+  virtual std::vector<Buffer> Results() = 0;
+};
+
+class Executor {
+ public:
+  virtual ~Executor() = default;
+  // Number of candidates worth evaluating at once (threads x ranks), for batch sizing.
+  virtual int concurrency() const = 0;
+  // Runs task over [0, n); rethrows the first exception a range threw (on every worker).
+  virtual void Execute(std::size_t n, BatchTask& task) = 0;
+};
+
+}  // namespace combabc

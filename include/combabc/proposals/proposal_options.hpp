@@ -1,0 +1,66 @@
+#pragma once
+// Which kernels propose a wave, and their options ([proposal] in the config; docs/config.md).
+#include <memory>
+#include <string>
+
+#include "combabc/core/enum_names.hpp"
+#include "combabc/proposals/proposal.hpp"
+
+namespace combabc {
+
+enum class BinaryKernelKind {
+  kIndependent,  // Eq. 2 / Eq. 3: each free bit on its own
+  kLogistic,     // logistic conditionals (Schaefer & Chopin 2013): p(x) = prod p(x_i | x_<i)
+};
+template <>
+struct EnumNames<BinaryKernelKind> {
+  static constexpr std::pair<BinaryKernelKind, const char*> kNames[] = {
+      {BinaryKernelKind::kIndependent, "independent"},
+      {BinaryKernelKind::kLogistic, "logistic"},
+  };
+};
+
+enum class ContinuousKernelKind {
+  kNormal,  // multivariate normal, covariance = scale x the weighted covariance (Beaumont 2009)
+  kOlcm,    // optimal local covariance matrix per particle (Filippi et al. 2013)
+};
+template <>
+struct EnumNames<ContinuousKernelKind> {
+  static constexpr std::pair<ContinuousKernelKind, const char*> kNames[] = {
+      {ContinuousKernelKind::kNormal, "normal"},
+      {ContinuousKernelKind::kOlcm, "olcm"},
+  };
+};
+
+struct LogisticKernelOptions {
+  // A predecessor x_k enters bit i's regression when |weighted correlation(x_i, x_k)| exceeds
+  // this (Schaefer & Chopin's sparse selection).
+  double min_correlation = 0.075;
+  // At most this many predecessors per bit (the most correlated ones).
+  int max_predecessors = 16;
+  // Ridge penalty on the regression coefficients (not the intercept), scaled by the population's
+  // total weight 1: keeps separable fits finite.
+  double ridge = 1e-3;
+  // A bit whose weighted marginal is within this of 0 or 1 is proposed from its marginal alone
+  // (near-constant bits carry no usable regression).
+  double min_marginal = 0.02;
+  // Conditional probabilities are clipped to [clip, 1 - clip] so no configuration has q = 0.
+  double clip = 1e-4;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct ProposalOptions {
+  BinaryKernelKind binary = BinaryKernelKind::kIndependent;
+  LogisticKernelOptions logistic;
+  ContinuousKernelKind continuous = ContinuousKernelKind::kNormal;
+  // kNormal: covariance = scale x weighted covariance (2 is Beaumont et al.'s choice).
+  double scale = 2.0;
+
+  bool IsValid(std::string* why) const;  // why: "ProposalOptions::field = value; constraint"
+};
+
+std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options);
+std::unique_ptr<ContinuousKernel> MakeContinuousKernel(const ProposalOptions& options);
+
+}  // namespace combabc
