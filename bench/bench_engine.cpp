@@ -16,10 +16,8 @@ class TrivialSimulator : public Simulator {
  public:
   explicit TrivialSimulator(int d) : d_(d) {}
   int output_size() const override { return d_; }
-  void Simulate(std::span<const std::uint8_t> bits,
-                RandomStream&,
-                std::span<double> out) const override {
-    for (int k = 0; k < d_; ++k) out[k] = bits[k];
+  void Simulate(const ParameterView& theta, RandomStream&, std::span<double> out) const override {
+    for (int k = 0; k < d_; ++k) out[k] = theta.bits[k];
   }
 
  private:
@@ -30,13 +28,13 @@ class TrivialSimulator : public Simulator {
 class SpinSimulator : public TrivialSimulator {
  public:
   SpinSimulator(int d, double seconds) : TrivialSimulator(d), seconds_(seconds) {}
-  void Simulate(std::span<const std::uint8_t> bits,
+  void Simulate(const ParameterView& theta,
                 RandomStream& rng,
                 std::span<double> out) const override {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds_);
     while (std::chrono::steady_clock::now() < until) {
     }
-    TrivialSimulator::Simulate(bits, rng, out);
+    TrivialSimulator::Simulate(theta, rng, out);
   }
 
  private:
@@ -72,7 +70,7 @@ SmcOptions PaperLikeOptions(int threads) {
 
 void BM_EngineOverheadPerCandidate(benchmark::State& state) {
   const int d = static_cast<int>(state.range(0));
-  const auto space = BinarySpace::Independent(d);
+  const ParameterSpace space(BinarySpace::Independent(d));
   TrivialSimulator sim(d);
   HammingDistance dist(d);
   auto options = PaperLikeOptions(1);
@@ -93,7 +91,7 @@ BENCHMARK(BM_EngineOverheadPerCandidate)->Arg(36)->Arg(1024)->Unit(benchmark::kM
 
 void BM_ThreadScaling50us(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
-  const auto space = BinarySpace::Independent(36);
+  const ParameterSpace space(BinarySpace::Independent(36));
   SpinSimulator sim(36, 50e-6);
   HammingDistance dist(36);
   auto options = PaperLikeOptions(threads);

@@ -17,7 +17,7 @@ constexpr int kDimension = 6;
 Particle MakeParticle(std::int64_t index, std::vector<std::uint8_t> bits, double distance) {
   Particle p;
   p.index = index;
-  p.bits = std::move(bits);
+  p.theta.bits = std::move(bits);
   p.log_weight = -0.1 * static_cast<double>(index);
   p.weight = 0.25;
   p.distance = {distance, 1.0};

@@ -166,9 +166,9 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
   for (const WaveRecord& w : h.waves) {
     for (const Particle& p : w.particles) {
       bits.clear();
-      for (std::uint8_t bit : p.bits) bits += bit ? '1' : '0';
+      for (std::uint8_t bit : p.theta.bits) bits += bit ? '1' : '0';
       out << WaveNumber(w) << ',' << p.index << ',' << bits;
-      for (std::uint8_t bit : p.bits) out << ',' << (bit ? '1' : '0');
+      for (std::uint8_t bit : p.theta.bits) out << ',' << (bit ? '1' : '0');
       out << ',' << Number(p.log_weight) << ',' << Number(p.weight);
       for (std::size_t c = 0; c < components; ++c) {
         out << ',' << (c < p.distance.size() ? Number(p.distance[c]) : "NaN");

@@ -209,7 +209,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
       check.Corrupt(who,
                     "lies outside the wave's " + std::to_string(wave.candidates) + " candidates");
     }
-    p.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
+    p.theta.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
     p.log_weight = particles.Real(kLogWeight);
     p.weight = particles.Real(kWeight);
     p.distance = check.Doubles(particles,

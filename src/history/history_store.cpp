@@ -37,7 +37,7 @@ UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
 void BindParticle(Statement& s, int wave, const Particle& p) {
   s.Bind(1, wave)
       .Bind(2, p.index)
-      .BindBlob(3, PackBits(p.bits))
+      .BindBlob(3, PackBits(p.theta.bits))
       .Bind(4, p.log_weight)
       .Bind(5, p.weight)
       .BindBlob(6, PackDoubles(p.distance))
@@ -47,10 +47,11 @@ void BindParticle(Statement& s, int wave, const Particle& p) {
 // A wrong bit count would only surface when the run is read back; refuse it when written.
 void CheckBits(int dimension, const std::string& path, std::span<const Particle> particles) {
   for (const Particle& p : particles) {
-    if (p.bits.size() != static_cast<std::size_t>(dimension)) {
+    if (p.theta.bits.size() != static_cast<std::size_t>(dimension)) {
       throw Error(ErrorKind::kSoftware,
-                  "particle " + std::to_string(p.index) + " has " + std::to_string(p.bits.size()) +
-                      " bits, the run has " + std::to_string(dimension),
+                  "particle " + std::to_string(p.index) + " has " +
+                      std::to_string(p.theta.bits.size()) + " bits, the run has " +
+                      std::to_string(dimension),
                   path);
     }
   }

@@ -8,64 +8,90 @@
 
 namespace combabc {
 
-CandidateBatch::CandidateBatch(const BinarySpace& space,
+CandidateBatch::CandidateBatch(const ParameterSpace& space,
                                const Simulator& simulator,
                                const Distance& distance,
                                std::size_t num_components)
     : space_(space),
       simulator_(simulator),
       distance_(distance),
-      d_(static_cast<std::size_t>(space.dimension())),
-      f_(static_cast<std::size_t>(space.num_free())),
+      d_(static_cast<std::size_t>(space.num_bits())),
+      f_(static_cast<std::size_t>(space.num_free_bits())),
+      r_(static_cast<std::size_t>(space.num_reals())),
       m_(static_cast<std::size_t>(simulator.output_size())),
       c_(num_components) {}
 
-void CandidateBatch::Evaluate(ThreadPool& pool,
+void CandidateBatch::Evaluate(Executor& executor,
                               std::uint64_t seed,
                               int wave,
                               std::int64_t first,
                               std::int64_t count,
-                              const BernoulliProposal& proposal) {
+                              const WaveProposal& proposal) {
   const auto n = static_cast<std::size_t>(count);
   free_.resize(n * f_);
   bits_.resize(n * d_);
+  reals_.resize(n * r_);
   outputs_.resize(n * m_);
   distances_.resize(n * c_);
   log_weights_.resize(n);
   rngs_.resize(n, RandomStream(0, 0, 0));
-  // Enough chunks per thread to balance uneven simulators, few enough to amortise the handoff.
-  const std::size_t chunk =
-      std::max<std::size_t>(1, n / (static_cast<std::size_t>(pool.size()) * 4));
-  pool.ParallelFor(n, chunk, [&](std::size_t begin, std::size_t end) {
-    EvaluateRange(begin, end, seed, wave, first, proposal);
-  });
+  seed_ = seed;
+  wave_ = wave;
+  first_ = first;
+  proposal_ = proposal;
+  executor.Execute(n, *this);
 }
 
-void CandidateBatch::EvaluateRange(std::size_t begin,
-                                   std::size_t end,
-                                   std::uint64_t seed,
-                                   int wave,
-                                   std::int64_t first,
-                                   const BernoulliProposal& proposal) {
+std::vector<BatchTask::Buffer> CandidateBatch::Results() {
+  return {{bits_.data(), d_},
+          {reals_.data(), r_ * sizeof(double)},
+          {outputs_.data(), m_ * sizeof(double)},
+          {distances_.data(), c_ * sizeof(double)},
+          {log_weights_.data(), sizeof(double)}};
+}
+
+void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
   auto span_of = [](auto& v, std::size_t i, std::size_t width) {
     return std::span(v.data() + i * width, width);
   };
-  for (std::size_t i = begin; i < end; ++i) {
-    rngs_[i] =
-        RandomStream(seed, static_cast<std::uint64_t>(wave), static_cast<std::uint64_t>(first) + i);
-    auto free = span_of(free_, i, f_);
-    proposal.Sample(rngs_[i], free);
-    space_.Expand(free, span_of(bits_, i, d_));
-    log_weights_[i] = proposal.LogWeight(free);
-  }
+  const int wave = wave_;
+  const std::int64_t first = first_;
   const std::string which = "wave " + std::to_string(wave + 1) + ", candidates " +
                             std::to_string(first + static_cast<std::int64_t>(begin)) + "-" +
                             std::to_string(first + static_cast<std::int64_t>(end) - 1);
+  for (std::size_t i = begin; i < end; ++i) {
+    rngs_[i] = RandomStream(
+        seed_, static_cast<std::uint64_t>(wave), static_cast<std::uint64_t>(first) + i);
+    auto free = span_of(free_, i, f_);
+    auto reals = span_of(reals_, i, r_);
+    proposal_.bits->Sample(rngs_[i], free);
+    if (r_ > 0) {
+      try {
+        proposal_.reals->Sample(rngs_[i], reals);
+      } catch (const std::exception& e) {
+        throw Error(ErrorKind::kSoftware, e.what(), "", 0, which);
+      }
+    }
+    space_.binary().Expand(free, span_of(bits_, i, d_));
+    // Importance weight p(theta) / q(theta); the binary and continuous proposals are independent,
+    // so it factors. Wave 0 proposes from the prior: exactly 1.
+    double log_weight = 0.0;
+    if (!proposal_.from_prior) {
+      log_weight = space_.LogPriorBits(free) - proposal_.bits->LogDensity(free);
+      if (r_ > 0) log_weight += space_.LogPriorReals(reals) - proposal_.reals->LogDensity(reals);
+    }
+    log_weights_[i] = log_weight;
+  }
   try {
-    simulator_.SimulateBatch(
+    const ParameterBatch batch{
+        end - begin,
+        d_,
+        r_,
         std::span<const std::uint8_t>(bits_.data() + begin * d_, (end - begin) * d_),
-        std::span(rngs_.data() + begin, end - begin),
-        std::span(outputs_.data() + begin * m_, (end - begin) * m_));
+        std::span<const double>(reals_.data() + begin * r_, (end - begin) * r_)};
+    simulator_.SimulateBatch(batch,
+                             std::span(rngs_.data() + begin, end - begin),
+                             std::span(outputs_.data() + begin * m_, (end - begin) * m_));
   } catch (const std::exception& e) {
     throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
   }
@@ -94,8 +120,10 @@ Particle CandidateBatch::MakeParticle(std::int64_t i, std::int64_t index, bool k
   const auto u = static_cast<std::size_t>(i);
   Particle p;
   p.index = index;
-  p.bits.assign(bits_.begin() + static_cast<std::ptrdiff_t>(u * d_),
-                bits_.begin() + static_cast<std::ptrdiff_t>((u + 1) * d_));
+  p.theta.bits.assign(bits_.begin() + static_cast<std::ptrdiff_t>(u * d_),
+                      bits_.begin() + static_cast<std::ptrdiff_t>((u + 1) * d_));
+  p.theta.reals.assign(reals_.begin() + static_cast<std::ptrdiff_t>(u * r_),
+                       reals_.begin() + static_cast<std::ptrdiff_t>((u + 1) * r_));
   p.log_weight = log_weights_[u];
   p.distance.assign(distances_.begin() + static_cast<std::ptrdiff_t>(u * c_),
                     distances_.begin() + static_cast<std::ptrdiff_t>((u + 1) * c_));

@@ -1,55 +1,64 @@
 #pragma once
-// A batch of consecutive candidates of one wave, evaluated in parallel into flat buffers (no
+// A batch of consecutive candidates of one wave, evaluated by an Executor into flat buffers (no
 // allocation per candidate). Candidate i's randomness is RandomStream(seed, wave, first + i):
-// proposal draws first, then whatever a stochastic simulator draws.
+// the binary proposal draws first, then the continuous one, then whatever a stochastic
+// simulator draws.
 #include <cstdint>
 #include <span>
 #include <vector>
 
-#include "combabc/core/thread_pool.hpp"
+#include "combabc/core/executor.hpp"
 #include "combabc/distances/distance.hpp"
-#include "combabc/params/binary_space.hpp"
-#include "combabc/proposals/bernoulli_proposal.hpp"
+#include "combabc/params/parameter_space.hpp"
+#include "combabc/proposals/proposal.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/samplers/simulator.hpp"
 
 namespace combabc {
 
-class CandidateBatch {
+// The proposals of one wave; `from_prior` marks wave 0, whose importance weights are exactly 1.
+struct WaveProposal {
+  const BinaryProposal* bits = nullptr;
+  const ContinuousProposal* reals = nullptr;  // null when the space has no reals
+  bool from_prior = false;
+};
+
+class CandidateBatch : public BatchTask {
  public:
-  CandidateBatch(const BinarySpace& space,
+  CandidateBatch(const ParameterSpace& space,
                  const Simulator& simulator,
                  const Distance& distance,
                  std::size_t num_components);
 
   // Proposes, simulates and measures candidates [first, first + count) of `wave`. Throws
   // Error(kSoftware) naming the wave and candidates if the simulator or distance fails.
-  void Evaluate(ThreadPool& pool,
+  void Evaluate(Executor& executor,
                 std::uint64_t seed,
                 int wave,
                 std::int64_t first,
                 std::int64_t count,
-                const BernoulliProposal& proposal);
+                const WaveProposal& proposal);
 
   std::span<const double> distance(std::int64_t i) const {
     return {distances_.data() + i * c_, c_};
   }
   Particle MakeParticle(std::int64_t i, std::int64_t index, bool keep_output) const;
 
- private:
-  void EvaluateRange(std::size_t begin,
-                     std::size_t end,
-                     std::uint64_t seed,
-                     int wave,
-                     std::int64_t first,
-                     const BernoulliProposal& proposal);
+  void EvaluateRange(std::size_t begin, std::size_t end) override;
+  std::vector<Buffer> Results() override;
 
-  const BinarySpace& space_;
+ private:
+  const ParameterSpace& space_;
   const Simulator& simulator_;
   const Distance& distance_;
-  std::size_t d_, f_, m_, c_;
+  std::size_t d_, f_, r_, m_, c_;
+  // The batch Evaluate is running.
+  std::uint64_t seed_ = 0;
+  int wave_ = 0;
+  std::int64_t first_ = 0;
+  WaveProposal proposal_;
   std::vector<std::uint8_t> free_, bits_;
-  std::vector<double> outputs_, distances_, log_weights_;
+  std::vector<double> reals_, outputs_, distances_, log_weights_;
   std::vector<RandomStream> rngs_;
 };
 

@@ -8,8 +8,7 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
-#include "combabc/core/thread_pool.hpp"
-#include "combabc/proposals/bernoulli_proposal.hpp"
+#include "combabc/proposals/proposal_options.hpp"
 #include "samplers/candidate_batch.hpp"
 
 namespace combabc {
@@ -21,21 +20,6 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// Fraction of 1s of each free parameter under the estimator's weights (Eq. 2 for kPaper).
-std::vector<double> FreeMarginals(const BinarySpace& space,
-                                  const WaveRecord& wave,
-                                  Estimator estimator) {
-  std::vector<double> out(static_cast<std::size_t>(space.num_free()), 0.0);
-  std::vector<int> seen(out.size(), 0);
-  const auto& bit_marginals = wave.marginals(estimator);
-  for (int k = 0; k < space.dimension(); ++k) {
-    const int j = space.free_of_bit(k);
-    if (!seen[j]) out[j] = std::clamp(bit_marginals[k], 0.0, 1.0);
-    seen[j] = 1;
-  }
-  return out;
-}
-
 class SmcRun {
  public:
   SmcRun(const SmcProblem& problem, const SmcOptions& options, SmcObserver* observer)
@@ -44,8 +28,35 @@ class SmcRun {
         distance_(*problem.distance),
         options_(options),
         observer_(observer),
-        pool_(options.threads),
         components_(distance_.components()) {
+    if (problem.binary_kernel) {
+      binary_kernel_ = problem.binary_kernel;
+    } else {
+      owned_binary_kernel_ = MakeBinaryKernel(options_.proposal);
+      binary_kernel_ = owned_binary_kernel_.get();
+    }
+    if (problem.continuous_kernel) {
+      continuous_kernel_ = problem.continuous_kernel;
+    } else {
+      owned_continuous_kernel_ = MakeContinuousKernel(options_.proposal);
+      continuous_kernel_ = owned_continuous_kernel_.get();
+    }
+    if (problem.executor) {
+      executor_ = problem.executor;
+    } else {
+      owned_executor_ = std::make_unique<ThreadPoolExecutor>(options_.threads);
+      executor_ = owned_executor_.get();
+    }
+    if (space_.num_reals() > 0 && options_.estimator == Estimator::kPaper) {
+      // Unweighted fractions are the paper's estimator for Eq. 2; a continuous kernel perturbs
+      // particles, and only importance weights correct for that.
+      throw Error(ErrorKind::kConfig,
+                  "the paper estimator is unweighted; continuous parameters need importance "
+                  "weights (estimator = importance)",
+                  "",
+                  0,
+                  "SmcOptions::estimator");
+    }
     for (std::size_t k = 0; k < components_.size(); ++k) {
       if (components_[k].kind == ComponentKind::kThreshold) threshold_components_.push_back(k);
     }
@@ -128,21 +139,47 @@ class SmcRun {
       }
       wave.thresholds.push_back(schedules_[s].ThresholdFor(t, column));
     }
-    const auto& prior = space_.free_prior_one();
+    const auto& prior = space_.binary().free_prior_one();
     wave.phi = options_.tempering.Phi(t, options_.num_waves);
-    if (!previous) {
-      wave.proposal = prior;  // wave 0 proposes from the prior
+    if (!previous || previous->particles.empty()) {
+      // Wave 0 proposes from the prior.
+      bit_proposal_ = binary_kernel_->Prior(prior);
+      if (space_.num_reals() > 0) real_proposal_ = continuous_kernel_->Prior(space_);
+      from_prior_ = true;
     } else {
-      // Eq. 2 (the estimator's per-bit fractions), tempered toward the prior by Eq. 3.
-      const auto p_hat = FreeMarginals(space_, *previous, options_.estimator);
-      wave.proposal.resize(p_hat.size());
-      for (std::size_t j = 0; j < p_hat.size(); ++j) {
-        wave.proposal[j] =
-            TemperedProbability(p_hat[j], prior[j], wave.phi, options_.tempering.form);
-      }
+      // Eq. 2 generalised: the kernels fit the previous wave's weighted particles; the binary
+      // proposal is tempered toward the prior (Eq. 3).
+      const Population population = MakePopulation(*previous, wave.thresholds);
+      bit_proposal_ =
+          binary_kernel_->Fit(population, prior, Tempering{wave.phi, options_.tempering.form});
+      if (space_.num_reals() > 0) real_proposal_ = continuous_kernel_->Fit(population, space_);
+      from_prior_ = false;
     }
+    wave.proposal = bit_proposal_->Marginals();
     if (observer_) observer_->OnWaveStart(wave);
     return wave;
+  }
+
+  // The previous wave's particles as the kernels see them: free bits, reals, the estimator's
+  // normalised weights, and which particles the new thresholds would still accept.
+  Population MakePopulation(const WaveRecord& previous,
+                            const std::vector<double>& thresholds) const {
+    Population pop;
+    pop.size = previous.particles.size();
+    pop.num_free_bits = static_cast<std::size_t>(space_.num_free_bits());
+    pop.num_reals = static_cast<std::size_t>(space_.num_reals());
+    pop.free_bits.resize(pop.size * pop.num_free_bits);
+    pop.reals.reserve(pop.size * pop.num_reals);
+    for (std::size_t i = 0; i < pop.size; ++i) {
+      const auto& p = previous.particles[i];
+      const bool tied = space_.binary().Reduce(
+          p.theta.bits, std::span(pop.free_bits.data() + i * pop.num_free_bits, pop.num_free_bits));
+      COMBABC_CHECK(tied);
+      pop.reals.insert(pop.reals.end(), p.theta.reals.begin(), p.theta.reals.end());
+      pop.weights.push_back(p.weight);
+      pop.within_next.push_back(Accept(p.distance, thresholds) ? 1 : 0);
+    }
+    return pop;
   }
 
   bool Accept(std::span<const double> d, const std::vector<double>& eps) const {
@@ -168,14 +205,14 @@ class SmcRun {
     const auto expected = static_cast<std::int64_t>(std::ceil(static_cast<double>(needed) / rate));
     // Big enough to keep every thread busy and amortise a checkpoint, small enough that a
     // killed run loses little and the overshoot past the last acceptance stays small.
-    const std::int64_t lo = 32LL * pool_.size();
+    const std::int64_t lo = 32LL * executor_->concurrency();
     return std::clamp<std::int64_t>(expected + expected / 16, lo, std::max<std::int64_t>(lo, 4096));
   }
 
   // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires.
   Stop RunWave(WaveRecord& wave, std::int64_t next_index) {
     const auto wave_start = Clock::now();
-    const BernoulliProposal proposal(wave.proposal, space_.free_prior_one());
+    const WaveProposal proposal{bit_proposal_.get(), real_proposal_.get(), from_prior_};
     const int n = options_.accepted_per_wave;
     const std::int64_t wave_cap =
         options_.min_acceptance_rate > 0
@@ -200,7 +237,7 @@ class SmcRun {
                             std::to_string(next_index) + " candidates, below min_acceptance_rate"});
         break;
       }
-      batch.Evaluate(pool_, options_.seed, wave.wave, next_index, size, proposal);
+      batch.Evaluate(*executor_, options_.seed, wave.wave, next_index, size, proposal);
       // Accept in index order, never completion order: the first n accepted candidates win.
       const std::size_t before = wave.particles.size();
       std::int64_t consumed = size;
@@ -263,12 +300,21 @@ class SmcRun {
     return history;
   }
 
-  const BinarySpace& space_;
+  const ParameterSpace& space_;
   const Simulator& simulator_;
   const Distance& distance_;
   const SmcOptions& options_;
   SmcObserver* observer_;
-  ThreadPool pool_;
+  const BinaryKernel* binary_kernel_ = nullptr;
+  const ContinuousKernel* continuous_kernel_ = nullptr;
+  Executor* executor_ = nullptr;
+  std::unique_ptr<BinaryKernel> owned_binary_kernel_;
+  std::unique_ptr<ContinuousKernel> owned_continuous_kernel_;
+  std::unique_ptr<Executor> owned_executor_;
+  // The current wave's proposals.
+  std::unique_ptr<BinaryProposal> bit_proposal_;
+  std::unique_ptr<ContinuousProposal> real_proposal_;
+  bool from_prior_ = true;
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;
   std::vector<ThresholdSchedule> schedules_;

@@ -55,9 +55,12 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
   wave.accepted = static_cast<std::int64_t>(n);
   wave.acceptance_rate =
       wave.candidates > 0 ? static_cast<double>(n) / static_cast<double>(wave.candidates) : 0.0;
-  const std::size_t d = n ? wave.particles[0].bits.size() : wave.marginals_paper.size();
+  const std::size_t d = n ? wave.particles[0].theta.bits.size() : wave.marginals_paper.size();
+  const std::size_t r = n ? wave.particles[0].theta.reals.size() : wave.reals_mean.size();
   wave.marginals_paper.assign(d, 0.0);
   wave.marginals_importance.assign(d, 0.0);
+  wave.reals_mean.assign(r, 0.0);
+  wave.reals_sd.assign(r, 0.0);
   if (n == 0) {
     wave.ess = 0.0;
     wave.distinct = 0;
@@ -83,15 +86,24 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
     auto& p = wave.particles[i];
     p.weight = estimator == Estimator::kPaper ? uniform : w[i];
     for (std::size_t k = 0; k < d; ++k) {
-      if (p.bits[k]) {
+      if (p.theta.bits[k]) {
         wave.marginals_paper[k] += uniform;
         wave.marginals_importance[k] += w[i];
       }
     }
+    for (std::size_t k = 0; k < r; ++k) wave.reals_mean[k] += p.weight * p.theta.reals[k];
   }
+  for (const auto& p : wave.particles) {
+    for (std::size_t k = 0; k < r; ++k) {
+      const double dev = p.theta.reals[k] - wave.reals_mean[k];
+      wave.reals_sd[k] += p.weight * dev * dev;
+    }
+  }
+  for (auto& v : wave.reals_sd) v = std::sqrt(v);
+  // Distinct bit configurations (the reals of a continuous kernel are almost surely all distinct).
   std::vector<const std::vector<std::uint8_t>*> configs;
   configs.reserve(n);
-  for (const auto& p : wave.particles) configs.push_back(&p.bits);
+  for (const auto& p : wave.particles) configs.push_back(&p.theta.bits);
   std::sort(configs.begin(), configs.end(), [](auto* a, auto* b) { return *a < *b; });
   wave.distinct = 1;
   for (std::size_t i = 1; i < n; ++i) wave.distinct += *configs[i] != *configs[i - 1];
@@ -124,6 +136,8 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.marginals_paper, y.marginals_paper, w + "marginals_paper", where) ||
         Differ(x.marginals_importance, y.marginals_importance, w + "marginals_importance", where) ||
         Differ(x.ess, y.ess, w + "ess", where) ||
+        Differ(x.reals_mean, y.reals_mean, w + "reals_mean", where) ||
+        Differ(x.reals_sd, y.reals_sd, w + "reals_sd", where) ||
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;
@@ -133,7 +147,8 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
       const auto& q = y.particles[i];
       const std::string pi = w + "particle " + std::to_string(i) + ": ";
       if (Differ(p.index, q.index, pi + "index", where) ||
-          Differ(p.bits, q.bits, pi + "bits", where) ||
+          Differ(p.theta.bits, q.theta.bits, pi + "bits", where) ||
+          Differ(p.theta.reals, q.theta.reals, pi + "reals", where) ||
           Differ(p.log_weight, q.log_weight, pi + "log_weight", where) ||
           Differ(p.weight, q.weight, pi + "weight", where) ||
           Differ(p.distance, q.distance, pi + "distance", where) ||

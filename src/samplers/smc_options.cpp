@@ -20,6 +20,10 @@ bool SmcOptions::IsValid(std::string* why) const {
     }
   }
   if (!tempering.IsValid("SmcOptions::tempering", why)) return false;
+  if (!proposal.IsValid(why)) {
+    if (why) *why = "SmcOptions::proposal." + why->substr(why->find("::") + 2);
+    return false;
+  }
   if (tempering.kind == TemperingKind::kList &&
       static_cast<int>(tempering.values.size()) < num_waves - 1) {
     return fail("tempering.values has " + std::to_string(tempering.values.size()) +

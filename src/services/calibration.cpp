@@ -10,7 +10,7 @@
 #include "combabc/data/measured_data.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/metrics/composite_distance.hpp"
-#include "combabc/params/binary_space.hpp"
+#include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/sensor_simulator.hpp"
 #include "services/fan_out_observer.hpp"
@@ -32,7 +32,7 @@ struct Problem {
   std::vector<double> data_values;
   std::unique_ptr<SensorSimulator> simulator;
   std::unique_ptr<CompositeDistance> distance;
-  std::optional<BinarySpace> space;
+  std::optional<ParameterSpace> space;
 
   SmcProblem view() const { return {&*space, simulator.get(), distance.get()}; }
 };
@@ -51,7 +51,7 @@ void BuildModel(Problem& p) {
                 0,
                 "model");
   }
-  p.space.emplace(p.config.space);
+  p.space.emplace(BinarySpace(p.config.space));
 }
 
 RunMetadata Describe(const Problem& p) {
@@ -65,9 +65,10 @@ RunMetadata Describe(const Problem& p) {
                   ? p.config.smc.threads
                   : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   m.estimator = ToString(p.config.smc.estimator);
-  m.dimension = p.space->dimension();
-  for (int k = 0; k < p.space->dimension(); ++k) m.bit_names.push_back(p.space->name(k));
-  m.bit_prior_one = p.space->bit_prior_one();
+  const BinarySpace& bits = p.space->binary();
+  m.dimension = bits.dimension();
+  for (int k = 0; k < bits.dimension(); ++k) m.bit_names.push_back(bits.name(k));
+  m.bit_prior_one = bits.bit_prior_one();
   m.distance_components = p.distance->components();
   m.output_positions = p.simulator->model().output_positions();
   m.position_unit = "m";

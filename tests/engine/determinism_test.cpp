@@ -12,7 +12,7 @@ namespace combabc {
 namespace {
 
 struct ToyRun {
-  BinarySpace space = BinarySpace::Independent(20, 0.4);
+  ParameterSpace space{BinarySpace::Independent(20, 0.4)};
   testing::NoisySimulator sim{20, 0.25};  // stochastic: draws from each candidate's stream
   testing::WeightedL1Distance dist{
       {1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1},
@@ -145,11 +145,11 @@ namespace {
 class BatchedNoisySimulator : public testing::NoisySimulator {
  public:
   using NoisySimulator::NoisySimulator;
-  void SimulateBatch(std::span<const std::uint8_t> bits,
+  void SimulateBatch(const ParameterBatch& batch,
                      std::span<RandomStream> rngs,
                      std::span<double> out) const override {
     ++batches;
-    NoisySimulator::SimulateBatch(bits, rngs, out);
+    NoisySimulator::SimulateBatch(batch, rngs, out);
   }
   mutable std::atomic<int> batches{0};
 };
@@ -167,7 +167,7 @@ TEST(Determinism, BatchFormGivesTheSameHistory) {
 
 TEST(Dimensions, RunsFromOneTo1024Bits) {
   for (int d : {1, 2, 1024}) {
-    const auto space = BinarySpace::Independent(d);
+    const ParameterSpace space(BinarySpace::Independent(d));
     testing::IdentitySimulator sim(d);
     // Only bit 0 matters: it must be 1. Every other bit is unidentifiable (posterior = prior).
     std::vector<double> target(static_cast<std::size_t>(d), 0.0), weights(target.size(), 0.0);

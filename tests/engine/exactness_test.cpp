@@ -30,11 +30,11 @@ struct Case {
                                    2,
                                    1.0};
   testing::IdentitySimulator sim{kBits};
-  BinarySpace space = [this] {
+  ParameterSpace space = [this] {
     BinarySpaceOptions o;
     o.dimension = kBits;
     o.prior_one = prior;
-    return BinarySpace(o);
+    return ParameterSpace(BinarySpace(o));
   }();
 
   std::vector<double> ExactMarginals() const {

@@ -91,7 +91,7 @@ TEST(SmcOptions, EachInvalidOptionIsRejectedWithItsMessage) {
 }
 
 TEST(SmcOptions, RunRejectsInvalidOptionsBeforeAnyWork) {
-  const auto space = BinarySpace::Independent(4);
+  const ParameterSpace space(BinarySpace::Independent(4));
   testing::IdentitySimulator sim(4);
   testing::WeightedL1Distance dist({1, 0, 1, 0}, {1, 1, 1, 1});
   SmcOptions o;

@@ -25,7 +25,7 @@ ThresholdSchedule List(std::vector<double> values) {
 }
 
 struct Toy {
-  BinarySpace space = BinarySpace::Independent(8);
+  ParameterSpace space{BinarySpace::Independent(8)};
   IdentitySimulator sim{8};
   WeightedL1Distance dist{{1, 0, 1, 0, 1, 0, 1, 0}, {1, 1, 1, 1, 1, 1, 1, 1}};
   SmcProblem problem() const { return {&space, &sim, &dist}; }
@@ -58,7 +58,7 @@ TEST(Stopping, MinAcceptanceRateGivesUpAfterNOverRateCandidates) {
 }
 
 TEST(Stopping, WallTimeLimitStopsAtABatchBoundary) {
-  const auto space = BinarySpace::Independent(8);
+  const ParameterSpace space(BinarySpace::Independent(8));
   IdentitySimulator slow(8, 20000);
   WeightedL1Distance dist({1, 0, 1, 0, 1, 0, 1, 0}, {1, 1, 1, 1, 1, 1, 1, 1});
   SmcOptions o;
@@ -109,7 +109,7 @@ TEST(Stopping, AdaptiveQuantileStopsWhenTheTargetIsReached) {
 }
 
 TEST(Stopping, MaxWavesWhenTheTargetIsOutOfReach) {
-  const auto space = BinarySpace::Independent(4);
+  const ParameterSpace space(BinarySpace::Independent(4));
   NoisySimulator sim(4, 0.3);
   WeightedL1Distance dist({1, 0, 1, 0}, {1, 1, 1, 1});
   SmcOptions o;
@@ -124,7 +124,7 @@ TEST(Stopping, MaxWavesWhenTheTargetIsOutOfReach) {
 }
 
 TEST(VectorDistance, EveryComponentMeetsItsThresholdAndIndicatorsTheirValue) {
-  const auto space = BinarySpace::Independent(8);
+  const ParameterSpace space(BinarySpace::Independent(8));
   IdentitySimulator sim(8);
   SplitDistance dist({1, 0, 1, 0, 1, 1, 0, 0});
   SmcOptions o;
@@ -139,7 +139,7 @@ TEST(VectorDistance, EveryComponentMeetsItsThresholdAndIndicatorsTheirValue) {
       EXPECT_LE(p.distance[0], w.thresholds[0]);
       EXPECT_LE(p.distance[1], w.thresholds[1]);
       EXPECT_EQ(p.distance[2], 1.0);
-      EXPECT_EQ(p.bits[0], 1);
+      EXPECT_EQ(p.theta.bits[0], 1);
     }
   }
 }
@@ -149,12 +149,10 @@ TEST(VectorDistance, EveryComponentMeetsItsThresholdAndIndicatorsTheirValue) {
 class CountingSimulator : public Simulator {
  public:
   int output_size() const override { return 4; }
-  void Simulate(std::span<const std::uint8_t> bits,
-                RandomStream&,
-                std::span<double> out) const override {
+  void Simulate(const ParameterView& theta, RandomStream&, std::span<double> out) const override {
     calls++;
-    ones += bits[0];
-    for (int k = 0; k < 4; ++k) out[k] = bits[k];
+    ones += theta.bits[0];
+    for (int k = 0; k < 4; ++k) out[k] = theta.bits[k];
   }
   mutable std::atomic<long> calls{0}, ones{0};
 };
@@ -181,7 +179,7 @@ TEST(Tempering, StuckBitIsProposedAtTheRateEq3Predicts) {
   BinarySpaceOptions so;
   so.dimension = 4;
   so.default_prior_one = 0.3;
-  const BinarySpace space(so);
+  const ParameterSpace space{BinarySpace(so)};
   BitZeroIsZero dist;
   struct Setting {
     TemperingForm form;

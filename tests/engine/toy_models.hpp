@@ -15,12 +15,12 @@ class IdentitySimulator : public Simulator {
  public:
   explicit IdentitySimulator(int d, int busy_iterations = 0) : d_(d), busy_(busy_iterations) {}
   int output_size() const override { return d_; }
-  void Simulate(std::span<const std::uint8_t> bits,
+  void Simulate(const ParameterView& theta,
                 RandomStream& /*rng*/,
                 std::span<double> out) const override {
     double acc = 0.0;
     for (int i = 0; i < busy_; ++i) acc += std::sqrt(static_cast<double>(i) + acc * 1e-9);
-    for (int k = 0; k < d_; ++k) out[k] = bits[k] + acc * 0.0;
+    for (int k = 0; k < d_; ++k) out[k] = theta.bits[k] + acc * 0.0;
   }
 
  private:
@@ -33,10 +33,10 @@ class NoisySimulator : public Simulator {
  public:
   NoisySimulator(int d, double sigma) : d_(d), sigma_(sigma) {}
   int output_size() const override { return d_; }
-  void Simulate(std::span<const std::uint8_t> bits,
+  void Simulate(const ParameterView& theta,
                 RandomStream& rng,
                 std::span<double> out) const override {
-    for (int k = 0; k < d_; ++k) out[k] = bits[k] + sigma_ * rng.Normal();
+    for (int k = 0; k < d_; ++k) out[k] = theta.bits[k] + sigma_ * rng.Normal();
   }
 
  private:

@@ -150,10 +150,10 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
       p.index = index;
       for (double q : proposal) {
         const bool one = stream.Uniform() < q;
-        p.bits.push_back(one ? 1 : 0);
+        p.theta.bits.push_back(one ? 1 : 0);
         p.log_weight += std::log(0.5) - std::log(one ? q : 1.0 - q);
       }
-      std::vector<double> curve = Curve(p.bits, metadata.output_positions);
+      std::vector<double> curve = Curve(p.theta.bits, metadata.output_positions);
       p.distance = {distance(curve), 1.0};
       if (p.distance[0] > threshold) continue;
       if (options.outputs) p.output = std::move(curve);

@@ -178,7 +178,7 @@ TEST_F(HistoryStoreTest, StoreDroppedBetweenBatchesKeepsExactlyTheCommittedBatch
   for (const Particle& p : point.partial_accepted) actual.push_back(p.index);
   EXPECT_EQ(actual, expected);
   ASSERT_FALSE(point.partial_accepted.empty());
-  EXPECT_EQ(point.partial_accepted[0].bits, history.waves[1].particles[0].bits);
+  EXPECT_EQ(point.partial_accepted[0].theta.bits, history.waves[1].particles[0].theta.bits);
   EXPECT_EQ(point.partial_accepted[0].output, history.waves[1].particles[0].output);
 
   // The history shows the partial wave last, with statistics derived from its particles.

@@ -9,6 +9,8 @@
 #include <span>
 #include <vector>
 
+#include "combabc/core/thread_pool.hpp"
+
 namespace combabc {
 
 class BatchTask {
@@ -32,6 +34,17 @@ class Executor {
   virtual int concurrency() const = 0;
   // Runs task over [0, n); rethrows the first exception a range threw (on every worker).
   virtual void Execute(std::size_t n, BatchTask& task) = 0;
+};
+
+// Shared memory: ranges run on a ThreadPool (threads = 0: all cores; 1: inline, no threads).
+class ThreadPoolExecutor : public Executor {
+ public:
+  explicit ThreadPoolExecutor(int threads) : pool_(threads) {}
+  int concurrency() const override { return pool_.size(); }
+  void Execute(std::size_t n, BatchTask& task) override;
+
+ private:
+  ThreadPool pool_;
 };
 
 }  // namespace combabc

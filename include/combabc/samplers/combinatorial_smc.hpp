@@ -2,8 +2,10 @@
 // Combinatorial ABC-SMC (paper section 3) and ABC rejection (paper Algorithm 1).
 #include <vector>
 
+#include "combabc/core/executor.hpp"
 #include "combabc/distances/distance.hpp"
-#include "combabc/params/binary_space.hpp"
+#include "combabc/params/parameter_space.hpp"
+#include "combabc/proposals/proposal.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/samplers/simulator.hpp"
@@ -24,14 +26,22 @@ struct ResumePoint {
   std::int64_t partial_discarded = 0;  // BatchProgress::discarded of the partial wave
 };
 
+// What a run infers and with what. The sampler knows kernels, executors and simulators only
+// through these interfaces.
 struct SmcProblem {
-  const BinarySpace* space = nullptr;
+  const ParameterSpace* space = nullptr;
   const Simulator* simulator = nullptr;
   const Distance* distance = nullptr;
+  // Optional. Null: made from SmcOptions::proposal (MakeBinaryKernel, MakeContinuousKernel) and
+  // a ThreadPoolExecutor of SmcOptions::threads.
+  const BinaryKernel* binary_kernel = nullptr;
+  const ContinuousKernel* continuous_kernel = nullptr;
+  Executor* executor = nullptr;
 };
 
-// Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the tempered
-// per-bit marginals of wave t (Eqs. 2-3). Throws combabc::Error for invalid options (kConfig) or
+// Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the kernels fitted
+// to wave t's weighted particles (for the independent kernel: the tempered per-bit marginals of
+// Eqs. 2-3). Throws combabc::Error for invalid options (kConfig) or
 // a simulator/distance failure (kSoftware, naming wave and candidate).
 RunHistory RunCombinatorialSmc(const SmcProblem& problem,
                                const SmcOptions& options,

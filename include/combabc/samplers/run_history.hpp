@@ -8,24 +8,25 @@
 #include <vector>
 #include "combabc/core/enum_names.hpp"
 
+#include "combabc/params/parameter_value.hpp"
 #include "combabc/samplers/smc_options.hpp"
 
 namespace combabc {
 
 struct Particle {
-  std::int64_t index = 0;          // candidate index within its wave
-  std::vector<std::uint8_t> bits;  // full parameter vector (0/1)
-  double log_weight = 0.0;         // log p(theta)/q(theta), unnormalised
-  double weight = 0.0;             // normalised weight under the run's estimator
-  std::vector<double> distance;    // one value per distance component
-  std::vector<double> output;      // simulated Y* (empty unless SmcOptions::keep_outputs)
+  std::int64_t index = 0;        // candidate index within its wave
+  ParameterValue theta;          // full bit vector (0/1) and the reals
+  double log_weight = 0.0;       // log p(theta)/q(theta), unnormalised
+  double weight = 0.0;           // normalised weight under the run's estimator
+  std::vector<double> distance;  // one value per distance component
+  std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
 };
 
 struct WaveRecord {
   int wave = 0;
   std::vector<double> thresholds;  // eps_t per threshold component
   double phi = 0.0;                // tempering phi(t) used by this wave's proposal
-  std::vector<double> proposal;    // P(free parameter = 1) this wave proposed with
+  std::vector<double> proposal;    // P(free bit = 1) under this wave's binary proposal
   std::int64_t candidates = 0;     // candidates simulated (consumed) in this wave
   std::int64_t accepted = 0;
   double acceptance_rate = 0.0;
@@ -33,7 +34,9 @@ struct WaveRecord {
   std::vector<double> marginals_paper;       // per bit: unweighted fraction of 1s (Eq. 2)
   std::vector<double> marginals_importance;  // per bit: p/q-weighted fraction of 1s
   double ess = 0.0;                          // effective sample size of the importance weights
-  std::int64_t distinct = 0;                 // distinct accepted configurations
+  std::vector<double> reals_mean;            // per real: mean under the estimator's weights
+  std::vector<double> reals_sd;              // per real: standard deviation, likewise
+  std::int64_t distinct = 0;                 // distinct accepted bit configurations
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
   double wall_seconds = 0.0;   // not deterministic; excluded from SameHistory
   std::vector<Particle> particles;
@@ -81,8 +84,8 @@ struct RunHistory {
   std::string FullReport(Estimator estimator) const;
 };
 
-// Per-bit marginals, ESS and distinct count recomputed from a wave's particles (also used by the
-// storage layer when reloading a run).
+// Per-bit marginals, the reals' means and standard deviations, ESS and distinct count recomputed
+// from a wave's particles (also used by the storage layer when reloading a run).
 void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator);
 
 // True when the two histories agree in everything deterministic (all but wall times). On a

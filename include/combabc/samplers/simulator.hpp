@@ -1,8 +1,9 @@
 #pragma once
-// The simulator f_theta: from a parameter vector to an output vector Y*.
+// The simulator f_theta: from a parameter value (bits + reals) to an output vector Y*.
 #include <cstdint>
 #include <span>
 
+#include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
@@ -11,15 +12,15 @@ class Simulator {
  public:
   virtual ~Simulator() = default;
   virtual int output_size() const = 0;
-  // bits: the full parameter vector (BinarySpace::dimension() entries of 0/1). rng: the
-  // candidate's own stream, for stochastic simulators (deterministic ones ignore it).
-  // Must be thread-safe. Throwing marks the run failed with the candidate named.
-  virtual void Simulate(std::span<const std::uint8_t> bits,
+  // theta: the full bit vector and the reals of the run's ParameterSpace. rng: the candidate's
+  // own stream, for stochastic simulators (deterministic ones ignore it). Must be thread-safe.
+  // Throwing marks the run failed with the candidate named.
+  virtual void Simulate(const ParameterView& theta,
                         RandomStream& rng,
                         std::span<double> out) const = 0;
-  // Batch form for simulators that vectorise: n candidates, bits row-major (n x d), out row-major
-  // (n x output_size()), rngs[i] for candidate i. The default loops over Simulate.
-  virtual void SimulateBatch(std::span<const std::uint8_t> bits,
+  // Batch form for simulators that vectorise: out row-major (batch.count x output_size()),
+  // rngs[i] for candidate i. The default loops over Simulate.
+  virtual void SimulateBatch(const ParameterBatch& batch,
                              std::span<RandomStream> rngs,
                              std::span<double> out) const;
 };

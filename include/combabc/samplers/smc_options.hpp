@@ -7,6 +7,7 @@
 #include <vector>
 #include "combabc/core/enum_names.hpp"
 
+#include "combabc/proposals/proposal_options.hpp"
 #include "combabc/schedules/tempering_schedule.hpp"
 #include "combabc/schedules/threshold_schedule.hpp"
 
@@ -35,6 +36,8 @@ struct SmcOptions {
   // components need none). Empty = one default quantile schedule for each.
   std::vector<ThresholdSchedule> thresholds;
   TemperingSchedule tempering;
+  // The kernels that fit each wave's proposal to the previous wave (Eq. 2 by default).
+  ProposalOptions proposal;
   Estimator estimator = Estimator::kImportance;
   // Root of every random stream: candidate i of wave t draws from RandomStream(seed, t, i).
   std::uint64_t seed = 1;

@@ -12,10 +12,10 @@ class SensorSimulator : public Simulator {
  public:
   explicit SensorSimulator(const plate::SensorOptions& options);
   int output_size() const override { return model_.num_outputs(); }
-  void Simulate(std::span<const std::uint8_t> bits,
+  void Simulate(const ParameterView& theta,
                 RandomStream& rng,
                 std::span<double> out) const override;
-  void SimulateBatch(std::span<const std::uint8_t> bits,
+  void SimulateBatch(const ParameterBatch& batch,
                      std::span<RandomStream> rngs,
                      std::span<double> out) const override;
   const plate::SensorModel& model() const { return model_; }

@@ -9,10 +9,10 @@ namespace {
 class Echo : public combabc::Simulator {
  public:
   int output_size() const override { return 3; }
-  void Simulate(std::span<const std::uint8_t> bits,
+  void Simulate(const combabc::ParameterView& theta,
                 combabc::RandomStream&,
                 std::span<double> out) const override {
-    for (int k = 0; k < 3; ++k) out[k] = bits[k];
+    for (int k = 0; k < 3; ++k) out[k] = theta.bits[k];
   }
 };
 
@@ -27,7 +27,7 @@ class ToTarget : public combabc::Distance {
 }  // namespace
 
 int main() {
-  const auto space = combabc::BinarySpace::Independent(3);
+  const combabc::ParameterSpace space(combabc::BinarySpace::Independent(3));
   Echo sim;
   ToTarget dist;
   const auto h = combabc::RunRejection({&space, &sim, &dist}, 50, {0.0}, 1);
