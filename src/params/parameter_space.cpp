@@ -1,0 +1,76 @@
+#include "combabc/params/parameter_space.hpp"
+
+#include <cmath>
+#include <set>
+#include <utility>
+
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+
+ParameterSpace::ParameterSpace(BinarySpace bits, std::vector<ContinuousParameter> reals)
+    : bits_(std::move(bits)), reals_(std::move(reals)) {
+  // Bit names share the namespace: histories, exports and reports name every parameter, so a real
+  // called like a bit would make them ambiguous.
+  std::set<std::string> bit_names;
+  for (int bit = 0; bit < bits_.dimension(); ++bit) bit_names.insert(bits_.name(bit));
+  std::set<std::string> seen;
+  for (std::size_t k = 0; k < reals_.size(); ++k) {
+    const ContinuousParameter& p = reals_[k];
+    const std::string field = "reals[" + std::to_string(k) + "] (" + p.name + ")";
+    if (p.name.empty()) {
+      throw Error(ErrorKind::kConfig, "name is empty; every parameter needs a name", "", 0, field);
+    }
+    if (!seen.insert(p.name).second) {
+      throw Error(
+          ErrorKind::kConfig,
+          "name '" + p.name + "' is used by an earlier real parameter; names must be unique",
+          "",
+          0,
+          field);
+    }
+    if (bit_names.contains(p.name)) {
+      throw Error(ErrorKind::kConfig,
+                  "name '" + p.name + "' is also a bit's name; names must be unique",
+                  "",
+                  0,
+                  field);
+    }
+    std::string why;
+    if (!p.prior.IsValid(&why)) {
+      throw Error(
+          ErrorKind::kConfig, std::string(ToString(p.prior.kind)) + " prior: " + why, "", 0, field);
+    }
+  }
+  // Precomputed once: LogPriorBits runs for every candidate of every wave.
+  for (const double p : bits_.free_prior_one()) {
+    log_one_.push_back(std::log(p));
+    log_zero_.push_back(std::log1p(-p));
+  }
+}
+
+double ParameterSpace::LogPriorBits(std::span<const std::uint8_t> free_bits) const {
+  COMBABC_CHECK(free_bits.size() == log_one_.size());
+  double sum = 0.0;
+  for (std::size_t j = 0; j < free_bits.size(); ++j)
+    sum += free_bits[j] ? log_one_[j] : log_zero_[j];
+  return sum;
+}
+
+double ParameterSpace::LogPriorReals(std::span<const double> reals) const {
+  COMBABC_CHECK(reals.size() == reals_.size());
+  double sum = 0.0;
+  for (std::size_t k = 0; k < reals.size(); ++k) sum += reals_[k].prior.LogDensity(reals[k]);
+  return sum;
+}
+
+bool ParameterSpace::InSupport(std::span<const double> reals) const {
+  COMBABC_CHECK(reals.size() == reals_.size());
+  for (std::size_t k = 0; k < reals.size(); ++k) {
+    if (!reals_[k].prior.InSupport(reals[k])) return false;
+  }
+  return true;
+}
+
+}  // namespace combabc
