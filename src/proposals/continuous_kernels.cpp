@@ -1,11 +1,244 @@
+#include "combabc/proposals/continuous_kernels.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "combabc/core/check.hpp"
-#include "combabc/proposals/proposal.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/proposals/proposal_options.hpp"
 
 namespace combabc {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kLogSqrt2Pi = 0.91893853320467274178;  // log sqrt(2 pi)
+// Sample gives up after this many draws in a row outside the support (proposal.hpp).
+constexpr int kMaxSupportTries = 10000;
+
+// Regularisation of a kernel covariance Sigma, in units of each real's prior standard deviation
+// tau_k (finite for every valid prior). A population says nothing about the scale of a coordinate
+// in which all its particles agree (one particle; all the weight on one particle; OLCM with a
+// single particle within the next thresholds), and a population of N <= d particles spans at most
+// N - 1 directions. So:
+//  1. a coordinate whose variance is at most (kCollapsedSd tau_k)^2 is collapsed: its row and
+//     column are replaced by the prior's scale, (kFallbackSd tau_k)^2 on the diagonal and no
+//     correlation, so the next wave can move again (a tenth of the prior, to stay local);
+//  2. (kCollapsedSd tau_k)^2 is then added to every diagonal entry, which makes a rank-deficient
+//     covariance positive definite while changing any posterior-sized one negligibly (a posterior
+//     1e-6 as wide as its prior is far beyond what ABC reaches).
+// Should rounding still defeat the Cholesky factorisation, the added multiple grows by 100 until
+// it succeeds.
+constexpr double kCollapsedSd = 1e-6;
+constexpr double kFallbackSd = 0.1;
+
+std::string Num(double x) {
+  std::array<char, 32> buf{};
+  const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), x);
+  return {buf.data(), result.ptr};
+}
+
+// Index of element (i, k), k <= i, of a lower-triangular matrix stored row by row.
+constexpr std::size_t Tri(std::size_t i, std::size_t k) { return i * (i + 1) / 2 + k; }
+
+// A Gaussian's factor Sigma = L L^T: L and L^{-1} (both lower triangular, packed with Tri) and
+// log det L = sum log L_ii.
+struct Factor {
+  std::vector<double> l, l_inv;
+  double log_det = 0.0;
+};
+
+Factor Factorise(Eigen::MatrixXd sigma, const std::vector<double>& prior_sd) {
+  const Eigen::Index d = sigma.rows();
+  for (Eigen::Index k = 0; k < d; ++k) {
+    const double tau = prior_sd[static_cast<std::size_t>(k)];
+    if (!(sigma(k, k) > kCollapsedSd * kCollapsedSd * tau * tau)) {  // also catches NaN
+      sigma.row(k).setZero();
+      sigma.col(k).setZero();
+      sigma(k, k) = kFallbackSd * kFallbackSd * tau * tau;
+    }
+  }
+  for (double ridge = kCollapsedSd * kCollapsedSd;; ridge *= 100.0) {
+    Eigen::MatrixXd regularised = sigma;
+    for (Eigen::Index k = 0; k < d; ++k) {
+      const double tau = prior_sd[static_cast<std::size_t>(k)];
+      regularised(k, k) += ridge * tau * tau;
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(regularised);
+    const Eigen::MatrixXd l = llt.matrixL();
+    if (llt.info() == Eigen::Success && (l.diagonal().array() > 0.0).all() && l.allFinite()) {
+      const Eigen::MatrixXd l_inv =
+          l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(d, d));
+      Factor f;
+      for (Eigen::Index i = 0; i < d; ++i) {
+        for (Eigen::Index k = 0; k <= i; ++k) {
+          f.l.push_back(l(i, k));
+          f.l_inv.push_back(l_inv(i, k));
+        }
+        f.log_det += std::log(l(i, i));
+      }
+      return f;
+    }
+    COMBABC_CHECK(ridge < 1e6);  // with ridge ~ tau^2 a covariance of particles is always PD
+  }
+}
+
+// q(r) = sum_j w_j N(r; c_j, Sigma_j) restricted to the prior's support. Everything is
+// precomputed: Sample and LogDensity only read, so they are thread-safe, and they allocate nothing.
+class GaussianMixtureProposal final : public ContinuousProposal {
+ public:
+  // `centres` is N x d row-major; `weights` sum to 1 (zero-weight components are dropped);
+  // factor_of[j] indexes `factors`. With a single shared factor, LogDensity uses the cheaper
+  // O(N d + d^2) form below.
+  GaussianMixtureProposal(const ParameterSpace& space,
+                          const std::vector<double>& centres,
+                          const std::vector<double>& weights,
+                          std::vector<Factor> factors,
+                          const std::vector<std::size_t>& factor_of)
+      : d_(static_cast<std::size_t>(space.num_reals())), factors_(std::move(factors)) {
+    for (const ContinuousParameter& p : space.reals()) {
+      priors_.push_back(p.prior);
+      names_.push_back(p.name);
+    }
+    double total = 0.0;
+    for (std::size_t j = 0; j < weights.size(); ++j) {
+      if (!(weights[j] > 0.0)) continue;
+      total += weights[j];
+      centres_.insert(centres_.end(), centres.begin() + j * d_, centres.begin() + (j + 1) * d_);
+      cumulative_.push_back(total);
+      factor_of_.push_back(factor_of[j]);
+      log_weight_.push_back(std::log(weights[j]));
+    }
+    COMBABC_CHECK(!cumulative_.empty() && std::isfinite(total));
+    // log of w_j / ((2 pi)^{d/2} det L_j), the Gaussian's normalising constant and the weight.
+    for (std::size_t j = 0; j < log_weight_.size(); ++j) {
+      log_weight_[j] += -std::log(total) - static_cast<double>(d_) * kLogSqrt2Pi -
+                        factors_[factor_of_[j]].log_det;
+    }
+    shared_ = factors_.size() == 1 && d_ <= kStackDims;
+    if (shared_) {
+      // Whitened centres relative to the first: L^{-1} (r - c_j) = L^{-1} (r - c_0) -
+      // L^{-1} (c_j - c_0), with both terms of the scale of the spread (not of |r|), so nothing
+      // cancels when the reals are large numbers with a small spread.
+      const Factor& f = factors_[0];
+      for (std::size_t j = 0; j < NumComponents(); ++j) {
+        for (std::size_t i = 0; i < d_; ++i) {
+          double y = 0.0;
+          for (std::size_t k = 0; k <= i; ++k) {
+            y += f.l_inv[Tri(i, k)] * (centres_[j * d_ + k] - centres_[k]);
+          }
+          whitened_.push_back(y);
+        }
+      }
+    }
+  }
+
+  void Sample(RandomStream& rng, std::span<double> reals) const override {
+    COMBABC_CHECK(reals.size() == d_);
+    // A draw outside the support is discarded whole and both the component and z drawn again:
+    // that samples q restricted to the support, q 1_S / Z with one constant Z for the wave. Keeping
+    // j and redrawing only z would truncate each component on its own, with a Z_j per component
+    // that LogDensity could not omit.
+    for (int attempt = 0; attempt < kMaxSupportTries; ++attempt) {
+      // Component j with probability w_j: the first cumulative weight above u x total.
+      const double u = rng.Uniform() * cumulative_.back();
+      const std::size_t j = std::min<std::size_t>(
+          std::upper_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin(),
+          cumulative_.size() - 1);
+      const Factor& f = factors_[factor_of_[j]];
+      const double* c = &centres_[j * d_];
+      for (std::size_t i = 0; i < d_; ++i) reals[i] = rng.Normal();
+      // r = c_j + L z in place: row i needs z_0..z_i only, so fill from the last row up.
+      for (std::size_t i = d_; i-- > 0;) {
+        double r = c[i];
+        for (std::size_t k = 0; k <= i; ++k) r += f.l[Tri(i, k)] * reals[k];
+        reals[i] = r;
+      }
+      if (InSupport(reals)) return;
+    }
+    std::size_t bad = 0;
+    while (bad + 1 < d_ && priors_[bad].InSupport(reals[bad])) ++bad;
+    throw Error(ErrorKind::kSoftware,
+                "continuous proposal: " + std::to_string(kMaxSupportTries) +
+                    " draws in a row fell outside the prior support of the reals (the last at " +
+                    names_[bad] + " = " + Num(reals[bad]) +
+                    "); the kernel has almost no mass inside the support");
+  }
+
+  // log sum_j w_j N(r; c_j, Sigma_j) by a one-pass log-sum-exp; -infinity outside the support.
+  // The mass of the support under q (the truncation constant) is common to the wave and omitted.
+  double LogDensity(std::span<const double> reals) const override {
+    COMBABC_CHECK(reals.size() == d_);
+    if (!InSupport(reals)) return -kInf;
+    double max = -kInf, sum = 0.0;
+    auto add = [&](double term) {
+      if (term <= max) {
+        sum += std::exp(term - max);
+      } else {
+        sum = sum * std::exp(max - term) + 1.0;
+        max = term;
+      }
+    };
+    if (shared_) {
+      const Factor& f = factors_[0];
+      std::array<double, kStackDims> y0{};  // L^{-1} (r - c_0)
+      for (std::size_t i = 0; i < d_; ++i) {
+        double y = 0.0;
+        for (std::size_t k = 0; k <= i; ++k) y += f.l_inv[Tri(i, k)] * (reals[k] - centres_[k]);
+        y0[i] = y;
+      }
+      for (std::size_t j = 0; j < NumComponents(); ++j) {
+        const double* w = &whitened_[j * d_];
+        double q = 0.0;
+        for (std::size_t i = 0; i < d_; ++i) q += (y0[i] - w[i]) * (y0[i] - w[i]);
+        add(log_weight_[j] - 0.5 * q);
+      }
+    } else {
+      for (std::size_t j = 0; j < NumComponents(); ++j) {
+        const Factor& f = factors_[factor_of_[j]];
+        const double* c = &centres_[j * d_];
+        double q = 0.0;
+        for (std::size_t i = 0; i < d_; ++i) {
+          double y = 0.0;
+          for (std::size_t k = 0; k <= i; ++k) y += f.l_inv[Tri(i, k)] * (reals[k] - c[k]);
+          q += y * y;
+        }
+        add(log_weight_[j] - 0.5 * q);
+      }
+    }
+    return max + std::log(sum);
+  }
+
+ private:
+  // Dimensions up to this take LogDensity's shared-covariance path with its scratch on the stack.
+  static constexpr std::size_t kStackDims = 64;
+
+  std::size_t NumComponents() const { return cumulative_.size(); }
+  bool InSupport(std::span<const double> reals) const {
+    for (std::size_t k = 0; k < d_; ++k) {
+      if (!priors_[k].InSupport(reals[k])) return false;
+    }
+    return true;
+  }
+
+  std::size_t d_;
+  std::vector<ContinuousPrior> priors_;  // copies: the proposal may outlive the space
+  std::vector<std::string> names_;
+  std::vector<Factor> factors_;
+  std::vector<double> centres_;         // N x d
+  std::vector<double> cumulative_;      // running sums of the weights
+  std::vector<std::size_t> factor_of_;  // component -> factor
+  std::vector<double> log_weight_;      // log w_j - (d/2) log 2 pi - log det L_j
+  bool shared_ = false;
+  std::vector<double> whitened_;  // shared_: L^{-1} (c_j - c_0), N x d
+};
 
 // Wave 0 proposes from the prior itself: each real drawn from its own prior, in order, so the
 // importance weight p / q is 1 and every draw is inside the support.
@@ -26,13 +259,159 @@ class PriorProposal final : public ContinuousProposal {
   }
 
  private:
-  std::vector<ContinuousPrior> priors_;  // a copy: the proposal may outlive the space
+  std::vector<ContinuousPrior> priors_;  // copies: the proposal may outlive the space
+};
+
+// The population's reals as an N x d matrix and its weights, checked against the space.
+struct Particles {
+  Eigen::MatrixXd r;  // N x d
+  Eigen::VectorXd w;  // sums to 1
+};
+
+Particles ReadParticles(const Population& population, const ParameterSpace& space) {
+  const auto n = population.size;
+  const auto d = static_cast<std::size_t>(space.num_reals());
+  COMBABC_CHECK(population.num_reals == d);
+  COMBABC_CHECK(population.reals.size() == n * d && population.weights.size() == n);
+  Particles p{Eigen::MatrixXd(n, d), Eigen::VectorXd(n)};
+  double total = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = population.weights[i];
+    COMBABC_CHECK(w >= 0.0 && std::isfinite(w));
+    total += w;
+    p.w(static_cast<Eigen::Index>(i)) = w;
+    for (std::size_t k = 0; k < d; ++k) {
+      p.r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = population.reals[i * d + k];
+    }
+  }
+  COMBABC_CHECK(total > 0.0);
+  p.w /= total;
+  return p;
+}
+
+std::vector<double> PriorSd(const ParameterSpace& space) {
+  std::vector<double> sd;
+  for (const ContinuousParameter& p : space.reals()) sd.push_back(p.prior.StandardDeviation());
+  return sd;
+}
+
+// Weighted covariance sum_i w_i (r_i - m)(r_i - m)^T with m = sum_i w_i r_i (w sums to 1; no
+// small-sample correction, as in Beaumont et al. 2009), and the mean through `mean`.
+Eigen::MatrixXd WeightedCovariance(const Eigen::MatrixXd& r,
+                                   const Eigen::VectorXd& w,
+                                   Eigen::RowVectorXd* mean) {
+  *mean = w.transpose() * r;
+  const Eigen::MatrixXd centred = r.rowwise() - *mean;
+  return centred.transpose() * w.asDiagonal() * centred;
+}
+
+std::vector<double> RowMajor(const Eigen::MatrixXd& m) {
+  std::vector<double> out;
+  out.reserve(static_cast<std::size_t>(m.size()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    for (Eigen::Index k = 0; k < m.cols(); ++k) out.push_back(m(i, k));
+  }
+  return out;
+}
+
+class NormalKernel final : public ContinuousKernel {
+ public:
+  explicit NormalKernel(double scale) : scale_(scale) {}
+  std::string name() const override { return ToString(ContinuousKernelKind::kNormal); }
+
+  std::unique_ptr<ContinuousProposal> Fit(const Population& population,
+                                          const ParameterSpace& space) const override {
+    if (population.size == 0 || space.num_reals() == 0) return Prior(space);
+    const Particles p = ReadParticles(population, space);
+    Eigen::RowVectorXd mean;
+    const Eigen::MatrixXd sigma = scale_ * WeightedCovariance(p.r, p.w, &mean);
+    std::vector<Factor> factors = {Factorise(sigma, PriorSd(space))};
+    const std::vector<double> weights(p.w.data(), p.w.data() + p.w.size());
+    return std::make_unique<GaussianMixtureProposal>(space,
+                                                     RowMajor(p.r),
+                                                     weights,
+                                                     std::move(factors),
+                                                     std::vector<std::size_t>(weights.size()));
+  }
+
+ private:
+  double scale_;
+};
+
+class OlcmKernel final : public ContinuousKernel {
+ public:
+  std::string name() const override { return ToString(ContinuousKernelKind::kOlcm); }
+
+  std::unique_ptr<ContinuousProposal> Fit(const Population& population,
+                                          const ParameterSpace& space) const override {
+    if (population.size == 0 || space.num_reals() == 0) return Prior(space);
+    const Particles p = ReadParticles(population, space);
+    const auto n = static_cast<Eigen::Index>(population.size);
+    // The particles within the next thresholds, with positive weight; all of them when there are
+    // none (or the sampler did not mark any: within_next empty).
+    COMBABC_CHECK(population.within_next.empty() ||
+                  population.within_next.size() == population.size);
+    std::vector<Eigen::Index> next;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const bool within =
+          !population.within_next.empty() && population.within_next[static_cast<std::size_t>(i)];
+      if (within && p.w(i) > 0.0) next.push_back(i);
+    }
+    if (next.empty()) {
+      for (Eigen::Index i = 0; i < n; ++i) next.push_back(i);
+    }
+    Eigen::MatrixXd r_next(static_cast<Eigen::Index>(next.size()), p.r.cols());
+    Eigen::VectorXd w_next(static_cast<Eigen::Index>(next.size()));
+    for (std::size_t t = 0; t < next.size(); ++t) {
+      r_next.row(static_cast<Eigen::Index>(t)) = p.r.row(next[t]);
+      w_next(static_cast<Eigen::Index>(t)) = p.w(next[t]);
+    }
+    w_next /= w_next.sum();
+    // sum_k w~_k (r_k - r_j)(r_k - r_j)^T = C + (m - r_j)(m - r_j)^T, with m and C the weighted
+    // mean and covariance of the particles within the next thresholds: O(N d^2) for all j rather
+    // than O(N^2 d^2).
+    Eigen::RowVectorXd mean;
+    const Eigen::MatrixXd cov = WeightedCovariance(r_next, w_next, &mean);
+    const std::vector<double> prior_sd = PriorSd(space);
+    std::vector<Factor> factors;
+    std::vector<std::size_t> factor_of;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const Eigen::RowVectorXd offset = mean - p.r.row(j);
+      factor_of.push_back(factors.size());
+      factors.push_back(Factorise(cov + offset.transpose() * offset, prior_sd));
+    }
+    const std::vector<double> weights(p.w.data(), p.w.data() + p.w.size());
+    return std::make_unique<GaussianMixtureProposal>(
+        space, RowMajor(p.r), weights, std::move(factors), factor_of);
+  }
 };
 
 }  // namespace
 
 std::unique_ptr<ContinuousProposal> ContinuousKernel::Prior(const ParameterSpace& space) const {
   return std::make_unique<PriorProposal>(space);
+}
+
+std::unique_ptr<ContinuousKernel> MakeNormalKernel(double scale) {
+  if (!(scale > 0.0) || !std::isfinite(scale)) {
+    throw Error(ErrorKind::kConfig,
+                "ProposalOptions::scale = " + Num(scale) + "; must be finite and > 0");
+  }
+  return std::make_unique<NormalKernel>(scale);
+}
+
+std::unique_ptr<ContinuousKernel> MakeOlcmKernel() { return std::make_unique<OlcmKernel>(); }
+
+std::unique_ptr<ContinuousKernel> MakeContinuousKernel(const ProposalOptions& options) {
+  switch (options.continuous) {
+    case ContinuousKernelKind::kNormal:
+      return MakeNormalKernel(options.scale);
+    case ContinuousKernelKind::kOlcm:
+      return MakeOlcmKernel();
+  }
+  throw Error(ErrorKind::kConfig,
+              "ProposalOptions::continuous = " +
+                  std::to_string(static_cast<int>(options.continuous)) + "; not a kernel kind");
 }
 
 }  // namespace combabc
