@@ -68,6 +68,7 @@ SmcOptions PaperLikeOptions(int threads) {
   return o;
 }
 
+// range(0) = d, range(1) = the binary kernel (0 independent, 1 logistic).
 void BM_EngineOverheadPerCandidate(benchmark::State& state) {
   const int d = static_cast<int>(state.range(0));
   const ParameterSpace space(BinarySpace::Independent(d));
@@ -75,6 +76,9 @@ void BM_EngineOverheadPerCandidate(benchmark::State& state) {
   HammingDistance dist(d);
   auto options = PaperLikeOptions(1);
   options.keep_outputs = false;
+  options.proposal.binary =
+      state.range(1) == 0 ? BinaryKernelKind::kIndependent : BinaryKernelKind::kLogistic;
+  state.SetLabel(ToString(options.proposal.binary));
   std::int64_t candidates = 0;
   for (auto _ : state) {
     const auto h = RunCombinatorialSmc({&space, &sim, &dist}, options);
@@ -87,7 +91,11 @@ void BM_EngineOverheadPerCandidate(benchmark::State& state) {
   state.counters["candidates_per_run"] =
       static_cast<double>(candidates) / static_cast<double>(state.iterations());
 }
-BENCHMARK(BM_EngineOverheadPerCandidate)->Arg(36)->Arg(1024)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EngineOverheadPerCandidate)
+    ->Args({36, 0})
+    ->Args({36, 1})
+    ->Args({1024, 0})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_ThreadScaling50us(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));

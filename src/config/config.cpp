@@ -227,6 +227,8 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   const int dimension = config_internal::ParseModelSection(root, &c);
   ParseData(root, &c);
   config_internal::ParseSamplerSection(root, dimension, &c, &sources);
+  config_internal::ParseProposalSection(root, &c);
+  config_internal::ParseParametersSection(root, &c);
   config_internal::ParseMetricSection(root, &c);
   ParseOutput(root, &c);
   root.Finish();
@@ -244,6 +246,14 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   std::string why;
   if (!c.smc.IsValid(&why)) {
     ThrowAttributed(why, "SmcOptions::", sources.smc, sources.sampler, c.path);
+  }
+  if (!c.reals.empty() && c.smc.estimator == Estimator::kPaper) {
+    throw Error(ErrorKind::kConfig,
+                "the paper estimator is unweighted; continuous parameters need importance weights "
+                "(estimator = \"importance\")",
+                c.path,
+                sources.sampler.line,
+                "sampler.estimator");
   }
   if (!c.space.IsValid(&why)) {
     ThrowAttributed(why, "BinarySpaceOptions::", sources.space, sources.sampler, c.path);

@@ -128,6 +128,9 @@ void ParseSamplerSection(TableReader& root,
                          int dimension,
                          CalibrationConfig* config,
                          Sources* sources);
+// [proposal] and [parameters.<name>] (config_proposal.cpp).
+void ParseProposalSection(TableReader& root, CalibrationConfig* config);
+void ParseParametersSection(TableReader& root, CalibrationConfig* config);
 // [metric] (config_metric.cpp): after [data] (position unit) and [sampler] (number of waves).
 void ParseMetricSection(TableReader& root, CalibrationConfig* config);
 

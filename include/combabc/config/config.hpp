@@ -15,6 +15,7 @@
 #include "combabc/data/measured_data.hpp"
 #include "combabc/metrics/metric_component.hpp"
 #include "combabc/params/binary_space.hpp"
+#include "combabc/params/continuous_prior.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/samplers/smc_options.hpp"
 
@@ -53,6 +54,9 @@ struct CalibrationConfig {
   // Filled from [sampler] (prior, tie) and the model's clamp count (dimension = 2 x
   // model.clamps_per_edge, names "clamp 1", ...).
   BinarySpaceOptions space;
+  // [parameters.<name>]: the model's continuous unknowns with their priors, by name in
+  // alphabetical order (docs/config.md lists the names the sensor model has).
+  std::vector<ContinuousParameter> reals;
   OutputConfig output;
 };
 

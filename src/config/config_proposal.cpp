@@ -1,0 +1,148 @@
+// [proposal] (the kernels: ProposalOptions) and [parameters.<name>] (continuous unknowns of the
+// model with their priors).
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
+#include "config_reader.hpp"
+
+namespace combabc::config_internal {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The sensor model's continuous unknowns and the physical range of each (SI units).
+struct RealParameterInfo {
+  const char* name;
+  double low, high;  // closed physical range the prior's support must lie in
+  const char* meaning;
+};
+constexpr RealParameterInfo kSensorReals[] = {
+    {"foundation_stiffness", 0.0, 1e15, "Winkler foundation stiffness k_f, N/m^3"},
+    {"stiffness_scale", 1e-6, 1e6, "factor on every layer's Young's modulus"},
+    {"loss_factor", 0.0, 10.0, "structural loss factor of every layer"},
+};
+
+std::string Names() {
+  std::string out;
+  for (const auto& p : kSensorReals)
+    out += (out.empty() ? "\"" : ", \"") + std::string(p.name) + "\"";
+  return out;
+}
+
+std::string Num(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+ContinuousPrior ParsePrior(TableReader& t, const RealParameterInfo& info) {
+  ContinuousPrior prior;
+  const auto kind = t.Choice<PriorKind>("prior", "prior");
+  if (!kind) {
+    t.Fail("prior",
+           "missing required key: one of \"uniform\", \"normal\", \"lognormal\", "
+           "\"truncated_normal\"");
+  }
+  prior.kind = *kind;
+  const bool bounded =
+      prior.kind == PriorKind::kUniform || prior.kind == PriorKind::kTruncatedNormal;
+  auto number = [&](const char* key, bool wanted) -> double {
+    if (!wanted) {
+      if (t.Has(key))
+        t.Fail(key, "not used by prior = \"" + std::string(ToString(prior.kind)) + "\"");
+      return 0.0;
+    }
+    const auto v = t.Number(key);
+    if (!v)
+      t.Fail(key, "missing required key for prior = \"" + std::string(ToString(prior.kind)) + "\"");
+    if (!std::isfinite(*v)) t.Fail(key, "must be finite");
+    return *v;
+  };
+  prior.low = number("low", bounded);
+  prior.high = number("high", bounded);
+  prior.mean = number("mean", prior.kind != PriorKind::kUniform);
+  prior.sd = number("sd", prior.kind != PriorKind::kUniform);
+  if (bounded && !(prior.low < prior.high)) t.Fail("high", "must be above low = " + Num(prior.low));
+  if (prior.kind != PriorKind::kUniform && !(prior.sd > 0.0)) t.Fail("sd", "must be > 0");
+  std::string why;
+  if (!prior.IsValid(&why)) t.Fail("prior", why);
+  // The prior may only propose physically meaningful values.
+  double lo = -kInf, hi = kInf;
+  if (bounded) {
+    lo = prior.low;
+    hi = prior.high;
+  } else if (prior.kind == PriorKind::kLogNormal) {
+    lo = 0.0;
+  }
+  const bool open_low = prior.kind == PriorKind::kLogNormal;  // support (0, inf)
+  if (lo < info.low || (lo == info.low && info.low > 0.0 && open_low) || hi > info.high) {
+    t.Fail(bounded ? (lo < info.low ? "low" : "high") : "prior",
+           "the prior's support [" + Num(lo) + ", " + Num(hi) + "] must lie within " +
+               std::string(info.name) + "'s physical range [" + Num(info.low) + ", " +
+               Num(info.high) + "]" +
+               (bounded ? "" : "; use a uniform, lognormal or truncated_normal prior"));
+  }
+  return prior;
+}
+
+}  // namespace
+
+void ParseProposalSection(TableReader& root, CalibrationConfig* c) {
+  auto t = root.Table("proposal");
+  if (!t) return;
+  ProposalOptions& p = c->smc.proposal;
+  p.binary = t->Choice<BinaryKernelKind>("kind", "proposal kind").value_or(p.binary);
+  LogisticKernelOptions& l = p.logistic;
+  const bool logistic = p.binary == BinaryKernelKind::kLogistic;
+  for (const char* key : {"min_correlation", "max_predecessors", "ridge", "min_marginal", "clip"}) {
+    if (!logistic && t->Has(key)) t->Fail(key, "only used with kind = \"logistic\"");
+  }
+  l.min_correlation = t->NumberIn("min_correlation", l.min_correlation, 0.0, 0.999);
+  l.max_predecessors = t->IntegerIn("max_predecessors", l.max_predecessors, 0, 4096);
+  l.ridge = t->NumberIn("ridge", l.ridge, 0.0, 1e6);
+  l.min_marginal = t->NumberIn("min_marginal", l.min_marginal, 0.0, 0.49);
+  l.clip = t->NumberIn("clip", l.clip, 1e-12, 0.1);
+  p.continuous =
+      t->Choice<ContinuousKernelKind>("continuous", "continuous kernel").value_or(p.continuous);
+  if (p.continuous != ContinuousKernelKind::kNormal && t->Has("scale")) {
+    t->Fail("scale", "only used with continuous = \"normal\"");
+  }
+  p.scale = t->NumberIn("scale", p.scale, 1e-6, 1e6);
+  t->Finish();
+}
+
+void ParseParametersSection(TableReader& root, CalibrationConfig* c) {
+  const toml::node* node = root.Raw("parameters");
+  if (!node) return;
+  if (!node->is_table()) {
+    root.FailAt(*node,
+                "parameters",
+                "expected tables [parameters.<name>], got " + std::string(TypeName(*node)));
+  }
+  auto t = root.Table("parameters");
+  for (const auto& [key, value] : *node->as_table()) {
+    const std::string name(key.str());
+    const RealParameterInfo* info = nullptr;
+    for (const auto& p : kSensorReals) {
+      if (name == p.name) info = &p;
+    }
+    if (!info) {
+      root.FailAt(value,
+                  "parameters." + name,
+                  "the sensor model has no continuous parameter " + Excerpt(name) +
+                      "; expected one of " + Names());
+    }
+    if (!value.is_table()) {
+      root.FailAt(value, "parameters." + name, "expected a table with prior = \"...\"");
+    }
+    auto p = t->Table(name);
+    c->reals.push_back({name, ParsePrior(*p, *info)});
+    p->Finish();
+  }
+  t->Finish();
+}
+
+}  // namespace combabc::config_internal
