@@ -233,10 +233,10 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   ParseOutput(root, &c);
   root.Finish();
 
-  // One schedule per threshold component, in order (SmcOptions::thresholds' contract).
+  // One schedule per threshold or likelihood component, in order (SmcOptions::thresholds).
   c.smc.thresholds.clear();
   for (const MetricComponentConfig& component : c.metric.components) {
-    if (KindOf(component.type) == ComponentKind::kThreshold) {
+    if (KindOf(component) != ComponentKind::kIndicator) {
       c.smc.thresholds.push_back(component.threshold);
     }
   }

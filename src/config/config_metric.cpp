@@ -55,6 +55,73 @@ ScheduleSpec ParseSchedule(TableReader& t, const ScheduleSpec& fallback) {
   return spec;
 }
 
+struct NoiseSpec {
+  NoiseConfig noise;
+  bool given = false;  // some noise key was written in this table
+};
+
+// noise = "none" | "gaussian", sigma_noise = <number> | "estimate", sigma_model = <number>.
+NoiseSpec ParseNoise(TableReader& t, const NoiseSpec& fallback) {
+  const auto model = t.Choice<NoiseModel>("noise", "noise model");
+  const toml::node* sigma_node = t.Raw("sigma_noise");
+  const auto sigma_model = t.Number("sigma_model");
+  NoiseSpec spec = fallback;
+  spec.given = false;
+  if (!model && !sigma_node && !sigma_model) return spec;
+  spec.given = true;
+  if (model) spec.noise.model = *model;
+  if (spec.noise.model != NoiseModel::kGaussian) {
+    const char* key = sigma_node ? "sigma_noise" : sigma_model ? "sigma_model" : "noise";
+    if (key != std::string("noise")) t.Fail(key, "needs noise = \"gaussian\"");
+    return spec;
+  }
+  if (sigma_node) {
+    if (const auto* text = sigma_node->as_string()) {
+      if (text->get() != "estimate") {
+        t.Fail("sigma_noise", "must be a number > 0 or \"estimate\", not " + Excerpt(text->get()));
+      }
+      spec.noise.sigma_noise.reset();
+    } else if (const auto value = sigma_node->value<double>()) {
+      if (!(*value > 0.0) || !std::isfinite(*value)) {
+        t.Fail("sigma_noise", "must be finite and > 0 (or \"estimate\")");
+      }
+      spec.noise.sigma_noise = *value;
+    } else {
+      t.Fail("sigma_noise", "must be a number > 0 or \"estimate\"");
+    }
+  }
+  if (sigma_model) {
+    if (!(*sigma_model >= 0.0) || !std::isfinite(*sigma_model)) {
+      t.Fail("sigma_model", "must be finite and >= 0");
+    }
+    spec.noise.sigma_model = *sigma_model;
+  }
+  return spec;
+}
+
+// A gaussian component's schedule holds temperatures, which end at 1 (the likelihood itself):
+// the default target 0 becomes 1; an explicit value below 1 is an error.
+void TemperatureSchedule(ScheduleSpec* spec, const TableReader& t, bool target_written) {
+  auto& s = spec->schedule;
+  if (s.kind == ThresholdKind::kList) {
+    for (double v : s.values) {
+      if (!(v >= 1.0)) {
+        t.Fail("threshold",
+               "with noise = \"gaussian\" the schedule holds temperatures, which must be >= 1");
+      }
+    }
+    return;
+  }
+  if (s.target < 1.0) {
+    if (target_written) {
+      t.Fail("target",
+             "with noise = \"gaussian\" the schedule holds temperatures: target must be >= 1 "
+             "(1 = the posterior under the noise model)");
+    }
+    s.target = 1.0;
+  }
+}
+
 void ValidateSchedule(const ScheduleSpec& spec,
                       int num_waves,
                       const std::string& path,
@@ -77,6 +144,8 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
   auto t = root.Table("metric");
   if (!t) throw Error(ErrorKind::kConfig, "missing required table [metric]", c->path, 1, "metric");
   const ScheduleSpec base = ParseSchedule(*t, ScheduleSpec{});
+  const NoiseSpec base_noise = ParseNoise(*t, NoiseSpec{});
+  bool noise_used = false;
   const auto preset_text = t->String("preset");
   auto components = t->Tables("component");
   if (preset_text && !components.empty()) {
@@ -103,8 +172,16 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
     for (auto& component : c->metric.components) {
       component.config_line = t->Line("preset");
       if (KindOf(component.type) != ComponentKind::kThreshold) continue;
-      ValidateSchedule(base, num_waves, c->path, t->Key("preset"), t->Line("preset"));
-      component.threshold = base.schedule;
+      ScheduleSpec spec = base;
+      if (component.type == MetricType::kLeastSquares) {
+        component.noise = base_noise.noise;
+        if (base_noise.noise.model == NoiseModel::kGaussian) {
+          noise_used = true;
+          TemperatureSchedule(&spec, *t, t->Has("target"));
+        }
+      }
+      ValidateSchedule(spec, num_waves, c->path, t->Key("preset"), t->Line("preset"));
+      component.threshold = spec.schedule;
     }
   }
   const double unit = MetresPer(c->data.position_unit);
@@ -128,12 +205,26 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
                     " indicator must equal 1 and takes no threshold");
       }
     } else {
-      const ScheduleSpec spec = ParseSchedule(ct, base);
+      ScheduleSpec spec = ParseSchedule(ct, base);
+      const NoiseSpec noise = ParseNoise(ct, base_noise);
+      if (component.type == MetricType::kLeastSquares) {
+        component.noise = noise.noise;
+      } else if (noise.given && noise.noise.model != NoiseModel::kNone) {
+        ct.Fail("noise", "a noise model applies to least_squares components only");
+      }
+      if (component.noise.model == NoiseModel::kGaussian) {
+        noise_used = true;
+        const bool own = ct.Has("target") || ct.Has("threshold");
+        TemperatureSchedule(&spec, own ? ct : *t, own ? ct.Has("target") : t->Has("target"));
+      }
       ValidateSchedule(spec, num_waves, c->path, ct.prefix(), ct.line());
       component.threshold = spec.schedule;
     }
     ct.Finish();
     c->metric.components.push_back(std::move(component));
+  }
+  if (base_noise.given && base_noise.noise.model == NoiseModel::kGaussian && !noise_used) {
+    t->Fail("noise", "no least_squares component to apply it to");
   }
   t->Finish();
 }

@@ -92,8 +92,10 @@ std::string Identifier(const std::string& name) {
 std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t count) {
   std::vector<std::string> names;
   for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
-    if (m.distance_components[c].kind == ComponentKind::kThreshold) {
-      names.push_back("eps_" + Identifier(m.distance_components[c].name));
+    if (m.distance_components[c].kind != ComponentKind::kIndicator) {
+      // A likelihood component's schedule slot holds its temperature.
+      const bool likelihood = m.distance_components[c].kind == ComponentKind::kNegLogLikelihood;
+      names.push_back((likelihood ? "T_" : "eps_") + Identifier(m.distance_components[c].name));
     }
   }
   if (names.size() != count) {

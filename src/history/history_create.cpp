@@ -92,9 +92,7 @@ CREATE TABLE particle (
 );
 )sql";
 
-const char* KindName(ComponentKind kind) {
-  return kind == ComponentKind::kIndicator ? "indicator" : "threshold";
-}
+const char* KindName(ComponentKind kind) { return ToString(kind); }
 
 void RemoveRunFiles(const std::string& path) {
   std::error_code ignored;

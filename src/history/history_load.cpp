@@ -276,8 +276,7 @@ RunMetadata HistoryStore::LoadMetadata() const {
   while (components.Step()) {
     DistanceComponent c;
     c.name = components.Text(0);
-    c.kind =
-        components.Text(1) == "indicator" ? ComponentKind::kIndicator : ComponentKind::kThreshold;
+    c.kind = ParseEnum<ComponentKind>(components.Text(1)).value_or(ComponentKind::kThreshold);
     c.required = components.Real(2);
     m.distance_components.push_back(c);
   }

@@ -101,7 +101,8 @@ void HistoryStore::Impl::CheckMetadata() {
   Statement kinds(db, "SELECT kind FROM component ORDER BY component");
   while (kinds.Step()) {
     const std::string kind = kinds.Text(0);
-    if (kind == "threshold") {
+    // A likelihood component has a schedule slot (its temperature) like a threshold.
+    if (kind == "threshold" || kind == "neg_log_likelihood") {
       ++shape.threshold_components;
     } else if (kind != "indicator") {
       kinds.Reset();

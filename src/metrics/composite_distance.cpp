@@ -98,6 +98,31 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     }
     Compiled compiled;
     compiled.type = c.type;
+    if (c.noise.model != NoiseModel::kNone && c.type != MetricType::kLeastSquares) {
+      throw Error(ErrorKind::kConfig,
+                  "a noise model applies to least_squares components only",
+                  {},
+                  c.config_line,
+                  Field(i));
+    }
+    if (c.noise.model == NoiseModel::kGaussian) {
+      double noise = 0.0;
+      if (c.noise.sigma_noise) {
+        noise = *c.noise.sigma_noise;
+      } else if (data_positions.size() >= 3) {
+        noise = EstimateNoiseSigma(data_positions, data_values);
+      }
+      compiled.sigma = std::hypot(noise, c.noise.sigma_model);
+      if (!(compiled.sigma > 0.0) || !std::isfinite(compiled.sigma)) {
+        throw Error(ErrorKind::kConfig,
+                    "the gaussian noise model's sigma is " + std::to_string(compiled.sigma) +
+                        (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
+                        "; it must be finite and > 0: give sigma_noise or sigma_model",
+                    {},
+                    c.config_line,
+                    Field(i));
+      }
+    }
     if (KindOf(c.type) == ComponentKind::kIndicator) {
       if (!data_positions.empty()) {
         metrics_internal::CheckIndicatorHoldsForData(c, i, data_positions, data_values);
@@ -146,7 +171,7 @@ std::vector<DistanceComponent> CompositeDistance::components() const {
   for (const MetricComponentConfig& c : configs_) {
     DistanceComponent d;
     d.name = ComponentName(c);
-    d.kind = KindOf(c.type);
+    d.kind = KindOf(c);
     d.required = 1.0;
     out.push_back(std::move(d));
   }
@@ -156,7 +181,7 @@ std::vector<DistanceComponent> CompositeDistance::components() const {
 std::vector<ThresholdSchedule> CompositeDistance::threshold_schedules() const {
   std::vector<ThresholdSchedule> out;
   for (const MetricComponentConfig& c : configs_) {
-    if (KindOf(c.type) == ComponentKind::kThreshold) out.push_back(c.threshold);
+    if (KindOf(c) != ComponentKind::kIndicator) out.push_back(c.threshold);
   }
   return out;
 }
@@ -214,7 +239,8 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
           const double r = Interpolate(simulated, c.samples[j], scale) - c.observed[j];
           sum += r * r;
         }
-        out[k] = sum;
+        // With a gaussian noise model: -log(pi(y | Y*) / c), c = pi at zero residual.
+        out[k] = c.sigma > 0.0 ? sum / (2.0 * c.sigma * c.sigma) : sum;
         break;
       }
       case MetricType::kRise: {  // Eq. 7 H1: y*(to) - y*(from) > 0
@@ -231,6 +257,18 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
       }
     }
   }
+}
+
+double EstimateNoiseSigma(std::span<const double> x, std::span<const double> y) {
+  COMBABC_CHECK(x.size() == y.size() && x.size() >= 3);
+  double sum = 0.0;
+  for (std::size_t i = 1; i + 1 < x.size(); ++i) {
+    const double a = (x[i + 1] - x[i]) / (x[i + 1] - x[i - 1]);
+    const double b = (x[i] - x[i - 1]) / (x[i + 1] - x[i - 1]);
+    const double e = a * y[i - 1] + b * y[i + 1] - y[i];
+    sum += e * e / (a * a + b * b + 1.0);
+  }
+  return std::sqrt(sum / static_cast<double>(x.size() - 2));
 }
 
 }  // namespace combabc

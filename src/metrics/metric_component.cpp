@@ -23,6 +23,11 @@ ComponentKind KindOf(MetricType type) {
                                                                 : ComponentKind::kThreshold;
 }
 
+ComponentKind KindOf(const MetricComponentConfig& config) {
+  return config.noise.model == NoiseModel::kGaussian ? ComponentKind::kNegLogLikelihood
+                                                     : KindOf(config.type);
+}
+
 std::string ComponentName(const MetricComponentConfig& config) {
   if (!config.name.empty()) return config.name;
   std::ostringstream out;

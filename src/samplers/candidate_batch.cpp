@@ -11,7 +11,8 @@ namespace combabc {
 CandidateBatch::CandidateBatch(const ParameterSpace& space,
                                const Simulator& simulator,
                                const Distance& distance,
-                               std::size_t num_components)
+                               std::size_t num_components,
+                               bool draw_uniform)
     : space_(space),
       simulator_(simulator),
       distance_(distance),
@@ -19,7 +20,8 @@ CandidateBatch::CandidateBatch(const ParameterSpace& space,
       f_(static_cast<std::size_t>(space.num_free_bits())),
       r_(static_cast<std::size_t>(space.num_reals())),
       m_(static_cast<std::size_t>(simulator.output_size())),
-      c_(num_components) {}
+      c_(num_components),
+      draw_uniform_(draw_uniform) {}
 
 void CandidateBatch::Evaluate(Executor& executor,
                               std::uint64_t seed,
@@ -34,6 +36,7 @@ void CandidateBatch::Evaluate(Executor& executor,
   outputs_.resize(n * m_);
   distances_.resize(n * c_);
   log_weights_.resize(n);
+  uniforms_.resize(n);
   rngs_.resize(n, RandomStream(0, 0, 0));
   seed_ = seed;
   wave_ = wave;
@@ -47,7 +50,8 @@ std::vector<BatchTask::Buffer> CandidateBatch::Results() {
           {reals_.data(), r_ * sizeof(double)},
           {outputs_.data(), m_ * sizeof(double)},
           {distances_.data(), c_ * sizeof(double)},
-          {log_weights_.data(), sizeof(double)}};
+          {log_weights_.data(), sizeof(double)},
+          {uniforms_.data(), sizeof(double)}};
 }
 
 void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
@@ -96,6 +100,8 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
     throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
   }
   for (std::size_t i = begin; i < end; ++i) {
+    // After the simulator's draws, so that they do not depend on whether it is drawn.
+    uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
     auto out = span_of(distances_, i, c_);
     try {
       distance_.Evaluate(span_of(outputs_, i, m_), out);

@@ -2,7 +2,7 @@
 // A batch of consecutive candidates of one wave, evaluated by an Executor into flat buffers (no
 // allocation per candidate). Candidate i's randomness is RandomStream(seed, wave, first + i):
 // the binary proposal draws first, then the continuous one, then whatever a stochastic
-// simulator draws.
+// simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -28,7 +28,8 @@ class CandidateBatch : public BatchTask {
   CandidateBatch(const ParameterSpace& space,
                  const Simulator& simulator,
                  const Distance& distance,
-                 std::size_t num_components);
+                 std::size_t num_components,
+                 bool draw_uniform = false);
 
   // Proposes, simulates and measures candidates [first, first + count) of `wave`. Throws
   // Error(kSoftware) naming the wave and candidates if the simulator or distance fails.
@@ -42,6 +43,8 @@ class CandidateBatch : public BatchTask {
   std::span<const double> distance(std::int64_t i) const {
     return {distances_.data() + i * c_, c_};
   }
+  // The candidate's acceptance uniform on [0, 1) (0 unless draw_uniform).
+  double uniform(std::int64_t i) const { return uniforms_[static_cast<std::size_t>(i)]; }
   Particle MakeParticle(std::int64_t i, std::int64_t index, bool keep_output) const;
 
   void EvaluateRange(std::size_t begin, std::size_t end) override;
@@ -52,13 +55,14 @@ class CandidateBatch : public BatchTask {
   const Simulator& simulator_;
   const Distance& distance_;
   std::size_t d_, f_, r_, m_, c_;
+  bool draw_uniform_;
   // The batch Evaluate is running.
   std::uint64_t seed_ = 0;
   int wave_ = 0;
   std::int64_t first_ = 0;
   WaveProposal proposal_;
   std::vector<std::uint8_t> free_, bits_;
-  std::vector<double> reals_, outputs_, distances_, log_weights_;
+  std::vector<double> reals_, outputs_, distances_, log_weights_, uniforms_;
   std::vector<RandomStream> rngs_;
 };
 

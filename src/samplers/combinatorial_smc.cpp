@@ -16,6 +16,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A quantile temperature schedule falls at least by this factor per wave (docs/algorithm.md).
+constexpr double kMaxTemperatureRatio = 0.5;
+
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
@@ -58,17 +61,43 @@ class SmcRun {
                   "SmcOptions::estimator");
     }
     for (std::size_t k = 0; k < components_.size(); ++k) {
-      if (components_[k].kind == ComponentKind::kThreshold) threshold_components_.push_back(k);
+      if (components_[k].kind != ComponentKind::kIndicator) threshold_components_.push_back(k);
+      if (components_[k].kind == ComponentKind::kNegLogLikelihood) stochastic_ = true;
     }
     schedules_ = options_.thresholds;
-    if (schedules_.empty()) schedules_.resize(threshold_components_.size());
+    if (schedules_.empty()) {
+      schedules_.resize(threshold_components_.size());
+      // A temperature ends at 1, where the acceptance is the likelihood itself.
+      for (std::size_t s = 0; s < schedules_.size(); ++s) {
+        if (IsLikelihood(s)) schedules_[s].target = 1.0;
+      }
+    }
     if (schedules_.size() != threshold_components_.size()) {
       throw Error(ErrorKind::kConfig,
                   "has " + std::to_string(schedules_.size()) + " schedules; the distance has " +
-                      std::to_string(threshold_components_.size()) + " threshold components",
+                      std::to_string(threshold_components_.size()) +
+                      " threshold and likelihood components",
                   "",
                   0,
                   "SmcOptions::thresholds");
+    }
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      if (!IsLikelihood(s)) continue;
+      const auto& schedule = schedules_[s];
+      const bool below_one = schedule.kind == ThresholdKind::kList
+                                 ? std::any_of(schedule.values.begin(),
+                                               schedule.values.end(),
+                                               [](double v) { return !(v >= 1.0); })
+                                 : !(schedule.target >= 1.0);
+      if (below_one) {
+        throw Error(ErrorKind::kConfig,
+                    "component \"" + components_[threshold_components_[s]].name +
+                        "\" is a likelihood: its schedule holds temperatures, which must be >= 1 "
+                        "(T = 1 is the posterior under the error model)",
+                    "",
+                    0,
+                    "SmcOptions::thresholds[" + std::to_string(s) + "]");
+      }
     }
     if (simulator_.output_size() < 0) {
       throw Error(ErrorKind::kConfig, "simulator output_size() is negative");
@@ -95,7 +124,7 @@ class SmcRun {
     }
     for (int t = first_wave; t < options_.num_waves; ++t) {
       const WaveRecord* previous = t > 0 ? &history.waves.back() : nullptr;
-      WaveRecord wave = StartWave(t, previous);
+      WaveRecord wave = StartWave(t, previous, history.waves);
       std::int64_t next_index = 0;
       if (resume && resume->has_partial && resume->partial_wave == t) {
         wave.particles = resume->partial_accepted;
@@ -126,18 +155,38 @@ class SmcRun {
     return true;
   }
 
-  WaveRecord StartWave(int t, const WaveRecord* previous) {
+  bool IsLikelihood(std::size_t s) const {
+    return components_[threshold_components_[s]].kind == ComponentKind::kNegLogLikelihood;
+  }
+
+  WaveRecord StartWave(int t, const WaveRecord* previous, const std::vector<WaveRecord>& done) {
     WaveRecord wave;
     wave.wave = t;
     std::vector<double> column;
+    offsets_.assign(schedules_.size(), 0.0);
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      const std::size_t k = threshold_components_[s];
+      if (IsLikelihood(s)) {
+        // m_k: the best likelihood found so far stands in for the unknown max over theta
+        // (pyABC's pdf_norm_max_found), so that acceptance at T = 1 is not astronomically rare.
+        double best = std::numeric_limits<double>::infinity();
+        for (const auto& w : done) {
+          for (const auto& p : w.particles) best = std::min(best, p.distance[k]);
+        }
+        if (std::isfinite(best)) offsets_[s] = best;
+      }
       column.clear();
       if (previous) {
-        for (const auto& p : previous->particles) {
-          column.push_back(p.distance[threshold_components_[s]]);
-        }
+        for (const auto& p : previous->particles) column.push_back(p.distance[k] - offsets_[s]);
       }
-      wave.thresholds.push_back(schedules_[s].ThresholdFor(t, column));
+      double eps = schedules_[s].ThresholdFor(t, column);
+      if (IsLikelihood(s) && schedules_[s].kind == ThresholdKind::kQuantile && previous) {
+        // Near the posterior the quantile of d - m can exceed T (many configurations within a
+        // few T): force a geometric decrease so the schedule cannot stall above 1.
+        eps = std::max(schedules_[s].target,
+                       std::min(eps, kMaxTemperatureRatio * previous->thresholds[s]));
+      }
+      wave.thresholds.push_back(eps);
     }
     const auto& prior = space_.binary().free_prior_one();
     wave.phi = options_.tempering.Phi(t, options_.num_waves);
@@ -177,19 +226,48 @@ class SmcRun {
       COMBABC_CHECK(tied);
       pop.reals.insert(pop.reals.end(), p.theta.reals.begin(), p.theta.reals.end());
       pop.weights.push_back(p.weight);
-      pop.within_next.push_back(Accept(p.distance, thresholds) ? 1 : 0);
+      pop.within_next.push_back(Within(p.distance, thresholds) ? 1 : 0);
     }
     return pop;
   }
 
-  bool Accept(std::span<const double> d, const std::vector<double>& eps) const {
+  // Whether candidate distances d pass the thresholds eps; likelihood components pass with
+  // probability exp(-sum_k (d_k - m_k) / T_k), decided by the candidate's uniform u.
+  bool Accept(std::span<const double> d, const std::vector<double>& eps, double u) const {
+    double log_accept = 0.0;
     std::size_t s = 0;
     for (std::size_t k = 0; k < components_.size(); ++k) {
-      if (components_[k].kind == ComponentKind::kThreshold) {
-        if (!(d[k] <= eps[s++])) return false;
-      } else if (d[k] != components_[k].required) {
-        return false;
+      switch (components_[k].kind) {
+        case ComponentKind::kThreshold:
+          if (!(d[k] <= eps[s++])) return false;
+          break;
+        case ComponentKind::kIndicator:
+          if (d[k] != components_[k].required) return false;
+          break;
+        case ComponentKind::kNegLogLikelihood: {
+          const double temperature = eps[s];
+          const double excess = d[k] - offsets_[s++];
+          if (std::isinf(temperature)) break;  // T = inf: the prior's wave accepts all
+          if (!(excess < std::numeric_limits<double>::infinity())) return false;
+          log_accept -= std::max(excess, 0.0) / temperature;
+          break;
+        }
       }
+    }
+    return !stochastic_ || u < std::exp(log_accept);
+  }
+
+  // The deterministic version for the kernels (OLCM's "still within the next thresholds"): a
+  // likelihood component counts as within when d_k - m_k <= T_k.
+  bool Within(std::span<const double> d, const std::vector<double>& eps) const {
+    std::size_t s = 0;
+    for (std::size_t k = 0; k < components_.size(); ++k) {
+      if (components_[k].kind == ComponentKind::kIndicator) {
+        if (d[k] != components_[k].required) return false;
+        continue;
+      }
+      const double offset = components_[k].kind == ComponentKind::kThreshold ? 0.0 : offsets_[s];
+      if (!(d[k] - offset <= eps[s++])) return false;
     }
     return true;
   }
@@ -220,7 +298,7 @@ class SmcRun {
             : std::numeric_limits<std::int64_t>::max();
     const double prior_rate = last_rate_;
     Stop stop;
-    CandidateBatch batch(space_, simulator_, distance_, components_.size());
+    CandidateBatch batch(space_, simulator_, distance_, components_.size(), stochastic_);
     while (static_cast<int>(wave.particles.size()) < n) {
       std::int64_t size = BatchSize(wave, next_index, prior_rate);
       size = std::min(size, wave_cap - next_index);
@@ -242,7 +320,7 @@ class SmcRun {
       const std::size_t before = wave.particles.size();
       std::int64_t consumed = size;
       for (std::int64_t i = 0; i < size; ++i) {
-        if (!Accept(batch.distance(i), wave.thresholds)) continue;
+        if (!Accept(batch.distance(i), wave.thresholds, batch.uniform(i))) continue;
         wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
         if (static_cast<int>(wave.particles.size()) == n) {
           consumed = i + 1;
@@ -318,6 +396,8 @@ class SmcRun {
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;
   std::vector<ThresholdSchedule> schedules_;
+  bool stochastic_ = false;      // some component is a negative log-likelihood
+  std::vector<double> offsets_;  // m_k per schedule slot for the current wave (0: thresholds)
   Clock::time_point start_;
   std::int64_t total_ = 0;
   std::int64_t discarded_ = 0;

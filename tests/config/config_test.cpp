@@ -454,3 +454,73 @@ TEST(Config, MetricShapeErrors) {
 
 }  // namespace
 }  // namespace combabc
+
+namespace combabc {
+namespace {
+
+const std::string kGaussianBase =
+    "[data]\n"
+    "csv = \"p.csv\"\n"
+    "[metric]\n"
+    "[[metric.component]]\n"
+    "type = \"least_squares\"\n"
+    "window = [0.5, 0.8]\n"
+    "noise = \"gaussian\"\n";  // line 7
+
+TEST(Config, GaussianNoiseModelKeys) {
+  const auto c = ParseConfig(kGaussianBase + "sigma_noise = 0.02\nsigma_model = 0.01\n", "x.toml");
+  ASSERT_EQ(c.metric.components.size(), 1u);
+  const auto& m = c.metric.components[0];
+  EXPECT_EQ(m.noise.model, NoiseModel::kGaussian);
+  EXPECT_EQ(m.noise.sigma_noise, 0.02);
+  EXPECT_EQ(m.noise.sigma_model, 0.01);
+  EXPECT_EQ(KindOf(m), ComponentKind::kNegLogLikelihood);
+  EXPECT_EQ(c.smc.thresholds.at(0).target, 1.0);  // temperatures end at 1
+  const auto estimated = ParseConfig(kGaussianBase + "sigma_noise = \"estimate\"\n", "x.toml");
+  EXPECT_FALSE(estimated.metric.components[0].noise.sigma_noise.has_value());
+  // [metric]-level noise applies to a preset's least_squares components.
+  const auto preset = ParseConfig(
+      "[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"split_least_squares\"\nnoise = "
+      "\"gaussian\"\nsigma_noise = 0.01\n",
+      "x.toml");
+  int likelihoods = 0;
+  for (const auto& m2 : preset.metric.components)
+    likelihoods += KindOf(m2) == ComponentKind::kNegLogLikelihood;
+  EXPECT_EQ(likelihoods, 3);
+  EXPECT_EQ(preset.smc.thresholds.size(), 3u);
+}
+
+TEST(Config, GaussianNoiseModelErrorsNameLineAndKey) {
+  ExpectLocated(ConfigError(kGaussianBase + "sigma_noise = -1\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].sigma_noise");
+  ExpectLocated(ConfigError(kGaussianBase + "sigma_noise = inf\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].sigma_noise");
+  ExpectLocated(ConfigError(kGaussianBase + "sigma_noise = \"guess\"\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].sigma_noise");
+  ExpectLocated(ConfigError(kGaussianBase + "sigma_model = -0.1\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].sigma_model");
+  ExpectLocated(ConfigError(kGaussianBase + "target = 0.5\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].target");
+  ExpectLocated(ConfigError(kGaussianBase + "sigma_nois = 0.1\n"),
+                "inline.toml",
+                8,
+                "metric.component[0].sigma_nois");
+  ExpectLocated(
+      ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\nnoise = \"gaussian\"\n"),
+      "inline.toml",
+      5,
+      "metric.noise");
+}
+
+}  // namespace
+}  // namespace combabc

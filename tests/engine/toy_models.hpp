@@ -94,4 +94,43 @@ class SplitDistance : public Distance {
   std::vector<double> target_;
 };
 
+// Output = A theta (rows of A as given): a linear model of the bits.
+class LinearSimulator : public Simulator {
+ public:
+  explicit LinearSimulator(std::vector<std::vector<double>> rows) : rows_(std::move(rows)) {}
+  int output_size() const override { return static_cast<int>(rows_.size()); }
+  void Simulate(const ParameterView& theta,
+                RandomStream& /*rng*/,
+                std::span<double> out) const override {
+    for (std::size_t j = 0; j < rows_.size(); ++j) {
+      out[j] = 0.0;
+      for (std::size_t k = 0; k < rows_[j].size(); ++k) out[j] += rows_[j][k] * theta.bits[k];
+    }
+  }
+
+ private:
+  std::vector<std::vector<double>> rows_;
+};
+
+// Gaussian negative log-likelihood: d = sum_j (y_j - observed_j)^2 / (2 sigma^2).
+class GaussianNllDistance : public Distance {
+ public:
+  GaussianNllDistance(std::vector<double> observed, double sigma)
+      : observed_(std::move(observed)), sigma_(sigma) {}
+  std::vector<DistanceComponent> components() const override {
+    return {{"nll", ComponentKind::kNegLogLikelihood, 1.0}};
+  }
+  void Evaluate(std::span<const double> y, std::span<double> out) const override {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < observed_.size(); ++j) {
+      sum += (y[j] - observed_[j]) * (y[j] - observed_[j]);
+    }
+    out[0] = sum / (2.0 * sigma_ * sigma_);
+  }
+
+ private:
+  std::vector<double> observed_;
+  double sigma_;
+};
+
 }  // namespace combabc::testing

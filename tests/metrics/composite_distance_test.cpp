@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "combabc/core/error.hpp"
+#include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
 namespace {
@@ -334,6 +335,55 @@ TEST(CompositeDistance, BadWindowsAreConfigErrorsNamingTheComponent) {
     EXPECT_NE(std::string(e.what()).find("metric.component[0]: window"), std::string::npos)
         << e.what();
   }
+}
+
+}  // namespace
+}  // namespace combabc
+
+namespace combabc {
+namespace {
+
+// Known sigma on a smooth, curved, steep profile (the sensor's decay): second differences recover
+// it; Rice's first differences would be inflated by the slope.
+TEST(NoiseEstimate, SecondDifferencesRecoverKnownSigma) {
+  RandomStream rng(42, 0, 0);
+  std::vector<double> x, y;
+  double rice = 0.0;
+  for (int i = 0; i < 400; ++i) {
+    x.push_back(0.01 * i + (i % 3) * 0.002);  // uneven spacing
+    y.push_back(std::exp(-3.0 * x.back()) * std::cos(6.0 * x.back()) + 0.01 * rng.Normal());
+    if (i > 0) rice += (y[i] - y[i - 1]) * (y[i] - y[i - 1]);
+  }
+  rice = std::sqrt(rice / (2.0 * 399));
+  const double sigma = EstimateNoiseSigma(x, y);
+  EXPECT_NEAR(sigma, 0.01, 0.0015);  // standard error ~ 0.01 * 0.06
+  EXPECT_GT(rice, 0.012);            // first differences: biased by the slope
+  // Exactly linear data: zero.
+  EXPECT_NEAR(
+      EstimateNoiseSigma(std::vector<double>{0, 1, 3}, std::vector<double>{1, 2, 4}), 0.0, 1e-12);
+}
+
+TEST(NoiseEstimate, GaussianComponentIsScaledNegLogLikelihood) {
+  const std::vector<double> pos = {0.0, 0.1, 0.2, 0.3};
+  const std::vector<double> data = {1.0, 0.5, 0.25, 0.1};
+  MetricComponentConfig c;
+  c.type = MetricType::kLeastSquares;
+  c.from = 0.0;
+  c.to = 0.3;
+  c.noise.model = NoiseModel::kGaussian;
+  c.noise.sigma_noise = 0.3;
+  c.noise.sigma_model = 0.4;  // sigma = 0.5
+  CompositeDistance d({c}, pos, data, pos, {.normalise_simulated = false});
+  EXPECT_EQ(d.components()[0].kind, ComponentKind::kNegLogLikelihood);
+  EXPECT_DOUBLE_EQ(d.noise_sigma(0), 0.5);
+  const std::vector<double> sim = {1.0, 0.5, 0.35, 0.1};
+  double out = 0.0;
+  d.Evaluate(sim, std::span(&out, 1));
+  EXPECT_NEAR(out, 0.01 / (2 * 0.25), 1e-12);
+  c.noise.sigma_noise.reset();
+  c.noise.sigma_model = 0.0;
+  const std::vector<double> line = {1.0, 0.9, 0.8, 0.7};  // noise-free: sigma estimate 0
+  EXPECT_THROW(CompositeDistance({c}, pos, line, pos), Error);
 }
 
 }  // namespace

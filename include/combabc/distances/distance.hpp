@@ -1,8 +1,9 @@
 #pragma once
 // A distance D(Y, Y*) between the observed data (held by the implementation) and a simulated
 // output. It may be vector-valued (paper Eq. 6): a candidate is accepted when every threshold
-// component satisfies d_k <= eps_k and every indicator component (Eq. 7's H1, H2) equals its
-// required value.
+// component satisfies d_k <= eps_k, every indicator component (Eq. 7's H1, H2) equals its
+// required value, and a uniform u < exp(-sum_k (d_k - m_k) / T_k) over the negative
+// log-likelihood components (noise-aware acceptance, Wilkinson 2013; docs/algorithm.md).
 #include <span>
 #include <string>
 #include <vector>
@@ -13,12 +14,17 @@ namespace combabc {
 enum class ComponentKind {
   kThreshold,  // accepted when d_k <= eps_k (eps_k from the component's threshold schedule)
   kIndicator,  // accepted when d_k == required (exact comparison: indicators are 0/1 values)
+  // d_k = -log(pi(y | Y*) / c) >= 0 for an error model pi with c >= its maximum; accepted with
+  // probability exp(-(d_k - m_k) / T_k), T_k >= 1 the component's temperature from its schedule
+  // and m_k the smallest d_k among earlier waves' particles (0 in wave 0).
+  kNegLogLikelihood,
 };
 template <>
 struct EnumNames<ComponentKind> {
   static constexpr std::pair<ComponentKind, const char*> kNames[] = {
       {ComponentKind::kThreshold, "threshold"},
       {ComponentKind::kIndicator, "indicator"},
+      {ComponentKind::kNegLogLikelihood, "neg_log_likelihood"},
   };
 };
 

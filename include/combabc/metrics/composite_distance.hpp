@@ -51,8 +51,11 @@ class CompositeDistance : public Distance {
   // indicator 0, so the candidate is rejected rather than compared as NaN.
   void Evaluate(std::span<const double> simulated, std::span<double> out) const override;
 
-  // One schedule per threshold component, in component order: what SmcOptions::thresholds wants.
+  // One schedule per threshold or likelihood component, in component order: what
+  // SmcOptions::thresholds wants.
   std::vector<ThresholdSchedule> threshold_schedules() const;
+  // Component k's total sigma (gaussian noise model; sigma_noise estimated if not given), or 0.
+  double noise_sigma(std::size_t k) const { return compiled_.at(k).sigma; }
   const std::vector<MetricComponentConfig>& configs() const { return configs_; }
   std::size_t output_size() const { return output_size_; }
 
@@ -68,6 +71,7 @@ class CompositeDistance : public Distance {
     std::vector<double> positions;  // x_j inside the window (area: trapezoid widths)
     std::vector<Sample> samples;    // where to read y*_j (rise / fall: the two endpoints)
     double observed_area = 0.0;     // area: A(Y)
+    double sigma = 0.0;             // gaussian noise model: sqrt(sigma_noise^2 + sigma_model^2)
   };
 
   double Interpolate(std::span<const double> simulated, const Sample& s, double scale) const;
@@ -78,5 +82,13 @@ class CompositeDistance : public Distance {
   std::size_t output_size_ = 0;
   CompositeDistanceOptions options_;
 };
+
+// Noise standard deviation of y(x) = g(x) + e, e iid, for smooth g: the difference-based
+// estimator of Gasser, Sroka & Jennen-Steinmetz (1986). Each interior point's pseudo-residual
+// e_i = a_i y_{i-1} + b_i y_{i+1} - y_i (a_i, b_i: linear interpolation weights from x) is zero
+// for a linear g, and sigma^2 = sum_i c_i^2 e_i^2 / (n - 2) with c_i^2 = 1 / (a_i^2 + b_i^2 + 1).
+// Its bias is from curvature only, O(h^4 g''^2) per point (Rice's first differences: O(h^2 g'^2),
+// which on a steep profile dominates the noise). Needs n >= 3 points; x strictly increasing.
+double EstimateNoiseSigma(std::span<const double> x, std::span<const double> y);
 
 }  // namespace combabc

@@ -6,7 +6,10 @@
 //   rise           Eq. 7 H1: 1 if y*(to) - y*(from) > 0, else 0
 //   fall           Eq. 7 H2: 1 if y*(to) - y*(from) < 0, else 0
 // area and least_squares are threshold components (d_k <= eps_k); rise and fall are indicator
-// components that must equal 1.
+// components that must equal 1. A least_squares component with a gaussian noise model is a
+// negative log-likelihood instead (docs/algorithm.md, "Noise-aware acceptance"):
+//   d = sum_j (y*_j - y_j)^2 / (2 sigma^2),  sigma^2 = sigma_noise^2 + sigma_model^2,
+// accepted with probability exp(-(d - m) / T).
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +33,28 @@ struct EnumNames<MetricType> {
 // kThreshold for area / least_squares, kIndicator for rise / fall.
 ComponentKind KindOf(MetricType type);
 
+enum class NoiseModel {
+  kNone,      // the paper's acceptance: d_k <= eps_k
+  kGaussian,  // y_j = Y*_j + e_j, e_j ~ N(0, sigma^2) independent (Wilkinson 2013)
+};
+template <>
+struct EnumNames<NoiseModel> {
+  static constexpr std::pair<NoiseModel, const char*> kNames[] = {
+      {NoiseModel::kNone, "none"},
+      {NoiseModel::kGaussian, "gaussian"},
+  };
+};
+
+// The error model of a least_squares component, in the units the metric compares (the
+// normalised profile when the data are normalised).
+struct NoiseConfig {
+  NoiseModel model = NoiseModel::kNone;
+  // Measurement noise; nullopt = estimate it from the measured data (EstimateNoiseSigma).
+  std::optional<double> sigma_noise;
+  // Model discrepancy, added in quadrature.
+  double sigma_model = 0.0;
+};
+
 struct MetricComponentConfig {
   MetricType type = MetricType::kLeastSquares;
   // Window [from, to] along the sensor, metres, from < to. area / least_squares use the measured
@@ -39,12 +64,18 @@ struct MetricComponentConfig {
   // Name reported by Distance::components() and written to the history; empty = generated from
   // the type and window in centimetres, e.g. "least_squares[48-80cm]".
   std::string name;
-  // Threshold schedule (threshold components only; ignored for indicators).
+  // Threshold schedule (threshold components only; ignored for indicators). With a gaussian
+  // noise model it holds temperatures T >= 1 instead.
   ThresholdSchedule threshold;
+  // least_squares only.
+  NoiseConfig noise;
   // Line of the config file that defined the component (its [[metric.component]] header or the
   // preset key), for error messages; 0 when not read from a file.
   int config_line = 0;
 };
+
+// KindOf(type), except kNegLogLikelihood for a component with a gaussian noise model.
+ComponentKind KindOf(const MetricComponentConfig& config);
 
 // The name a component reports: config.name, or the generated one.
 std::string ComponentName(const MetricComponentConfig& config);
