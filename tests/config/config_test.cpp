@@ -281,7 +281,7 @@ TEST(Config, DocumentedExampleIsTheTestedFixture) {
   doc_text << doc.rdbuf();
   fixture_text << fixture.rdbuf();
   const std::string text = doc_text.str();
-  const std::size_t begin = text.find("```toml\n");
+  const std::size_t begin = text.find("```toml\n", text.find("## Complete example"));
   ASSERT_NE(begin, std::string::npos);
   const std::size_t end = text.find("```", begin + 8);
   EXPECT_EQ(text.substr(begin + 8, end - begin - 8), fixture_text.str());
