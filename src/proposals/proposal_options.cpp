@@ -1,0 +1,71 @@
+#include "combabc/proposals/proposal_options.hpp"
+
+#include <cmath>
+
+#include "combabc/core/error.hpp"
+#include "combabc/proposals/logistic_kernel.hpp"
+
+namespace combabc {
+namespace {
+
+// The checks shared by LogisticKernelOptions::IsValid and ProposalOptions::IsValid; `where` is the
+// field path that messages start with ("LogisticKernelOptions::" or "ProposalOptions::logistic.").
+bool LogisticOptionsValid(const LogisticKernelOptions& o,
+                          const std::string& where,
+                          std::string* why) {
+  auto fail = [&](const std::string& msg) {
+    if (why) *why = where + msg;
+    return false;
+  };
+  if (!(o.min_correlation >= 0.0 && o.min_correlation < 1.0)) {
+    return fail("min_correlation = " + std::to_string(o.min_correlation) + "; must be in [0, 1)");
+  }
+  if (o.max_predecessors < 0) {
+    return fail("max_predecessors = " + std::to_string(o.max_predecessors) + "; must be >= 0");
+  }
+  // ridge = 0 would let a separable regression run its slopes to infinity (it would then fall
+  // back to the marginal, losing exactly the strong couplings the kernel exists for).
+  if (!(o.ridge > 0.0 && std::isfinite(o.ridge))) {
+    return fail("ridge = " + std::to_string(o.ridge) + "; must be finite and > 0");
+  }
+  if (!(o.min_marginal >= 0.0 && o.min_marginal < 0.5)) {
+    return fail("min_marginal = " + std::to_string(o.min_marginal) + "; must be in [0, 0.5)");
+  }
+  // clip > 0 keeps q > 0 everywhere (importance weights need the prior's support); clip < 0.5
+  // keeps [clip, 1 - clip] a non-degenerate interval.
+  if (!(o.clip > 0.0 && o.clip < 0.5)) {
+    return fail("clip = " + std::to_string(o.clip) + "; must be in (0, 0.5)");
+  }
+  return true;
+}
+
+}  // namespace
+
+bool LogisticKernelOptions::IsValid(std::string* why) const {
+  return LogisticOptionsValid(*this, "LogisticKernelOptions::", why);
+}
+
+bool ProposalOptions::IsValid(std::string* why) const {
+  if (!LogisticOptionsValid(logistic, "ProposalOptions::logistic.", why)) return false;
+  if (!(scale > 0.0 && std::isfinite(scale))) {
+    if (why) {
+      *why = "ProposalOptions::scale = " + std::to_string(scale) + "; must be finite and > 0";
+    }
+    return false;
+  }
+  return true;
+}
+
+std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options) {
+  switch (options.binary) {
+    case BinaryKernelKind::kIndependent:
+      return MakeIndependentKernel();
+    case BinaryKernelKind::kLogistic:
+      return MakeLogisticKernel(options.logistic);
+  }
+  throw Error(ErrorKind::kConfig,
+              "ProposalOptions::binary = " + std::to_string(static_cast<int>(options.binary)) +
+                  "; not a known binary kernel");
+}
+
+}  // namespace combabc
