@@ -56,6 +56,27 @@ int main(int argc, char** argv) try {
   resume->add_flag("--no-report", no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", quiet, "No progress display");
 
+  combabc::services::EnumerateRequest enumerate_request;
+  auto* enumerate = app.add_subcommand(
+      "enumerate", "Exact ABC posterior by simulating every configuration of the free bits");
+  enumerate->add_option("CONFIG", enumerate_request.config_path, "Config file")->required();
+  enumerate
+      ->add_option("--threshold",
+                   enumerate_request.thresholds,
+                   "One per threshold component (default: the config's final thresholds)")
+      ->check(CLI::NonNegativeNumber);
+  enumerate->add_option("-o,--output", enumerate_request.output_directory, "Output directory");
+  enumerate
+      ->add_option(
+          "-j,--threads", enumerate_request.threads, "Threads, 0 = all cores (overrides [sampler])")
+      ->check(CLI::Range(0, kMaxThreads));
+  enumerate->add_flag(
+      "--overwrite", enumerate_request.overwrite, "Replace an existing history and its files");
+  enumerate->add_option("--top", enumerate_request.top, "Configurations in top_configurations.csv")
+      ->check(CLI::Range(1, 1000000));
+  enumerate->add_flag("--no-report", no_report, "Do not write figures at the end");
+  enumerate->add_flag("-q,--quiet", quiet, "No progress display");
+
   std::string sim_config, clamps, sim_out = "profile.csv";
   bool overwrite_profile = false;
   auto* simulate = app.add_subcommand("simulate", "Simulate one clamp configuration to CSV");
@@ -113,6 +134,23 @@ int main(int argc, char** argv) try {
       interrupted = outcome.history.summary.termination == combabc::Termination::kInterrupted;
       if (interrupted) {
         std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path << "\n";
+      }
+    } else if (*enumerate) {
+      enumerate_request.report = !no_report;
+      const auto outcome = combabc::services::RunEnumeration(enumerate_request, observer);
+      interrupted = outcome.interrupted;
+      if (interrupted) {
+        std::cerr << "interrupted after " << outcome.enumerated << " of " << outcome.configurations
+                  << " configurations; nothing written (an enumeration cannot be resumed)\n";
+      } else {
+        std::cout << "enumerated " << outcome.configurations
+                  << " configurations: " << outcome.accepted << " accepted, evidence "
+                  << outcome.evidence << " (" << outcome.wall_seconds << " s)\n"
+                  << "history: " << outcome.history_path << "\n"
+                  << "tables:  " << outcome.enumeration_directory << "\n";
+        if (!outcome.report_directory.empty()) {
+          std::cout << "report:  " << outcome.report_directory << "/index.html\n";
+        }
       }
     } else if (*simulate) {
       combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);

@@ -17,6 +17,8 @@ class ProgressDisplay : public SmcObserver {
   void OnWaveStart(const WaveRecord& wave) override {
     wave_start_ = std::chrono::steady_clock::now();
     wave_ = wave.wave;
+    // Only an enumeration knows its candidates in advance: then progress is candidates done.
+    total_ = wave.candidates;
   }
 
   void OnBatch(const BatchProgress& p, std::span<const Particle>) override {
@@ -24,22 +26,38 @@ class ProgressDisplay : public SmcObserver {
     const double elapsed = Elapsed();
     const auto accepted = static_cast<double>(p.accepted);
     const double rate = p.next_index > 0 ? accepted / static_cast<double>(p.next_index) : 0.0;
-    const double eta = p.accepted > 0 ? elapsed * (p.accepted_needed - accepted) / accepted : 0.0;
+    double eta = p.accepted > 0 ? elapsed * (p.accepted_needed - accepted) / accepted : 0.0;
     constexpr int kWidth = 24;
-    const int filled = static_cast<int>(kWidth * p.accepted / std::max(1, p.accepted_needed));
+    int filled = static_cast<int>(kWidth * p.accepted / std::max(1, p.accepted_needed));
+    if (total_ > 0) {
+      const auto done = static_cast<double>(p.next_index);
+      eta = done > 0 ? elapsed * (static_cast<double>(total_) - done) / done : 0.0;
+      filled = static_cast<int>(kWidth * p.next_index / total_);
+    }
     char bar[kWidth + 1];
     for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
     bar[kWidth] = '\0';
-    std::fprintf(stderr,
-                 "\rwave %d [%s] %lld/%d accepted  rate %.4f  %lld sims  %.1f s  ETA %.1f s  ",
-                 p.wave + 1,
-                 bar,
-                 static_cast<long long>(p.accepted),
-                 p.accepted_needed,
-                 rate,
-                 static_cast<long long>(p.total_simulations),
-                 elapsed,
-                 eta);
+    if (total_ > 0) {
+      std::fprintf(stderr,
+                   "\renumerate [%s] %lld/%lld configurations  %lld accepted  %.1f s  ETA %.1f s  ",
+                   bar,
+                   static_cast<long long>(p.next_index),
+                   static_cast<long long>(total_),
+                   static_cast<long long>(p.accepted),
+                   elapsed,
+                   eta);
+    } else {
+      std::fprintf(stderr,
+                   "\rwave %d [%s] %lld/%d accepted  rate %.4f  %lld sims  %.1f s  ETA %.1f s  ",
+                   p.wave + 1,
+                   bar,
+                   static_cast<long long>(p.accepted),
+                   p.accepted_needed,
+                   rate,
+                   static_cast<long long>(p.total_simulations),
+                   elapsed,
+                   eta);
+    }
     std::fflush(stderr);
     dirty_ = true;
   }
@@ -78,6 +96,7 @@ class ProgressDisplay : public SmcObserver {
   bool terminal_;
   bool dirty_ = false;
   int wave_ = 0;
+  std::int64_t total_ = 0;
   std::chrono::steady_clock::time_point wave_start_;
 };
 

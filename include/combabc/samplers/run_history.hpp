@@ -54,6 +54,7 @@ enum class Termination {
   kAcceptanceRateTooLow,  // a wave fell below min_acceptance_rate
   kWallTimeExceeded,      // max_wall_time_s reached
   kInterrupted,           // the observer asked to stop
+  kEnumerated,            // exact enumeration (Enumerate): one wave holding the exact posterior
 };
 template <>
 struct EnumNames<Termination> {
@@ -64,6 +65,7 @@ struct EnumNames<Termination> {
       {Termination::kAcceptanceRateTooLow, "acceptance_rate_too_low"},
       {Termination::kWallTimeExceeded, "wall_time_exceeded"},
       {Termination::kInterrupted, "interrupted"},
+      {Termination::kEnumerated, "enumerated"},
   };
 };
 

@@ -1,0 +1,379 @@
+// Exact ABC posterior by enumerating every free-bit configuration (docs/algorithm.md, "Exact
+// enumeration").
+#include "combabc/samplers/enumeration.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "combabc/core/error.hpp"
+#include "combabc/core/executor.hpp"
+
+namespace combabc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Configurations [first, first + n): decoded, expanded to bits, simulated and measured by an
+// Executor into flat buffers reused batch after batch, so memory stays one batch whatever 2^k is.
+class EnumerationBatch : public BatchTask {
+ public:
+  EnumerationBatch(const ParameterSpace& space,
+                   const Simulator& simulator,
+                   const Distance& distance,
+                   std::size_t components,
+                   std::uint64_t seed)
+      : space_(space),
+        simulator_(simulator),
+        distance_(distance),
+        seed_(seed),
+        d_(static_cast<std::size_t>(space.num_bits())),
+        f_(static_cast<std::size_t>(space.num_free_bits())),
+        m_(static_cast<std::size_t>(simulator.output_size())),
+        c_(components) {}
+
+  void Evaluate(Executor& executor, std::int64_t first, std::int64_t count) {
+    const auto n = static_cast<std::size_t>(count);
+    first_ = first;
+    free_.resize(n * f_);
+    bits_.resize(n * d_);
+    outputs_.resize(n * m_);
+    distances_.resize(n * c_);
+    log_prior_.resize(n);
+    rngs_.resize(n, RandomStream(0, 0, 0));
+    executor.Execute(n, *this);
+  }
+
+  std::span<const std::uint8_t> bits(std::size_t i) const { return {bits_.data() + i * d_, d_}; }
+  std::span<const double> output(std::size_t i) const { return {outputs_.data() + i * m_, m_}; }
+  std::span<const double> distance(std::size_t i) const { return {distances_.data() + i * c_, c_}; }
+  double log_prior(std::size_t i) const { return log_prior_[i]; }
+
+  void EvaluateRange(std::size_t begin, std::size_t end) override {
+    const std::string which = "enumeration, configurations " +
+                              std::to_string(first_ + static_cast<std::int64_t>(begin)) + "-" +
+                              std::to_string(first_ + static_cast<std::int64_t>(end) - 1);
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto index = static_cast<std::uint64_t>(first_) + i;
+      std::span<std::uint8_t> free(free_.data() + i * f_, f_);
+      for (std::size_t j = 0; j < f_; ++j) free[j] = static_cast<std::uint8_t>((index >> j) & 1U);
+      space_.binary().Expand(free, std::span(bits_.data() + i * d_, d_));
+      log_prior_[i] = space_.LogPriorBits(free);
+      rngs_[i] = RandomStream(seed_, 0, index);
+    }
+    try {
+      const ParameterBatch batch{
+          end - begin,
+          d_,
+          0,
+          std::span<const std::uint8_t>(bits_.data() + begin * d_, (end - begin) * d_),
+          {}};
+      simulator_.SimulateBatch(batch,
+                               std::span(rngs_.data() + begin, end - begin),
+                               std::span(outputs_.data() + begin * m_, (end - begin) * m_));
+    } catch (const std::exception& e) {
+      throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      std::span<double> out(distances_.data() + i * c_, c_);
+      try {
+        distance_.Evaluate(output(i), out);
+      } catch (const std::exception& e) {
+        throw Error(
+            ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
+      }
+      for (std::size_t k = 0; k < c_; ++k) {
+        if (std::isnan(out[k])) {
+          throw Error(ErrorKind::kSoftware,
+                      "distance component " + std::to_string(k) +
+                          " is NaN (the simulated output holds NaN or the distance is undefined)",
+                      "",
+                      0,
+                      "enumeration, configuration " +
+                          std::to_string(first_ + static_cast<std::int64_t>(i)));
+        }
+      }
+    }
+  }
+
+  std::vector<Buffer> Results() override {
+    return {{bits_.data(), d_},
+            {outputs_.data(), m_ * sizeof(double)},
+            {distances_.data(), c_ * sizeof(double)},
+            {log_prior_.data(), sizeof(double)}};
+  }
+
+ private:
+  const ParameterSpace& space_;
+  const Simulator& simulator_;
+  const Distance& distance_;
+  std::uint64_t seed_;
+  std::size_t d_, f_, m_, c_;
+  std::int64_t first_ = 0;
+  std::vector<std::uint8_t> free_, bits_;
+  std::vector<double> outputs_, distances_, log_prior_;
+  std::vector<RandomStream> rngs_;
+};
+
+// Larger mass first; equal masses (a uniform prior makes them all equal) by configuration index,
+// so which particles are kept never depends on the order they were found in.
+bool Better(const Particle& a, const Particle& b) {
+  return a.log_weight != b.log_weight ? a.log_weight > b.log_weight : a.index < b.index;
+}
+
+// The `capacity` best particles seen so far; front() is the worst of them (a heap under Better).
+class Best {
+ public:
+  explicit Best(std::size_t capacity) : capacity_(capacity) {}
+  bool WouldKeep(double log_weight, std::int64_t index) const {
+    if (heap_.size() < capacity_) return true;
+    if (capacity_ == 0) return false;
+    Particle probe;
+    probe.log_weight = log_weight;
+    probe.index = index;
+    return Better(probe, heap_.front());
+  }
+  void Add(Particle p) {
+    if (heap_.size() == capacity_) {
+      std::pop_heap(heap_.begin(), heap_.end(), Better);
+      heap_.back() = std::move(p);
+    } else {
+      heap_.push_back(std::move(p));
+    }
+    std::push_heap(heap_.begin(), heap_.end(), Better);
+  }
+  std::vector<Particle> Sorted() const {
+    auto out = heap_;
+    std::sort(out.begin(), out.end(), Better);
+    return out;
+  }
+
+ private:
+  std::size_t capacity_;
+  std::vector<Particle> heap_;
+};
+
+void CheckOptions(const SmcProblem& problem,
+                  const EnumerationOptions& options,
+                  const std::vector<DistanceComponent>& components) {
+  if (!problem.space || !problem.simulator || !problem.distance) {
+    throw Error(
+        ErrorKind::kConfig, "space, simulator and distance must all be set", "", 0, "SmcProblem");
+  }
+  if (problem.space->num_reals() > 0) {
+    throw Error(ErrorKind::kConfig,
+                "enumeration needs a purely binary space; this one has " +
+                    std::to_string(problem.space->num_reals()) + " continuous parameters",
+                "",
+                0,
+                "SmcProblem::space");
+  }
+  const int free = problem.space->num_free_bits();
+  if (free > kMaxEnumerationBits) {
+    throw Error(ErrorKind::kConfig,
+                "enumeration of " + std::to_string(free) + " free bits (2^" + std::to_string(free) +
+                    " configurations) exceeds the limit of 2^" +
+                    std::to_string(kMaxEnumerationBits) +
+                    "; tie bits to reduce them, or run combinatorial ABC-SMC",
+                "",
+                0,
+                "SmcProblem::space");
+  }
+  std::size_t threshold_components = 0;
+  for (const auto& c : components) threshold_components += c.kind == ComponentKind::kThreshold;
+  if (options.thresholds.size() != threshold_components) {
+    throw Error(ErrorKind::kConfig,
+                "has " + std::to_string(options.thresholds.size()) +
+                    " thresholds; the distance has " + std::to_string(threshold_components) +
+                    " threshold components",
+                "",
+                0,
+                "EnumerationOptions::thresholds");
+  }
+  for (double eps : options.thresholds) {
+    if (!(eps >= 0.0)) {
+      throw Error(ErrorKind::kConfig,
+                  "must be >= 0 (got " + std::to_string(eps) + ")",
+                  "",
+                  0,
+                  "EnumerationOptions::thresholds");
+    }
+  }
+  if (options.batch_size < 1 || options.max_particles < 0 || options.top < 0 ||
+      options.threads < 0) {
+    throw Error(ErrorKind::kConfig,
+                "batch_size must be >= 1; max_particles, top and threads >= 0",
+                "",
+                0,
+                "EnumerationOptions");
+  }
+  if (problem.simulator->output_size() < 0) {
+    throw Error(ErrorKind::kConfig, "simulator output_size() is negative");
+  }
+}
+
+}  // namespace
+
+WaveRecord EnumerationResult::Wave(const std::vector<double>& thresholds,
+                                   const std::vector<double>& proposal) const {
+  WaveRecord w;
+  w.wave = 0;
+  w.thresholds = thresholds;
+  w.proposal = proposal;
+  w.candidates = enumerated;
+  w.accepted = accepted;
+  w.acceptance_rate =
+      enumerated > 0 ? static_cast<double>(accepted) / static_cast<double>(enumerated) : 0.0;
+  w.complete = !interrupted;
+  w.marginals_paper = marginals;
+  w.marginals_importance = marginals;
+  w.ess = ess;
+  w.distinct = accepted;  // every configuration is enumerated once
+  w.wall_seconds = wall_seconds;
+  w.particles = particles;
+  return w;
+}
+
+EnumerationResult Enumerate(const SmcProblem& problem,
+                            const EnumerationOptions& options,
+                            SmcObserver* observer) {
+  const auto start = Clock::now();
+  const auto components =
+      problem.distance ? problem.distance->components() : std::vector<DistanceComponent>{};
+  CheckOptions(problem, options, components);
+  const ParameterSpace& space = *problem.space;
+  std::unique_ptr<Executor> owned_executor;
+  Executor* executor = problem.executor;
+  if (!executor) {
+    owned_executor = std::make_unique<ThreadPoolExecutor>(options.threads);
+    executor = owned_executor.get();
+  }
+  const auto d = static_cast<std::size_t>(space.num_bits());
+  EnumerationResult result;
+  result.configurations = std::int64_t{1} << space.num_free_bits();
+
+  auto accept = [&](std::span<const double> dist) {
+    std::size_t s = 0;
+    for (std::size_t k = 0; k < components.size(); ++k) {
+      if (components[k].kind == ComponentKind::kThreshold) {
+        if (!(dist[k] <= options.thresholds[s++])) return false;
+      } else if (dist[k] != components[k].required) {
+        return false;
+      }
+    }
+    return true;
+  };
+
+  WaveRecord start_record;
+  start_record.thresholds = options.thresholds;
+  start_record.proposal = space.binary().free_prior_one();
+  start_record.candidates = result.configurations;
+  if (observer) observer->OnWaveStart(start_record);
+
+  // Unnormalised sums, accumulated on this thread in configuration order: the same additions in
+  // the same order for any executor, hence bit-identical results.
+  double mass_sum = 0.0, mass_sq_sum = 0.0;
+  std::vector<double> ones(d, 0.0), pairs(d * d, 0.0);
+  std::vector<std::size_t> set_bits;
+  Best best(static_cast<std::size_t>(std::max(options.max_particles, options.top)));
+  EnumerationBatch batch(
+      space, *problem.simulator, *problem.distance, components.size(), options.seed);
+  std::int64_t next = 0;
+  while (next < result.configurations) {
+    const std::int64_t n = std::min<std::int64_t>(options.batch_size, result.configurations - next);
+    batch.Evaluate(*executor, next, n);
+    for (std::int64_t i = 0; i < n; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      if (!accept(batch.distance(u))) continue;
+      ++result.accepted;
+      const double log_prior = batch.log_prior(u);
+      const double mass = std::exp(log_prior);
+      mass_sum += mass;
+      mass_sq_sum += mass * mass;
+      const auto bits = batch.bits(u);
+      set_bits.clear();
+      for (std::size_t k = 0; k < d; ++k) {
+        if (bits[k]) set_bits.push_back(k);
+      }
+      for (std::size_t a = 0; a < set_bits.size(); ++a) {
+        ones[set_bits[a]] += mass;
+        for (std::size_t b = a + 1; b < set_bits.size(); ++b) {
+          pairs[set_bits[a] * d + set_bits[b]] += mass;
+        }
+      }
+      if (best.WouldKeep(log_prior, next + i)) {
+        Particle p;
+        p.index = next + i;
+        p.theta.bits.assign(bits.begin(), bits.end());
+        p.log_weight = log_prior;
+        const auto dist = batch.distance(u);
+        p.distance.assign(dist.begin(), dist.end());
+        if (options.keep_outputs) {
+          const auto out = batch.output(u);
+          p.output.assign(out.begin(), out.end());
+        }
+        best.Add(std::move(p));
+      }
+    }
+    next += n;
+    result.enumerated = next;
+    if (observer) {
+      const BatchProgress progress{0, next, result.accepted, 0, 0, next, Seconds(start)};
+      observer->OnBatch(progress, {});
+    }
+    if (next < result.configurations && observer && observer->ShouldStop()) {
+      result.interrupted = true;
+      break;
+    }
+  }
+
+  result.evidence = mass_sum;
+  if (result.accepted > 0) {
+    result.marginals.resize(d);
+    result.correlations.assign(d * d, 0.0);
+    // A bit is constant under the posterior exactly when its sum is 0 or, summed over the same
+    // masses in the same order, equal to the total.
+    std::vector<bool> constant(d);
+    for (std::size_t k = 0; k < d; ++k) {
+      result.marginals[k] = ones[k] / mass_sum;
+      constant[k] = ones[k] == 0.0 || ones[k] == mass_sum;
+    }
+    for (std::size_t i = 0; i < d; ++i) {
+      if (constant[i]) continue;
+      result.correlations[i * d + i] = 1.0;
+      const double mi = result.marginals[i];
+      for (std::size_t j = i + 1; j < d; ++j) {
+        if (constant[j]) continue;
+        const double mj = result.marginals[j];
+        const double cov = pairs[i * d + j] / mass_sum - mi * mj;
+        const double r = std::clamp(cov / std::sqrt(mi * (1 - mi) * mj * (1 - mj)), -1.0, 1.0);
+        result.correlations[i * d + j] = r;
+        result.correlations[j * d + i] = r;
+      }
+    }
+    result.ess = mass_sum * mass_sum / mass_sq_sum;
+  }
+  auto sorted = best.Sorted();
+  const auto top = std::min(sorted.size(), static_cast<std::size_t>(options.top));
+  result.top.assign(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(top));
+  for (auto& p : result.top) p.weight = std::exp(p.log_weight) / mass_sum;
+  sorted.resize(std::min(sorted.size(), static_cast<std::size_t>(options.max_particles)));
+  double kept_mass = 0.0;
+  for (const auto& p : sorted) kept_mass += std::exp(p.log_weight);
+  for (auto& p : sorted) p.weight = std::exp(p.log_weight) / kept_mass;
+  std::sort(sorted.begin(), sorted.end(), [](const Particle& a, const Particle& b) {
+    return a.index < b.index;
+  });
+  result.particles = std::move(sorted);
+  result.wall_seconds = Seconds(start);
+  if (observer) observer->OnWaveEnd(result.Wave(options.thresholds, start_record.proposal));
+  return result;
+}
+
+}  // namespace combabc

@@ -1,0 +1,98 @@
+// `combabc enumerate` through the CLI: on the 45 cm example reduced to 5 + 5 clamps (2^10
+// configurations, well under a second) it writes a one-wave history that verify, export and
+// report read unchanged, and its tables; thresholds default to the config's final ones.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "cli_runner.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kUsage = 64, kCantCreate = 73;
+
+void Replace(std::string& text, const std::string& line_start, const std::string& with) {
+  const auto at = text.find("\n" + line_start);
+  ASSERT_NE(at, std::string::npos) << line_start;
+  const auto end = text.find('\n', at + 1);
+  text.replace(at + 1, end - at - 1, with);
+}
+
+// The shipped example with 5 clamps per edge and `schedule` as its [metric] threshold schedule.
+std::string Config(const std::string& schedule) {
+  std::string text = ReadFile(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/area.toml");
+  Replace(text, "per_edge =", "per_edge = 5");
+  Replace(text, "quantile =", schedule);
+  Replace(text, "waves =", "waves = 2");
+  Replace(text, "threads =", "threads = 2");
+  Replace(text, "directory =", "directory = \"out\"");
+  return text;
+}
+
+int Lines(const std::string& s) { return CountLines(s); }
+
+TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
+  ScratchDir dir("enumerate");
+  fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
+  std::ofstream(dir / "list.toml") << Config("threshold = [0.5, 0.3]");
+  auto r = RunCli({"enumerate", dir / "list.toml", "--no-report", "-q", "--top", "7"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("enumerated 1024 configurations"), std::string::npos) << r.out;
+  const std::string history = dir / "out/history.sqlite";
+  ASSERT_TRUE(fs::exists(history)) << r.out;
+
+  r = RunCli({"verify", history}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = RunCli({"export", history}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string waves = ReadFile(dir.path() / "out/export/waves.csv");
+  // One wave at the list's last threshold, every configuration a candidate.
+  ASSERT_EQ(Lines(waves), 2) << waves;
+  EXPECT_EQ(waves.find("\n1,0.3,0,1024,"), waves.find('\n')) << waves;
+  const std::string summary = ReadFile(dir.path() / "out/export/summary.json");
+  EXPECT_NE(summary.find("\"termination\": \"enumerated\""), std::string::npos);
+  const std::string marginals = ReadFile(dir.path() / "out/export/marginals.csv");
+  EXPECT_EQ(Lines(marginals), 11);
+
+  const std::string top = ReadFile(dir.path() / "out/history.enumeration/top_configurations.csv");
+  EXPECT_EQ(Lines(top), 8) << top;
+  const std::string corr = ReadFile(dir.path() / "out/history.enumeration/pair_correlations.csv");
+  EXPECT_EQ(Lines(corr), 11) << corr;
+  EXPECT_EQ(corr.find("nan"), std::string::npos) << corr;
+
+  // A finished enumeration is not an SMC run to resume; and nothing is replaced unasked.
+  r = RunCli({"resume", history, "--no-report"}, dir.path());
+  EXPECT_EQ(r.exit_code, kUsage) << r.err;
+  r = RunCli({"enumerate", dir / "list.toml", "--no-report", "-q"}, dir.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  r = RunCli(
+      {"enumerate", dir / "list.toml", "--no-report", "-q", "--overwrite", "--threshold", "0.2"},
+      dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
+  if (std::system("/usr/bin/python3 -c 'import numpy, matplotlib' > /dev/null 2>&1") == 0) {
+    r = RunCli({"report", history}, dir.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(dir.path() / "out/report/index.html"));
+  }
+}
+
+TEST(Enumerate, WithoutAFinalThresholdAsksForOne) {
+  ScratchDir dir("enumerate-usage");
+  fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
+  std::ofstream(dir / "quantile.toml") << Config("quantile = 0.3");
+  const auto r = RunCli({"enumerate", dir / "quantile.toml", "--no-report", "-q"}, dir.path());
+  EXPECT_EQ(r.exit_code, kUsage) << r.err;
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--threshold"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "out/history.sqlite"));
+}
+
+}  // namespace
+}  // namespace combabc::testing
