@@ -375,7 +375,7 @@ TEST_F(HistoryIntegrityTest, VerifyAcceptsSoundFilesAndSaysWhenThereAreNoChecksu
   EXPECT_EQ(check.schema_version, 1);
 }
 
-TEST_F(HistoryIntegrityTest, AV1RunResumedIsUpgradedToChecksummedV2) {
+TEST_F(HistoryIntegrityTest, AV1RunResumedIsUpgradedToTheCurrentChecksummedSchema) {
   const std::string path = WriteKilled("killed.db");
   DowngradeToV1(path);
   const ResumePoint v1 = HistoryStore::Open(path, true).LoadResumePoint();
