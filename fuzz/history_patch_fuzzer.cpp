@@ -134,7 +134,15 @@ const char* const kWords[] = {"running",
                               "cm",
                               "18446744073709551615",
                               "-1",
-                              "1e999"};
+                              "1e999",
+                              "independent",
+                              "logistic",
+                              "normal",
+                              "olcm",
+                              "uniform",
+                              "truncated_normal",
+                              "geometric",
+                              "mixture"};
 
 double ConsumeDouble(FuzzedDataProvider& in) {
   return in.ConsumeBool() ? in.PickValueInArray(kDoubles) : in.ConsumeFloatingPoint<double>();

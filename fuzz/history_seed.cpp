@@ -18,6 +18,7 @@ Particle MakeParticle(std::int64_t index, std::vector<std::uint8_t> bits, double
   Particle p;
   p.index = index;
   p.theta.bits = std::move(bits);
+  p.theta.reals = {0.05 + 0.1 * static_cast<double>(index)};
   p.log_weight = -0.1 * static_cast<double>(index);
   p.weight = 0.25;
   p.distance = {distance, 1.0};
@@ -55,6 +56,11 @@ void WriteSeedHistory(const std::string& path) {
   m.position_unit = "m";
   m.measured.positions = {0.5, 0.6, 0.7};
   m.measured.values = {1.0, 0.5, 0.25};
+  // Schema v3's additions, so that the patch fuzzer mutates them too.
+  m.reals = {{"stiffness", {PriorKind::kUniform, 0.0, 1.0, 0.0, 1.0}}};
+  m.proposal.binary = BinaryKernelKind::kLogistic;
+  m.tempering_form = "geometric";
+  m.fingerprint = {{"combined", "0123456789abcdef"}, {"data", "fedcba9876543210"}};
 
   RemoveDatabase(path);
   {
@@ -77,6 +83,8 @@ void WriteSeedHistory(const std::string& path) {
     one.marginals_paper = {0.5, 0.5, 0.5, 0.25, 0.75, 0.75};
     one.marginals_importance = {0.5, 0.5, 0.5, 0.25, 0.75, 0.75};
     one.ess = 3.5;
+    one.reals_mean = {0.3};
+    one.reals_sd = {0.2};
     one.distinct = 4;
     one.wall_seconds = 0.01;
     store.OnWaveEnd(one);

@@ -13,6 +13,9 @@ DIR (default: report/ beside RUN.sqlite), in each format of the run's [output] f
                                 (paper Figures 4, 6, 9, 11)
   overview.<fmt>                one row per wave: curves and marginals side by side
   summary.<fmt>                 thresholds, acceptance rate and simulations per wave
+  reals.<fmt>                   runs with continuous parameters only: each parameter's accepted
+                                values per wave (weighted histograms under the estimator) over
+                                its prior's range
   index.html                    all of the above with the run's provenance and per-wave table
 
 DIR follows combabc's rule for output directories (docs/history.md, "Output files"): created if
@@ -56,7 +59,10 @@ except ImportError as missing:
           "or set COMBABC_PYTHON to a python that has them", file=sys.stderr)
     sys.exit(EX_UNAVAILABLE)
 
-SCHEMA_VERSION = 2  # v2 only adds wave.discarded, wave.content_hash and checksum rows in meta
+# v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
+# parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
+# the fingerprint. Older files read as runs without reals.
+SCHEMA_VERSION = 3
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150
@@ -135,6 +141,8 @@ class Wave:
         self.marginals = {}
         self.bits = None      # (n, d) uint8
         self.curves = None    # (n, points) float or None
+        self.reals = None     # (n, r) float: each particle's continuous parameters
+        self.log_w = None     # (n,) log p/q of each particle
 
 
 def load_run(con):
@@ -158,10 +166,15 @@ def load_run(con):
                         dtype=float).reshape(-1, 2)
     run["measured_x_cm"] = measured[:, 0] * scale
     run["measured_y"] = measured[:, 1]
+    run["schema_version"] = con.execute("PRAGMA user_version").fetchone()[0]
+    run["reals"] = []
+    if run["schema_version"] >= 3:
+        run["reals"] = con.execute(
+            "SELECT name, kind, low, high, mean, sd FROM real ORDER BY i").fetchall()
     return run
 
 
-def load_waves(con, dimension):
+def load_waves(con, dimension, num_reals=0):
     rows = con.execute("""
         SELECT wave, thresholds, next_index, accepted_so_far, ended, complete, candidates,
                accepted, acceptance_rate, marginals_paper, marginals_importance, ess,
@@ -183,17 +196,26 @@ def load_waves(con, dimension):
         else:
             w.candidates, w.accepted = next_index, accepted_so_far
             w.acceptance_rate = accepted_so_far / next_index if next_index else float("nan")
-        load_particles(con, w, dimension)
+        load_particles(con, w, dimension, num_reals)
         waves.append(w)
         if not (ended and complete):
             break  # at most one incomplete wave, and it is the last
     return waves
 
 
-def load_particles(con, wave, dimension):
-    rows = con.execute("SELECT bits, log_weight, output FROM particle WHERE wave = ? "
+def load_particles(con, wave, dimension, num_reals=0):
+    # particle.reals exists from schema v3 on; a run without reals has none to read.
+    reals = "reals" if num_reals else "NULL"
+    rows = con.execute(f"SELECT bits, log_weight, output, {reals} FROM particle WHERE wave = ? "
                        "ORDER BY candidate", (wave.number,)).fetchall()
     n = len(rows)
+    wave.log_w = np.array([r[1] if r[1] is not None else -np.inf for r in rows], dtype=float)
+    if num_reals:
+        values = [doubles(r[3]) for r in rows]
+        if any(v.size != num_reals for v in values):
+            raise ReportError(f"corrupt run history: wave {wave.number + 1}: a particle does not "
+                              f"have {num_reals} reals")
+        wave.reals = np.array(values, dtype=float).reshape(n, num_reals)
     nbytes = (dimension + 7) // 8
     packed = np.frombuffer(b"".join(r[0] for r in rows), dtype=np.uint8).reshape(n, nbytes)
     wave.bits = np.unpackbits(packed, axis=1, bitorder="little")[:, :dimension]
@@ -377,6 +399,65 @@ def marginals_figure(w, run, estimator, out):
     return save(fig, out, f"wave_{w.number + 1}_marginals")
 
 
+def estimator_weights(w, estimator):
+    """The accepted particles' weights under the estimator, as the engine's statistics use them:
+    equal (paper), or p/q self-normalised (importance)."""
+    n = w.log_w.size
+    if estimator == "paper" or n == 0 or not np.isfinite(np.max(w.log_w)):
+        return np.full(n, 1.0 / max(n, 1))
+    weights = np.exp(w.log_w - np.max(w.log_w))
+    return weights / weights.sum()
+
+
+def prior_range(real, values):
+    """Where to draw a parameter: its prior's support when bounded, else mean +- 4 sd (of log x for
+    the lognormal), widened to the accepted values."""
+    _, kind, low, high, mean, sd = real
+    if kind in ("uniform", "truncated_normal"):
+        lo, hi = low, high
+    elif kind == "lognormal":
+        lo, hi = np.exp(mean - 4 * sd), np.exp(mean + 4 * sd)
+    else:
+        lo, hi = mean - 4 * sd, mean + 4 * sd
+    if values.size:
+        lo, hi = min(lo, float(np.min(values))), max(hi, float(np.max(values)))
+    return (lo, hi) if hi > lo else (lo - 0.5, lo + 0.5)
+
+
+def reals_figure(waves, run, estimator, out):
+    reals = run["reals"]
+    cols = min(len(reals), 3)
+    rows = (len(reals) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.3 * rows), squeeze=False)
+    colours = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(waves), 1)))
+    for j, real in enumerate(reals):
+        ax = axes[j // cols][j % cols]
+        every = np.concatenate([w.reals[:, j] for w in waves if w.reals is not None])
+        lo, hi = prior_range(real, every)
+        bins = np.linspace(lo, hi, 31)
+        for w, colour in zip(waves, colours):
+            if w.reals is None or not w.reals.shape[0]:
+                continue
+            ax.hist(w.reals[:, j], bins=bins, weights=estimator_weights(w, estimator),
+                    histtype="step", color=colour, linewidth=1.3,
+                    linestyle="-" if w.complete else "--", label=wave_label(w))
+        ax.set_title(f"{real[0]} (prior: {real[1]})", fontsize=10)
+        ax.set_xlim(lo, hi)
+        ax.xaxis.set_major_locator(MaxNLocator(5))  # wide values (1e4 ... 1e5) must not overlap
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+        ax.set_xlabel(real[0])
+        ax.set_ylabel("Weight per bin")
+        ax.grid(True, linewidth=0.4, alpha=0.4)
+    for j in range(len(reals), rows * cols):
+        axes[j // cols][j % cols].axis("off")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 6) or 1, frameon=False)
+    fig.suptitle(f"Continuous parameters: accepted values per wave ({estimator} estimator)",
+                 fontsize=11)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    return save(fig, out, "reals")
+
+
 def overview_figure(waves, run, estimator, out):
     """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side."""
     panels, _ = edges(run)
@@ -551,6 +632,8 @@ def _render(task):
             return overview_figure(waves, run, estimator, out)
         if kind == "summary":
             return summary_figure(waves, run, estimator, out)
+        if kind == "reals":
+            return reals_figure(waves, run, estimator, out)
         figure = curves_figure if kind == "curves" else marginals_figure
         return figure(waves[index], run, estimator, out)
 
@@ -560,6 +643,8 @@ def render_all(waves, run, estimator, out, formats):
     they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
     single-threaded and dominate the time)."""
     tasks = [("summary", None), ("overview", None)]
+    if run["reals"] and any(w.reals is not None and w.reals.shape[0] for w in waves):
+        tasks.append(("reals", None))
     for i, w in enumerate(waves):
         if w.curves is not None and w.curves.size:
             tasks.append(("curves", i))
@@ -679,7 +764,7 @@ def make_report(db_path, out, estimator=None, overwrite=False, formats=None):
     con = connect(db_path)
     try:
         run = load_run(con)
-        waves = load_waves(con, run["dimension"])
+        waves = load_waves(con, run["dimension"], len(run["reals"]))
         scale_like_the_metric(run, waves)
     finally:
         con.close()

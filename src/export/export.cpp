@@ -126,7 +126,12 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
   const std::size_t k = h.waves.empty() ? 0 : h.waves.front().thresholds.size();
   out << "wave";
   for (const std::string& name : ThresholdColumns(m, k)) out << ',' << name;
-  out << ",phi,candidates,accepted,acceptance_rate,ess,distinct,wall_seconds,complete\n";
+  out << ",phi,candidates,accepted,acceptance_rate,ess,distinct,wall_seconds,complete";
+  // The reals' estimates, last: files of runs without reals keep their columns and order.
+  for (const ContinuousParameter& r : m.reals) {
+    out << ',' << CsvField(r.name + "_mean") << ',' << CsvField(r.name + "_sd");
+  }
+  out << '\n';
   for (const WaveRecord& w : h.waves) {
     out << WaveNumber(w);
     for (std::size_t i = 0; i < k; ++i) {
@@ -134,7 +139,13 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
     }
     out << ',' << Number(w.phi) << ',' << w.candidates << ',' << w.accepted << ','
         << Number(w.acceptance_rate) << ',' << Number(w.ess) << ',' << w.distinct << ','
-        << Number(w.wall_seconds) << ',' << (w.complete ? 1 : 0) << '\n';
+        << Number(w.wall_seconds) << ',' << (w.complete ? 1 : 0);
+    for (std::size_t i = 0; i < m.reals.size(); ++i) {
+      // A wave that accepted nothing has no estimates.
+      out << ',' << (i < w.reals_mean.size() ? Number(w.reals_mean[i]) : "NaN") << ','
+          << (i < w.reals_sd.size() ? Number(w.reals_sd[i]) : "NaN");
+    }
+    out << '\n';
   }
 }
 
@@ -161,6 +172,8 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
   }
   out << "wave,index,bits";
   for (int b = 0; b < m.dimension; ++b) out << ",bit_" << b;
+  // theta is the bits and then the reals, one column each, named by the parameter.
+  for (const ContinuousParameter& r : m.reals) out << ',' << CsvField(r.name);
   out << ",log_weight,weight";
   for (const std::string& name : DistanceColumns(m, components)) out << ',' << name;
   out << '\n';
@@ -171,6 +184,9 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
       for (std::uint8_t bit : p.theta.bits) bits += bit ? '1' : '0';
       out << WaveNumber(w) << ',' << p.index << ',' << bits;
       for (std::uint8_t bit : p.theta.bits) out << ',' << (bit ? '1' : '0');
+      for (std::size_t i = 0; i < m.reals.size(); ++i) {
+        out << ',' << (i < p.theta.reals.size() ? Number(p.theta.reals[i]) : "NaN");
+      }
       out << ',' << Number(p.log_weight) << ',' << Number(p.weight);
       for (std::size_t c = 0; c < components; ++c) {
         out << ',' << (c < p.distance.size() ? Number(p.distance[c]) : "NaN");
@@ -256,7 +272,30 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
         << ", \"kind\": " << JsonString(ToString(dc.kind))
         << ", \"required\": " << JsonNumber(dc.required) << "}";
   }
-  out << "],\n  \"waves\": [";
+  out << "],\n  \"reals\": [";
+  for (std::size_t i = 0; i < m.reals.size(); ++i) {
+    const ContinuousPrior& prior = m.reals[i].prior;
+    out << (i ? "," : "") << "\n    {\"name\": " << JsonString(m.reals[i].name)
+        << ", \"prior\": {\"kind\": " << JsonString(ToString(prior.kind))
+        << ", \"low\": " << JsonNumber(prior.low) << ", \"high\": " << JsonNumber(prior.high)
+        << ", \"mean\": " << JsonNumber(prior.mean) << ", \"sd\": " << JsonNumber(prior.sd) << "}}";
+  }
+  const ProposalOptions& p = m.proposal;
+  out << (m.reals.empty() ? "" : "\n  ")
+      << "],\n  \"proposal\": {\"binary_kernel\": " << JsonString(ToString(p.binary))
+      << ", \"logistic\": {\"min_correlation\": " << JsonNumber(p.logistic.min_correlation)
+      << ", \"max_predecessors\": " << p.logistic.max_predecessors
+      << ", \"ridge\": " << JsonNumber(p.logistic.ridge)
+      << ", \"min_marginal\": " << JsonNumber(p.logistic.min_marginal)
+      << ", \"clip\": " << JsonNumber(p.logistic.clip) << "}"
+      << ", \"continuous_kernel\": " << JsonString(ToString(p.continuous))
+      << ", \"scale\": " << JsonNumber(p.scale)
+      << ", \"tempering_form\": " << JsonString(m.tempering_form) << "},\n  \"fingerprint\": {";
+  for (std::size_t i = 0; i < m.fingerprint.size(); ++i) {
+    out << (i ? ", " : "") << JsonString(m.fingerprint[i].first) << ": "
+        << JsonString(m.fingerprint[i].second);
+  }
+  out << "},\n  \"waves\": [";
   for (std::size_t t = 0; t < h.waves.size(); ++t) {
     const WaveRecord& w = h.waves[t];
     out << (t ? "," : "") << "\n    {\"wave\": " << WaveNumber(w)
@@ -267,7 +306,9 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
         << ", \"ess\": " << JsonNumber(w.ess) << ", \"distinct\": " << w.distinct
         << ", \"wall_seconds\": " << JsonNumber(w.wall_seconds)
         << ",\n     \"marginals_paper\": " << JsonArray(w.marginals_paper)
-        << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance) << "}";
+        << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance)
+        << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
+        << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
   }
   out << "\n  ]\n}\n";
 }

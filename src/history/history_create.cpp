@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 2).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 3).
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,9 +20,10 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 2 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
-// meta). Vectors of doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive,
-// which REAL columns and JSON would not guarantee); bits are packed.
+// Version 3 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// meta; version 2 the tables real and proposal, the reals columns and the fingerprint). Vectors of
+// doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
+// and JSON would not guarantee); bits are packed.
 constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE run (
@@ -78,7 +79,9 @@ CREATE TABLE wave (
   wall_seconds REAL,
   ended_at TEXT,
   discarded INTEGER NOT NULL DEFAULT 0,
-  content_hash TEXT
+  content_hash TEXT,
+  reals_mean BLOB,
+  reals_sd BLOB
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -88,9 +91,52 @@ CREATE TABLE particle (
   weight REAL,
   distance BLOB,
   output BLOB,
+  reals BLOB,
   PRIMARY KEY (wave, candidate)
 );
 )sql";
+
+// Added by version 3 (also when an older file is upgraded).
+constexpr const char* kSchemaV3Tables = R"sql(
+CREATE TABLE real (
+  i INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  kind TEXT NOT NULL,
+  low REAL NOT NULL,
+  high REAL NOT NULL,
+  mean REAL NOT NULL,
+  sd REAL NOT NULL
+);
+CREATE TABLE proposal (
+  id INTEGER PRIMARY KEY CHECK (id = 1),
+  binary_kernel TEXT NOT NULL,
+  min_correlation REAL NOT NULL,
+  max_predecessors INTEGER NOT NULL,
+  ridge REAL NOT NULL,
+  min_marginal REAL NOT NULL,
+  clip REAL NOT NULL,
+  continuous_kernel TEXT NOT NULL,
+  scale REAL NOT NULL,
+  tempering_form TEXT NOT NULL
+);
+)sql";
+
+void WriteProposal(history::Database& db, const ProposalOptions& p, const std::string& form) {
+  Statement s(db, R"sql(
+    INSERT OR REPLACE INTO proposal (id, binary_kernel, min_correlation, max_predecessors, ridge,
+      min_marginal, clip, continuous_kernel, scale, tempering_form)
+    VALUES (1, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9))sql");
+  s.Bind(1, std::string(ToString(p.binary)))
+      .Bind(2, p.logistic.min_correlation)
+      .Bind(3, p.logistic.max_predecessors)
+      .Bind(4, p.logistic.ridge)
+      .Bind(5, p.logistic.min_marginal)
+      .Bind(6, p.logistic.clip)
+      .Bind(7, std::string(ToString(p.continuous)))
+      .Bind(8, p.scale)
+      .Bind(9, form)
+      .Run();
+}
 
 const char* KindName(ComponentKind kind) { return ToString(kind); }
 
@@ -151,12 +197,29 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
         .Bind(3, m.measured.values[i])
         .Run();
   }
+  Statement real(db, R"sql(
+    INSERT INTO real (i, name, kind, low, high, mean, sd) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7))sql");
+  for (std::size_t i = 0; i < m.reals.size(); ++i) {
+    const ContinuousPrior& prior = m.reals[i].prior;
+    real.Bind(1, static_cast<std::int64_t>(i))
+        .Bind(2, m.reals[i].name)
+        .Bind(3, std::string(ToString(prior.kind)))
+        .Bind(4, prior.low)
+        .Bind(5, prior.high)
+        .Bind(6, prior.mean)
+        .Bind(7, prior.sd)
+        .Run();
+  }
+  WriteProposal(db, m.proposal, m.tempering_form);
+  for (const auto& [part, digest] : m.fingerprint) {
+    meta.Bind(1, "fingerprint_" + part).Bind(2, digest).Run();
+  }
 }
 
-void WriteRunHashes(history::Database& db) {
+void WriteRunHashes(history::Database& db, int schema_version) {
   Statement store(db, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)");
   store.Bind(1, std::string("metadata_hash"))
-      .Bind(2, history::HexDigest(history::MetadataHash(db)))
+      .Bind(2, history::HexDigest(history::MetadataHash(db, schema_version)))
       .Run();
   store.Bind(1, std::string("run_state_hash"))
       .Bind(2, history::HexDigest(history::RunStateHash(db)))
@@ -193,6 +256,16 @@ HistoryStore HistoryStore::Create(const std::string& path,
   }
   if (metadata.measured.positions.size() != metadata.measured.values.size()) {
     throw Error(ErrorKind::kSoftware, "measured positions and values differ in length", path);
+  }
+  for (const auto& [part, digest] : metadata.fingerprint) {
+    // A part names a meta key: lower-case words; a digest is what HexDigest writes.
+    const bool named =
+        !part.empty() && part.find_first_not_of("abcdefghijklmnopqrstuvwxyz_") == std::string::npos;
+    if (!named || !history::ParseHexDigest(digest)) {
+      throw Error(ErrorKind::kSoftware,
+                  "RunMetadata::fingerprint: bad part '" + part + "' = '" + digest + "'",
+                  path);
+    }
   }
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
@@ -232,8 +305,9 @@ HistoryStore HistoryStore::Create(const std::string& path,
       history::Database db(temp, /*create=*/true, /*read_only=*/false);
       Transaction transaction(db);
       db.Exec(kSchema);
+      db.Exec(kSchemaV3Tables);
       WriteMetadata(db, metadata);
-      WriteRunHashes(db);
+      WriteRunHashes(db, kHistorySchemaVersion);
       db.Exec(("PRAGMA application_id = " + std::to_string(kHistoryApplicationId)).c_str());
       db.Exec(("PRAGMA user_version = " + std::to_string(kHistorySchemaVersion)).c_str());
       transaction.Commit();
@@ -311,26 +385,39 @@ HistoryStore HistoryStore::OpenFile(const std::string& path, bool read_only, boo
   }
   if (!read_only) {
     SetWriteMode(db);
-    if (!impl->checksummed()) impl->MigrateToV2();
+    if (impl->schema_version < kHistorySchemaVersion) impl->MigrateToCurrent();
   }
   return HistoryStore(std::move(impl));
 }
 
-void HistoryStore::Impl::StoreRunHashes() { WriteRunHashes(db); }
+void HistoryStore::Impl::StoreRunHashes() { WriteRunHashes(db, schema_version); }
 
-void HistoryStore::Impl::MigrateToV2() {
-  // Only what a v1 file can be trusted with: its structure was checked on open; the checksums
-  // protect it from here on. A v1 run's earlier waves did not record their overshoot (0).
+void HistoryStore::Impl::MigrateToCurrent() {
+  // Only what an older file can be trusted with: its structure and (v2) its checksums were checked
+  // on open; the new checksums protect it from here on. A v1 run's earlier waves did not record
+  // their overshoot (0). An older run has no reals, ran the default (independent) kernels, and
+  // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none).
   Transaction transaction(db);
+  if (schema_version < 2) {
+    db.Exec(R"sql(
+      ALTER TABLE wave ADD COLUMN discarded INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE wave ADD COLUMN content_hash TEXT;)sql");
+  }
   db.Exec(R"sql(
-    ALTER TABLE wave ADD COLUMN discarded INTEGER NOT NULL DEFAULT 0;
-    ALTER TABLE wave ADD COLUMN content_hash TEXT;
-    UPDATE meta SET value = '2' WHERE key = 'schema_version';
-    PRAGMA user_version = 2;)sql");
-  schema_version = 2;
+    ALTER TABLE wave ADD COLUMN reals_mean BLOB;
+    ALTER TABLE wave ADD COLUMN reals_sd BLOB;
+    ALTER TABLE particle ADD COLUMN reals BLOB;)sql");
+  db.Exec(kSchemaV3Tables);
+  WriteProposal(db, ProposalOptions{}, "");
+  db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
+           "' WHERE key = 'schema_version'; PRAGMA user_version = " +
+           std::to_string(kHistorySchemaVersion))
+              .c_str());
+  schema_version = kHistorySchemaVersion;
   std::vector<int> waves;
   Statement rows(db, "SELECT wave FROM wave ORDER BY wave");
   while (rows.Step()) waves.push_back(static_cast<int>(rows.Int(0)));
+  chain.wave = -1;
   for (int wave : waves) StoreWaveHash(wave);
   StoreRunHashes();
   transaction.Commit();

@@ -93,7 +93,7 @@ std::optional<std::uint64_t> ParseHexDigest(const std::string& text) {
   return value;
 }
 
-std::uint64_t MetadataHash(Database& db) {
+std::uint64_t MetadataHash(Database& db, int schema_version) {
   Fnv1a64 hash;
   AddRows(hash,
           db,
@@ -108,6 +108,18 @@ std::uint64_t MetadataHash(Database& db) {
           db,
           "SELECT key, value FROM meta WHERE key IN ('format', 'schema_version') ORDER BY key",
           2);
+  if (schema_version >= 3) {
+    AddRows(hash, db, "SELECT i, name, kind, low, high, mean, sd FROM real ORDER BY i", 7);
+    AddRows(hash,
+            db,
+            "SELECT binary_kernel, min_correlation, max_predecessors, ridge, min_marginal, clip, "
+            "continuous_kernel, scale, tempering_form FROM proposal WHERE id = 1",
+            9);
+    AddRows(hash,
+            db,
+            "SELECT key, value FROM meta WHERE substr(key, 1, 12) = 'fingerprint_' ORDER BY key",
+            2);
+  }
   return hash.value();
 }
 
@@ -122,7 +134,7 @@ std::uint64_t RunStateHash(Database& db) {
 }
 
 void WaveHasher::AddParticle(const Statement& particle_row) {
-  hash_.AddColumns(particle_row, 0, kParticleColumnCount);
+  hash_.AddColumns(particle_row, 0, v3_ ? kParticleColumnCount : kParticleColumnCountV2);
   ++count_;
 }
 
@@ -130,6 +142,7 @@ std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
   Fnv1a64 hash = hash_;
   hash.AddInt(count_);
   hash.AddColumns(wave_row, 0, kWaveHashedColumnCount);
+  if (v3_) hash.AddColumns(wave_row, kWaveRealsColumn, 2);
   return hash.value();
 }
 

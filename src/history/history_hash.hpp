@@ -30,26 +30,35 @@ class Fnv1a64 {
 std::string HexDigest(std::uint64_t hash);
 std::optional<std::uint64_t> ParseHexDigest(const std::string& text);
 
-// The immutable description of the run: provenance, problem, bits, components, positions, data.
-std::uint64_t MetadataHash(Database& db);
+// The immutable description of the run: provenance, problem, bits, components, positions, data,
+// and from schema v3 the reals, the proposal options and the fingerprint. `schema_version` says
+// which tables the file has.
+std::uint64_t MetadataHash(Database& db, int schema_version);
 // The run row's mutable part: status, end time, termination, message, resume count, summary.
 std::uint64_t RunStateHash(Database& db);
 
 // The particle rows of one wave, fed in candidate order (the state a wave's checksum starts from).
+// Schema v3 added `reals`, last, so that a v2 checksum is the same hash over the first six.
 inline constexpr const char* kParticleColumns =
-    "candidate, bits, log_weight, weight, distance, output";
-inline constexpr int kParticleColumnCount = 6;
-// The wave row's columns in checksum order; content_hash itself comes last and is not hashed.
+    "candidate, bits, log_weight, weight, distance, output, reals";
+inline constexpr int kParticleColumnCountV2 = 6;
+inline constexpr int kParticleColumnCount = 7;
+// The wave row's columns in checksum order: the first 21, then (v3) reals_mean and reals_sd after
+// content_hash, which is not hashed itself. Older files select constants in their place.
 inline constexpr const char* kWaveColumns =
     "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
-    "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash";
+    "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash, "
+    "reals_mean, reals_sd";
 inline constexpr int kWaveHashedColumnCount = 21;
+inline constexpr int kWaveRealsColumn = 22;  // reals_mean, then reals_sd (hashed from v3)
 
 // A wave's checksum, built as its particles are read: AddParticle per particle row (in candidate
-// order), then Finish with the wave row.
+// order), then Finish with the wave row. The schema version decides which columns are hashed.
 class WaveHasher {
  public:
+  WaveHasher() = default;  // the current schema: what writers produce
+  explicit WaveHasher(int schema_version) : v3_(schema_version >= 3) {}
   void AddParticle(const Statement& particle_row);
   std::uint64_t Finish(const Statement& wave_row) const;
   std::int64_t particles() const { return count_; }
@@ -57,6 +66,7 @@ class WaveHasher {
  private:
   Fnv1a64 hash_;
   std::int64_t count_ = 0;
+  bool v3_ = true;
 };
 
 }  // namespace combabc::history

@@ -20,6 +20,7 @@ struct HistoryShape {
   std::size_t components = 0;            // distance values per particle
   std::size_t threshold_components = 0;  // thresholds per wave
   std::size_t outputs = 0;               // output values per particle, when kept
+  std::size_t reals = 0;                 // continuous parameters (schema v3; 0 before)
   // Free parameters (proposal length): not in the metadata, so taken from wave 1's proposal,
   // which every later wave's must match. Waves are always read in order from the first.
   std::size_t free_parameters = 0;
@@ -51,6 +52,7 @@ struct HistoryStore::Impl {
   WaveChain chain;
 
   bool checksummed() const { return schema_version >= 2; }
+  bool has_reals() const { return schema_version >= 3; }
   void RequireWritable(const char* what) const;
 
   // Open's checks (they throw the first problem, kData): PRAGMA quick_check (or the slower full
@@ -61,6 +63,8 @@ struct HistoryStore::Impl {
 
   // The wave row's SELECT (kWaveColumns, or their v1 equivalent) without WHERE / ORDER BY.
   std::string WaveSelect() const;
+  // The particle row's SELECT (kParticleColumns, or their v1/v2 equivalent), likewise.
+  std::string ParticleSelect() const;
   // One wave read from a row of WaveSelect(): every vector checked against the shape, its
   // particles loaded (all of them, in candidate order) and its checksum verified. Errors are
   // kData naming the wave (from 1) and the field. expected_wave: the 0-based number it must have.
@@ -78,8 +82,9 @@ struct HistoryStore::Impl {
   void StoreWaveHash(int wave);
   void ExtendWaveChain(int wave);
   void StoreRunHashes();
-  // A v1 file opened for writing becomes v2: new columns, checksums of what it holds.
-  void MigrateToV2();
+  // An older file opened for writing becomes the current version: new columns and tables,
+  // checksums of what it holds.
+  void MigrateToCurrent();
 };
 
 }  // namespace combabc

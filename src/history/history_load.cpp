@@ -1,6 +1,7 @@
 // Reading a run history back: metadata, waves, the resume point, and truncation for resume.
 #include <sqlite3.h>
 
+#include <cmath>
 #include <cstdlib>
 
 #include "combabc/core/error.hpp"
@@ -35,10 +36,12 @@ enum WaveColumn {
   kEndedAt,
   kDiscarded,
   kContentHash,
+  kRealsMean,
+  kRealsSd,
 };
 
 // Columns of history::kParticleColumns.
-enum ParticleColumn { kCandidate, kBits, kLogWeight, kWeight, kDistance, kOutput };
+enum ParticleColumn { kCandidate, kBits, kLogWeight, kWeight, kDistance, kOutput, kReals };
 
 // Reads one wave's fields, each checked against what the run's metadata say it must measure.
 // Errors name the file, the wave (numbered from 1, as users see it) and the field.
@@ -116,10 +119,20 @@ class WaveReader {
 std::string HistoryStore::Impl::WaveSelect() const {
   std::string columns = history::kWaveColumns;
   if (!checksummed()) {
-    // Version 1 had neither column: no overshoot recorded, no checksum.
-    columns.replace(columns.find("discarded, content_hash"), std::string::npos, "0, NULL");
+    // Version 1 had neither column: no overshoot recorded, no checksum; nor any reals.
+    columns.replace(
+        columns.find("discarded, content_hash"), std::string::npos, "0, NULL, NULL, NULL");
+  } else if (!has_reals()) {
+    columns.replace(columns.find("reals_mean, reals_sd"), std::string::npos, "NULL, NULL");
   }
   return "SELECT " + columns + " FROM wave";
+}
+
+std::string HistoryStore::Impl::ParticleSelect() const {
+  std::string columns = history::kParticleColumns;
+  // Before version 3 a particle had no reals.
+  if (!has_reals()) columns.replace(columns.find("reals"), std::string::npos, "NULL");
+  return "SELECT " + columns + " FROM particle";
 }
 
 std::optional<HistoryStore::Impl::PartialWave> HistoryStore::Impl::FindPartial() {
@@ -180,6 +193,11 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     wave.ess = row.Real(kEss);
     wave.distinct = check.Count(row, kDistinct, "distinct_count");
     wave.wall_seconds = row.Real(kWallSeconds);
+    const std::size_t r = shape.reals;
+    const std::size_t min_reals = wave.accepted == 0 ? 0 : r;
+    const std::string per_real = std::to_string(r) + " (one per real parameter)";
+    wave.reals_mean = check.Doubles(row, kRealsMean, min_reals, r, "reals_mean", per_real);
+    wave.reals_sd = check.Doubles(row, kRealsSd, min_reals, r, "reals_sd", per_real);
   } else {
     // A wave cut short before OnWaveEnd: only its progress is known (LoadHistory derives the
     // rest from the particles).
@@ -190,12 +208,9 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
                                                : 0.0;
   }
 
-  Statement particles(db,
-                      (std::string("SELECT ") + history::kParticleColumns +
-                       " FROM particle WHERE wave = ?1 ORDER BY candidate")
-                          .c_str());
+  Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);
-  history::WaveHasher hasher;
+  history::WaveHasher hasher(schema_version);
   const std::string distance_count =
       std::to_string(shape.components) + " (one per distance component)";
   const std::string output_count =
@@ -222,6 +237,18 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     if (!p.output.empty() && p.output.size() != shape.outputs) {
       check.Corrupt(who + " output",
                     "has " + std::to_string(p.output.size()) + " values, expected " + output_count);
+    }
+    p.theta.reals = check.Doubles(particles,
+                                  kReals,
+                                  shape.reals,
+                                  shape.reals,
+                                  who + " reals",
+                                  std::to_string(shape.reals) + " (one per real parameter)");
+    for (std::size_t i = 0; i < p.theta.reals.size(); ++i) {
+      // A particle's reals were drawn inside their prior's support: never NaN or infinite.
+      if (!std::isfinite(p.theta.reals[i])) {
+        check.Corrupt(who + " reals", "value " + std::to_string(i + 1) + " is not finite");
+      }
     }
     wave.particles.push_back(std::move(p));
   }
@@ -288,6 +315,38 @@ RunMetadata HistoryStore::LoadMetadata() const {
     m.measured.values.push_back(measured.Real(1));
   }
   m.schema_version = static_cast<int>(db.QueryInt("PRAGMA user_version"));
+  if (m.schema_version < 3) return m;  // no reals, default kernels, no fingerprint
+  Statement reals(db, "SELECT name, kind, low, high, mean, sd FROM real ORDER BY i");
+  while (reals.Step()) {
+    ContinuousParameter parameter;
+    parameter.name = reals.Text(0);
+    parameter.prior.kind = ParseEnum<PriorKind>(reals.Text(1)).value_or(PriorKind::kUniform);
+    parameter.prior.low = reals.Real(2);
+    parameter.prior.high = reals.Real(3);
+    parameter.prior.mean = reals.Real(4);
+    parameter.prior.sd = reals.Real(5);
+    m.reals.push_back(std::move(parameter));
+  }
+  Statement proposal(db, R"sql(
+    SELECT binary_kernel, min_correlation, max_predecessors, ridge, min_marginal, clip,
+      continuous_kernel, scale, tempering_form FROM proposal WHERE id = 1)sql");
+  if (proposal.Step()) {
+    ProposalOptions& p = m.proposal;
+    p.binary = ParseEnum<BinaryKernelKind>(proposal.Text(0)).value_or(p.binary);
+    p.logistic.min_correlation = proposal.Real(1);
+    p.logistic.max_predecessors = static_cast<int>(proposal.Int(2));
+    p.logistic.ridge = proposal.Real(3);
+    p.logistic.min_marginal = proposal.Real(4);
+    p.logistic.clip = proposal.Real(5);
+    p.continuous = ParseEnum<ContinuousKernelKind>(proposal.Text(6)).value_or(p.continuous);
+    p.scale = proposal.Real(7);
+    m.tempering_form = proposal.Text(8);
+    proposal.Reset();
+  }
+  Statement fingerprint(db, R"sql(
+    SELECT substr(key, 13), value FROM meta WHERE substr(key, 1, 12) = 'fingerprint_'
+    ORDER BY key)sql");
+  while (fingerprint.Step()) m.fingerprint.emplace_back(fingerprint.Text(0), fingerprint.Text(1));
   return m;
 }
 
@@ -405,7 +464,8 @@ ResumePoint HistoryStore::BeginResume() {
         Statement reopen(impl.db, R"sql(
           UPDATE wave SET ended = 0, complete = 0, candidates = NULL, accepted = NULL,
             acceptance_rate = NULL, marginals_paper = NULL, marginals_importance = NULL,
-            ess = NULL, distinct_count = NULL, wall_seconds = NULL, ended_at = NULL
+            ess = NULL, distinct_count = NULL, wall_seconds = NULL, ended_at = NULL,
+            reals_mean = NULL, reals_sd = NULL
           WHERE wave = ?1)sql");
         reopen.Bind(1, partial->wave).Run();
         impl.chain.wave = -1;

@@ -22,11 +22,12 @@ ON CONFLICT (wave) DO UPDATE SET
 // Re-sending a particle (OnWaveEnd's normalised weights) replaces it, but an output already stored
 // is kept when the new record carries none.
 constexpr const char* kUpsertParticle = R"sql(
-INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)
+INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output, reals)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)
 ON CONFLICT (wave, candidate) DO UPDATE SET
   bits = excluded.bits, log_weight = excluded.log_weight, weight = excluded.weight,
-  distance = excluded.distance, output = COALESCE(excluded.output, particle.output)
+  distance = excluded.distance, output = COALESCE(excluded.output, particle.output),
+  reals = excluded.reals
 )sql";
 
 constexpr const char* kUpdateProgress = R"sql(
@@ -41,17 +42,22 @@ void BindParticle(Statement& s, int wave, const Particle& p) {
       .Bind(4, p.log_weight)
       .Bind(5, p.weight)
       .BindBlob(6, PackDoubles(p.distance))
-      .BindBlob(7, PackDoubles(p.output));
+      .BindBlob(7, PackDoubles(p.output))
+      .BindBlob(8, PackDoubles(p.theta.reals));
 }
 
-// A wrong bit count would only surface when the run is read back; refuse it when written.
-void CheckBits(int dimension, const std::string& path, std::span<const Particle> particles) {
+// A wrong bit or real count would only surface when the run is read back; refuse it when written.
+void CheckTheta(const HistoryShape& shape,
+                const std::string& path,
+                std::span<const Particle> particles) {
   for (const Particle& p : particles) {
-    if (p.theta.bits.size() != static_cast<std::size_t>(dimension)) {
+    if (p.theta.bits.size() != static_cast<std::size_t>(shape.dimension) ||
+        p.theta.reals.size() != shape.reals) {
       throw Error(ErrorKind::kSoftware,
                   "particle " + std::to_string(p.index) + " has " +
-                      std::to_string(p.theta.bits.size()) + " bits, the run has " +
-                      std::to_string(dimension),
+                      std::to_string(p.theta.bits.size()) + " bits and " +
+                      std::to_string(p.theta.reals.size()) + " reals, the run has " +
+                      std::to_string(shape.dimension) + " and " + std::to_string(shape.reals),
                   path);
     }
   }
@@ -75,10 +81,8 @@ void HistoryStore::Impl::ExtendWaveChain(int wave) {
     chain.wave = wave;
     chain.next_candidate = INT64_MIN;
   }
-  Statement rows(db,
-                 (std::string("SELECT ") + history::kParticleColumns +
-                  " FROM particle WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate")
-                     .c_str());
+  Statement rows(
+      db, (ParticleSelect() + " WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate").c_str());
   rows.Bind(1, wave).Bind(2, chain.next_candidate);
   while (rows.Step()) {
     chain.hasher.AddParticle(rows);
@@ -119,7 +123,7 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
   impl.RequireWritable("record a batch");
   if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
   if (!impl.update_progress) impl.update_progress.emplace(impl.db, kUpdateProgress);
-  CheckBits(impl.shape.dimension, impl.db.path(), accepted);
+  CheckTheta(impl.shape, impl.db.path(), accepted);
   // Particles and progress commit together: after this, next_index is a valid restart point.
   Transaction transaction(impl.db);
   impl.update_progress->Bind(1, progress.wave)
@@ -150,13 +154,14 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
   Impl& impl = *impl_;
   impl.RequireWritable("record a wave");
   if (!impl.upsert_particle) impl.upsert_particle.emplace(impl.db, kUpsertParticle);
-  CheckBits(impl.shape.dimension, impl.db.path(), wave.particles);
+  CheckTheta(impl.shape, impl.db.path(), wave.particles);
   Transaction transaction(impl.db);
   UpsertWave(impl.db, wave);
   Statement end(impl.db, R"sql(
     UPDATE wave SET ended = 1, complete = ?2, candidates = ?3, accepted = ?4,
       acceptance_rate = ?5, marginals_paper = ?6, marginals_importance = ?7, ess = ?8,
-      distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12
+      distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12, reals_mean = ?13,
+      reals_sd = ?14
     WHERE wave = ?1)sql");
   end.Bind(1, wave.wave)
       .Bind(2, wave.complete ? 1 : 0)
@@ -170,6 +175,8 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
       .Bind(10, wave.wall_seconds)
       .Bind(11, history::UtcNow())
       .Bind(12, wave.discarded)
+      .BindBlob(13, PackDoubles(wave.reals_mean))
+      .BindBlob(14, PackDoubles(wave.reals_sd))
       .Run();
   std::set<std::int64_t> kept;
   for (const Particle& p : wave.particles) {

@@ -79,7 +79,7 @@ void HistoryStore::Impl::CheckMetadata() {
   if (checksummed()) {
     CheckDigest(db,
                 "metadata_hash",
-                history::MetadataHash(db),
+                history::MetadataHash(db, schema_version),
                 "the run's configuration, problem description and measured data");
   }
   Statement run(db, "SELECT dimension FROM run WHERE id = 1");
@@ -112,6 +112,29 @@ void HistoryStore::Impl::CheckMetadata() {
   shape.outputs =
       CountNumberedRows(db, "SELECT i FROM output_position ORDER BY i", "output_position");
   CountNumberedRows(db, "SELECT i FROM measured ORDER BY i", "measured");
+  shape.reals = 0;
+  if (!has_reals()) return;
+  shape.reals = CountNumberedRows(db, "SELECT i FROM real ORDER BY i", "real");
+  Statement reals(db, "SELECT i, name, kind FROM real ORDER BY i");
+  while (reals.Step()) {
+    const std::string field = "real " + std::to_string(reals.Int(0) + 1);
+    const std::string kind = reals.Text(2);
+    if (reals.Text(1).empty() || !ParseEnum<PriorKind>(kind)) {
+      reals.Reset();
+      Corrupt(path, field, "has no name or an unknown prior kind '" + kind + "'");
+    }
+  }
+  Statement proposal(db, "SELECT binary_kernel, continuous_kernel FROM proposal WHERE id = 1");
+  if (!proposal.Step()) Corrupt(path, "proposal", "no proposal row");
+  const std::string binary = proposal.Text(0);
+  const std::string continuous = proposal.Text(1);
+  proposal.Reset();
+  if (!ParseEnum<BinaryKernelKind>(binary)) {
+    Corrupt(path, "proposal.binary_kernel", "unknown kernel '" + binary + "'");
+  }
+  if (!ParseEnum<ContinuousKernelKind>(continuous)) {
+    Corrupt(path, "proposal.continuous_kernel", "unknown kernel '" + continuous + "'");
+  }
 }
 
 void HistoryStore::Impl::CheckRunState() {

@@ -18,9 +18,13 @@
 #include "combabc/services/sensor_simulator.hpp"
 #include "services/fan_out_observer.hpp"
 #include "services/report_checks.hpp"
+#include "services/run_fingerprint.hpp"
 
 #ifndef COMBABC_GIT_HASH
 #define COMBABC_GIT_HASH ""
+#endif
+#ifndef COMBABC_VERSION
+#define COMBABC_VERSION "unknown"
 #endif
 
 namespace combabc::services {
@@ -57,8 +61,20 @@ void BuildModel(Problem& p) {
   p.space.emplace(BinarySpace(p.config.space));
 }
 
+Fingerprint FingerprintOf(const Problem& p) {
+  FingerprintInputs inputs;
+  inputs.config = &p.config;
+  inputs.space = &*p.space;
+  inputs.data_positions = p.data_positions;
+  inputs.data_values = p.data_values;
+  inputs.components = p.distance->components();
+  inputs.version = COMBABC_VERSION;
+  return ComputeFingerprint(inputs);
+}
+
 RunMetadata Describe(const Problem& p) {
   RunMetadata m;
+  m.combabc_version = COMBABC_VERSION;
   m.config_text = p.config.text;
   m.config_path = p.config.path;
   m.git_hash = COMBABC_GIT_HASH;
@@ -77,6 +93,10 @@ RunMetadata Describe(const Problem& p) {
   m.position_unit = "m";
   m.measured.positions = p.data_positions;
   m.measured.values = p.data_values;
+  m.reals = p.space->reals();
+  m.proposal = p.config.smc.proposal;
+  m.tempering_form = ToString(p.config.smc.tempering.form);
+  m.fingerprint = FingerprintOf(p);
   return m;
 }
 
@@ -158,6 +178,14 @@ RunOutcome ResumeCalibration(const std::string& history_path,
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
   BuildModel(p);
+  // The rebuilt problem must be the one the run started with, or the continuation would not
+  // equal an uninterrupted run. Checked before BeginResume rewrites anything.
+  CheckResumeFingerprint(metadata.fingerprint,
+                         FingerprintOf(p),
+                         history_path,
+                         p.config.data.csv,
+                         metadata.combabc_version,
+                         COMBABC_VERSION);
   if (report) CheckReportPossible(ReportDirectory(history_path));
   const auto resume = store.BeginResume();
   return Execute(p, store, &resume, report, progress);

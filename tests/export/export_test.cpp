@@ -107,6 +107,64 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   }
 }
 
+// A run with continuous parameters: a column per real in particles.csv (after the bits), its mean
+// and sd per wave in waves.csv, and their priors, the proposal options and the fingerprint in
+// summary.json.
+TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
+  options_.reals = 2;
+  RunMetadata metadata = testing::MakeFakeMetadata(options_);
+  metadata.proposal.binary = BinaryKernelKind::kLogistic;
+  metadata.proposal.continuous = ContinuousKernelKind::kOlcm;
+  metadata.fingerprint = {{"data", "0123456789abcdef"}};
+  const std::string db = (dir_ / "RUN.db").string();
+  const RunHistory history = testing::MakeFakeHistory(options_);
+  {
+    HistoryStore store = HistoryStore::Create(db, metadata);
+    for (const WaveRecord& wave : history.waves) testing::RecordWave(store, wave, 4);
+    store.Finish(history.summary);
+  }
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+
+  const auto particles = Lines(out / "particles.csv");
+  EXPECT_EQ(particles[0],
+            "wave,index,bits,bit_0,bit_1,bit_2,bit_3,bit_4,bit_5,stiffness_1,stiffness_2,"
+            "log_weight,weight,d_least_squares,d_secondary_peak");
+  ASSERT_EQ(particles.size(), 1u + 2u * 5u);
+  auto field = [](const std::string& line, int n) {
+    std::stringstream in(line);
+    std::string value;
+    for (int i = 0; i <= n; ++i) std::getline(in, value, ',');
+    return value;
+  };
+  const Particle& last = history.waves[1].particles.back();
+  EXPECT_EQ(std::stod(field(particles.back(), 9)), last.theta.reals[0]) << "exact round trip";
+  EXPECT_EQ(std::stod(field(particles.back(), 10)), last.theta.reals[1]);
+
+  const auto waves = Lines(out / "waves.csv");
+  EXPECT_EQ(
+      waves[0],
+      "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
+      "wall_seconds,complete,stiffness_1_mean,stiffness_1_sd,stiffness_2_mean,stiffness_2_sd");
+  ASSERT_EQ(waves.size(), 3u);
+  EXPECT_EQ(std::stod(field(waves[2], 10)), history.waves[1].reals_mean[0]);
+  EXPECT_EQ(std::stod(field(waves[2], 13)), history.waves[1].reals_sd[1]);
+
+  std::ifstream json(out / "summary.json");
+  std::stringstream text;
+  text << json.rdbuf();
+  for (const char* expected :
+       {"{\"name\": \"stiffness_2\", \"prior\": {\"kind\": \"uniform\", \"low\": 10000, "
+        "\"high\": 1e+05",
+        "\"binary_kernel\": \"logistic\"",
+        "\"continuous_kernel\": \"olcm\"",
+        "\"tempering_form\": \"geometric\"",
+        "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
+        "\"reals_mean\": ["}) {
+    EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
+  }
+}
+
 TEST_F(ExportTest, KilledRunExportsItsPartialWave) {
   const std::string path = (dir_ / "RUN.db").string();
   const RunHistory history = testing::MakeFakeHistory(options_);

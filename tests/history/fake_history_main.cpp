@@ -1,6 +1,7 @@
 // Writes a synthetic run history (36 clamps, 91-point curves by default) for trying the report
 // and export tools without running the FE model:
 //   combabc_fake_history OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves]
+//     [--reals N]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -12,7 +13,8 @@ int main(int argc, char** argv) {
   using namespace combabc;
   if (argc < 2) {
     std::fprintf(stderr,
-                 "usage: %s OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves]\n",
+                 "usage: %s OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves] "
+                 "[--reals N]\n",
                  argv[0]);
     return 64;
   }
@@ -28,6 +30,8 @@ int main(int argc, char** argv) {
       options.per_wave = std::atoi(argv[++i]);
     } else if (arg == "--incomplete") {
       incomplete = true;
+    } else if (arg == "--reals" && i + 1 < argc) {
+      options.reals = std::atoi(argv[++i]);
     } else if (arg == "--no-curves") {
       options.outputs = false;
     } else {

@@ -92,6 +92,13 @@ RunMetadata MakeFakeMetadata(const FakeRunOptions& options) {
                            {"secondary peak", ComponentKind::kIndicator, 1.0}};
   m.output_positions = Positions(options.points);
   m.position_unit = "m";
+  for (int i = 0; i < options.reals; ++i) {
+    ContinuousParameter parameter;
+    parameter.name = "stiffness_" + std::to_string(i + 1);
+    parameter.prior = {PriorKind::kUniform, 1e4, 1e5, 0.0, 1.0};
+    m.reals.push_back(parameter);
+  }
+  m.tempering_form = "geometric";
   // Like the paper's data: the measured profile normalised over the whole sensor, seen only on
   // part of it.
   const std::vector<double> truth = Curve(TrueBits(options.dimension), m.output_positions);
@@ -152,6 +159,13 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
         const bool one = stream.Uniform() < q;
         p.theta.bits.push_back(one ? 1 : 0);
         p.log_weight += std::log(0.5) - std::log(one ? q : 1.0 - q);
+      }
+      // Later waves concentrate near 3e4 + 1e4 i, so that the reals' figures show a narrowing.
+      for (const ContinuousParameter& parameter : metadata.reals) {
+        const double centre = 3e4 + 1e4 * static_cast<double>(p.theta.reals.size());
+        const double spread = 4e4 / (t + 1.0);
+        p.theta.reals.push_back(std::clamp(
+            centre + spread * (stream.Uniform() - 0.5), parameter.prior.low, parameter.prior.high));
       }
       std::vector<double> curve = Curve(p.theta.bits, metadata.output_positions);
       p.distance = {distance(curve), 1.0};

@@ -17,6 +17,9 @@ struct FakeRunOptions {
   int dimension = 36;   // even with "clamp" names: two edges of dimension/2 clamps
   int points = 91;      // output positions 0 .. 0.9 m
   bool outputs = true;  // store curves
+  // Continuous parameters ("stiffness_1", ...: uniform priors on [1e4, 1e5]) drawn per particle;
+  // they do not change the curves, only what is stored and exported.
+  int reals = 0;
   std::uint64_t seed = 7;
 };
 

@@ -18,6 +18,8 @@
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "history/fake_run.hpp"
+#include "history/history_hash.hpp"
+#include "history/history_sqlite.hpp"
 
 namespace combabc {
 namespace {
@@ -34,6 +36,7 @@ FakeRunOptions SmallRun() {
   options.per_wave = 12;
   options.dimension = 10;
   options.points = 8;
+  options.reals = 2;
   return options;
 }
 
@@ -81,8 +84,47 @@ void Sql(const std::string& path, const std::string& sql) {
   ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
 }
 
-// What a v1 file (no checksums, no overshoot column) looks like, made from a v2 one.
+// The v3 additions dropped: what a v2 run (without reals) holds, still with v3 checksums.
+void DropV3(const std::string& path) {
+  Sql(path, R"sql(
+    ALTER TABLE wave DROP COLUMN reals_mean;
+    ALTER TABLE wave DROP COLUMN reals_sd;
+    ALTER TABLE particle DROP COLUMN reals;
+    DROP TABLE real;
+    DROP TABLE proposal;
+    DELETE FROM meta WHERE substr(key, 1, 12) = 'fingerprint_';)sql");
+}
+
+// What a v2 file looks like, made from a v3 one: its tables, and its checksums computed as
+// combabc 0.1 computed them (history_hash.cpp keeps the v2 forms for reading such files).
+void DowngradeToV2(const std::string& path) {
+  DropV3(path);
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  db.Exec("UPDATE meta SET value = '2' WHERE key = 'schema_version'; PRAGMA user_version = 2");
+  std::vector<std::pair<std::int64_t, std::string>> digests;
+  std::string columns = history::kWaveColumns;
+  columns.erase(columns.find(", reals_mean"));
+  history::Statement waves(db, ("SELECT " + columns + " FROM wave ORDER BY wave").c_str());
+  while (waves.Step()) {
+    history::WaveHasher hasher(2);
+    history::Statement particles(db,
+                                 "SELECT candidate, bits, log_weight, weight, distance, output "
+                                 "FROM particle WHERE wave = ?1 ORDER BY candidate");
+    particles.Bind(1, waves.Int(0));
+    while (particles.Step()) hasher.AddParticle(particles);
+    digests.emplace_back(waves.Int(0), history::HexDigest(hasher.Finish(waves)));
+  }
+  history::Statement store(db, "UPDATE wave SET content_hash = ?2 WHERE wave = ?1");
+  for (const auto& [wave, digest] : digests) store.Bind(1, wave).Bind(2, digest).Run();
+  history::Statement meta(db, "UPDATE meta SET value = ?1 WHERE key = 'metadata_hash'");
+  meta.Bind(1, history::HexDigest(history::MetadataHash(db, 2))).Run();
+  transaction.Commit();
+}
+
+// What a v1 file (no checksums, no overshoot column) looks like, made from a v3 one.
 void DowngradeToV1(const std::string& path) {
+  DropV3(path);
   Sql(path, R"sql(
     ALTER TABLE wave DROP COLUMN content_hash;
     ALTER TABLE wave DROP COLUMN discarded;
@@ -134,7 +176,7 @@ std::string Damage(const Corruption& c) {
 
 // Each vector column the engine or the exporter indexes, in a complete wave and in the partial
 // wave of a killed run, made NULL, one element short and one element long.
-std::vector<Corruption> Corruptions(bool killed) {
+std::vector<Corruption> Corruptions(bool killed, bool reals) {
   const std::string particle =
       "wave = 1 AND candidate = (SELECT min(candidate) FROM particle WHERE wave = 1)";
   const std::string first =
@@ -151,6 +193,12 @@ std::vector<Corruption> Corruptions(bool killed) {
     out.push_back({"wave.thresholds", "wave = 1", "wave 2, thresholds", mode});
     // NULL is a valid output (not kept); a wrong length is not.
     if (std::string(mode) != "NULL") out.push_back({"particle.output", particle, "output", mode});
+    if (reals) {
+      out.push_back({"particle.reals", first, "wave 1, particle", mode});
+      out.push_back({"particle.reals", particle, "reals", mode});
+      out.push_back({"wave.reals_mean", "wave = 0", "wave 1, reals_mean", mode});
+      out.push_back({"wave.reals_sd", "wave = 0", "wave 1, reals_sd", mode});
+    }
   }
   if (!killed) {
     for (const char* mode : {"NULL", "short", "long"}) {
@@ -167,7 +215,7 @@ TEST_F(HistoryIntegrityTest, WrongLengthOrNullColumnsAreDataErrorsNamingWaveAndF
     for (const bool killed : {false, true}) {
       const std::string original = killed ? WriteKilled("killed.db") : WriteFinished("finished.db");
       if (v1) DowngradeToV1(original);
-      for (const Corruption& c : Corruptions(killed)) {
+      for (const Corruption& c : Corruptions(killed, /*reals=*/!v1)) {
         SCOPED_TRACE(c.column + " " + c.mode + " where " + c.where + (v1 ? " (v1)" : "") +
                      (killed ? " (killed run)" : ""));
         const std::string path = Path("damaged.db");
@@ -327,7 +375,7 @@ TEST_F(HistoryIntegrityTest, VerifyAcceptsSoundFilesAndSaysWhenThereAreNoChecksu
   EXPECT_EQ(check.schema_version, 1);
 }
 
-TEST_F(HistoryIntegrityTest, AV1RunResumedIsUpgradedToChecksummedV2) {
+TEST_F(HistoryIntegrityTest, AV1RunResumedIsUpgradedToTheCurrentChecksummedSchema) {
   const std::string path = WriteKilled("killed.db");
   DowngradeToV1(path);
   const ResumePoint v1 = HistoryStore::Open(path, true).LoadResumePoint();
@@ -398,6 +446,90 @@ TEST_F(HistoryIntegrityTest, ASecondWriterIsRefusedWhileTheFirstHoldsTheRun) {
   ASSERT_EQ(::waitpid(holder, &status, 0), holder);
   HistoryStore store = HistoryStore::Open(path);
   EXPECT_EQ(store.BeginResume().partial_wave, 1);
+}
+
+// A run with continuous parameters whose fingerprint, proposal options and reals' priors are part
+// of the metadata checksum: any change to them is a clean data error on open, and verify says so.
+TEST_F(HistoryIntegrityTest, RealsProposalAndFingerprintAreCoveredByTheMetadataChecksum) {
+  for (const char* damage :
+       {"UPDATE real SET low = 2e4 WHERE i = 1",
+        "UPDATE real SET name = 'damping' WHERE i = 0",
+        "UPDATE proposal SET scale = 1.5",
+        "UPDATE proposal SET binary_kernel = 'logistic'",
+        "UPDATE proposal SET tempering_form = 'mixture'",
+        "UPDATE meta SET value = '0000000000000000' WHERE key = 'fingerprint_data'",
+        "DELETE FROM meta WHERE key = 'fingerprint_space'"}) {
+    SCOPED_TRACE(damage);
+    const std::string path = Path("fingerprinted.db");
+    fs::remove(path);
+    RunMetadata metadata = MakeFakeMetadata(SmallRun());
+    metadata.fingerprint = {{"data", "0123456789abcdef"}, {"space", "fedcba9876543210"}};
+    {
+      HistoryStore store = HistoryStore::Create(path, metadata);
+      const RunHistory history = MakeFakeHistory(SmallRun());
+      RecordWave(store, history.waves[0], 5);
+    }
+    Sql(path, damage);
+    ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "meta.metadata_hash");
+    const HistoryCheck check = HistoryStore::Verify(path);
+    ASSERT_FALSE(check.problems.empty());
+    EXPECT_NE(check.problems.front().find("metadata_hash"), std::string::npos);
+  }
+}
+
+TEST_F(HistoryIntegrityTest, ANonFiniteRealIsADataErrorNamingTheParticle) {
+  for (const char* value : {"X'000000000000F87F0000000000000040'",     // NaN, 2
+                            "X'0000000000000040000000000000F07F'"}) {  // 2, +inf
+    SCOPED_TRACE(value);
+    const std::string path = WriteFinished("finished.db");
+    Sql(path,
+        std::string("UPDATE particle SET reals = ") + value +
+            " WHERE wave = 1 AND candidate = (SELECT min(candidate) FROM particle WHERE wave = 1)");
+    const Error error = Catch([&] { HistoryStore::Open(path, true).LoadHistory(); });
+    ExpectDataError(error, path, "wave 2, particle");
+    EXPECT_NE(std::string(error.what()).find("reals: corrupt run history: value"),
+              std::string::npos)
+        << error.what();
+    EXPECT_NE(std::string(error.what()).find("is not finite"), std::string::npos) << error.what();
+    fs::remove(path);
+  }
+}
+
+// A v2 file (combabc before continuous parameters) reads as a run without reals that ran the
+// independent kernel; resuming it upgrades it to v3 with checksums that still protect it.
+TEST_F(HistoryIntegrityTest, AV2RunReadsAndIsUpgradedToV3OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  DowngradeToV2(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 2);
+  EXPECT_TRUE(check.checksummed);
+  const ResumePoint v2 = HistoryStore::Open(path, true).LoadResumePoint();
+  ASSERT_TRUE(v2.has_partial);
+  ASSERT_FALSE(v2.partial_accepted.empty());
+  EXPECT_TRUE(v2.partial_accepted[0].theta.reals.empty());
+  RunMetadata metadata = HistoryStore::Open(path, true).LoadMetadata();
+  EXPECT_EQ(metadata.schema_version, 2);
+  EXPECT_TRUE(metadata.reals.empty());
+  EXPECT_TRUE(metadata.fingerprint.empty());
+  EXPECT_EQ(metadata.proposal.binary, BinaryKernelKind::kIndependent);
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    const ResumePoint point = store.BeginResume();
+    EXPECT_EQ(point.partial_next_index, v2.partial_next_index);
+    EXPECT_EQ(point.partial_accepted.size(), v2.partial_accepted.size());
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  metadata = HistoryStore::Open(path, true).LoadMetadata();
+  EXPECT_EQ(metadata.tempering_form, "") << "an upgraded run did not record its tempering form";
+  EXPECT_EQ(metadata.proposal.binary, BinaryKernelKind::kIndependent);
+  Sql(path,
+      "UPDATE particle SET weight = 0.5 WHERE wave = 0 AND candidate = (SELECT min(candidate) FROM "
+      "particle WHERE wave = 0)");
+  ExpectDataError(
+      Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, "wave 1, content_hash");
 }
 
 }  // namespace

@@ -119,6 +119,68 @@ TEST_F(HistoryStoreTest, MetadataRoundTrips) {
   EXPECT_EQ(read.schema_version, kHistorySchemaVersion);
 }
 
+// Schema v3: each particle's reals, each wave's means and sds, the reals' priors, the proposal
+// options, the tempering form and the fingerprint come back as written.
+TEST_F(HistoryStoreTest, RealsProposalOptionsAndFingerprintRoundTrip) {
+  FakeRunOptions options = SmallRun();
+  options.reals = 2;
+  RunMetadata written = MakeFakeMetadata(options);
+  written.reals[1].prior = {PriorKind::kTruncatedNormal, 0.5, 4.0, 1.0, 0.25};
+  written.proposal.binary = BinaryKernelKind::kLogistic;
+  written.proposal.logistic.max_predecessors = 5;
+  written.proposal.logistic.ridge = 0.125;
+  written.proposal.continuous = ContinuousKernelKind::kOlcm;
+  written.proposal.scale = 1.5;
+  written.tempering_form = "mixture";
+  written.fingerprint = {{"combined", "00000000000000ff"}, {"data", "0123456789abcdef"}};
+  const RunHistory history = MakeFakeHistory(options);
+  ASSERT_EQ(history.waves[0].particles[0].theta.reals.size(), 2u);
+  ASSERT_EQ(history.waves[0].reals_mean.size(), 2u);
+  const std::string path = Path("RUN.db");
+  {
+    HistoryStore store = HistoryStore::Create(path, written);
+    for (const WaveRecord& wave : history.waves) RecordWave(store, wave, 7);
+    store.Finish(history.summary);
+  }
+  const HistoryStore store = HistoryStore::Open(path, /*read_only=*/true);
+  ExpectSame(history, store.LoadHistory());
+  const RunMetadata read = store.LoadMetadata();
+  ASSERT_EQ(read.reals.size(), 2u);
+  EXPECT_EQ(read.reals[0].name, "stiffness_1");
+  EXPECT_EQ(read.reals[0].prior.kind, PriorKind::kUniform);
+  EXPECT_EQ(read.reals[0].prior.high, 1e5);
+  EXPECT_EQ(read.reals[1].prior.kind, PriorKind::kTruncatedNormal);
+  EXPECT_EQ(read.reals[1].prior.low, 0.5);
+  EXPECT_EQ(read.reals[1].prior.high, 4.0);
+  EXPECT_EQ(read.reals[1].prior.mean, 1.0);
+  EXPECT_EQ(read.reals[1].prior.sd, 0.25);
+  EXPECT_EQ(read.proposal.binary, BinaryKernelKind::kLogistic);
+  EXPECT_EQ(read.proposal.logistic.max_predecessors, 5);
+  EXPECT_EQ(read.proposal.logistic.ridge, 0.125);
+  EXPECT_EQ(read.proposal.logistic.clip, written.proposal.logistic.clip);
+  EXPECT_EQ(read.proposal.continuous, ContinuousKernelKind::kOlcm);
+  EXPECT_EQ(read.proposal.scale, 1.5);
+  EXPECT_EQ(read.tempering_form, "mixture");
+  EXPECT_EQ(read.fingerprint, written.fingerprint);
+  EXPECT_TRUE(HistoryStore::Verify(path).problems.empty());
+}
+
+TEST_F(HistoryStoreTest, AParticleWithTheWrongNumberOfRealsIsRefusedWhenWritten) {
+  FakeRunOptions options = SmallRun();
+  options.reals = 2;
+  HistoryStore store = HistoryStore::Create(Path("RUN.db"), MakeFakeMetadata(options));
+  WaveRecord wave = MakeFakeHistory(options).waves[0];
+  wave.particles[0].theta.reals.pop_back();
+  try {
+    RecordWave(store, wave, 1000);
+    ADD_FAILURE() << "a particle with 1 real in a 2-real run was stored";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::kSoftware);
+    EXPECT_NE(std::string(error.what()).find("1 reals, the run has 10 and 2"), std::string::npos)
+        << error.what();
+  }
+}
+
 TEST_F(HistoryStoreTest, BitPriorsRoundTrip) {
   RunMetadata m = MakeFakeMetadata(SmallRun());
   m.bit_prior_one.assign(static_cast<std::size_t>(m.dimension), 0.25);

@@ -7,10 +7,13 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 #include "combabc/core/enum_names.hpp"
 
 #include "combabc/distances/distance.hpp"
+#include "combabc/params/continuous_prior.hpp"
+#include "combabc/proposals/proposal_options.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
@@ -18,8 +21,10 @@
 namespace combabc {
 
 // Version of the on-disk schema this build writes; it reads this version and older ones.
-// Version 2 added checksums and each wave's overshoot; a v1 file opened for writing is upgraded.
-inline constexpr int kHistorySchemaVersion = 2;
+// Version 2 added checksums and each wave's overshoot; version 3 the continuous parameters (their
+// priors, each particle's values, each wave's means and sds), the proposal options and the run's
+// fingerprint. An older file opened for writing (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 3;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise
@@ -70,6 +75,15 @@ struct RunMetadata {
   std::vector<double> output_positions;                // x of each simulated output value
   std::string position_unit = "m";                     // unit of output and measured positions
   StoredMeasuredData measured;
+  // Schema v3; older files read as no reals, the default (independent) kernels and an empty
+  // tempering form (not recorded).
+  std::vector<ContinuousParameter> reals;  // the continuous parameters, in ParameterValue order
+  ProposalOptions proposal;                // the kernels that proposed each wave
+  std::string tempering_form;              // TemperingForm name, e.g. "geometric"
+  // What makes the run reproducible, as (part, 16 hex digits) pairs, e.g. ("data", "0f3e...");
+  // stored as meta rows fingerprint_<part>. Opaque to the history: the services layer computes
+  // the parts and resume compares them (docs/history.md, "Fingerprint"). Empty before v3.
+  std::vector<std::pair<std::string, std::string>> fingerprint;
 
   int schema_version = kHistorySchemaVersion;  // as read from the file
 };
@@ -98,7 +112,7 @@ class HistoryStore final : public SmcObserver {
                              bool overwrite = false);
   // Opens an existing history after SQLite's quick_check and the metadata's checks. read_only
   // suits report/export: no write is attempted, no lock taken. Otherwise (resume) the file is
-  // locked for this process until the store is destroyed, and a v1 file is upgraded to v2.
+  // locked for this process until the store is destroyed, and an older file is upgraded to v3.
   static HistoryStore Open(const std::string& path, bool read_only = false);
   // Checks everything, without stopping at the first problem: SQLite's integrity_check, the
   // metadata, every wave's vectors, particles and checksum. Throws only when the file cannot be

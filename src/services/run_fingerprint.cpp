@@ -1,0 +1,232 @@
+#include "services/run_fingerprint.hpp"
+
+#include <cstdint>
+#include <cstdio>
+#include <map>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc::services {
+namespace {
+
+// FNV-1a 64 over a canonical text: every field as "name=value;", doubles with 17 significant
+// digits (exact round trip), so equal inputs give equal digests on every platform.
+class Canonical {
+ public:
+  Canonical& Add(const char* name, double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return Add(name, std::string(text));
+  }
+  Canonical& Add(const char* name, long long value) { return Add(name, std::to_string(value)); }
+  Canonical& Add(const char* name, int value) { return Add(name, std::to_string(value)); }
+  Canonical& Add(const char* name, bool value) { return Add(name, std::string(value ? "1" : "0")); }
+  Canonical& Add(const char* name, const char* value) { return Add(name, std::string(value)); }
+  Canonical& Add(const char* name, const std::string& value) {
+    // The length first: no two different field lists serialise alike.
+    text_ += name;
+    text_ += '=';
+    text_ += std::to_string(value.size());
+    text_ += ':';
+    text_ += value;
+    text_ += ';';
+    return *this;
+  }
+  Canonical& Add(const char* name, std::span<const double> values) {
+    Add(name, static_cast<long long>(values.size()));
+    for (double v : values) Add(name, v);
+    return *this;
+  }
+  std::string Digest() const {
+    std::uint64_t hash = 14695981039346656037ull;
+    for (unsigned char c : text_) {
+      hash ^= c;
+      hash *= 1099511628211ull;
+    }
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+    return text;
+  }
+
+ private:
+  std::string text_;
+};
+
+void AddThreshold(Canonical& c, const ThresholdSchedule& t) {
+  c.Add("threshold.kind", static_cast<int>(t.kind))
+      .Add("threshold.values", t.values)
+      .Add("threshold.quantile", t.quantile)
+      .Add("threshold.initial", t.initial)
+      .Add("threshold.target", t.target);
+}
+
+// What decides the sequence of candidates and acceptances. Not threads or batch_size (the history
+// does not depend on them) nor max_wall_time_s (wall time is not reproducible anyway).
+std::string SamplerPart(const SmcOptions& s) {
+  Canonical c;
+  c.Add("num_waves", s.num_waves).Add("accepted_per_wave", s.accepted_per_wave);
+  c.Add("thresholds", static_cast<int>(s.thresholds.size()));
+  for (const ThresholdSchedule& t : s.thresholds) AddThreshold(c, t);
+  c.Add("tempering.kind", ToString(s.tempering.kind))
+      .Add("tempering.form", ToString(s.tempering.form))
+      .Add("tempering.phi0", s.tempering.phi0)
+      .Add("tempering.values", s.tempering.values);
+  const ProposalOptions& p = s.proposal;
+  c.Add("proposal.binary", ToString(p.binary))
+      .Add("logistic.min_correlation", p.logistic.min_correlation)
+      .Add("logistic.max_predecessors", p.logistic.max_predecessors)
+      .Add("logistic.ridge", p.logistic.ridge)
+      .Add("logistic.min_marginal", p.logistic.min_marginal)
+      .Add("logistic.clip", p.logistic.clip)
+      .Add("proposal.continuous", ToString(p.continuous))
+      .Add("proposal.scale", p.scale);
+  c.Add("estimator", ToString(s.estimator))
+      .Add("seed", std::to_string(s.seed))
+      .Add("max_simulations", static_cast<long long>(s.max_simulations))
+      .Add("min_acceptance_rate", s.min_acceptance_rate)
+      .Add("keep_outputs", s.keep_outputs);
+  return c.Digest();
+}
+
+// Bits: dimension, ties (which free parameter drives each bit) and the prior; names too, as the
+// history and its reports show them. Reals: names and priors.
+std::string SpacePart(const ParameterSpace& space) {
+  Canonical c;
+  const BinarySpace& bits = space.binary();
+  c.Add("dimension", bits.dimension()).Add("free", bits.num_free());
+  for (int k = 0; k < bits.dimension(); ++k) {
+    c.Add("bit.name", bits.name(k)).Add("bit.free_of", bits.free_of_bit(k));
+  }
+  c.Add("free_prior_one", bits.free_prior_one());
+  c.Add("reals", space.num_reals());
+  for (const ContinuousParameter& r : space.reals()) {
+    c.Add("real.name", r.name)
+        .Add("real.kind", ToString(r.prior.kind))
+        .Add("real.low", r.prior.low)
+        .Add("real.high", r.prior.high)
+        .Add("real.mean", r.prior.mean)
+        .Add("real.sd", r.prior.sd);
+  }
+  return c.Digest();
+}
+
+std::string DataPart(std::span<const double> positions, std::span<const double> values) {
+  Canonical c;
+  c.Add("positions", positions).Add("values", values);
+  return c.Digest();
+}
+
+// The components as configured and as built (names, kinds, required), and the normalisation of
+// the simulated profiles the metric applies.
+std::string MetricPart(const CalibrationConfig& config,
+                       const std::vector<DistanceComponent>& components) {
+  Canonical c;
+  c.Add("normalise", config.data.normalise);
+  for (const MetricComponentConfig& m : config.metric.components) {
+    c.Add("type", ToString(m.type)).Add("from", m.from).Add("to", m.to).Add("name", m.name);
+  }
+  for (const DistanceComponent& d : components) {
+    c.Add("component", d.name).Add("kind", static_cast<int>(d.kind)).Add("required", d.required);
+  }
+  return c.Digest();
+}
+
+// The built-in sensor simulator: every SensorOptions key that changes its output.
+// memory_limit_bytes only decides whether the model may be built.
+std::string SimulatorPart(const plate::SensorOptions& s) {
+  Canonical c;
+  c.Add("simulator", "combabc sensor plate");
+  c.Add("length", s.length).Add("width", s.width);
+  for (const plate::Layer& layer : s.layers) {
+    c.Add("layer.thickness", layer.thickness)
+        .Add("layer.youngs_modulus", layer.youngs_modulus)
+        .Add("layer.poisson_ratio", layer.poisson_ratio)
+        .Add("layer.density", layer.density)
+        .Add("layer.loss_factor", layer.loss_factor);
+  }
+  c.Add("foundation_stiffness", s.foundation_stiffness)
+      .Add("foundation_loss_factor", s.foundation_loss_factor)
+      .Add("clamps_per_edge", s.clamps_per_edge)
+      .Add("fixed_support", static_cast<int>(s.fixed_support))
+      .Add("short_edge_start", static_cast<int>(s.short_edge_start))
+      .Add("short_edge_end", static_cast<int>(s.short_edge_end))
+      .Add("load_force", s.load_force)
+      .Add("load_x", s.load_x)
+      .Add("load_y_fraction", s.load_y_fraction)
+      .Add("load_patch_length", s.load_patch_length)
+      .Add("load_patch_width", s.load_patch_width)
+      .Add("frequency_hz", s.frequency_hz)
+      .Add("output_positions", s.output_positions)
+      .Add("output_y_fraction", s.output_y_fraction)
+      .Add("normalise", s.normalise)
+      .Add("elements_per_section", s.elements_per_section)
+      .Add("elements_across_width", s.elements_across_width)
+      .Add("length_grading", s.length_grading)
+      .Add("width_grading", s.width_grading)
+      .Add("always_pivot", s.always_pivot);
+  return c.Digest();
+}
+
+}  // namespace
+
+Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
+  Fingerprint parts = {
+      {"sampler", SamplerPart(in.config->smc)},
+      {"space", SpacePart(*in.space)},
+      {"data", DataPart(in.data_positions, in.data_values)},
+      {"metric", MetricPart(*in.config, in.components)},
+      {"simulator", SimulatorPart(in.config->model)},
+      {"version", Canonical().Add("combabc", in.version).Digest()},
+  };
+  Canonical combined;
+  for (const auto& [part, digest] : parts) combined.Add(part.c_str(), digest);
+  parts.emplace_back("combined", combined.Digest());
+  return parts;
+}
+
+void CheckResumeFingerprint(const Fingerprint& stored,
+                            const Fingerprint& now,
+                            const std::string& history_path,
+                            const std::string& data_source,
+                            const std::string& stored_version,
+                            const std::string& version) {
+  const std::map<std::string, std::string> current(now.begin(), now.end());
+  std::vector<std::string> changed;
+  for (const auto& [part, digest] : stored) {
+    const auto found = current.find(part);
+    // "combined" only summarises the others; a part this combabc does not compute cannot be
+    // compared (and a newer combabc's file has a newer schema, refused on open).
+    if (part == "combined" || found == current.end()) continue;
+    if (found->second != digest) changed.push_back(part);
+  }
+  if (changed.empty()) return;
+  const std::string& part = changed.front();
+  const std::string key = "fingerprint_" + part;
+  std::string message;
+  if (part == "data") {
+    message = "the measured data changed since the run started (" + data_source + ": " + key +
+              " differs); start a new run or restore the file";
+  } else if (part == "version") {
+    message = "this combabc (" + version + ") is not the one that started the run (" +
+              stored_version + "): " + key + " differs; resume with combabc " + stored_version +
+              " or start a new run";
+  } else {
+    const std::map<std::string, std::string> what = {
+        {"sampler", "the sampler options ([sampler], [proposal])"},
+        {"space", "the parameter space (bits, priors, ties, continuous parameters)"},
+        {"metric", "the metric ([metric])"},
+        {"simulator", "the simulator's model options ([model])"},
+    };
+    const auto named = what.find(part);
+    message = (named != what.end() ? named->second : "the run's " + part) +
+              " as this combabc reads the run's configuration differ from when the run started (" +
+              key + " differs); start a new run";
+  }
+  for (std::size_t i = 1; i < changed.size(); ++i) {
+    message += (i == 1 ? " (also fingerprint_" : ", fingerprint_") + changed[i];
+    if (i + 1 == changed.size()) message += ")";
+  }
+  throw Error(ErrorKind::kConfig, "resume: " + message, history_path);
+}
+
+}  // namespace combabc::services

@@ -1,0 +1,43 @@
+#pragma once
+// The run's fingerprint (docs/history.md, "Fingerprint"): a 64-bit FNV-1a digest of a canonical
+// text of each input that decides the history -- sampler options, parameter space, measured
+// data, metric, simulator, combabc version -- and a combined one. Stored with the run; resume
+// recomputes it from the problem it rebuilt and refuses to continue a run whose inputs changed,
+// since the continuation would no longer equal an uninterrupted run. Private to src/services.
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "combabc/config/config.hpp"
+#include "combabc/distances/distance.hpp"
+#include "combabc/params/parameter_space.hpp"
+
+namespace combabc::services {
+
+// (part, 16 hex digits), as RunMetadata::fingerprint holds them.
+using Fingerprint = std::vector<std::pair<std::string, std::string>>;
+
+struct FingerprintInputs {
+  const CalibrationConfig* config = nullptr;  // sampler options, metric, simulator options
+  const ParameterSpace* space = nullptr;
+  std::span<const double> data_positions;  // metres, as the metric sees them
+  std::span<const double> data_values;
+  std::vector<DistanceComponent> components;  // the metric as built
+  std::string version;                        // combabc version
+};
+
+// Parts "sampler", "space", "data", "metric", "simulator", "version", then "combined".
+Fingerprint ComputeFingerprint(const FingerprintInputs& inputs);
+
+// Throws combabc::Error(kConfig), one line naming the history file and what changed, when a part
+// stored with the run differs from `now`. A run stored without a fingerprint (schema v1/v2) is
+// not checked. data_source names the data file in the message; stored_version the run's combabc.
+void CheckResumeFingerprint(const Fingerprint& stored,
+                            const Fingerprint& now,
+                            const std::string& history_path,
+                            const std::string& data_source,
+                            const std::string& stored_version,
+                            const std::string& version);
+
+}  // namespace combabc::services

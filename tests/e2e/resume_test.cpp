@@ -1,0 +1,163 @@
+// Resume against the run's fingerprint: a run whose inputs, as this combabc rebuilds them from the
+// stored configuration, differ from when it started is refused (exit 78, one line naming what
+// changed and the file); an unchanged run, or one from before fingerprints, resumes. The runs are
+// tiny (3 + 3 clamps, a 2 x 2 mesh per section) so that this stays a unit test.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "cli_runner.hpp"
+#include "combabc/history/history_store.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kConfig = R"([model.clamps]
+per_edge = 3
+
+[model.mesh]
+elements_per_section = 2
+elements_across_width = 2
+
+[data]
+csv = "data.csv"
+position_column = "position_m"
+displacement_column = "displacement_m"
+position_unit = "m"
+displacement_unit = "m"
+
+[metric]
+[[metric.component]]
+type = "least_squares"
+window = [0.31, 0.58]
+
+[sampler]
+seed = 3
+waves = 2
+accepted_per_wave = 5
+
+[output]
+directory = "out"
+)";
+
+void WriteData(const ScratchDir& dir, double peak) {
+  std::ofstream out(dir / "data.csv");
+  out << "position_m,displacement_m\n";
+  for (int i = 31; i < 60; i += 3)
+    out << i / 100.0 << "," << peak - std::abs(i / 100.0 - 0.45) << "\n";
+}
+
+class ResumeFingerprint : public ::testing::Test {
+ protected:
+  ResumeFingerprint() : dir_("e2e-fingerprint") {}
+  void SetUp() override {
+    std::ofstream(dir_ / "run.toml") << kConfig;
+    WriteData(dir_, 1.0);
+    const auto r = RunCli({"run", dir_ / "run.toml", "--no-report"}, dir_.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    finished_ = HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadMetadata();
+  }
+
+  // A run that was started with `metadata` and killed before its first batch.
+  std::string Started(const std::string& name, const RunMetadata& metadata) {
+    const std::string path = dir_ / name;
+    HistoryStore::Create(path, metadata);
+    return path;
+  }
+
+  RunMetadata With(const std::string& part, const std::string& digest) const {
+    RunMetadata m = finished_;
+    bool found = false;
+    for (auto& [name, value] : m.fingerprint) {
+      if (name == part) value = digest, found = true;
+    }
+    EXPECT_TRUE(found) << "the run stores no fingerprint_" << part;
+    return m;
+  }
+
+  ScratchDir dir_;
+  RunMetadata finished_;
+};
+
+TEST_F(ResumeFingerprint, ARunStoresEveryPartAndTheCombinedOne) {
+  std::vector<std::string> parts;
+  for (const auto& [name, digest] : finished_.fingerprint) {
+    parts.push_back(name);
+    EXPECT_EQ(digest.size(), 16u) << name;
+  }
+  EXPECT_EQ(parts,
+            (std::vector<std::string>{
+                "combined", "data", "metric", "sampler", "simulator", "space", "version"}));
+}
+
+// The unchanged run resumes and gives the uninterrupted run's history, even with the data CSV
+// rewritten meanwhile: resume continues with the data the run stored, never the CSV as it reads
+// today, so the CSV cannot change a run under way.
+TEST_F(ResumeFingerprint, AnUnchangedRunResumesToTheSameHistoryWhateverTheCsvSaysNow) {
+  const std::string path = Started("started.sqlite", finished_);
+  WriteData(dir_, 2.0);
+  const auto r = RunCli({"resume", path, "--no-report"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadHistory(),
+                          HistoryStore::Open(path, true).LoadHistory(),
+                          &where))
+      << where;
+}
+
+TEST_F(ResumeFingerprint, ARunFromBeforeFingerprintsResumesUnchecked) {
+  RunMetadata old = With("sampler", "0000000000000000");
+  old.fingerprint.clear();
+  const auto r = RunCli({"resume", Started("old.sqlite", old), "--no-report"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// Each part as resume would find it changed (the stored digest stands for the run's inputs when
+// it started): refused before anything is rewritten, naming the part and what to do.
+TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
+  struct Case {
+    const char* part;
+    const char* says;
+  };
+  for (const Case& c : {
+           Case{"data",
+                "resume: the measured data changed since the run started (data.csv: "
+                "fingerprint_data differs); start a new run or restore the file"},
+           Case{"sampler", "the sampler options ([sampler], [proposal])"},
+           Case{"space", "the parameter space"},
+           Case{"metric", "the metric ([metric])"},
+           Case{"simulator", "the simulator's model options ([model])"},
+           Case{"version",
+                "is not the one that started the run (0.0.9): fingerprint_version "
+                "differs; resume with combabc 0.0.9 or start a new run"},
+       }) {
+    SCOPED_TRACE(c.part);
+    RunMetadata changed = With(c.part, "0123456789abcdef");
+    if (std::string(c.part) == "version") changed.combabc_version = "0.0.9";
+    const std::string path = Started(std::string(c.part) + ".sqlite", changed);
+    const auto r = RunCli({"resume", path, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 78) << r.err;
+    EXPECT_NE(r.err.find(path + ": resume: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string("fingerprint_") + c.part + " differs"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+    const RunMetadata after = HistoryStore::Open(path, true).LoadMetadata();
+    EXPECT_EQ(after.resume_count, 0) << "refused before BeginResume";
+    EXPECT_EQ(after.status, RunStatus::kRunning);
+  }
+  // Several parts: the first is explained, the others listed.
+  RunMetadata two = With("metric", "0123456789abcdef");
+  for (auto& [name, value] : two.fingerprint) {
+    if (name == "simulator") value = "0123456789abcdef";
+  }
+  const auto r = RunCli({"resume", Started("two.sqlite", two), "--no-report"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 78);
+  EXPECT_NE(r.err.find("(also fingerprint_simulator)"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace combabc::testing
