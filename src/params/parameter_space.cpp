@@ -45,16 +45,16 @@ ParameterSpace::ParameterSpace(BinarySpace bits, std::vector<ContinuousParameter
   }
   // Precomputed once: LogPriorBits runs for every candidate of every wave.
   for (const double p : bits_.free_prior_one()) {
-    log_one_.push_back(std::log(p));
-    log_zero_.push_back(std::log1p(-p));
+    log_density_.push_back(std::log1p(-p));
+    log_density_.push_back(std::log(p));
   }
 }
 
 double ParameterSpace::LogPriorBits(std::span<const std::uint8_t> free_bits) const {
-  COMBABC_CHECK(free_bits.size() == log_one_.size());
+  COMBABC_CHECK(2 * free_bits.size() == log_density_.size());
   double sum = 0.0;
   for (std::size_t j = 0; j < free_bits.size(); ++j)
-    sum += free_bits[j] ? log_one_[j] : log_zero_[j];
+    sum += log_density_[2 * j + (free_bits[j] & 1U)];
   return sum;
 }
 

@@ -13,8 +13,8 @@ BernoulliProposal::BernoulliProposal(std::vector<double> prob_one)
     COMBABC_CHECK(q >= 0.0 && q <= 1.0);
     threshold_.push_back(BernoulliThreshold(q));
     // log 0 = -inf marks a value this proposal never draws.
-    log_one_.push_back(std::log(q));
-    log_zero_.push_back(std::log1p(-q));
+    log_density_.push_back(std::log1p(-q));
+    log_density_.push_back(std::log(q));
   }
 }
 
@@ -27,7 +27,7 @@ void BernoulliProposal::Sample(RandomStream& rng, std::span<std::uint8_t> free_b
 double BernoulliProposal::LogDensity(std::span<const std::uint8_t> free_bits) const {
   double sum = 0.0;
   for (std::size_t j = 0; j < threshold_.size(); ++j) {
-    sum += free_bits[j] ? log_one_[j] : log_zero_[j];
+    sum += log_density_[2 * j + (free_bits[j] & 1U)];
   }
   return sum;
 }

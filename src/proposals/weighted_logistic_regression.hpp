@@ -15,7 +15,7 @@ struct WeightedLogisticOptions {
   // Converged once the Newton decrement g' H^-1 g (twice the gain the next step promises) is below
   // this. The weights sum to 1, so the log-likelihood is O(1); near the optimum the decrement falls
   // quadratically (~1e-6, ~1e-12, ~1e-24), so the test costs at most one extra iteration.
-  double tolerance = 1e-15;
+  double tolerance = 1e-10;
 };
 
 // Maximises the penalised weighted log-likelihood

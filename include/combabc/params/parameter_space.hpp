@@ -33,7 +33,8 @@ class ParameterSpace {
  private:
   BinarySpace bits_;
   std::vector<ContinuousParameter> reals_;
-  std::vector<double> log_one_, log_zero_;  // log prior of free bit = 1 / = 0
+  // log prior of free bit j = v at [2 j + v]: a lookup, not a branch on random bits.
+  std::vector<double> log_density_;
 };
 
 }  // namespace combabc

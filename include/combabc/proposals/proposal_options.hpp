@@ -37,7 +37,7 @@ struct LogisticKernelOptions {
   // this (Schaefer & Chopin's sparse selection).
   double min_correlation = 0.075;
   // At most this many predecessors per bit (the most correlated ones).
-  int max_predecessors = 16;
+  int max_predecessors = 8;
   // Ridge penalty on the regression coefficients (not the intercept), scaled by the population's
   // total weight 1: keeps separable fits finite.
   double ridge = 1e-3;
