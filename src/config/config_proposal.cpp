@@ -11,8 +11,6 @@
 namespace combabc::config_internal {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 // The sensor model's continuous unknowns and the physical range of each (SI units).
 struct RealParameterInfo {
   const char* name;
@@ -69,21 +67,24 @@ ContinuousPrior ParsePrior(TableReader& t, const RealParameterInfo& info) {
   if (prior.kind != PriorKind::kUniform && !(prior.sd > 0.0)) t.Fail("sd", "must be > 0");
   std::string why;
   if (!prior.IsValid(&why)) t.Fail("prior", why);
-  // The prior may only propose physically meaningful values.
-  double lo = -kInf, hi = kInf;
-  if (bounded) {
-    lo = prior.low;
-    hi = prior.high;
+  // The prior may only propose physically meaningful values: its support, or for the unbounded
+  // normal and lognormal the interval holding all but 1e-12 of its mass (mean +- 7.1 sd), must lie
+  // within the parameter's physical range.
+  constexpr double kTail = 7.1;
+  double lo = prior.low, hi = prior.high;
+  if (prior.kind == PriorKind::kNormal) {
+    lo = prior.mean - kTail * prior.sd;
+    hi = prior.mean + kTail * prior.sd;
   } else if (prior.kind == PriorKind::kLogNormal) {
-    lo = 0.0;
+    lo = std::exp(prior.mean - kTail * prior.sd);
+    hi = std::exp(prior.mean + kTail * prior.sd);
   }
-  const bool open_low = prior.kind == PriorKind::kLogNormal;  // support (0, inf)
-  if (lo < info.low || (lo == info.low && info.low > 0.0 && open_low) || hi > info.high) {
+  if (lo < info.low || hi > info.high) {
     t.Fail(bounded ? (lo < info.low ? "low" : "high") : "prior",
-           "the prior's support [" + Num(lo) + ", " + Num(hi) + "] must lie within " +
-               std::string(info.name) + "'s physical range [" + Num(info.low) + ", " +
-               Num(info.high) + "]" +
-               (bounded ? "" : "; use a uniform, lognormal or truncated_normal prior"));
+           std::string(bounded ? "the prior's support [" : "the prior's mass (all but 1e-12) [") +
+               Num(lo) + ", " + Num(hi) + "] must lie within " + std::string(info.name) +
+               "'s physical range [" + Num(info.low) + ", " + Num(info.high) + "]" +
+               (bounded ? "" : "; narrow it, or use a uniform or truncated_normal prior"));
   }
   return prior;
 }

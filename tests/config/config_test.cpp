@@ -272,6 +272,78 @@ TEST(Config, ModelErrorsNameTheKey) {
                 "sampler.tie[0][1]");
 }
 
+TEST(Config, ProposalAndContinuousParameters) {
+  const auto c = ParseConfig(kMinimal +
+                                 "[proposal]\nkind = \"logistic\"\nmax_predecessors = 4\n"
+                                 "continuous = \"olcm\"\n"
+                                 "[parameters.stiffness_scale]\nprior = \"uniform\"\nlow = 0.5\n"
+                                 "high = 2\n"
+                                 "[parameters.foundation_stiffness]\nprior = \"lognormal\"\n"
+                                 "mean = 10.8\nsd = 0.5\n",
+                             "inline.toml");
+  EXPECT_EQ(c.smc.proposal.binary, BinaryKernelKind::kLogistic);
+  EXPECT_EQ(c.smc.proposal.logistic.max_predecessors, 4);
+  EXPECT_EQ(c.smc.proposal.continuous, ContinuousKernelKind::kOlcm);
+  ASSERT_EQ(c.reals.size(), 2u);
+  EXPECT_EQ(c.reals[0].name, "foundation_stiffness");  // by name
+  EXPECT_EQ(c.reals[0].prior.kind, PriorKind::kLogNormal);
+  EXPECT_EQ(c.reals[1].name, "stiffness_scale");
+  EXPECT_EQ(c.reals[1].prior.high, 2.0);
+}
+
+TEST(Config, ProposalAndParameterErrorsNameTheKey) {
+  ExpectLocated(ConfigError(kMinimal + "[proposal]\nkind = \"pairwise\"\n"),
+                "inline.toml",
+                6,
+                "proposal.kind");
+  ExpectLocated(ConfigError(kMinimal + "[proposal]\nkind = \"logistic\"\nmin_correlation = 1.5\n"),
+                "inline.toml",
+                7,
+                "proposal.min_correlation");
+  ExpectLocated(ConfigError(kMinimal + "[proposal]\nridge = 0.1\n"),  // independent kernel
+                "inline.toml",
+                6,
+                "proposal.ridge");
+  ExpectLocated(ConfigError(kMinimal + "[parameters.damping]\nprior = \"uniform\"\nlow = 0\n"
+                                       "high = 1\n"),
+                "inline.toml",
+                5,
+                "parameters.damping");
+  ExpectLocated(ConfigError(kMinimal + "[parameters.loss_factor]\nprior = \"normal\"\nmean = 0.1\n"
+                                       "sd = -1\n"),
+                "inline.toml",
+                8,
+                "parameters.loss_factor.sd");
+  ExpectLocated(ConfigError(kMinimal + "[parameters.loss_factor]\nprior = \"uniform\"\nlow = 2\n"
+                                       "high = 1\n"),
+                "inline.toml",
+                8,
+                "parameters.loss_factor.high");
+  // A prior reaching outside the physical range: a negative foundation stiffness.
+  ExpectLocated(ConfigError(kMinimal + "[parameters.foundation_stiffness]\nprior = \"uniform\"\n"
+                                       "low = -5\nhigh = 1e5\n"),
+                "inline.toml",
+                7,
+                "parameters.foundation_stiffness.low");
+  ExpectLocated(ConfigError(kMinimal + "[parameters.foundation_stiffness]\nprior = \"normal\"\n"
+                                       "mean = 5e4\nsd = 1e4\n"),
+                "inline.toml",
+                6,
+                "parameters.foundation_stiffness.prior");
+  ExpectLocated(ConfigError(kMinimal + "[parameters.stiffness_scale]\nprior = \"uniform\"\n"
+                                       "low = 0.5\nhigh = 2\nmean = 1\n"),
+                "inline.toml",
+                9,
+                "parameters.stiffness_scale.mean");
+  // Continuous parameters need importance weights.
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\nestimator = \"paper\"\n"
+                                       "[parameters.stiffness_scale]\nprior = \"uniform\"\n"
+                                       "low = 0.5\nhigh = 2\n"),
+                "inline.toml",
+                5,
+                "sampler.estimator");
+}
+
 TEST(Config, DocumentedExampleIsTheTestedFixture) {
   // docs/config.md's complete example must stay identical to the fixture parsed above.
   std::ifstream doc(std::string(COMBABC_SOURCE_DIR) + "/docs/config.md");
