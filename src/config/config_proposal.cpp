@@ -25,8 +25,11 @@ constexpr RealParameterInfo kSensorReals[] = {
 
 std::string Names() {
   std::string out;
-  for (const auto& p : kSensorReals)
-    out += (out.empty() ? "\"" : ", \"") + std::string(p.name) + "\"";
+  for (const auto& p : kSensorReals) {
+    out += out.empty() ? "\"" : ", \"";
+    out += p.name;
+    out += "\"";
+  }
   return out;
 }
 
@@ -49,13 +52,15 @@ ContinuousPrior ParsePrior(TableReader& t, const RealParameterInfo& info) {
       prior.kind == PriorKind::kUniform || prior.kind == PriorKind::kTruncatedNormal;
   auto number = [&](const char* key, bool wanted) -> double {
     if (!wanted) {
-      if (t.Has(key))
+      if (t.Has(key)) {
         t.Fail(key, "not used by prior = \"" + std::string(ToString(prior.kind)) + "\"");
+      }
       return 0.0;
     }
     const auto v = t.Number(key);
-    if (!v)
+    if (!v) {
       t.Fail(key, "missing required key for prior = \"" + std::string(ToString(prior.kind)) + "\"");
+    }
     if (!std::isfinite(*v)) t.Fail(key, "must be finite");
     return *v;
   };

@@ -263,7 +263,11 @@ HistoryStore HistoryStore::Create(const std::string& path,
         !part.empty() && part.find_first_not_of("abcdefghijklmnopqrstuvwxyz_") == std::string::npos;
     if (!named || !history::ParseHexDigest(digest)) {
       throw Error(ErrorKind::kSoftware,
-                  "RunMetadata::fingerprint: bad part '" + part + "' = '" + digest + "'",
+                  std::string("RunMetadata::fingerprint: bad part '")
+                      .append(part)
+                      .append("' = '")
+                      .append(digest)
+                      .append("'"),
                   path);
     }
   }

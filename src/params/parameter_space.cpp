@@ -53,8 +53,9 @@ ParameterSpace::ParameterSpace(BinarySpace bits, std::vector<ContinuousParameter
 double ParameterSpace::LogPriorBits(std::span<const std::uint8_t> free_bits) const {
   COMBABC_CHECK(2 * free_bits.size() == log_density_.size());
   double sum = 0.0;
-  for (std::size_t j = 0; j < free_bits.size(); ++j)
+  for (std::size_t j = 0; j < free_bits.size(); ++j) {
     sum += log_density_[2 * j + (free_bits[j] & 1U)];
+  }
   return sum;
 }
 

@@ -556,8 +556,9 @@ TEST(Config, GaussianNoiseModelKeys) {
       "\"gaussian\"\nsigma_noise = 0.01\n",
       "x.toml");
   int likelihoods = 0;
-  for (const auto& m2 : preset.metric.components)
+  for (const auto& m2 : preset.metric.components) {
     likelihoods += KindOf(m2) == ComponentKind::kNegLogLikelihood;
+  }
   EXPECT_EQ(likelihoods, 3);
   EXPECT_EQ(preset.smc.thresholds.size(), 3u);
 }

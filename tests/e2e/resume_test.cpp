@@ -46,8 +46,9 @@ directory = "out"
 void WriteData(const ScratchDir& dir, double peak) {
   std::ofstream out(dir / "data.csv");
   out << "position_m,displacement_m\n";
-  for (int i = 31; i < 60; i += 3)
+  for (int i = 31; i < 60; i += 3) {
     out << i / 100.0 << "," << peak - std::abs(i / 100.0 - 0.45) << "\n";
+  }
 }
 
 class ResumeFingerprint : public ::testing::Test {
@@ -63,7 +64,7 @@ class ResumeFingerprint : public ::testing::Test {
 
   // A run that was started with `metadata` and killed before its first batch.
   std::string Started(const std::string& name, const RunMetadata& metadata) {
-    const std::string path = dir_ / name;
+    std::string path = dir_ / name;
     HistoryStore::Create(path, metadata);
     return path;
   }

@@ -242,11 +242,12 @@ TEST(SimulationBasedCalibration, RanksAreUniform) {
                                        ListOptions({1.5, 0.6, kEps},
                                                    ContinuousKernelKind::kNormal,
                                                    300,
-                                                   static_cast<std::uint64_t>(100 + r)));
+                                                   100 + static_cast<std::uint64_t>(r)));
     ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
     // L draws from the weighted particles (multinomial resampling from the replicate's stream).
     const auto& particles = h.waves.back().particles;
     std::vector<double> cumulative;
+    cumulative.reserve(particles.size());
     double sum = 0;
     for (const auto& p : particles) cumulative.push_back(sum += p.weight);
     int rank = 0;

@@ -106,8 +106,9 @@ TEST(NoiseAware, ThresholdAcceptanceWouldBeDifferent) {
   Case c;
   const auto exact = c.ExactMarginals();
   double from_prior = 0.0;
-  for (int k = 0; k < kBits; ++k)
+  for (int k = 0; k < kBits; ++k) {
     from_prior = std::max(from_prior, std::abs(exact[k] - c.prior[k]));
+  }
   EXPECT_GT(from_prior, 0.2);
 }
 

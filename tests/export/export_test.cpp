@@ -153,14 +153,15 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
   std::ifstream json(out / "summary.json");
   std::stringstream text;
   text << json.rdbuf();
-  for (const char* expected :
-       {"{\"name\": \"stiffness_2\", \"prior\": {\"kind\": \"uniform\", \"low\": 10000, "
-        "\"high\": 1e+05",
-        "\"binary_kernel\": \"logistic\"",
-        "\"continuous_kernel\": \"olcm\"",
-        "\"tempering_form\": \"geometric\"",
-        "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
-        "\"reals_mean\": ["}) {
+  const std::string prior_json =
+      std::string("{\"name\": \"stiffness_2\", \"prior\": {\"kind\": \"uniform\", ") +
+      "\"low\": 10000, \"high\": 1e+05";
+  for (const char* expected : {prior_json.c_str(),
+                               "\"binary_kernel\": \"logistic\"",
+                               "\"continuous_kernel\": \"olcm\"",
+                               "\"tempering_form\": \"geometric\"",
+                               "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
+                               "\"reals_mean\": ["}) {
     EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
   }
 }

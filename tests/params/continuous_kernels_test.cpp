@@ -178,8 +178,9 @@ TEST(OlcmKernel, LocalCovariancesFollowTheDefinition) {
   const ParameterSpace space = WideSpace();
   const auto proposal = MakeOlcmKernel()->Fit(MakePopulation(r, w, within), space);
   std::vector<Mat2> s;
-  for (std::size_t j = 0; j < r.size(); ++j)
+  for (std::size_t j = 0; j < r.size(); ++j) {
     s.push_back(WithRidge(OlcmCovariance(r, w, within, j)));
+  }
   for (const Vec2& x : kEvalPoints) {
     EXPECT_NEAR(proposal->LogDensity(x), LogMixture(x, r, w, s), kLogTol) << x[0] << ", " << x[1];
   }
@@ -207,7 +208,8 @@ void ExpectMoments(const std::vector<Vec2>& draws, const Vec2& mean, const Mat2&
     m[1] += x[1] / n;
   }
   for (int i = 0; i < 2; ++i) {
-    EXPECT_NEAR(m[i], mean[i], 6.0 * std::sqrt(cov[3 * i] / n)) << "mean " << i;
+    EXPECT_NEAR(m[i], mean[i], 6.0 * std::sqrt(cov[static_cast<std::size_t>(3 * i)] / n))
+        << "mean " << i;
   }
   for (auto [a, b] : {std::pair{0, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
     double s = 0.0, s2 = 0.0;
