@@ -48,7 +48,7 @@ class ContinuousCondensation {
   // Truncation of the series, relative to the bound on its whole sum.
   static constexpr double kSeriesTol = 1e-17;
   // Largest q = |mu| / lambda_1 summed by the series; above it: direct. 0.3 needs 33 stored terms
-  // (7 MB at the default mesh) and covers k_f up to ~60 times and s down to ~1/70 of the defaults;
+  // (7 MB at the default mesh) and covers k_f up to ~80 times and s down to ~1/90 of the defaults;
   // 0.5 would need 58 terms for less than twice the range.
   static constexpr double kMaxRatio = 0.3;
 
