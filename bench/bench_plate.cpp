@@ -1,5 +1,7 @@
 // Time per clamp configuration of the default sensor: the condensed fast path against the full
-// sparse solve of the same mesh, the precompute, and a threaded batch (docs/benchmarks.md).
+// sparse solve of the same mesh, the precompute, and a threaded batch (docs/benchmarks.md); and
+// the same with continuous unknowns per call (SensorVariation, docs/model.md).
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -75,6 +77,106 @@ void BM_SensorProfileFullSolve(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SensorProfileFullSolve)->Unit(benchmark::kMillisecond);
+
+// Continuous unknowns (SensorModel::Profile with a SensorVariation): every call has its own
+// foundation stiffness, stiffness scale and (unless `own_loss`) loss factor, drawn over ranges a
+// calibration would explore, so no two calls share values. The continuous precompute is built
+// before timing starts (BM_SensorVariationPrecompute times it).
+std::vector<combabc::plate::SensorVariation> Variations(int count, bool own_loss, double scale_lo) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<combabc::plate::SensorVariation> all(count);
+  for (auto& v : all) {
+    v.foundation_stiffness = 1e4 * std::pow(20.0, unit(rng));  // 1e4 .. 2e5 N/m^3
+    v.stiffness_scale = scale_lo * std::pow(4.0, unit(rng));   // scale_lo .. 4 scale_lo
+    if (!own_loss) v.loss_factor = 0.02 + 0.3 * unit(rng);
+  }
+  return all;
+}
+
+void RunVariation(benchmark::State& state,
+                  const SensorModel& model,
+                  bool own_loss,
+                  double scale_lo) {
+  const auto configs = Configurations(256, model.num_clamps());
+  const auto variations = Variations(256, own_loss, scale_lo);
+  std::vector<double> out(model.num_outputs());
+  model.Profile(configs[0], variations[0], out);  // builds the precompute
+  std::size_t i = 0;
+  for (auto _ : state) {
+    model.Profile(configs[i % configs.size()], variations[i % variations.size()], out);
+    ++i;
+    benchmark::DoNotOptimize(out.data());
+  }
+  const auto terms = model.VariationSeriesTerms(variations[0]);
+  state.counters["series_terms"] = terms[0];
+  state.counters["precomputed_MiB"] =
+      static_cast<double>(model.VariationPrecomputedBytes()) / (1024.0 * 1024.0);
+}
+
+// k_f, s and eta per call: the series path (|mu| / lambda_1 < 0.01 here, 5-8 terms).
+void BM_SensorProfileVariation(benchmark::State& state) {
+  RunVariation(state, DefaultModel(), false, 0.5);
+}
+BENCHMARK(BM_SensorProfileVariation)->Unit(benchmark::kMicrosecond);
+
+// k_f and s per call with the layers' own loss factors, on a laminate whose damping is not
+// proportional (the core's Poisson ratio differs), so K_base is complex. (For the default
+// laminate the layers' own damping is proportional and this is the case above.)
+void BM_SensorProfileVariationOwnLoss(benchmark::State& state) {
+  static const SensorModel model = [] {
+    SensorOptions o;
+    o.layers[1].poisson_ratio = 0.3;
+    return SensorModel(o);
+  }();
+  RunVariation(state, model, true, 0.5);
+}
+BENCHMARK(BM_SensorProfileVariationOwnLoss)->Unit(benchmark::kMicrosecond);
+
+// A laminate 1000 times softer (s in [1e-3, 4e-3]): |mu| / lambda_1 > 0.3, every state condensed
+// directly per call (the exact fallback of the series).
+void BM_SensorProfileVariationDirect(benchmark::State& state) {
+  RunVariation(state, DefaultModel(), false, 1e-3);
+}
+BENCHMARK(BM_SensorProfileVariationDirect)->Unit(benchmark::kMicrosecond);
+
+// Building the continuous precompute (one loss-factor kind) on top of a built model.
+void BM_SensorVariationPrecompute(benchmark::State& state) {
+  const auto configs = Configurations(1, 36);
+  const auto variations = Variations(1, false, 0.5);
+  std::vector<double> out(91);
+  for (auto _ : state) {
+    state.PauseTiming();
+    SensorModel model{SensorOptions{}};
+    state.ResumeTiming();
+    model.Profile(configs[0], variations[0], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(BM_SensorVariationPrecompute)->Unit(benchmark::kMillisecond);
+
+// Threaded batch with a variation per configuration; items/s is configurations per second.
+void BM_SensorProfileVariationBatch(benchmark::State& state) {
+  const SensorModel& model = DefaultModel();
+  const int n = 256;
+  const auto configs = Configurations(n, model.num_clamps());
+  const auto variations = Variations(n, false, 0.5);
+  std::vector<std::uint8_t> flat;
+  for (const auto& c : configs) flat.insert(flat.end(), c.begin(), c.end());
+  std::vector<double> out(static_cast<std::size_t>(n) * model.num_outputs());
+  const int threads = static_cast<int>(state.range(0));
+  model.ProfileBatch(flat, variations, n, out, threads);  // builds the precompute
+  for (auto _ : state) {
+    model.ProfileBatch(flat, variations, n, out, threads);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetItemsProcessed(state.iterations() * n);
+}
+BENCHMARK(BM_SensorProfileVariationBatch)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Threaded batch; items/s is configurations per second.
 void BM_SensorProfileBatch(benchmark::State& state) {

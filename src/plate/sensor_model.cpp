@@ -6,6 +6,7 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
+#include "continuous_condensation.hpp"
 #include "section_condensation.hpp"
 
 namespace combabc::plate {
@@ -74,11 +75,58 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
       options_.output_positions,
       options_.output_y_fraction * options_.width,
       options_.always_pivot);
+  continuous_ = std::make_unique<ContinuousCache>();
+  // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
+  // precompute of their own. It holds when every layer has one loss factor, and also when every
+  // layer has one Poisson ratio (each layer's bending matrix then has the same shape), as in the
+  // default laminate (eta = 0.10 from 0.10 / 0.15 / 0.10).
+  const PlateSection& section = plate_->section();
+  const double eta = section.bending_imag(0, 0) / section.bending_real(0, 0);
+  continuous_->proportional =
+      (section.bending_imag - eta * section.bending_real).cwiseAbs().maxCoeff() <=
+      1e-14 * section.bending_real.cwiseAbs().maxCoeff();
+  continuous_->own_loss_factor = eta;
 }
 
 SensorModel::~SensorModel() = default;
 
 std::size_t SensorModel::PrecomputedBytes() const { return condensation_->MemoryBytes(); }
+
+const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& variation,
+                                                      std::complex<double>* factor,
+                                                      std::complex<double>* mu) const {
+  // K(theta) = s (K_real + i K_imag') + k_f (1 + i eta_f) M_1 - omega^2 rho h M_1, where K_imag'
+  // is eta K_real for a given loss factor, else the layers' own K_imag. Factoring out what
+  // multiplies the bending stiffness leaves one complex number mu on M_1
+  // (continuous_condensation.hpp).
+  const double s = variation.stiffness_scale.value_or(1.0);
+  const bool own = !variation.loss_factor.has_value() && !continuous_->proportional;
+  const double eta = variation.loss_factor.value_or(continuous_->own_loss_factor);
+  *factor = own ? std::complex<double>(s, 0.0) : std::complex<double>(s, s * eta);
+  const double k_f = variation.foundation_stiffness.value_or(options_.foundation_stiffness);
+  const double omega = 2.0 * M_PI * options_.frequency_hz;
+  const std::complex<double> b(k_f - omega * omega * plate_->section().mass_per_area,
+                               k_f * options_.foundation_loss_factor);
+  *mu = b / *factor;
+  const int index = own ? 1 : 0;
+  std::call_once(continuous_->once[index], [&] {
+    continuous_->base[index] = std::make_unique<ContinuousCondensation>(
+        *plate_,
+        options_.clamps_per_edge,
+        options_.elements_per_section,
+        own,
+        SupportMask(Edge::kBottom, options_.fixed_support),
+        SupportMask(Edge::kTop, options_.fixed_support),
+        SupportMask(Edge::kLeft, options_.short_edge_start),
+        SupportMask(Edge::kRight, options_.short_edge_end),
+        plate_->LoadVector(SensorLoad(options_)),
+        options_.output_positions,
+        options_.output_y_fraction * options_.width,
+        options_.always_pivot);
+    continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
+  });
+  return *continuous_->base[index];
+}
 
 void SensorModel::CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const {
   if (clamps.size() != static_cast<std::size_t>(num_clamps())) {

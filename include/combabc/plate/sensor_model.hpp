@@ -10,10 +10,20 @@
 // groups of 3 sections are composed for each of their 64 states, and a configuration then costs
 // one block-tridiagonal solve over the 5 inner group boundaries. This is exact: it equals the
 // full sparse solve of the same mesh to round-off (tests: < 1e-10 relative at the default mesh).
+//
+// Continuous unknowns (docs/model.md, "Continuous unknowns"): a call may also change the
+// foundation stiffness, a scale of the laminate's stiffness and one loss factor for all layers
+// (SensorVariation). Those change every section piece, so that path evaluates the pieces per call
+// from a precompute split by physics (a power series in one complex number, or a direct
+// condensation where it would converge slowly) and solves the chain of section boundaries. It is
+// exact: it equals the full solve of a model built with the same values up to round-off amplified
+// by the conditioning (tests: < 1e-9 relative at the test mesh; docs/model.md for the default one).
+#include <array>
 #include <complex>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,7 +35,9 @@
 
 namespace combabc::plate {
 
-class SectionCondensation;  // src/plate/section_condensation.hpp
+class SectionCondensation;     // src/plate/section_condensation.hpp
+class ContinuousCondensation;  // src/plate/continuous_condensation.hpp
+struct ContinuousCache;        // src/plate/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
 // elastomer core carrying the fibre, a polyurethane cover.
@@ -110,6 +122,32 @@ struct SensorOptions {
   bool IsValid(std::string* why) const;
 };
 
+// Continuous parameters a single simulation may set in place of the model's own values (unset: the
+// model's value). Ranges as SensorOptions and Layer use them (docs/config.md); the stiffness scale
+// is bounded so that every derived stiffness stays a finite double.
+struct SensorVariation {
+  // Winkler foundation stiffness k_f (N/m^3) in [0, 1e15]; the foundation keeps the model's
+  // foundation_loss_factor.
+  std::optional<double> foundation_stiffness;
+  // s in [1e-6, 1e6]: multiplies every layer's Young's modulus, hence the laminate's bending
+  // stiffness D (the neutral plane does not move; the mass does not change).
+  std::optional<double> stiffness_scale;
+  // eta in [0, 10]: one structural loss factor for every layer, replacing the layers' own.
+  std::optional<double> loss_factor;
+
+  bool empty() const {
+    return !foundation_stiffness.has_value() && !stiffness_scale.has_value() &&
+           !loss_factor.has_value();
+  }
+  // On failure `why` reads "SensorVariation::field = value; constraint".
+  bool IsValid(std::string* why) const;
+};
+
+// `options` with the variation's values applied (youngs_modulus *= s and loss_factor = eta in
+// every layer, foundation_stiffness = k_f): the model SensorModel::Profile(clamps, variation, ...)
+// reproduces. The result may fail SensorOptions::IsValid (a scaled modulus out of its range).
+SensorOptions ApplyVariation(SensorOptions options, const SensorVariation& variation);
+
 // Modal analysis of one clamp configuration.
 struct SensorModes {
   std::vector<double> frequencies_hz;  // undamped, ascending
@@ -145,6 +183,29 @@ class SensorModel {
   // Complex centreline deflection (m) from the fast path, before |.| and normalisation.
   void ComplexProfile(std::span<const std::uint8_t> clamps,
                       std::span<std::complex<double>> out) const;
+
+  // The same with continuous unknowns: the profile of ApplyVariation(options(), variation) at the
+  // same mesh, without rebuilding the model. An empty variation takes the clamp-only fast path
+  // above; otherwise the per-call condensation (docs/model.md, "Continuous unknowns"), whose
+  // precompute is built on the first such call (one for an explicit loss factor, one for the
+  // layers' own; thread-safe). Throws combabc::Error (kConfig) on an invalid variation.
+  void Profile(std::span<const std::uint8_t> clamps,
+               const SensorVariation& variation,
+               std::span<double> out) const;
+  void ComplexProfile(std::span<const std::uint8_t> clamps,
+                      const SensorVariation& variation,
+                      std::span<std::complex<double>> out) const;
+  // n configurations with their own variations (variations.size() == n), as ProfileBatch above.
+  void ProfileBatch(std::span<const std::uint8_t> clamps,
+                    std::span<const SensorVariation> variations,
+                    std::size_t n,
+                    std::span<double> out,
+                    int threads = 1) const;
+  // Terms of the power series in mu (docs/model.md) each section clamp state (edge A fixed +
+  // 2 x edge B fixed) sums for `variation`, or -1 where that state is condensed directly instead.
+  std::array<int, 4> VariationSeriesTerms(const SensorVariation& variation) const;
+  // Bytes held by the continuous-unknowns precompute built so far (0 before the first call).
+  std::size_t VariationPrecomputedBytes() const;
   // The full complex field (all dofs of plate()) of a configuration, by the full solve.
   Eigen::VectorXcd Field(std::span<const std::uint8_t> clamps) const;
   // Constraints of the whole plate for a configuration (used by the full solve and modes).
@@ -155,10 +216,16 @@ class SensorModel {
  private:
   void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
   void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
+  // The precompute for `variation` (built on first use) and the factors mapping the variation's
+  // dynamic stiffness onto it: K(theta) = factor (K_base + mu M_1).
+  const ContinuousCondensation& Continuous(const SensorVariation& variation,
+                                           std::complex<double>* factor,
+                                           std::complex<double>* mu) const;
 
   SensorOptions options_;
   std::unique_ptr<Plate> plate_;
   std::unique_ptr<SectionCondensation> condensation_;
+  std::unique_ptr<ContinuousCache> continuous_;
 };
 
 }  // namespace combabc::plate

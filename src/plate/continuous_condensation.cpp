@@ -1,0 +1,474 @@
+#include "continuous_condensation.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+
+namespace combabc::plate {
+namespace {
+
+using Complex = std::complex<double>;
+
+// A lower bound of the smallest eigenvalue of K x = lambda M x (K, M symmetric positive
+// definite). Inverse iteration gives a Rayleigh quotient just above lambda_1; 0.9 of it is then
+// proven a lower bound by Sylvester's law of inertia (K - bound M has a positive-pivot LDL^T iff
+// no eigenvalue lies below the bound), halving it until the proof holds. Only the series' term
+// count depends on it, and only logarithmically, so the 10 % margin costs at most a term.
+double LowestEigenvalueBound(const Eigen::SparseMatrix<double>& k,
+                             const Eigen::SparseMatrix<double>& m) {
+  const Eigen::VectorXd scale = k.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+  const Eigen::SparseMatrix<double> ks = scale.asDiagonal() * k * scale.asDiagonal();
+  const Eigen::SparseMatrix<double> ms = scale.asDiagonal() * m * scale.asDiagonal();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(ks);
+  if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 0.0) {
+    throw Error(ErrorKind::kSoftware, "continuous condensation: section interior not definite");
+  }
+  // Deterministic start with a component along every smooth shape.
+  Eigen::VectorXd x(ks.rows());
+  for (Eigen::Index r = 0; r < x.size(); ++r) {
+    x(r) = 1.0 + 0.25 * std::sin(1.0 + 0.7 * static_cast<double>(r));
+  }
+  double rayleigh = std::numeric_limits<double>::infinity();
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    const Eigen::VectorXd y = ldlt.solve(ms * x);
+    x = y / std::sqrt(y.dot(ms * y));
+    const double next = x.dot(ks * x);
+    const bool converged = std::abs(next - rayleigh) <= 1e-6 * next;
+    rayleigh = next;
+    if (converged) break;
+  }
+  double bound = 0.9 * rayleigh;
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    const Eigen::SparseMatrix<double> shifted = ks - bound * ms;
+    ldlt.compute(shifted);
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0) return bound;
+    bound *= 0.5;
+  }
+  throw Error(ErrorKind::kSoftware, "continuous condensation: no eigenvalue bound");
+}
+
+Eigen::MatrixXcd Symmetric(const Eigen::MatrixXcd& a) { return 0.5 * (a + a.transpose()); }
+
+}  // namespace
+
+int ContinuousCondensation::TermsFor(double q) {
+  if (!(q > 0.0)) return 0;
+  if (q > kMaxRatio) return -1;
+  const int terms = static_cast<int>(std::ceil(std::log(kSeriesTol * (1.0 - q)) / std::log(q)));
+  return std::max(terms, 1);
+}
+
+ContinuousCondensation::ContinuousCondensation(const Plate& plate,
+                                               int num_sections,
+                                               int elements_per_section,
+                                               bool own_loss_factors,
+                                               std::uint8_t fixed_mask_a,
+                                               std::uint8_t fixed_mask_b,
+                                               std::uint8_t start_mask,
+                                               std::uint8_t end_mask,
+                                               const Eigen::VectorXd& load_vector,
+                                               const std::vector<double>& output_x,
+                                               double output_y,
+                                               bool always_pivot)
+    : num_sections_(num_sections),
+      elements_per_section_(elements_per_section),
+      ny_(plate.grid().ny()),
+      nc_(kDofsPerNode * (plate.grid().ny() + 1)),
+      own_loss_factors_(own_loss_factors),
+      fixed_mask_a_(fixed_mask_a),
+      fixed_mask_b_(fixed_mask_b),
+      start_mask_(start_mask),
+      end_mask_(end_mask),
+      always_pivot_(always_pivot) {
+  const Grid& grid = plate.grid();
+  const int m = elements_per_section;
+  COMBABC_CHECK(grid.nx() == num_sections * m);
+  // Outputs by section, as SectionCondensation assigns them.
+  section_outputs_.resize(num_sections);
+  std::vector<std::vector<double>> relative_x(num_sections);
+  for (std::size_t o = 0; o < output_x.size(); ++o) {
+    int dofs[kElementDofs];
+    ElementVector row;
+    plate.InterpolationRow(output_x[o], output_y, dofs, &row);
+    const int section = (dofs[0] / kDofsPerNode) / (ny_ + 1) / m;
+    section_outputs_[section].push_back(static_cast<int>(o));
+    relative_x[section].push_back(output_x[o] - grid.x[static_cast<std::size_t>(section) * m]);
+  }
+  for (int c = 0; c <= num_sections; ++c) {
+    boundary_load_.push_back(
+        load_vector.segment(static_cast<Eigen::Index>(c) * m * nc_, nc_).cast<Complex>());
+  }
+  // Distinct meshes: the same element lengths. Distinct sections: the same mesh, no interior
+  // load and outputs at the same relative positions (as SectionCondensation shares pieces).
+  const double tol = 1e-12 * grid.x.back();
+  const auto same_mesh = [&](int s, int t) {
+    for (int e = 0; e < m; ++e) {
+      const double hs = grid.x[s * m + e + 1] - grid.x[s * m + e];
+      const double ht = grid.x[t * m + e + 1] - grid.x[t * m + e];
+      if (std::abs(hs - ht) > tol) return false;
+    }
+    return true;
+  };
+  const auto loaded = [&](int s) {
+    return m > 1 && load_vector
+                            .segment((static_cast<Eigen::Index>(s) * m + 1) * nc_,
+                                     static_cast<Eigen::Index>(m - 1) * nc_)
+                            .cwiseAbs()
+                            .maxCoeff() != 0.0;
+  };
+  for (int s = 0; s < num_sections; ++s) {
+    int mesh = -1;
+    for (std::size_t k = 0; k < mesh_section_.size() && mesh < 0; ++k) {
+      if (same_mesh(s, mesh_section_[k])) mesh = static_cast<int>(k);
+    }
+    if (mesh < 0) {
+      mesh = static_cast<int>(mesh_section_.size());
+      mesh_section_.push_back(s);
+    }
+    mesh_kind_.push_back(mesh);
+    int kind = -1;
+    for (std::size_t k = 0; k < kind_section_.size() && kind < 0 && !loaded(s); ++k) {
+      const int t = kind_section_[k];
+      if (mesh_kind_[t] != mesh || loaded(t)) continue;
+      if (relative_x[s].size() != relative_x[t].size()) continue;
+      bool same = true;
+      for (std::size_t o = 0; o < relative_x[s].size(); ++o) {
+        same = same && std::abs(relative_x[s][o] - relative_x[t][o]) <= tol;
+      }
+      if (same) kind = static_cast<int>(k);
+    }
+    if (kind < 0) {
+      kind = static_cast<int>(kind_section_.size());
+      kind_section_.push_back(s);
+    }
+    kind_.push_back(kind);
+  }
+  states_.resize(mesh_section_.size() * 4);
+  sections_.resize(kind_section_.size() * 4);
+  for (int mesh = 0; mesh < static_cast<int>(mesh_section_.size()); ++mesh) {
+    for (int state = 0; state < 4; ++state) {
+      Precompute(plate, mesh, state, load_vector, output_x, output_y);
+    }
+  }
+  // Jacobi scaling of the cross-section dofs, as in SectionCondensation: one scale vector for all
+  // cross-sections (from the static piece of section 0, both edges free), so that the BFS dofs'
+  // different units do not cost digits in the unpivoted block LDL^T.
+  const Eigen::MatrixXcd& reference = states_[static_cast<std::size_t>(mesh_kind_[0]) * 4].k_static;
+  boundary_scale_.resize(nc_);
+  for (int d = 0; d < nc_; ++d) {
+    const double a = std::abs(reference(d, d));
+    boundary_scale_(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
+  }
+  Eigen::VectorXd s2(2 * nc_);
+  s2 << boundary_scale_, boundary_scale_;
+  const auto both = [&](Eigen::MatrixXcd& a) { a = s2.asDiagonal() * a * s2.asDiagonal(); };
+  for (StateData& sd : states_) {
+    both(sd.k_static);
+    both(sd.m_static);
+    both(sd.k_bb);
+    both(sd.m_bb);
+    for (Eigen::MatrixXcd& t : sd.moments) both(t);
+    sd.k_ib = sd.k_ib * s2.asDiagonal();
+    sd.m_ib = sd.m_ib * s2.asDiagonal();
+  }
+  for (SectionData& sec : sections_) {
+    sec.out_static = sec.out_static * s2.asDiagonal();
+    for (Eigen::MatrixXcd& t : sec.out_terms) t = t * s2.asDiagonal();
+    sec.r_b = sec.r_b * s2.asDiagonal();
+    if (sec.loaded) {
+      sec.load_static = s2.asDiagonal() * sec.load_static;
+      for (Eigen::VectorXcd& t : sec.load_terms) t = s2.asDiagonal() * t;
+    }
+  }
+  for (Eigen::VectorXcd& b : boundary_load_) b = boundary_scale_.asDiagonal() * b;
+  BuildTables();
+}
+
+void ContinuousCondensation::Precompute(const Plate& plate,
+                                        int mesh_kind,
+                                        int state,
+                                        const Eigen::VectorXd& load_vector,
+                                        const std::vector<double>& output_x,
+                                        double output_y) {
+  const int m = elements_per_section_;
+  const int n_local = (m + 1) * nc_;
+  const int nb = 2 * nc_;
+  const bool fixed_a = (state & 1) != 0;
+  const bool fixed_b = (state & 2) != 0;
+  // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
+  // SectionCondensation::Condense.
+  std::vector<int> boundary_index(n_local, -1);
+  std::vector<int> interior_index(n_local, -1);
+  int n_interior = 0;
+  for (int d = 0; d < n_local; ++d) {
+    if (d < nc_) {
+      boundary_index[d] = d;
+    } else if (d >= m * nc_) {
+      boundary_index[d] = d - (m - 1) * nc_;
+    } else {
+      const int j = (d / kDofsPerNode) % (ny_ + 1);
+      const int bit = 1 << (d % kDofsPerNode);
+      const bool fixed = (fixed_a && j == 0 && (fixed_mask_a_ & bit)) ||
+                         (fixed_b && j == ny_ && (fixed_mask_b_ & bit));
+      if (!fixed) interior_index[d] = n_interior++;
+    }
+  }
+  // The section matrices split by physics: K_base (K_real, + i K_imag for the layers' own loss
+  // factors) and M_1. Sections of one mesh have equal element matrices.
+  StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
+  const int section = mesh_section_[mesh_kind];
+  const int offset = section * m * nc_;
+  sd.k_bb = Eigen::MatrixXcd::Zero(nb, nb);
+  sd.m_bb = Eigen::MatrixXcd::Zero(nb, nb);
+  sd.k_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
+  sd.m_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
+  std::vector<Eigen::Triplet<Complex>> k_triplets;
+  std::vector<Eigen::Triplet<Complex>> m_triplets;
+  std::vector<Eigen::Triplet<double>> real_triplets;
+  std::vector<Eigen::Triplet<double>> mass_triplets;
+  for (int ex = section * m; ex < (section + 1) * m; ++ex) {
+    for (int ey = 0; ey < ny_; ++ey) {
+      const ElementMatrices& e = plate.Element(ex, ey);
+      int local[kElementDofs];
+      for (int k = 0; k < kElementDofs; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < kElementDofs; ++c) {
+        for (int r = 0; r < kElementDofs; ++r) {
+          const double kr = e.stiffness_real(r, c);
+          const Complex k(kr, own_loss_factors_ ? e.stiffness_imag(r, c) : 0.0);
+          const double mm = e.mass_unit(r, c);
+          const int rb = boundary_index[local[r]];
+          const int cb = boundary_index[local[c]];
+          const int ri = interior_index[local[r]];
+          const int ci = interior_index[local[c]];
+          if (rb >= 0 && cb >= 0) {
+            sd.k_bb(rb, cb) += k;
+            sd.m_bb(rb, cb) += mm;
+          }
+          if (ri >= 0 && cb >= 0) {
+            sd.k_ib(ri, cb) += k;
+            sd.m_ib(ri, cb) += mm;
+          }
+          if (ri >= 0 && ci >= 0) {
+            k_triplets.emplace_back(ri, ci, k);
+            m_triplets.emplace_back(ri, ci, mm);
+            real_triplets.emplace_back(ri, ci, kr);
+            mass_triplets.emplace_back(ri, ci, mm);
+          }
+        }
+      }
+    }
+  }
+  // The distinct sections of this mesh: their output rows r_I, r_B and interior load f_I.
+  std::vector<int> kinds;
+  for (int kind = 0; kind < static_cast<int>(kind_section_.size()); ++kind) {
+    if (mesh_kind_[kind_section_[kind]] == mesh_kind) kinds.push_back(kind);
+  }
+  for (int kind : kinds) {
+    SectionData& sec = sections_[static_cast<std::size_t>(kind) * 4 + state];
+    const int s = kind_section_[kind];
+    const int s_offset = s * m * nc_;
+    const std::vector<int>& outputs = section_outputs_[s];
+    const auto n_out = static_cast<Eigen::Index>(outputs.size());
+    sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
+    sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
+    for (Eigen::Index k = 0; k < n_out; ++k) {
+      int dofs[kElementDofs];
+      ElementVector row;
+      plate.InterpolationRow(output_x[outputs[k]], output_y, dofs, &row);
+      for (int q = 0; q < kElementDofs; ++q) {
+        const int d = dofs[q] - s_offset;
+        COMBABC_CHECK(d >= 0 && d < n_local);
+        if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);
+        if (interior_index[d] >= 0) sec.r_i(k, interior_index[d]) += row(q);
+      }
+    }
+    sec.f_i = Eigen::VectorXcd::Zero(n_interior);
+    for (int d = 0; d < n_local; ++d) {
+      if (interior_index[d] >= 0) sec.f_i(interior_index[d]) = load_vector(s_offset + d);
+    }
+    sec.loaded = n_interior > 0 && sec.f_i.cwiseAbs().maxCoeff() != 0.0;
+    sec.num_outputs = static_cast<int>(n_out);
+    for (int i = 0; i < n_interior; ++i) {
+      if (n_out > 0 && sec.r_i.col(i).cwiseAbs().maxCoeff() != 0.0) sec.read.push_back(i);
+    }
+    sec.out_static = sec.r_b;
+  }
+  for (int i = 0; i < n_interior; ++i) {
+    if ((sd.k_ib.row(i).cwiseAbs().maxCoeff() != 0.0) ||
+        (sd.m_ib.row(i).cwiseAbs().maxCoeff() != 0.0)) {
+      sd.coupled.push_back(i);
+    }
+  }
+  if (n_interior == 0) {  // one element per section: nothing to condense, C = K_BB + mu M_BB
+    sd.lambda_bound = std::numeric_limits<double>::infinity();
+    sd.k_static = sd.k_bb;
+    sd.m_static = sd.m_bb;
+    return;
+  }
+  sd.k_ii.resize(n_interior, n_interior);
+  sd.k_ii.setFromTriplets(k_triplets.begin(), k_triplets.end());
+  sd.m_ii.resize(n_interior, n_interior);
+  sd.m_ii.setFromTriplets(m_triplets.begin(), m_triplets.end());
+  Eigen::SparseMatrix<double> k_real(n_interior, n_interior);
+  k_real.setFromTriplets(real_triplets.begin(), real_triplets.end());
+  Eigen::SparseMatrix<double> mass(n_interior, n_interior);
+  mass.setFromTriplets(mass_triplets.begin(), mass_triplets.end());
+  sd.lambda_bound = LowestEigenvalueBound(k_real, mass);
+
+  // Jacobi-scaled sparse LU of K_II (complex symmetric: LU, as everywhere in the plate layer).
+  const Eigen::VectorXd scale = sd.k_ii.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+  Eigen::SparseMatrix<Complex> scaled = scale.asDiagonal() * sd.k_ii * scale.asDiagonal();
+  scaled.makeCompressed();
+  Eigen::SparseLU<Eigen::SparseMatrix<Complex>, Eigen::COLAMDOrdering<int>> lu;
+  lu.compute(scaled);
+  if (lu.info() != Eigen::Success) {
+    throw Error(ErrorKind::kSoftware, "continuous condensation: singular interior matrix");
+  }
+  const auto solve = [&](const auto& b) -> Eigen::MatrixXcd {
+    return scale.asDiagonal() * lu.solve((scale.asDiagonal() * b).eval());
+  };
+  const Eigen::MatrixXcd x0 = -solve(sd.k_ib);
+  sd.k_static = Symmetric(sd.k_bb + sd.k_ib.transpose() * x0);
+  const Eigen::MatrixXcd n = sd.m_ii * x0 + sd.m_ib;
+  sd.m_static = Symmetric(sd.m_bb + sd.m_ib.transpose() * x0 + x0.transpose() * n);
+  // Moments by the recursion Z_0 = K^{-1} N, Z_{k+1} = K^{-1} M Z_k; T_k = N^T Z_k.
+  const int terms = TermsFor(kMaxRatio);
+  std::vector<Eigen::MatrixXcd> z_load(kinds.size());
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    SectionData& sec = sections_[static_cast<std::size_t>(kinds[i]) * 4 + state];
+    sec.out_static = sec.r_b + sec.r_i * x0;
+    if (sec.loaded) {
+      sec.load_static = x0.transpose() * sec.f_i;
+      z_load[i] = solve(sec.f_i);
+    }
+  }
+  Eigen::MatrixXcd z = solve(n);
+  for (int k = 0; k < terms; ++k) {
+    sd.moments.push_back(Symmetric(n.transpose() * z));
+    for (std::size_t i = 0; i < kinds.size(); ++i) {
+      SectionData& sec = sections_[static_cast<std::size_t>(kinds[i]) * 4 + state];
+      sec.out_terms.push_back(sec.r_i * z);
+      if (sec.loaded) {
+        sec.offset_terms.push_back(sec.r_i * z_load[i]);
+        sec.load_terms.push_back(n.transpose() * z_load[i]);
+        z_load[i] = solve(sd.m_ii * z_load[i]);
+        if (k + 1 == terms) sec.offset_terms.push_back(sec.r_i * z_load[i]);
+      }
+    }
+    if (k + 1 < terms) z = solve(sd.m_ii * z);
+  }
+}
+
+void ContinuousCondensation::PackPiece(const Eigen::MatrixXcd& piece, Complex* out) const {
+  Eigen::Index k = 0;
+  for (int block = 0; block < 2; ++block) {
+    const int o = block * nc_;
+    for (int j = 0; j < nc_; ++j) {
+      for (int i = j; i < nc_; ++i) out[k++] = piece(o + i, o + j);
+    }
+  }
+  for (int j = 0; j < nc_; ++j) {
+    for (int i = 0; i < nc_; ++i) out[k++] = piece(i, nc_ + j);
+  }
+}
+
+void ContinuousCondensation::BuildTables() {
+  const int columns = TermsFor(kMaxRatio);
+  const auto split =
+      [](const Eigen::MatrixXcd& table, bool complex_base, StateData* sd, SectionData* sec) {
+        Eigen::MatrixXd& re = sd != nullptr ? sd->table_re : sec->table_re;
+        Eigen::MatrixXd& im = sd != nullptr ? sd->table_im : sec->table_im;
+        re = table.real();
+        if (complex_base) im = table.imag();
+      };
+  for (StateData& sd : states_) {
+    const std::size_t count = 2 + sd.moments.size();
+    Eigen::MatrixXcd table(PackedSize(), static_cast<Eigen::Index>(count));
+    PackPiece(sd.k_static, table.col(0).data());
+    PackPiece(-sd.m_static, table.col(1).data());
+    for (std::size_t k = 0; k < sd.moments.size(); ++k) {
+      PackPiece(-sd.moments[k], table.col(static_cast<Eigen::Index>(k) + 2).data());
+    }
+    split(table, own_loss_factors_, &sd, nullptr);
+    sd.k_static.resize(0, 0);
+    sd.m_static.resize(0, 0);
+    sd.moments.clear();
+  }
+  for (SectionData& sec : sections_) {
+    const Eigen::Index map_rows = sec.out_static.size();
+    const Eigen::Index rows = map_rows + (sec.loaded ? 2 * nc_ + sec.num_outputs : 0);
+    const Eigen::Index count = sec.out_terms.empty() ? 1 : columns + 1;
+    Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(rows, count);
+    for (Eigen::Index j = 0; j < count; ++j) {
+      const Eigen::MatrixXcd& map = j == 0 ? sec.out_static : sec.out_terms[j - 1];
+      table.col(j).head(map_rows) = map.reshaped();
+      if (sec.loaded) {
+        const Eigen::VectorXcd& load = j == 0 ? sec.load_static : sec.load_terms[j - 1];
+        table.col(j).segment(map_rows, 2 * nc_) = load;
+        table.col(j).tail(sec.num_outputs) = sec.offset_terms[j];
+      }
+    }
+    split(table, own_loss_factors_, nullptr, &sec);
+    sec.out_static.resize(0, 0);
+    sec.out_terms.clear();
+    sec.load_static.resize(0);
+    sec.load_terms.clear();
+    sec.offset_terms.clear();
+  }
+}
+
+void ContinuousCondensation::FreeDofs(int cross_section,
+                                      bool fixed_a,
+                                      bool fixed_b,
+                                      std::vector<int>* free) const {
+  free->clear();
+  for (int d = 0; d < nc_; ++d) {
+    const int j = d / kDofsPerNode;
+    const int bit = 1 << (d % kDofsPerNode);
+    int mask = 0;
+    if (fixed_a && j == 0) mask |= fixed_mask_a_;
+    if (fixed_b && j == ny_) mask |= fixed_mask_b_;
+    if (cross_section == 0) mask |= start_mask_;
+    if (cross_section == num_sections_) mask |= end_mask_;
+    if ((mask & bit) == 0) free->push_back(d);
+  }
+}
+
+std::array<int, 4> ContinuousCondensation::SeriesTerms(std::complex<double> mu) const {
+  std::array<int, 4> terms = {0, 0, 0, 0};
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    const int t = TermsFor(std::abs(mu) / states_[i].lambda_bound);
+    int& slot = terms[i % 4];
+    slot = (slot < 0 || t < 0) ? -1 : std::max(slot, t);
+  }
+  return terms;
+}
+
+std::size_t ContinuousCondensation::MemoryBytes() const {
+  const auto bytes = [](const auto& a) {
+    return sizeof(typename std::decay_t<decltype(a)>::Scalar) * static_cast<std::size_t>(a.size());
+  };
+  const auto sparse = [](const Eigen::SparseMatrix<Complex>& a) {
+    return static_cast<std::size_t>(a.nonZeros()) * (sizeof(Complex) + sizeof(int)) +
+           static_cast<std::size_t>(a.outerSize() + 1) * sizeof(int);
+  };
+  std::size_t total = 0;
+  for (const StateData& sd : states_) {
+    total += bytes(sd.table_re) + bytes(sd.table_im) + bytes(sd.k_ib) + bytes(sd.m_ib) +
+             bytes(sd.k_bb) + bytes(sd.m_bb) + sparse(sd.k_ii) + sparse(sd.m_ii);
+  }
+  for (const SectionData& sec : sections_) {
+    total += bytes(sec.table_re) + bytes(sec.table_im) + bytes(sec.r_i) + bytes(sec.r_b) +
+             bytes(sec.f_i);
+  }
+  for (const auto& b : boundary_load_) total += bytes(b);
+  return total;
+}
+
+}  // namespace combabc::plate

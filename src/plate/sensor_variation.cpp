@@ -1,0 +1,130 @@
+// SensorModel with continuous unknowns (docs/model.md, "Continuous unknowns"): validation of a
+// SensorVariation, the options it stands for, and the per-call entry points over
+// ContinuousCondensation.
+#include <sstream>
+
+#include "combabc/core/error.hpp"
+#include "combabc/core/thread_pool.hpp"
+#include "combabc/plate/sensor_model.hpp"
+#include "continuous_condensation.hpp"
+
+namespace combabc::plate {
+namespace {
+
+bool Fail(std::string* why, const char* field, double value, const char* constraint) {
+  if (why != nullptr) {
+    std::ostringstream os;
+    os << "SensorVariation::" << field << " = " << value << "; " << constraint;
+    *why = os.str();
+  }
+  return false;
+}
+
+bool InRange(double value, double lo, double hi) { return value >= lo && value <= hi; }
+
+}  // namespace
+
+bool SensorVariation::IsValid(std::string* why) const {
+  // The ranges of SensorOptions::foundation_stiffness and Layer::loss_factor (docs/config.md);
+  // NaN fails every comparison.
+  if (foundation_stiffness && !InRange(*foundation_stiffness, 0.0, 1e15)) {
+    return Fail(why, "foundation_stiffness", *foundation_stiffness, "must be in [0, 1e15] N/m^3");
+  }
+  // A millionth to a million times the laminate: far beyond any material uncertainty, and with
+  // Layer's modulus range every scaled stiffness stays a finite, non-zero double.
+  if (stiffness_scale && !InRange(*stiffness_scale, 1e-6, 1e6)) {
+    return Fail(why, "stiffness_scale", *stiffness_scale, "must be in [1e-6, 1e6]");
+  }
+  if (loss_factor && !InRange(*loss_factor, 0.0, 10.0)) {
+    return Fail(why, "loss_factor", *loss_factor, "must be in [0, 10]");
+  }
+  return true;
+}
+
+SensorOptions ApplyVariation(SensorOptions options, const SensorVariation& variation) {
+  if (variation.foundation_stiffness) {
+    options.foundation_stiffness = *variation.foundation_stiffness;
+  }
+  for (Layer& layer : options.layers) {
+    if (variation.stiffness_scale) layer.youngs_modulus *= *variation.stiffness_scale;
+    if (variation.loss_factor) layer.loss_factor = *variation.loss_factor;
+  }
+  return options;
+}
+
+void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
+                                 const SensorVariation& variation,
+                                 std::span<std::complex<double>> out) const {
+  if (variation.empty()) {
+    ComplexProfile(clamps, out);  // the clamp-only fast path
+    return;
+  }
+  CheckSpans(clamps, out.size());
+  std::string why;
+  if (!variation.IsValid(&why)) {
+    throw Error(ErrorKind::kConfig, why, "", 0, why.substr(0, why.find(' ')));
+  }
+  std::complex<double> factor;
+  std::complex<double> mu;
+  const ContinuousCondensation& continuous = Continuous(variation, &factor, &mu);
+  continuous.Solve(clamps, mu, out);
+  // The solve was of K / factor.
+  const std::complex<double> inverse = 1.0 / factor;
+  for (std::complex<double>& v : out) v *= inverse;
+}
+
+void SensorModel::Profile(std::span<const std::uint8_t> clamps,
+                          const SensorVariation& variation,
+                          std::span<double> out) const {
+  CheckSpans(clamps, out.size());
+  // Reused per thread: no allocation per configuration.
+  thread_local std::vector<std::complex<double>> w;
+  w.resize(out.size());
+  ComplexProfile(clamps, variation, w);
+  Finish(w, out);
+}
+
+void SensorModel::ProfileBatch(std::span<const std::uint8_t> clamps,
+                               std::span<const SensorVariation> variations,
+                               std::size_t n,
+                               std::span<double> out,
+                               int threads) const {
+  const std::size_t nk = static_cast<std::size_t>(num_clamps());
+  const std::size_t no = static_cast<std::size_t>(num_outputs());
+  if (clamps.size() != n * nk || out.size() != n * no || variations.size() != n) {
+    throw Error(ErrorKind::kConfig,
+                "ProfileBatch: clamps must be n x num_clamps, variations n and out n x num_outputs",
+                "",
+                0,
+                "clamps");
+  }
+  if (threads < 0) throw Error(ErrorKind::kConfig, "threads must be >= 0", "", 0, "threads");
+  // Each configuration writes only its own row, so the result does not depend on the schedule.
+  ThreadPool pool(threads);
+  pool.ParallelFor(n, 4, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Profile(clamps.subspan(i * nk, nk), variations[i], out.subspan(i * no, no));
+    }
+  });
+}
+
+std::array<int, 4> SensorModel::VariationSeriesTerms(const SensorVariation& variation) const {
+  std::string why;
+  if (!variation.IsValid(&why)) {
+    throw Error(ErrorKind::kConfig, why, "", 0, why.substr(0, why.find(' ')));
+  }
+  std::complex<double> factor;
+  std::complex<double> mu;
+  return Continuous(variation, &factor, &mu).SeriesTerms(mu);
+}
+
+std::size_t SensorModel::VariationPrecomputedBytes() const {
+  std::size_t bytes = 0;
+  for (const auto& ready : continuous_->ready) {
+    const ContinuousCondensation* base = ready.load(std::memory_order_acquire);
+    if (base != nullptr) bytes += base->MemoryBytes();
+  }
+  return bytes;
+}
+
+}  // namespace combabc::plate
