@@ -48,7 +48,9 @@ void BuildModel(Problem& p) {
   // First, as it is cheap: checks the metric's windows and indicators against the model's output
   // positions and the data before the model is assembled or anything simulated or stored.
   p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
-  p.simulator = std::make_unique<SensorSimulator>(p.config.model);
+  std::vector<std::string> real_names;
+  for (const auto& r : p.config.reals) real_names.push_back(r.name);
+  p.simulator = std::make_unique<SensorSimulator>(p.config.model, std::move(real_names));
   const int clamps = p.simulator->model().num_clamps();
   if (p.config.space.dimension != clamps) {
     throw Error(ErrorKind::kConfig,
@@ -58,7 +60,7 @@ void BuildModel(Problem& p) {
                 0,
                 "model");
   }
-  p.space.emplace(BinarySpace(p.config.space));
+  p.space.emplace(BinarySpace(p.config.space), p.config.reals);
 }
 
 Fingerprint FingerprintOf(const Problem& p) {

@@ -1,18 +1,57 @@
 #include "combabc/services/sensor_simulator.hpp"
 
+#include "combabc/core/check.hpp"
+#include "combabc/core/error.hpp"
+
 namespace combabc::services {
 
-SensorSimulator::SensorSimulator(const plate::SensorOptions& options) : model_(options) {}
+SensorSimulator::SensorSimulator(const plate::SensorOptions& options,
+                                 std::vector<std::string> real_names)
+    : model_(options), real_names_(std::move(real_names)) {
+  for (const auto& name : real_names_) {
+    if (name != "foundation_stiffness" && name != "stiffness_scale" && name != "loss_factor") {
+      throw Error(ErrorKind::kConfig,
+                  "the sensor model has no continuous parameter " + Excerpt(name),
+                  "",
+                  0,
+                  "parameters." + name);
+    }
+  }
+}
+
+plate::SensorVariation SensorSimulator::Variation(std::span<const double> reals) const {
+  COMBABC_CHECK(reals.size() == real_names_.size());
+  plate::SensorVariation v;
+  for (std::size_t k = 0; k < reals.size(); ++k) {
+    const std::string& name = real_names_[k];
+    if (name == "foundation_stiffness") {
+      v.foundation_stiffness = reals[k];
+    } else if (name == "stiffness_scale") {
+      v.stiffness_scale = reals[k];
+    } else {
+      v.loss_factor = reals[k];
+    }
+  }
+  return v;
+}
 
 void SensorSimulator::Simulate(const ParameterView& theta,
                                RandomStream& /*rng*/,
                                std::span<double> out) const {
-  model_.Profile(theta.bits, out);
+  if (real_names_.empty()) {
+    model_.Profile(theta.bits, out);
+  } else {
+    model_.Profile(theta.bits, Variation(theta.reals), out);
+  }
 }
 
 void SensorSimulator::SimulateBatch(const ParameterBatch& batch,
-                                    std::span<RandomStream> /*rngs*/,
+                                    std::span<RandomStream> rngs,
                                     std::span<double> out) const {
+  if (!real_names_.empty()) {
+    Simulator::SimulateBatch(batch, rngs, out);  // one variation per candidate
+    return;
+  }
   // One thread here: the engine already runs one batch per worker thread.
   model_.ProfileBatch(batch.bits, batch.count, out, 1);
 }
