@@ -140,7 +140,9 @@ class ContinuousCondensation {
   // A symmetric 2 nc x 2 nc piece packed as the solve reads it: the lower triangles of its left
   // and right diagonal blocks by columns (column j of a triangle starts at LowerStart(j)), then
   // its coupling block (rows left, columns right) by columns.
-  Eigen::Index PackedSize() const { return static_cast<Eigen::Index>(nc_) * (nc_ + 1) + nc_ * nc_; }
+  Eigen::Index PackedSize() const {
+    return static_cast<Eigen::Index>(nc_) * (nc_ + 1) + static_cast<Eigen::Index>(nc_) * nc_;
+  }
   Eigen::Index LowerStart(int j) const {
     return static_cast<Eigen::Index>(j) * nc_ - static_cast<Eigen::Index>(j) * (j - 1) / 2;
   }

@@ -225,6 +225,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     const Complex* left = c > 0 ? piece_of(c - 1) + right_block : nullptr;
     const Complex* right = c < ns ? piece_of(c) : nullptr;
     const Complex* only = left != nullptr ? left : right;  // the plate's end cross-sections
+    COMBABC_CHECK(only != nullptr);  // a cross-section has a section on at least one side
     for (Eigen::Index j = 0; j < n; ++j) {
       const Eigen::Index start = LowerStart(f[j]) - f[j];
       if (left != nullptr && right != nullptr) {
@@ -365,7 +366,9 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     } else {
       values.setZero();
     }
-    values.noalias() += Eigen::Map<const Eigen::MatrixXcd>(section.data(), n_out, 2 * nc) * ends;
+    values.noalias() += Eigen::Map<const Eigen::MatrixXcd>(
+                            section.data(), n_out, 2 * static_cast<Eigen::Index>(nc)) *
+                        ends;
     for (std::size_t o = 0; o < outputs.size(); ++o) {
       w[outputs[o]] = values(static_cast<Eigen::Index>(o));
     }
