@@ -11,21 +11,9 @@
 namespace combabc::config_internal {
 namespace {
 
-// The sensor model's continuous unknowns and the physical range of each (SI units).
-struct RealParameterInfo {
-  const char* name;
-  double low, high;  // closed physical range the prior's support must lie in
-  const char* meaning;
-};
-constexpr RealParameterInfo kSensorReals[] = {
-    {"foundation_stiffness", 0.0, 1e15, "Winkler foundation stiffness k_f, N/m^3"},
-    {"stiffness_scale", 1e-6, 1e6, "factor on every layer's Young's modulus"},
-    {"loss_factor", 0.0, 10.0, "structural loss factor of every layer"},
-};
-
 std::string Names() {
   std::string out;
-  for (const auto& p : kSensorReals) {
+  for (const auto& p : plate::kSensorVariationFields) {
     out += out.empty() ? "\"" : ", \"";
     out += p.name;
     out += "\"";
@@ -39,7 +27,7 @@ std::string Num(double x) {
   return buf;
 }
 
-ContinuousPrior ParsePrior(TableReader& t, const RealParameterInfo& info) {
+ContinuousPrior ParsePrior(TableReader& t, const plate::SensorVariationField& info) {
   ContinuousPrior prior;
   const auto kind = t.Choice<PriorKind>("prior", "prior");
   if (!kind) {
@@ -131,10 +119,7 @@ void ParseParametersSection(TableReader& root, CalibrationConfig* c) {
   auto t = root.Table("parameters");
   for (const auto& [key, value] : *node->as_table()) {
     const std::string name(key.str());
-    const RealParameterInfo* info = nullptr;
-    for (const auto& p : kSensorReals) {
-      if (name == p.name) info = &p;
-    }
+    const plate::SensorVariationField* info = plate::FindSensorVariationField(name);
     if (!info) {
       root.FailAt(value,
                   "parameters." + name,

@@ -39,6 +39,8 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
+#include "section_condensation.hpp"
+
 #include "combabc/plate/plate.hpp"
 
 namespace combabc::plate {
@@ -147,7 +149,16 @@ class ContinuousCondensation {
     return static_cast<Eigen::Index>(j) * nc_ - static_cast<Eigen::Index>(j) * (j - 1) / 2;
   }
   void PackPiece(const Eigen::MatrixXcd& piece, std::complex<double>* out) const;
-  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const;
+  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {
+    CrossSectionFreeDofs(nc_,
+                         ny_,
+                         num_sections_,
+                         {fixed_mask_a_, fixed_mask_b_, start_mask_, end_mask_},
+                         cross_section,
+                         fixed_a,
+                         fixed_b,
+                         free);
+  }
 
   int num_sections_;
   int elements_per_section_;

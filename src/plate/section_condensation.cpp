@@ -176,23 +176,6 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   }
 }
 
-void SectionCondensation::FreeDofs(int cross_section,
-                                   bool fixed_a,
-                                   bool fixed_b,
-                                   std::vector<int>* free) const {
-  free->clear();
-  for (int d = 0; d < nc_; ++d) {
-    const int j = d / kDofsPerNode;
-    const int bit = 1 << (d % kDofsPerNode);
-    int mask = 0;
-    if (fixed_a && j == 0) mask |= fixed_mask_a_;
-    if (fixed_b && j == ny_) mask |= fixed_mask_b_;
-    if (cross_section == 0) mask |= start_mask_;
-    if (cross_section == num_sections_) mask |= end_mask_;
-    if ((mask & bit) == 0) free->push_back(d);
-  }
-}
-
 SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int state) const {
   const int g = group_size_;
   const int nc = nc_;

@@ -31,6 +31,35 @@
 
 namespace combabc::plate {
 
+// The masks that fix a cross-section's dofs (bit k of a mask: the node's dof k is fixed): an
+// edge node of a fixed clamp (edge A at j = 0, edge B at j = ny) and the plate's two end
+// cross-sections.
+struct CrossSectionMasks {
+  std::uint8_t fixed_a, fixed_b, start, end;
+};
+// The free dofs (0..nc-1, in order) of cross-section `cross_section` of `num_sections` sections
+// whose edge-A / edge-B clamps are fixed as given; shared by both condensations.
+inline void CrossSectionFreeDofs(int nc,
+                                 int ny,
+                                 int num_sections,
+                                 const CrossSectionMasks& masks,
+                                 int cross_section,
+                                 bool fixed_a,
+                                 bool fixed_b,
+                                 std::vector<int>* free) {
+  free->clear();
+  for (int d = 0; d < nc; ++d) {
+    const int j = d / kDofsPerNode;
+    const int bit = 1 << (d % kDofsPerNode);
+    int mask = 0;
+    if (fixed_a && j == 0) mask |= masks.fixed_a;
+    if (fixed_b && j == ny) mask |= masks.fixed_b;
+    if (cross_section == 0) mask |= masks.start;
+    if (cross_section == num_sections) mask |= masks.end;
+    if ((mask & bit) == 0) free->push_back(d);
+  }
+}
+
 class SectionCondensation {
  public:
   // `plate` must have num_sections * elements_per_section elements along x. Masks: dofs fixed on
@@ -84,7 +113,16 @@ class SectionCondensation {
   Piece ComposeGroup(int group, int state) const;
   const Piece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
   // Free dofs (0..nc-1) of a cross-section between sections with edge-A / edge-B flags.
-  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const;
+  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {
+    CrossSectionFreeDofs(nc_,
+                         ny_,
+                         num_sections_,
+                         {fixed_mask_a_, fixed_mask_b_, start_mask_, end_mask_},
+                         cross_section,
+                         fixed_a,
+                         fixed_b,
+                         free);
+  }
 
   int num_sections_;
   int elements_per_section_;

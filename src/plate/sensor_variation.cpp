@@ -27,18 +27,20 @@ bool InRange(double value, double lo, double hi) { return value >= lo && value <
 bool SensorVariation::IsValid(std::string* why) const {
   // The ranges of SensorOptions::foundation_stiffness and Layer::loss_factor (docs/config.md);
   // NaN fails every comparison.
-  if (foundation_stiffness && !InRange(*foundation_stiffness, 0.0, 1e15)) {
-    return Fail(why, "foundation_stiffness", *foundation_stiffness, "must be in [0, 1e15] N/m^3");
-  }
-  // A millionth to a million times the laminate: far beyond any material uncertainty, and with
-  // Layer's modulus range every scaled stiffness stays a finite, non-zero double.
-  if (stiffness_scale && !InRange(*stiffness_scale, 1e-6, 1e6)) {
-    return Fail(why, "stiffness_scale", *stiffness_scale, "must be in [1e-6, 1e6]");
-  }
-  if (loss_factor && !InRange(*loss_factor, 0.0, 10.0)) {
-    return Fail(why, "loss_factor", *loss_factor, "must be in [0, 10]");
+  for (const SensorVariationField& field : kSensorVariationFields) {
+    const std::optional<double>& value = this->*field.member;
+    if (value && !InRange(*value, field.low, field.high)) {
+      return Fail(why, field.name, *value, (std::string("must be in ") + field.range_text).c_str());
+    }
   }
   return true;
+}
+
+const SensorVariationField* FindSensorVariationField(std::string_view name) {
+  for (const SensorVariationField& field : kSensorVariationFields) {
+    if (name == field.name) return &field;
+  }
+  return nullptr;
 }
 
 SensorOptions ApplyVariation(SensorOptions options, const SensorVariation& variation) {

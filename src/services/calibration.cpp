@@ -74,6 +74,17 @@ Fingerprint FingerprintOf(const Problem& p) {
   return ComputeFingerprint(inputs);
 }
 
+// A new run's problem from its config file: the config (threads >= 0 overrides the config's), the
+// measured data read from disk, the model. (A resume takes the data stored in its history.)
+void LoadProblem(const std::string& config_path, int threads, Problem& p) {
+  p.config = LoadConfig(config_path);
+  if (threads >= 0) p.config.smc.threads = threads;
+  const auto data = LoadMeasuredData(p.config.data, p.config.directory);
+  p.data_positions = data.positions;
+  p.data_values = data.displacements;
+  BuildModel(p);
+}
+
 RunMetadata Describe(const Problem& p) {
   RunMetadata m;
   m.combabc_version = COMBABC_VERSION;
@@ -139,12 +150,7 @@ RunOutcome Execute(Problem& problem,
 
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   Problem p;
-  p.config = LoadConfig(request.config_path);
-  if (request.threads >= 0) p.config.smc.threads = request.threads;
-  const auto data = LoadMeasuredData(p.config.data, p.config.directory);
-  p.data_positions = data.positions;
-  p.data_values = data.displacements;
-  BuildModel(p);
+  LoadProblem(request.config_path, request.threads, p);
 
   std::string directory = request.output_directory.empty()
                               ? ResolvePath(p.config.directory, p.config.output.directory)
@@ -272,12 +278,7 @@ void WriteEnumerationFiles(OutputDirectory& dir, const RunMetadata& m, const Enu
 
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress) {
   Problem p;
-  p.config = LoadConfig(request.config_path);
-  if (request.threads >= 0) p.config.smc.threads = request.threads;
-  const auto data = LoadMeasuredData(p.config.data, p.config.directory);
-  p.data_positions = data.positions;
-  p.data_values = data.displacements;
-  BuildModel(p);
+  LoadProblem(request.config_path, request.threads, p);
 
   EnumerationOptions options;
   options.thresholds = request.thresholds.empty() ? FinalThresholds(p.config) : request.thresholds;

@@ -9,29 +9,22 @@ SensorSimulator::SensorSimulator(const plate::SensorOptions& options,
                                  std::vector<std::string> real_names)
     : model_(options), real_names_(std::move(real_names)) {
   for (const auto& name : real_names_) {
-    if (name != "foundation_stiffness" && name != "stiffness_scale" && name != "loss_factor") {
+    const plate::SensorVariationField* field = plate::FindSensorVariationField(name);
+    if (field == nullptr) {
       throw Error(ErrorKind::kConfig,
                   "the sensor model has no continuous parameter " + Excerpt(name),
                   "",
                   0,
                   "parameters." + name);
     }
+    members_.push_back(field->member);
   }
 }
 
 plate::SensorVariation SensorSimulator::Variation(std::span<const double> reals) const {
-  COMBABC_CHECK(reals.size() == real_names_.size());
+  COMBABC_CHECK(reals.size() == members_.size());
   plate::SensorVariation v;
-  for (std::size_t k = 0; k < reals.size(); ++k) {
-    const std::string& name = real_names_[k];
-    if (name == "foundation_stiffness") {
-      v.foundation_stiffness = reals[k];
-    } else if (name == "stiffness_scale") {
-      v.stiffness_scale = reals[k];
-    } else {
-      v.loss_factor = reals[k];
-    }
-  }
+  for (std::size_t k = 0; k < reals.size(); ++k) v.*members_[k] = reals[k];
   return v;
 }
 

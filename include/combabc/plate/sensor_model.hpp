@@ -26,6 +26,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -142,6 +143,24 @@ struct SensorVariation {
   // On failure `why` reads "SensorVariation::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
+
+// SensorVariation's fields by name, with their ranges: the one table that IsValid, the config's
+// [parameters.<name>] and the engine's simulator go through.
+struct SensorVariationField {
+  const char* name;
+  std::optional<double> SensorVariation::*member;
+  double low, high;        // closed range
+  const char* range_text;  // "[0, 1e15] N/m^3", for messages
+};
+inline constexpr SensorVariationField kSensorVariationFields[] = {
+    {"foundation_stiffness", &SensorVariation::foundation_stiffness, 0.0, 1e15, "[0, 1e15] N/m^3"},
+    // A millionth to a million times the laminate: far beyond any material uncertainty, and with
+    // Layer's modulus range every scaled stiffness stays a finite, non-zero double.
+    {"stiffness_scale", &SensorVariation::stiffness_scale, 1e-6, 1e6, "[1e-6, 1e6]"},
+    {"loss_factor", &SensorVariation::loss_factor, 0.0, 10.0, "[0, 10]"},
+};
+// The field called `name`, or nullptr.
+const SensorVariationField* FindSensorVariationField(std::string_view name);
 
 // `options` with the variation's values applied (youngs_modulus *= s and loss_factor = eta in
 // every layer, foundation_stiffness = k_f): the model SensorModel::Profile(clamps, variation, ...)

@@ -32,6 +32,8 @@ class SensorSimulator : public Simulator {
 
   plate::SensorModel model_;
   std::vector<std::string> real_names_;
+  // The SensorVariation field each real sets, by its name (plate::kSensorVariationFields).
+  std::vector<std::optional<double> plate::SensorVariation::*> members_;
 };
 
 }  // namespace combabc::services
