@@ -2,11 +2,22 @@
 // The simulator f_theta: from a parameter value (bits + reals) to an output vector Y*.
 #include <cstdint>
 #include <span>
+#include <stdexcept>
+#include <string>
 
 #include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
+
+// Thrown by a simulator for one candidate whose simulation failed in a way a run can survive (an
+// external process that crashed, hung, or printed something unreadable): the candidate counts as
+// a failed simulation, with `what()` as its reason, and is never accepted. Any other exception is
+// a defect or a fatal condition and ends the run.
+class SimulationFailed : public std::runtime_error {
+ public:
+  explicit SimulationFailed(const std::string& reason) : std::runtime_error(reason) {}
+};
 
 class Simulator {
  public:
