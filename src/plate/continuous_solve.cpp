@@ -288,6 +288,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     double scale = 0.0;
     for (int c = 0; c < rows; ++c) {
       const Eigen::Index n = size(c);
+      if (n == 0) continue;  // a cross-section with every dof fixed has no equation
       auto r = ws.tmp.head(n);
       const auto a = ws.diagonal[c].topLeftCorner(n, n);
       r.noalias() = a.triangularView<Eigen::Lower>() * ws.u[c].head(n);

@@ -248,7 +248,8 @@ SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int stat
     // Jacobi-scaled (see Plate::SolveHarmonic).
     const Eigen::VectorXd scale = k_ii.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
     const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(scale.asDiagonal() * k_ii * scale.asDiagonal());
-    x_b = scale.asDiagonal() * lu.solve(scale.asDiagonal() * k_ib);
+    // Empty products are skipped: Eigen binds references to their (null) data in Debug.
+    if (nb > 0) x_b = scale.asDiagonal() * lu.solve(scale.asDiagonal() * k_ib);
     x_f = scale.asDiagonal() * lu.solve(scale.asDiagonal() * g_i);
   }
   Piece result;
