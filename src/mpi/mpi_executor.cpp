@@ -48,7 +48,7 @@ class Slice : public BatchTask {
 
 // An exception as bytes, to rebuild the same one on another rank: combabc::Error with all its
 // parts, anything else as its what().
-std::string Serialise(std::exception_ptr error) {
+std::string Serialise(const std::exception_ptr& error) {
   std::string bytes;
   auto add = [&bytes](const std::string& s) {
     bytes += std::to_string(s.size()) + ':';
@@ -157,7 +157,7 @@ void MpiExecutor::Execute(std::size_t n, BatchTask& task) {
   }
 }
 
-void MpiExecutor::Join(std::exception_ptr error) {
+void MpiExecutor::Join(const std::exception_ptr& error) {
   // The lowest failing rank's error wins: the same one on every rank, whatever the timing.
   const int mine = error ? rank_ : size_;
   int first = size_;

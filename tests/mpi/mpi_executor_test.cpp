@@ -26,8 +26,9 @@ class ToyTask : public BatchTask {
       if (i == fail_at_) {
         throw Error(ErrorKind::kSoftware, "candidate " + std::to_string(i), "sim.toml", 7, "x");
       }
-      for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t k = 0; k < 3; ++k) {
         a_[i * 3 + k] = static_cast<double>(i) + 0.25 * static_cast<double>(k);
+      }
       b_[i] = static_cast<std::uint8_t>(i % 251);
       ++evaluated_;
     }
@@ -79,7 +80,7 @@ TEST(MpiExecutor, AFailureOnOneRankIsThrownOnEveryRankAlike) {
   // Still in step afterwards.
   ToyTask ok(4);
   executor.Execute(4, ok);
-  EXPECT_EQ(ok.a_[3 * 3], 3.0);
+  EXPECT_EQ(ok.a_[9], 3.0);  // row 3, first value
 }
 
 TEST(MpiExecutor, JoinThrowsTheLowestFailingRanksErrorEverywhere) {

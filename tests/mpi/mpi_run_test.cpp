@@ -66,6 +66,7 @@ pid_t Spawn(int np, const std::vector<std::string>& args, const fs::path& dir, i
   all.push_back(COMBABC_CLI);
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(all.size() + 1);
   for (auto& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;
@@ -143,8 +144,9 @@ class MpiRun : public ::testing::Test {
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
     std::ofstream data(dir_ / "data.csv");
     data << "position_m,displacement_m\n";
-    for (int i = 31; i < 60; i += 3)
+    for (int i = 31; i < 60; i += 3) {
       data << i / 100.0 << "," << 1e-3 - std::abs(i / 100.0 - 0.45) << "\n";
+    }
   }
   void WriteConfig(const std::string& name, int waves, int accepted) {
     std::ofstream(dir_ / name) << Config(waves, accepted);

@@ -46,7 +46,7 @@ class Executor {
   // returns on all when none failed, else throws on all the failure of the first that failed
   // (combabc::Error keeps its kind), so that a step only the primary does (creating the history)
   // cannot leave the others running, and every worker exits with the same code.
-  virtual void Join(std::exception_ptr error) {
+  virtual void Join(const std::exception_ptr& error) {
     if (error) std::rethrow_exception(error);
   }
   // The primary's value, on every worker: for decisions that are not a function of the inputs

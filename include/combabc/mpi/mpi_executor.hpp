@@ -41,7 +41,7 @@ class MpiExecutor : public Executor {
   // (a rank that died) is Error(kSoftware) naming MPI.
   void Execute(std::size_t n, BatchTask& task) override;
   bool primary() const override { return rank_ == 0; }
-  void Join(std::exception_ptr error) override;
+  void Join(const std::exception_ptr& error) override;
   bool FromPrimary(bool value) override;
 
   int rank() const { return rank_; }
