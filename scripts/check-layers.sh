@@ -5,10 +5,11 @@
 # test-math-dependencies: a cheap grep that fails CI. There is no exception list.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-order=(core rng params schedules proposals distances samplers plate data metrics config history
+order=(core mpi rng params schedules proposals distances samplers plate data metrics config history
   export services)
 declare -A deps=(
   [core]=""
+  [mpi]="core"
   [rng]="core"
   [params]="core rng"
   [proposals]="core rng params schedules"

@@ -5,11 +5,16 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <memory>
+#include <optional>
 
 #include "combabc/core/error.hpp"
 #include "combabc/services/calibration.hpp"
 #include "interrupt.hpp"
 #include "progress_display.hpp"
+#ifdef COMBABC_HAVE_MPI
+#include "combabc/mpi/mpi_executor.hpp"
+#endif
 
 namespace {
 
@@ -120,66 +125,98 @@ int main(int argc, char** argv) try {
     return kExitUsage;
   }
 
-  combabc::cli::ProgressDisplay progress(isatty(STDERR_FILENO) != 0);
-  combabc::cli::InterruptObserver interrupt(quiet ? nullptr : &progress);
-  combabc::SmcObserver* observer = &interrupt;
-  bool interrupted = false;
-  try {
-    if (*run || *resume) {
-      request.report = !no_report;
-      const auto outcome = *run ? combabc::services::RunCalibration(request, observer)
-                                : combabc::services::ResumeCalibration(
-                                      history, resume_threads, !no_report, observer);
-      PrintOutcome(outcome);
-      interrupted = outcome.history.summary.termination == combabc::Termination::kInterrupted;
-      if (interrupted) {
-        std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path << "\n";
-      }
-    } else if (*enumerate) {
-      enumerate_request.report = !no_report;
-      const auto outcome = combabc::services::RunEnumeration(enumerate_request, observer);
-      interrupted = outcome.interrupted;
-      if (interrupted) {
-        std::cerr << "interrupted after " << outcome.enumerated << " of " << outcome.configurations
-                  << " configurations; nothing written (an enumeration cannot be resumed)\n";
-      } else {
-        std::cout << "enumerated " << outcome.configurations
-                  << " configurations: " << outcome.accepted << " accepted, evidence "
-                  << outcome.evidence << " (" << outcome.wall_seconds << " s)\n"
-                  << "history: " << outcome.history_path << "\n"
-                  << "tables:  " << outcome.enumeration_directory << "\n";
-        if (!outcome.report_directory.empty()) {
-          std::cout << "report:  " << outcome.report_directory << "/index.html\n";
-        }
-      }
-    } else if (*simulate) {
-      combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);
-      std::cout << "wrote " << sim_out << "\n";
-    } else if (*report) {
-      // Written first, printed after: a failure prints no half line on stdout.
-      const auto directory = combabc::services::WriteReport(history, out_dir, overwrite_dir);
-      std::cout << "report: " << directory << "/index.html\n";
-    } else if (*verify) {
-      const auto outcome = combabc::services::VerifyHistory(history);
-      for (const std::string& line : outcome.lines) {
-        (outcome.ok ? std::cout : std::cerr)
-            << (outcome.ok ? "" : "combabc: data error: ") << line << "\n";
-      }
-      if (!outcome.ok) return combabc::ExitCode(combabc::ErrorKind::kData);
-    } else if (*exporter) {
-      const auto directory = combabc::services::ExportHistory(history, out_dir, overwrite_dir);
-      std::cout << "export: " << directory << "\n";
-    }
-  } catch (const combabc::Error& e) {
-    progress.Clear();
-    std::cerr << "combabc: " << ToString(e.kind()) << ": " << e.what() << "\n";
-    return combabc::ExitCode(e.kind());
-  } catch (const std::exception& e) {
-    progress.Clear();
-    std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";
-    return kExitSoftware;
+  // Under mpirun (and only there: a plain run never touches MPI) every rank runs the same command
+  // (SPMD, docs/architecture.md): run, resume and enumerate spread their simulations over the
+  // ranks; rank 0 alone prints and writes files, the others are silent; all exit with rank 0's
+  // code.
+  bool primary = true;
+  combabc::services::ExecutorFactory executor;
+#ifdef COMBABC_HAVE_MPI
+  std::optional<combabc::mpi::MpiSession> mpi;
+  if (combabc::mpi::MpiSession::LaunchedByMpirun()) {
+    mpi.emplace(&argc, &argv);
+    primary = mpi->rank() == 0;
+    executor = [](int threads) { return std::make_unique<combabc::mpi::MpiExecutor>(threads); };
   }
-  return interrupted ? 130 : 0;
+#endif
+  if (!primary) {
+    std::cout.setstate(std::ios::failbit);
+    std::cerr.setstate(std::ios::failbit);
+  }
+  request.executor = executor;
+  enumerate_request.executor = executor;
+  // The command itself; returns the exit code.
+  auto run_command = [&]() -> int {
+    combabc::cli::ProgressDisplay progress(primary && isatty(STDERR_FILENO) != 0);
+    combabc::cli::InterruptObserver interrupt(quiet || !primary ? nullptr : &progress);
+    combabc::SmcObserver* observer = &interrupt;
+    bool interrupted = false;
+    try {
+      if (*run || *resume) {
+        request.report = !no_report;
+        const auto outcome = *run ? combabc::services::RunCalibration(request, observer)
+                                  : combabc::services::ResumeCalibration(
+                                        history, resume_threads, !no_report, observer, executor);
+        PrintOutcome(outcome);
+        interrupted = outcome.history.summary.termination == combabc::Termination::kInterrupted;
+        if (interrupted) {
+          std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path
+                    << "\n";
+        }
+      } else if (*enumerate) {
+        enumerate_request.report = !no_report;
+        const auto outcome = combabc::services::RunEnumeration(enumerate_request, observer);
+        interrupted = outcome.interrupted;
+        if (interrupted) {
+          std::cerr << "interrupted after " << outcome.enumerated << " of "
+                    << outcome.configurations
+                    << " configurations; nothing written (an enumeration cannot be resumed)\n";
+        } else {
+          std::cout << "enumerated " << outcome.configurations
+                    << " configurations: " << outcome.accepted << " accepted, evidence "
+                    << outcome.evidence << " (" << outcome.wall_seconds << " s)\n"
+                    << "history: " << outcome.history_path << "\n"
+                    << "tables:  " << outcome.enumeration_directory << "\n";
+          if (!outcome.report_directory.empty()) {
+            std::cout << "report:  " << outcome.report_directory << "/index.html\n";
+          }
+        }
+      } else if (!primary) {
+        // The other commands write or print only: rank 0 does them, the others wait for its code.
+      } else if (*simulate) {
+        combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);
+        std::cout << "wrote " << sim_out << "\n";
+      } else if (*report) {
+        // Written first, printed after: a failure prints no half line on stdout.
+        const auto directory = combabc::services::WriteReport(history, out_dir, overwrite_dir);
+        std::cout << "report: " << directory << "/index.html\n";
+      } else if (*verify) {
+        const auto outcome = combabc::services::VerifyHistory(history);
+        for (const std::string& line : outcome.lines) {
+          (outcome.ok ? std::cout : std::cerr)
+              << (outcome.ok ? "" : "combabc: data error: ") << line << "\n";
+        }
+        if (!outcome.ok) return combabc::ExitCode(combabc::ErrorKind::kData);
+      } else if (*exporter) {
+        const auto directory = combabc::services::ExportHistory(history, out_dir, overwrite_dir);
+        std::cout << "export: " << directory << "\n";
+      }
+    } catch (const combabc::Error& e) {
+      progress.Clear();
+      std::cerr << "combabc: " << ToString(e.kind()) << ": " << e.what() << "\n";
+      return combabc::ExitCode(e.kind());
+    } catch (const std::exception& e) {
+      progress.Clear();
+      std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";
+      return kExitSoftware;
+    }
+    return interrupted ? 130 : 0;
+  };
+  const int code = run_command();
+#ifdef COMBABC_HAVE_MPI
+  if (mpi) return combabc::mpi::ExitCodeOfPrimary(code);
+#endif
+  return code;
 } catch (const std::exception& e) {
   // Setting up the command line (CLI11, the progress display) can throw too: exit 70, no abort.
   std::cerr << "combabc: internal error: " << combabc::Printable(e.what(), 400) << "\n";

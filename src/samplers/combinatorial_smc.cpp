@@ -343,12 +343,15 @@ class SmcRun {
         observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
       }
       if (static_cast<int>(wave.particles.size()) >= n) break;
-      if (options_.max_wall_time_s > 0 && Seconds(start_) >= options_.max_wall_time_s) {
+      // The primary's clock and signals decide, so that every worker of a distributed executor
+      // stops after the same batch.
+      if (executor_->FromPrimary(options_.max_wall_time_s > 0 &&
+                                 Seconds(start_) >= options_.max_wall_time_s)) {
         stop = Stop({Termination::kWallTimeExceeded,
                      "wall-time limit reached in wave " + std::to_string(wave.wave + 1)});
         break;
       }
-      if (observer_ && observer_->ShouldStop()) {
+      if (executor_->FromPrimary(observer_ && observer_->ShouldStop())) {
         stop = Stop(
             {Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave + 1)});
         break;

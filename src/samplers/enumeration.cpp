@@ -327,7 +327,8 @@ EnumerationResult Enumerate(const SmcProblem& problem,
       const BatchProgress progress{0, next, result.accepted, 0, 0, next, Seconds(start)};
       observer->OnBatch(progress, {});
     }
-    if (next < result.configurations && observer && observer->ShouldStop()) {
+    // The primary's signals decide, so that every worker of a distributed executor stops alike.
+    if (next < result.configurations && executor->FromPrimary(observer && observer->ShouldStop())) {
       result.interrupted = true;
       break;
     }

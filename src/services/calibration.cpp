@@ -40,8 +40,54 @@ struct Problem {
   std::unique_ptr<SensorSimulator> simulator;
   std::unique_ptr<CompositeDistance> distance;
   std::optional<ParameterSpace> space;
+  std::unique_ptr<Executor> executor;
 
-  SmcProblem view() const { return {&*space, simulator.get(), distance.get()}; }
+  SmcProblem view() const {
+    SmcProblem v{&*space, simulator.get(), distance.get()};
+    v.executor = executor.get();
+    return v;
+  }
+};
+
+// The executor for the problem's threads (after LoadProblem or the resume's config).
+void MakeExecutor(Problem& p, const ExecutorFactory& factory) {
+  p.executor = factory ? factory(p.config.smc.threads)
+                       : std::make_unique<ThreadPoolExecutor>(p.config.smc.threads);
+}
+
+// Runs `step` on the primary only, then joins: its failure is thrown on every worker.
+template <typename Step>
+void OnPrimary(Executor& executor, Step&& step) {
+  std::exception_ptr error;
+  if (executor.primary()) {
+    try {
+      step();
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }
+  executor.Join(error);
+}
+
+// The history store's callbacks, made on the primary only (`store` is null elsewhere) and joined
+// after each, so that a failed write (disk full) stops every worker at the same callback instead
+// of leaving the others waiting in the next batch.
+class PrimaryStore : public SmcObserver {
+ public:
+  PrimaryStore(Executor& executor, HistoryStore* store) : executor_(executor), store_(store) {}
+  void OnWaveStart(const WaveRecord& wave) override {
+    OnPrimary(executor_, [&] { store_->OnWaveStart(wave); });
+  }
+  void OnBatch(const BatchProgress& progress, std::span<const Particle> accepted) override {
+    OnPrimary(executor_, [&] { store_->OnBatch(progress, accepted); });
+  }
+  void OnWaveEnd(const WaveRecord& wave) override {
+    OnPrimary(executor_, [&] { store_->OnWaveEnd(wave); });
+  }
+
+ private:
+  Executor& executor_;
+  HistoryStore* store_;
 };
 
 void BuildModel(Problem& p) {
@@ -113,36 +159,41 @@ RunMetadata Describe(const Problem& p) {
   return m;
 }
 
+// `store` is the history on the primary, null on the other workers of a distributed executor.
 RunOutcome Execute(Problem& problem,
-                   HistoryStore& store,
+                   HistoryStore* store,
+                   const std::string& history_path,
                    const ResumePoint* resume,
                    bool report,
                    SmcObserver* progress) {
-  FanOutObserver observer({&store, progress});
+  Executor& executor = *problem.executor;
+  PrimaryStore stored(executor, store);
+  FanOutObserver observer({&stored, progress});
   RunOutcome outcome;
-  outcome.history_path = store.path();
+  outcome.history_path = history_path;
   try {
     outcome.history = RunCombinatorialSmc(problem.view(), problem.config.smc, &observer, resume);
   } catch (const std::exception& e) {
     try {
-      store.MarkFailed(e.what());
+      if (store) store->MarkFailed(e.what());
     } catch (const std::exception&) {
       // The store itself may be what failed (disk full); the first error is the one to report.
     }
     throw;
   }
-  store.Finish(outcome.history.summary);
-  if (report) {
+  OnPrimary(executor, [&] {
+    store->Finish(outcome.history.summary);
+    if (!report) return;
     try {
-      outcome.report_directory = WriteReport(store.path(), ReportDirectory(store.path()));
+      outcome.report_directory = WriteReport(store->path(), ReportDirectory(store->path()));
     } catch (const Error& e) {
       // One line still, but saying that the run itself is safe and how to retry the report.
       throw Error(e.kind(),
-                  "the run is saved in " + store.path() +
+                  "the run is saved in " + store->path() +
                       " ('combabc report' retries the report), " +
                       "but its report failed: " + e.what());
     }
-  }
+  });
   return outcome;
 }
 
@@ -151,28 +202,34 @@ RunOutcome Execute(Problem& problem,
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
+  MakeExecutor(p, request.executor);
 
   std::string directory = request.output_directory.empty()
                               ? ResolvePath(p.config.directory, p.config.output.directory)
                               : request.output_directory;
   const std::string history_path = (fs::path(directory) / p.config.output.database).string();
-  if (request.report) CheckReportPossible(ReportDirectory(history_path));
-  std::error_code ec;
-  fs::create_directories(directory, ec);
-  if (ec) {
-    throw Error(
-        ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
-  }
-  auto store = HistoryStore::Create(history_path, Describe(p), request.overwrite);
-  return Execute(p, store, nullptr, request.report, progress);
+  std::optional<HistoryStore> store;
+  OnPrimary(*p.executor, [&] {
+    if (request.report) CheckReportPossible(ReportDirectory(history_path));
+    std::error_code ec;
+    fs::create_directories(directory, ec);
+    if (ec) {
+      throw Error(
+          ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+    }
+    store.emplace(HistoryStore::Create(history_path, Describe(p), request.overwrite));
+  });
+  return Execute(p, store ? &*store : nullptr, history_path, nullptr, request.report, progress);
 }
 
 RunOutcome ResumeCalibration(const std::string& history_path,
                              int threads,
                              bool report,
-                             SmcObserver* progress) {
-  auto store = HistoryStore::Open(history_path);
-  const auto metadata = store.LoadMetadata();
+                             SmcObserver* progress,
+                             const ExecutorFactory& executor) {
+  // Read-only first: with a distributed executor every worker reads the run, and only the
+  // primary, once known, locks and rewrites it.
+  const auto metadata = HistoryStore::Open(history_path, true).LoadMetadata();
   if (metadata.status == RunStatus::kFinished) {
     throw Error(ErrorKind::kUsage,
                 "the run has already finished (" + metadata.termination +
@@ -194,9 +251,26 @@ RunOutcome ResumeCalibration(const std::string& history_path,
                          p.config.data.csv,
                          metadata.combabc_version,
                          COMBABC_VERSION);
-  if (report) CheckReportPossible(ReportDirectory(history_path));
-  const auto resume = store.BeginResume();
-  return Execute(p, store, &resume, report, progress);
+  MakeExecutor(p, executor);
+  std::optional<HistoryStore> store;
+  ResumePoint resume;
+  OnPrimary(*p.executor, [&] {
+    if (report) CheckReportPossible(ReportDirectory(history_path));
+    store.emplace(HistoryStore::Open(history_path));
+    resume = store->BeginResume();
+  });
+  // The other workers read the resume point as the primary's BeginResume left it, before the
+  // primary writes anything more (the second join).
+  std::exception_ptr error;
+  if (!p.executor->primary()) {
+    try {
+      resume = HistoryStore::Open(history_path, true).LoadResumePoint();
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }
+  p.executor->Join(error);
+  return Execute(p, store ? &*store : nullptr, history_path, &resume, report, progress);
 }
 
 namespace {
@@ -274,11 +348,20 @@ void WriteEnumerationFiles(OutputDirectory& dir, const RunMetadata& m, const Enu
   }
 }
 
+// The enumeration's history, tables and report (after the checks RunEnumeration made).
+void WriteEnumeration(const EnumerateRequest& request,
+                      const Problem& p,
+                      const EnumerationOptions& options,
+                      const EnumerationResult& result,
+                      EnumerateOutcome& outcome);
+
 }  // namespace
 
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress) {
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
+  MakeExecutor(p, request.executor);
+  Executor& executor = *p.executor;
 
   EnumerationOptions options;
   options.thresholds = request.thresholds.empty() ? FinalThresholds(p.config) : request.thresholds;
@@ -295,19 +378,21 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   const std::string files_directory =
       (history.parent_path() / (history.stem().string() + ".enumeration")).string();
   // Everything that would refuse the results at the end is refused now, before hours of work.
-  std::error_code ec;
-  if (!request.overwrite && fs::exists(fs::symlink_status(history, ec))) {
-    throw Error(ErrorKind::kCantCreate,
-                "a run history already exists there (use --overwrite to replace it)",
-                history.string());
-  }
-  if (request.report) CheckReportPossible(ReportDirectory(history.string()));
-  fs::create_directories(directory, ec);
-  if (ec) {
-    throw Error(
-        ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
-  }
-  OutputDirectory::Check(files_directory, request.overwrite);
+  OnPrimary(executor, [&] {
+    std::error_code ec;
+    if (!request.overwrite && fs::exists(fs::symlink_status(history, ec))) {
+      throw Error(ErrorKind::kCantCreate,
+                  "a run history already exists there (use --overwrite to replace it)",
+                  history.string());
+    }
+    if (request.report) CheckReportPossible(ReportDirectory(history.string()));
+    fs::create_directories(directory, ec);
+    if (ec) {
+      throw Error(
+          ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+    }
+    OutputDirectory::Check(files_directory, request.overwrite);
+  });
 
   EnumerateOutcome outcome;
   const EnumerationResult result = Enumerate(p.view(), options, progress);
@@ -318,7 +403,24 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   outcome.wall_seconds = result.wall_seconds;
   outcome.interrupted = result.interrupted;
   if (result.interrupted) return outcome;
+  // The files, on the primary only.
+  OnPrimary(executor, [&] { WriteEnumeration(request, p, options, result, outcome); });
+  return outcome;
+}
 
+namespace {
+
+void WriteEnumeration(const EnumerateRequest& request,
+                      const Problem& p,
+                      const EnumerationOptions& options,
+                      const EnumerationResult& result,
+                      EnumerateOutcome& outcome) {
+  const std::string directory = request.output_directory.empty()
+                                    ? ResolvePath(p.config.directory, p.config.output.directory)
+                                    : request.output_directory;
+  const fs::path history = fs::path(directory) / p.config.output.database;
+  const std::string files_directory =
+      (history.parent_path() / (history.stem().string() + ".enumeration")).string();
   RunMetadata metadata = Describe(p);
   // The stored particles carry exact posterior masses, so both marginals are the exact ones; the
   // importance estimator is the one whose weights they are (termination "enumerated" tells).
@@ -367,7 +469,8 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
                       " ('combabc report' retries the report), but its report failed: " + e.what());
     }
   }
-  return outcome;
 }
+
+}  // namespace
 
 }  // namespace combabc::services

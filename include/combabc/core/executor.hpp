@@ -6,6 +6,7 @@
 // ranges on its threads; an executor whose workers do not share memory (MPI, issue 10) runs a
 // slice per worker and then gathers the slices of each result buffer.
 #include <cstddef>
+#include <exception>
 #include <span>
 #include <vector>
 
@@ -34,6 +35,23 @@ class Executor {
   virtual int concurrency() const = 0;
   // Runs task over [0, n); rethrows the first exception a range threw (on every worker).
   virtual void Execute(std::size_t n, BatchTask& task) = 0;
+
+  // A distributed executor runs one copy of the whole program per worker (SPMD: same inputs, same
+  // seed, hence the same proposals and decisions everywhere). These three keep the copies in step;
+  // a shared-memory executor has one worker and they are trivial.
+  //
+  // The worker that writes files and prints progress.
+  virtual bool primary() const { return true; }
+  // Every worker calls it at the same point with its own outcome of a step (null: it succeeded);
+  // returns on all when none failed, else throws on all the failure of the first that failed
+  // (combabc::Error keeps its kind), so that a step only the primary does (creating the history)
+  // cannot leave the others running, and every worker exits with the same code.
+  virtual void Join(const std::exception_ptr& error) {
+    if (error) std::rethrow_exception(error);
+  }
+  // The primary's value, on every worker: for decisions that are not a function of the inputs
+  // (the wall clock, an interruption) and must nevertheless be the same everywhere.
+  virtual bool FromPrimary(bool value) { return value; }
 };
 
 // Shared memory: ranges run on a ThreadPool (threads = 0: all cores; 1: inline, no threads).

@@ -3,14 +3,23 @@
 // Each function does one user-level job end to end and reports through callbacks; errors are
 // combabc::Error with the ErrorKind the CLI maps to a sysexits code.
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "combabc/config/config.hpp"
+#include "combabc/core/executor.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
 
 namespace combabc::services {
+
+// Where the simulations run, made once the run's threads are known (the config's [sampler] threads
+// or the override). Empty: a ThreadPoolExecutor. With a distributed executor (MPI) every worker
+// calls the same service; only the executor's primary writes files, and every worker returns or
+// throws alike (Executor::Join), so that all exit with the same code.
+using ExecutorFactory = std::function<std::unique_ptr<Executor>(int threads)>;
 
 struct RunRequest {
   std::string config_path;
@@ -18,6 +27,7 @@ struct RunRequest {
   int threads = -1;              // overrides [sampler] threads when >= 0
   bool overwrite = false;        // replace an existing history file
   bool report = true;            // write the report (report/ beside the history) when it ends
+  ExecutorFactory executor;      // empty: threads on this machine
 };
 
 struct RunOutcome {
@@ -34,7 +44,8 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress = nul
 RunOutcome ResumeCalibration(const std::string& history_path,
                              int threads = -1,
                              bool report = true,
-                             SmcObserver* progress = nullptr);
+                             SmcObserver* progress = nullptr,
+                             const ExecutorFactory& executor = {});
 
 struct EnumerateRequest {
   std::string config_path;
@@ -45,6 +56,7 @@ struct EnumerateRequest {
   std::vector<double> thresholds;  // one per threshold component; empty = the config's final ones
   int top = 20;                    // configurations in top_configurations.csv
   int max_particles = 100000;      // accepted configurations kept in the history (by mass)
+  ExecutorFactory executor;        // empty: threads on this machine
 };
 
 struct EnumerateOutcome {
