@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -24,8 +25,6 @@ constexpr int kMarginalsDraws = 1024;
 
 // log(p / (1 - p)); -inf at 0 and +inf at 1.
 double Logit(double p) { return std::log(p) - std::log1p(-p); }
-
-double Sigmoid(double eta) { return 1.0 / (1.0 + std::exp(-eta)); }
 
 // log(e^a + e^b), either of which may be -inf.
 double LogSumExp(double a, double b) {
@@ -68,11 +67,37 @@ class IndependentBernoulliProposal final : public BinaryProposal {
   std::vector<double> log_zero_;
 };
 
+// Conditionals with at most this many predecessors are tabulated: one entry per pattern of their
+// predecessors (2^s of them, 24 bytes each: 6 KiB per bit at the default max_predecessors = 8).
+// Sample, LogDensity and Marginals then cost a table lookup per bit instead of an exp (and a log),
+// and the fit regresses on the at most 2^s patterns instead of the population's rows. Bits with
+// more predecessors (only with max_predecessors > 12) evaluate their logit per candidate.
+constexpr std::size_t kMaxTabulatedPredecessors = 12;
+
+// One conditional q(x_i | x_<i) with logit L: P(x_i = 1) and log q for x_i = 0 and 1. Sample and
+// LogDensity read the same entry, so the density is exact for what Sample draws; L = -inf or +inf
+// (a tempered prior of 0 or 1) gives probability 0 or 1 and log q = -inf for the other value.
+struct ConditionalEntry {
+  double prob_one = 0.0;
+  std::array<double, 2> log_q{};  // log q(x_i = 0 | .), log q(x_i = 1 | .)
+};
+
+// One exp and one log1p: with e = exp(-|L|), sigmoid(L) is 1 / (1 + e) or e / (1 + e) and
+// softplus(+-L) = max(+-L, 0) + log1p(e).
+ConditionalEntry EntryOfLogit(double logit) {
+  const double e = std::exp(-std::abs(logit));
+  const double log1p_e = std::log1p(e);
+  return {logit >= 0.0 ? 1.0 / (1.0 + e) : e / (1.0 + e),
+          {-(std::max(logit, 0.0) + log1p_e), -(std::max(-logit, 0.0) + log1p_e)}};
+}
+
 // The fitted conditionals in flat arrays, so that a candidate's Sample and LogDensity touch a few
 // contiguous vectors and allocate nothing. Bit i's logit is
 //   scale * clamp(intercept[i] + sum_{j in [begin[i], begin[i+1])} slope[j] x[predecessor[j]],
 //                 -max_logit, max_logit) + shift[i],
 // the clamp being the [clip, 1 - clip] clip and (scale, shift) the geometric tempering.
+// Tabulate() then stores, for each bit with at most kMaxTabulatedPredecessors predecessors, the
+// entry of each pattern: pattern = sum_j x[predecessor[begin[i] + j]] 2^j.
 struct Conditionals {
   std::vector<double> intercept;
   std::vector<std::uint32_t> begin{0};
@@ -81,15 +106,53 @@ struct Conditionals {
   double max_logit = 0.0;
   double scale = 1.0;
   std::vector<double> shift;
+  std::vector<std::uint32_t> table_begin;  // per bit; kNotTabulated for the others
+  std::vector<ConditionalEntry> table;
+
+  static constexpr std::uint32_t kNotTabulated = std::numeric_limits<std::uint32_t>::max();
 
   std::size_t size() const { return intercept.size(); }
 
-  double LogitOf(std::size_t i, const std::uint8_t* x) const {
+  double LogitOfPattern(std::size_t i, std::uint32_t pattern) const {
     double eta = intercept[i];
     for (std::uint32_t j = begin[i]; j < begin[i + 1]; ++j) {
-      eta += slope[j] * static_cast<double>(x[predecessor[j]]);
+      if ((pattern >> (j - begin[i])) & 1U) eta += slope[j];
     }
     return scale * std::clamp(eta, -max_logit, max_logit) + shift[i];
+  }
+
+  void Tabulate() {
+    table_begin.assign(size(), kNotTabulated);
+    table.clear();
+    std::size_t entries = 0;
+    for (std::size_t i = 0; i < size(); ++i) {
+      const std::size_t s = begin[i + 1] - begin[i];
+      if (s <= kMaxTabulatedPredecessors) entries += std::size_t{1} << s;
+    }
+    table.reserve(entries);
+    for (std::size_t i = 0; i < size(); ++i) {
+      const std::size_t s = begin[i + 1] - begin[i];
+      if (s > kMaxTabulatedPredecessors) continue;
+      table_begin[i] = static_cast<std::uint32_t>(table.size());
+      for (std::uint32_t pattern = 0; pattern < (1U << s); ++pattern) {
+        table.push_back(EntryOfLogit(LogitOfPattern(i, pattern)));
+      }
+    }
+  }
+
+  ConditionalEntry EntryOf(std::size_t i, const std::uint8_t* x) const {
+    if (table_begin[i] != kNotTabulated) {
+      std::uint32_t pattern = 0;
+      for (std::uint32_t j = begin[i]; j < begin[i + 1]; ++j) {
+        pattern |= static_cast<std::uint32_t>(x[predecessor[j]] != 0) << (j - begin[i]);
+      }
+      return table[table_begin[i] + pattern];
+    }
+    double eta = intercept[i];
+    for (std::uint32_t j = begin[i]; j < begin[i + 1]; ++j) {
+      if (x[predecessor[j]] != 0) eta += slope[j];
+    }
+    return EntryOfLogit(scale * std::clamp(eta, -max_logit, max_logit) + shift[i]);
   }
 };
 
@@ -106,15 +169,7 @@ class LogisticProposal final : public BinaryProposal {
       log_fit_weight_ = std::log1p(-mixture_phi_);
       log_prior_weight_ = std::log(mixture_phi_);
     }
-    // No finite denominator exceeds 1 + e^(scale max_logit + |shift|); keeping the running product
-    // below 1e300 / that bound keeps it below 1e300 after one more factor. With the default clip
-    // (1e-4) this is ~1e296, so a candidate practically never pays a second log.
-    double largest_shift = 0.0;
-    for (const double shift : conditionals_.shift) {
-      if (std::isfinite(shift)) largest_shift = std::max(largest_shift, std::abs(shift));
-    }
-    fold_above_ =
-        1e300 / (1.0 + std::exp(conditionals_.scale * conditionals_.max_logit + largest_shift));
+    conditionals_.Tabulate();
   }
 
   void Sample(RandomStream& rng, std::span<std::uint8_t> free_bits) const override {
@@ -123,29 +178,19 @@ class LogisticProposal final : public BinaryProposal {
       return;
     }
     for (std::size_t i = 0; i < conditionals_.size(); ++i) {
-      // u < 1 / (1 + e^-eta), without the division.
-      const double eta = conditionals_.LogitOf(i, free_bits.data());
-      free_bits[i] = static_cast<std::uint8_t>(rng.Uniform() * (1.0 + std::exp(-eta)) < 1.0);
+      const double prob_one = conditionals_.EntryOf(i, free_bits.data()).prob_one;
+      free_bits[i] = static_cast<std::uint8_t>(rng.Uniform() < prob_one);
     }
   }
 
   double LogDensity(std::span<const std::uint8_t> free_bits) const override {
-    // q(x_i | x_<i) = 1 / (1 + e^-eta) for a 1 and 1 / (1 + e^eta) for a 0, so log q(x) is minus
-    // the log of a product of denominators: one log per candidate instead of one log1p per bit,
-    // which was a third of the per-candidate cost. The product is folded into the sum before it
-    // could overflow (see fold_above_); a denominator made infinite by tempering toward a prior
-    // of 0 or 1 gives log q = -inf, as it should.
-    double log_denominator = 0.0;
-    double denominator = 1.0;
+    // log q(x) = sum_i log q(x_i | x_<i), each term read from the same entry Sample drew from; a
+    // conditional made certain by tempering toward a prior of 0 or 1 gives -inf for the other
+    // value, as it should.
+    double fit = 0.0;
     for (std::size_t i = 0; i < conditionals_.size(); ++i) {
-      const double eta = conditionals_.LogitOf(i, free_bits.data());
-      denominator *= 1.0 + std::exp(free_bits[i] ? -eta : eta);
-      if (denominator > fold_above_) {
-        log_denominator += std::log(denominator);
-        denominator = 1.0;
-      }
+      fit += conditionals_.EntryOf(i, free_bits.data()).log_q[free_bits[i] != 0 ? 1 : 0];
     }
-    const double fit = -(log_denominator + std::log(denominator));
     if (mixture_phi_ == 0.0) return fit;
     return LogSumExp(log_fit_weight_ + fit, log_prior_weight_ + prior_.LogDensity(free_bits));
   }
@@ -158,7 +203,7 @@ class LogisticProposal final : public BinaryProposal {
     for (int k = 0; coupled && k < kMarginalsDraws; ++k) {
       RandomStream rng(kMarginalsSeed, 0, static_cast<std::uint64_t>(k));
       for (std::size_t i = 0; i < f; ++i) {
-        const double p = Sigmoid(conditionals_.LogitOf(i, x.data()));
+        const double p = conditionals_.EntryOf(i, x.data()).prob_one;
         marginal[i] += p;
         x[i] = static_cast<std::uint8_t>(rng.Uniform() < p);
       }
@@ -167,7 +212,7 @@ class LogisticProposal final : public BinaryProposal {
     for (std::size_t i = 0; i < f; ++i) {
       // A bit without predecessors has a constant conditional: its marginal, exactly.
       if (conditionals_.begin[i] == conditionals_.begin[i + 1]) {
-        marginal[i] = Sigmoid(conditionals_.LogitOf(i, x.data()));
+        marginal[i] = conditionals_.EntryOf(i, x.data()).prob_one;
       } else {
         marginal[i] /= kMarginalsDraws;
       }
@@ -181,7 +226,6 @@ class LogisticProposal final : public BinaryProposal {
   double mixture_phi_;
   double log_fit_weight_ = 0.0;
   double log_prior_weight_ = -std::numeric_limits<double>::infinity();
-  double fold_above_ = 1.0;
   IndependentBernoulliProposal prior_;
 };
 
@@ -282,8 +326,10 @@ class LogisticKernel final : public BinaryKernel {
   Conditionals FitConditionals(const DistinctRows& rows) const {
     const Eigen::Index f = rows.bits.cols();
     const Eigen::VectorXd marginal = rows.bits.transpose() * rows.weight;
-    // E_w[x_i x_k], for the weighted correlations.
-    const Eigen::MatrixXd second = rows.bits.transpose() * rows.weight.asDiagonal() * rows.bits;
+    // E_w[x_i x_k] for k < i, for the weighted correlations: the lower half of a Gram matrix.
+    const Eigen::MatrixXd root_weighted = rows.weight.cwiseSqrt().asDiagonal() * rows.bits;
+    Eigen::MatrixXd second = Eigen::MatrixXd::Zero(f, f);
+    second.selfadjointView<Eigen::Lower>().rankUpdate(root_weighted.transpose());
     auto near_constant = [&](Eigen::Index i) {
       return std::min(marginal[i], 1.0 - marginal[i]) < options_.min_marginal ||
              !(marginal[i] > 0.0 && marginal[i] < 1.0);
@@ -321,15 +367,7 @@ class LogisticKernel final : public BinaryKernel {
 
       std::optional<Eigen::VectorXd> beta;
       if (!candidates.empty()) {
-        const auto s = static_cast<Eigen::Index>(candidates.size());
-        Eigen::MatrixXd design(rows.bits.rows(), s + 1);
-        design.col(0).setOnes();
-        for (Eigen::Index j = 0; j < s; ++j) {
-          design.col(j + 1) = rows.bits.col(candidates[static_cast<std::size_t>(j)].second);
-        }
-        Eigen::VectorXd start = Eigen::VectorXd::Zero(s + 1);
-        start[0] = Logit(m);
-        beta = FitWeightedLogistic(design, rows.bits.col(i), rows.weight, start, regression);
+        beta = FitBit(rows, i, candidates, Logit(m), regression);
       }
       if (beta) {
         out.intercept.push_back((*beta)[0]);
@@ -344,6 +382,58 @@ class LogisticKernel final : public BinaryKernel {
       out.begin.push_back(static_cast<std::uint32_t>(out.predecessor.size()));
     }
     return out;
+  }
+
+  // Bit i's regression on its predecessors `candidates` (index order). With few predecessors the
+  // rows are first merged by their predecessors' pattern (weights summed, y the weighted fraction
+  // of ones): the likelihood is the same function of the coefficients, over at most 2^s rows.
+  static std::optional<Eigen::VectorXd> FitBit(
+      const DistinctRows& rows,
+      Eigen::Index i,
+      const std::vector<std::pair<double, Eigen::Index>>& candidates,
+      double marginal_logit,
+      const WeightedLogisticOptions& regression) {
+    const auto s = static_cast<Eigen::Index>(candidates.size());
+    const Eigen::Index n = rows.bits.rows();
+    Eigen::VectorXd start = Eigen::VectorXd::Zero(s + 1);
+    start[0] = marginal_logit;
+    if (candidates.size() > kMaxTabulatedPredecessors) {
+      Eigen::MatrixXd design(n, s + 1);
+      design.col(0).setOnes();
+      for (Eigen::Index j = 0; j < s; ++j) {
+        design.col(j + 1) = rows.bits.col(candidates[static_cast<std::size_t>(j)].second);
+      }
+      return FitWeightedLogistic(design, rows.bits.col(i), rows.weight, start, regression);
+    }
+    // Column by column: the bits are stored column-major.
+    std::vector<std::uint32_t> pattern_of(static_cast<std::size_t>(n), 0);
+    for (Eigen::Index j = 0; j < s; ++j) {
+      const auto column = rows.bits.col(candidates[static_cast<std::size_t>(j)].second);
+      for (Eigen::Index u = 0; u < n; ++u) {
+        pattern_of[static_cast<std::size_t>(u)] |= static_cast<std::uint32_t>(column[u] != 0.0) << j;
+      }
+    }
+    std::vector<double> weight(std::size_t{1} << candidates.size(), 0.0);
+    std::vector<double> ones(weight.size(), 0.0);
+    for (Eigen::Index u = 0; u < n; ++u) {
+      weight[pattern_of[static_cast<std::size_t>(u)]] += rows.weight[u];
+      ones[pattern_of[static_cast<std::size_t>(u)]] += rows.weight[u] * rows.bits(u, i);
+    }
+    Eigen::Index cells = 0;
+    for (const double w : weight) cells += w > 0.0 ? 1 : 0;
+    Eigen::MatrixXd design(cells, s + 1);
+    Eigen::VectorXd y(cells);
+    Eigen::VectorXd w(cells);
+    Eigen::Index c = 0;
+    for (std::size_t pattern = 0; pattern < weight.size(); ++pattern) {
+      if (!(weight[pattern] > 0.0)) continue;
+      design(c, 0) = 1.0;
+      for (Eigen::Index j = 0; j < s; ++j) design(c, j + 1) = (pattern >> j) & 1U ? 1.0 : 0.0;
+      w[c] = weight[pattern];
+      y[c] = ones[pattern] / weight[pattern];
+      ++c;
+    }
+    return FitWeightedLogistic(design, y, w, start, regression);
   }
 
   LogisticKernelOptions options_;

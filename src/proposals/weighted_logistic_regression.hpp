@@ -21,7 +21,8 @@ struct WeightedLogisticOptions {
 // Maximises the penalised weighted log-likelihood
 //   L(beta) = sum_u w_u [y_u eta_u - log(1 + exp(eta_u))] - ridge / 2 sum_{k >= 1} beta_k^2,
 //   eta = design * beta,
-// where column 0 of `design` is the intercept (all ones), y_u is in {0, 1} and w_u >= 0. Starts
+// where column 0 of `design` is the intercept (all ones), y_u is in [0, 1] (a fraction of ones
+// where rows with equal design rows were merged, w_u then their summed weight) and w_u >= 0. Starts
 // from `start`; each Newton step is halved until L does not decrease, so the iteration
 // ascends monotonically. nullopt when it has not converged within max_iterations or produced a
 // non-finite number: the caller then falls back to something simpler.

@@ -212,6 +212,44 @@ TEST(LogisticKernel, SampleFrequenciesMatchTheDensity) {
   }
 }
 
+TEST(LogisticKernel, BitsWithMoreThanTwelvePredecessorsAreExactToo) {
+  // Bits with at most 12 predecessors are tabulated per pattern; the last two bits here have 13 and
+  // 14 and take the per-candidate path. Their conditionals must depend on their far predecessors
+  // (else the fit fell back to the marginal and this path went untested), the density must sum
+  // to one, and Sample must draw x_14 as often as the density says.
+  constexpr std::size_t f = 15;
+  LogisticKernelOptions options;
+  options.min_correlation = 0.0;
+  options.max_predecessors = 14;
+  const auto kernel = MakeLogisticKernel(options);
+  const auto population = CoupledPopulation(f, 2000, 3);
+  for (std::size_t t = 0; t < 3; ++t) {
+    const auto q = kernel->Fit(population, SkewedPrior(f), kTemperings[t].tempering);
+    Bits prefix(f - 1, 0);
+    const double without_x0 = ConditionalOne(*q, prefix, f);
+    prefix[0] = 1;
+    EXPECT_GT(std::abs(ConditionalOne(*q, prefix, f) - without_x0), 1e-6) << kTemperings[t].name;
+    double total = 0.0, last_one = 0.0;
+    for (std::uint32_t c = 0; c < (1U << f); ++c) {
+      const Bits x = ConfigurationOf(c, f);
+      const double mass = std::exp(q->LogDensity(x));
+      total += mass;
+      if (x[f - 1]) last_one += mass;
+    }
+    EXPECT_NEAR(total, 1.0, 1e-11) << kTemperings[t].name;
+    constexpr int n = 100000;
+    RandomStream rng(78, 1, t);
+    Bits x(f);
+    int ones = 0;
+    for (int k = 0; k < n; ++k) {
+      q->Sample(rng, x);
+      ones += x[f - 1];
+    }
+    EXPECT_LE(std::abs(ones - n * last_one), 6.0 * std::sqrt(n * last_one * (1.0 - last_one)) + 1.0)
+        << kTemperings[t].name;
+  }
+}
+
 TEST(LogisticKernel, ConcentratesOnAConfigurationAndItsComplement) {
   // 480 of 500 rows are c or its complement, 20 are uniform noise. The independent kernel sees
   // marginals near 1/2 and puts about 2 x 2^-16 on {c, ~c}; the conditionals see that each bit
@@ -429,6 +467,30 @@ TEST(WeightedLogisticRegression, ConvergesOnSeparableDataAndGivesUpWhenOutOfIter
   EXPECT_LT(score.lpNorm<Eigen::Infinity>(), 1e-10);
   options.max_iterations = 2;
   EXPECT_FALSE(FitWeightedLogistic(design, y, w, Eigen::VectorXd::Zero(2), options).has_value());
+}
+
+TEST(WeightedLogisticRegression, MergedRowsGiveTheSameFitAsTheRows) {
+  // Rows with equal design rows merged into one, with summed weight and y their weighted fraction
+  // of ones, have the same likelihood: the kernel fits on merged rows.
+  Eigen::MatrixXd design(6, 2);
+  design << 1, 0, 1, 0, 1, 0, 1, 1, 1, 1, 1, 1;
+  const Eigen::VectorXd y = (Eigen::VectorXd(6) << 1, 0, 0, 1, 1, 0).finished();
+  const Eigen::VectorXd w = (Eigen::VectorXd(6) << 0.1, 0.2, 0.1, 0.3, 0.2, 0.1).finished();
+  Eigen::MatrixXd merged_design(2, 2);
+  merged_design << 1, 0, 1, 1;
+  const Eigen::VectorXd merged_w = (Eigen::VectorXd(2) << 0.4, 0.6).finished();
+  const Eigen::VectorXd merged_y = (Eigen::VectorXd(2) << 0.1 / 0.4, 0.5 / 0.6).finished();
+  const WeightedLogisticOptions options;
+  const auto rows = FitWeightedLogistic(design, y, w, Eigen::VectorXd::Zero(2), options);
+  const auto merged =
+      FitWeightedLogistic(merged_design, merged_y, merged_w, Eigen::VectorXd::Zero(2), options);
+  ASSERT_TRUE(rows.has_value());
+  ASSERT_TRUE(merged.has_value());
+  // Ones in 1/4 of the x = 0 weight and 5/6 of the x = 1 weight: a clear positive slope
+  // (unpenalised it would be logit(5/6) - logit(1/4) = 2.7).
+  EXPECT_GT((*rows)[1], 2.0);
+  EXPECT_NEAR((*merged)[0], (*rows)[0], 1e-9);
+  EXPECT_NEAR((*merged)[1], (*rows)[1], 1e-9);
 }
 
 }  // namespace

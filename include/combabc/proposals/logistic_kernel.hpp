@@ -16,6 +16,9 @@
 //     the marginal's logit; a fit that does not converge (50 iterations) falls back to the
 //     marginal;
 //  5. every conditional is clipped to [clip, 1 - clip], so every configuration has q > 0.
+// A bit with s <= 12 predecessors is regressed on the at most 2^s patterns of its predecessors
+// (rows merged, the same likelihood), and its tempered conditional is tabulated per pattern
+// (P(x_i = 1) and both log q values), so that sampling and the density cost a lookup per bit.
 //
 // Tempering toward the prior p (Eq. 3 of the paper, generalised to conditionals):
 //  - kGeometric: each conditional is tempered by TemperedProbability(q_i(x_<i), prior_i, phi),
@@ -32,7 +35,7 @@
 // bit, i = 0 .. f - 1, with x_i = 1 when it is below P(x_i = 1 | x_<i).
 //
 // Marginals(): exact for bits without predecessors; for the others the average of P(x_j = 1 | x_<j)
-// over 4096 forward draws, draw k from RandomStream(0x1061571c, 0, k) (the same on every run).
+// over 1024 forward draws, draw k from RandomStream(0x1061571c, 0, k) (the same on every run).
 #include <memory>
 
 #include "combabc/proposals/proposal.hpp"
