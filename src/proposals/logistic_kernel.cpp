@@ -410,7 +410,8 @@ class LogisticKernel final : public BinaryKernel {
     for (Eigen::Index j = 0; j < s; ++j) {
       const auto column = rows.bits.col(candidates[static_cast<std::size_t>(j)].second);
       for (Eigen::Index u = 0; u < n; ++u) {
-        pattern_of[static_cast<std::size_t>(u)] |= static_cast<std::uint32_t>(column[u] != 0.0) << j;
+        pattern_of[static_cast<std::size_t>(u)] |= static_cast<std::uint32_t>(column[u] != 0.0)
+                                                   << j;
       }
     }
     std::vector<double> weight(std::size_t{1} << candidates.size(), 0.0);
