@@ -177,7 +177,13 @@ std::string Gigabytes(double bytes) {
 // The model's precompute and the sampler's buffers together must fit memory_limit_gb; blamed on
 // the sampler key that asks for the larger share.
 void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
-  const double model = c.model.EstimatedMemoryBytes();
+  double model = c.model.EstimatedMemoryBytes();
+  // A mixed run also builds the continuous-unknowns precompute (on its first simulation).
+  if (!c.reals.empty()) {
+    bool loss_factor_unknown = false;
+    for (const ContinuousParameter& r : c.reals) loss_factor_unknown |= r.name == "loss_factor";
+    model += c.model.EstimatedContinuousMemoryBytes(loss_factor_unknown);
+  }
   const SamplerMemory sampler = EstimateSamplerMemory(c);
   const double total = model + sampler.batch + sampler.particles;
   if (total <= c.model.memory_limit_bytes) return;

@@ -3,12 +3,15 @@
 // SectionCondensation keeps (docs/model.md, "Section condensation"): condensed pieces of the
 // distinct sections (4 clamp states each) and of the distinct groups of sections (4^group_size
 // states each), dense complex blocks of the cross-section size nc = 4 (ny + 1).
+// SensorOptions::EstimatedContinuousMemoryBytes: the same for what ContinuousCondensation keeps
+// and builds (docs/model.md, "Continuous unknowns").
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <vector>
 
 #include "combabc/plate/sensor_model.hpp"
+#include "continuous_condensation.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -18,6 +21,39 @@ constexpr double kComplexBytes = 16.0;
 constexpr double kBytesPerDof = 64.0;
 // One set of element matrices (stiffness and mass, 16 x 16 doubles, and their workspace).
 constexpr double kBytesPerElementKind = 4096.0;
+
+// Whether section s is touched by the load (a point load or a patch; clipping does not matter).
+bool Loaded(const SensorOptions& o, int s) {
+  const double h = o.length / o.clamps_per_edge;
+  const double patch =
+      o.load_patch_length > 0.0 && o.load_patch_width > 0.0 ? o.load_patch_length : 0.0;
+  return o.load_x + 0.5 * patch >= s * h && o.load_x - 0.5 * patch <= (s + 1) * h;
+}
+
+// The distinct sections, as both condensations share their pieces: the same outputs at the same
+// relative positions and no load (a loaded section is unique). Returns each section's kind and
+// fills the number of outputs of each section.
+std::vector<int> SectionKinds(const SensorOptions& o, std::vector<int>* outputs, int* kinds) {
+  const int sections = o.clamps_per_edge;
+  const double h = o.length / sections;
+  std::vector<std::vector<long long>> relative(static_cast<std::size_t>(sections));
+  for (double x : o.output_positions) {
+    const int s = std::clamp(static_cast<int>(x / h), 0, sections - 1);
+    relative[s].push_back(std::llround((x - s * h) / h * 1e9));
+  }
+  std::vector<int> section_kind(static_cast<std::size_t>(sections));
+  std::map<std::vector<long long>, int> section_kinds;
+  outputs->assign(static_cast<std::size_t>(sections), 0);
+  for (int s = 0; s < sections; ++s) {
+    std::vector<long long> signature = relative[s];
+    if (Loaded(o, s)) signature.push_back(-1 - s);
+    section_kind[s] =
+        section_kinds.emplace(signature, static_cast<int>(section_kinds.size())).first->second;
+    (*outputs)[s] = static_cast<int>(relative[s].size());
+  }
+  *kinds = static_cast<int>(section_kinds.size());
+  return section_kind;
+}
 
 }  // namespace
 
@@ -31,31 +67,15 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const double piece_bytes = 4.0 * nc * nc * kComplexBytes;  // 2 nc x 2 nc, or its blocks
   const double output_row_bytes = 2.0 * nc * kComplexBytes;  // one output's map row
 
-  // Sections touched by the load (a point load or a patch; clipping does not matter here).
-  const double h = length / sections;
-  const double patch = load_patch_length > 0.0 && load_patch_width > 0.0 ? load_patch_length : 0.0;
-  auto loaded = [&](int s) {
-    return load_x + 0.5 * patch >= s * h && load_x - 0.5 * patch <= (s + 1) * h;
-  };
-  // Outputs by section (relative position, rounded): what, besides the load, makes two sections'
-  // condensed pieces differ.
-  std::vector<std::vector<long long>> relative(static_cast<std::size_t>(sections));
-  for (double x : output_positions) {
-    const int s = std::clamp(static_cast<int>(x / h), 0, sections - 1);
-    relative[s].push_back(std::llround((x - s * h) / h * 1e9));
-  }
-  std::vector<int> section_kind(static_cast<std::size_t>(sections));
-  std::map<std::vector<long long>, int> section_kinds;
+  std::vector<int> outputs_of;
+  int num_kinds = 0;
+  const std::vector<int> section_kind = SectionKinds(*this, &outputs_of, &num_kinds);
   double bytes = 0.0;
+  std::vector<bool> counted(static_cast<std::size_t>(num_kinds), false);
   for (int s = 0; s < sections; ++s) {
-    std::vector<long long> signature = relative[s];
-    if (loaded(s)) signature.push_back(-1 - s);  // a loaded section is unique
-    const auto [it, inserted] =
-        section_kinds.emplace(signature, static_cast<int>(section_kinds.size()));
-    section_kind[s] = it->second;
-    if (inserted) {
-      bytes += 4.0 * (piece_bytes + static_cast<double>(relative[s].size()) * output_row_bytes);
-    }
+    if (counted[section_kind[s]]) continue;
+    counted[section_kind[s]] = true;
+    bytes += 4.0 * (piece_bytes + static_cast<double>(outputs_of[s]) * output_row_bytes);
   }
   // Groups: the two end groups and loaded groups are unique, the others shared by signature.
   std::map<std::vector<int>, int> group_kinds;
@@ -66,8 +86,8 @@ double SensorOptions::EstimatedMemoryBytes() const {
     for (int k = 0; k < group_size; ++k) {
       const int s = g * group_size + k;
       signature.push_back(section_kind[s]);
-      outputs += static_cast<int>(relative[s].size());
-      unique = unique || loaded(s);
+      outputs += outputs_of[s];
+      unique = unique || Loaded(*this, s);
     }
     if (unique) signature.push_back(-1 - g);
     if (group_kinds.emplace(signature, g).second) {
@@ -90,6 +110,60 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const double element_kinds = static_cast<double>(distinct_along) * distinct_across;
   bytes += dofs * kBytesPerDof + element_kinds * kBytesPerElementKind;
   return bytes;
+}
+
+double SensorOptions::EstimatedContinuousMemoryBytes(bool loss_factor_unknown) const {
+  // One set of section pieces in complex arithmetic unless K_base is real: a loss factor among
+  // the unknowns, or layers whose imaginary bending stiffness is proportional to the real one
+  // (one loss factor, or one Poisson ratio, across the layers; SensorModel's constructor).
+  bool one_loss_factor = true, one_poisson_ratio = true;
+  for (const Layer& layer : layers) {
+    one_loss_factor = one_loss_factor && layer.loss_factor == layers.front().loss_factor;
+    one_poisson_ratio = one_poisson_ratio && layer.poisson_ratio == layers.front().poisson_ratio;
+  }
+  const double table_parts =
+      loss_factor_unknown || one_loss_factor || one_poisson_ratio ? 1.0 : 2.0;
+  const double real_bytes = 8.0;
+  const double nc = 4.0 * (elements_across_width + 1);
+  const double nb = 2.0 * nc;  // a section's two end cross-sections
+  // Interior dofs (an upper bound: clamped edge dofs are removed) and their sparse matrices: a
+  // node couples with at most 9 nodes x 4 dofs; entry and row index, plus the column starts.
+  const double interior = (elements_per_section - 1) * nc;
+  const double sparse = interior * 36.0 * (kComplexBytes + 4.0) + (interior + 1.0) * 4.0;
+  const double terms =
+      interior > 0.0 ? ContinuousCondensation::TermsFor(ContinuousCondensation::kMaxRatio) : 0.0;
+  const double packed = nc * (nc + 1.0) + nc * nc;  // a packed piece's entries
+
+  // Every section has the same graded mesh: one mesh in 4 clamp states.
+  const double state_tables = 4.0 * packed * (terms + 2.0) * real_bytes * table_parts;
+  const double state_kept =
+      4.0 * (2.0 * interior * nb * kComplexBytes + 2.0 * nb * nb * kComplexBytes + 2.0 * sparse);
+  // Built before the tables: K_G, M_G and the moments T_k, full complex nb x nb.
+  const double state_transient = 4.0 * (terms + 2.0) * nb * nb * kComplexBytes;
+
+  std::vector<int> outputs_of;
+  int num_kinds = 0;
+  const std::vector<int> section_kind = SectionKinds(*this, &outputs_of, &num_kinds);
+  double section_tables = 0.0, section_kept = 0.0, section_transient = 0.0;
+  std::vector<bool> counted(static_cast<std::size_t>(num_kinds), false);
+  for (int s = 0; s < clamps_per_edge; ++s) {
+    if (counted[section_kind[s]]) continue;
+    counted[section_kind[s]] = true;
+    const double n_out = outputs_of[s];
+    const double load_rows = Loaded(*this, s) ? nb + n_out : 0.0;
+    section_tables += 4.0 * (n_out * nb + load_rows) * (terms + 1.0) * real_bytes * table_parts;
+    section_kept += 4.0 * (n_out * interior + n_out * nb + interior) * kComplexBytes;
+    section_transient += 4.0 * (n_out * nb + load_rows) * (terms + 1.0) * kComplexBytes;
+  }
+  const double boundary_loads = (clamps_per_edge + 1.0) * nc * kComplexBytes;
+  const double kept = state_tables + state_kept + section_tables + section_kept + boundary_loads;
+  // The peak: everything but the tables, with the series terms they are built from, one complex
+  // table being split, and one interior solve (its sparse LU and X0 = -K_II^-1 K_IB).
+  const double one_table = packed * (terms + 2.0) * kComplexBytes;
+  const double solve = 5.0 * interior * nb * kComplexBytes;
+  const double peak = kept - state_tables - section_tables + state_transient + section_transient +
+                      one_table + solve;
+  return std::max(kept, peak);
 }
 
 }  // namespace combabc::plate

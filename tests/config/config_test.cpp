@@ -291,6 +291,27 @@ TEST(Config, ProposalAndContinuousParameters) {
   EXPECT_EQ(c.reals[1].prior.high, 2.0);
 }
 
+// A mixed run builds the continuous-unknowns precompute too: at a limit between the clamp-only
+// estimate and that plus the continuous one, the clamp-only run is accepted and the mixed one
+// refused, with the estimate.
+TEST(Config, AMixedRunCountsTheContinuousPrecomputeInItsMemory) {
+  plate::SensorOptions model;
+  model.elements_across_width = 12;
+  const double clamp_only = model.EstimatedMemoryBytes();
+  const double continuous = model.EstimatedContinuousMemoryBytes(false);
+  const std::string limit = std::to_string((clamp_only + 0.5 * continuous) / 1e9);
+  const std::string clamps = "memory_limit_gb = " + limit + "\n" + kMinimal +
+                             "[model.mesh]\nelements_across_width = 12\n"
+                             "[sampler]\nbatch_size = 8\nestimator = \"importance\"\n";
+  EXPECT_NO_THROW(ParseConfig(clamps, "inline.toml"));
+  const Error e = ConfigError(clamps +
+                              "[parameters.foundation_stiffness]\nprior = \"uniform\"\n"
+                              "low = 1e4\nhigh = 1e5\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+  EXPECT_NE(std::string(e.what()).find("the run would need about"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("raise memory_limit_gb"), std::string::npos) << e.what();
+}
+
 TEST(Config, ProposalAndParameterErrorsNameTheKey) {
   ExpectLocated(ConfigError(kMinimal + "[proposal]\nkind = \"pairwise\"\n"),
                 "inline.toml",

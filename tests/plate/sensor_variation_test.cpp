@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <span>
 #include <string>
@@ -363,6 +364,44 @@ TEST(PlateSensorVariation, BatchMatchesSingleCallsForAnyThreadCount) {
   std::vector<double> batch(n * no);
   EXPECT_THROW(reference.ProfileBatch(clamps, std::span(variations).first(n - 1), n, batch, 1),
                Error);
+}
+
+// The estimate that the config adds for a mixed run must track what the continuous precompute
+// really keeps (its containers, VariationPrecomputedBytes): above it (it also counts the series'
+// terms while they are built) but within 2.5 x, for real tables (the default laminate, whose
+// loss factors are proportional; or loss_factor unknown) and complex ones (layers with their own,
+// non-proportional loss factors).
+TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
+  struct Case {
+    int along, across;
+    bool own_loss_factors;  // a laminate whose imaginary stiffness is not proportional
+    std::optional<double> loss_factor;
+  };
+  for (const Case& c : {Case{4, 2, false, std::nullopt},
+                        Case{6, 4, false, std::nullopt},
+                        Case{4, 2, true, std::nullopt},
+                        Case{4, 2, true, 0.05}}) {
+    SCOPED_TRACE(std::to_string(c.along) + " x " + std::to_string(c.across) +
+                 (c.own_loss_factors ? ", own loss factors" : "") +
+                 (c.loss_factor ? ", loss_factor unknown" : ""));
+    SensorOptions o;
+    o.elements_per_section = c.along;
+    o.elements_across_width = c.across;
+    if (c.own_loss_factors) {
+      o.layers[1].loss_factor = 0.3;
+      o.layers[1].poisson_ratio = 0.3;  // the others: 0.45
+    }
+    const SensorModel model(o);
+    ASSERT_EQ(model.VariationPrecomputedBytes(), 0u);
+    std::vector<std::uint8_t> clamps(static_cast<std::size_t>(model.num_clamps()), 1);
+    std::vector<double> out(static_cast<std::size_t>(model.num_outputs()));
+    model.Profile(clamps, Variation(6e4, std::nullopt, c.loss_factor), out);
+    const auto kept = static_cast<double>(model.VariationPrecomputedBytes());
+    ASSERT_GT(kept, 0.0);
+    const double estimate = o.EstimatedContinuousMemoryBytes(c.loss_factor.has_value());
+    EXPECT_GE(estimate, kept);
+    EXPECT_LE(estimate, 2.5 * kept);
+  }
 }
 
 }  // namespace

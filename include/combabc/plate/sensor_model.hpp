@@ -116,6 +116,12 @@ struct SensorOptions {
   // 24 elements, about 2 x what the finished model keeps. Needs the sizes in range (IsValid
   // checks them first).
   double EstimatedMemoryBytes() const;
+  // Peak memory (bytes) of the continuous-unknowns precompute that a mixed run builds on its first
+  // simulation (docs/model.md, "Continuous unknowns"), on top of EstimatedMemoryBytes():
+  // series tables of the section pieces and output maps, the interior blocks for direct
+  // condensation, and while building, the series' terms in complex form. loss_factor_unknown: the
+  // unknowns include loss_factor (the tables are then real whatever the layers).
+  double EstimatedContinuousMemoryBytes(bool loss_factor_unknown) const;
 
   // Checks every field: finite values in physical ranges (docs/config.md), sizes within the
   // kMax* limits, the estimated memory within memory_limit_bytes. On failure `why` reads
