@@ -71,8 +71,10 @@ class IndependentBernoulliProposal final : public BinaryProposal {
 // predecessors (2^s of them, 24 bytes each: 6 KiB per bit at the default max_predecessors = 8).
 // Sample, LogDensity and Marginals then cost a table lookup per bit instead of an exp (and a log),
 // and the fit regresses on the at most 2^s patterns instead of the population's rows. Bits with
-// more predecessors (only with max_predecessors > 12) evaluate their logit per candidate.
-constexpr std::size_t kMaxTabulatedPredecessors = 12;
+// more predecessors (only with max_predecessors > 10) evaluate their logit per candidate: their
+// tables (24 KiB per bit at s = 10, 100 MB for 1024 bits at s = 12) would cost more to build
+// and hold than a wave's candidates save.
+constexpr std::size_t kMaxTabulatedPredecessors = 10;
 
 // One conditional q(x_i | x_<i) with logit L: P(x_i = 1) and log q for x_i = 0 and 1. Sample and
 // LogDensity read the same entry, so the density is exact for what Sample draws; L = -inf or +inf
@@ -329,7 +331,8 @@ class LogisticKernel final : public BinaryKernel {
     // E_w[x_i x_k] for k < i, for the weighted correlations: the lower half of a Gram matrix.
     const Eigen::MatrixXd root_weighted = rows.weight.cwiseSqrt().asDiagonal() * rows.bits;
     Eigen::MatrixXd second = Eigen::MatrixXd::Zero(f, f);
-    second.selfadjointView<Eigen::Lower>().rankUpdate(root_weighted.transpose());
+    // (Eigen's debug assertions reject the empty product of a population without free bits.)
+    if (f > 0) second.selfadjointView<Eigen::Lower>().rankUpdate(root_weighted.transpose());
     auto near_constant = [&](Eigen::Index i) {
       return std::min(marginal[i], 1.0 - marginal[i]) < options_.min_marginal ||
              !(marginal[i] > 0.0 && marginal[i] < 1.0);

@@ -74,8 +74,9 @@ class MixedRun : public ::testing::Test {
     std::ofstream(*dir_ / "run.toml") << kConfig;
     std::ofstream data(*dir_ / "data.csv");
     data << "position_m,displacement_m\n";
-    for (int i = 31; i < 60; i += 3)
+    for (int i = 31; i < 60; i += 3) {
       data << i / 100.0 << "," << 1.0 - std::abs(i / 100.0 - 0.45) << "\n";
+    }
     data.close();
     run_ = new CliResult(RunCli({"run", *dir_ / "run.toml", "--no-report"}, dir_->path()));
   }

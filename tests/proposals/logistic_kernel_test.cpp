@@ -212,9 +212,9 @@ TEST(LogisticKernel, SampleFrequenciesMatchTheDensity) {
   }
 }
 
-TEST(LogisticKernel, BitsWithMoreThanTwelvePredecessorsAreExactToo) {
-  // Bits with at most 12 predecessors are tabulated per pattern; the last two bits here have 13 and
-  // 14 and take the per-candidate path. Their conditionals must depend on their far predecessors
+TEST(LogisticKernel, BitsWithMoreThanTenPredecessorsAreExactToo) {
+  // Bits with at most 10 predecessors are tabulated per pattern; the last four bits here have 11
+  // to 14 and take the per-candidate path. Their conditionals must depend on their far predecessors
   // (else the fit fell back to the marginal and this path went untested), the density must sum
   // to one, and Sample must draw x_14 as often as the density says.
   constexpr std::size_t f = 15;

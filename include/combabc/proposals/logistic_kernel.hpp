@@ -16,7 +16,7 @@
 //     the marginal's logit; a fit that does not converge (50 iterations) falls back to the
 //     marginal;
 //  5. every conditional is clipped to [clip, 1 - clip], so every configuration has q > 0.
-// A bit with s <= 12 predecessors is regressed on the at most 2^s patterns of its predecessors
+// A bit with s <= 10 predecessors is regressed on the at most 2^s patterns of its predecessors
 // (rows merged, the same likelihood), and its tempered conditional is tabulated per pattern
 // (P(x_i = 1) and both log q values), so that sampling and the density cost a lookup per bit.
 //
