@@ -72,8 +72,8 @@ void WriteSeedHistory(const std::string& path) {
                                    MakeParticle(2, {0, 1, 1, 0, 0, 1}, 0.4)};
     std::vector<Particle> second = {MakeParticle(3, {1, 1, 0, 0, 1, 1}, 0.1),
                                     MakeParticle(5, {0, 0, 0, 1, 1, 1}, 0.3)};
-    store.OnBatch({1, 4, 2, 0, 4, 4, 0.0}, first);
-    store.OnBatch({1, 6, 4, 0, 4, 6, 0.0}, second);
+    store.OnBatch({1, 4, 2, 0, 4, 4, 0.0, 0, {}}, first);
+    store.OnBatch({1, 6, 4, 0, 4, 6, 0.0, 0, {}}, second);
     one.particles = first;
     one.particles.insert(one.particles.end(), second.begin(), second.end());
     one.candidates = 6;
@@ -91,7 +91,7 @@ void WriteSeedHistory(const std::string& path) {
     // Wave 2: one batch committed, then the "process was killed".
     WaveRecord two = MakeWave(2, 0.3);
     store.OnWaveStart(two);
-    store.OnBatch({2, 3, 2, 0, 4, 9, 0.0},
+    store.OnBatch({2, 3, 2, 0, 4, 9, 0.0, 0, {}},
                   std::vector<Particle>{MakeParticle(0, {1, 0, 1, 1, 1, 0}, 0.1),
                                         MakeParticle(1, {1, 0, 0, 0, 1, 0}, 0.2)});
   }

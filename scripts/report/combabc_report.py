@@ -62,7 +62,7 @@ except ImportError as missing:
 # v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
 # parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
 # the fingerprint. Older files read as runs without reals.
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150

@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 3).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 4).
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,8 +20,9 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 3 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
-// meta; version 2 the tables real and proposal, the reals columns and the fingerprint). Vectors of
+// Version 4 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// meta; version 2 the tables real and proposal, the reals columns and the fingerprint; version 3
+// the table failure and wave.failures, created apart as kSchemaV4Tables). Vectors of
 // doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
 // and JSON would not guarantee); bits are packed.
 constexpr const char* kSchema = R"sql(
@@ -81,7 +82,8 @@ CREATE TABLE wave (
   discarded INTEGER NOT NULL DEFAULT 0,
   content_hash TEXT,
   reals_mean BLOB,
-  reals_sd BLOB
+  reals_sd BLOB,
+  failures INTEGER NOT NULL DEFAULT 0
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -118,6 +120,17 @@ CREATE TABLE proposal (
   continuous_kernel TEXT NOT NULL,
   scale REAL NOT NULL,
   tempering_form TEXT NOT NULL
+);
+)sql";
+
+// Added by version 4 (also when an older file is upgraded): the failed simulations, one row per
+// candidate whose simulation failed, with its reason.
+constexpr const char* kSchemaV4Tables = R"sql(
+CREATE TABLE failure (
+  wave INTEGER NOT NULL REFERENCES wave (wave),
+  candidate INTEGER NOT NULL,
+  reason TEXT NOT NULL,
+  PRIMARY KEY (wave, candidate)
 );
 )sql";
 
@@ -310,6 +323,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
       Transaction transaction(db);
       db.Exec(kSchema);
       db.Exec(kSchemaV3Tables);
+      db.Exec(kSchemaV4Tables);
       WriteMetadata(db, metadata);
       WriteRunHashes(db, kHistorySchemaVersion);
       db.Exec(("PRAGMA application_id = " + std::to_string(kHistoryApplicationId)).c_str());
@@ -400,19 +414,25 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // Only what an older file can be trusted with: its structure and (v2) its checksums were checked
   // on open; the new checksums protect it from here on. A v1 run's earlier waves did not record
   // their overshoot (0). An older run has no reals, ran the default (independent) kernels, and
-  // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none).
+  // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
+  // nor (before v4) any failed simulation.
   Transaction transaction(db);
   if (schema_version < 2) {
     db.Exec(R"sql(
       ALTER TABLE wave ADD COLUMN discarded INTEGER NOT NULL DEFAULT 0;
       ALTER TABLE wave ADD COLUMN content_hash TEXT;)sql");
   }
-  db.Exec(R"sql(
-    ALTER TABLE wave ADD COLUMN reals_mean BLOB;
-    ALTER TABLE wave ADD COLUMN reals_sd BLOB;
-    ALTER TABLE particle ADD COLUMN reals BLOB;)sql");
-  db.Exec(kSchemaV3Tables);
-  WriteProposal(db, ProposalOptions{}, "");
+  if (schema_version < 3) {
+    db.Exec(R"sql(
+      ALTER TABLE wave ADD COLUMN reals_mean BLOB;
+      ALTER TABLE wave ADD COLUMN reals_sd BLOB;
+      ALTER TABLE particle ADD COLUMN reals BLOB;)sql");
+    db.Exec(kSchemaV3Tables);
+    WriteProposal(db, ProposalOptions{}, "");
+  }
+  // An older run recorded no failures: its simulators could not fail without ending the run.
+  db.Exec("ALTER TABLE wave ADD COLUMN failures INTEGER NOT NULL DEFAULT 0");
+  db.Exec(kSchemaV4Tables);
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))

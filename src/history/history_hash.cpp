@@ -138,11 +138,21 @@ void WaveHasher::AddParticle(const Statement& particle_row) {
   ++count_;
 }
 
+void WaveHasher::AddFailure(const Statement& failure_row) {
+  failure_hash_.AddColumns(failure_row, 0, kFailureColumnCount);
+  ++failures_;
+}
+
 std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
   Fnv1a64 hash = hash_;
   hash.AddInt(count_);
   hash.AddColumns(wave_row, 0, kWaveHashedColumnCount);
   if (v3_) hash.AddColumns(wave_row, kWaveRealsColumn, 2);
+  if (v4_) {
+    hash.AddColumn(wave_row, kWaveFailuresColumn);
+    hash.AddInt(static_cast<std::int64_t>(failure_hash_.value()));
+    hash.AddInt(failures_);
+  }
   return hash.value();
 }
 

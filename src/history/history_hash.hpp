@@ -44,29 +44,41 @@ inline constexpr const char* kParticleColumns =
 inline constexpr int kParticleColumnCountV2 = 6;
 inline constexpr int kParticleColumnCount = 7;
 // The wave row's columns in checksum order: the first 21, then (v3) reals_mean and reals_sd after
-// content_hash, which is not hashed itself. Older files select constants in their place.
+// content_hash, which is not hashed itself, then (v4) the failure count. Older files select
+// constants in their place.
 inline constexpr const char* kWaveColumns =
     "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
     "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash, "
-    "reals_mean, reals_sd";
+    "reals_mean, reals_sd, failures";
 inline constexpr int kWaveHashedColumnCount = 21;
-inline constexpr int kWaveRealsColumn = 22;  // reals_mean, then reals_sd (hashed from v3)
+inline constexpr int kWaveRealsColumn = 22;     // reals_mean, then reals_sd (hashed from v3)
+inline constexpr int kWaveFailuresColumn = 24;  // hashed from v4
+
+// The failure rows of one wave, fed in candidate order after its particles (schema v4).
+inline constexpr const char* kFailureColumns = "candidate, reason";
+inline constexpr int kFailureColumnCount = 2;
 
 // A wave's checksum, built as its particles are read: AddParticle per particle row (in candidate
 // order), then Finish with the wave row. The schema version decides which columns are hashed.
 class WaveHasher {
  public:
   WaveHasher() = default;  // the current schema: what writers produce
-  explicit WaveHasher(int schema_version) : v3_(schema_version >= 3) {}
+  explicit WaveHasher(int schema_version)
+      : v3_(schema_version >= 3), v4_(schema_version >= 4) {}
   void AddParticle(const Statement& particle_row);
+  // v4: after every particle; failures are hashed apart so that the two can be fed in turn.
+  void AddFailure(const Statement& failure_row);
   std::uint64_t Finish(const Statement& wave_row) const;
   std::int64_t particles() const { return count_; }
 
  private:
   Fnv1a64 hash_;
+  Fnv1a64 failure_hash_;
   std::int64_t count_ = 0;
+  std::int64_t failures_ = 0;
   bool v3_ = true;
+  bool v4_ = true;
 };
 
 }  // namespace combabc::history

@@ -42,17 +42,20 @@ struct HistoryStore::Impl {
   HistoryShape shape;
   std::optional<history::Statement> upsert_particle;
   std::optional<history::Statement> update_progress;
+  std::optional<history::Statement> upsert_failure;
 
   // The checksum state of the wave being written: its particles so far, in candidate order.
   struct WaveChain {
     int wave = -1;
     std::int64_t next_candidate = 0;  // particles below this are in `hasher`
+    std::int64_t next_failure = 0;    // failures below this are in `hasher`
     history::WaveHasher hasher;
   };
   WaveChain chain;
 
   bool checksummed() const { return schema_version >= 2; }
   bool has_reals() const { return schema_version >= 3; }
+  bool has_failures() const { return schema_version >= 4; }
   void RequireWritable(const char* what) const;
 
   // Open's checks (they throw the first problem, kData): PRAGMA quick_check (or the slower full
@@ -81,6 +84,8 @@ struct HistoryStore::Impl {
   // Writers: recompute / extend the wave's checksum and store it, and the run-level ones.
   void StoreWaveHash(int wave);
   void ExtendWaveChain(int wave);
+  // Writes failure rows (replacing any of the same candidate).
+  void InsertFailures(int wave, std::span<const SimulationFailure> rows);
   void StoreRunHashes();
   // An older file opened for writing becomes the current version: new columns and tables,
   // checksums of what it holds.

@@ -38,6 +38,7 @@ enum WaveColumn {
   kContentHash,
   kRealsMean,
   kRealsSd,
+  kFailures,
 };
 
 // Columns of history::kParticleColumns.
@@ -121,9 +122,11 @@ std::string HistoryStore::Impl::WaveSelect() const {
   if (!checksummed()) {
     // Version 1 had neither column: no overshoot recorded, no checksum; nor any reals.
     columns.replace(
-        columns.find("discarded, content_hash"), std::string::npos, "0, NULL, NULL, NULL");
+        columns.find("discarded, content_hash"), std::string::npos, "0, NULL, NULL, NULL, 0");
   } else if (!has_reals()) {
-    columns.replace(columns.find("reals_mean, reals_sd"), std::string::npos, "NULL, NULL");
+    columns.replace(columns.find("reals_mean, reals_sd"), std::string::npos, "NULL, NULL, 0");
+  } else if (!has_failures()) {
+    columns.replace(columns.rfind("failures"), std::string::npos, "0");  // none recorded
   }
   return "SELECT " + columns + " FROM wave";
 }
@@ -252,6 +255,31 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     }
     wave.particles.push_back(std::move(p));
   }
+  const std::int64_t failures = check.Count(row, kFailures, "failures");
+  if (has_failures()) {
+    Statement rows(db,
+                   (std::string("SELECT ") + history::kFailureColumns +
+                    " FROM failure WHERE wave = ?1 ORDER BY candidate")
+                       .c_str());
+    rows.Bind(1, expected_wave);
+    while (rows.Step()) {
+      hasher.AddFailure(rows);
+      SimulationFailure failure;
+      failure.index = rows.Int(0);
+      failure.reason = rows.Text(1);
+      if (failure.index < 0 || failure.index >= wave.candidates) {
+        check.Corrupt("failure " + std::to_string(failure.index),
+                      "lies outside the wave's " + std::to_string(wave.candidates) +
+                          " candidates");
+      }
+      wave.failures.push_back(std::move(failure));
+    }
+  }
+  if (static_cast<std::int64_t>(wave.failures.size()) != failures) {
+    check.Corrupt("failures",
+                  "counts " + std::to_string(failures) + " failed simulations, the table holds " +
+                      std::to_string(wave.failures.size()));
+  }
   if (checksummed()) {
     const auto stored = history::ParseHexDigest(row.Text(kContentHash));
     if (!stored) check.Corrupt("content_hash", "the wave's checksum is missing or malformed");
@@ -372,6 +400,7 @@ ResumePoint HistoryStore::LoadResumePoint() const {
       point.partial_next_index = rows.Int(kNextIndex);
       point.partial_accepted = std::move(partial.particles);
       point.partial_discarded = partial.discarded;
+      point.partial_failures = std::move(partial.failures);
     }
     rows.Reset();
     break;
@@ -427,6 +456,9 @@ RunHistory HistoryStore::LoadHistory() const {
     summary.simulations = simulations;
     summary.simulations_discarded = discarded;
   }
+  for (const WaveRecord& wave : history.waves) {
+    summary.failures += static_cast<std::int64_t>(wave.failures.size());
+  }
   run.Reset();
   if (const auto termination = ParseEnum<Termination>(metadata.termination)) {
     summary.termination = *termination;
@@ -450,16 +482,23 @@ ResumePoint HistoryStore::BeginResume() {
       // Waves after the partial one cannot be valid (the engine writes them in order).
       Statement later_particles(impl.db, "DELETE FROM particle WHERE wave > ?1");
       later_particles.Bind(1, partial->wave).Run();
+      Statement later_failures(impl.db, "DELETE FROM failure WHERE wave > ?1");
+      later_failures.Bind(1, partial->wave).Run();
       Statement later_waves(impl.db, "DELETE FROM wave WHERE wave > ?1");
       later_waves.Bind(1, partial->wave).Run();
       if (partial->next_index == 0) {
         Statement drop(impl.db, "DELETE FROM particle WHERE wave = ?1");
         drop.Bind(1, partial->wave).Run();
+        Statement drop_failures(impl.db, "DELETE FROM failure WHERE wave = ?1");
+        drop_failures.Bind(1, partial->wave).Run();
         Statement drop_wave(impl.db, "DELETE FROM wave WHERE wave = ?1");
         drop_wave.Bind(1, partial->wave).Run();
       } else {
         Statement beyond(impl.db, "DELETE FROM particle WHERE wave = ?1 AND candidate >= ?2");
         beyond.Bind(1, partial->wave).Bind(2, partial->next_index).Run();
+        Statement beyond_failures(impl.db,
+                                  "DELETE FROM failure WHERE wave = ?1 AND candidate >= ?2");
+        beyond_failures.Bind(1, partial->wave).Bind(2, partial->next_index).Run();
         // Its end-of-wave statistics (an interrupted wave) are rewritten when it really ends.
         Statement reopen(impl.db, R"sql(
           UPDATE wave SET ended = 0, complete = 0, candidates = NULL, accepted = NULL,

@@ -32,7 +32,11 @@ ON CONFLICT (wave, candidate) DO UPDATE SET
 
 constexpr const char* kUpdateProgress = R"sql(
 UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
-  total_simulations = ?5, discarded = ?6 WHERE wave = ?1
+  total_simulations = ?5, discarded = ?6, failures = ?7 WHERE wave = ?1
+)sql";
+
+constexpr const char* kUpsertFailure = R"sql(
+INSERT OR REPLACE INTO failure (wave, candidate, reason) VALUES (?1, ?2, ?3)
 )sql";
 
 void BindParticle(Statement& s, int wave, const Particle& p) {
@@ -75,11 +79,22 @@ void UpsertWave(history::Database& db, const WaveRecord& wave) {
 
 }  // namespace
 
+// A failure sent again (OnWaveEnd) below the hashed chain means hashing the wave anew.
+void HistoryStore::Impl::InsertFailures(int wave, std::span<const SimulationFailure> rows) {
+  if (rows.empty()) return;
+  if (!upsert_failure) upsert_failure.emplace(db, kUpsertFailure);
+  for (const SimulationFailure& f : rows) {
+    upsert_failure->Bind(1, wave).Bind(2, f.index).Bind(3, f.reason).Run();
+    if (chain.wave == wave && f.index < chain.next_failure) chain.wave = -1;
+  }
+}
+
 void HistoryStore::Impl::ExtendWaveChain(int wave) {
   if (chain.wave != wave) {
     chain = WaveChain{};
     chain.wave = wave;
     chain.next_candidate = INT64_MIN;
+    chain.next_failure = INT64_MIN;
   }
   Statement rows(
       db, (ParticleSelect() + " WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate").c_str());
@@ -87,6 +102,17 @@ void HistoryStore::Impl::ExtendWaveChain(int wave) {
   while (rows.Step()) {
     chain.hasher.AddParticle(rows);
     chain.next_candidate = rows.Int(0) + 1;
+  }
+  if (!has_failures()) return;
+  Statement failures(
+      db,
+      (std::string("SELECT ") + history::kFailureColumns +
+       " FROM failure WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate")
+          .c_str());
+  failures.Bind(1, wave).Bind(2, chain.next_failure);
+  while (failures.Step()) {
+    chain.hasher.AddFailure(failures);
+    chain.next_failure = failures.Int(0) + 1;
   }
 }
 
@@ -132,6 +158,7 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
       .Bind(4, progress.accepted_needed)
       .Bind(5, progress.total_simulations)
       .Bind(6, progress.discarded)
+      .Bind(7, progress.failures)
       .Run();
   if (impl.db.Changes() == 0) {
     throw Error(ErrorKind::kSoftware,
@@ -146,6 +173,7 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
       impl.chain.wave = -1;
     }
   }
+  impl.InsertFailures(progress.wave, progress.failed);
   impl.StoreWaveHash(progress.wave);
   transaction.Commit();
 }
@@ -161,7 +189,7 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
     UPDATE wave SET ended = 1, complete = ?2, candidates = ?3, accepted = ?4,
       acceptance_rate = ?5, marginals_paper = ?6, marginals_importance = ?7, ess = ?8,
       distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12, reals_mean = ?13,
-      reals_sd = ?14
+      reals_sd = ?14, failures = ?15
     WHERE wave = ?1)sql");
   end.Bind(1, wave.wave)
       .Bind(2, wave.complete ? 1 : 0)
@@ -177,7 +205,12 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
       .Bind(12, wave.discarded)
       .BindBlob(13, PackDoubles(wave.reals_mean))
       .BindBlob(14, PackDoubles(wave.reals_sd))
+      .Bind(15, static_cast<std::int64_t>(wave.failures.size()))
       .Run();
+  impl.InsertFailures(wave.wave, wave.failures);
+  // Like its particles, the wave's final list of failures is the truth.
+  Statement beyond(impl.db, "DELETE FROM failure WHERE wave = ?1 AND candidate >= ?2");
+  beyond.Bind(1, wave.wave).Bind(2, wave.candidates).Run();
   std::set<std::int64_t> kept;
   for (const Particle& p : wave.particles) {
     BindParticle(*impl.upsert_particle, wave.wave, p);
@@ -228,6 +261,7 @@ void HistoryStore::Finish(const RunSummary& summary) {
   // one self-contained file that can be copied or opened read-only anywhere.
   impl.upsert_particle.reset();
   impl.update_progress.reset();
+  impl.upsert_failure.reset();
   // Best effort: the summary is committed already, and a reader holding the file open (a report
   // of the running run) only means the WAL stays until the next open.
   impl.db.TryExec("PRAGMA wal_checkpoint(TRUNCATE)");

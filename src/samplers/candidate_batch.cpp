@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <string>
 
 #include "combabc/core/error.hpp"
@@ -37,6 +39,8 @@ void CandidateBatch::Evaluate(Executor& executor,
   distances_.resize(n * c_);
   log_weights_.resize(n);
   uniforms_.resize(n);
+  status_.assign(n, 0);
+  reasons_.assign(n * kFailureReasonBytes, '\0');
   rngs_.resize(n, RandomStream(0, 0, 0));
   seed_ = seed;
   wave_ = wave;
@@ -51,7 +55,19 @@ std::vector<BatchTask::Buffer> CandidateBatch::Results() {
           {outputs_.data(), m_ * sizeof(double)},
           {distances_.data(), c_ * sizeof(double)},
           {log_weights_.data(), sizeof(double)},
-          {uniforms_.data(), sizeof(double)}};
+          {uniforms_.data(), sizeof(double)},
+          {status_.data(), 1},
+          {reasons_.data(), kFailureReasonBytes}};
+}
+
+std::string_view CandidateBatch::reason(std::int64_t i) const {
+  const char* row = reasons_.data() + static_cast<std::size_t>(i) * kFailureReasonBytes;
+  return {row, strnlen(row, kFailureReasonBytes)};
+}
+
+void CandidateBatch::Fail(std::size_t i, std::string_view reason) {
+  if (status_[i] != 0) return;
+  BatchFailures(std::span(status_), std::span(reasons_)).Fail(i, reason);
 }
 
 void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
@@ -93,30 +109,45 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
         r_,
         std::span<const std::uint8_t>(bits_.data() + begin * d_, (end - begin) * d_),
         std::span<const double>(reals_.data() + begin * r_, (end - begin) * r_)};
+    BatchFailures failures =
+        BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, end - begin);
     simulator_.SimulateBatch(batch,
                              std::span(rngs_.data() + begin, end - begin),
-                             std::span(outputs_.data() + begin * m_, (end - begin) * m_));
+                             std::span(outputs_.data() + begin * m_, (end - begin) * m_),
+                             failures);
   } catch (const std::exception& e) {
+    // Not a SimulationFailed of one candidate (SimulateBatch handles those): a defect.
     throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
   }
   for (std::size_t i = begin; i < end; ++i) {
     // After the simulator's draws, so that they do not depend on whether it is drawn.
     uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
     auto out = span_of(distances_, i, c_);
+    if (status_[i] != 0) {
+      // Never accepted: no distance is computed from outputs the simulator did not produce.
+      std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    // A NaN output is the simulation's failure (a diverged solve, an unreadable value), not the
+    // run's: the candidate is recorded as failed and the run goes on.
+    const auto output = span_of(outputs_, i, m_);
+    const auto nan = std::find_if(output.begin(), output.end(), [](double v) {
+      return std::isnan(v);
+    });
+    if (nan != output.end()) {
+      Fail(i, "output holds NaN at index " + std::to_string(nan - output.begin()));
+      std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
     try {
-      distance_.Evaluate(span_of(outputs_, i, m_), out);
+      distance_.Evaluate(output, out);
     } catch (const std::exception& e) {
       throw Error(ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
     }
     for (std::size_t k = 0; k < c_; ++k) {
       if (std::isnan(out[k])) {
-        throw Error(ErrorKind::kSoftware,
-                    "distance component " + std::to_string(k) +
-                        " is NaN (the simulated output holds NaN or the distance is undefined)",
-                    "",
-                    0,
-                    "wave " + std::to_string(wave + 1) + ", candidate " +
-                        std::to_string(first + static_cast<std::int64_t>(i)));
+        Fail(i, "distance component " + std::to_string(k) + " is NaN");
+        break;
       }
     }
   }

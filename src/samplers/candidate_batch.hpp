@@ -5,6 +5,7 @@
 // simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance.
 #include <cstdint>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "combabc/core/executor.hpp"
@@ -31,8 +32,10 @@ class CandidateBatch : public BatchTask {
                  std::size_t num_components,
                  bool draw_uniform = false);
 
-  // Proposes, simulates and measures candidates [first, first + count) of `wave`. Throws
-  // Error(kSoftware) naming the wave and candidates if the simulator or distance fails.
+  // Proposes, simulates and measures candidates [first, first + count) of `wave`. A candidate
+  // whose simulation failed (SimulationFailed, an output or distance holding NaN) is marked
+  // failed with its reason; any other simulator or distance exception throws Error(kSoftware)
+  // naming the wave and candidates.
   void Evaluate(Executor& executor,
                 std::uint64_t seed,
                 int wave,
@@ -45,12 +48,20 @@ class CandidateBatch : public BatchTask {
   }
   // The candidate's acceptance uniform on [0, 1) (0 unless draw_uniform).
   double uniform(std::int64_t i) const { return uniforms_[static_cast<std::size_t>(i)]; }
+  bool failed(std::int64_t i) const { return status_[static_cast<std::size_t>(i)] != 0; }
+  std::string_view reason(std::int64_t i) const;
   Particle MakeParticle(std::int64_t i, std::int64_t index, bool keep_output) const;
 
   void EvaluateRange(std::size_t begin, std::size_t end) override;
+  // Per candidate, in this order: bits (d bytes), reals (r doubles), outputs (m doubles),
+  // distances (c doubles), log weight (1 double), uniform (1 double), status (1 byte: 0 =
+  // simulated, 1 = failed), reason (kFailureReasonBytes, NUL-padded). docs/algorithm.md.
   std::vector<Buffer> Results() override;
 
  private:
+  // Marks candidate i failed unless it already is (the first reason wins).
+  void Fail(std::size_t i, std::string_view reason);
+
   const ParameterSpace& space_;
   const Simulator& simulator_;
   const Distance& distance_;
@@ -61,7 +72,8 @@ class CandidateBatch : public BatchTask {
   int wave_ = 0;
   std::int64_t first_ = 0;
   WaveProposal proposal_;
-  std::vector<std::uint8_t> free_, bits_;
+  std::vector<std::uint8_t> free_, bits_, status_;
+  std::vector<char> reasons_;
   std::vector<double> reals_, outputs_, distances_, log_weights_, uniforms_;
   std::vector<RandomStream> rngs_;
 };

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "combabc/core/check.hpp"
@@ -21,6 +22,11 @@ constexpr double kMaxTemperatureRatio = 0.5;
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+std::string Describe(int wave, const SimulationFailure& failure) {
+  return "wave " + std::to_string(wave + 1) + ", candidate " + std::to_string(failure.index) +
+         ": " + failure.reason;
 }
 
 class SmcRun {
@@ -113,6 +119,8 @@ class SmcRun {
       for (const auto& w : history.waves) {
         total_ += w.candidates;
         discarded_ += w.discarded;
+        failures_ += static_cast<std::int64_t>(w.failures.size());
+        if (!w.failures.empty()) last_failure_ = Describe(w.wave, w.failures.back());
         if (!w.complete) throw Error(ErrorKind::kData, "resume point holds an incomplete wave");
       }
       first_wave = static_cast<int>(history.waves.size());
@@ -132,6 +140,10 @@ class SmcRun {
         // Killed after the wave's last batch but before it ended: its overshoot still counts.
         wave.discarded = resume->partial_discarded;
         discarded_ += wave.discarded;
+        wave.failures = resume->partial_failures;
+        total_ += next_index;
+        failures_ += static_cast<std::int64_t>(wave.failures.size());
+        if (!wave.failures.empty()) last_failure_ = Describe(t, wave.failures.back());
       }
       const auto stop = RunWave(wave, next_index);
       history.waves.push_back(std::move(wave));
@@ -287,42 +299,78 @@ class SmcRun {
     return std::clamp<std::int64_t>(expected + expected / 16, lo, std::max<std::int64_t>(lo, 4096));
   }
 
+  // The stop, if any, that candidate `index` of `wave` triggers once it is counted (run-wide:
+  // total_ candidates and failures_ failures so far, this one included). Checked candidate by
+  // candidate in index order, so that where a run stops does not depend on the batch sizes.
+  Stop CheckCandidate(const WaveRecord& wave, std::int64_t index) const {
+    if (options_.max_failure_fraction < 1.0 && total_ >= options_.failure_fraction_after &&
+        static_cast<double>(failures_) >
+            options_.max_failure_fraction * static_cast<double>(total_)) {
+      char fraction[64];
+      std::snprintf(fraction,
+                    sizeof fraction,
+                    " (%.1f %% > %.4g %%)",
+                    100.0 * static_cast<double>(failures_) / static_cast<double>(total_),
+                    100.0 * options_.max_failure_fraction);
+      return Stop({Termination::kTooManyFailures,
+                   std::to_string(failures_) + " of " + std::to_string(total_) +
+                       " simulations failed" + fraction + "; last failure: " + last_failure_});
+    }
+    const std::int64_t candidates = index + 1;
+    if (options_.min_acceptance_rate > 0 && candidates >= options_.acceptance_floor_after &&
+        static_cast<double>(wave.particles.size()) <
+            options_.min_acceptance_rate * static_cast<double>(candidates)) {
+      char rate[96];
+      std::snprintf(rate,
+                    sizeof rate,
+                    " candidates (rate %.3g), below min_acceptance_rate = %.3g",
+                    static_cast<double>(wave.particles.size()) / static_cast<double>(candidates),
+                    options_.min_acceptance_rate);
+      return Stop({Termination::kAcceptanceRateTooLow,
+                   "wave " + std::to_string(wave.wave + 1) + " accepted " +
+                       std::to_string(wave.particles.size()) + " of " +
+                       std::to_string(candidates) + rate});
+    }
+    return std::nullopt;
+  }
+
   // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires.
   Stop RunWave(WaveRecord& wave, std::int64_t next_index) {
     const auto wave_start = Clock::now();
     const WaveProposal proposal{bit_proposal_.get(), real_proposal_.get(), from_prior_};
     const int n = options_.accepted_per_wave;
-    const std::int64_t wave_cap =
-        options_.min_acceptance_rate > 0
-            ? static_cast<std::int64_t>(std::ceil(n / options_.min_acceptance_rate))
-            : std::numeric_limits<std::int64_t>::max();
     const double prior_rate = last_rate_;
     Stop stop;
     CandidateBatch batch(space_, simulator_, distance_, components_.size(), stochastic_);
     while (static_cast<int>(wave.particles.size()) < n) {
       std::int64_t size = BatchSize(wave, next_index, prior_rate);
-      size = std::min(size, wave_cap - next_index);
       if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
       if (size <= 0) {
-        stop =
-            options_.max_simulations > 0 && total_ >= options_.max_simulations
-                ? Stop({Termination::kBudgetExhausted,
-                        "simulation budget of " + std::to_string(options_.max_simulations) +
-                            " reached in wave " + std::to_string(wave.wave + 1)})
-                : Stop({Termination::kAcceptanceRateTooLow,
-                        "wave " + std::to_string(wave.wave + 1) + " accepted " +
-                            std::to_string(wave.particles.size()) + " of " +
-                            std::to_string(next_index) + " candidates, below min_acceptance_rate"});
+        stop = Stop({Termination::kBudgetExhausted,
+                     "simulation budget of " + std::to_string(options_.max_simulations) +
+                         " reached in wave " + std::to_string(wave.wave + 1)});
         break;
       }
       batch.Evaluate(*executor_, options_.seed, wave.wave, next_index, size, proposal);
       // Accept in index order, never completion order: the first n accepted candidates win.
       const std::size_t before = wave.particles.size();
+      const std::size_t failures_before = wave.failures.size();
       std::int64_t consumed = size;
       for (std::int64_t i = 0; i < size; ++i) {
-        if (!Accept(batch.distance(i), wave.thresholds, batch.uniform(i))) continue;
-        wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
-        if (static_cast<int>(wave.particles.size()) == n) {
+        ++total_;
+        if (batch.failed(i)) {
+          wave.failures.push_back({next_index + i, std::string(batch.reason(i))});
+          ++failures_;
+          last_failure_ = Describe(wave.wave, wave.failures.back());
+        } else if (Accept(batch.distance(i), wave.thresholds, batch.uniform(i))) {
+          wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
+          if (static_cast<int>(wave.particles.size()) == n) {
+            consumed = i + 1;
+            break;
+          }
+        }
+        stop = CheckCandidate(wave, next_index + i);
+        if (stop) {
           consumed = i + 1;
           break;
         }
@@ -330,7 +378,6 @@ class SmcRun {
       wave.discarded += size - consumed;
       discarded_ += size - consumed;
       next_index += consumed;
-      total_ += consumed;
       wave.candidates = next_index;
       if (observer_) {
         BatchProgress progress{wave.wave,
@@ -339,10 +386,15 @@ class SmcRun {
                                wave.discarded,
                                n,
                                total_,
-                               Seconds(start_)};
+                               Seconds(start_),
+                               static_cast<std::int64_t>(wave.failures.size()),
+                               std::span<const SimulationFailure>(wave.failures)
+                                   .subspan(failures_before)};
         observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
       }
-      if (static_cast<int>(wave.particles.size()) >= n) break;
+      // A candidate's stop (budget, floor, failures) is decided from the gathered result rows,
+      // which every worker of a distributed executor holds: all stop after the same batch.
+      if (stop || static_cast<int>(wave.particles.size()) >= n) break;
       // The primary's clock and signals decide, so that every worker of a distributed executor
       // stops after the same batch.
       if (executor_->FromPrimary(options_.max_wall_time_s > 0 &&
@@ -372,9 +424,11 @@ class SmcRun {
     s.message = std::move(message);
     s.waves_completed = 0;
     s.simulations = 0;
+    s.failures = 0;
     for (const auto& w : history.waves) {
       s.waves_completed += w.complete;
       s.simulations += w.candidates;
+      s.failures += static_cast<std::int64_t>(w.failures.size());
     }
     s.simulations_discarded = discarded_;
     s.wall_seconds = Seconds(start_);
@@ -404,6 +458,8 @@ class SmcRun {
   Clock::time_point start_;
   std::int64_t total_ = 0;
   std::int64_t discarded_ = 0;
+  std::int64_t failures_ = 0;  // failed simulations among total_
+  std::string last_failure_;   // the latest of them, described for the stop message
   double last_rate_ = 1.0;
 };
 

@@ -46,6 +46,8 @@ class EnumerationBatch : public BatchTask {
     outputs_.resize(n * m_);
     distances_.resize(n * c_);
     log_prior_.resize(n);
+    status_.assign(n, 0);
+    reasons_.assign(n * kFailureReasonBytes, '\0');
     rngs_.resize(n, RandomStream(0, 0, 0));
     executor.Execute(n, *this);
   }
@@ -74,13 +76,28 @@ class EnumerationBatch : public BatchTask {
           0,
           std::span<const std::uint8_t>(bits_.data() + begin * d_, (end - begin) * d_),
           {}};
+      BatchFailures failures =
+          BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, end - begin);
       simulator_.SimulateBatch(batch,
                                std::span(rngs_.data() + begin, end - begin),
-                               std::span(outputs_.data() + begin * m_, (end - begin) * m_));
+                               std::span(outputs_.data() + begin * m_, (end - begin) * m_),
+                               failures);
     } catch (const std::exception& e) {
       throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
     }
+    const BatchFailures failures{std::span(status_), std::span(reasons_)};
     for (std::size_t i = begin; i < end; ++i) {
+      // The exact posterior needs every configuration's distance: unlike a sampled run, an
+      // enumeration cannot carry on past a failed simulation.
+      if (failures.failed(i)) {
+        throw Error(ErrorKind::kSoftware,
+                    "simulation failed: " + std::string(failures.reason(i)) +
+                        " (an enumeration needs every configuration)",
+                    "",
+                    0,
+                    "enumeration, configuration " +
+                        std::to_string(first_ + static_cast<std::int64_t>(i)));
+      }
       std::span<double> out(distances_.data() + i * c_, c_);
       try {
         distance_.Evaluate(output(i), out);
@@ -106,7 +123,9 @@ class EnumerationBatch : public BatchTask {
     return {{bits_.data(), d_},
             {outputs_.data(), m_ * sizeof(double)},
             {distances_.data(), c_ * sizeof(double)},
-            {log_prior_.data(), sizeof(double)}};
+            {log_prior_.data(), sizeof(double)},
+            {status_.data(), 1},
+            {reasons_.data(), kFailureReasonBytes}};
   }
 
  private:
@@ -116,7 +135,8 @@ class EnumerationBatch : public BatchTask {
   std::uint64_t seed_;
   std::size_t d_, f_, m_, c_;
   std::int64_t first_ = 0;
-  std::vector<std::uint8_t> free_, bits_;
+  std::vector<std::uint8_t> free_, bits_, status_;
+  std::vector<char> reasons_;
   std::vector<double> outputs_, distances_, log_prior_;
   std::vector<RandomStream> rngs_;
 };
@@ -324,7 +344,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     next += n;
     result.enumerated = next;
     if (observer) {
-      const BatchProgress progress{0, next, result.accepted, 0, 0, next, Seconds(start)};
+      const BatchProgress progress{0, next, result.accepted, 0, 0, next, Seconds(start), 0, {}};
       observer->OnBatch(progress, {});
     }
     // The primary's signals decide, so that every worker of a distributed executor stops alike.

@@ -8,16 +8,17 @@
 namespace combabc {
 
 std::string RunSummary::BriefReport() const {
-  char buf[256];
+  char buf[128];
   std::snprintf(buf,
                 sizeof buf,
-                "%s: %d waves, %lld simulations, %.3f s (%s)",
+                "%s: %d waves, %lld simulations",
                 ToString(termination),
                 waves_completed,
-                static_cast<long long>(simulations),
-                wall_seconds,
-                message.c_str());
-  return buf;
+                static_cast<long long>(simulations));
+  std::string text = buf;
+  if (failures > 0) text += " (" + std::to_string(failures) + " failed)";
+  std::snprintf(buf, sizeof buf, ", %.3f s (", wall_seconds);
+  return text + buf + message + ")";
 }
 
 std::string RunHistory::FullReport(Estimator estimator) const {
@@ -139,6 +140,7 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.reals_mean, y.reals_mean, w + "reals_mean", where) ||
         Differ(x.reals_sd, y.reals_sd, w + "reals_sd", where) ||
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
+        Differ(x.failures, y.failures, w + "failures", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;
     }

@@ -40,6 +40,18 @@ bool SmcOptions::IsValid(std::string* why) const {
     return fail("min_acceptance_rate = " + std::to_string(min_acceptance_rate) +
                 "; must be in [0, 1]");
   }
+  if (acceptance_floor_after < 1) {
+    return fail("acceptance_floor_after = " + std::to_string(acceptance_floor_after) +
+                "; must be >= 1");
+  }
+  if (!(max_failure_fraction >= 0.0 && max_failure_fraction <= 1.0)) {
+    return fail("max_failure_fraction = " + std::to_string(max_failure_fraction) +
+                "; must be in [0, 1] (1 = never stop for failures)");
+  }
+  if (failure_fraction_after < 1) {
+    return fail("failure_fraction_after = " + std::to_string(failure_fraction_after) +
+                "; must be >= 1");
+  }
   if (!(max_wall_time_s >= 0.0 && std::isfinite(max_wall_time_s))) {
     return fail("max_wall_time_s = " + std::to_string(max_wall_time_s) +
                 "; must be finite and >= 0");

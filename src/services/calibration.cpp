@@ -444,7 +444,9 @@ void WriteEnumeration(const EnumerateRequest& request,
                              0,
                              static_cast<int>(wave.particles.size()),
                              result.enumerated,
-                             result.wall_seconds};
+                             result.wall_seconds,
+                             0,
+                             {}};
     store.OnBatch(done, wave.particles);
     store.OnWaveEnd(wave);
     store.Finish(summary);

@@ -40,9 +40,10 @@ void SensorSimulator::Simulate(const ParameterView& theta,
 
 void SensorSimulator::SimulateBatch(const ParameterBatch& batch,
                                     std::span<RandomStream> rngs,
-                                    std::span<double> out) const {
+                                    std::span<double> out,
+                                    BatchFailures& failures) const {
   if (!real_names_.empty()) {
-    Simulator::SimulateBatch(batch, rngs, out);  // one variation per candidate
+    Simulator::SimulateBatch(batch, rngs, out, failures);  // one variation per candidate
     return;
   }
   // One thread here: the engine already runs one batch per worker thread.

@@ -147,9 +147,10 @@ class BatchedNoisySimulator : public testing::NoisySimulator {
   using NoisySimulator::NoisySimulator;
   void SimulateBatch(const ParameterBatch& batch,
                      std::span<RandomStream> rngs,
-                     std::span<double> out) const override {
+                     std::span<double> out,
+                     BatchFailures& failures) const override {
     ++batches;
-    NoisySimulator::SimulateBatch(batch, rngs, out);
+    NoisySimulator::SimulateBatch(batch, rngs, out, failures);
   }
   mutable std::atomic<int> batches{0};
 };

@@ -24,6 +24,15 @@ ThresholdSchedule List(std::vector<double> values) {
   return s;
 }
 
+// Outputs 5 everywhere: never within threshold 0 of any 0/1 target.
+class FarSimulator : public Simulator {
+ public:
+  int output_size() const override { return 8; }
+  void Simulate(const ParameterView&, RandomStream&, std::span<double> out) const override {
+    for (double& v : out) v = 5.0;
+  }
+};
+
 struct Toy {
   ParameterSpace space{BinarySpace::Independent(8)};
   IdentitySimulator sim{8};
@@ -44,17 +53,55 @@ TEST(Stopping, BudgetStopsAtExactlyMaxSimulations) {
   for (std::size_t t = 0; t + 1 < h.waves.size(); ++t) EXPECT_TRUE(h.waves[t].complete);
 }
 
-TEST(Stopping, MinAcceptanceRateGivesUpAfterNOverRateCandidates) {
+TEST(Stopping, MinAcceptanceRateGivesUpOnceTheFloorApplies) {
   Toy toy;
   SmcOptions o;
   o.num_waves = 1;
   o.accepted_per_wave = 50;
   o.thresholds = {List({0})};  // exact match: rate 1/256
   o.min_acceptance_rate = 0.1;
+  o.acceptance_floor_after = 200;
   const auto h = RunCombinatorialSmc(toy.problem(), o);
   EXPECT_EQ(h.summary.termination, Termination::kAcceptanceRateTooLow);
-  EXPECT_EQ(h.waves[0].candidates, 500);  // 50 / 0.1
-  EXPECT_LT(h.waves[0].accepted, 50);
+  // Judged at candidate 200 exactly: ~0.8 accepted there, far below 0.1 x 200.
+  EXPECT_EQ(h.waves[0].candidates, 200);
+  EXPECT_LT(h.waves[0].accepted, 20);
+  EXPECT_NE(h.summary.message.find("below min_acceptance_rate"), std::string::npos)
+      << h.summary.message;
+}
+
+TEST(Stopping, DefaultsEndAHopelessRun) {
+  // A simulator whose distance is never within the threshold: with the default floor the run
+  // ends after acceptance_floor_after candidates, not never.
+  Toy toy;
+  FarSimulator far;
+  SmcOptions o;
+  o.num_waves = 1;
+  o.accepted_per_wave = 10;
+  o.thresholds = {List({0})};
+  const SmcOptions defaults;
+  EXPECT_GT(defaults.min_acceptance_rate, 0.0);
+  EXPECT_GT(defaults.max_simulations, 0);
+  const auto h = RunCombinatorialSmc({&toy.space, &far, &toy.dist}, o);
+  EXPECT_EQ(h.summary.termination, Termination::kAcceptanceRateTooLow);
+  EXPECT_EQ(h.waves[0].candidates, defaults.acceptance_floor_after);
+  EXPECT_EQ(h.waves[0].accepted, 0);
+}
+
+TEST(Stopping, ZeroMeansNoFloor) {
+  // Without the floor or a budget this run would never end; a budget shows the floor is off.
+  Toy toy;
+  FarSimulator far;
+  SmcOptions o;
+  o.num_waves = 1;
+  o.accepted_per_wave = 10;
+  o.thresholds = {List({0})};
+  o.min_acceptance_rate = 0;
+  o.acceptance_floor_after = 10;
+  o.max_simulations = 3000;
+  const auto h = RunCombinatorialSmc({&toy.space, &far, &toy.dist}, o);
+  EXPECT_EQ(h.summary.termination, Termination::kBudgetExhausted);
+  EXPECT_EQ(h.summary.simulations, 3000);
 }
 
 TEST(Stopping, WallTimeLimitStopsAtABatchBoundary) {

@@ -87,6 +87,8 @@ void Sql(const std::string& path, const std::string& sql) {
 // The v3 additions dropped: what a v2 run (without reals) holds, still with v3 checksums.
 void DropV3(const std::string& path) {
   Sql(path, R"sql(
+    ALTER TABLE wave DROP COLUMN failures;
+    DROP TABLE failure;
     ALTER TABLE wave DROP COLUMN reals_mean;
     ALTER TABLE wave DROP COLUMN reals_sd;
     ALTER TABLE particle DROP COLUMN reals;

@@ -23,8 +23,9 @@ namespace combabc {
 // Version of the on-disk schema this build writes; it reads this version and older ones.
 // Version 2 added checksums and each wave's overshoot; version 3 the continuous parameters (their
 // priors, each particle's values, each wave's means and sds), the proposal options and the run's
-// fingerprint. An older file opened for writing (resume) is upgraded to this version.
-inline constexpr int kHistorySchemaVersion = 3;
+// fingerprint; version 4 the failed simulations (table failure, each wave's failure count). An
+// older file opened for writing (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 4;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise

@@ -24,6 +24,7 @@ struct ResumePoint {
   std::int64_t partial_next_index = 0;
   std::vector<Particle> partial_accepted;
   std::int64_t partial_discarded = 0;  // BatchProgress::discarded of the partial wave
+  std::vector<SimulationFailure> partial_failures;  // its failed simulations below next_index
 };
 
 // What a run infers and with what. The sampler knows kernels, executors and simulators only
@@ -41,8 +42,9 @@ struct SmcProblem {
 
 // Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the kernels fitted
 // to wave t's weighted particles (for the independent kernel: the tempered per-bit marginals of
-// Eqs. 2-3). Throws combabc::Error for invalid options (kConfig) or
-// a simulator/distance failure (kSoftware, naming wave and candidate).
+// Eqs. 2-3). A failed simulation (SimulationFailed, NaN output or distance) is a rejected
+// candidate recorded in WaveRecord::failures. Throws combabc::Error for invalid options (kConfig)
+// or any other simulator/distance exception (kSoftware, naming wave and candidate).
 RunHistory RunCombinatorialSmc(const SmcProblem& problem,
                                const SmcOptions& options,
                                SmcObserver* observer = nullptr,

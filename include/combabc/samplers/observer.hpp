@@ -16,6 +16,8 @@ struct BatchProgress {
   int accepted_needed = 0;
   std::int64_t total_simulations = 0;
   double elapsed_seconds = 0.0;
+  std::int64_t failures = 0;                  // failed simulations among [0, next_index)
+  std::span<const SimulationFailure> failed;  // those this batch added, in candidate order
 };
 
 class SmcObserver {

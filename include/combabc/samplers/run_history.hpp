@@ -9,6 +9,7 @@
 #include "combabc/core/enum_names.hpp"
 
 #include "combabc/params/parameter_value.hpp"
+#include "combabc/samplers/simulator.hpp"
 #include "combabc/samplers/smc_options.hpp"
 
 namespace combabc {
@@ -20,6 +21,14 @@ struct Particle {
   double weight = 0.0;           // normalised weight under the run's estimator
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
+};
+
+// A candidate whose simulation failed (SimulationFailed, or an output or distance holding NaN):
+// never accepted, counted as simulated.
+struct SimulationFailure {
+  std::int64_t index = 0;  // candidate index within its wave
+  std::string reason;      // at most kFailureReasonBytes - 1 bytes
+  bool operator==(const SimulationFailure&) const = default;
 };
 
 struct WaveRecord {
@@ -38,6 +47,8 @@ struct WaveRecord {
   std::vector<double> reals_sd;              // per real: standard deviation, likewise
   std::int64_t distinct = 0;                 // distinct accepted bit configurations
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
+  // The failed simulations among `candidates`, in candidate order.
+  std::vector<SimulationFailure> failures;
   double wall_seconds = 0.0;   // not deterministic; excluded from SameHistory
   std::vector<Particle> particles;
 
@@ -55,6 +66,7 @@ enum class Termination {
   kWallTimeExceeded,      // max_wall_time_s reached
   kInterrupted,           // the observer asked to stop
   kEnumerated,            // exact enumeration (Enumerate): one wave holding the exact posterior
+  kTooManyFailures,       // more than max_failure_fraction of the simulations failed
 };
 template <>
 struct EnumNames<Termination> {
@@ -66,6 +78,7 @@ struct EnumNames<Termination> {
       {Termination::kWallTimeExceeded, "wall_time_exceeded"},
       {Termination::kInterrupted, "interrupted"},
       {Termination::kEnumerated, "enumerated"},
+      {Termination::kTooManyFailures, "too_many_failures"},
   };
 };
 
@@ -76,6 +89,7 @@ struct RunSummary {
   std::int64_t simulations = 0;  // candidates consumed, all waves
   std::int64_t simulations_discarded =
       0;  // simulated past a wave's last acceptance (parallel overshoot)
+  std::int64_t failures = 0;  // failed simulations among `simulations`, all waves
   double wall_seconds = 0.0;
   std::string BriefReport() const;
 };

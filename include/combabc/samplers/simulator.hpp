@@ -4,6 +4,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
@@ -19,21 +20,52 @@ class SimulationFailed : public std::runtime_error {
   explicit SimulationFailed(const std::string& reason) : std::runtime_error(reason) {}
 };
 
+// Longest failure reason kept, in bytes: a batch holds each candidate's reason in a fixed-size row
+// (so that a distributed executor can gather it like any other result); longer ones are cut.
+inline constexpr std::size_t kFailureReasonBytes = 200;
+
+// Where a batch records which of its candidates failed: a view on two per-candidate rows of the
+// batch's result buffers, status (0 = simulated, 1 = failed) and the reason, NUL-padded and cut to
+// kFailureReasonBytes - 1 bytes (at a UTF-8 character boundary). A vectorising SimulateBatch marks
+// single candidates failed with Fail(i, reason) instead of throwing for the whole batch.
+class BatchFailures {
+ public:
+  BatchFailures(std::span<std::uint8_t> status, std::span<char> reasons)
+      : status_(status), reasons_(reasons) {}
+  std::size_t size() const { return status_.size(); }
+  void Fail(std::size_t i, std::string_view reason);
+  bool failed(std::size_t i) const { return status_[i] != 0; }
+  std::string_view reason(std::size_t i) const;
+  // The candidates [begin, begin + count), for a simulator handing part of a batch on.
+  BatchFailures Sub(std::size_t begin, std::size_t count) const {
+    return {status_.subspan(begin, count),
+            reasons_.subspan(begin * kFailureReasonBytes, count * kFailureReasonBytes)};
+  }
+
+ private:
+  std::span<std::uint8_t> status_;
+  std::span<char> reasons_;
+};
+
 class Simulator {
  public:
   virtual ~Simulator() = default;
   virtual int output_size() const = 0;
   // theta: the full bit vector and the reals of the run's ParameterSpace. rng: the candidate's
   // own stream, for stochastic simulators (deterministic ones ignore it). Must be thread-safe.
-  // Throwing marks the run failed with the candidate named.
+  // Throwing SimulationFailed makes this candidate a failed simulation (never accepted, counted
+  // and recorded with its reason); any other exception ends the run naming the candidate.
   virtual void Simulate(const ParameterView& theta,
                         RandomStream& rng,
                         std::span<double> out) const = 0;
   // Batch form for simulators that vectorise: out row-major (batch.count x output_size()),
-  // rngs[i] for candidate i. The default loops over Simulate.
+  // rngs[i] for candidate i; failures.Fail(i, reason) marks candidate i failed (its outputs are
+  // then ignored). The default loops over Simulate and turns a SimulationFailed into Fail, so one
+  // failed candidate does not fail the batch. Any other exception ends the run.
   virtual void SimulateBatch(const ParameterBatch& batch,
                              std::span<RandomStream> rngs,
-                             std::span<double> out) const;
+                             std::span<double> out,
+                             BatchFailures& failures) const;
 };
 
 }  // namespace combabc

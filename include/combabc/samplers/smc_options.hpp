@@ -43,10 +43,21 @@ struct SmcOptions {
   std::uint64_t seed = 1;
   // Worker threads (0 = all cores). The history does not depend on it.
   int threads = 1;
+  // Runs always end by default (docs/algorithm.md, "Stopping"): a budget, an acceptance-rate
+  // floor and a failure ceiling. Each check is made candidate by candidate in index order, so
+  // where a run stops does not depend on threads or batch sizes.
   // Stop once this many candidates have been simulated in all (0 = no limit).
-  std::int64_t max_simulations = 0;
-  // Give up on a wave after accepted_per_wave / min_acceptance_rate candidates (0 = never).
-  double min_acceptance_rate = 0.0;
+  std::int64_t max_simulations = 10'000'000;
+  // Give up on a wave whose acceptance rate (accepted / candidates so far) is below this once it
+  // has simulated acceptance_floor_after candidates (0 = never).
+  double min_acceptance_rate = 1e-4;
+  // Candidates a wave simulates before the floor applies: about 10 / min_acceptance_rate, so that
+  // a wave at the floor has about 10 acceptances to be judged on, not a handful of candidates.
+  std::int64_t acceptance_floor_after = 100'000;
+  // Stop when more than this fraction of the run's simulations failed (SimulationFailed, NaN
+  // output), judged once the run has simulated failure_fraction_after candidates (1 = never).
+  double max_failure_fraction = 0.1;
+  std::int64_t failure_fraction_after = 100;
   // Stop at the first batch boundary after this many seconds (0 = no limit).
   double max_wall_time_s = 0.0;
   // Candidates simulated between two checkpoints (observer OnBatch calls). 0 = automatic,

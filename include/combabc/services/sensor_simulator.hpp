@@ -24,7 +24,8 @@ class SensorSimulator : public Simulator {
                 std::span<double> out) const override;
   void SimulateBatch(const ParameterBatch& batch,
                      std::span<RandomStream> rngs,
-                     std::span<double> out) const override;
+                     std::span<double> out,
+                     BatchFailures& failures) const override;
   const plate::SensorModel& model() const { return model_; }
 
  private:
