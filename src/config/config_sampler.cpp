@@ -106,6 +106,19 @@ void ParseSamplerSection(TableReader& root, int dimension, CalibrationConfig* c,
   Note(sources->smc, "max_simulations", *t, "max_simulations");
   smc.min_acceptance_rate = t->NumberIn("min_acceptance_rate", smc.min_acceptance_rate, 0.0, 1.0);
   Note(sources->smc, "min_acceptance_rate", *t, "min_acceptance_rate");
+  auto count = [&](const char* key, std::int64_t* field) {
+    if (const auto value = t->Integer(key)) {
+      if (*value < 1) t->Fail(key, "must be >= 1");
+      *field = *value;
+    }
+  };
+  count("acceptance_floor_after", &smc.acceptance_floor_after);
+  Note(sources->smc, "acceptance_floor_after", *t, "acceptance_floor_after");
+  smc.max_failure_fraction =
+      t->NumberIn("max_failure_fraction", smc.max_failure_fraction, 0.0, 1.0);
+  Note(sources->smc, "max_failure_fraction", *t, "max_failure_fraction");
+  count("failure_fraction_after", &smc.failure_fraction_after);
+  Note(sources->smc, "failure_fraction_after", *t, "failure_fraction_after");
   smc.max_wall_time_s = t->NumberIn("max_wall_time", smc.max_wall_time_s, 0.0, kHuge);
   Note(sources->smc, "max_wall_time_s", *t, "max_wall_time");
   smc.batch_size = t->IntegerIn("batch_size", smc.batch_size, 0, 1000000000);

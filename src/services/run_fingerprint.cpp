@@ -84,6 +84,9 @@ std::string SamplerPart(const SmcOptions& s) {
       .Add("seed", std::to_string(s.seed))
       .Add("max_simulations", static_cast<long long>(s.max_simulations))
       .Add("min_acceptance_rate", s.min_acceptance_rate)
+      .Add("acceptance_floor_after", static_cast<long long>(s.acceptance_floor_after))
+      .Add("max_failure_fraction", s.max_failure_fraction)
+      .Add("failure_fraction_after", static_cast<long long>(s.failure_fraction_after))
       .Add("keep_outputs", s.keep_outputs);
   return c.Digest();
 }

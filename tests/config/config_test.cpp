@@ -202,6 +202,11 @@ TEST(Config, DefaultsComeFromTheOptionStructs) {
   EXPECT_EQ(c.smc.accepted_per_wave, defaults.accepted_per_wave);
   EXPECT_EQ(c.smc.estimator, defaults.estimator);
   EXPECT_EQ(c.smc.seed, defaults.seed);
+  EXPECT_EQ(c.smc.max_simulations, defaults.max_simulations);
+  EXPECT_EQ(c.smc.min_acceptance_rate, defaults.min_acceptance_rate);
+  EXPECT_EQ(c.smc.acceptance_floor_after, defaults.acceptance_floor_after);
+  EXPECT_EQ(c.smc.max_failure_fraction, defaults.max_failure_fraction);
+  EXPECT_EQ(c.smc.failure_fraction_after, defaults.failure_fraction_after);
   EXPECT_EQ(c.data.position_column, "position");
   EXPECT_EQ(c.data.position_unit, LengthUnit::kCentimetre);
   EXPECT_EQ(c.output.figure_formats, (std::vector<std::string>{"png"}));
@@ -465,6 +470,29 @@ TEST(Config, WrongTypes) {
                 "inline.toml",
                 3,
                 "data.window[1]");
+}
+
+TEST(Config, StoppingKeys) {
+  const CalibrationConfig c = ParseConfig(kMinimal +
+                                              "[sampler]\nmax_simulations = 0\n"
+                                              "min_acceptance_rate = 0.001\n"
+                                              "acceptance_floor_after = 5000\n"
+                                              "max_failure_fraction = 0.25\n"
+                                              "failure_fraction_after = 40\n",
+                                          "inline.toml");
+  EXPECT_EQ(c.smc.max_simulations, 0);
+  EXPECT_EQ(c.smc.min_acceptance_rate, 0.001);
+  EXPECT_EQ(c.smc.acceptance_floor_after, 5000);
+  EXPECT_EQ(c.smc.max_failure_fraction, 0.25);
+  EXPECT_EQ(c.smc.failure_fraction_after, 40);
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\nmax_failure_fraction = 1.5\n"),
+                "inline.toml",
+                6,
+                "sampler.max_failure_fraction");
+  ExpectLocated(ConfigError(kMinimal + "[sampler]\nacceptance_floor_after = 0\n"),
+                "inline.toml",
+                6,
+                "sampler.acceptance_floor_after");
 }
 
 TEST(Config, OutOfRangeAndInconsistentValues) {
