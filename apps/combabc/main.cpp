@@ -21,14 +21,30 @@ namespace {
 // sysexits.h codes for failures that are not combabc::Error.
 constexpr int kExitUsage = 64;
 constexpr int kExitSoftware = 70;
+// A run stopped because too many simulations failed: the simulator, not the calibration, is the
+// problem (sysexits EX_UNAVAILABLE). Its finished waves are kept.
+constexpr int kExitTooManyFailures = 69;
 // The same bound as [sampler] threads (SmcOptions::IsValid).
 constexpr int kMaxThreads = 4096;
 
 void PrintOutcome(const combabc::services::RunOutcome& outcome) {
-  std::cout << outcome.history.summary.BriefReport() << "\n"
+  const combabc::RunSummary& summary = outcome.history.summary;
+  std::cout << summary.BriefReport() << "\n"
             << "history: " << outcome.history_path << "\n";
   if (!outcome.report_directory.empty()) {
     std::cout << "report:  " << outcome.report_directory << "/index.html\n";
+  }
+  // A run that gave up says why on stderr too, where a user watching the progress looks.
+  using combabc::Termination;
+  switch (summary.termination) {
+    case Termination::kBudgetExhausted:
+    case Termination::kAcceptanceRateTooLow:
+    case Termination::kWallTimeExceeded:
+    case Termination::kTooManyFailures:
+      std::cerr << "stopped: " << summary.message << "\n";
+      break;
+    default:
+      break;
   }
 }
 
@@ -162,6 +178,9 @@ int main(int argc, char** argv) try {
         if (interrupted) {
           std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path
                     << "\n";
+        }
+        if (outcome.history.summary.termination == combabc::Termination::kTooManyFailures) {
+          return kExitTooManyFailures;
         }
       } else if (*enumerate) {
         enumerate_request.report = !no_report;

@@ -51,6 +51,24 @@ void WriteData(const ScratchDir& dir, double peak) {
   }
 }
 
+// A run that stops on one of its stopping rules says why on stderr, and keeps its history.
+TEST(Stopping, TheReasonIsOnScreen) {
+  ScratchDir dir("e2e-stopping");
+  std::string config = kConfig;
+  config.replace(config.find("accepted_per_wave = 5"),
+                 std::string("accepted_per_wave = 5").size(),
+                 "accepted_per_wave = 500\nmax_simulations = 300");
+  std::ofstream(dir / "run.toml") << config;
+  WriteData(dir, 1.0);
+  const auto r = RunCli({"run", dir / "run.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("stopped: simulation budget of 300 reached in wave 1"), std::string::npos)
+      << r.err;
+  const RunMetadata m = HistoryStore::Open(dir / "out/history.sqlite", true).LoadMetadata();
+  EXPECT_EQ(m.termination, "budget_exhausted");
+  EXPECT_EQ(m.summary_message, "simulation budget of 300 reached in wave 1");
+}
+
 class ResumeFingerprint : public ::testing::Test {
  protected:
   ResumeFingerprint() : dir_("e2e-fingerprint") {}
