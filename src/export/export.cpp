@@ -258,6 +258,7 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
   out << "    \"waves_completed\": " << h.summary.waves_completed << ",\n";
   out << "    \"simulations\": " << h.summary.simulations << ",\n";
   out << "    \"simulations_discarded\": " << h.summary.simulations_discarded << ",\n";
+  out << "    \"failures\": " << h.summary.failures << ",\n";
   out << "    \"wall_seconds\": " << JsonNumber(h.summary.wall_seconds) << "\n  },\n";
   out << "  \"config_text\": " << JsonString(m.config_text) << ",\n";
   out << "  \"bit_names\": [";
@@ -301,6 +302,7 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
     out << (t ? "," : "") << "\n    {\"wave\": " << WaveNumber(w)
         << ", \"thresholds\": " << JsonArray(w.thresholds) << ", \"phi\": " << JsonNumber(w.phi)
         << ", \"candidates\": " << w.candidates << ", \"accepted\": " << w.accepted
+        << ", \"failures\": " << w.failures.size()
         << ", \"acceptance_rate\": " << JsonNumber(w.acceptance_rate)
         << ", \"complete\": " << (w.complete ? "true" : "false")
         << ", \"ess\": " << JsonNumber(w.ess) << ", \"distinct\": " << w.distinct

@@ -64,8 +64,7 @@ inline constexpr int kFailureColumnCount = 2;
 class WaveHasher {
  public:
   WaveHasher() = default;  // the current schema: what writers produce
-  explicit WaveHasher(int schema_version)
-      : v3_(schema_version >= 3), v4_(schema_version >= 4) {}
+  explicit WaveHasher(int schema_version) : v3_(schema_version >= 3), v4_(schema_version >= 4) {}
   void AddParticle(const Statement& particle_row);
   // v4: after every particle; failures are hashed apart so that the two can be fed in turn.
   void AddFailure(const Statement& failure_row);

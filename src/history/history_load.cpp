@@ -269,8 +269,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
       failure.reason = rows.Text(1);
       if (failure.index < 0 || failure.index >= wave.candidates) {
         check.Corrupt("failure " + std::to_string(failure.index),
-                      "lies outside the wave's " + std::to_string(wave.candidates) +
-                          " candidates");
+                      "lies outside the wave's " + std::to_string(wave.candidates) + " candidates");
       }
       wave.failures.push_back(std::move(failure));
     }

@@ -104,11 +104,10 @@ void HistoryStore::Impl::ExtendWaveChain(int wave) {
     chain.next_candidate = rows.Int(0) + 1;
   }
   if (!has_failures()) return;
-  Statement failures(
-      db,
-      (std::string("SELECT ") + history::kFailureColumns +
-       " FROM failure WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate")
-          .c_str());
+  Statement failures(db,
+                     (std::string("SELECT ") + history::kFailureColumns +
+                      " FROM failure WHERE wave = ?1 AND candidate >= ?2 ORDER BY candidate")
+                         .c_str());
   failures.Bind(1, wave).Bind(2, chain.next_failure);
   while (failures.Step()) {
     chain.hasher.AddFailure(failures);

@@ -131,9 +131,8 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
     // A NaN output is the simulation's failure (a diverged solve, an unreadable value), not the
     // run's: the candidate is recorded as failed and the run goes on.
     const auto output = span_of(outputs_, i, m_);
-    const auto nan = std::find_if(output.begin(), output.end(), [](double v) {
-      return std::isnan(v);
-    });
+    const auto nan =
+        std::find_if(output.begin(), output.end(), [](double v) { return std::isnan(v); });
     if (nan != output.end()) {
       Fail(i, "output holds NaN at index " + std::to_string(nan - output.begin()));
       std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());

@@ -328,8 +328,8 @@ class SmcRun {
                     options_.min_acceptance_rate);
       return Stop({Termination::kAcceptanceRateTooLow,
                    "wave " + std::to_string(wave.wave + 1) + " accepted " +
-                       std::to_string(wave.particles.size()) + " of " +
-                       std::to_string(candidates) + rate});
+                       std::to_string(wave.particles.size()) + " of " + std::to_string(candidates) +
+                       rate});
     }
     return std::nullopt;
   }
@@ -380,16 +380,16 @@ class SmcRun {
       next_index += consumed;
       wave.candidates = next_index;
       if (observer_) {
-        BatchProgress progress{wave.wave,
-                               next_index,
-                               static_cast<std::int64_t>(wave.particles.size()),
-                               wave.discarded,
-                               n,
-                               total_,
-                               Seconds(start_),
-                               static_cast<std::int64_t>(wave.failures.size()),
-                               std::span<const SimulationFailure>(wave.failures)
-                                   .subspan(failures_before)};
+        BatchProgress progress{
+            wave.wave,
+            next_index,
+            static_cast<std::int64_t>(wave.particles.size()),
+            wave.discarded,
+            n,
+            total_,
+            Seconds(start_),
+            static_cast<std::int64_t>(wave.failures.size()),
+            std::span<const SimulationFailure>(wave.failures).subspan(failures_before)};
         observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
       }
       // A candidate's stop (budget, floor, failures) is decided from the gathered result rows,

@@ -90,13 +90,13 @@ class EnumerationBatch : public BatchTask {
       // The exact posterior needs every configuration's distance: unlike a sampled run, an
       // enumeration cannot carry on past a failed simulation.
       if (failures.failed(i)) {
-        throw Error(ErrorKind::kSoftware,
-                    "simulation failed: " + std::string(failures.reason(i)) +
-                        " (an enumeration needs every configuration)",
-                    "",
-                    0,
-                    "enumeration, configuration " +
-                        std::to_string(first_ + static_cast<std::int64_t>(i)));
+        throw Error(
+            ErrorKind::kSoftware,
+            "simulation failed: " + std::string(failures.reason(i)) +
+                " (an enumeration needs every configuration)",
+            "",
+            0,
+            "enumeration, configuration " + std::to_string(first_ + static_cast<std::int64_t>(i)));
       }
       std::span<double> out(distances_.data() + i * c_, c_);
       try {

@@ -100,7 +100,9 @@ struct Toy {
     o.max_failure_fraction = 1.0;  // about a quarter fail; this test is not about the ceiling
     return o;
   }
-  RunHistory Run(const Simulator& sim, const SmcOptions& o, SmcObserver* observer = nullptr,
+  RunHistory Run(const Simulator& sim,
+                 const SmcOptions& o,
+                 SmcObserver* observer = nullptr,
                  const ResumePoint* resume = nullptr) const {
     return RunCombinatorialSmc({&space, &sim, &dist}, o, observer, resume);
   }
@@ -178,7 +180,8 @@ TEST(Failures, TooManyStopTheRunAtTheSameCandidateForAnyThreads) {
   const RunHistory h = toy.Run(flaky, o);
   ASSERT_EQ(h.summary.termination, Termination::kTooManyFailures) << h.summary.message;
   EXPECT_GE(h.summary.simulations, o.failure_fraction_after);
-  EXPECT_GT(static_cast<double>(h.summary.failures), 0.1 * static_cast<double>(h.summary.simulations));
+  EXPECT_GT(static_cast<double>(h.summary.failures),
+            0.1 * static_cast<double>(h.summary.simulations));
   // Judged candidate by candidate: it stops on the first candidate past the after-count.
   EXPECT_EQ(h.summary.simulations, o.failure_fraction_after);
   const std::string& m = h.summary.message;

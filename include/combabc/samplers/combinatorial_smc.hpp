@@ -23,7 +23,7 @@ struct ResumePoint {
   int partial_wave = 0;
   std::int64_t partial_next_index = 0;
   std::vector<Particle> partial_accepted;
-  std::int64_t partial_discarded = 0;  // BatchProgress::discarded of the partial wave
+  std::int64_t partial_discarded = 0;               // BatchProgress::discarded of the partial wave
   std::vector<SimulationFailure> partial_failures;  // its failed simulations below next_index
 };
 

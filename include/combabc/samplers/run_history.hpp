@@ -49,7 +49,7 @@ struct WaveRecord {
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
   // The failed simulations among `candidates`, in candidate order.
   std::vector<SimulationFailure> failures;
-  double wall_seconds = 0.0;   // not deterministic; excluded from SameHistory
+  double wall_seconds = 0.0;  // not deterministic; excluded from SameHistory
   std::vector<Particle> particles;
 
   // The estimator's marginals (what the run reports and proposes from).
@@ -88,7 +88,7 @@ struct RunSummary {
   int waves_completed = 0;
   std::int64_t simulations = 0;  // candidates consumed, all waves
   std::int64_t simulations_discarded =
-      0;  // simulated past a wave's last acceptance (parallel overshoot)
+      0;                      // simulated past a wave's last acceptance (parallel overshoot)
   std::int64_t failures = 0;  // failed simulations among `simulations`, all waves
   double wall_seconds = 0.0;
   std::string BriefReport() const;
