@@ -61,7 +61,8 @@ except ImportError as missing:
 
 # v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
 # parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
-# the fingerprint. Older files read as runs without reals.
+# the fingerprint; v4 the failed simulations (table failure, wave.failures). Older files read as
+# runs without reals and without failures.
 SCHEMA_VERSION = 4
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
@@ -131,6 +132,7 @@ class Wave:
         self.number = 0  # engine's wave index t (0-based)
         self.thresholds = np.zeros(0)
         self.candidates = 0
+        self.failures = 0
         self.accepted = 0
         self.acceptance_rate = float("nan")
         self.complete = False
@@ -180,6 +182,8 @@ def load_waves(con, dimension, num_reals=0):
                accepted, acceptance_rate, marginals_paper, marginals_importance, ess,
                distinct_count, wall_seconds
         FROM wave ORDER BY wave""").fetchall()
+    has_failures = con.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table' "
+                               "AND name = 'failure'").fetchone()[0] > 0
     waves = []
     for (t, thresholds, next_index, accepted_so_far, ended, complete, candidates, accepted, rate,
          m_paper, m_importance, ess, distinct, wall) in rows:
@@ -197,6 +201,9 @@ def load_waves(con, dimension, num_reals=0):
             w.candidates, w.accepted = next_index, accepted_so_far
             w.acceptance_rate = accepted_so_far / next_index if next_index else float("nan")
         load_particles(con, w, dimension, num_reals)
+        if has_failures:
+            w.failures = con.execute("SELECT count(*) FROM failure WHERE wave = ?",
+                                     (t,)).fetchone()[0]
         waves.append(w)
         if not (ended and complete):
             break  # at most one incomplete wave, and it is the last
@@ -578,18 +585,20 @@ def write_index(waves, run, estimator, out, written, db_path, formats):
         ("Dimension", run["dimension"]),
         ("Simulations", run["simulations"] if run["simulations"] is not None
          else sum(w.candidates for w in waves)),
+        ("Failed simulations", sum(w.failures for w in waves)),
         ("Wall time (s)", fmt(run["wall_seconds"], ".1f")),
         ("Started", run["start_time"]), ("Ended", run["end_time"] or "—"),
         ("Resumed", f"{run['resume_count']} times"),
         ("combabc", f"{run['combabc_version']} {run['git_hash']}".strip()),
     ]
     rows = "\n".join(f"<tr><th>{e(str(k))}</th><td>{e(str(v))}</td></tr>" for k, v in provenance)
-    head = ("<tr><th>Wave</th><th>Thresholds</th><th>Candidates</th><th>Accepted</th>"
+    head = ("<tr><th>Wave</th><th>Thresholds</th><th>Candidates</th><th>Failed</th><th>Accepted</th>"
             "<th>Acceptance rate</th><th>ESS</th><th>Distinct</th><th>Wall time (s)</th>"
             "<th>Complete</th></tr>")
     body = "\n".join(
         f"<tr><td>{w.number + 1}</td><td>{e(', '.join(format(x, '.4g') for x in w.thresholds))}</td>"
-        f"<td>{w.candidates}</td><td>{w.accepted}</td><td>{fmt(w.acceptance_rate)}</td>"
+        f"<td>{w.candidates}</td><td>{w.failures}</td><td>{w.accepted}</td>"
+        f"<td>{fmt(w.acceptance_rate)}</td>"
         f"<td>{fmt(float(w.ess), '.1f')}</td><td>{w.distinct}</td>"
         f"<td>{fmt(w.wall_seconds, '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
         for w in waves)
