@@ -5,6 +5,7 @@
 // history file and the export count from 0).
 #include <chrono>
 #include <cstdio>
+#include <string>
 
 #include "combabc/samplers/observer.hpp"
 
@@ -57,6 +58,7 @@ class ProgressDisplay : public SmcObserver {
                    static_cast<long long>(p.total_simulations),
                    elapsed,
                    eta);
+      if (p.failures > 0) std::fprintf(stderr, "%lld failed  ", static_cast<long long>(p.failures));
     }
     std::fflush(stderr);
     dirty_ = true;
@@ -66,16 +68,18 @@ class ProgressDisplay : public SmcObserver {
     Clear();
     std::string eps;
     for (double e : w.thresholds) eps += (eps.empty() ? "" : ",") + Format(e);
-    std::fprintf(stderr,
-                 "wave %d: eps %s  %lld/%lld accepted (rate %.4f)  ESS %.0f  %.2f s%s\n",
-                 w.wave + 1,
-                 eps.c_str(),
-                 static_cast<long long>(w.accepted),
-                 static_cast<long long>(w.candidates),
-                 w.acceptance_rate,
-                 w.ess,
-                 w.wall_seconds,
-                 w.complete ? "" : "  (incomplete)");
+    std::fprintf(
+        stderr,
+        "wave %d: eps %s  %lld/%lld accepted (rate %.4f)%s  ESS %.0f  %.2f s%s\n",
+        w.wave + 1,
+        eps.c_str(),
+        static_cast<long long>(w.accepted),
+        static_cast<long long>(w.candidates),
+        w.acceptance_rate,
+        w.failures.empty() ? "" : ("  " + std::to_string(w.failures.size()) + " failed").c_str(),
+        w.ess,
+        w.wall_seconds,
+        w.complete ? "" : "  (incomplete)");
   }
 
   void Clear() {
