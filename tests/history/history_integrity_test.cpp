@@ -124,6 +124,36 @@ void DowngradeToV2(const std::string& path) {
   transaction.Commit();
 }
 
+// What a v3 file (before failed simulations were recorded) looks like, made from a v4 one without
+// failures: its tables, and its checksums as combabc computed them for v3.
+void DowngradeToV3(const std::string& path) {
+  Sql(path, R"sql(
+    ALTER TABLE wave DROP COLUMN failures;
+    DROP TABLE failure;)sql");
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  db.Exec("UPDATE meta SET value = '3' WHERE key = 'schema_version'; PRAGMA user_version = 3");
+  std::vector<std::pair<std::int64_t, std::string>> digests;
+  std::string columns = history::kWaveColumns;
+  columns.erase(columns.find(", failures"));
+  history::Statement waves(db, ("SELECT " + columns + " FROM wave ORDER BY wave").c_str());
+  while (waves.Step()) {
+    history::WaveHasher hasher(3);
+    history::Statement particles(db,
+                                 (std::string("SELECT ") + history::kParticleColumns +
+                                  " FROM particle WHERE wave = ?1 ORDER BY candidate")
+                                     .c_str());
+    particles.Bind(1, waves.Int(0));
+    while (particles.Step()) hasher.AddParticle(particles);
+    digests.emplace_back(waves.Int(0), history::HexDigest(hasher.Finish(waves)));
+  }
+  history::Statement store(db, "UPDATE wave SET content_hash = ?2 WHERE wave = ?1");
+  for (const auto& [wave, digest] : digests) store.Bind(1, wave).Bind(2, digest).Run();
+  history::Statement meta(db, "UPDATE meta SET value = ?1 WHERE key = 'metadata_hash'");
+  meta.Bind(1, history::HexDigest(history::MetadataHash(db, 3))).Run();
+  transaction.Commit();
+}
+
 // What a v1 file (no checksums, no overshoot column) looks like, made from a v3 one.
 void DowngradeToV1(const std::string& path) {
   DropV3(path);
@@ -532,6 +562,31 @@ TEST_F(HistoryIntegrityTest, AV2RunReadsAndIsUpgradedToV3OnResume) {
       "particle WHERE wave = 0)");
   ExpectDataError(
       Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, "wave 1, content_hash");
+}
+
+// A v3 file (before failed simulations) reads as a run without failures; resuming it upgrades it to
+// v4, whose checksums then cover the failure table too.
+TEST_F(HistoryIntegrityTest, AV3RunReadsAndIsUpgradedToV4OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  DowngradeToV3(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 3);
+  const ResumePoint v3 = HistoryStore::Open(path, true).LoadResumePoint();
+  ASSERT_TRUE(v3.has_partial);
+  EXPECT_TRUE(v3.partial_failures.empty());
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    const ResumePoint point = store.BeginResume();
+    EXPECT_EQ(point.partial_next_index, v3.partial_next_index);
+    EXPECT_EQ(point.partial_accepted.size(), v3.partial_accepted.size());
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  Sql(path, "INSERT INTO failure (wave, candidate, reason) VALUES (0, 0, 'forged')");
+  ExpectDataError(
+      Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, "wave 1, failures");
 }
 
 }  // namespace
