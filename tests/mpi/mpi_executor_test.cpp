@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <exception>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/mpi/mpi_executor.hpp"
+#include "combabc/samplers/combinatorial_smc.hpp"
 
 namespace combabc::mpi {
 namespace {
@@ -96,6 +98,54 @@ TEST(MpiExecutor, JoinThrowsTheLowestFailingRanksErrorEverywhere) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "rank 1");
   }
+}
+
+// Fails on a deterministic subset of configurations: a rank that simulates a failed candidate
+// must hand its status and reason to every rank with the other result rows.
+class FlakySimulator : public Simulator {
+ public:
+  int output_size() const override { return 6; }
+  void Simulate(const ParameterView& theta, RandomStream&, std::span<double> out) const override {
+    std::uint64_t h = 14695981039346656037ull;
+    for (std::uint8_t b : theta.bits) h = (h ^ b) * 1099511628211ull;
+    if (h % 4 == 0) throw SimulationFailed("no convergence (" + std::to_string(h % 1000) + ")");
+    for (std::size_t k = 0; k < 6; ++k) out[k] = theta.bits[k];
+  }
+};
+
+class L1 : public Distance {
+ public:
+  std::vector<DistanceComponent> components() const override {
+    return {{"l1", ComponentKind::kThreshold, 1.0}};
+  }
+  void Evaluate(std::span<const double> y, std::span<double> out) const override {
+    out[0] = 0;
+    for (std::size_t k = 0; k < 6; ++k) out[0] += std::abs(y[k] - static_cast<double>(k % 2));
+  }
+};
+
+TEST(MpiExecutor, FailedSimulationsAreGatheredLikeAnyResult) {
+  const ParameterSpace space(BinarySpace::Independent(6));
+  const FlakySimulator simulator;
+  const L1 distance;
+  SmcOptions o;
+  o.num_waves = 2;
+  o.accepted_per_wave = 40;
+  o.batch_size = 17;
+  o.max_failure_fraction = 1.0;
+  ThresholdSchedule list;
+  list.kind = ThresholdKind::kList;
+  list.values = {3.0, 1.0};
+  o.thresholds = {list};
+  ThreadPoolExecutor local(1);
+  const RunHistory reference =
+      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, nullptr, &local}, o);
+  MpiExecutor executor(1);
+  const RunHistory h =
+      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, nullptr, &executor}, o);
+  ASSERT_GT(reference.summary.failures, 0);
+  std::string where;
+  EXPECT_TRUE(SameHistory(reference, h, &where)) << where;
 }
 
 TEST(MpiExecutor, DecisionsAreThePrimarys) {
