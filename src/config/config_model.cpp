@@ -51,6 +51,7 @@ std::string ModelKeyOf(const std::string& field) {
       {"length", "model.length"},
       {"width", "model.width"},
       {"layers", "model.layer"},
+      {"theory", "model.theory"},
       {"foundation_stiffness", "model.foundation_stiffness"},
       {"foundation_loss_factor", "model.foundation_loss_factor"},
       {"clamps_per_edge", "model.clamps.per_edge"},
@@ -159,6 +160,7 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
     sources[""] = {t->prefix(), t->line()};
     Positive(*t, "length", &m.length, &sources, "length");
     Positive(*t, "width", &m.width, &sources, "width");
+    m.theory = t->Choice<plate::PlateTheory>("theory", "plate theory").value_or(m.theory);
     InRange(*t,
             "foundation_stiffness",
             0.0,

@@ -38,17 +38,17 @@ constexpr std::array<double, 4> kGaussPoint = {
 constexpr std::array<double, 4> kGaussWeight = {
     0.1739274225813185, 0.3260725774186815, 0.3260725774186815, 0.1739274225813185};
 
-int LocalDof(int a, int b, int k) { return kDofsPerNode * (a + 2 * b) + k; }
+int LocalDof(int a, int b, int k) { return kBfsDofsPerNode * (a + 2 * b) + k; }
 
 }  // namespace
 
 ElementVector ShapeValues(double hx, double hy, double x, double y) {
   const Hermite hx_basis = HermiteAt(hx, x);
   const Hermite hy_basis = HermiteAt(hy, y);
-  ElementVector n;
+  ElementVector n(kBfsElementDofs);
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
-      for (int k = 0; k < kDofsPerNode; ++k) {
+      for (int k = 0; k < kBfsDofsPerNode; ++k) {
         const int p = k & 1;
         const int q = k >> 1;
         n(LocalDof(a, b, k)) = hx_basis.value[2 * a + p] * hy_basis.value[2 * b + q];
@@ -59,7 +59,7 @@ ElementVector ShapeValues(double hx, double hy, double x, double y) {
 }
 
 ElementVector ShapeIntegral(double hx, double hy, double x0, double x1, double y0, double y1) {
-  ElementVector f = ElementVector::Zero();
+  ElementVector f = ElementVector::Zero(kBfsElementDofs);
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 4; ++j) {
       const double x = x0 + (x1 - x0) * kGaussPoint[i];
@@ -75,19 +75,19 @@ ElementMatrices ComputeElementMatrices(double hx,
                                        const Eigen::Matrix3d& bending_real,
                                        const Eigen::Matrix3d& bending_imag) {
   ElementMatrices m;
-  m.stiffness_real.setZero();
-  m.stiffness_imag.setZero();
-  m.mass_unit.setZero();
+  m.stiffness_real.setZero(kBfsElementDofs, kBfsElementDofs);
+  m.stiffness_imag.setZero(kBfsElementDofs, kBfsElementDofs);
+  m.mass_unit.setZero(kBfsElementDofs, kBfsElementDofs);
   for (int i = 0; i < 4; ++i) {
     const Hermite bx = HermiteAt(hx, hx * kGaussPoint[i]);
     for (int j = 0; j < 4; ++j) {
       const Hermite by = HermiteAt(hy, hy * kGaussPoint[j]);
       const double weight = kGaussWeight[i] * kGaussWeight[j] * hx * hy;
-      Eigen::Matrix<double, 3, kElementDofs> b_matrix;
-      ElementVector n;
+      Eigen::Matrix<double, 3, kBfsElementDofs> b_matrix;
+      ElementVector n(kBfsElementDofs);
       for (int b = 0; b < 2; ++b) {
         for (int a = 0; a < 2; ++a) {
-          for (int k = 0; k < kDofsPerNode; ++k) {
+          for (int k = 0; k < kBfsDofsPerNode; ++k) {
             const int ix = 2 * a + (k & 1);
             const int iy = 2 * b + (k >> 1);
             const int d = LocalDof(a, b, k);

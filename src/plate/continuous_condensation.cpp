@@ -79,7 +79,7 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
     : num_sections_(num_sections),
       elements_per_section_(elements_per_section),
       ny_(plate.grid().ny()),
-      nc_(kDofsPerNode * (plate.grid().ny() + 1)),
+      nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
       own_loss_factors_(own_loss_factors),
       fixed_mask_a_(fixed_mask_a),
       fixed_mask_b_(fixed_mask_b),
@@ -93,10 +93,10 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
   section_outputs_.resize(num_sections);
   std::vector<std::vector<double>> relative_x(num_sections);
   for (std::size_t o = 0; o < output_x.size(); ++o) {
-    int dofs[kElementDofs];
+    int dofs[kMaxElementDofs];
     ElementVector row;
     plate.InterpolationRow(output_x[o], output_y, dofs, &row);
-    const int section = (dofs[0] / kDofsPerNode) / (ny_ + 1) / m;
+    const int section = dofs[0] / nc_ / m;
     section_outputs_[section].push_back(static_cast<int>(o));
     relative_x[section].push_back(output_x[o] - grid.x[static_cast<std::size_t>(section) * m]);
   }
@@ -212,8 +212,9 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     } else if (d >= m * nc_) {
       boundary_index[d] = d - (m - 1) * nc_;
     } else {
-      const int j = (d / kDofsPerNode) % (ny_ + 1);
-      const int bit = 1 << (d % kDofsPerNode);
+      const int dofs_per_node = nc_ / (ny_ + 1);
+      const int j = (d / dofs_per_node) % (ny_ + 1);
+      const int bit = 1 << (d % dofs_per_node);
       const bool fixed = (fixed_a && j == 0 && (fixed_mask_a_ & bit)) ||
                          (fixed_b && j == ny_ && (fixed_mask_b_ & bit));
       if (!fixed) interior_index[d] = n_interior++;
@@ -235,10 +236,10 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   for (int ex = section * m; ex < (section + 1) * m; ++ex) {
     for (int ey = 0; ey < ny_; ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
-      int local[kElementDofs];
-      for (int k = 0; k < kElementDofs; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < kElementDofs; ++c) {
-        for (int r = 0; r < kElementDofs; ++r) {
+      int local[kMaxElementDofs];
+      for (int k = 0; k < plate.element_dofs(); ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < plate.element_dofs(); ++c) {
+        for (int r = 0; r < plate.element_dofs(); ++r) {
           const double kr = e.stiffness_real(r, c);
           const Complex k(kr, own_loss_factors_ ? e.stiffness_imag(r, c) : 0.0);
           const double mm = e.mass_unit(r, c);
@@ -278,10 +279,10 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
     sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
     for (Eigen::Index k = 0; k < n_out; ++k) {
-      int dofs[kElementDofs];
+      int dofs[kMaxElementDofs];
       ElementVector row;
       plate.InterpolationRow(output_x[outputs[k]], output_y, dofs, &row);
-      for (int q = 0; q < kElementDofs; ++q) {
+      for (int q = 0; q < plate.element_dofs(); ++q) {
         const int d = dofs[q] - s_offset;
         COMBABC_CHECK(d >= 0 && d < n_local);
         if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);

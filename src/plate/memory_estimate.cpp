@@ -2,7 +2,7 @@
 // alone so that an oversized model is refused before anything is allocated. It mirrors what
 // SectionCondensation keeps (docs/model.md, "Section condensation"): condensed pieces of the
 // distinct sections (4 clamp states each) and of the distinct groups of sections (4^group_size
-// states each), dense complex blocks of the cross-section size nc = 4 (ny + 1).
+// states each), dense complex blocks of the cross-section size nc = n (ny + 1), n dofs per node.
 // SensorOptions::EstimatedContinuousMemoryBytes: the same for what ContinuousCondensation keeps
 // and builds (docs/model.md, "Continuous unknowns").
 #include <algorithm>
@@ -63,7 +63,7 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const int group_size = sections % 3 == 0 ? 3 : (sections % 2 == 0 ? 2 : 1);
   const int groups = sections / group_size;
   const double group_states = std::pow(4.0, group_size);
-  const double nc = 4.0 * (elements_across_width + 1);
+  const double nc = DofsPerNode(theory) * (elements_across_width + 1.0);
   const double piece_bytes = 4.0 * nc * nc * kComplexBytes;  // 2 nc x 2 nc, or its blocks
   const double output_row_bytes = 2.0 * nc * kComplexBytes;  // one output's map row
 
@@ -121,10 +121,13 @@ double SensorOptions::EstimatedContinuousMemoryBytes(bool loss_factor_unknown) c
     one_loss_factor = one_loss_factor && layer.loss_factor == layers.front().loss_factor;
     one_poisson_ratio = one_poisson_ratio && layer.poisson_ratio == layers.front().poisson_ratio;
   }
-  const double table_parts =
-      loss_factor_unknown || one_loss_factor || one_poisson_ratio ? 1.0 : 2.0;
+  // In FSDT one Poisson ratio is not enough: the shear stiffness weights the loss factors by the
+  // shear energy, not the bending energy.
+  const bool proportional =
+      one_loss_factor || (one_poisson_ratio && theory == PlateTheory::kKirchhoff);
+  const double table_parts = loss_factor_unknown || proportional ? 1.0 : 2.0;
   const double real_bytes = 8.0;
-  const double nc = 4.0 * (elements_across_width + 1);
+  const double nc = DofsPerNode(theory) * (elements_across_width + 1.0);
   const double nb = 2.0 * nc;  // a section's two end cross-sections
   // Interior dofs (an upper bound: clamped edge dofs are removed) and their sparse matrices: a
   // node couples with at most 9 nodes x 4 dofs; entry and row index, plus the column starts.

@@ -22,11 +22,11 @@ Eigen::SparseMatrix<double> AssembleMass(const Plate& plate, const std::vector<i
   for (int ex = 0; ex < grid.nx(); ++ex) {
     for (int ey = 0; ey < grid.ny(); ++ey) {
       const ElementMatrix& m = plate.Element(ex, ey).mass_unit;
-      int global[kElementDofs];
-      for (int k = 0; k < kElementDofs; ++k) global[k] = map[plate.ElementDof(ex, ey, k)];
-      for (int c = 0; c < kElementDofs; ++c) {
+      int global[kMaxElementDofs];
+      for (int k = 0; k < plate.element_dofs(); ++k) global[k] = map[plate.ElementDof(ex, ey, k)];
+      for (int c = 0; c < plate.element_dofs(); ++c) {
         if (global[c] < 0) continue;
-        for (int r = 0; r < kElementDofs; ++r) {
+        for (int r = 0; r < plate.element_dofs(); ++r) {
           if (global[r] >= 0) triplets.emplace_back(global[r], global[c], m(r, c));
         }
       }

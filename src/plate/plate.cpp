@@ -10,6 +10,8 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/plate/bfs_element.hpp"
+#include "combabc/plate/mitc4_element.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -56,8 +58,14 @@ std::uint8_t SupportMask(Edge edge, Support support) {
   return 0;
 }
 
-Constraints::Constraints(const Grid& grid)
-    : x_(grid.x), y_(grid.y), masks_(grid.x.size() * grid.y.size(), 0) {}
+Constraints::Constraints(const Grid& grid, int dofs_per_node)
+    : x_(grid.x),
+      y_(grid.y),
+      dofs_per_node_(dofs_per_node),
+      all_dofs_(static_cast<std::uint8_t>((1U << dofs_per_node) - 1U)),
+      masks_(grid.x.size() * grid.y.size(), 0) {
+  COMBABC_CHECK(dofs_per_node >= 1 && dofs_per_node <= kMaxDofsPerNode);
+}
 
 void Constraints::AddEdgeSupport(Edge edge, Support support) {
   const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
@@ -66,7 +74,7 @@ void Constraints::AddEdgeSupport(Edge edge, Support support) {
 }
 
 void Constraints::AddEdgeSupport(Edge edge, double from, double to, Support support) {
-  const std::uint8_t mask = SupportMask(edge, support);
+  const std::uint8_t mask = SupportMask(edge, support) & all_dofs_;
   const int ny1 = static_cast<int>(y_.size());
   const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
   const std::vector<double>& axis = along_x ? x_ : y_;
@@ -102,11 +110,13 @@ int Constraints::num_fixed() const {
 Plate::Plate(Grid grid,
              PlateSection section,
              double foundation_stiffness,
-             double foundation_loss_factor)
+             double foundation_loss_factor,
+             PlateTheory theory)
     : grid_(std::move(grid)),
       section_(std::move(section)),
       foundation_stiffness_(foundation_stiffness),
-      foundation_loss_factor_(foundation_loss_factor) {
+      foundation_loss_factor_(foundation_loss_factor),
+      theory_(theory) {
   CheckAxis(grid_.x, "Grid::x");
   CheckAxis(grid_.y, "Grid::y");
   const int nx = grid_.nx();
@@ -130,7 +140,9 @@ Plate::Plate(Grid grid,
         kind = static_cast<int>(sizes.size());
         sizes.emplace_back(hx, hy);
         unique_elements_.push_back(
-            ComputeElementMatrices(hx, hy, section_.bending_real, section_.bending_imag));
+            theory_ == PlateTheory::kFsdt
+                ? Mitc4ElementMatrices(hx, hy, section_)
+                : ComputeElementMatrices(hx, hy, section_.bending_real, section_.bending_imag));
       }
       element_kind_[ex * ny + ey] = kind;
     }
@@ -138,10 +150,11 @@ Plate::Plate(Grid grid,
 }
 
 int Plate::ElementDof(int ex, int ey, int local) const {
-  const int corner = local / kDofsPerNode;
+  const int n = dofs_per_node();
+  const int corner = local / n;
   const int a = corner & 1;
   const int b = corner >> 1;
-  return kDofsPerNode * Node(ex + a, ey + b) + local % kDofsPerNode;
+  return n * Node(ex + a, ey + b) + local % n;
 }
 
 std::complex<double> Plate::MassCoefficient(double frequency_hz) const {
@@ -155,10 +168,10 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
   const double length = grid_.x.back();
   const double width = grid_.y.back();
   if (load.patch_length <= 0.0 || load.patch_width <= 0.0) {
-    int dofs[kElementDofs];
+    int dofs[kMaxElementDofs];
     ElementVector row;
     InterpolationRow(load.x, load.y, dofs, &row);
-    for (int k = 0; k < kElementDofs; ++k) f(dofs[k]) += load.force * row(k);
+    for (int k = 0; k < element_dofs(); ++k) f(dofs[k]) += load.force * row(k);
     return f;
   }
   const double x0 = std::max(0.0, load.x - 0.5 * load.patch_length);
@@ -175,13 +188,16 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
       const double ay = std::max(y0, grid_.y[ey]);
       const double by = std::min(y1, grid_.y[ey + 1]);
       if (by <= ay) continue;
-      const ElementVector fe = ShapeIntegral(grid_.x[ex + 1] - grid_.x[ex],
-                                             grid_.y[ey + 1] - grid_.y[ey],
-                                             ax - grid_.x[ex],
-                                             bx - grid_.x[ex],
-                                             ay - grid_.y[ey],
-                                             by - grid_.y[ey]);
-      for (int k = 0; k < kElementDofs; ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
+      const double hx = grid_.x[ex + 1] - grid_.x[ex];
+      const double hy = grid_.y[ey + 1] - grid_.y[ey];
+      const double lx0 = ax - grid_.x[ex];
+      const double lx1 = bx - grid_.x[ex];
+      const double ly0 = ay - grid_.y[ey];
+      const double ly1 = by - grid_.y[ey];
+      const ElementVector fe = theory_ == PlateTheory::kFsdt
+                                   ? Mitc4ShapeIntegral(hx, hy, lx0, lx1, ly0, ly1)
+                                   : ShapeIntegral(hx, hy, lx0, lx1, ly0, ly1);
+      for (int k = 0; k < element_dofs(); ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
     }
   }
   return f;
@@ -200,15 +216,16 @@ Eigen::SparseMatrix<std::complex<double>> Plate::DynamicStiffness(
   const std::complex<double> mass_coefficient = MassCoefficient(frequency_hz);
   const std::complex<double> i_unit(0.0, 1.0);
   std::vector<Eigen::Triplet<std::complex<double>>> triplets;
-  triplets.reserve(static_cast<std::size_t>(grid_.nx()) * grid_.ny() * kElementDofs * kElementDofs);
+  const int ne = element_dofs();
+  triplets.reserve(static_cast<std::size_t>(grid_.nx()) * grid_.ny() * ne * ne);
   for (int ex = 0; ex < grid_.nx(); ++ex) {
     for (int ey = 0; ey < grid_.ny(); ++ey) {
       const ElementMatrices& e = Element(ex, ey);
-      int global[kElementDofs];
-      for (int k = 0; k < kElementDofs; ++k) global[k] = map[ElementDof(ex, ey, k)];
-      for (int c = 0; c < kElementDofs; ++c) {
+      int global[kMaxElementDofs];
+      for (int k = 0; k < ne; ++k) global[k] = map[ElementDof(ex, ey, k)];
+      for (int c = 0; c < ne; ++c) {
         if (global[c] < 0) continue;
-        for (int r = 0; r < kElementDofs; ++r) {
+        for (int r = 0; r < ne; ++r) {
           if (global[r] < 0) continue;
           triplets.emplace_back(global[r],
                                 global[c],
@@ -289,31 +306,34 @@ Eigen::VectorXcd Plate::SolveHarmonic(const Constraints& constraints,
   return u;
 }
 
-void Plate::InterpolationRow(double x, double y, int dofs[kElementDofs], ElementVector* row) const {
+void Plate::InterpolationRow(double x,
+                             double y,
+                             int dofs[kMaxElementDofs],
+                             ElementVector* row) const {
   const int ex = Locate(grid_.x, x);
   const int ey = Locate(grid_.y, y);
-  *row = ShapeValues(grid_.x[ex + 1] - grid_.x[ex],
-                     grid_.y[ey + 1] - grid_.y[ey],
-                     x - grid_.x[ex],
-                     y - grid_.y[ey]);
-  for (int k = 0; k < kElementDofs; ++k) dofs[k] = ElementDof(ex, ey, k);
+  const double hx = grid_.x[ex + 1] - grid_.x[ex];
+  const double hy = grid_.y[ey + 1] - grid_.y[ey];
+  *row = theory_ == PlateTheory::kFsdt ? Mitc4ShapeValues(hx, hy, x - grid_.x[ex], y - grid_.y[ey])
+                                       : ShapeValues(hx, hy, x - grid_.x[ex], y - grid_.y[ey]);
+  for (int k = 0; k < element_dofs(); ++k) dofs[k] = ElementDof(ex, ey, k);
 }
 
 double Plate::Deflection(const Eigen::VectorXd& u, double x, double y) const {
-  int dofs[kElementDofs];
+  int dofs[kMaxElementDofs];
   ElementVector row;
   InterpolationRow(x, y, dofs, &row);
   double w = 0.0;
-  for (int k = 0; k < kElementDofs; ++k) w += row(k) * u(dofs[k]);
+  for (int k = 0; k < element_dofs(); ++k) w += row(k) * u(dofs[k]);
   return w;
 }
 
 std::complex<double> Plate::Deflection(const Eigen::VectorXcd& u, double x, double y) const {
-  int dofs[kElementDofs];
+  int dofs[kMaxElementDofs];
   ElementVector row;
   InterpolationRow(x, y, dofs, &row);
   std::complex<double> w = 0.0;
-  for (int k = 0; k < kElementDofs; ++k) w += row(k) * u(dofs[k]);
+  for (int k = 0; k < element_dofs(); ++k) w += row(k) * u(dofs[k]);
   return w;
 }
 

@@ -26,7 +26,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     : num_sections_(num_sections),
       elements_per_section_(elements_per_section),
       ny_(plate.grid().ny()),
-      nc_(kDofsPerNode * (plate.grid().ny() + 1)),
+      nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
       fixed_mask_a_(fixed_mask_a),
       fixed_mask_b_(fixed_mask_b),
       start_mask_(start_mask),
@@ -41,10 +41,10 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   section_outputs_.resize(num_sections);
   std::vector<std::vector<double>> relative_x(num_sections);
   for (std::size_t o = 0; o < output_x.size(); ++o) {
-    int dofs[kElementDofs];
+    int dofs[kMaxElementDofs];
     ElementVector row;
     plate.InterpolationRow(output_x[o], output_y, dofs, &row);
-    const int cross_section = (dofs[0] / kDofsPerNode) / (ny_ + 1);
+    const int cross_section = dofs[0] / nc_;
     const int section = cross_section / elements_per_section;
     section_outputs_[section].push_back(static_cast<int>(o));
     const auto first_node =
@@ -304,8 +304,9 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
     } else if (d >= m * nc_) {
       boundary_index[d] = d - (m - 1) * nc_;
     } else {
-      const int j = (d / kDofsPerNode) % (ny_ + 1);
-      const int bit = 1 << (d % kDofsPerNode);
+      const int dofs_per_node = nc_ / (ny_ + 1);
+      const int j = (d / dofs_per_node) % (ny_ + 1);
+      const int bit = 1 << (d % dofs_per_node);
       const bool fixed = (fixed_a && j == 0 && (fixed_mask_a_ & bit)) ||
                          (fixed_b && j == ny_ && (fixed_mask_b_ & bit));
       if (!fixed) interior_index[d] = n_interior++;
@@ -320,10 +321,10 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   for (int ex = section * m; ex < (section + 1) * m; ++ex) {
     for (int ey = 0; ey < ny_; ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
-      int local[kElementDofs];
-      for (int k = 0; k < kElementDofs; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < kElementDofs; ++c) {
-        for (int r = 0; r < kElementDofs; ++r) {
+      int local[kMaxElementDofs];
+      for (int k = 0; k < plate.element_dofs(); ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < plate.element_dofs(); ++c) {
+        for (int r = 0; r < plate.element_dofs(); ++r) {
           const std::complex<double> v = e.stiffness_real(r, c) + i_unit * e.stiffness_imag(r, c) +
                                          mass_coefficient * e.mass_unit(r, c);
           const int rb = boundary_index[local[r]];
@@ -371,10 +372,10 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   piece.output_map = Eigen::MatrixXcd::Zero(n_out, nb);
   piece.output_offset = Eigen::VectorXcd::Zero(n_out);
   for (int k = 0; k < n_out; ++k) {
-    int dofs[kElementDofs];
+    int dofs[kMaxElementDofs];
     ElementVector row;
     plate.InterpolationRow(output_x[outputs[k]], output_y, dofs, &row);
-    for (int q = 0; q < kElementDofs; ++q) {
+    for (int q = 0; q < plate.element_dofs(); ++q) {
       const int d = dofs[q] - offset;
       COMBABC_CHECK(d >= 0 && d < n_local);
       if (boundary_index[d] >= 0) {

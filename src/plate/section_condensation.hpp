@@ -48,9 +48,10 @@ inline void CrossSectionFreeDofs(int nc,
                                  bool fixed_b,
                                  std::vector<int>* free) {
   free->clear();
+  const int dofs_per_node = nc / (ny + 1);
   for (int d = 0; d < nc; ++d) {
-    const int j = d / kDofsPerNode;
-    const int bit = 1 << (d % kDofsPerNode);
+    const int j = d / dofs_per_node;
+    const int bit = 1 << (d % dofs_per_node);
     int mask = 0;
     if (fixed_a && j == 0) mask |= masks.fixed_a;
     if (fixed_b && j == ny) mask |= masks.fixed_b;

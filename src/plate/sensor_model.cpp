@@ -58,7 +58,8 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
   plate_ = std::make_unique<Plate>(SensorGrid(options_),
                                    EquivalentSingleLayer(options_.layers),
                                    options_.foundation_stiffness,
-                                   options_.foundation_loss_factor);
+                                   options_.foundation_loss_factor,
+                                   options_.theory);
   condensation_ = std::make_unique<SectionCondensation>(
       *plate_,
       options_.clamps_per_edge,
@@ -82,9 +83,13 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
   // default laminate (eta = 0.10 from 0.10 / 0.15 / 0.10).
   const PlateSection& section = plate_->section();
   const double eta = section.bending_imag(0, 0) / section.bending_real(0, 0);
+  // In FSDT the shear stiffness must carry the same eta (it does not for the default laminate:
+  // the shear follows the core's loss factor).
   continuous_->proportional =
       (section.bending_imag - eta * section.bending_real).cwiseAbs().maxCoeff() <=
-      1e-14 * section.bending_real.cwiseAbs().maxCoeff();
+          1e-14 * section.bending_real.cwiseAbs().maxCoeff() &&
+      (options_.theory != PlateTheory::kFsdt ||
+       std::abs(section.shear_imag - eta * section.shear_real) <= 1e-14 * section.shear_real);
   continuous_->own_loss_factor = eta;
 }
 
@@ -174,7 +179,7 @@ void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double
 Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> clamps) const {
   const int n = options_.clamps_per_edge;
   COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
-  Constraints c(plate_->grid());
+  Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
   const auto m = static_cast<std::size_t>(options_.elements_per_section);
   for (int s = 0; s < n; ++s) {

@@ -83,6 +83,9 @@ bool SensorOptions::IsValid(std::string* why) const {
   if (fixed_support == Support::kFree) {
     return Fail(why, "fixed_support", ToString(fixed_support), "must not be free");
   }
+  if (std::string_view(ToString(theory)) == "?") {
+    return Fail(why, "theory", static_cast<int>(theory), "must be kirchhoff or fsdt");
+  }
   if (!InRange(load_force, -1e6, 1e6)) {
     return Fail(why, "load_force", load_force, "must be in [-1e6, 1e6] N");
   }

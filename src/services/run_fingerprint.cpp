@@ -167,6 +167,9 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
       .Add("length_grading", s.length_grading)
       .Add("width_grading", s.width_grading)
       .Add("always_pivot", s.always_pivot);
+  // Added only when not the original Kirchhoff model, so histories written before the key
+  // existed keep their fingerprint.
+  if (s.theory != plate::PlateTheory::kKirchhoff) c.Add("theory", static_cast<int>(s.theory));
   return c.Digest();
 }
 

@@ -8,22 +8,14 @@
 // left corner; local dof 4 (a + 2 b) + k with k = 0 w, 1 w_x, 2 w_y, 3 w_xy.
 #include <Eigen/Dense>
 
+#include "combabc/plate/element.hpp"
+
 namespace combabc::plate {
 
-inline constexpr int kDofsPerNode = 4;
-inline constexpr int kElementDofs = 16;
+inline constexpr int kBfsDofsPerNode = 4;
+inline constexpr int kBfsElementDofs = 16;
 
-using ElementMatrix = Eigen::Matrix<double, kElementDofs, kElementDofs>;
-using ElementVector = Eigen::Matrix<double, kElementDofs, 1>;
-
-// The three real matrices from which every complex dynamic stiffness is combined:
-//   K_dyn = stiffness_real + i stiffness_imag + (k_f (1 + i eta_f) - omega^2 rho h) mass_unit.
-struct ElementMatrices {
-  ElementMatrix stiffness_real;  // integral of B^T D_real B, B = (d_xx, d_yy, 2 d_xy) N
-  ElementMatrix stiffness_imag;  // integral of B^T D_imag B
-  ElementMatrix mass_unit;       // integral of N^T N (consistent mass for unit mass per area)
-};
-
+// stiffness_real / _imag: integral of B^T D B, B = (d_xx, d_yy, 2 d_xy) N; mass_unit: N^T N.
 ElementMatrices ComputeElementMatrices(double hx,
                                        double hy,
                                        const Eigen::Matrix3d& bending_real,

@@ -23,16 +23,21 @@ struct Layer {
 };
 
 // Bending properties of the equivalent single layer: moment = -(D_real + i D_imag) curvature with
-// curvature (w_xx, w_yy, 2 w_xy).
+// curvature (w_xx, w_yy, 2 w_xy); and its transverse shear stiffness for first-order shear
+// deformation theory: shear force = (S_real + i S_imag) shear strain, in both directions (the
+// layers are isotropic, so A44 = A55 and A45 = 0).
 struct PlateSection {
   Eigen::Matrix3d bending_real = Eigen::Matrix3d::Zero();  // N m
   Eigen::Matrix3d bending_imag = Eigen::Matrix3d::Zero();  // N m (loss part)
+  double shear_real = 0.0;                                 // N/m
+  double shear_imag = 0.0;                                 // N/m (loss part)
   double mass_per_area = 0.0;                              // kg/m^2 (rotary inertia neglected)
   double thickness = 0.0;                                  // m, total
   double neutral_plane = 0.0;                              // m above the bottom face
 };
 
-// Layers are listed from the bottom face up.
+// Layers are listed from the bottom face up. The shear stiffness is energy-consistent (see
+// laminate.cpp): 5/6 G h for a single layer; for a sandwich it follows the soft core.
 PlateSection EquivalentSingleLayer(const std::vector<Layer>& layers);
 
 // Homogeneous isotropic plate, D = E h^3 / (12 (1 - nu^2)).

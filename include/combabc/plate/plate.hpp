@@ -1,12 +1,15 @@
 #pragma once
-// A rectangular Kirchhoff plate on a structured grid of Bogner-Fox-Schmit elements, with
+// A rectangular plate on a structured grid of rectangular elements of one family (element.hpp:
+// Kirchhoff theory on Bogner-Fox-Schmit elements, or first-order shear deformation theory on MITC4
+// elements), with
 // per-edge-segment supports, an optional Winkler foundation, point or patch loads, and static,
 // harmonic and modal solves. The sensor simulator (sensor_model.hpp) is built on this; the
 // validation tests use it directly.
 //
 // Degrees of freedom: node (i, j) at (grid.x[i], grid.y[j]) has index i (ny + 1) + j and dofs
-// 4 node + k, k = 0 w, 1 w_x, 2 w_y, 3 w_xy (cross-section-major, so the dofs of one cross-section
-// x = grid.x[i] are contiguous, which the section condensation relies on).
+// n node + k with n = dofs_per_node(): k = 0 w, 1 w_x, 2 w_y, 3 w_xy for Kirchhoff; k = 0 w,
+// 1 phi_x, 2 phi_y for FSDT (cross-section-major, so the dofs of one cross-section x = grid.x[i]
+// are contiguous, which the section condensation relies on).
 #include <complex>
 #include <cstdint>
 #include <string>
@@ -17,7 +20,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
-#include "combabc/plate/bfs_element.hpp"
+#include "combabc/plate/element.hpp"
 #include "combabc/plate/laminate.hpp"
 
 namespace combabc::plate {
@@ -25,7 +28,9 @@ namespace combabc::plate {
 enum class Support {
   kFree,             // no constraint
   kSimplySupported,  // w = 0 and the tangential slope = 0 along the edge
-  kClamped,          // w = 0 and both slopes = 0 (so all four BFS dofs vanish on the edge)
+  kClamped,          // w = 0 and both slopes = 0 (so all four BFS dofs vanish on the edge; in
+                     // FSDT w and both rotations of the normal, a "hard" clamp that holds the
+                     // whole edge face, as a clamp gripping the strip over its thickness does)
 };
 }  // namespace combabc::plate
 
@@ -60,31 +65,36 @@ struct Grid {
 };
 Grid UniformGrid(double length, double width, int nx, int ny);
 
-// Which dofs are fixed: one bit mask per node (bit k fixes dof k).
+// Which dofs are fixed: one bit mask per node (bit k fixes dof k of dofs_per_node).
 class Constraints {
  public:
-  explicit Constraints(const Grid& grid);
+  explicit Constraints(const Grid& grid, int dofs_per_node = DofsPerNode(PlateTheory::kKirchhoff));
 
   // Supports the nodes of `edge` whose coordinate along the edge lies in the closed interval
   // [from, to] (a tolerance of 1e-9 of the edge length). Masks are OR-ed, so a node shared by a
   // clamped and a free segment is clamped, and a corner gets the union of both edges.
   void AddEdgeSupport(Edge edge, double from, double to, Support support);
   void AddEdgeSupport(Edge edge, Support support);
-  void FixNode(int node, std::uint8_t mask) { masks_[node] |= mask; }
+  void FixNode(int node, std::uint8_t mask) { masks_[node] |= mask & all_dofs_; }
 
   std::uint8_t mask(int node) const { return masks_[node]; }
   bool IsFixed(int dof) const {
-    return ((masks_[dof / kDofsPerNode] >> (dof % kDofsPerNode)) & 1) != 0;
+    return ((masks_[dof / dofs_per_node_] >> (dof % dofs_per_node_)) & 1) != 0;
   }
   int num_fixed() const;
 
  private:
   std::vector<double> x_;
   std::vector<double> y_;
+  int dofs_per_node_;
+  std::uint8_t all_dofs_;  // the mask of every dof of a node
   std::vector<std::uint8_t> masks_;
 };
 
-// Mask of the dofs fixed by `support` on a node of `edge` (see Support).
+// Mask of the dofs fixed by `support` on a node of `edge` (see Support). The same for every
+// theory: dofs 0-2 mean (w, slope along x, slope along y) in each family, and bit 3 (w_xy, Kirchhoff
+// only) is dropped by Constraints where a family has 3 dofs. Simply supported is the "hard" support
+// in FSDT: w and the rotation about the edge's normal (the tangential slope) are fixed.
 std::uint8_t SupportMask(Edge edge, Support support);
 
 // A transverse force of amplitude `force` (N) at (x, y): a point load when patch_length and
@@ -110,14 +120,20 @@ class Plate {
   Plate(Grid grid,
         PlateSection section,
         double foundation_stiffness = 0.0,
-        double foundation_loss_factor = 0.0);
+        double foundation_loss_factor = 0.0,
+        PlateTheory theory = PlateTheory::kKirchhoff);
 
   const Grid& grid() const { return grid_; }
+  PlateTheory theory() const { return theory_; }
+  int dofs_per_node() const { return DofsPerNode(theory_); }
+  int element_dofs() const { return 4 * DofsPerNode(theory_); }
+  // An empty constraint set of this plate's dof layout.
+  Constraints NewConstraints() const { return Constraints(grid_, dofs_per_node()); }
   const PlateSection& section() const { return section_; }
   double foundation_stiffness() const { return foundation_stiffness_; }
   double foundation_loss_factor() const { return foundation_loss_factor_; }
   int num_nodes() const { return (grid_.nx() + 1) * (grid_.ny() + 1); }
-  int num_dofs() const { return kDofsPerNode * num_nodes(); }
+  int num_dofs() const { return dofs_per_node() * num_nodes(); }
   int Node(int i, int j) const { return i * (grid_.ny() + 1) + j; }
   // Global dof of local dof `local` of element (ex, ey).
   int ElementDof(int ex, int ey, int local) const;
@@ -157,14 +173,16 @@ class Plate {
   // Deflection w at (x, y) interpolated with the element shape functions.
   double Deflection(const Eigen::VectorXd& u, double x, double y) const;
   std::complex<double> Deflection(const Eigen::VectorXcd& u, double x, double y) const;
-  // Interpolation row: w(x, y) = row . u over the returned 16 global dofs.
-  void InterpolationRow(double x, double y, int dofs[kElementDofs], ElementVector* row) const;
+  // Interpolation row: w(x, y) = row . u over the returned element_dofs() global dofs (dofs must
+  // hold kMaxElementDofs).
+  void InterpolationRow(double x, double y, int dofs[kMaxElementDofs], ElementVector* row) const;
 
  private:
   Grid grid_;
   PlateSection section_;
   double foundation_stiffness_;
   double foundation_loss_factor_;
+  PlateTheory theory_;
   std::vector<ElementMatrices> unique_elements_;  // one per distinct (hx, hy)
   std::vector<int> element_kind_;                 // ex * ny + ey -> index into unique_elements_
 };
