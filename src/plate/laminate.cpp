@@ -1,7 +1,6 @@
 #include "combabc/plate/laminate.hpp"
 
 #include <array>
-#include <complex>
 #include <sstream>
 
 #include "combabc/core/check.hpp"
@@ -36,35 +35,40 @@ Eigen::Matrix3d ReducedStiffnessShape(double nu) {
 // same shear energy for the same shear force Q: 1 / S = integral of g(z)^2 / G(z) dz (Whitney,
 // J. Appl. Mech. 40 (1973) 302-304; Vlachoutsis, Int. J. Numer. Meth. Eng. 33 (1992) 1537-1552).
 // One layer gives S = 5/6 G h; a sandwich with a soft core gives about G_core d^2 / c, the
-// sandwich-beam value (Allen 1969). Complex moduli E (1 + i eta) carry the damping through (the
-// correspondence principle), so proportional damping gives S (1 + i eta) exactly.
-std::complex<double> ShearStiffness(const std::vector<Layer>& layers,
-                                    double neutral_plane,
-                                    std::complex<double> d11) {
+// sandwich-beam value (Allen 1969). Elastic moduli, so S_real does not depend on the loss factors
+// (as D_real does not: the continuous-unknowns path relies on it). The loss part weights each
+// layer's loss factor by its share of the shear energy (Ungar & Kerwin, J. Acoust. Soc. Am. 34
+// (1962) 954-957), as D_imag = sum eta_k D_k does for bending; one loss factor eta for every layer
+// gives S_imag = eta S_real exactly.
+void ShearStiffness(const std::vector<Layer>& layers, PlateSection* section) {
   // 3-point Gauss-Legendre on [0, 1]: exact for g^2, a polynomial of degree 4 in each layer.
   constexpr std::array<double, 3> kPoint = {0.1127016653792583, 0.5, 0.8872983346207417};
   constexpr std::array<double, 3> kWeight = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-  using Complex = std::complex<double>;
-  Complex compliance = 0.0;
-  Complex g_bottom = 0.0;
+  const double d11 = section->bending_real(0, 0);
+  double compliance = 0.0;
+  double loss_compliance = 0.0;
+  double g_bottom = 0.0;
   double z = 0.0;
   for (const Layer& layer : layers) {
-    const Complex modulus = layer.youngs_modulus * Complex(1.0, layer.loss_factor);
-    const Complex q11 = modulus / (1.0 - layer.poisson_ratio * layer.poisson_ratio);
-    const Complex shear_modulus = modulus / (2.0 * (1.0 + layer.poisson_ratio));
-    const double zb = z - neutral_plane;
+    const double q11 = layer.youngs_modulus / (1.0 - layer.poisson_ratio * layer.poisson_ratio);
+    const double shear_modulus = layer.youngs_modulus / (2.0 * (1.0 + layer.poisson_ratio));
+    const double zb = z - section->neutral_plane;
     auto g = [&](double t) {  // t in [0, thickness] from the layer's bottom
       const double zz = zb + t;
       return g_bottom - q11 / d11 * (0.5 * (zz * zz - zb * zb));
     };
+    double layer_compliance = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const Complex gk = g(kPoint[k] * layer.thickness);
-      compliance += kWeight[k] * layer.thickness * gk * gk / shear_modulus;
+      const double gk = g(kPoint[k] * layer.thickness);
+      layer_compliance += kWeight[k] * layer.thickness * gk * gk / shear_modulus;
     }
+    compliance += layer_compliance;
+    loss_compliance += layer.loss_factor * layer_compliance;
     g_bottom = g(layer.thickness);
     z += layer.thickness;
   }
-  return 1.0 / compliance;
+  section->shear_real = 1.0 / compliance;
+  section->shear_imag = section->shear_real * (loss_compliance / compliance);
 }
 
 }  // namespace
@@ -117,12 +121,7 @@ PlateSection EquivalentSingleLayer(const std::vector<Layer>& layers) {
     section.bending_imag += layer.loss_factor * d;
     z += layer.thickness;
   }
-  const std::complex<double> shear = ShearStiffness(
-      layers,
-      section.neutral_plane,
-      std::complex<double>(section.bending_real(0, 0), section.bending_imag(0, 0)));
-  section.shear_real = shear.real();
-  section.shear_imag = shear.imag();
+  ShearStiffness(layers, &section);
   return section;
 }
 

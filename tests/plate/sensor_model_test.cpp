@@ -91,6 +91,19 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveAboveResonance) {
   ExpectFastEqualsFull(o, 20, 5);
 }
 
+// FSDT (MITC4, 3 dofs per node) through the same condensation: the identity is algebraic, so
+// the same tolerance; the other supports too (simply supported is the hard support in FSDT).
+TEST(PlateSensorModel, FastPathEqualsFullSolveFsdt) {
+  SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kFsdt;
+  ExpectFastEqualsFull(o, 40, 11);
+  o.fixed_support = Support::kSimplySupported;
+  o.short_edge_start = Support::kClamped;
+  o.load_x = 0.3712;
+  o.load_patch_length = 0.0;
+  ExpectFastEqualsFull(o, 20, 12);
+}
+
 // The pivoting-LU path (the LDL^T fallback) on its own.
 TEST(PlateSensorModel, FastPathWithPivotingLuEqualsFullSolve) {
   SensorOptions o = CoarseOptions();

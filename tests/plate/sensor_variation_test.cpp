@@ -196,6 +196,15 @@ TEST(PlateSensorVariation, LayersOwnLossFactorsNotProportional) {
   ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
 }
 
+// FSDT through the continuous-unknowns path: its mass acts on w only (no rotary inertia), so the
+// series bound works with a semidefinite M; and the default laminate's shear stiffness carries
+// the core's loss factor, so the layers' own factors take the complex K_base.
+TEST(PlateSensorVariation, EqualsFullSolveFsdt) {
+  SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kFsdt;
+  ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
+}
+
 // The proportional default laminate needs one precompute for both loss-factor kinds.
 TEST(PlateSensorVariation, ProportionalLaminateSharesOnePrecompute) {
   const SensorModel model(CoarseOptions());
