@@ -78,6 +78,51 @@ void BM_SensorProfileFullSolve(benchmark::State& state) {
 }
 BENCHMARK(BM_SensorProfileFullSolve)->Unit(benchmark::kMillisecond);
 
+// The same three with first-order shear deformation theory (MITC4, 3 dofs per node) at the
+// default mesh (docs/model.md, "Plate theories").
+SensorOptions FsdtOptions() {
+  SensorOptions options;
+  options.theory = combabc::plate::PlateTheory::kFsdt;
+  return options;
+}
+
+const SensorModel& FsdtModel() {
+  static const SensorModel model{FsdtOptions()};
+  return model;
+}
+
+void BM_SensorPrecomputeFsdt(benchmark::State& state) {
+  for (auto _ : state) {
+    SensorModel model{FsdtOptions()};
+    benchmark::DoNotOptimize(&model);
+  }
+}
+BENCHMARK(BM_SensorPrecomputeFsdt)->Unit(benchmark::kMillisecond);
+
+void BM_SensorProfileFastFsdt(benchmark::State& state) {
+  const SensorModel& model = FsdtModel();
+  const auto configs = Configurations(256, model.num_clamps());
+  std::vector<double> out(model.num_outputs());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    model.Profile(configs[i++ % configs.size()], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(BM_SensorProfileFastFsdt)->Unit(benchmark::kMicrosecond);
+
+void BM_SensorProfileFullSolveFsdt(benchmark::State& state) {
+  const SensorModel& model = FsdtModel();
+  const auto configs = Configurations(16, model.num_clamps());
+  std::vector<double> out(model.num_outputs());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    model.ProfileFullSolve(configs[i++ % configs.size()], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(BM_SensorProfileFullSolveFsdt)->Unit(benchmark::kMillisecond);
+
 // Continuous unknowns (SensorModel::Profile with a SensorVariation): every call has its own
 // foundation stiffness, stiffness scale and (unless `own_loss`) loss factor, drawn over ranges a
 // calibration would explore, so no two calls share values. The continuous precompute is built

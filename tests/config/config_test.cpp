@@ -253,6 +253,15 @@ TEST(Config, ModelKeysAreOptionalAndDefaultsComeFromSensorOptions) {
   EXPECT_EQ(c.data.gaussian_extension.impact_position, 0.3);
 }
 
+TEST(Config, ModelTheorySelectsThePlateTheory) {
+  EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.theory, plate::PlateTheory::kKirchhoff);
+  EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"fsdt\"\n", "inline.toml").model.theory,
+            plate::PlateTheory::kFsdt);
+  const Error e = ConfigError(kMinimal + "[model]\ntheory = \"mindlin\"\n");
+  ExpectLocated(e, "inline.toml", 6, "model.theory");
+  EXPECT_NE(std::string(e.what()).find("\"kirchhoff\", \"fsdt\""), std::string::npos) << e.what();
+}
+
 TEST(Config, ModelErrorsNameTheKey) {
   ExpectLocated(ConfigError(kMinimal + "[model]\nlength = -1\n"), "inline.toml", 6, "model.length");
   ExpectLocated(ConfigError(kMinimal + "[model.short_edges]\nstart = \"pinned\"\n"),
