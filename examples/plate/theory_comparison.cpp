@@ -46,7 +46,8 @@ double Peak(const std::vector<double>& p) { return *std::max_element(p.begin(), 
 
 double ProfileDifference(const std::vector<double>& a, const std::vector<double>& b) {
   double d = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) d = std::max(d, std::abs(a[k] / Peak(a) - b[k] / Peak(b)));
+  for (std::size_t k = 0; k < a.size(); ++k)
+    d = std::max(d, std::abs(a[k] / Peak(a) - b[k] / Peak(b)));
   return d;
 }
 
@@ -80,19 +81,29 @@ int main(int argc, char** argv) {
       model.ProfileFullSolve(cases[0].clamps, full);
       const auto t2 = std::chrono::steady_clock::now();
       std::printf("mesh %d x %d per section, %s: precompute %.2f s, one full solve %.1f ms\n",
-                  o.elements_per_section, o.elements_across_width, combabc::ToString(theory),
+                  o.elements_per_section,
+                  o.elements_across_width,
+                  combabc::ToString(theory),
                   std::chrono::duration<double>(t1 - t0).count(),
                   1e3 * std::chrono::duration<double>(t2 - t1).count());
       profiles.emplace_back();
       for (const Case& c : cases) profiles.back().push_back(Magnitudes(model, c.clamps));
     }
-    std::printf("%-36s %14s %14s %10s %12s\n", "configuration", "peak K (um)", "peak FSDT (um)",
-                "FSDT / K", "profile diff");
+    std::printf("%-36s %14s %14s %10s %12s\n",
+                "configuration",
+                "peak K (um)",
+                "peak FSDT (um)",
+                "FSDT / K",
+                "profile diff");
     for (std::size_t k = 0; k < cases.size(); ++k) {
       const double pk = Peak(profiles[0][k]);
       const double pf = Peak(profiles[1][k]);
-      std::printf("%-36s %14.4f %14.4f %10.4f %11.2f%%\n", cases[k].name, pk * 1e6, pf * 1e6,
-                  pf / pk, 100.0 * ProfileDifference(profiles[1][k], profiles[0][k]));
+      std::printf("%-36s %14.4f %14.4f %10.4f %11.2f%%\n",
+                  cases[k].name,
+                  pk * 1e6,
+                  pf * 1e6,
+                  pf / pk,
+                  100.0 * ProfileDifference(profiles[1][k], profiles[0][k]));
     }
   }
   return 0;

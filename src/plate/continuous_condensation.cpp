@@ -237,7 +237,8 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     for (int ey = 0; ey < ny_; ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
       int local[kMaxElementDofs];
-      for (int k = 0; k < plate.element_dofs(); ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int k = 0; k < plate.element_dofs(); ++k)
+        local[k] = plate.ElementDof(ex, ey, k) - offset;
       for (int c = 0; c < plate.element_dofs(); ++c) {
         for (int r = 0; r < plate.element_dofs(); ++r) {
           const double kr = e.stiffness_real(r, c);

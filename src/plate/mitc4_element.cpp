@@ -19,7 +19,8 @@ double LinearSlope(int a) { return a == 0 ? -1.0 : 1.0; }
 // Displacement-based shear strain rows at local (s, t) in [0, 1]^2: gamma_x = w_x - phi_x
 // (row 0) and gamma_y = w_y - phi_y (row 1).
 Eigen::Matrix<double, 2, kMitc4ElementDofs> ShearRows(double hx, double hy, double s, double t) {
-  Eigen::Matrix<double, 2, kMitc4ElementDofs> rows = Eigen::Matrix<double, 2, kMitc4ElementDofs>::Zero();
+  Eigen::Matrix<double, 2, kMitc4ElementDofs> rows =
+      Eigen::Matrix<double, 2, kMitc4ElementDofs>::Zero();
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
       const double n = Linear(a, s) * Linear(b, t);
@@ -72,7 +73,8 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
       const double weight = kGaussWeight * kGaussWeight * hx * hy;
       Eigen::Matrix<double, 3, kMitc4ElementDofs> bending =
           Eigen::Matrix<double, 3, kMitc4ElementDofs>::Zero();
-      Eigen::Matrix<double, kMitc4ElementDofs, 1> n = Eigen::Matrix<double, kMitc4ElementDofs, 1>::Zero();
+      Eigen::Matrix<double, kMitc4ElementDofs, 1> n =
+          Eigen::Matrix<double, kMitc4ElementDofs, 1>::Zero();
       for (int b = 0; b < 2; ++b) {
         for (int a = 0; a < 2; ++a) {
           const double dx = LinearSlope(a) / hx * Linear(b, t);

@@ -95,8 +95,8 @@ TEST(FsdtValidation, ThickPlateMatchesNavierSeries) {
     const PlateSection section = IsotropicSection(h, kModulus, kPoisson, kDensity);
     const double shear_modulus = kModulus / (2.0 * (1.0 + kPoisson));
     EXPECT_NEAR(section.shear_real / (5.0 / 6.0 * shear_modulus * h), 1.0, 1e-12);
-    const double reference = NavierMindlinCentre(section.bending_real(0, 0), section.shear_real,
-                                                 side, 2001);
+    const double reference =
+        NavierMindlinCentre(section.bending_real(0, 0), section.shear_real, side, 2001);
     const double fsdt = CentreStatic(PlateTheory::kFsdt, section, side, 16);
     const double kirchhoff = CentreStatic(PlateTheory::kKirchhoff, section, side, 16);
     std::printf("h/a = %g: FSDT / Navier %.5f, Kirchhoff / Navier %.5f\n",
@@ -153,7 +153,8 @@ Eigen::VectorXd SinusoidalLoad(const Plate& plate, double side) {
 
 double SinusoidalCentre(PlateTheory theory, const PlateSection& section, double side, int n) {
   const Plate plate(UniformGrid(side, side, n, n), section, 0.0, 0.0, theory);
-  const Eigen::VectorXcd u = plate.SolveHarmonic(SimplySupported(plate), SinusoidalLoad(plate, side), 0.0);
+  const Eigen::VectorXcd u =
+      plate.SolveHarmonic(SimplySupported(plate), SinusoidalLoad(plate, side), 0.0);
   return plate.Deflection(u, 0.5 * side, 0.5 * side).real();
 }
 
@@ -172,12 +173,15 @@ TEST(FsdtValidation, ExactSolutionChecks) {
     const double d = section.bending_real(0, 0);
     const double kirchhoff = 1.0 / (d * k2 * k2);
     const double mindlin = kirchhoff + 1.0 / (section.shear_real * k2);
-    const double exact = testing::ExactCentreDeflection({steel}, side, side, 1.0, 0.5 * steel.thickness);
+    const double exact =
+        testing::ExactCentreDeflection({steel}, side, side, 1.0, 0.5 * steel.thickness);
     Layer third = steel;
     third.thickness = steel.thickness / 3.0;
-    const double split =
-        testing::ExactCentreDeflection({third, third, third}, side, side, 1.0, 0.5 * steel.thickness);
-    std::printf("h/a = %g: 3D / Kirchhoff %.6f, 3D / Mindlin %.6f\n", ratio, exact / kirchhoff,
+    const double split = testing::ExactCentreDeflection(
+        {third, third, third}, side, side, 1.0, 0.5 * steel.thickness);
+    std::printf("h/a = %g: 3D / Kirchhoff %.6f, 3D / Mindlin %.6f\n",
+                ratio,
+                exact / kirchhoff,
                 exact / mindlin);
     EXPECT_NEAR(split / exact, 1.0, 1e-9);
     if (ratio < 0.01) {
@@ -201,17 +205,22 @@ TEST(FsdtValidation, SandwichAgainstExact3D) {
   const double h = section.thickness;
   double naive_shear = 0.0;
   for (const Layer& layer : layers) {
-    naive_shear += 5.0 / 6.0 * layer.youngs_modulus / (2.0 * (1.0 + layer.poisson_ratio)) *
-                   layer.thickness;
+    naive_shear +=
+        5.0 / 6.0 * layer.youngs_modulus / (2.0 * (1.0 + layer.poisson_ratio)) * layer.thickness;
   }
-  std::printf("shear stiffness: energy-consistent %.1f N/m (loss factor %.4f), 5/6 sum G h %.1f N/m\n",
-              section.shear_real, section.shear_imag / section.shear_real, naive_shear);
+  std::printf(
+      "shear stiffness: energy-consistent %.1f N/m (loss factor %.4f), 5/6 sum G h %.1f N/m\n",
+      section.shear_real,
+      section.shear_imag / section.shear_real,
+      naive_shear);
   struct Case {
     double side;
-    double fsdt_error;       // |FSDT / 3D - 1| bound
-    double kirchhoff_low;    // Kirchhoff / 3D at most this
+    double fsdt_error;     // |FSDT / 3D - 1| bound
+    double kirchhoff_low;  // Kirchhoff / 3D at most this
   };
-  for (const Case& c : {Case{0.01, 0.29, 0.30}, Case{0.02, 0.07, 0.58}, Case{0.04, 0.025, 0.85},
+  for (const Case& c : {Case{0.01, 0.29, 0.30},
+                        Case{0.02, 0.07, 0.58},
+                        Case{0.04, 0.025, 0.85},
                         Case{0.08, 0.015, 0.97}}) {
     const double k2 = 2.0 * M_PI * M_PI / (c.side * c.side);
     const double kirchhoff = 1.0 / (section.bending_real(0, 0) * k2 * k2);
@@ -220,9 +229,15 @@ TEST(FsdtValidation, SandwichAgainstExact3D) {
     const double naive = kirchhoff + 1.0 / (naive_shear * k2);
     const double fe = SinusoidalCentre(PlateTheory::kFsdt, section, c.side, 24);
     const double fe_kirchhoff = SinusoidalCentre(PlateTheory::kKirchhoff, section, c.side, 24);
-    std::printf("a = %.0f mm (a/h %.1f): Kirchhoff / 3D %.4f, FSDT / 3D %.4f, FE FSDT / closed form %.5f, FE Kirchhoff / closed form %.5f\n",
-                c.side * 1e3, c.side / h, kirchhoff / exact, fsdt / exact, fe / fsdt,
-                fe_kirchhoff / kirchhoff);
+    std::printf(
+        "a = %.0f mm (a/h %.1f): Kirchhoff / 3D %.4f, FSDT / 3D %.4f, FE FSDT / closed form %.5f, "
+        "FE Kirchhoff / closed form %.5f\n",
+        c.side * 1e3,
+        c.side / h,
+        kirchhoff / exact,
+        fsdt / exact,
+        fe / fsdt,
+        fe_kirchhoff / kirchhoff);
     EXPECT_NEAR(fe / fsdt, 1.0, 0.005);
     EXPECT_NEAR(fe_kirchhoff / kirchhoff, 1.0, 0.005);
     EXPECT_NEAR(fsdt / exact, 1.0, c.fsdt_error);

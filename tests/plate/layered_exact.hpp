@@ -24,11 +24,8 @@ namespace combabc::plate::testing {
 // w at height z (m above the bottom face) at the plate's centre, for load amplitude q0 (Pa) in
 // the +w direction. Internally scaled (lengths by the total thickness, stresses by the first
 // layer's modulus) so the 6 x 6 algebra stays well conditioned.
-inline double ExactCentreDeflection(const std::vector<Layer>& layers,
-                                    double a,
-                                    double b,
-                                    double q0,
-                                    double z) {
+inline double ExactCentreDeflection(
+    const std::vector<Layer>& layers, double a, double b, double q0, double z) {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   double h = 0.0;
   for (const Layer& layer : layers) h += layer.thickness;

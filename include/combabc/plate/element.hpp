@@ -29,10 +29,13 @@ inline constexpr int kMaxElementDofs = 4 * kMaxDofsPerNode;
 constexpr int DofsPerNode(PlateTheory theory) { return theory == PlateTheory::kFsdt ? 3 : 4; }
 
 // Sized per family at run time, stored inline (no heap) up to the largest family.
-using ElementMatrix = Eigen::
-    Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxElementDofs, kMaxElementDofs>;
-using ElementVector =
-    Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxElementDofs, 1>;
+using ElementMatrix = Eigen::Matrix<double,
+                                    Eigen::Dynamic,
+                                    Eigen::Dynamic,
+                                    Eigen::ColMajor,
+                                    kMaxElementDofs,
+                                    kMaxElementDofs>;
+using ElementVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxElementDofs, 1>;
 
 // The three real matrices from which every complex dynamic stiffness is combined:
 //   K_dyn = stiffness_real + i stiffness_imag + (k_f (1 + i eta_f) - omega^2 rho h) mass_unit.

@@ -92,9 +92,10 @@ class Constraints {
 };
 
 // Mask of the dofs fixed by `support` on a node of `edge` (see Support). The same for every
-// theory: dofs 0-2 mean (w, slope along x, slope along y) in each family, and bit 3 (w_xy, Kirchhoff
-// only) is dropped by Constraints where a family has 3 dofs. Simply supported is the "hard" support
-// in FSDT: w and the rotation about the edge's normal (the tangential slope) are fixed.
+// theory: dofs 0-2 mean (w, slope along x, slope along y) in each family, and bit 3 (w_xy,
+// Kirchhoff only) is dropped by Constraints where a family has 3 dofs. Simply supported is the
+// "hard" support in FSDT: w and the rotation about the edge's normal (the tangential slope) are
+// fixed.
 std::uint8_t SupportMask(Edge edge, Support support);
 
 // A transverse force of amplitude `force` (N) at (x, y): a point load when patch_length and
