@@ -40,6 +40,37 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
   EXPECT_LT(worst, kFastPathTol);
 }
 
+// FSDT (MITC4) at twice the default mesh in each direction (20 x 12 per section, closer to what
+// its bilinear elements need: docs/model.md, "Plate theories"), 40 configurations.
+TEST(PlateSensorSlow, FastPathEqualsFullSolveFsdtRefinedMesh) {
+  SensorOptions options;
+  options.theory = PlateTheory::kFsdt;
+  options.elements_per_section = 20;
+  options.elements_across_width = 12;
+  const SensorModel model{options};
+  std::mt19937_64 rng(6);
+  std::vector<double> fast(model.num_outputs());
+  std::vector<double> full(model.num_outputs());
+  double worst = 0.0;
+  constexpr int kConfigurations = 40;
+  for (int i = 0; i < kConfigurations; ++i) {
+    std::vector<std::uint8_t> clamps(model.num_clamps());
+    for (auto& v : clamps) v = static_cast<std::uint8_t>(rng() & 1);
+    if (i == 0) std::fill(clamps.begin(), clamps.end(), 0);
+    model.Profile(clamps, fast);
+    model.ProfileFullSolve(clamps, full);
+    double diff = 0.0;
+    for (std::size_t k = 0; k < fast.size(); ++k) {
+      diff = std::max(diff, std::abs(fast[k] - full[k]));
+    }
+    worst = std::max(worst, diff / *std::max_element(full.begin(), full.end()));
+  }
+  std::printf("FSDT 20 x 12: worst relative difference over %d configurations: %.2e\n",
+              kConfigurations,
+              worst);
+  EXPECT_LT(worst, kFastPathTol);
+}
+
 // The continuous-unknowns path against the full solve of the model built with the same values,
 // over values a calibration would try (both section paths: series, and direct condensation for a
 // laminate 500 times softer). At this graded mesh the agreement is bounded by conditioning, not by
