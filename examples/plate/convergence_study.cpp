@@ -3,7 +3,8 @@
 // max_x | p_h(x) - p_ref(x) | (p normalised to a maximum of 1, so the error is in units of the
 // peak) between a mesh and one `factor_x` / `factor_y` times finer along / across the strip.
 //   convergence_study [elements_per_section elements_across_width factor_x factor_y
-//                      configurations seed length_grading width_grading]
+//                      configurations seed length_grading width_grading theory]
+// (theory: "kirchhoff", the default, or "fsdt")
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,6 +29,15 @@ int main(int argc, char** argv) {
   SensorOptions coarse_options;
   if (argc > 7) coarse_options.length_grading = std::atof(argv[7]);
   if (argc > 8) coarse_options.width_grading = std::atof(argv[8]);
+  if (argc > 9) {
+    const auto theory = combabc::ParseEnum<combabc::plate::PlateTheory>(argv[9]);
+    if (!theory) {
+      std::fprintf(stderr, "unknown theory %s; expected %s\n", argv[9],
+                   combabc::EnumChoices<combabc::plate::PlateTheory>().c_str());
+      return 2;
+    }
+    coarse_options.theory = *theory;
+  }
   coarse_options.elements_per_section = m;
   coarse_options.elements_across_width = ny;
   SensorOptions fine_options = coarse_options;

@@ -236,11 +236,11 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   for (int ex = section * m; ex < (section + 1) * m; ++ex) {
     for (int ey = 0; ey < ny_; ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
+      const int ne = plate.element_dofs();
       int local[kMaxElementDofs];
-      for (int k = 0; k < plate.element_dofs(); ++k)
-        local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < plate.element_dofs(); ++c) {
-        for (int r = 0; r < plate.element_dofs(); ++r) {
+      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < ne; ++c) {
+        for (int r = 0; r < ne; ++r) {
           const double kr = e.stiffness_real(r, c);
           const Complex k(kr, own_loss_factors_ ? e.stiffness_imag(r, c) : 0.0);
           const double mm = e.mass_unit(r, c);

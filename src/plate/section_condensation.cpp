@@ -321,11 +321,11 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   for (int ex = section * m; ex < (section + 1) * m; ++ex) {
     for (int ey = 0; ey < ny_; ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
+      const int ne = plate.element_dofs();
       int local[kMaxElementDofs];
-      for (int k = 0; k < plate.element_dofs(); ++k)
-        local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < plate.element_dofs(); ++c) {
-        for (int r = 0; r < plate.element_dofs(); ++r) {
+      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < ne; ++c) {
+        for (int r = 0; r < ne; ++r) {
           const std::complex<double> v = e.stiffness_real(r, c) + i_unit * e.stiffness_imag(r, c) +
                                          mass_coefficient * e.mass_unit(r, c);
           const int rb = boundary_index[local[r]];
