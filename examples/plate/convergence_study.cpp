@@ -32,7 +32,9 @@ int main(int argc, char** argv) {
   if (argc > 9) {
     const auto theory = combabc::ParseEnum<combabc::plate::PlateTheory>(argv[9]);
     if (!theory) {
-      std::fprintf(stderr, "unknown theory %s; expected %s\n", argv[9],
+      std::fprintf(stderr,
+                   "unknown theory %s; expected %s\n",
+                   argv[9],
                    combabc::EnumChoices<combabc::plate::PlateTheory>().c_str());
       return 2;
     }
