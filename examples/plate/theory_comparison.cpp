@@ -37,17 +37,20 @@ std::vector<std::uint8_t> BothEdges(Pick pick) {
 std::vector<double> Magnitudes(const SensorModel& model, const std::vector<std::uint8_t>& clamps) {
   std::vector<std::complex<double>> w(model.num_outputs());
   model.ComplexProfile(clamps, w);
-  std::vector<double> out;
-  for (const auto& v : w) out.push_back(std::abs(v));
+  std::vector<double> out(w.size());
+  for (std::size_t k = 0; k < w.size(); ++k) out[k] = std::abs(w[k]);
   return out;
 }
 
 double Peak(const std::vector<double>& p) { return *std::max_element(p.begin(), p.end()); }
 
 double ProfileDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  const double peak_a = Peak(a);
+  const double peak_b = Peak(b);
   double d = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k)
-    d = std::max(d, std::abs(a[k] / Peak(a) - b[k] / Peak(b)));
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    d = std::max(d, std::abs(a[k] / peak_a - b[k] / peak_b));
+  }
   return d;
 }
 
