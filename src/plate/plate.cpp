@@ -205,6 +205,8 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
 
 Eigen::SparseMatrix<std::complex<double>> Plate::DynamicStiffness(
     const Constraints& constraints, double frequency_hz, std::vector<int>* free_dofs) const {
+  // Constraints built for another dof layout (Plate::NewConstraints gives the right one).
+  COMBABC_CHECK(constraints.dofs_per_node() == dofs_per_node());
   std::vector<int> map(num_dofs(), -1);
   free_dofs->clear();
   for (int d = 0; d < num_dofs(); ++d) {

@@ -78,6 +78,7 @@ class Constraints {
   void FixNode(int node, std::uint8_t mask) { masks_[node] |= mask & all_dofs_; }
 
   std::uint8_t mask(int node) const { return masks_[node]; }
+  int dofs_per_node() const { return dofs_per_node_; }
   bool IsFixed(int dof) const {
     return ((masks_[dof / dofs_per_node_] >> (dof % dofs_per_node_)) & 1) != 0;
   }
