@@ -1,0 +1,30 @@
+# The Python module (docs/python.md): python/src/*.cpp built with pybind11 into
+# ${PROJECT_BINARY_DIR}/python/combabc/ next to a copy of the pure-Python package python/combabc/,
+# so that PYTHONPATH=${PROJECT_BINARY_DIR}/python imports it from the build tree.
+# Debian's python3 (/usr/bin/python3) is preferred over one found first on PATH (a pyenv shim):
+# the module must be built for the interpreter that has Debian's numpy, pandas and pytest.
+set(COMBABC_HAVE_PYTHON OFF)
+if(NOT COMBABC_PYTHON STREQUAL "OFF")
+  if(NOT COMBABC_PYTHON MATCHES "^(AUTO|ON)$")
+    message(FATAL_ERROR "COMBABC_PYTHON must be AUTO, ON or OFF, not '${COMBABC_PYTHON}'")
+  endif()
+  if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+    set(Python3_EXECUTABLE /usr/bin/python3)
+  endif()
+  set(python_required "")
+  if(COMBABC_PYTHON STREQUAL "ON")
+    set(python_required REQUIRED)
+  endif()
+  find_package(Python3 COMPONENTS Interpreter Development.Module ${python_required})
+  if(Python3_FOUND)
+    set(PYBIND11_FINDPYTHON ON)
+    find_package(pybind11 CONFIG ${python_required})
+    if(pybind11_FOUND)
+      set(COMBABC_HAVE_PYTHON ON)
+    endif()
+  endif()
+endif()
+message(STATUS "combabc: Python module ${COMBABC_HAVE_PYTHON}")
+if(COMBABC_HAVE_PYTHON)
+  add_subdirectory(python)
+endif()

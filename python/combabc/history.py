@@ -1,0 +1,125 @@
+"""A run history as NumPy arrays and pandas DataFrames (docs/python.md).
+
+The column names follow `combabc export` (docs/history.md, "Export"): waves are numbered from 1 in
+the DataFrames as in the CSV files, bits and indices stay 0-based.
+"""
+
+import numpy as np
+
+
+class Wave:
+    """One wave: its statistics and its accepted particles as NumPy arrays.
+
+    Attributes: wave (0-based), thresholds, phi, proposal, candidates, accepted, acceptance_rate,
+    complete, marginals_paper, marginals_importance, ess, reals_mean, reals_sd, distinct,
+    discarded, wall_seconds; per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
+    log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
+    run kept no outputs); failure_index int64[f] and failure_reason (list of str).
+    """
+
+    def __init__(self, record, estimator):
+        self.__dict__.update(record)
+        self._estimator = estimator
+
+    @property
+    def marginals(self):
+        """Per-bit P(bit = 1) under the run's estimator."""
+        if self._estimator == "paper":
+            return self.marginals_paper
+        return self.marginals_importance
+
+    def __repr__(self):
+        return (f"Wave({self.wave + 1}: {self.accepted} accepted of {self.candidates}, "
+                f"thresholds {list(self.thresholds)})")
+
+
+class History:
+    """A run's waves and summary. `waves` is a list of Wave; the methods return DataFrames."""
+
+    def __init__(self, data):
+        names = data["names"]
+        self.bit_names = list(names["bits"])
+        self.real_names = list(names["reals"])
+        self.components = list(names["components"])
+        self.estimator = data["estimator"]
+        self.summary = dict(data["summary"])
+        self.termination = self.summary["termination"]
+        self.waves = [Wave(w, self.estimator) for w in data["waves"]]
+        self.path = data.get("path")
+        self.status = data.get("status")
+        self.report_directory = data.get("report_directory") or None
+
+    @property
+    def dimension(self):
+        return len(self.bit_names)
+
+    @property
+    def posterior(self):
+        """The last wave's per-bit marginals under the run's estimator."""
+        return self.waves[-1].marginals
+
+    def particles(self, wave=None):
+        """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
+        bit_0..bit_{d-1}, one column per continuous parameter, log_weight, weight and
+        d_<component>. wave: a 0-based wave number, or None for every wave."""
+        import pandas as pd
+        frames = []
+        for w in self._selected(wave):
+            columns = {"wave": np.full(len(w.index), w.wave + 1, dtype=np.int64),
+                       "index": w.index,
+                       "bits": ["".join("1" if b else "0" for b in row) for row in w.bits]}
+            for k in range(self.dimension):
+                columns[f"bit_{k}"] = w.bits[:, k].astype(np.int64)
+            for k, name in enumerate(self.real_names):
+                columns[name] = w.reals[:, k]
+            columns["log_weight"] = w.log_weight
+            columns["weight"] = w.weight
+            for k, name in enumerate(self.components):
+                columns[f"d_{name}"] = w.distance[:, k]
+            frames.append(pd.DataFrame(columns))
+        return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+    def marginals(self):
+        """Per-bit marginals, long, as export's marginals.csv: wave (from 1), bit, name,
+        prob_paper, prob_importance."""
+        import pandas as pd
+        rows = []
+        for w in self.waves:
+            for k in range(min(self.dimension, len(w.marginals_paper))):
+                rows.append({"wave": w.wave + 1, "bit": k, "name": self.bit_names[k],
+                             "prob_paper": w.marginals_paper[k],
+                             "prob_importance": w.marginals_importance[k]})
+        return pd.DataFrame(rows, columns=["wave", "bit", "name", "prob_paper",
+                                           "prob_importance"])
+
+    def wave_table(self):
+        """One row per wave: wave (from 1), eps_<component> per threshold, phi, candidates,
+        accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures."""
+        import pandas as pd
+        rows = []
+        for w in self.waves:
+            row = {"wave": w.wave + 1}
+            for name, eps in zip(self._threshold_names(w), w.thresholds):
+                row[f"eps_{name}"] = eps
+            row.update(phi=w.phi, candidates=w.candidates, accepted=w.accepted,
+                       acceptance_rate=w.acceptance_rate, ess=w.ess, distinct=w.distinct,
+                       wall_seconds=w.wall_seconds, complete=int(w.complete),
+                       failures=len(w.failure_index))
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    def _threshold_names(self, w):
+        # One threshold per threshold component; without kinds at hand, name them in order when
+        # every component has one, by position otherwise.
+        if len(w.thresholds) == len(self.components):
+            return self.components
+        return [str(k) for k in range(len(w.thresholds))]
+
+    def _selected(self, wave):
+        if wave is None:
+            return self.waves
+        return [self.waves[wave]]
+
+    def __repr__(self):
+        return (f"History({len(self.waves)} waves, termination {self.termination}, "
+                f"{self.summary['simulations']} simulations)")

@@ -1,0 +1,120 @@
+#include "history_arrays.hpp"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstdint>
+
+namespace py = pybind11;
+
+namespace combabc::python {
+namespace {
+
+py::array_t<double> Vector(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
+  py::dict d;
+  d["wave"] = wave.wave;
+  d["thresholds"] = Vector(wave.thresholds);
+  d["phi"] = wave.phi;
+  d["proposal"] = Vector(wave.proposal);
+  d["candidates"] = wave.candidates;
+  d["accepted"] = wave.accepted;
+  d["acceptance_rate"] = wave.acceptance_rate;
+  d["complete"] = wave.complete;
+  d["marginals_paper"] = Vector(wave.marginals_paper);
+  d["marginals_importance"] = Vector(wave.marginals_importance);
+  d["ess"] = wave.ess;
+  d["reals_mean"] = Vector(wave.reals_mean);
+  d["reals_sd"] = Vector(wave.reals_sd);
+  d["distinct"] = wave.distinct;
+  d["discarded"] = wave.discarded;
+  d["wall_seconds"] = wave.wall_seconds;
+
+  const auto n = static_cast<py::ssize_t>(wave.particles.size());
+  const auto num_bits = static_cast<py::ssize_t>(names.bits.size());
+  const auto num_reals = static_cast<py::ssize_t>(names.reals.size());
+  const auto num_components = static_cast<py::ssize_t>(names.components.size());
+  // Every particle keeps its output, or none does (SmcOptions::keep_outputs).
+  const auto num_outputs =
+      static_cast<py::ssize_t>(n > 0 ? wave.particles.front().output.size() : 0);
+  py::array_t<std::int64_t> index(n);
+  py::array_t<std::uint8_t> bits({n, num_bits});
+  py::array_t<double> reals({n, num_reals});
+  py::array_t<double> log_weight(n);
+  py::array_t<double> weight(n);
+  py::array_t<double> distance({n, num_components});
+  py::array_t<double> output({n, num_outputs});
+  auto index_w = index.mutable_unchecked<1>();
+  auto bits_w = bits.mutable_unchecked<2>();
+  auto reals_w = reals.mutable_unchecked<2>();
+  auto log_weight_w = log_weight.mutable_unchecked<1>();
+  auto weight_w = weight.mutable_unchecked<1>();
+  auto distance_w = distance.mutable_unchecked<2>();
+  auto output_w = output.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const Particle& p = wave.particles[static_cast<std::size_t>(i)];
+    index_w(i) = p.index;
+    for (py::ssize_t k = 0; k < num_bits; ++k) bits_w(i, k) = p.theta.bits[static_cast<std::size_t>(k)];
+    for (py::ssize_t k = 0; k < num_reals; ++k) {
+      reals_w(i, k) = p.theta.reals[static_cast<std::size_t>(k)];
+    }
+    log_weight_w(i) = p.log_weight;
+    weight_w(i) = p.weight;
+    for (py::ssize_t k = 0; k < num_components; ++k) {
+      distance_w(i, k) = p.distance[static_cast<std::size_t>(k)];
+    }
+    for (py::ssize_t k = 0; k < num_outputs; ++k) {
+      const auto j = static_cast<std::size_t>(k);
+      output_w(i, k) = j < p.output.size() ? p.output[j] : std::nan("");
+    }
+  }
+  d["index"] = index;
+  d["bits"] = bits;
+  d["reals"] = reals;
+  d["log_weight"] = log_weight;
+  d["weight"] = weight;
+  d["distance"] = distance;
+  d["output"] = output;
+  py::array_t<std::int64_t> failure_index(static_cast<py::ssize_t>(wave.failures.size()));
+  py::list failure_reason;
+  auto failure_w = failure_index.mutable_unchecked<1>();
+  for (std::size_t i = 0; i < wave.failures.size(); ++i) {
+    failure_w(static_cast<py::ssize_t>(i)) = wave.failures[i].index;
+    failure_reason.append(wave.failures[i].reason);
+  }
+  d["failure_index"] = failure_index;
+  d["failure_reason"] = failure_reason;
+  return d;
+}
+
+}  // namespace
+
+py::dict HistoryToDict(const RunHistory& history, const HistoryNames& names) {
+  py::dict result;
+  py::dict name_lists;
+  name_lists["bits"] = names.bits;
+  name_lists["reals"] = names.reals;
+  name_lists["components"] = names.components;
+  result["names"] = name_lists;
+  result["estimator"] = names.estimator;
+  const RunSummary& s = history.summary;
+  py::dict summary;
+  summary["termination"] = std::string(ToString(s.termination));
+  summary["message"] = s.message;
+  summary["waves_completed"] = s.waves_completed;
+  summary["simulations"] = s.simulations;
+  summary["simulations_discarded"] = s.simulations_discarded;
+  summary["failures"] = s.failures;
+  summary["wall_seconds"] = s.wall_seconds;
+  result["summary"] = summary;
+  py::list waves;
+  for (const WaveRecord& wave : history.waves) waves.append(WaveToDict(wave, names));
+  result["waves"] = waves;
+  return result;
+}
+
+}  // namespace combabc::python

@@ -1,0 +1,28 @@
+#pragma once
+// A run history as plain Python objects: a dict per wave holding NumPy arrays (particles, weights,
+// distances, marginals), which the pure-Python layer (combabc/history.py) turns into DataFrames.
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <vector>
+
+#include "combabc/samplers/run_history.hpp"
+
+namespace combabc::python {
+
+// What the arrays' columns are called: the export's names (docs/history.md, "Export").
+struct HistoryNames {
+  std::vector<std::string> bits;        // one per bit
+  std::vector<std::string> reals;       // one per continuous parameter
+  std::vector<std::string> components;  // one per distance component
+  std::string estimator;                // "paper" or "importance"
+};
+
+// Keys: "names" (bits, reals, components), "estimator", "summary" (termination, message, waves
+// completed, simulations, discarded, failures, wall seconds) and "waves", a list of dicts, one
+// per wave: its statistics (wave is 0-based), then the particles' index int64[n], bits uint8[n, d],
+// reals float64[n, r], log_weight and weight float64[n], distance float64[n, k], output
+// float64[n, m] (m = 0 without kept outputs), and failure_index / failure_reason.
+pybind11::dict HistoryToDict(const RunHistory& history, const HistoryNames& names);
+
+}  // namespace combabc::python

@@ -1,0 +1,278 @@
+// combabc._core: the compiled half of the Python module (docs/python.md). It binds the options and
+// parameter types, runs config files through the same services as the CLI, runs problems whose
+// simulator is written in Python, and reads histories as NumPy arrays. The pure-Python package
+// (python/combabc/) wraps it in DataFrames. The GIL is released while C++ works.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "combabc/core/error.hpp"
+#include "combabc/history/history_store.hpp"
+#include "combabc/params/parameter_space.hpp"
+#include "combabc/samplers/combinatorial_smc.hpp"
+#include "combabc/services/calibration.hpp"
+#include "history_arrays.hpp"
+#include "python_simulator.hpp"
+
+namespace py = pybind11;
+
+namespace combabc::python {
+namespace {
+
+// Euclidean distance to the observed data: one threshold component, "euclidean".
+class EuclideanDistance final : public Distance {
+ public:
+  explicit EuclideanDistance(std::vector<double> observed) : observed_(std::move(observed)) {}
+  std::vector<DistanceComponent> components() const override {
+    return {{"euclidean", ComponentKind::kThreshold, 1.0}};
+  }
+  void Evaluate(std::span<const double> simulated, std::span<double> out) const override {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < observed_.size(); ++i) {
+      const double diff = simulated[i] - observed_[i];
+      sum += diff * diff;
+    }
+    out[0] = std::sqrt(sum);
+  }
+
+ private:
+  std::vector<double> observed_;
+};
+
+template <NamedEnum E>
+E Parse(const std::string& text, const std::string& field) {
+  const std::optional<E> value = ParseEnum<E>(text);
+  if (!value) {
+    throw Error(ErrorKind::kConfig,
+                "unknown value " + Excerpt(text) + "; expected one of " + EnumChoices<E>(), {}, 0,
+                field);
+  }
+  return *value;
+}
+
+HistoryNames NamesOf(const RunMetadata& metadata) {
+  HistoryNames names;
+  for (int k = 0; k < metadata.dimension; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    names.bits.push_back(i < metadata.bit_names.size() ? metadata.bit_names[i]
+                                                       : "bit " + std::to_string(k + 1));
+  }
+  for (const ContinuousParameter& p : metadata.reals) names.reals.push_back(p.name);
+  for (const DistanceComponent& c : metadata.distance_components) names.components.push_back(c.name);
+  names.estimator = metadata.estimator;
+  return names;
+}
+
+py::dict LoadHistory(const std::string& path) {
+  RunMetadata metadata;
+  RunHistory history;
+  {
+    const py::gil_scoped_release release;
+    const HistoryStore store = HistoryStore::Open(path, /*read_only=*/true);
+    metadata = store.LoadMetadata();
+    history = store.LoadHistory();
+  }
+  py::dict result = HistoryToDict(history, NamesOf(metadata));
+  result["status"] = std::string(ToString(metadata.status));
+  result["bit_prior_one"] = metadata.bit_prior_one;
+  result["seed"] = metadata.seed;
+  result["path"] = path;
+  return result;
+}
+
+py::dict RunConfig(const std::string& config_path,
+                   int threads,
+                   const std::string& output_directory,
+                   bool overwrite,
+                   bool report) {
+  services::RunRequest request;
+  request.config_path = config_path;
+  request.output_directory = output_directory;
+  request.threads = threads;
+  request.overwrite = overwrite;
+  request.report = report;
+  services::RunOutcome outcome;
+  {
+    const py::gil_scoped_release release;
+    outcome = services::RunCalibration(request);
+  }
+  // Read back from the file, so that the arrays are exactly what `combabc export` writes.
+  py::dict result = LoadHistory(outcome.history_path);
+  result["report_directory"] = outcome.report_directory;
+  return result;
+}
+
+py::dict RunSmc(const BinarySpace& bits,
+                const std::vector<ContinuousParameter>& reals,
+                const py::object& function,
+                bool batch,
+                const std::vector<double>& observed,
+                const SmcOptions& options) {
+  if (observed.empty()) {
+    throw Error(ErrorKind::kConfig, "the observed data are empty", {}, 0, "observed");
+  }
+  const ParameterSpace space(bits, reals);
+  const PythonSimulator simulator(function, batch, static_cast<int>(observed.size()),
+                                  space.num_reals(),
+                                  py::module_::import("combabc._core").attr("SimulationFailed"));
+  const EuclideanDistance distance(observed);
+  SmcProblem problem;
+  problem.space = &space;
+  problem.simulator = &simulator;
+  problem.distance = &distance;
+  RunHistory history;
+  try {
+    const py::gil_scoped_release release;
+    history = RunCombinatorialSmc(problem, options);
+  } catch (const std::exception& e) {
+    // A Python exception that ended the run is raised again as itself, the engine's line (wave
+    // and candidate) attached as a note.
+    std::optional<py::error_already_set> raised = simulator.python_error();
+    if (!raised) throw;
+    if (py::hasattr(raised->value(), "add_note")) {
+      const auto* error = dynamic_cast<const Error*>(&e);
+      raised->value().attr("add_note")(
+          error ? std::string(ToString(error->kind())) + ": " + error->what() : e.what());
+    }
+    throw *raised;
+  }
+  HistoryNames names;
+  for (int k = 0; k < space.num_bits(); ++k) names.bits.push_back(bits.name(k));
+  for (const ContinuousParameter& p : reals) names.reals.push_back(p.name);
+  names.components = {"euclidean"};
+  names.estimator = ToString(options.estimator);
+  return HistoryToDict(history, names);
+}
+
+BinarySpace MakeBinarySpace(int dimension,
+                            const std::vector<double>& prior_one,
+                            double default_prior_one,
+                            const std::vector<std::vector<int>>& tied,
+                            const std::vector<std::string>& names) {
+  BinarySpaceOptions options;
+  options.dimension = dimension;
+  options.prior_one = prior_one;
+  options.default_prior_one = default_prior_one;
+  options.tied = tied;
+  options.names = names;
+  return BinarySpace(options);
+}
+
+void BindTypes(py::module_& m) {
+  py::class_<BinarySpace>(m, "BinarySpace")
+      .def(py::init(&MakeBinarySpace), py::arg("dimension"),
+           py::arg("prior_one") = std::vector<double>{}, py::arg("default_prior_one") = 0.5,
+           py::arg("tied") = std::vector<std::vector<int>>{},
+           py::arg("names") = std::vector<std::string>{})
+      .def_property_readonly("dimension", &BinarySpace::dimension)
+      .def_property_readonly("num_free", &BinarySpace::num_free)
+      .def_property_readonly("bit_prior_one", &BinarySpace::bit_prior_one)
+      .def_property_readonly("names", [](const BinarySpace& s) {
+        std::vector<std::string> names;
+        for (int k = 0; k < s.dimension(); ++k) names.push_back(s.name(k));
+        return names;
+      });
+
+  py::class_<ContinuousParameter>(m, "ContinuousParameter")
+      .def(py::init([](std::string name, const std::string& kind, double low, double high,
+                       double mean, double sd) {
+             ContinuousParameter p;
+             p.name = std::move(name);
+             p.prior.kind = Parse<PriorKind>(kind, "kind");
+             p.prior.low = low;
+             p.prior.high = high;
+             p.prior.mean = mean;
+             p.prior.sd = sd;
+             return p;
+           }),
+           py::arg("name"), py::arg("kind") = "uniform", py::arg("low") = 0.0,
+           py::arg("high") = 1.0, py::arg("mean") = 0.0, py::arg("sd") = 1.0)
+      .def_readonly("name", &ContinuousParameter::name)
+      .def_property_readonly("kind",
+                             [](const ContinuousParameter& p) { return ToString(p.prior.kind); });
+
+  py::class_<ThresholdSchedule>(m, "ThresholdSchedule")
+      .def(py::init([](const std::string& kind, std::vector<double> values, double quantile,
+                       double initial, double target) {
+             ThresholdSchedule s;
+             s.kind = Parse<ThresholdKind>(kind, "kind");
+             s.values = std::move(values);
+             s.quantile = quantile;
+             s.initial = initial;
+             s.target = target;
+             return s;
+           }),
+           py::arg("kind") = "quantile", py::arg("values") = std::vector<double>{},
+           py::arg("quantile") = 0.5, py::arg("initial") = HUGE_VAL, py::arg("target") = 0.0)
+      .def_property_readonly("kind", [](const ThresholdSchedule& s) { return ToString(s.kind); })
+      .def_readwrite("values", &ThresholdSchedule::values)
+      .def_readwrite("quantile", &ThresholdSchedule::quantile)
+      .def_readwrite("initial", &ThresholdSchedule::initial)
+      .def_readwrite("target", &ThresholdSchedule::target);
+
+  py::class_<SmcOptions>(m, "SmcOptions")
+      .def(py::init<>())
+      .def_readwrite("num_waves", &SmcOptions::num_waves)
+      .def_readwrite("accepted_per_wave", &SmcOptions::accepted_per_wave)
+      .def_readwrite("thresholds", &SmcOptions::thresholds)
+      .def_property(
+          "estimator", [](const SmcOptions& o) { return ToString(o.estimator); },
+          [](SmcOptions& o, const std::string& text) {
+            o.estimator = Parse<Estimator>(text, "estimator");
+          })
+      .def_readwrite("seed", &SmcOptions::seed)
+      .def_readwrite("threads", &SmcOptions::threads)
+      .def_readwrite("max_simulations", &SmcOptions::max_simulations)
+      .def_readwrite("min_acceptance_rate", &SmcOptions::min_acceptance_rate)
+      .def_readwrite("acceptance_floor_after", &SmcOptions::acceptance_floor_after)
+      .def_readwrite("max_failure_fraction", &SmcOptions::max_failure_fraction)
+      .def_readwrite("failure_fraction_after", &SmcOptions::failure_fraction_after)
+      .def_readwrite("max_wall_time_s", &SmcOptions::max_wall_time_s)
+      .def_readwrite("batch_size", &SmcOptions::batch_size)
+      .def_readwrite("keep_outputs", &SmcOptions::keep_outputs)
+      .def("is_valid", [](const SmcOptions& o) {
+        std::string why;
+        const bool ok = o.IsValid(&why);
+        return py::make_tuple(ok, why);
+      });
+}
+
+}  // namespace
+}  // namespace combabc::python
+
+PYBIND11_MODULE(_core, m) {
+  using namespace combabc;
+  using namespace combabc::python;
+  m.doc() = "combabc's compiled core; use the combabc package (docs/python.md)";
+  m.attr("__version__") = COMBABC_PYTHON_VERSION;
+
+  // combabc::Error as combabc.Error, its message as the CLI prints it after "combabc: ".
+  static py::exception<Error> error_type(m, "Error", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      const auto type = py::reinterpret_borrow<py::object>(error_type.ptr());
+      py::object exception = type(std::string(ToString(e.kind())) + ": " + std::string(e.what()));
+      exception.attr("kind") = std::string(ToString(e.kind()));
+      exception.attr("exit_code") = ExitCode(e.kind());
+      PyErr_SetObject(error_type.ptr(), exception.ptr());
+    }
+  });
+  static py::exception<SimulationFailed> failed_type(m, "SimulationFailed", PyExc_RuntimeError);
+  static_cast<void>(failed_type);
+
+  BindTypes(m);
+  m.def("load_history", &LoadHistory, py::arg("path"));
+  m.def("run_config", &RunConfig, py::arg("config_path"), py::arg("threads") = -1,
+        py::arg("output_directory") = std::string(), py::arg("overwrite") = false,
+        py::arg("report") = false);
+  m.def("run_smc", &RunSmc, py::arg("space"), py::arg("reals"), py::arg("simulator"),
+        py::arg("batch"), py::arg("observed"), py::arg("options"));
+}

@@ -1,0 +1,54 @@
+#pragma once
+// A simulator written in Python, for runs started from Python (docs/python.md). The engine calls it
+// from its worker threads with the GIL released; each call takes the GIL, so Python code runs one
+// call at a time while the engine's own work (proposals, distances) stays parallel. The history is
+// the same for any thread count: each candidate's parameters come from its own RandomStream.
+#include <pybind11/pybind11.h>
+
+#include <mutex>
+#include <optional>
+
+#include "combabc/samplers/simulator.hpp"
+
+namespace combabc::python {
+
+class PythonSimulator final : public Simulator {
+ public:
+  // function: f(bits) or f(bits, reals) (reals only when num_reals > 0). Per sample (batch =
+  // false) bits is uint8[d], reals float64[r], and f returns m values; batched, bits is
+  // uint8[n, d], reals float64[n, r], and f returns an [n, m] array. simulation_failed: the Python
+  // exception type that marks one candidate failed (combabc.SimulationFailed). Made and destroyed
+  // with the GIL held.
+  PythonSimulator(pybind11::object function,
+                  bool batch,
+                  int output_size,
+                  int num_reals,
+                  pybind11::object simulation_failed);
+  int output_size() const override { return output_size_; }
+  void Simulate(const ParameterView& theta, RandomStream& rng, std::span<double> out) const override;
+  void SimulateBatch(const ParameterBatch& batch,
+                     std::span<RandomStream> rngs,
+                     std::span<double> out,
+                     BatchFailures& failures) const override;
+  // The first exception the function raised that ended the run (not SimulationFailed), if any:
+  // the caller raises it again in Python once the run has returned. Read with the GIL held.
+  std::optional<pybind11::error_already_set> python_error() const;
+
+ private:
+  // Call f (GIL held) for the whole batch / one candidate; a wrong output shape raises ValueError.
+  // Python exceptions propagate as error_already_set.
+  void CallBatch(const ParameterBatch& batch, std::span<double> out) const;
+  void CallOne(const ParameterView& theta, std::span<double> out) const;
+  // Keeps the first error and throws a C++ exception that ends the run.
+  [[noreturn]] void Fatal(pybind11::error_already_set& error) const;
+
+  pybind11::object function_;
+  bool batch_;
+  int output_size_;
+  int num_reals_;
+  pybind11::object simulation_failed_;
+  mutable std::mutex mutex_;
+  mutable std::optional<pybind11::error_already_set> error_;
+};
+
+}  // namespace combabc::python
