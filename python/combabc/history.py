@@ -41,6 +41,8 @@ class History:
         self.bit_names = list(names["bits"])
         self.real_names = list(names["reals"])
         self.components = list(names["components"])
+        self._threshold_columns = list(names["threshold_columns"])
+        self._distance_columns = list(names["distance_columns"])
         self.estimator = data["estimator"]
         self.summary = dict(data["summary"])
         self.termination = self.summary["termination"]
@@ -61,7 +63,8 @@ class History:
     def particles(self, wave=None):
         """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
         bit_0..bit_{d-1}, one column per continuous parameter, log_weight, weight and
-        d_<component>. wave: a 0-based wave number, or None for every wave."""
+        d_<component> (component names made column-safe, as in the export). wave: a 0-based
+        wave number, or None for every wave."""
         import pandas as pd
         frames = []
         for w in self._selected(wave):
@@ -74,8 +77,8 @@ class History:
                 columns[name] = w.reals[:, k]
             columns["log_weight"] = w.log_weight
             columns["weight"] = w.weight
-            for k, name in enumerate(self.components):
-                columns[f"d_{name}"] = w.distance[:, k]
+            for k, name in enumerate(self._distance_columns):
+                columns[name] = w.distance[:, k]
             frames.append(pd.DataFrame(columns))
         return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -93,27 +96,21 @@ class History:
                                            "prob_importance"])
 
     def wave_table(self):
-        """One row per wave: wave (from 1), eps_<component> per threshold, phi, candidates,
+        """One row per wave: wave (from 1), eps_<component> (T_<component> for a likelihood
+        component) per threshold, phi, candidates,
         accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures."""
         import pandas as pd
         rows = []
         for w in self.waves:
             row = {"wave": w.wave + 1}
-            for name, eps in zip(self._threshold_names(w), w.thresholds):
-                row[f"eps_{name}"] = eps
+            for name, eps in zip(self._threshold_columns, w.thresholds):
+                row[name] = eps
             row.update(phi=w.phi, candidates=w.candidates, accepted=w.accepted,
                        acceptance_rate=w.acceptance_rate, ess=w.ess, distinct=w.distinct,
                        wall_seconds=w.wall_seconds, complete=int(w.complete),
                        failures=len(w.failure_index))
             rows.append(row)
         return pd.DataFrame(rows)
-
-    def _threshold_names(self, w):
-        # One threshold per threshold component; without kinds at hand, name them in order when
-        # every component has one, by position otherwise.
-        if len(w.thresholds) == len(self.components):
-            return self.components
-        return [str(k) for k in range(len(w.thresholds))]
 
     def _selected(self, wave):
         if wave is None:

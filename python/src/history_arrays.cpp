@@ -99,6 +99,8 @@ py::dict HistoryToDict(const RunHistory& history, const HistoryNames& names) {
   name_lists["bits"] = names.bits;
   name_lists["reals"] = names.reals;
   name_lists["components"] = names.components;
+  name_lists["threshold_columns"] = names.threshold_columns;
+  name_lists["distance_columns"] = names.distance_columns;
   result["names"] = name_lists;
   result["estimator"] = names.estimator;
   const RunSummary& s = history.summary;

@@ -15,10 +15,13 @@ struct HistoryNames {
   std::vector<std::string> bits;        // one per bit
   std::vector<std::string> reals;       // one per continuous parameter
   std::vector<std::string> components;  // one per distance component
+  // The export's column names (ThresholdColumns, DistanceColumns in export/export.hpp).
+  std::vector<std::string> threshold_columns;
+  std::vector<std::string> distance_columns;
   std::string estimator;                // "paper" or "importance"
 };
 
-// Keys: "names" (bits, reals, components), "estimator", "summary" (termination, message, waves
+// Keys: "names" (bits, reals, components, threshold_columns, distance_columns), "estimator", "summary" (termination, message, waves
 // completed, simulations, discarded, failures, wall seconds) and "waves", a list of dicts, one
 // per wave: its statistics (wave is 0-based), then the particles' index int64[n], bits uint8[n, d],
 // reals float64[n, r], log_weight and weight float64[n], distance float64[n, k], output

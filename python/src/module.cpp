@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "combabc/core/error.hpp"
+#include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
@@ -56,7 +57,7 @@ E Parse(const std::string& text, const std::string& field) {
   return *value;
 }
 
-HistoryNames NamesOf(const RunMetadata& metadata) {
+HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
   HistoryNames names;
   for (int k = 0; k < metadata.dimension; ++k) {
     const auto i = static_cast<std::size_t>(k);
@@ -66,6 +67,13 @@ HistoryNames NamesOf(const RunMetadata& metadata) {
   for (const ContinuousParameter& p : metadata.reals) names.reals.push_back(p.name);
   for (const DistanceComponent& c : metadata.distance_components) names.components.push_back(c.name);
   names.estimator = metadata.estimator;
+  std::size_t thresholds = 0;
+  for (const DistanceComponent& c : metadata.distance_components) {
+    if (c.kind != ComponentKind::kIndicator) ++thresholds;
+  }
+  if (!history.waves.empty()) thresholds = history.waves.front().thresholds.size();
+  names.threshold_columns = ThresholdColumns(metadata, thresholds);
+  names.distance_columns = DistanceColumns(metadata, metadata.distance_components.size());
   return names;
 }
 
@@ -78,7 +86,7 @@ py::dict LoadHistory(const std::string& path) {
     metadata = store.LoadMetadata();
     history = store.LoadHistory();
   }
-  py::dict result = HistoryToDict(history, NamesOf(metadata));
+  py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["status"] = std::string(ToString(metadata.status));
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["seed"] = metadata.seed;
@@ -142,12 +150,14 @@ py::dict RunSmc(const BinarySpace& bits,
     }
     throw *raised;
   }
-  HistoryNames names;
-  for (int k = 0; k < space.num_bits(); ++k) names.bits.push_back(bits.name(k));
-  for (const ContinuousParameter& p : reals) names.reals.push_back(p.name);
-  names.components = {"euclidean"};
-  names.estimator = ToString(options.estimator);
-  return HistoryToDict(history, names);
+  // Named as a history file of the same run would be.
+  RunMetadata metadata;
+  metadata.dimension = space.num_bits();
+  for (int k = 0; k < space.num_bits(); ++k) metadata.bit_names.push_back(bits.name(k));
+  metadata.reals = reals;
+  metadata.distance_components = distance.components();
+  metadata.estimator = ToString(options.estimator);
+  return HistoryToDict(history, NamesOf(metadata, history));
 }
 
 BinarySpace MakeBinarySpace(int dimension,

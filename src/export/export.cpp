@@ -88,7 +88,8 @@ std::string Identifier(const std::string& name) {
   return out;
 }
 
-// Column names for the thresholds (one per threshold component) and distances (one per component).
+}  // namespace
+
 std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t count) {
   std::vector<std::string> names;
   for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
@@ -116,6 +117,8 @@ std::vector<std::string> DistanceColumns(const RunMetadata& m, std::size_t count
   }
   return names;
 }
+
+namespace {
 
 // Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
 // database keeps the engine's 0-based numbers).

@@ -1,7 +1,9 @@
 #pragma once
 // Export of a run history to plain files for pandas, MATLAB and spreadsheets: one CSV per table
 // plus summary.json. Files and columns are documented in docs/history.md.
+#include <cstddef>
 #include <string>
+#include <vector>
 
 #include "combabc/history/history_store.hpp"
 
@@ -29,5 +31,13 @@ void ExportRun(const HistoryStore& store,
 void ExportRun(const std::string& history_path,
                const std::string& out_dir,
                const ExportOptions& options = {});
+
+// The export's column names (docs/history.md, "Export"), shared with the Python module's
+// DataFrames: eps_<component> (T_<component> for a likelihood component's temperature) per
+// threshold slot, d_<component> per distance component, each name made column-safe ("least
+// squares" -> "least_squares"). `count` values per row; when the metadata disagrees with it
+// (an older file), the names fall back to eps_<k> / d_<k>.
+std::vector<std::string> ThresholdColumns(const RunMetadata& metadata, std::size_t count);
+std::vector<std::string> DistanceColumns(const RunMetadata& metadata, std::size_t count);
 
 }  // namespace combabc
