@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs clang-tidy (Debian's clang-tidy 14, the checks in .clang-tidy) over every project .cpp in
-# src/, apps/, tests/, bench/ and examples/ that the given build compiles, in parallel. Fails on any
-# warning (.clang-tidy sets WarningsAsErrors '*'). Needs a configured build for its
+# src/, apps/, tests/, bench/, examples/ and python/ that the given build compiles, in parallel.
+# Fails on any warning (.clang-tidy sets WarningsAsErrors '*'). Needs a configured build for its
 # compile_commands.json: scripts/check-tidy.sh [BUILD_DIR] (default build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,8 +18,8 @@ if [ -z "$tidy" ]; then
   exit 2
 fi
 # Generated sources (none today) live in the build tree, outside these directories.
-files="^$root/(src|apps|tests|bench|examples)/.*\.cpp$"
-count=$(grep -cE "\"file\": \"$root/(src|apps|tests|bench|examples)/.*\.cpp\"" "$db" || true)
+files="^$root/(src|apps|tests|bench|examples|python)/.*\.cpp$"
+count=$(grep -cE "\"file\": \"$root/(src|apps|tests|bench|examples|python)/.*\.cpp\"" "$db" || true)
 echo "check-tidy: $count files from $db, $(nproc) jobs"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

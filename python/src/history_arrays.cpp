@@ -58,7 +58,9 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   for (py::ssize_t i = 0; i < n; ++i) {
     const Particle& p = wave.particles[static_cast<std::size_t>(i)];
     index_w(i) = p.index;
-    for (py::ssize_t k = 0; k < num_bits; ++k) bits_w(i, k) = p.theta.bits[static_cast<std::size_t>(k)];
+    for (py::ssize_t k = 0; k < num_bits; ++k) {
+      bits_w(i, k) = p.theta.bits[static_cast<std::size_t>(k)];
+    }
     for (py::ssize_t k = 0; k < num_reals; ++k) {
       reals_w(i, k) = p.theta.reals[static_cast<std::size_t>(k)];
     }

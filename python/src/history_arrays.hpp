@@ -18,14 +18,15 @@ struct HistoryNames {
   // The export's column names (ThresholdColumns, DistanceColumns in export/export.hpp).
   std::vector<std::string> threshold_columns;
   std::vector<std::string> distance_columns;
-  std::string estimator;                // "paper" or "importance"
+  std::string estimator;  // "paper" or "importance"
 };
 
-// Keys: "names" (bits, reals, components, threshold_columns, distance_columns), "estimator", "summary" (termination, message, waves
-// completed, simulations, discarded, failures, wall seconds) and "waves", a list of dicts, one
-// per wave: its statistics (wave is 0-based), then the particles' index int64[n], bits uint8[n, d],
-// reals float64[n, r], log_weight and weight float64[n], distance float64[n, k], output
-// float64[n, m] (m = 0 without kept outputs), and failure_index / failure_reason.
+// Keys: "names" (bits, reals, components, threshold_columns, distance_columns), "estimator",
+// "summary" (termination, message, waves completed, simulations, discarded, failures, wall seconds)
+// and "waves", a list of dicts, one per wave: its statistics (wave is 0-based), then the particles'
+// index int64[n], bits uint8[n, d], reals float64[n, r], log_weight and weight float64[n], distance
+// float64[n, k], output float64[n, m] (m = 0 without kept outputs), and failure_index /
+// failure_reason.
 pybind11::dict HistoryToDict(const RunHistory& history, const HistoryNames& names);
 
 }  // namespace combabc::python

@@ -51,7 +51,9 @@ E Parse(const std::string& text, const std::string& field) {
   const std::optional<E> value = ParseEnum<E>(text);
   if (!value) {
     throw Error(ErrorKind::kConfig,
-                "unknown value " + Excerpt(text) + "; expected one of " + EnumChoices<E>(), {}, 0,
+                "unknown value " + Excerpt(text) + "; expected one of " + EnumChoices<E>(),
+                {},
+                0,
                 field);
   }
   return *value;
@@ -65,7 +67,9 @@ HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
                                                        : "bit " + std::to_string(k + 1));
   }
   for (const ContinuousParameter& p : metadata.reals) names.reals.push_back(p.name);
-  for (const DistanceComponent& c : metadata.distance_components) names.components.push_back(c.name);
+  for (const DistanceComponent& c : metadata.distance_components) {
+    names.components.push_back(c.name);
+  }
   names.estimator = metadata.estimator;
   std::size_t thresholds = 0;
   for (const DistanceComponent& c : metadata.distance_components) {
@@ -126,7 +130,9 @@ py::dict RunSmc(const BinarySpace& bits,
     throw Error(ErrorKind::kConfig, "the observed data are empty", {}, 0, "observed");
   }
   const ParameterSpace space(bits, reals);
-  const PythonSimulator simulator(function, batch, static_cast<int>(observed.size()),
+  const PythonSimulator simulator(function,
+                                  batch,
+                                  static_cast<int>(observed.size()),
                                   space.num_reals(),
                                   py::module_::import("combabc._core").attr("SimulationFailed"));
   const EuclideanDistance distance(observed);
@@ -176,8 +182,10 @@ BinarySpace MakeBinarySpace(int dimension,
 
 void BindTypes(py::module_& m) {
   py::class_<BinarySpace>(m, "BinarySpace")
-      .def(py::init(&MakeBinarySpace), py::arg("dimension"),
-           py::arg("prior_one") = std::vector<double>{}, py::arg("default_prior_one") = 0.5,
+      .def(py::init(&MakeBinarySpace),
+           py::arg("dimension"),
+           py::arg("prior_one") = std::vector<double>{},
+           py::arg("default_prior_one") = 0.5,
            py::arg("tied") = std::vector<std::vector<int>>{},
            py::arg("names") = std::vector<std::string>{})
       .def_property_readonly("dimension", &BinarySpace::dimension)
@@ -185,13 +193,18 @@ void BindTypes(py::module_& m) {
       .def_property_readonly("bit_prior_one", &BinarySpace::bit_prior_one)
       .def_property_readonly("names", [](const BinarySpace& s) {
         std::vector<std::string> names;
+        names.reserve(static_cast<std::size_t>(s.dimension()));
         for (int k = 0; k < s.dimension(); ++k) names.push_back(s.name(k));
         return names;
       });
 
   py::class_<ContinuousParameter>(m, "ContinuousParameter")
-      .def(py::init([](std::string name, const std::string& kind, double low, double high,
-                       double mean, double sd) {
+      .def(py::init([](std::string name,
+                       const std::string& kind,
+                       double low,
+                       double high,
+                       double mean,
+                       double sd) {
              ContinuousParameter p;
              p.name = std::move(name);
              p.prior.kind = Parse<PriorKind>(kind, "kind");
@@ -201,15 +214,22 @@ void BindTypes(py::module_& m) {
              p.prior.sd = sd;
              return p;
            }),
-           py::arg("name"), py::arg("kind") = "uniform", py::arg("low") = 0.0,
-           py::arg("high") = 1.0, py::arg("mean") = 0.0, py::arg("sd") = 1.0)
+           py::arg("name"),
+           py::arg("kind") = "uniform",
+           py::arg("low") = 0.0,
+           py::arg("high") = 1.0,
+           py::arg("mean") = 0.0,
+           py::arg("sd") = 1.0)
       .def_readonly("name", &ContinuousParameter::name)
       .def_property_readonly("kind",
                              [](const ContinuousParameter& p) { return ToString(p.prior.kind); });
 
   py::class_<ThresholdSchedule>(m, "ThresholdSchedule")
-      .def(py::init([](const std::string& kind, std::vector<double> values, double quantile,
-                       double initial, double target) {
+      .def(py::init([](const std::string& kind,
+                       std::vector<double> values,
+                       double quantile,
+                       double initial,
+                       double target) {
              ThresholdSchedule s;
              s.kind = Parse<ThresholdKind>(kind, "kind");
              s.values = std::move(values);
@@ -218,8 +238,11 @@ void BindTypes(py::module_& m) {
              s.target = target;
              return s;
            }),
-           py::arg("kind") = "quantile", py::arg("values") = std::vector<double>{},
-           py::arg("quantile") = 0.5, py::arg("initial") = HUGE_VAL, py::arg("target") = 0.0)
+           py::arg("kind") = "quantile",
+           py::arg("values") = std::vector<double>{},
+           py::arg("quantile") = 0.5,
+           py::arg("initial") = HUGE_VAL,
+           py::arg("target") = 0.0)
       .def_property_readonly("kind", [](const ThresholdSchedule& s) { return ToString(s.kind); })
       .def_readwrite("values", &ThresholdSchedule::values)
       .def_readwrite("quantile", &ThresholdSchedule::quantile)
@@ -232,7 +255,8 @@ void BindTypes(py::module_& m) {
       .def_readwrite("accepted_per_wave", &SmcOptions::accepted_per_wave)
       .def_readwrite("thresholds", &SmcOptions::thresholds)
       .def_property(
-          "estimator", [](const SmcOptions& o) { return ToString(o.estimator); },
+          "estimator",
+          [](const SmcOptions& o) { return ToString(o.estimator); },
           [](SmcOptions& o, const std::string& text) {
             o.estimator = Parse<Estimator>(text, "estimator");
           })
@@ -264,6 +288,8 @@ PYBIND11_MODULE(_core, m) {
 
   // combabc::Error as combabc.Error, its message as the CLI prints it after "combabc: ".
   static py::exception<Error> error_type(m, "Error", PyExc_RuntimeError);
+  // By value: pybind11's ExceptionTranslator is void (*)(std::exception_ptr).
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -280,9 +306,19 @@ PYBIND11_MODULE(_core, m) {
 
   BindTypes(m);
   m.def("load_history", &LoadHistory, py::arg("path"));
-  m.def("run_config", &RunConfig, py::arg("config_path"), py::arg("threads") = -1,
-        py::arg("output_directory") = std::string(), py::arg("overwrite") = false,
+  m.def("run_config",
+        &RunConfig,
+        py::arg("config_path"),
+        py::arg("threads") = -1,
+        py::arg("output_directory") = std::string(),
+        py::arg("overwrite") = false,
         py::arg("report") = false);
-  m.def("run_smc", &RunSmc, py::arg("space"), py::arg("reals"), py::arg("simulator"),
-        py::arg("batch"), py::arg("observed"), py::arg("options"));
+  m.def("run_smc",
+        &RunSmc,
+        py::arg("space"),
+        py::arg("reals"),
+        py::arg("simulator"),
+        py::arg("batch"),
+        py::arg("observed"),
+        py::arg("options"));
 }

@@ -28,7 +28,8 @@ std::string Shape(const py::array& a) {
 Doubles Checked(const py::object& result, std::vector<py::ssize_t> expected) {
   Doubles values = Doubles::ensure(result);
   if (!values) {
-    PyErr_Format(PyExc_TypeError, "the simulator returned %s, not an array of numbers",
+    PyErr_Format(PyExc_TypeError,
+                 "the simulator returned %s, not an array of numbers",
                  Py_TYPE(result.ptr())->tp_name);
     throw py::error_already_set();
   }
@@ -50,11 +51,8 @@ Doubles Checked(const py::object& result, std::vector<py::ssize_t> expected) {
 
 }  // namespace
 
-PythonSimulator::PythonSimulator(py::object function,
-                                 bool batch,
-                                 int output_size,
-                                 int num_reals,
-                                 py::object simulation_failed)
+PythonSimulator::PythonSimulator(
+    py::object function, bool batch, int output_size, int num_reals, py::object simulation_failed)
     : function_(std::move(function)),
       batch_(batch),
       output_size_(output_size),

@@ -25,7 +25,9 @@ class PythonSimulator final : public Simulator {
                   int num_reals,
                   pybind11::object simulation_failed);
   int output_size() const override { return output_size_; }
-  void Simulate(const ParameterView& theta, RandomStream& rng, std::span<double> out) const override;
+  void Simulate(const ParameterView& theta,
+                RandomStream& rng,
+                std::span<double> out) const override;
   void SimulateBatch(const ParameterBatch& batch,
                      std::span<RandomStream> rngs,
                      std::span<double> out,
