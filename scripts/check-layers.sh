@@ -5,7 +5,7 @@
 # test-math-dependencies: a cheap grep that fails CI. There is no exception list.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-order=(core mpi rng params schedules proposals distances samplers plate data metrics config history
+order=(core mpi rng params schedules proposals distances samplers simulators plate data metrics config history
   export services)
 declare -A deps=(
   [core]=""
@@ -16,13 +16,14 @@ declare -A deps=(
   [distances]="core rng"
   [schedules]="core"
   [samplers]="core rng params proposals distances schedules"
+  [simulators]="core rng params samplers"
   [plate]="core"
   [data]="core"
   [metrics]="core distances schedules"
-  [config]="core rng params proposals distances schedules samplers plate data metrics"
+  [config]="core rng params proposals distances schedules samplers simulators plate data metrics"
   [history]="core rng params proposals distances schedules samplers"
   [export]="core history"
-  [services]="core rng params proposals distances schedules samplers plate data metrics config history export"
+  [services]="core rng params proposals distances schedules samplers simulators plate data metrics config history export"
 )
 status=0
 declare -A rank=()

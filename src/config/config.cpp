@@ -158,7 +158,7 @@ struct SamplerMemory {
 
 SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const auto d = static_cast<double>(c.space.dimension);
-  const auto m = static_cast<double>(c.model.output_positions.size());
+  const auto m = static_cast<double>(c.simulator.outputs.size());
   const auto components = static_cast<double>(c.metric.components.size());
   constexpr double kOverheadBytes = 160.0;  // vector headers, allocator slack, RNG state
   const int threads = c.smc.threads > 0 ? c.smc.threads : 4096;
@@ -180,9 +180,11 @@ std::string Gigabytes(double bytes) {
 // The model's precompute and the sampler's buffers together must fit memory_limit_gb; blamed on
 // the sampler key that asks for the larger share.
 void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
-  double model = c.model.EstimatedMemoryBytes();
+  // An external simulator's memory is its own processes', not combabc's.
+  const bool sensor = c.simulator.kind == SimulatorKind::kSensor;
+  double model = sensor ? c.model.EstimatedMemoryBytes() : 0.0;
   // A mixed run also builds the continuous-unknowns precompute (on its first simulation).
-  if (!c.reals.empty()) {
+  if (sensor && !c.reals.empty()) {
     bool loss_factor_unknown = false;
     for (const ContinuousParameter& r : c.reals) loss_factor_unknown |= r.name == "loss_factor";
     model += c.model.EstimatedContinuousMemoryBytes(loss_factor_unknown);
@@ -233,11 +235,13 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   Sources sources;
   sources.sampler = {"sampler", 1};
   c.description = root.String("description").value_or("");
-  const int dimension = config_internal::ParseModelSection(root, &c);
+  config_internal::ParseModelSection(root, &c);
+  config_internal::ParseSimulatorSection(root, &c);
   ParseData(root, &c);
-  config_internal::ParseSamplerSection(root, dimension, &c, &sources);
+  config_internal::ParseSamplerSection(root, &c, &sources);
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
+  for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   config_internal::ParseMetricSection(root, &c);
   ParseOutput(root, &c);
   root.Finish();

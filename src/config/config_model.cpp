@@ -147,7 +147,7 @@ plate::Layer ParseLayer(TableReader& t, int index, std::map<std::string, Source>
 
 }  // namespace
 
-int ParseModelSection(TableReader& root, CalibrationConfig* config) {
+void ParseModelSection(TableReader& root, CalibrationConfig* config) {
   plate::SensorOptions& m = config->model;
   std::map<std::string, Source> sources;  // SensorOptions field -> config key
   // The memory budget is a top-level key: it bounds the whole run, the sampler's buffers too.
@@ -309,7 +309,6 @@ int ParseModelSection(TableReader& root, CalibrationConfig* config) {
 
   std::string why;
   if (!m.IsValid(&why)) ThrowModelError(why, sources, t ? t->line() : 1, config->path);
-  return 2 * m.clamps_per_edge;
 }
 
 }  // namespace combabc::config_internal

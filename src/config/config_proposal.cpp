@@ -11,6 +11,8 @@
 namespace combabc::config_internal {
 namespace {
 
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
 std::string Names() {
   std::string out;
   for (const auto& p : plate::kSensorVariationFields) {
@@ -119,7 +121,11 @@ void ParseParametersSection(TableReader& root, CalibrationConfig* c) {
   auto t = root.Table("parameters");
   for (const auto& [key, value] : *node->as_table()) {
     const std::string name(key.str());
-    const plate::SensorVariationField* info = plate::FindSensorVariationField(name);
+    // An external simulator's parameters are its own: any name, no physical range combabc knows.
+    const plate::SensorVariationField any{name.c_str(), nullptr, -kInf, kInf, ""};
+    const bool sensor = c->simulator.kind == SimulatorKind::kSensor;
+    const plate::SensorVariationField* info =
+        sensor ? plate::FindSensorVariationField(name) : &any;
     if (!info) {
       root.FailAt(value,
                   "parameters." + name,

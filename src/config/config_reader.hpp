@@ -121,13 +121,14 @@ void Note(std::map<std::string, Source>& map,
 std::pair<double, double> WindowKey(TableReader& t, std::string_view key, double metres_per_unit);
 
 // Section parsers, each reading its table of `root` into `config` (and calling Finish on it).
-// [model] (config_model.cpp): returns the number of binary parameters, 2 x clamps per edge.
-int ParseModelSection(TableReader& root, CalibrationConfig* config);
-// [sampler] (config_sampler.cpp): needs the dimension for prior arrays and tie numbers.
-void ParseSamplerSection(TableReader& root,
-                         int dimension,
-                         CalibrationConfig* config,
-                         Sources* sources);
+// [model] (config_model.cpp): the sensor's options (defaults when the table is absent).
+void ParseModelSection(TableReader& root, CalibrationConfig* config);
+// [simulator] (config_simulator.cpp): after [model]; sets the simulator's outputs and the bit
+// names (config->space.names).
+void ParseSimulatorSection(TableReader& root, CalibrationConfig* config);
+// [sampler] (config_sampler.cpp): needs the bit names (config->space.names) for prior arrays
+// and tie numbers.
+void ParseSamplerSection(TableReader& root, CalibrationConfig* config, Sources* sources);
 // [proposal] and [parameters.<name>] (config_proposal.cpp).
 void ParseProposalSection(TableReader& root, CalibrationConfig* config);
 void ParseParametersSection(TableReader& root, CalibrationConfig* config);

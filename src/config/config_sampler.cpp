@@ -79,12 +79,11 @@ void ParseTies(TableReader& s, int dimension, BinarySpaceOptions* space) {
 
 }  // namespace
 
-void ParseSamplerSection(TableReader& root, int dimension, CalibrationConfig* c, Sources* sources) {
+void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sources) {
   SmcOptions& smc = c->smc;
   BinarySpaceOptions& space = c->space;
+  const int dimension = static_cast<int>(space.names.size());
   space.dimension = dimension;
-  space.names.clear();
-  for (int k = 1; k <= dimension; ++k) space.names.push_back("clamp " + std::to_string(k));
   auto t = root.Table("sampler");
   if (!t) return;  // all defaults
   sources->sampler = {t->prefix(), t->line()};
@@ -142,7 +141,7 @@ void ParseSamplerSection(TableReader& root, int dimension, CalibrationConfig* c,
       if (static_cast<int>(a.size()) != dimension) {
         t->FailAt(*prior,
                   key,
-                  "has " + std::to_string(a.size()) + " entries; must have one per clamp (" +
+                  "has " + std::to_string(a.size()) + " entries; must have one per bit (" +
                       std::to_string(dimension) + ")");
       }
       space.prior_one.clear();

@@ -18,7 +18,7 @@ std::unique_ptr<CompositeDistance> MakeDistance(const CalibrationConfig& config,
     return std::make_unique<CompositeDistance>(config.metric.components,
                                                data_positions,
                                                data_values,
-                                               config.model.output_positions,
+                                               config.simulator.outputs.coordinates,
                                                options);
   } catch (const Error& e) {
     if (!e.file().empty()) throw;

@@ -15,10 +15,10 @@
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/samplers/enumeration.hpp"
-#include "combabc/services/sensor_simulator.hpp"
 #include "services/fan_out_observer.hpp"
 #include "services/report_checks.hpp"
 #include "services/run_fingerprint.hpp"
+#include "services/simulator_factory.hpp"
 
 #ifndef COMBABC_GIT_HASH
 #define COMBABC_GIT_HASH ""
@@ -37,13 +37,13 @@ struct Problem {
   CalibrationConfig config;
   std::vector<double> data_positions;  // metres
   std::vector<double> data_values;
-  std::unique_ptr<SensorSimulator> simulator;
   std::unique_ptr<CompositeDistance> distance;
   std::optional<ParameterSpace> space;
   std::unique_ptr<Executor> executor;
+  BuiltSimulator simulator;  // last: external processes end before anything else goes
 
   SmcProblem view() const {
-    SmcProblem v{&*space, simulator.get(), distance.get()};
+    SmcProblem v{&*space, simulator.simulator.get(), distance.get()};
     v.executor = executor.get();
     return v;
   }
@@ -69,6 +69,18 @@ void OnPrimary(Executor& executor, Step&& step) {
   executor.Join(error);
 }
 
+// Runs `step` on every worker, then joins: one worker's failure is thrown on all.
+template <typename Step>
+void OnEvery(Executor& executor, Step&& step) {
+  std::exception_ptr error;
+  try {
+    step();
+  } catch (...) {
+    error = std::current_exception();
+  }
+  executor.Join(error);
+}
+
 // The history store's callbacks, made on the primary only (`store` is null elsewhere) and joined
 // after each, so that a failed write (disk full) stops every worker at the same callback instead
 // of leaving the others waiting in the next batch.
@@ -90,23 +102,38 @@ class PrimaryStore : public SmcObserver {
   HistoryStore* store_;
 };
 
-void BuildModel(Problem& p) {
-  // First, as it is cheap: checks the metric's windows and indicators against the model's output
-  // positions and the data before the model is assembled or anything simulated or stored.
-  p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
-  std::vector<std::string> real_names;
-  for (const auto& r : p.config.reals) real_names.push_back(r.name);
-  p.simulator = std::make_unique<SensorSimulator>(p.config.model, std::move(real_names));
-  const int clamps = p.simulator->model().num_clamps();
-  if (p.config.space.dimension != clamps) {
-    throw Error(ErrorKind::kConfig,
-                "the sampler has " + std::to_string(p.config.space.dimension) +
-                    " bits; the model has " + std::to_string(clamps) + " clamps",
-                p.config.path,
-                0,
-                "model");
-  }
+// history_path: the run's history file; an external simulator works in a folder beside it.
+void BuildModel(Problem& p, const std::string& history_path) {
+  // First, as it is cheap: checks the metric's windows and indicators against the simulator's
+  // output coordinates and the data before the model is built or anything simulated or stored.
+  if (!p.distance) p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
+  p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path));
   p.space.emplace(BinarySpace(p.config.space), p.config.reals);
+}
+
+// Creates the run's output folder (on the primary); true when it did not exist before.
+bool CreateOutputDirectory(const std::string& directory) {
+  std::error_code ec;
+  const bool existed = fs::exists(directory, ec);
+  fs::create_directories(directory, ec);
+  if (ec) {
+    throw Error(
+        ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+  }
+  return !existed;
+}
+
+// Builds the model on every worker once the output folder exists (an external simulator works
+// inside it); a folder this run created (`created`) is removed again, if still empty, when the
+// model cannot be built.
+void BuildModelIn(Problem& p, const std::string& history_path, const std::string& created) {
+  try {
+    OnEvery(*p.executor, [&] { BuildModel(p, history_path); });
+  } catch (...) {
+    std::error_code ec;
+    if (!created.empty()) fs::remove(created, ec);  // only if empty
+    throw;
+  }
 }
 
 Fingerprint FingerprintOf(const Problem& p) {
@@ -117,25 +144,30 @@ Fingerprint FingerprintOf(const Problem& p) {
   inputs.data_values = p.data_values;
   inputs.components = p.distance->components();
   inputs.version = COMBABC_VERSION;
+  inputs.handshake = p.simulator.handshake;
   return ComputeFingerprint(inputs);
 }
 
 // A new run's problem from its config file: the config (threads >= 0 overrides the config's), the
-// measured data read from disk, the model. (A resume takes the data stored in its history.)
+// measured data read from disk and the metric; BuildModelIn follows once the output folder
+// exists. (A resume takes the data stored in its history.)
 void LoadProblem(const std::string& config_path, int threads, Problem& p) {
   p.config = LoadConfig(config_path);
   if (threads >= 0) p.config.smc.threads = threads;
   const auto data = LoadMeasuredData(p.config.data, p.config.directory);
   p.data_positions = data.positions;
   p.data_values = data.displacements;
-  BuildModel(p);
+  p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
 }
 
 RunMetadata Describe(const Problem& p) {
   RunMetadata m;
   m.combabc_version = COMBABC_VERSION;
   m.config_text = p.config.text;
-  m.config_path = p.config.path;
+  // Absolute: a resume from another folder must find {config_dir} (and report paths) the same.
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p.config.path, ec);
+  m.config_path = ec ? p.config.path : absolute.lexically_normal().string();
   m.git_hash = COMBABC_GIT_HASH;
   m.seed = p.config.smc.seed;
   // 0 means all cores (as ThreadPool resolves it): record how many that was.
@@ -148,7 +180,7 @@ RunMetadata Describe(const Problem& p) {
   for (int k = 0; k < bits.dimension(); ++k) m.bit_names.push_back(bits.name(k));
   m.bit_prior_one = bits.bit_prior_one();
   m.distance_components = p.distance->components();
-  m.output_positions = p.simulator->model().output_positions();
+  m.output_positions = p.config.simulator.outputs.coordinates;
   m.position_unit = "m";
   m.measured.positions = p.data_positions;
   m.measured.values = p.data_values;
@@ -208,15 +240,14 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
                               ? ResolvePath(p.config.directory, p.config.output.directory)
                               : request.output_directory;
   const std::string history_path = (fs::path(directory) / p.config.output.database).string();
-  std::optional<HistoryStore> store;
+  std::string created;
   OnPrimary(*p.executor, [&] {
     if (request.report) CheckReportPossible(ReportDirectory(history_path));
-    std::error_code ec;
-    fs::create_directories(directory, ec);
-    if (ec) {
-      throw Error(
-          ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
-    }
+    if (CreateOutputDirectory(directory)) created = directory;
+  });
+  BuildModelIn(p, history_path, created);
+  std::optional<HistoryStore> store;
+  OnPrimary(*p.executor, [&] {
     store.emplace(HistoryStore::Create(history_path, Describe(p), request.overwrite));
   });
   return Execute(p, store ? &*store : nullptr, history_path, nullptr, request.report, progress);
@@ -242,7 +273,7 @@ RunOutcome ResumeCalibration(const std::string& history_path,
   // The measured data as the run first used them, not as the CSV reads today.
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
-  BuildModel(p);
+  BuildModel(p, history_path);
   // The rebuilt problem must be the one the run started with, or the continuation would not
   // equal an uninterrupted run. Checked before BeginResume rewrites anything.
   CheckResumeFingerprint(metadata.fingerprint,
@@ -250,7 +281,8 @@ RunOutcome ResumeCalibration(const std::string& history_path,
                          history_path,
                          p.config.data.csv,
                          metadata.combabc_version,
-                         COMBABC_VERSION);
+                         COMBABC_VERSION,
+                         p.simulator.handshake);
   MakeExecutor(p, executor);
   std::optional<HistoryStore> store;
   ResumePoint resume;
@@ -386,13 +418,10 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
                   history.string());
     }
     if (request.report) CheckReportPossible(ReportDirectory(history.string()));
-    fs::create_directories(directory, ec);
-    if (ec) {
-      throw Error(
-          ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
-    }
+    CreateOutputDirectory(directory);
     OutputDirectory::Check(files_directory, request.overwrite);
   });
+  BuildModelIn(p, history.string(), "");
 
   EnumerateOutcome outcome;
   const EnumerationResult result = Enumerate(p.view(), options, progress);

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <algorithm>
 #include <map>
 
 #include "combabc/core/error.hpp"
@@ -173,17 +174,49 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
   return c.Digest();
 }
 
+// An external simulator: what the config says about the program and how it is called (the
+// timeout and retries decide which candidates fail, so they decide the history too).
+std::string ExternalPart(const SimulatorConfig& s) {
+  const ExternalSimulatorOptions& e = s.external;
+  Canonical c;
+  c.Add("simulator", ToString(s.kind));
+  c.Add("argv", static_cast<int>(e.argv.size()));
+  for (const std::string& a : e.argv) c.Add("arg", a);
+  c.Add("timeout_s", e.timeout_s).Add("retries", e.retries);
+  if (s.kind == SimulatorKind::kCommand) {
+    c.Add("params", ToString(e.params))
+        .Add("params_format", ToString(e.params_format))
+        .Add("results", ToString(e.results))
+        .Add("results_format", ToString(e.results_format));
+  }
+  return c.Digest();
+}
+
+std::string OutputsPart(const SimulatorOutputs& o) {
+  Canonical c;
+  c.Add("name", o.name).Add("coordinates", o.coordinates);
+  return c.Digest();
+}
+
 }  // namespace
 
 Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
+  const SimulatorConfig& simulator = in.config->simulator;
+  const bool sensor = simulator.kind == SimulatorKind::kSensor;
+  // The sensor's part is what it always was, so runs started before external simulators existed
+  // still resume; its outputs are its [model.output] positions, already in that part.
   Fingerprint parts = {
       {"sampler", SamplerPart(in.config->smc)},
       {"space", SpacePart(*in.space)},
       {"data", DataPart(in.data_positions, in.data_values)},
       {"metric", MetricPart(*in.config, in.components)},
-      {"simulator", SimulatorPart(in.config->model)},
-      {"version", Canonical().Add("combabc", in.version).Digest()},
+      {"simulator", sensor ? SimulatorPart(in.config->model) : ExternalPart(simulator)},
   };
+  if (!sensor) parts.emplace_back("simulator_outputs", OutputsPart(simulator.outputs));
+  if (simulator.kind == SimulatorKind::kWorker) {
+    parts.emplace_back("simulator_handshake", Canonical().Add("handshake", in.handshake).Digest());
+  }
+  parts.emplace_back("version", Canonical().Add("combabc", in.version).Digest());
   Canonical combined;
   for (const auto& [part, digest] : parts) combined.Add(part.c_str(), digest);
   parts.emplace_back("combined", combined.Digest());
@@ -195,15 +228,29 @@ void CheckResumeFingerprint(const Fingerprint& stored,
                             const std::string& history_path,
                             const std::string& data_source,
                             const std::string& stored_version,
-                            const std::string& version) {
+                            const std::string& version,
+                            const std::string& handshake) {
   const std::map<std::string, std::string> current(now.begin(), now.end());
+  const std::map<std::string, std::string> before(stored.begin(), stored.end());
   std::vector<std::string> changed;
+  // A part the run has and this problem lacks, or the other way round, is a change of simulator
+  // kind (e.g. a worker run resumed as a sensor run): reported as the simulator.
+  for (const char* part : {"simulator_outputs", "simulator_handshake"}) {
+    if (!before.empty() && before.count(part) != current.count(part) &&
+        before.count("simulator") != 0) {
+      changed.emplace_back("simulator");
+      break;
+    }
+  }
   for (const auto& [part, digest] : stored) {
     const auto found = current.find(part);
     // "combined" only summarises the others; a part this combabc does not compute cannot be
     // compared (and a newer combabc's file has a newer schema, refused on open).
     if (part == "combined" || found == current.end()) continue;
-    if (found->second != digest) changed.push_back(part);
+    if (found->second != digest &&
+        std::find(changed.begin(), changed.end(), part) == changed.end()) {
+      changed.push_back(part);
+    }
   }
   if (changed.empty()) return;
   const std::string& part = changed.front();
@@ -212,6 +259,10 @@ void CheckResumeFingerprint(const Fingerprint& stored,
   if (part == "data") {
     message = "the measured data changed since the run started (" + data_source + ": " + key +
               " differs); start a new run or restore the file";
+  } else if (part == "simulator_handshake") {
+    message = "the worker's handshake is now " + Excerpt(handshake) +
+              ", not the one the run started with (" + key +
+              " differs): the worker program changed; restore it or start a new run";
   } else if (part == "version") {
     message = "this combabc (" + version + ") is not the one that started the run (" +
               stored_version + "): " + key + " differs; resume with combabc " + stored_version +
@@ -221,7 +272,10 @@ void CheckResumeFingerprint(const Fingerprint& stored,
         {"sampler", "the sampler options ([sampler], [proposal])"},
         {"space", "the parameter space (bits, priors, ties, continuous parameters)"},
         {"metric", "the metric ([metric])"},
-        {"simulator", "the simulator's model options ([model])"},
+        {"simulator",
+         "the simulator (its kind, and [model] for the sensor or the program, argv, hand-over, "
+         "timeout and retries in [simulator])"},
+        {"simulator_outputs", "the simulator's declared outputs ([simulator.outputs])"},
     };
     const auto named = what.find(part);
     message = (named != what.end() ? named->second : "the run's " + part) +

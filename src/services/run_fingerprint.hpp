@@ -25,19 +25,23 @@ struct FingerprintInputs {
   std::span<const double> data_values;
   std::vector<DistanceComponent> components;  // the metric as built
   std::string version;                        // combabc version
+  std::string handshake;                      // a worker simulator's handshake line, else empty
 };
 
-// Parts "sampler", "space", "data", "metric", "simulator", "version", then "combined".
+// Parts "sampler", "space", "data", "metric", "simulator", "version", then "combined"; an external
+// simulator adds "simulator_outputs" (its declared outputs) and a worker "simulator_handshake".
 Fingerprint ComputeFingerprint(const FingerprintInputs& inputs);
 
 // Throws combabc::Error(kConfig), one line naming the history file and what changed, when a part
 // stored with the run differs from `now`. A run stored without a fingerprint (schema v1/v2) is
-// not checked. data_source names the data file in the message; stored_version the run's combabc.
+// not checked. data_source names the data file in the message; stored_version the run's combabc;
+// handshake, the worker's handshake now (quoted when it is what changed).
 void CheckResumeFingerprint(const Fingerprint& stored,
                             const Fingerprint& now,
                             const std::string& history_path,
                             const std::string& data_source,
                             const std::string& stored_version,
-                            const std::string& version);
+                            const std::string& version,
+                            const std::string& handshake = {});
 
 }  // namespace combabc::services

@@ -155,15 +155,18 @@ TEST(Config, SplitPresetWithGaussianExtension) {
   EXPECT_EQ(d, (std::vector<double>{0, 0, 0, 1, 1}));
 }
 
-TEST(Config, MakeDistanceUsesTheModelOutputPositions) {
+TEST(Config, MakeDistanceUsesTheSimulatorsDeclaredOutputs) {
   const CalibrationConfig c = LoadConfig(Fixture("paper_70cm_split.toml"));
+  // The sensor declares its [model.output] positions as its outputs.
+  EXPECT_EQ(c.simulator.kind, SimulatorKind::kSensor);
+  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
   const MeasuredData data = LoadMeasuredData(c.data, c.directory);
   const auto distance = MakeDistance(c, data);
   EXPECT_EQ(distance->output_size(), c.model.output_positions.size());
   EXPECT_EQ(distance->components().size(), 5u);
-  // A model whose output stops short of the data is a config error naming the file.
+  // A simulator whose output stops short of the data is a config error naming the file.
   CalibrationConfig short_model = c;
-  short_model.model.output_positions = {0.0, 0.1, 0.2};
+  short_model.simulator.outputs.coordinates = {0.0, 0.1, 0.2};
   try {
     MakeDistance(short_model, data);
     ADD_FAILURE();

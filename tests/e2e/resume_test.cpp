@@ -148,7 +148,7 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
            Case{"sampler", "the sampler options ([sampler], [proposal])"},
            Case{"space", "the parameter space"},
            Case{"metric", "the metric ([metric])"},
-           Case{"simulator", "the simulator's model options ([model])"},
+           Case{"simulator", "the simulator (its kind, and [model] for the sensor"},
            Case{"version",
                 "is not the one that started the run (0.0.9): fingerprint_version "
                 "differs; resume with combabc 0.0.9 or start a new run"},

@@ -18,6 +18,7 @@
 #include "combabc/params/continuous_prior.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/samplers/smc_options.hpp"
+#include "combabc/simulators/external_simulator.hpp"
 
 namespace combabc {
 
@@ -37,25 +38,38 @@ struct MetricConfig {
   std::vector<MetricComponentConfig> components;
 };
 
+// [simulator]: the simulator the run calibrates and what it declares. Every kind declares its
+// outputs; the workflow (data, metric windows, history, report) sees only this declaration.
+struct SimulatorConfig {
+  SimulatorKind kind = SimulatorKind::kSensor;
+  // The sensor: its [model.output] positions; command / worker: [simulator.outputs].
+  SimulatorOutputs outputs;
+  // Command / worker only. work_directory is the run's (set when the run starts: "." here).
+  ExternalSimulatorOptions external;
+};
+
 struct CalibrationConfig {
   std::string path;         // the config file as given ("<string>" for ParseConfig without a file)
   std::string directory;    // its directory: data.csv and output.directory are relative to it
   std::string text;         // the TOML text verbatim (provenance for the run history)
   std::string description;  // free text, top-level `description`
 
-  // The sensor simulator, from [model]; every key not given keeps SensorOptions' default, and
-  // model.normalise mirrors data.normalise so Y and Y* are scaled alike.
+  SimulatorConfig simulator;
+  // The sensor simulator, from [model] (kind = "sensor" only); every key not given keeps
+  // SensorOptions' default, and model.normalise mirrors data.normalise so Y and Y* are scaled
+  // alike.
   plate::SensorOptions model;
   DataConfig data;
   MetricConfig metric;
   // Filled from [sampler]; smc.thresholds holds one schedule per threshold component of the
   // metric, in order, and smc.keep_outputs mirrors output.keep_simulated_curves.
   SmcOptions smc;
-  // Filled from [sampler] (prior, tie) and the model's clamp count (dimension = 2 x
-  // model.clamps_per_edge, names "clamp 1", ...).
+  // Filled from [sampler] (prior, tie) and the simulator's bits: the sensor's clamps (dimension
+  // = 2 x model.clamps_per_edge, names "clamp 1", ...) or [simulator.bits].
   BinarySpaceOptions space;
-  // [parameters.<name>]: the model's continuous unknowns with their priors, by name in
-  // alphabetical order (docs/config.md lists the names the sensor model has).
+  // [parameters.<name>]: the simulator's continuous unknowns with their priors, by name in
+  // alphabetical order (docs/config.md lists the names the sensor model has; an external
+  // simulator takes any name).
   std::vector<ContinuousParameter> reals;
   OutputConfig output;
 };

@@ -1,0 +1,61 @@
+#include "services/simulator_factory.hpp"
+
+#include <filesystem>
+
+#include "combabc/core/error.hpp"
+#include "combabc/services/sensor_simulator.hpp"
+#include "combabc/simulators/command_simulator.hpp"
+#include "combabc/simulators/worker_simulator.hpp"
+
+namespace combabc::services {
+namespace fs = std::filesystem;
+
+std::string WorkDirectoryOf(const std::string& history_path) {
+  const fs::path history(history_path);
+  return (history.parent_path() / (history.stem().string() + ".work")).string();
+}
+
+BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string& work_directory) {
+  BuiltSimulator built;
+  if (config.simulator.kind == SimulatorKind::kSensor) {
+    std::vector<std::string> real_names;
+    for (const auto& r : config.reals) real_names.push_back(r.name);
+    auto sensor = std::make_unique<SensorSimulator>(config.model, std::move(real_names));
+    const int clamps = sensor->model().num_clamps();
+    if (config.space.dimension != clamps) {
+      throw Error(ErrorKind::kConfig,
+                  "the sampler has " + std::to_string(config.space.dimension) +
+                      " bits; the model has " + std::to_string(clamps) + " clamps",
+                  config.path,
+                  0,
+                  "model");
+    }
+    built.simulator = std::move(sensor);
+    return built;
+  }
+  ExternalSimulatorOptions options = config.simulator.external;
+  options.work_directory = work_directory;
+  // The program runs in its own folder: {config_dir} must not depend on combabc's.
+  std::error_code ec;
+  const fs::path dir = fs::absolute(config.directory.empty() ? "." : config.directory, ec);
+  options.config_directory = dir.lexically_normal().string();
+  if (!options.config_directory.empty() && options.config_directory.back() == '/' &&
+      options.config_directory.size() > 1) {
+    options.config_directory.pop_back();
+  }
+  try {
+    if (config.simulator.kind == SimulatorKind::kCommand) {
+      built.simulator = std::make_unique<CommandSimulator>(std::move(options));
+    } else {
+      auto worker = std::make_unique<WorkerSimulator>(std::move(options));
+      built.handshake = worker->handshake();
+      built.simulator = std::move(worker);
+    }
+  } catch (const Error& e) {
+    if (!e.file().empty()) throw;
+    throw Error(e.kind(), e.message(), config.path, 0, e.field());
+  }
+  return built;
+}
+
+}  // namespace combabc::services

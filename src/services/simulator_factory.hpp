@@ -1,0 +1,28 @@
+#pragma once
+// The simulator a config names, built the same way for a new run, a resume and an enumeration:
+// the workflow sees only the Simulator interface and the config's output declaration.
+// Private to src/services.
+#include <memory>
+#include <string>
+
+#include "combabc/config/config.hpp"
+#include "combabc/samplers/simulator.hpp"
+
+namespace combabc::services {
+
+struct BuiltSimulator {
+  std::unique_ptr<Simulator> simulator;
+  // What identifies the program beyond the config, for the run's fingerprint: a worker's
+  // handshake line; empty for the others.
+  std::string handshake;
+};
+
+// work_directory: where an external simulator makes its per-call / per-worker folders (inside the
+// run's output folder). Throws combabc::Error(kConfig) for a simulator that does not fit the
+// config (the sensor's clamp count, a worker that fails its handshake).
+BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string& work_directory);
+
+// The work folder of the run whose history is `history_path`: "<history stem>.work" beside it.
+std::string WorkDirectoryOf(const std::string& history_path);
+
+}  // namespace combabc::services

@@ -1,0 +1,82 @@
+#include "combabc/simulators/external_simulator.hpp"
+
+#include <cmath>
+#include <utility>
+
+namespace combabc {
+namespace {
+
+bool Mentions(const std::vector<std::string>& argv, const std::string& placeholder) {
+  for (const std::string& a : argv) {
+    if (a.find(placeholder) != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool ExternalSimulatorOptions::IsValid(SimulatorKind kind, std::string* why) const {
+  auto fail = [&](const std::string& message) {
+    if (why) *why = "ExternalSimulatorOptions::" + message;
+    return false;
+  };
+  if (kind == SimulatorKind::kSensor) return fail("kind is the built-in sensor, not external");
+  if (argv.empty() || argv.front().empty()) return fail("argv is empty; name the program");
+  if (output_size < 1) return fail("output_size = " + std::to_string(output_size) + "; must be >= 1");
+  if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) return fail("timeout_s must be >= 0");
+  if (!(startup_timeout_s >= 0.0) || !std::isfinite(startup_timeout_s)) {
+    return fail("startup_timeout_s must be >= 0");
+  }
+  if (retries < 0) return fail("retries = " + std::to_string(retries) + "; must be >= 0");
+  if (work_directory.empty()) return fail("work_directory is empty");
+  if (kind == SimulatorKind::kCommand) {
+    if (params == Transport::kStdout) return fail("params must be \"file\" or \"stdin\"");
+    if (results == Transport::kStdin) return fail("results must be \"stdout\" or \"file\"");
+    if (params == Transport::kFile && !Mentions(argv, "{params}")) {
+      return fail("argv has no {params}: with params = \"file\" the program must be told where");
+    }
+    if (results == Transport::kFile && !Mentions(argv, "{output}")) {
+      return fail("argv has no {output}: with results = \"file\" the program must be told where");
+    }
+  } else if (Mentions(argv, "{params}") || Mentions(argv, "{output}")) {
+    return fail("argv of a worker cannot use {params} or {output} (requests come on stdin)");
+  }
+  return true;
+}
+
+std::vector<std::string> ExpandArgv(const std::vector<std::string>& argv,
+                                    const std::string& params,
+                                    const std::string& output,
+                                    const std::string& workdir,
+                                    const std::string& config_dir) {
+  const std::pair<std::string, std::string> values[] = {
+      {"{config_dir}", config_dir.empty() ? "." : config_dir},
+      {"{workdir}", workdir},
+      {"{params}", params},
+      {"{output}", output},
+  };
+  std::vector<std::string> out;
+  out.reserve(argv.size());
+  for (const std::string& a : argv) {
+    // One left-to-right pass: a substituted value is never scanned again, so a path that itself
+    // contains "{output}" arrives literally.
+    std::string expanded;
+    std::size_t i = 0;
+    while (i < a.size()) {
+      bool replaced = false;
+      for (const auto& [name, value] : values) {
+        if (a.compare(i, name.size(), name) == 0) {
+          expanded += value;
+          i += name.size();
+          replaced = true;
+          break;
+        }
+      }
+      if (!replaced) expanded += a[i++];
+    }
+    out.push_back(std::move(expanded));
+  }
+  return out;
+}
+
+}  // namespace combabc

@@ -1,0 +1,216 @@
+#include "combabc/simulators/worker_simulator.hpp"
+
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "combabc/core/error.hpp"
+#include "combabc/core/subprocess.hpp"
+#include "simulator_io.hpp"
+
+namespace combabc {
+namespace si = simulators_internal;
+
+// One running worker: its process and its own working folder (removed with it).
+class WorkerSimulator::Worker {
+ public:
+  Worker(std::string folder, const SubprocessOptions& spawn)
+      : folder_(std::move(folder)), stderr_path_(spawn.stderr_path) {
+    try {
+      process_.emplace(spawn);
+    } catch (...) {
+      WorkDirectory::Remove(folder_);
+      throw;
+    }
+  }
+  ~Worker() {
+    if (process_ && process_->running()) {
+      // End of input asks the worker to exit; one that does not within a moment is killed.
+      process_->CloseInput();
+      if (!process_->Wait(DeadlineAfter(0.5))) process_->Kill();
+    }
+    process_.reset();
+    WorkDirectory::Remove(folder_);
+  }
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+  Subprocess& process() { return *process_; }
+  // Why the worker stopped, for the failure reason: its exit status and last stderr line.
+  std::string Death() {
+    const ExitStatus status = process_->Kill();
+    std::ifstream in(stderr_path_);
+    std::string line;
+    std::string last;
+    while (std::getline(in, line)) {
+      if (!line.empty()) last = line;
+    }
+    return "the worker " + Describe(status) + (last.empty() ? "" : "; stderr: " + Printable(last, 160));
+  }
+
+ private:
+  std::string folder_;
+  std::string stderr_path_;
+  std::optional<Subprocess> process_;
+};
+
+namespace {
+
+std::string Seconds(double s) {
+  std::ostringstream out;
+  out << s << " s";
+  return out.str();
+}
+
+// Checks "combabc-worker <version> <output size> [identity]"; returns the reason it is refused.
+std::string CheckHandshake(const std::string& line, int output_size) {
+  std::istringstream in(line);
+  std::string protocol;
+  std::string version;
+  std::string size;
+  in >> protocol >> version >> size;
+  const std::string expected = std::string(kWorkerProtocol) + " " +
+                               std::to_string(kWorkerProtocolVersion) + " " +
+                               std::to_string(output_size);
+  if (protocol != kWorkerProtocol) {
+    return "its first line is " + Excerpt(line) + ", not a handshake \"" + expected + " ...\"";
+  }
+  if (version != std::to_string(kWorkerProtocolVersion)) {
+    return "it speaks protocol version " + Excerpt(version) + "; this combabc speaks " +
+           std::to_string(kWorkerProtocolVersion);
+  }
+  if (size != std::to_string(output_size)) {
+    return "it declares " + Excerpt(size) + " outputs; the config declares " +
+           std::to_string(output_size) + " ([simulator.outputs])";
+  }
+  return {};
+}
+
+}  // namespace
+
+WorkerSimulator::WorkerSimulator(ExternalSimulatorOptions options)
+    : options_(std::move(options)), work_([&] {
+        std::string why;
+        if (!options_.IsValid(SimulatorKind::kWorker, &why)) {
+          throw Error(ErrorKind::kConfig, why, "", 0, "simulator");
+        }
+        return options_.work_directory;
+      }()) {
+  std::string reason;
+  auto first = Start(&reason, &handshake_);
+  if (!first) {
+    throw Error(ErrorKind::kConfig,
+                "the worker " + Excerpt(options_.argv.front()) + " did not start: " + reason,
+                "",
+                0,
+                "simulator.argv");
+  }
+  idle_.push_back(std::move(first));
+}
+
+WorkerSimulator::~WorkerSimulator() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  idle_.clear();  // before work_ goes: each worker removes its folder
+}
+
+std::unique_ptr<WorkerSimulator::Worker> WorkerSimulator::Start(std::string* reason,
+                                                               std::string* first_handshake) const {
+  std::unique_ptr<Worker> worker;
+  try {
+    const std::string folder = work_.MakeSubfolder("worker");
+    SubprocessOptions spawn;
+    spawn.argv = ExpandArgv(options_.argv, "", "", folder, options_.config_directory);
+    spawn.working_directory = folder;
+    spawn.pipe_stdin = true;
+    spawn.stderr_path = folder + "/stderr.txt";
+    worker = std::make_unique<Worker>(folder, spawn);
+  } catch (const std::runtime_error& e) {
+    *reason = e.what();
+    return nullptr;
+  }
+  std::string line;
+  const ReadStatus read = worker->process().ReadLine(
+      &line, kMaxSimulatorOutputBytes, DeadlineAfter(options_.startup_timeout_s));
+  if (read == ReadStatus::kTimeout) {
+    *reason = "no handshake within " + Seconds(options_.startup_timeout_s);
+    return nullptr;
+  }
+  if (read != ReadStatus::kOk) {
+    *reason = read == ReadStatus::kEof ? worker->Death() : "handshake line too long";
+    return nullptr;
+  }
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  *reason = CheckHandshake(line, options_.output_size);
+  if (!reason->empty()) return nullptr;
+  if (!handshake_.empty() && line != handshake_) {
+    *reason = "a new worker's handshake " + Excerpt(line) + " differs from the first one's " +
+              Excerpt(handshake_);
+    return nullptr;
+  }
+  if (handshake_.empty()) *first_handshake = line;
+  return worker;
+}
+
+std::string WorkerSimulator::Attempt(Worker& worker,
+                                     const ParameterView& theta,
+                                     std::span<double> out,
+                                     bool* in_step) const {
+  *in_step = false;
+  Subprocess& p = worker.process();
+  const Deadline deadline = DeadlineAfter(options_.timeout_s);
+  if (!p.Write(si::RequestLine(theta), deadline)) {
+    return p.timed_out() ? "timed out after " + Seconds(options_.timeout_s) + " (worker killed)"
+                         : worker.Death();
+  }
+  std::string line;
+  const ReadStatus read = p.ReadLine(&line, kMaxSimulatorOutputBytes, deadline);
+  if (read == ReadStatus::kTimeout) {
+    return "timed out after " + Seconds(options_.timeout_s) + " (worker killed)";
+  }
+  if (read == ReadStatus::kTooLong) {
+    return "response longer than " + std::to_string(kMaxSimulatorOutputBytes) + " bytes";
+  }
+  if (read == ReadStatus::kEof) return worker.Death();
+  // One response line per request: after any "ok"/"error" line the worker is in step again,
+  // even when its values were refused (wrong count, NaN).
+  *in_step = line.rfind("ok", 0) == 0 || line.rfind("error", 0) == 0;
+  return si::ReadResponse(line, out);
+}
+
+void WorkerSimulator::Simulate(const ParameterView& theta,
+                               RandomStream& /*rng*/,
+                               std::span<double> out) const {
+  std::string reason;
+  const int attempts = options_.retries + 1;
+  for (int attempt = 1; attempt <= attempts; ++attempt) {
+    std::unique_ptr<Worker> worker;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (!idle_.empty()) {
+        worker = std::move(idle_.back());
+        idle_.pop_back();
+      }
+    }
+    if (!worker) {
+      worker = Start(&reason, nullptr);
+      if (!worker) {
+        reason = "a new worker did not start: " + reason;
+        continue;
+      }
+    }
+    bool in_step = false;
+    reason = Attempt(*worker, theta, out, &in_step);
+    // A worker still in step with the protocol is kept; any other failure leaves it in an
+    // unknown state: it is killed (with its group) and replaced by the next call.
+    if (in_step) {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      idle_.push_back(std::move(worker));
+    } else {
+      worker->process().Kill();
+    }
+    if (reason.empty()) return;
+  }
+  if (attempts > 1) reason += " (" + std::to_string(attempts) + " attempts)";
+  throw SimulationFailed(reason);
+}
+
+}  // namespace combabc
