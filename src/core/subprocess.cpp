@@ -109,7 +109,7 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   posix_spawn_file_actions_adddup2(&s.actions, out[1], STDOUT_FILENO);
   const std::string err = options.stderr_path.empty() ? "/dev/null" : options.stderr_path;
   posix_spawn_file_actions_addopen(
-      &s.actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+      &s.actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (!options.working_directory.empty()) {
     posix_spawn_file_actions_addchdir_np(&s.actions, options.working_directory.c_str());
   }

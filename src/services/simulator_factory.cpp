@@ -34,9 +34,9 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string&
     return built;
   }
   ExternalSimulatorOptions options = config.simulator.external;
-  options.work_directory = work_directory;
-  // The program runs in its own folder: {config_dir} must not depend on combabc's.
+  // The program runs in its own folder: no path handed to it may be relative to combabc's.
   std::error_code ec;
+  options.work_directory = fs::absolute(work_directory, ec).lexically_normal().string();
   const fs::path dir = fs::absolute(config.directory.empty() ? "." : config.directory, ec);
   options.config_directory = dir.lexically_normal().string();
   if (!options.config_directory.empty() && options.config_directory.back() == '/' &&
