@@ -46,11 +46,10 @@ class Collector {
       return Where(line) + Excerpt(token) + " is not a number";
     }
     if (nan_text || std::isnan(v)) {
-      return "output value " + std::to_string(count_ + 1) + " is NaN (" + Where(line, false) + ")";
+      return "output value " + std::to_string(count_ + 1) + " is NaN" + InLine(line);
     }
     if (!std::isfinite(v)) {
-      return "output value " + std::to_string(count_ + 1) + " is infinite (" + Where(line, false) +
-             ")";
+      return "output value " + std::to_string(count_ + 1) + " is infinite" + InLine(line);
     }
     if (count_ < out_.size()) out_[count_] = v;
     ++count_;
@@ -63,9 +62,11 @@ class Collector {
   }
 
  private:
-  static std::string Where(int line, bool colon = true) {
-    if (line <= 0) return "";
-    return "line " + std::to_string(line) + (colon ? ": " : "");
+  static std::string Where(int line) {
+    return line <= 0 ? "" : "line " + std::to_string(line) + ": ";
+  }
+  static std::string InLine(int line) {
+    return line <= 0 ? "" : " (line " + std::to_string(line) + ")";
   }
   std::span<double> out_;
   std::size_t count_ = 0;
