@@ -1,0 +1,134 @@
+// The CLI with the shipped external simulators (examples/custom-simulator) copied into a folder
+// whose path has a space and shell metacharacters: a run through the Python worker and through the
+// Python command simulator, a resume that continues with the same simulator and gives the
+// uninterrupted history, and a resume refused (exit 78, naming what changed) when the simulator
+// changed. Also keeps the README's worker the shipped one.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include "cli_runner.hpp"
+#include "combabc/history/history_store.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kExample = fs::path(COMBABC_SOURCE_DIR) / "examples/custom-simulator";
+
+class ExternalSimulatorCli : public ::testing::Test {
+ protected:
+  ExternalSimulatorCli() : dir_("e2e-external simulator $(touch pwned)") {}
+
+  // The example's config `name`, shrunk to a tiny run, written into the scratch folder.
+  std::string Config(const std::string& name, int accepted) const {
+    for (const char* file : {"worker.py", "model.py", "data.csv"}) {
+      fs::copy_file(kExample / file, dir_.path() / file, fs::copy_options::overwrite_existing);
+    }
+    std::string text = ReadFile(kExample / name);
+    text = std::regex_replace(text, std::regex("waves = 3"), "waves = 2");
+    text = std::regex_replace(
+        text, std::regex("accepted_per_wave = 40"), "accepted_per_wave = " + std::to_string(accepted));
+    text = std::regex_replace(text, std::regex("directory = \"results-[a-z]+\""), "directory = \"out\"");
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+
+  std::string Started(const std::string& name, const RunMetadata& metadata) const {
+    std::string path = dir_ / name;
+    HistoryStore::Create(path, metadata);
+    return path;
+  }
+
+  void RunsResumesAndRefusesAChange(const std::string& config,
+                                    const std::string& change_file,
+                                    const std::string& from,
+                                    const std::string& to,
+                                    const std::string& says) {
+    const auto r = RunCli({"run", config, "--no-report", "--threads", "2"}, dir_.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string history = dir_ / "out/history.sqlite";
+    EXPECT_FALSE(fs::exists(dir_ / "out/history.work")) << "the work folder is removed";
+    EXPECT_FALSE(fs::exists(dir_.path() / "pwned"));
+    const RunMetadata finished = HistoryStore::Open(history, true).LoadMetadata();
+    EXPECT_EQ(finished.output_positions.size(), 21u);
+    EXPECT_NE(finished.config_path.find(dir_.path().string()), std::string::npos)
+        << "stored absolute: " << finished.config_path;
+
+    // A run killed before its first batch resumes with the same simulator: same history.
+    const std::string started = Started("started.sqlite", finished);
+    const auto resumed = RunCli({"resume", started, "--no-report"}, dir_.path());
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    std::string where;
+    EXPECT_TRUE(SameHistory(HistoryStore::Open(history, true).LoadHistory(),
+                            HistoryStore::Open(started, true).LoadHistory(),
+                            &where))
+        << where;
+
+    // The simulator changed since: refused, saying what changed, before anything is rewritten.
+    RunMetadata changed_metadata = finished;
+    if (change_file.empty()) {
+      const std::size_t at = changed_metadata.config_text.find(from);
+      ASSERT_NE(at, std::string::npos);
+      changed_metadata.config_text.replace(at, from.size(), to);
+    }
+    const std::string refused = Started("refused.sqlite", changed_metadata);
+    if (!change_file.empty()) {
+      std::string text = ReadFile(dir_ / change_file);
+      const std::size_t at = text.find(from);
+      ASSERT_NE(at, std::string::npos);
+      text.replace(at, from.size(), to);
+      std::ofstream(dir_ / change_file) << text;
+    }
+    const auto r2 = RunCli({"resume", refused, "--no-report"}, dir_.path());
+    EXPECT_EQ(r2.exit_code, 78) << r2.err;
+    EXPECT_NE(r2.err.find(says), std::string::npos) << r2.err;
+    EXPECT_EQ(HistoryStore::Open(refused, true).LoadMetadata().resume_count, 0);
+  }
+
+  ScratchDir dir_;
+};
+
+TEST_F(ExternalSimulatorCli, ThePythonWorkerRunsResumesAndAChangedWorkerIsRefused) {
+  RunsResumesAndRefusesAChange(Config("worker.toml", 10),
+                               "worker.py",
+                               "example-supports 1.0",
+                               "example-supports 2.0",
+                               "the worker's handshake is now 'combabc-worker 1 21 "
+                               "example-supports 2.0'");
+}
+
+TEST_F(ExternalSimulatorCli, ThePythonCommandRunsResumesAndAChangedCommandIsRefused) {
+  RunsResumesAndRefusesAChange(Config("command.toml", 6),
+                               "",
+                               "{config_dir}/model.py",
+                               "{config_dir}/other_model.py",
+                               "resume: the simulator (its kind, and [model] for the sensor or the "
+                               "program, argv");
+}
+
+TEST_F(ExternalSimulatorCli, AWorkerThatFailsItsHandshakeIsAConfigErrorAndLeavesNothing) {
+  const std::string config = Config("worker.toml", 10);
+  std::ofstream(dir_ / "worker.py") << "print('combabc-worker 1 20 wrong size')\n";
+  const auto r = RunCli({"run", config, "--no-report"}, dir_.path());
+  EXPECT_EQ(r.exit_code, 78) << r.err;
+  EXPECT_NE(r.err.find("it declares '20' outputs; the config declares 21"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "no output folder left";
+}
+
+// README.md's "Bring your own simulator" shows examples/custom-simulator/worker.py verbatim, so
+// the copy users take is the one these tests run.
+TEST(ReadmeWorker, IsTheShippedExample) {
+  const std::string readme = ReadFile(fs::path(COMBABC_SOURCE_DIR) / "README.md");
+  const std::string worker = ReadFile(kExample / "worker.py");
+  ASSERT_FALSE(worker.empty());
+  EXPECT_NE(readme.find("```python\n" + worker + "```"), std::string::npos)
+      << "README.md must show examples/custom-simulator/worker.py verbatim";
+}
+
+}  // namespace
+}  // namespace combabc::testing
