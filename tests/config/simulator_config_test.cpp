@@ -1,0 +1,130 @@
+// [simulator]: the sensor by default (declaring its clamps and output positions), command and
+// worker simulators declaring bits and outputs, and every mistake located at its key.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
+
+namespace combabc {
+namespace {
+
+const std::string kRest =
+    "[data]\n"
+    "csv = \"p.csv\"\n"
+    "position_unit = \"m\"\n"
+    "[metric]\n"
+    "[[metric.component]]\n"
+    "type = \"least_squares\"\n"
+    "window = [0.0, 0.2]\n";
+
+const std::string kWorker =
+    "[simulator]\n"
+    "kind = \"worker\"\n"
+    "argv = [\"python3\", \"{config_dir}/w.py\"]\n"
+    "timeout = 2.5\n"
+    "[simulator.bits]\n"
+    "names = [\"a\", \"b\", \"c\"]\n"
+    "[simulator.outputs]\n"
+    "name = \"strain\"\n"
+    "coordinates = [0.0, 0.1, 0.2]\n";
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    ParseConfig(text, "dir/run.toml");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
+  const CalibrationConfig c = ParseConfig("[model.clamps]\nper_edge = 3\n" + kRest, "run.toml");
+  EXPECT_EQ(c.simulator.kind, SimulatorKind::kSensor);
+  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
+  EXPECT_EQ(c.space.dimension, 6);
+  EXPECT_EQ(c.space.names.front(), "clamp 1");
+  EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest).find(
+                "dir/run.toml:3: simulator.argv: unknown key"),
+            0u);
+}
+
+TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
+  const CalibrationConfig c = ParseConfig(kWorker + kRest +
+                                              "[sampler]\nestimator = \"importance\"\n"
+                                              "[parameters.\"my gain\"]\nprior = \"uniform\"\n"
+                                              "low = -1e30\nhigh = 1e30\n",
+                                          "dir/run.toml");
+  EXPECT_EQ(c.simulator.kind, SimulatorKind::kWorker);
+  EXPECT_EQ(c.space.dimension, 3);
+  EXPECT_EQ(c.space.names, (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(c.simulator.outputs.name, "strain");
+  EXPECT_EQ(c.simulator.outputs.coordinates, (std::vector<double>{0.0, 0.1, 0.2}));
+  const ExternalSimulatorOptions& e = c.simulator.external;
+  EXPECT_EQ(e.argv, (std::vector<std::string>{"python3", "{config_dir}/w.py"}));
+  EXPECT_EQ(e.timeout_s, 2.5);
+  EXPECT_EQ(e.output_size, 3);
+  EXPECT_EQ(e.real_names, std::vector<std::string>{"my gain"});
+  EXPECT_EQ(e.config_directory, "dir");
+}
+
+TEST(SimulatorConfig, CoordinatesFromACsvFile) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("combabc-coords-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "c.csv") << "x_m,comment\n0.0,a\n0.05\n\n0.2,b\n";
+  std::string text = kWorker;
+  text.replace(text.find("coordinates = [0.0, 0.1, 0.2]"),
+               std::string("coordinates = [0.0, 0.1, 0.2]").size(),
+               "coordinates_csv = \"c.csv\"");
+  const CalibrationConfig c = ParseConfig(text + kRest, (dir / "run.toml").string());
+  EXPECT_EQ(c.simulator.outputs.coordinates, (std::vector<double>{0.0, 0.05, 0.2}));
+  std::ofstream(dir / "c.csv") << "x\n0.0\nzero\n";
+  try {
+    ParseConfig(text + kRest, (dir / "run.toml").string());
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kData);
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("'zero' is not a number"), std::string::npos);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {
+  auto with = [](const std::string& from, const std::string& to) {
+    std::string text = kWorker;
+    text.replace(text.find(from), from.size(), to);
+    return text + kRest;
+  };
+  EXPECT_EQ(ErrorOf("[model]\nlength = 1\n" + kWorker + kRest)
+                .rfind("dir/run.toml:1: model: [model] configures the built-in sensor", 0),
+            0u);
+  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"shell\"")).find(
+                "simulator.kind: unknown simulator kind 'shell'; expected one of \"sensor\", "
+                "\"command\", \"worker\""),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(with("argv = [\"python3\", \"{config_dir}/w.py\"]\n", "")).find(
+                "simulator.argv: missing required key"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"command\"")).find(
+                "simulator.argv: argv has no {params}"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(with("names = [\"a\", \"b\", \"c\"]", "names = [\"a\", \"a\"]"))
+                .find("simulator.bits.names: 'a' appears twice"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(with("[0.0, 0.1, 0.2]", "[0.0, 0.2, 0.1]"))
+                .find("simulator.outputs.coordinates: must be strictly increasing (entry 2)"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(with("timeout = 2.5", "params = \"file\"")).find("simulator.params: unknown key"),
+            std::string::npos)
+      << "params is a command key";
+}
+
+}  // namespace
+}  // namespace combabc
