@@ -124,8 +124,7 @@ void ParseParametersSection(TableReader& root, CalibrationConfig* c) {
     // An external simulator's parameters are its own: any name, no physical range combabc knows.
     const plate::SensorVariationField any{name.c_str(), nullptr, -kInf, kInf, ""};
     const bool sensor = c->simulator.kind == SimulatorKind::kSensor;
-    const plate::SensorVariationField* info =
-        sensor ? plate::FindSensorVariationField(name) : &any;
+    const plate::SensorVariationField* info = sensor ? plate::FindSensorVariationField(name) : &any;
     if (!info) {
       root.FailAt(value,
                   "parameters." + name,

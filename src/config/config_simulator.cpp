@@ -49,7 +49,9 @@ std::vector<double> ReadCoordinatesCsv(const std::string& path) {
       if (line == 1) continue;  // header
       throw Error(ErrorKind::kData, Excerpt(cell) + " is not a number", path, line, "coordinate");
     }
-    if (!std::isfinite(v)) throw Error(ErrorKind::kData, "must be finite", path, line, "coordinate");
+    if (!std::isfinite(v)) {
+      throw Error(ErrorKind::kData, "must be finite", path, line, "coordinate");
+    }
     values.push_back(v);
   }
   return values;
@@ -76,8 +78,9 @@ void ParseOutputs(TableReader& s, CalibrationConfig* c) {
   }
   if (out.coordinates.empty()) o->Fail(key, "must hold at least one coordinate");
   if (out.size() > kMaxOutputs) {
-    o->Fail(key, "has " + std::to_string(out.size()) + " entries; at most " +
-                     std::to_string(kMaxOutputs));
+    o->Fail(
+        key,
+        "has " + std::to_string(out.size()) + " entries; at most " + std::to_string(kMaxOutputs));
   }
   for (std::size_t k = 0; k < out.coordinates.size(); ++k) {
     if (!std::isfinite(out.coordinates[k])) o->Fail(key, "must be finite");
@@ -146,8 +149,9 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
   ExternalSimulatorOptions& e = sim.external;
   const auto argv = s->Strings("argv");
   if (!argv || argv->empty() || argv->front().empty()) {
-    s->Fail("argv", "missing required key: the program and its arguments, e.g. "
-                    "[\"python3\", \"{config_dir}/model.py\", \"{params}\"]");
+    s->Fail("argv",
+            "missing required key: the program and its arguments, e.g. "
+            "[\"python3\", \"{config_dir}/model.py\", \"{params}\"]");
   }
   e.argv = *argv;
   e.timeout_s = Seconds(*s, "timeout", e.timeout_s);
@@ -158,8 +162,7 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
     e.params_format = s->Choice<DataFormat>("params_format", "format").value_or(e.params_format);
     e.results = s->Choice<Transport>("results", "result hand-over").value_or(e.results);
     if (e.results == Transport::kStdin) s->Fail("results", "must be \"stdout\" or \"file\"");
-    e.results_format =
-        s->Choice<DataFormat>("results_format", "format").value_or(e.results_format);
+    e.results_format = s->Choice<DataFormat>("results_format", "format").value_or(e.results_format);
   } else {
     e.startup_timeout_s = Seconds(*s, "startup_timeout", e.startup_timeout_s);
   }
@@ -174,9 +177,8 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
   if (!e.IsValid(sim.kind, &why)) {
     const std::string text = why.substr(why.find("::") + 2);
     const std::string field = text.substr(0, text.find_first_of(" ="));
-    const std::map<std::string, std::string> keys = {{"argv", "argv"},
-                                                     {"params", "params"},
-                                                     {"results", "results"}};
+    const std::map<std::string, std::string> keys = {
+        {"argv", "argv"}, {"params", "params"}, {"results", "results"}};
     const auto it = keys.find(field);
     s->Fail(it != keys.end() ? it->second : "kind", text);
   }

@@ -57,8 +57,8 @@ struct SpawnSetup {
 
 Deadline DeadlineAfter(double seconds) {
   if (!(seconds > 0.0)) return Deadline::max();
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                            std::chrono::duration<double>(seconds));
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 std::string Describe(const ExitStatus& status) {

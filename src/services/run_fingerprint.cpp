@@ -1,8 +1,8 @@
 #include "services/run_fingerprint.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
-#include <algorithm>
 #include <map>
 
 #include "combabc/core/error.hpp"

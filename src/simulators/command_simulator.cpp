@@ -82,8 +82,8 @@ std::string CommandSimulator::Attempt(const ParameterView& theta, std::span<doub
     return "cannot write " + params_path;
   }
   SubprocessOptions spawn;
-  spawn.argv = ExpandArgv(
-      options_.argv, params_path, output_path, folder.path, options_.config_directory);
+  spawn.argv =
+      ExpandArgv(options_.argv, params_path, output_path, folder.path, options_.config_directory);
   spawn.working_directory = folder.path;
   spawn.pipe_stdin = options_.params == Transport::kStdin;
   spawn.stderr_path = stderr_path;
@@ -124,7 +124,8 @@ std::string CommandSimulator::Attempt(const ParameterView& theta, std::span<doub
   if (options_.results == Transport::kFile) {
     source = "output file";
     try {
-      text = ReadBoundedFile(output_path, kMaxSimulatorOutputBytes, "output file", ErrorKind::kData);
+      text =
+          ReadBoundedFile(output_path, kMaxSimulatorOutputBytes, "output file", ErrorKind::kData);
     } catch (const Error&) {
       return "exited with status 0 but wrote no readable output file" + StderrTail(stderr_path);
     }

@@ -22,7 +22,9 @@ bool ExternalSimulatorOptions::IsValid(SimulatorKind kind, std::string* why) con
   };
   if (kind == SimulatorKind::kSensor) return fail("kind is the built-in sensor, not external");
   if (argv.empty() || argv.front().empty()) return fail("argv is empty; name the program");
-  if (output_size < 1) return fail("output_size = " + std::to_string(output_size) + "; must be >= 1");
+  if (output_size < 1) {
+    return fail("output_size = " + std::to_string(output_size) + "; must be >= 1");
+  }
   if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) return fail("timeout_s must be >= 0");
   if (!(startup_timeout_s >= 0.0) || !std::isfinite(startup_timeout_s)) {
     return fail("startup_timeout_s must be >= 0");

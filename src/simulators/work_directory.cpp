@@ -30,7 +30,7 @@ WorkDirectory::~WorkDirectory() {
 
 std::string WorkDirectory::MakeSubfolder(const std::string& prefix) const {
   for (int attempt = 0; attempt < 1000; ++attempt) {
-    const std::string sub = path_ + "/" + prefix + "-" + std::to_string(next_.fetch_add(1));
+    std::string sub = path_ + "/" + prefix + "-" + std::to_string(next_.fetch_add(1));
     // mkdir fails on anything that exists: a subfolder left by an earlier, killed run is never
     // reused (nor deleted).
     if (::mkdir(sub.c_str(), 0755) == 0) return sub;

@@ -44,7 +44,8 @@ class WorkerSimulator::Worker {
     while (std::getline(in, line)) {
       if (!line.empty()) last = line;
     }
-    return "the worker " + Describe(status) + (last.empty() ? "" : "; stderr: " + Printable(last, 160));
+    return "the worker " + Describe(status) +
+           (last.empty() ? "" : "; stderr: " + Printable(last, 160));
   }
 
  private:
@@ -112,8 +113,8 @@ WorkerSimulator::~WorkerSimulator() {
   idle_.clear();  // before work_ goes: each worker removes its folder
 }
 
-std::unique_ptr<WorkerSimulator::Worker> WorkerSimulator::Start(std::string* reason,
-                                                               std::string* first_handshake) const {
+std::unique_ptr<WorkerSimulator::Worker> WorkerSimulator::Start(
+    std::string* reason, std::string* first_handshake) const {
   std::unique_ptr<Worker> worker;
   try {
     const std::string folder = work_.MakeSubfolder("worker");
@@ -193,7 +194,7 @@ void WorkerSimulator::Simulate(const ParameterView& theta,
     if (!worker) {
       worker = Start(&reason, nullptr);
       if (!worker) {
-        reason = "a new worker did not start: " + reason;
+        reason.insert(0, "a new worker did not start: ");
         continue;
       }
     }

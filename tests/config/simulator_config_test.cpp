@@ -49,8 +49,8 @@ TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
   EXPECT_EQ(c.space.dimension, 6);
   EXPECT_EQ(c.space.names.front(), "clamp 1");
-  EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest).find(
-                "dir/run.toml:3: simulator.argv: unknown key"),
+  EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest)
+                .find("dir/run.toml:3: simulator.argv: unknown key"),
             0u);
 }
 
@@ -74,8 +74,8 @@ TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
 }
 
 TEST(SimulatorConfig, CoordinatesFromACsvFile) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("combabc-coords-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("combabc-coords-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "c.csv") << "x_m,comment\n0.0,a\n0.05\n\n0.2,b\n";
   std::string text = kWorker;
@@ -105,15 +105,15 @@ TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {
   EXPECT_EQ(ErrorOf("[model]\nlength = 1\n" + kWorker + kRest)
                 .rfind("dir/run.toml:1: model: [model] configures the built-in sensor", 0),
             0u);
-  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"shell\"")).find(
-                "simulator.kind: unknown simulator kind 'shell'; expected one of \"sensor\", "
-                "\"command\", \"worker\""),
+  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"shell\""))
+                .find("simulator.kind: unknown simulator kind 'shell'; expected one of \"sensor\", "
+                      "\"command\", \"worker\""),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("argv = [\"python3\", \"{config_dir}/w.py\"]\n", "")).find(
-                "simulator.argv: missing required key"),
+  EXPECT_NE(ErrorOf(with("argv = [\"python3\", \"{config_dir}/w.py\"]\n", ""))
+                .find("simulator.argv: missing required key"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"command\"")).find(
-                "simulator.argv: argv has no {params}"),
+  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"command\""))
+                .find("simulator.argv: argv has no {params}"),
             std::string::npos);
   EXPECT_NE(ErrorOf(with("names = [\"a\", \"b\", \"c\"]", "names = [\"a\", \"a\"]"))
                 .find("simulator.bits.names: 'a' appears twice"),
@@ -121,8 +121,9 @@ TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {
   EXPECT_NE(ErrorOf(with("[0.0, 0.1, 0.2]", "[0.0, 0.2, 0.1]"))
                 .find("simulator.outputs.coordinates: must be strictly increasing (entry 2)"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("timeout = 2.5", "params = \"file\"")).find("simulator.params: unknown key"),
-            std::string::npos)
+  EXPECT_NE(
+      ErrorOf(with("timeout = 2.5", "params = \"file\"")).find("simulator.params: unknown key"),
+      std::string::npos)
       << "params is a command key";
 }
 

@@ -30,9 +30,11 @@ class ExternalSimulatorCli : public ::testing::Test {
     }
     std::string text = ReadFile(kExample / name);
     text = std::regex_replace(text, std::regex("waves = 3"), "waves = 2");
+    text = std::regex_replace(text,
+                              std::regex("accepted_per_wave = 40"),
+                              "accepted_per_wave = " + std::to_string(accepted));
     text = std::regex_replace(
-        text, std::regex("accepted_per_wave = 40"), "accepted_per_wave = " + std::to_string(accepted));
-    text = std::regex_replace(text, std::regex("directory = \"results-[a-z]+\""), "directory = \"out\"");
+        text, std::regex("directory = \"results-[a-z]+\""), "directory = \"out\"");
     std::ofstream(dir_ / name) << text;
     return dir_ / name;
   }

@@ -107,10 +107,11 @@ TEST_F(CommandSimulatorTest, ArgumentsAndPathsWithShellMetacharactersArriveLiter
   std::vector<std::string> args = {run_ / "args.txt"};
   args.insert(args.end(), tricky.begin(), tricky.end());
   args.emplace_back("{output}");
-  ExternalSimulatorOptions o = ShOptions(
-      run_, R"(out=$1; shift; printf '%s\n' "$@" > "$out"; for a; do last=$a; done
+  ExternalSimulatorOptions o =
+      ShOptions(run_,
+                R"(out=$1; shift; printf '%s\n' "$@" > "$out"; for a; do last=$a; done
 echo 1 2 3 > "$last")",
-      args);
+                args);
   o.results = Transport::kFile;
   o.params = Transport::kStdin;
   CommandSimulator s(o);
@@ -132,8 +133,8 @@ echo 1 2 3 > "$last")",
 }
 
 TEST_F(CommandSimulatorTest, ParametersAsJsonOnStdinAndResultsAsJson) {
-  ExternalSimulatorOptions o = ShOptions(run_, "cat > \"$1\"; echo '[1, 2.5e-3,\n -3]'",
-                                         {run_ / "params.json"});
+  ExternalSimulatorOptions o =
+      ShOptions(run_, "cat > \"$1\"; echo '[1, 2.5e-3,\n -3]'", {run_ / "params.json"});
   o.params = Transport::kStdin;
   o.results_format = DataFormat::kJson;
   o.real_names = {"k \"f\"", "scale"};
@@ -148,8 +149,7 @@ TEST_F(CommandSimulatorTest, ParametersAsJsonOnStdinAndResultsAsJson) {
   ExternalSimulatorOptions bad = o;
   bad.argv = {"sh", "-c", "printf '[1,\\n2 3]'"};
   CommandSimulator b(bad);
-  EXPECT_EQ(Reason(b, Bits("000", {1, 2}), &out),
-            "stdout: line 2: expected ',' or ']', got '3]'");
+  EXPECT_EQ(Reason(b, Bits("000", {1, 2}), &out), "stdout: line 2: expected ',' or ']', got '3]'");
 }
 
 TEST_F(CommandSimulatorTest, RetriesRunAFailedCallAgain) {
@@ -213,11 +213,13 @@ TEST_F(CommandSimulatorTest, ThreadsCallItConcurrently) {
   CommandSimulator s(Faulty());
   std::atomic<int> ok{0};
   std::vector<std::thread> threads;
+  threads.reserve(4);
   for (int t = 0; t < 4; ++t) {
     threads.emplace_back([&] {
       std::vector<double> out;
       for (int i = 0; i < 5; ++i) {
-        if (Reason(s, Bits(i % 2 ? "000" : "100"), &out) == (i % 2 ? "" : "stdout: returned 2 values; expected 3")) {
+        if (Reason(s, Bits(i % 2 ? "000" : "100"), &out) ==
+            (i % 2 ? "" : "stdout: returned 2 values; expected 3")) {
           ++ok;
         }
       }

@@ -147,6 +147,7 @@ TEST_F(WorkerSimulatorTest, ThreadsEachUseTheirOwnWorker) {
   WorkerSimulator s(Faulty());
   std::atomic<int> ok{0};
   std::vector<std::thread> threads;
+  threads.reserve(4);
   for (int t = 0; t < 4; ++t) {
     threads.emplace_back([&] {
       std::vector<double> out;

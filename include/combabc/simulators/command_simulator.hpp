@@ -28,7 +28,6 @@ class CommandSimulator : public Simulator {
 
   ExternalSimulatorOptions options_;
   WorkDirectory work_;
-
 };
 
 }  // namespace combabc

@@ -65,9 +65,9 @@ struct ExternalSimulatorOptions {
   double timeout_s = 60.0;  // per call (command) or per request (worker); 0 = none
   int retries = 0;          // further attempts after a failed one before the candidate fails
   // Command simulator only.
-  Transport params = Transport::kFile;       // kFile ({params} in argv) or kStdin
+  Transport params = Transport::kFile;  // kFile ({params} in argv) or kStdin
   DataFormat params_format = DataFormat::kJson;
-  Transport results = Transport::kStdout;    // kStdout or kFile ({output} in argv)
+  Transport results = Transport::kStdout;  // kStdout or kFile ({output} in argv)
   DataFormat results_format = DataFormat::kCsv;
   // Worker simulator only: time for a new worker to print its handshake.
   double startup_timeout_s = 60.0;
