@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <thread>
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
@@ -120,6 +121,48 @@ TEST_F(ExternalSimulatorCli, AWorkerThatFailsItsHandshakeIsAConfigErrorAndLeaves
   EXPECT_NE(r.err.find("it declares '20' outputs; the config declares 21"), std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out")) << "no output folder left";
+}
+
+// A worker run killed mid-wave (SIGKILL: its workers see their stdin close and exit) resumes to the
+// uninterrupted run's history. The worker sleeps 3 ms per request so that the run can be caught
+// mid-wave.
+TEST_F(ExternalSimulatorCli, AWorkerRunKilledMidWaveResumesToTheUninterruptedHistory) {
+  std::string config = Config("worker.toml", 30);
+  std::string worker = ReadFile(dir_ / "worker.py");
+  const std::string loop = "for line in sys.stdin:";
+  worker.replace(worker.find(loop), loop.size(), "import time\nfor line in sys.stdin:\n    time.sleep(0.003)");
+  std::ofstream(dir_ / "worker.py") << worker;
+  std::string text = ReadFile(config);
+  text.replace(text.find("seed = 11"), 9, "seed = 11\nbatch_size = 4\nthreads = 1");
+  std::ofstream(config) << text;
+
+  const auto whole = RunCli({"run", config, "-o", dir_ / "whole", "--no-report"}, dir_.path());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const std::string killed_db = dir_ / "killed/history.sqlite";
+  const pid_t pid = SpawnCli({"run", config, "-o", dir_ / "killed", "--no-report"}, dir_.path());
+  ASSERT_GT(pid, 0);
+  bool killed = false;
+  for (int i = 0; i < 20000 && !killed; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    try {
+      const auto point = HistoryStore::Open(killed_db, true).LoadResumePoint();
+      if (point.has_partial && point.partial_wave >= 1 && !point.partial_accepted.empty()) {
+        killed = ::kill(pid, SIGKILL) == 0;
+      }
+    } catch (const std::exception&) {
+      // Not created yet, or mid-write: try again.
+    }
+  }
+  const auto dead = WaitCli(pid, dir_.path());
+  ASSERT_TRUE(killed) << "the run finished before it could be killed";
+  ASSERT_EQ(dead.exit_code, 128 + SIGKILL);
+  const auto resumed = RunCli({"resume", killed_db, "--no-report"}, dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(HistoryStore::Open(dir_ / "whole/history.sqlite", true).LoadHistory(),
+                          HistoryStore::Open(killed_db, true).LoadHistory(),
+                          &where))
+      << where;
 }
 
 // README.md's "Bring your own simulator" shows examples/custom-simulator/worker.py verbatim, so
