@@ -1,12 +1,13 @@
 // The non-sampling jobs: simulate one configuration, export a history (the report: report.cpp).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/export.hpp"
-#include "combabc/plate/sensor_model.hpp"
 #include "combabc/services/calibration.hpp"
+#include "services/simulator_factory.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -23,15 +24,27 @@ void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
                            const std::string& output_csv,
                            bool overwrite) {
-  const auto config = LoadConfig(config_path);
-  // The raw amplitude in metres; the normalised column is derived below. One precompute only.
-  auto options = config.model;
-  options.normalise = false;
-  const int num_clamps = 2 * options.clamps_per_edge;  // checked before the costly precompute
-  if (static_cast<int>(clamps.size()) != num_clamps) {
+  auto config = LoadConfig(config_path);
+  const bool sensor = config.simulator.kind == SimulatorKind::kSensor;
+  // The nominal model: the sensor at its [model] values; an external simulator would need values
+  // for its continuous parameters, which this command does not take.
+  if (!config.reals.empty() && !sensor) {
     throw Error(ErrorKind::kUsage,
-                "has " + std::to_string(clamps.size()) + " characters; the model has " +
-                    std::to_string(num_clamps) + " clamps (one 0/1 per clamp, 1 = fixed)",
+                "the simulator has continuous parameters ([parameters]); 'combabc simulate' "
+                "takes only the bits",
+                config_path);
+  }
+  config.reals.clear();
+  // The sensor's raw amplitude in metres; the normalised column is derived below.
+  config.model.normalise = false;
+  const int dimension = config.space.dimension;  // checked before the costly precompute
+  if (static_cast<int>(clamps.size()) != dimension) {
+    throw Error(ErrorKind::kUsage,
+                "has " + std::to_string(clamps.size()) + " characters; the " +
+                    (sensor ? "model has " + std::to_string(dimension) +
+                                  " clamps (one 0/1 per clamp, 1 = fixed)"
+                            : "simulator has " + std::to_string(dimension) +
+                                  " bits (one 0/1 per bit, in [simulator.bits] order)"),
                 "",
                 0,
                 "--clamps");
@@ -51,16 +64,27 @@ void SimulateConfiguration(const std::string& config_path,
   // A unique temporary beside the target, renamed at the end: no partial CSV, nothing followed,
   // and an existing file refused before the precompute rather than after it.
   AtomicFile out(output_csv, overwrite);
-  const plate::SensorModel raw(options);
-  std::vector<double> w(static_cast<std::size_t>(raw.num_outputs()));
-  raw.Profile(bits, w);
+  const fs::path csv(output_csv);
+  const BuiltSimulator built = MakeSimulator(
+      config, (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string());
+  const SimulatorOutputs& outputs = config.simulator.outputs;
+  std::vector<double> w(static_cast<std::size_t>(outputs.size()));
+  RandomStream rng(config.smc.seed, 0, 0);
+  const std::vector<double> no_reals;
+  try {
+    built.simulator->Simulate({bits, no_reals}, rng, w);
+  } catch (const SimulationFailed& e) {
+    throw Error(
+        ErrorKind::kSoftware, std::string("the simulation failed: ") + e.what(), config_path);
+  }
   double peak = 0.0;
-  for (double v : w) peak = std::max(peak, v);
+  for (double v : w) peak = std::max(peak, std::abs(v));
 
   out.out().precision(10);
-  out.out() << "position_m,displacement_m,normalised\n";
+  // The sensor's values are metres; an external simulator's are in its own unit.
+  out.out() << "position_m," << outputs.name << (sensor ? "_m" : "") << ",normalised\n";
   for (std::size_t i = 0; i < w.size(); ++i) {
-    out.out() << raw.output_positions()[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0)
+    out.out() << outputs.coordinates[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0)
               << '\n';
   }
   out.Commit();

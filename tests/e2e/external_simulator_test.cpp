@@ -123,6 +123,22 @@ TEST_F(ExternalSimulatorCli, AWorkerThatFailsItsHandshakeIsAConfigErrorAndLeaves
   EXPECT_FALSE(fs::exists(dir_ / "out")) << "no output folder left";
 }
 
+TEST_F(ExternalSimulatorCli, SimulateRunsOneConfigurationThroughTheDeclaredSimulator) {
+  const std::string config = Config("worker.toml", 10);
+  const auto r =
+      RunCli({"simulate", config, "--clamps", "111111", "-o", dir_ / "p.csv"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string csv = ReadFile(dir_ / "p.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "position_m,deflection,normalised");
+  EXPECT_EQ(CountLines(csv), 22);
+  EXPECT_NE(csv.find("\n0.6,0.05,1\n"), std::string::npos) << csv;  // all fixed: the baseline
+  EXPECT_FALSE(fs::exists(dir_ / "p.simulate.work"));
+  const auto bad =
+      RunCli({"simulate", config, "--clamps", "1111", "-o", dir_ / "q.csv"}, dir_.path());
+  EXPECT_EQ(bad.exit_code, 64);
+  EXPECT_NE(bad.err.find("the simulator has 6 bits"), std::string::npos) << bad.err;
+}
+
 // A worker run killed mid-wave (SIGKILL: its workers see their stdin close and exit) resumes to the
 // uninterrupted run's history. The worker sleeps 3 ms per request so that the run can be caught
 // mid-wave.
@@ -130,7 +146,8 @@ TEST_F(ExternalSimulatorCli, AWorkerRunKilledMidWaveResumesToTheUninterruptedHis
   std::string config = Config("worker.toml", 30);
   std::string worker = ReadFile(dir_ / "worker.py");
   const std::string loop = "for line in sys.stdin:";
-  worker.replace(worker.find(loop), loop.size(), "import time\nfor line in sys.stdin:\n    time.sleep(0.003)");
+  worker.replace(
+      worker.find(loop), loop.size(), "import time\nfor line in sys.stdin:\n    time.sleep(0.003)");
   std::ofstream(dir_ / "worker.py") << worker;
   std::string text = ReadFile(config);
   text.replace(text.find("seed = 11"), 9, "seed = 11\nbatch_size = 4\nthreads = 1");

@@ -79,9 +79,12 @@ struct EnumerateOutcome {
 // without final ones in the config: Error kUsage.
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress = nullptr);
 
-// One clamp configuration ("0110..." with one character per clamp, 1 = fixed) through the
-// config's sensor model, written as CSV (position_m, displacement, and the normalised profile).
-// An existing output_csv is refused (kCantCreate) unless `overwrite`.
+// One bit configuration ("0110..." with one character per bit; for the sensor one per clamp,
+// 1 = fixed) through the config's simulator at its nominal continuous values, written as CSV:
+// position_m (the output coordinates), the output (the sensor's: displacement_m, raw metres) and
+// the profile normalised by its largest magnitude. An external simulator works in
+// "<csv stem>.simulate.work" beside the CSV. An existing output_csv is refused (kCantCreate)
+// unless `overwrite`.
 void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
                            const std::string& output_csv,
