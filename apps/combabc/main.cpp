@@ -102,7 +102,9 @@ int main(int argc, char** argv) try {
   bool overwrite_profile = false;
   auto* simulate = app.add_subcommand("simulate", "Simulate one bit (clamp) configuration to CSV");
   simulate->add_option("CONFIG", sim_config, "Config file (its simulator is used)")->required();
-  simulate->add_option("--clamps", clamps, "One 0/1 per bit (the sensor: per clamp, 1 = fixed), e.g. 0110...")
+  simulate
+      ->add_option(
+          "--clamps", clamps, "One 0/1 per bit (the sensor: per clamp, 1 = fixed), e.g. 0110...")
       ->required();
   simulate->add_option("-o,--output", sim_out, "CSV to write (default profile.csv)");
   simulate->add_flag("--overwrite", overwrite_profile, "Replace an existing CSV at that path");
