@@ -303,6 +303,17 @@ def curve_handles(n, run):
     return handles
 
 
+def output_labels(run):
+    """Axis labels from the simulator's declaration: the sensor's |w| along the sensor, or an
+    external simulator's declared output name ([simulator.outputs] name) at its coordinates."""
+    simulator = run_config(run).get("simulator", {})
+    if simulator.get("kind", "sensor") == "sensor":
+        return "Position along sensor (cm)", "Normalised |w|"
+    name = str(simulator.get("outputs", {}).get("name", "output"))
+    normalise = run_config(run).get("data", {}).get("normalise", True)
+    return "Position (cm)", ("Normalised " if normalise else "") + name
+
+
 def draw_curves(ax, w, run):
     curves = w.curves
     x = run["x_cm"]
@@ -320,8 +331,9 @@ def draw_curves(ax, w, run):
     top = max(1.0, float(np.nanmax(curves)) if n else 1.0,
               float(run["measured_y"].max()) if run["measured_y"].size else 1.0)
     ax.set_ylim(0.0, 1.05 * top)
-    ax.set_xlabel("Position along sensor (cm)")
-    ax.set_ylabel("Normalised |w|")
+    xlabel, ylabel = output_labels(run)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.grid(True, linewidth=0.4, alpha=0.4)
 
 

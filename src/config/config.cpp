@@ -56,6 +56,11 @@ void ParseData(TableReader& root, CalibrationConfig* c) {
       if (!std::isfinite(*impact)) g->Fail("impact_position", "must be finite");
       e.impact_position = *impact * unit;
     }
+    if (e.enabled && !g->Has("impact_position") && c->simulator.kind != SimulatorKind::kSensor) {
+      g->Fail("impact_position",
+              "missing required key: the default is the sensor's load position, and this run's "
+              "simulator is not the sensor");
+    }
     e.fit_offset = g->Bool("fit_offset").value_or(e.fit_offset);
     e.fit_points = g->IntegerIn("fit_points", e.fit_points, e.fit_offset ? 3 : 2, 100000);
     if (const auto spacing = g->Number("spacing")) {

@@ -125,6 +125,10 @@ TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {
       ErrorOf(with("timeout = 2.5", "params = \"file\"")).find("simulator.params: unknown key"),
       std::string::npos)
       << "params is a command key";
+  // The Gaussian extension's default centre is the sensor's load: another simulator must say.
+  EXPECT_NE(ErrorOf(kWorker + kRest + "[data.gaussian_extension]\nfit_points = 3\n")
+                .find("data.gaussian_extension.impact_position: missing required key"),
+            std::string::npos);
 }
 
 }  // namespace
