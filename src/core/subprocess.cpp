@@ -169,16 +169,20 @@ bool Subprocess::Write(std::string_view data, Deadline deadline) {
 
 void Subprocess::CloseInput() { CloseFd(stdin_fd_); }
 
-bool Subprocess::WaitReadable(int fd, Deadline deadline, bool* exited) {
+bool Subprocess::WaitReadable(int fd, Deadline deadline, bool* exited, bool* readable) {
   pollfd p[2] = {{fd, POLLIN, 0}, {pidfd_, POLLIN, 0}};
+  // Once the exit was seen and the group killed, only the pipe is worth waiting for.
+  const nfds_t n = group_killed_ ? 1 : 2;
+  if (group_killed_) *exited = true;
   for (;;) {
-    const int r = ::poll(static_cast<pollfd*>(p), 2, RemainingMs(deadline));
+    const int r = ::poll(static_cast<pollfd*>(p), n, RemainingMs(deadline));
     if (r < 0 && errno == EINTR) continue;
     if (r == 0) {
       timed_out_ = true;
       return false;
     }
     if ((p[1].revents & POLLIN) != 0) *exited = true;
+    *readable = p[0].revents != 0;  // data, end of file or an error: read() will not block
     return true;
   }
 }
@@ -194,8 +198,11 @@ ReadStatus Subprocess::ReadLine(std::string* line, std::size_t max_bytes, Deadli
     }
     if (buffer_.size() > max_bytes) return ReadStatus::kTooLong;
     bool exited = false;
-    if (!WaitReadable(stdout_fd_, deadline, &exited)) return ReadStatus::kTimeout;
-    const ssize_t n = ::read(stdout_fd_, static_cast<char*>(chunk), sizeof chunk);
+    bool readable = false;
+    if (!WaitReadable(stdout_fd_, deadline, &exited, &readable)) return ReadStatus::kTimeout;
+    // A child that exited with nothing more to read has said all it will, even if a grandchild
+    // still holds its stdout open (a blocking read would wait for that grandchild).
+    const ssize_t n = readable ? ::read(stdout_fd_, static_cast<char*>(chunk), sizeof chunk) : 0;
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       *line = buffer_;
@@ -213,13 +220,16 @@ ReadStatus Subprocess::ReadToEnd(std::string* out, std::size_t max_bytes, Deadli
   for (;;) {
     if (out->size() > max_bytes) return ReadStatus::kTooLong;
     bool exited = false;
-    if (!WaitReadable(stdout_fd_, deadline, &exited)) return ReadStatus::kTimeout;
+    bool readable = false;
+    if (!WaitReadable(stdout_fd_, deadline, &exited, &readable)) return ReadStatus::kTimeout;
     if (exited && !group_killed_) {
       // The child is a zombie until reaped, so its pid (= the group id) cannot have been reused:
-      // killing the group now reaches exactly the grandchildren it left behind.
+      // killing the group now reaches exactly the grandchildren it left behind, and with them
+      // every holder of the pipe: end of file follows.
       ::kill(-pid_, SIGKILL);
       group_killed_ = true;
     }
+    if (!readable) continue;
     const ssize_t n = ::read(stdout_fd_, static_cast<char*>(chunk), sizeof chunk);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && errno == EAGAIN) continue;

@@ -122,6 +122,19 @@ TEST_F(WorkerSimulatorTest, AHangingWorkerIsKilledWithItsGroupAndReplaced) {
   EXPECT_EQ(WorkersStarted(), 2);
 }
 
+TEST_F(WorkerSimulatorTest, AWorkerThatDiesLeavingAGrandchildOnItsStdoutFailsAtOnce) {
+  ExternalSimulatorOptions o =
+      ShOptions(run_,
+                "echo 'combabc-worker 1 3 x'; read line; sleep 30 & echo $! > \"$1\"; exit 4",
+                {run_ / "grandchild.pid"});
+  WorkerSimulator s(o);
+  std::vector<double> out;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(Reason(s, Bits("000"), &out), "the worker exited with status 4");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(3));
+  EXPECT_TRUE(Gone(std::stoi(ReadText(run_ / "grandchild.pid"))));
+}
+
 TEST_F(WorkerSimulatorTest, RetriesUseANewWorker) {
   ExternalSimulatorOptions o = Faulty();
   o.retries = 2;

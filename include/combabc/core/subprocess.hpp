@@ -67,7 +67,9 @@ class Subprocess {
   ExitStatus Kill();
 
  private:
-  bool WaitReadable(int fd, Deadline deadline, bool* exited);
+  // Polls fd and the child's exit until the deadline (false: timed out); *exited when the child
+  // has exited, *readable when a read of fd will not block.
+  bool WaitReadable(int fd, Deadline deadline, bool* exited, bool* readable);
   ExitStatus Reap();
 
   pid_t pid_ = -1;
