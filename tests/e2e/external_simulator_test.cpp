@@ -139,6 +139,39 @@ TEST_F(ExternalSimulatorCli, SimulateRunsOneConfigurationThroughTheDeclaredSimul
   EXPECT_NE(bad.err.find("the simulator has 6 bits"), std::string::npos) << bad.err;
 }
 
+// Candidates whose simulation fails (here the worker answers "error" for every configuration
+// starting 11, and crashes for 0111...) are failed simulations of the run, with their reasons,
+// not the run's end: the run completes within its max_failure_fraction.
+TEST_F(ExternalSimulatorCli, FailedSimulationsAreRecordedAndTheRunGoesOn) {
+  std::string config = Config("worker.toml", 10);
+  std::string worker = ReadFile(dir_ / "worker.py");
+  const std::string at = "    try:\n";
+  worker.replace(worker.find(at),
+                 at.size(),
+                 "    if bits.startswith('0111'):\n        sys.exit(3)\n"
+                 "    try:\n        if bits.startswith('11'):\n"
+                 "            raise ValueError('no convergence')\n");
+  std::ofstream(dir_ / "worker.py") << worker;
+  std::string text = ReadFile(config);
+  text.replace(text.find("seed = 11"), 9, "seed = 11\nmax_failure_fraction = 0.6");
+  std::ofstream(config) << text;
+  const auto r = RunCli({"run", config, "--no-report"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const RunHistory h = HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadHistory();
+  EXPECT_GT(h.summary.failures, 0);
+  bool crash = false;
+  bool reported = false;
+  for (const WaveRecord& w : h.waves) {
+    for (const SimulationFailure& f : w.failures) {
+      crash |= f.reason == "the worker exited with status 3";
+      reported |= f.reason == "the worker reported an error: no convergence";
+    }
+  }
+  EXPECT_TRUE(crash);
+  EXPECT_TRUE(reported);
+  EXPECT_FALSE(fs::exists(dir_ / "out/history.work"));
+}
+
 // A worker run killed mid-wave (SIGKILL: its workers see their stdin close and exit) resumes to the
 // uninterrupted run's history. The worker sleeps 3 ms per request so that the run can be caught
 // mid-wave.
