@@ -30,7 +30,7 @@ class ExternalSimulatorCli : public ::testing::Test {
       fs::copy_file(kExample / file, dir_.path() / file, fs::copy_options::overwrite_existing);
     }
     std::string text = ReadFile(kExample / name);
-    text = std::regex_replace(text, std::regex("waves = 3"), "waves = 2");
+    text = std::regex_replace(text, std::regex("waves = 5"), "waves = 2");
     text = std::regex_replace(text,
                               std::regex("accepted_per_wave = 40"),
                               "accepted_per_wave = " + std::to_string(accepted));
