@@ -13,6 +13,7 @@ packages=(
   clang-format clang-tidy
   clang-14 libclang-rt-14-dev  # libFuzzer + sanitizer runtimes for scripts/fuzz.sh (docs/fuzzing.md)
   python3 python3-numpy python3-matplotlib  # report figures (Debian's python3, not a pyenv one)
+  calculix-ccx           # the CalculiX example (examples/sensor-calculix) and its test
   python3-dev pybind11-dev python3-pybind11  # the Python module (COMBABC_PYTHON, docs/python.md)
   python3-pytest python3-pandas             # its tests and DataFrames
   chromium               # the report page's browser test (ctest -L browser), headless
