@@ -61,8 +61,8 @@ class SensorCalculix : public ::testing::Test {
 };
 
 TEST_F(SensorCalculix, EnumerationPutsTheMassOnTheTruth) {
-  const auto r = RunCli({"enumerate", dir_ / "config.toml", "-o", dir_ / "enum", "--no-report", "-q"},
-                        dir_.path());
+  const auto r = RunCli(
+      {"enumerate", dir_ / "config.toml", "-o", dir_ / "enum", "--no-report", "-q"}, dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = ReadCsv(dir_.path() / "enum/history.enumeration/top_configurations.csv");
   // Header: rank,configuration,bits,prior,posterior,d_...; rows by decreasing posterior.
