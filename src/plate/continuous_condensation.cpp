@@ -199,27 +199,12 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   const int m = elements_per_section_;
   const int n_local = (m + 1) * nc_;
   const int nb = 2 * nc_;
-  const bool fixed_a = (state & 1) != 0;
-  const bool fixed_b = (state & 2) != 0;
   // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
   // SectionCondensation::Condense.
-  std::vector<int> boundary_index(n_local, -1);
-  std::vector<int> interior_index(n_local, -1);
-  int n_interior = 0;
-  for (int d = 0; d < n_local; ++d) {
-    if (d < nc_) {
-      boundary_index[d] = d;
-    } else if (d >= m * nc_) {
-      boundary_index[d] = d - (m - 1) * nc_;
-    } else {
-      const int dofs_per_node = nc_ / (ny_ + 1);
-      const int j = (d / dofs_per_node) % (ny_ + 1);
-      const int bit = 1 << (d % dofs_per_node);
-      const bool fixed = (fixed_a && j == 0 && (fixed_mask_a_ & bit)) ||
-                         (fixed_b && j == ny_ && (fixed_mask_b_ & bit));
-      if (!fixed) interior_index[d] = n_interior++;
-    }
-  }
+  std::vector<int> boundary_index;
+  std::vector<int> interior_index;
+  const int n_interior = ClassifySectionDofs(
+      m, nc_, ny_, state, fixed_mask_a_, fixed_mask_b_, &boundary_index, &interior_index);
   // The section matrices split by physics: K_base (K_real, + i K_imag for the layers' own loss
   // factors) and M_1. Sections of one mesh have equal element matrices.
   StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];

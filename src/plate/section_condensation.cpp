@@ -291,27 +291,11 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   const int m = elements_per_section_;
   const int n_local = (m + 1) * nc_;
   const int offset = section * m * nc_;
-  const bool fixed_a = (state & 1) != 0;
-  const bool fixed_b = (state & 2) != 0;
   // Classify local dofs: boundary (index into [left; right]), interior (index into I), or fixed.
-  constexpr int kFixed = -1;
-  std::vector<int> boundary_index(n_local, kFixed);
-  std::vector<int> interior_index(n_local, kFixed);
-  int n_interior = 0;
-  for (int d = 0; d < n_local; ++d) {
-    if (d < nc_) {
-      boundary_index[d] = d;
-    } else if (d >= m * nc_) {
-      boundary_index[d] = d - (m - 1) * nc_;
-    } else {
-      const int dofs_per_node = nc_ / (ny_ + 1);
-      const int j = (d / dofs_per_node) % (ny_ + 1);
-      const int bit = 1 << (d % dofs_per_node);
-      const bool fixed = (fixed_a && j == 0 && (fixed_mask_a_ & bit)) ||
-                         (fixed_b && j == ny_ && (fixed_mask_b_ & bit));
-      if (!fixed) interior_index[d] = n_interior++;
-    }
-  }
+  std::vector<int> boundary_index;
+  std::vector<int> interior_index;
+  const int n_interior = ClassifySectionDofs(
+      m, nc_, ny_, state, fixed_mask_a_, fixed_mask_b_, &boundary_index, &interior_index);
   const int nb = 2 * nc_;
   const std::complex<double> mass_coefficient = plate.MassCoefficient(frequency_hz);
   const std::complex<double> i_unit(0.0, 1.0);

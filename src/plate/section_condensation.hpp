@@ -61,6 +61,41 @@ inline void CrossSectionFreeDofs(int nc,
   }
 }
 
+// The local dofs of one clamp section of m elements ((m + 1) cross-sections of nc dofs):
+// boundary[d] indexes [left; right] for the first and last cross-sections, interior[d] indexes
+// the section's interior unknowns, -1 otherwise (a dof fixed by a clamp); returns the interior
+// count. `state` bit 0 / bit 1: the edge-A / edge-B clamp is fixed. Shared by both condensations.
+inline int ClassifySectionDofs(int m,
+                               int nc,
+                               int ny,
+                               int state,
+                               std::uint8_t fixed_mask_a,
+                               std::uint8_t fixed_mask_b,
+                               std::vector<int>* boundary,
+                               std::vector<int>* interior) {
+  const int n_local = (m + 1) * nc;
+  const bool fixed_a = (state & 1) != 0;
+  const bool fixed_b = (state & 2) != 0;
+  const int dofs_per_node = nc / (ny + 1);
+  boundary->assign(n_local, -1);
+  interior->assign(n_local, -1);
+  int n_interior = 0;
+  for (int d = 0; d < n_local; ++d) {
+    if (d < nc) {
+      (*boundary)[d] = d;
+    } else if (d >= m * nc) {
+      (*boundary)[d] = d - (m - 1) * nc;
+    } else {
+      const int j = (d / dofs_per_node) % (ny + 1);
+      const int bit = 1 << (d % dofs_per_node);
+      const bool fixed = (fixed_a && j == 0 && (fixed_mask_a & bit)) ||
+                         (fixed_b && j == ny && (fixed_mask_b & bit));
+      if (!fixed) (*interior)[d] = n_interior++;
+    }
+  }
+  return n_interior;
+}
+
 class SectionCondensation {
  public:
   // `plate` must have num_sections * elements_per_section elements along x. Masks: dofs fixed on
