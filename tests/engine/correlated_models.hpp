@@ -74,7 +74,12 @@ struct BitMoments {
 inline BitMoments MomentsFrom(const std::vector<std::vector<double>>& second,
                               std::vector<double> mean) {
   const std::size_t d = mean.size();
-  BitMoments m{std::move(mean), std::vector<std::vector<double>>(d, std::vector<double>(d, 0.0))};
+  // Filled member by member: the aggregate initialiser trips GCC 12's -Wfree-nonheap-object (a
+  // false positive) at -O2 under ThreadSanitizer.
+  BitMoments m;
+  m.mean = std::move(mean);
+  m.corr.resize(d);
+  for (auto& row : m.corr) row.assign(d, 0.0);
   for (std::size_t a = 0; a < d; ++a) {
     for (std::size_t b = 0; b < d; ++b) {
       const double va = m.mean[a] * (1 - m.mean[a]), vb = m.mean[b] * (1 - m.mean[b]);
