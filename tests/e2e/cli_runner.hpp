@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 extern "C" char** environ;
@@ -46,10 +47,9 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
-// Starts the CLI with stdout/stderr redirected to files in `dir`; returns the child's pid.
-inline pid_t SpawnCli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
-  std::vector<std::string> all = {COMBABC_CLI};
-  all.insert(all.end(), args.begin(), args.end());
+// Starts `argv` (looked up in PATH) with stdout/stderr redirected to cli.stdout / cli.stderr in
+// `dir`; returns the child's pid, or -1.
+inline pid_t SpawnWithOutputIn(std::vector<std::string> all, const std::filesystem::path& dir) {
   std::vector<char*> argv;
   argv.reserve(all.size() + 1);
   for (auto& a : all) argv.push_back(a.data());
@@ -60,9 +60,16 @@ inline pid_t SpawnCli(const std::vector<std::string>& args, const std::filesyste
   posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   pid_t pid = -1;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
   posix_spawn_file_actions_destroy(&actions);
   return pid;
+}
+
+// Starts the CLI with stdout/stderr redirected to files in `dir`; returns the child's pid.
+inline pid_t SpawnCli(const std::vector<std::string>& args, const std::filesystem::path& dir) {
+  std::vector<std::string> all = {COMBABC_CLI};
+  all.insert(all.end(), args.begin(), args.end());
+  return SpawnWithOutputIn(std::move(all), dir);
 }
 
 inline CliResult WaitCli(pid_t pid, const std::filesystem::path& dir) {
