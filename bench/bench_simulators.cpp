@@ -5,15 +5,18 @@
 // run with --as-worker / --as-command, and /bin/echo for the bare spawn.
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
+#include <sched.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <thread>
 
 #include "combabc/simulators/command_simulator.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
@@ -27,7 +30,16 @@ std::string self_path;  // NOLINT: set once in main, before any benchmark
 
 constexpr int kOutputs = 3;
 
-int RunAsWorker() {
+bool PinTo(int cpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  return ::sched_setaffinity(0, sizeof set, &set) == 0;
+}
+
+// With a CPU number, the worker pins itself there (the cross-core benchmark below).
+int RunAsWorker(const char* cpu) {
+  if (cpu != nullptr) PinTo(std::atoi(cpu));
   std::printf("combabc-worker 1 %d bench-trivial\n", kOutputs);
   std::fflush(stdout);
   char line[4096];
@@ -81,6 +93,27 @@ void BM_WorkerRoundTrip(benchmark::State& state) {
 }
 BENCHMARK(BM_WorkerRoundTrip)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
+// The same with combabc's thread on CPU 0 and the worker on CPU 1: the scheduler may otherwise put
+// both on one core, where the exchange is a cheap context switch. Across cores each side's wake-up
+// reaches a CPU that may have gone idle, which on a virtual machine costs tens of microseconds.
+void BM_WorkerRoundTripCrossCore(benchmark::State& state) {
+  cpu_set_t before;
+  ::sched_getaffinity(0, sizeof before, &before);
+  if (std::thread::hardware_concurrency() < 2 || !PinTo(0)) {
+    state.SkipWithError("needs two CPUs");
+    return;
+  }
+  {
+    const Scratch scratch;
+    auto o = Options((scratch.path / "work").string());
+    o.argv = {self_path, "--as-worker", "1"};
+    const combabc::WorkerSimulator worker(o);
+    Call(state, worker);
+  }
+  ::sched_setaffinity(0, sizeof before, &before);
+}
+BENCHMARK(BM_WorkerRoundTripCrossCore)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 // The realistic call: parameters file (JSON), a program that reads nothing and prints 3 values.
 void BM_CommandCall(benchmark::State& state) {
   const Scratch scratch;
@@ -125,7 +158,8 @@ BENCHMARK(BM_BareSpawnEcho)->Unit(benchmark::kMicrosecond)->UseRealTime();
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "--as-worker") == 0) return RunAsWorker();
+  if (argc >= 2 && std::strcmp(argv[1], "--as-worker") == 0)
+    return RunAsWorker(argc >= 3 ? argv[2] : nullptr);
   if (argc >= 2 && std::strcmp(argv[1], "--as-command") == 0) return RunAsCommand();
   self_path = fs::canonical("/proc/self/exe").string();
   benchmark::Initialize(&argc, argv);

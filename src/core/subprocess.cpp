@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
@@ -185,6 +186,18 @@ bool Subprocess::WaitReadable(int fd, Deadline deadline, bool* exited, bool* rea
     *readable = p[0].revents != 0;  // data, end of file or an error: read() will not block
     return true;
   }
+}
+
+bool Subprocess::SpinUntilReadable(std::chrono::nanoseconds budget) {
+  if (buffer_.find('\n') != std::string::npos) return true;
+  const auto end = std::chrono::steady_clock::now() + budget;
+  do {
+    pollfd p{stdout_fd_, POLLIN, 0};
+    if (::poll(&p, 1, 0) > 0) return true;
+    // Lets a worker that shares this CPU run at once instead of at the end of our time slice.
+    ::sched_yield();
+  } while (std::chrono::steady_clock::now() < end);
+  return false;
 }
 
 ReadStatus Subprocess::ReadLine(std::string* line, std::size_t max_bytes, Deadline deadline) {

@@ -56,6 +56,11 @@ class Subprocess {
   // One line of stdout without its '\n'. kEof: stdout closed before a full line (a partial line
   // is left in *line); kTooLong: more than max_bytes without a '\n'.
   ReadStatus ReadLine(std::string* line, std::size_t max_bytes, Deadline deadline);
+  // Checks stdout without sleeping for at most `budget`, true as soon as a read will not block.
+  // A caller expecting a quick answer calls it before ReadLine: a thread that sleeps in poll()
+  // lets its CPU go idle, and waking an idle CPU costs tens of microseconds on a virtual machine
+  // (docs/benchmarks.md, "External simulators").
+  bool SpinUntilReadable(std::chrono::nanoseconds budget);
   // All of stdout up to EOF. When the child itself exits, the rest of its group is killed so that
   // a grandchild holding stdout open cannot stall the read.
   ReadStatus ReadToEnd(std::string* out, std::size_t max_bytes, Deadline deadline);
