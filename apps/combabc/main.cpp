@@ -48,9 +48,29 @@ void PrintOutcome(const combabc::services::RunOutcome& outcome) {
   }
 }
 
+// A build for a newer instruction set (COMBABC_ARCH) dies of SIGILL on an older CPU; say why
+// instead. Checked first thing, before any vectorised code of ours runs.
+bool CpuRunsThisBuild() {
+  const char* missing = nullptr;
+#if defined(__AVX512F__)
+  if (!__builtin_cpu_supports("avx512f")) missing = "AVX-512";
+#endif
+#if defined(__AVX2__)
+  if (!__builtin_cpu_supports("avx2")) missing = "AVX2";
+#endif
+#if defined(__FMA__)
+  if (!__builtin_cpu_supports("fma")) missing = "FMA";
+#endif
+  if (missing == nullptr) return true;
+  std::cerr << "combabc: this build (" COMBABC_VERSION ") needs a CPU with " << missing
+            << "; rebuild with another COMBABC_ARCH (empty: portable)\n";
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
+  if (!CpuRunsThisBuild()) return 70;
   CLI::App app{"combabc " COMBABC_VERSION
                " - combinatorial ABC-SMC calibration of binary (on/off) simulator parameters"};
   app.require_subcommand(1);
