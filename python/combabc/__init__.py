@@ -77,6 +77,10 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
             options.threads = threads
         data = _core.run_smc(what.space, what.reals, what.simulator, what.batch, what.observed,
                              options)
+        # The data's coordinate is the output's index (the NetCDF export's observed_data).
+        data.update(measured_position=np.arange(len(what.observed), dtype=np.float64),
+                    measured_value=what.observed, position_unit="index",
+                    combabc_version=__version__)
         return History(data)
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")

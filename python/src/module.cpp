@@ -95,6 +95,14 @@ py::dict LoadHistory(const std::string& path) {
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["seed"] = metadata.seed;
   result["path"] = path;
+  // What the NetCDF export records beside the particles (History.to_inference_data).
+  result["measured_position"] = metadata.measured.positions;
+  result["measured_value"] = metadata.measured.values;
+  result["position_unit"] = metadata.position_unit;
+  result["combabc_version"] = metadata.combabc_version;
+  result["config_path"] = metadata.config_path;
+  result["config_text"] = metadata.config_text;
+  result["end_time"] = metadata.end_time;
   return result;
 }
 
@@ -163,7 +171,9 @@ py::dict RunSmc(const BinarySpace& bits,
   metadata.reals = reals;
   metadata.distance_components = distance.components();
   metadata.estimator = ToString(options.estimator);
-  return HistoryToDict(history, NamesOf(metadata, history));
+  py::dict result = HistoryToDict(history, NamesOf(metadata, history));
+  result["seed"] = options.seed;
+  return result;
 }
 
 BinarySpace MakeBinarySpace(int dimension,

@@ -110,10 +110,20 @@ struct VerifyOutcome {
 // checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
 VerifyOutcome VerifyHistory(const std::string& history_path);
 
+struct ExportOutcome {
+  std::string directory;
+  std::string netcdf_path;  // empty when no NetCDF file was written
+  std::string note;         // why not, when it was asked for but its Python packages are missing
+};
+
 // CSV + JSON export (docs/history.md); default directory: export/ beside the history; directory
-// rules as for the report (`overwrite`: write into a directory combabc did not write).
-std::string ExportHistory(const std::string& history_path,
-                          const std::string& directory = {},
-                          bool overwrite = false);
+// rules as for the report (`overwrite`: write into a directory combabc did not write). With
+// `netcdf`, also inference_data.nc (ArviZ's InferenceData layout) by
+// scripts/report/combabc_netcdf.py when $COMBABC_PYTHON (default /usr/bin/python3) has xarray and
+// netCDF4; without them the rest is written and `note` says so.
+ExportOutcome ExportHistory(const std::string& history_path,
+                            const std::string& directory = {},
+                            bool overwrite = false,
+                            bool netcdf = true);
 
 }  // namespace combabc::services
