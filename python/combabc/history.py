@@ -53,6 +53,8 @@ class History:
         self.status = data.get("status")
         self.report_directory = data.get("report_directory") or None
         self.seed = data.get("seed")
+        # `enumerate` only: directory, configurations, accepted, evidence, wall_seconds.
+        self.enumeration = data.get("enumeration")
         # The measured data (positions in position_unit); for a Problem, the observed data by
         # index.
         self.measured_position = np.asarray(data.get("measured_position", ()), dtype=np.float64)
