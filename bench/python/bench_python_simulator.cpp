@@ -6,6 +6,8 @@
 #include <pybind11/embed.h>
 
 #include <cmath>
+#include <cstdio>
+#include <exception>
 #include <string>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
@@ -86,10 +88,15 @@ BENCHMARK(BM_PythonSimulatorOverhead)
 }  // namespace
 
 int main(int argc, char** argv) {
-  const py::scoped_interpreter interpreter;
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  try {
+    const py::scoped_interpreter interpreter;
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+  } catch (const std::exception& e) {  // numpy missing, a Python error in the simulator
+    std::fprintf(stderr, "bench_python_simulator: %s\n", e.what());
+    return 1;
+  }
 }
