@@ -15,6 +15,7 @@ See docs/python.md.
 """
 
 import os
+import warnings
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from .history import History, Wave
 __version__ = _core.__version__
 __all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "Problem", "SensorModel",
            "SimulationFailed", "SmcOptions", "ThresholdSchedule", "Wave", "enumerate",
-           "load_history", "make_options", "resume", "run"]
+           "export", "load_history", "make_options", "resume", "run"]
 
 
 class Problem:
@@ -100,6 +101,17 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
 def load_history(path):
     """Reads a history file (RUN.sqlite) written by `combabc run`, `resume` or `enumerate`."""
     return History(_core.load_history(os.fspath(path)))
+
+
+def export(path, directory=None, *, overwrite=False, netcdf=True):
+    """`combabc export RUN.sqlite`: the CSV and JSON files, and inference_data.nc (netcdf=False
+    skips it), into `directory` (default export/ beside the history). Returns the directory. When
+    the NetCDF file cannot be made (no xarray for the report's python) the rest is written and a
+    UserWarning says why, as the CLI's note."""
+    outcome = _core.export(os.fspath(path), os.fspath(directory or ""), overwrite, netcdf)
+    if outcome["note"]:
+        warnings.warn(outcome["note"], stacklevel=2)
+    return outcome["directory"]
 
 
 def resume(path, *, threads=None, report=False):

@@ -209,6 +209,22 @@ py::dict Enumerate(const std::string& config_path,
   return result;
 }
 
+py::dict Export(const std::string& history_path,
+                const std::string& directory,
+                bool overwrite,
+                bool netcdf) {
+  services::ExportOutcome outcome;
+  {
+    const py::gil_scoped_release release;
+    outcome = services::ExportHistory(history_path, directory, overwrite, netcdf);
+  }
+  py::dict result;
+  result["directory"] = outcome.directory;
+  result["netcdf_path"] = outcome.netcdf_path;
+  result["note"] = outcome.note;
+  return result;
+}
+
 // The config's simulator at its nominal values (services::NominalSimulator): SensorModel.
 std::unique_ptr<services::NominalSimulator> MakeNominal(const std::string& config_path,
                                                         const std::string& work_directory) {
@@ -445,6 +461,12 @@ PYBIND11_MODULE(_core, m) {
         py::arg("output_directory") = std::string(),
         py::arg("overwrite") = false,
         py::arg("report") = false);
+  m.def("export",
+        &Export,
+        py::arg("history_path"),
+        py::arg("directory") = std::string(),
+        py::arg("overwrite") = false,
+        py::arg("netcdf") = true);
   m.def("resume",
         &Resume,
         py::arg("history_path"),

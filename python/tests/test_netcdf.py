@@ -127,3 +127,22 @@ def test_no_netcdf_flag_skips_it(exported, tmp_path):
                           capture_output=True, text=True)
     assert done.returncode == 0 and done.stderr == ""
     assert (out / "waves.csv").is_file() and not (out / "inference_data.nc").exists()
+
+
+def test_export_from_python_writes_the_clis_files(exported, tmp_path):
+    history, out = exported
+    directory = combabc.export(history.path, tmp_path / "py")
+    assert directory == str(tmp_path / "py")
+    for name in ("particles.csv", "waves.csv", "marginals.csv", "measured.csv"):
+        assert (tmp_path / "py" / name).read_bytes() == (out / name).read_bytes(), name
+    mine = open_groups(tmp_path / "py" / "inference_data.nc")
+    theirs = open_groups(out / "inference_data.nc")
+    for group in GROUPS:
+        xr.testing.assert_identical(mine[group], theirs[group])
+    # A directory it did not write is refused with the CLI's message.
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    with pytest.raises(combabc.Error, match=r"was not written by combabc"):
+        combabc.export(history.path, foreign)
+    assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
