@@ -146,3 +146,17 @@ def test_export_from_python_writes_the_clis_files(exported, tmp_path):
     with pytest.raises(combabc.Error, match=r"was not written by combabc"):
         combabc.export(history.path, foreign)
     assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
+
+
+def test_a_failing_netcdf_script_fails_the_export_and_writes_nothing(exported, tmp_path):
+    history, _ = exported
+    script = tmp_path / "broken.py"
+    script.write_text('import sys\nprint("combabc_netcdf: broken on purpose", file=sys.stderr)\n'
+                      "sys.exit(65)\n")
+    out = tmp_path / "export"
+    env = dict(os.environ, COMBABC_NETCDF_SCRIPT=str(script))
+    done = subprocess.run([CLI, "export", history.path, "-o", str(out)], capture_output=True,
+                          text=True, env=env)
+    assert done.returncode == 65
+    assert done.stderr == "combabc: data error: inference_data.nc: broken on purpose\n"
+    assert not out.exists()  # no CSV without its NetCDF file, no temporaries
