@@ -16,6 +16,7 @@ packages=(
   calculix-ccx           # the CalculiX example (examples/sensor-calculix) and its test
   python3-dev pybind11-dev python3-pybind11  # the Python module (COMBABC_PYTHON, docs/python.md)
   python3-pytest python3-pandas             # its tests and DataFrames
+  python3-xarray python3-netcdf4            # export's inference_data.nc (ArviZ layout)
   chromium               # the report page's browser test (ctest -L browser), headless
 )
 missing=()

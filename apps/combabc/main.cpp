@@ -143,6 +143,9 @@ int main(int argc, char** argv) try {
   exporter->add_option("RUN.sqlite", history, "History file of the run")->required();
   exporter->add_option("-o,--output", out_dir, "Directory (default: export/ beside the history)");
   exporter->add_flag("--overwrite", overwrite_dir, kOverwriteDir);
+  bool no_netcdf = false;
+  exporter->add_flag(
+      "--no-netcdf", no_netcdf, "Skip inference_data.nc (ArviZ layout; needs python3-xarray)");
 
   auto* verify = app.add_subcommand(
       "verify", "Check a history's integrity (structure, checksums); exit 0 if sound, 65 if not");
@@ -239,8 +242,10 @@ int main(int argc, char** argv) try {
         }
         if (!outcome.ok) return combabc::ExitCode(combabc::ErrorKind::kData);
       } else if (*exporter) {
-        const auto directory = combabc::services::ExportHistory(history, out_dir, overwrite_dir);
-        std::cout << "export: " << directory << "\n";
+        const auto outcome =
+            combabc::services::ExportHistory(history, out_dir, overwrite_dir, !no_netcdf);
+        std::cout << "export: " << outcome.directory << "\n";
+        if (!outcome.note.empty()) std::cerr << "combabc: note: " << outcome.note << "\n";
       }
     } catch (const combabc::Error& e) {
       progress.Clear();

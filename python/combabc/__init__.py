@@ -6,11 +6,16 @@
     space = combabc.BinarySpace(dimension=8, default_prior_one=0.5)
     problem = combabc.Problem(space, simulate, observed=y)  # simulate(bits) -> ndarray[m]
     history = combabc.run(problem, combabc.SmcOptions(...))
+    history = combabc.resume("results/history.sqlite")   # as `combabc resume`
+    history = combabc.enumerate("config.toml")            # as `combabc enumerate`
+    model = combabc.SensorModel("config.toml")            # as `combabc simulate`
+    y = model.profile("0110...")
 
 See docs/python.md.
 """
 
 import os
+import warnings
 
 import numpy as np
 
@@ -20,9 +25,9 @@ from ._core import (BinarySpace, ContinuousParameter, Error, SimulationFailed, S
 from .history import History, Wave
 
 __version__ = _core.__version__
-__all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "Problem",
-           "SimulationFailed", "SmcOptions", "ThresholdSchedule", "Wave", "load_history",
-           "make_options", "run"]
+__all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "Problem", "SensorModel",
+           "SimulationFailed", "SmcOptions", "ThresholdSchedule", "Wave", "enumerate",
+           "export", "load_history", "make_options", "resume", "run"]
 
 
 class Problem:
@@ -34,14 +39,18 @@ class Problem:
     float64[n, m]. observed: the data y (m values); the distance is Euclidean, one threshold
     component named "euclidean". Raise combabc.SimulationFailed for a candidate that failed (a
     NaN output counts as failed too); any other exception ends the run and reaches the caller.
+    rng=True: f also gets the keyword argument rng, a numpy Generator seeded from the candidate's
+    own random stream (batched: a list of n, one per row), so that a stochastic simulator gives the
+    same history for any thread count.
     """
 
-    def __init__(self, space, simulator, observed, reals=(), batch=False):
+    def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False):
         self.space = space
         self.simulator = simulator
         self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.reals = list(reals)
         self.batch = bool(batch)
+        self.rng = bool(rng)
 
 
 def make_options(**fields):
@@ -75,16 +84,101 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
             options = SmcOptions()
         if threads is not None:
             options.threads = threads
-        data = _core.run_smc(what.space, what.reals, what.simulator, what.batch, what.observed,
-                             options)
+        data = _core.run_smc(what.space, what.reals, what.simulator, what.batch, what.rng,
+                             what.observed, options)
+        # The data's coordinate is the output's index (the NetCDF export's observed_data).
+        data.update(measured_position=np.arange(len(what.observed), dtype=np.float64),
+                    measured_value=what.observed, position_unit="index",
+                    combabc_version=__version__)
         return History(data)
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")
     data = _core.run_config(os.fspath(what), -1 if threads is None else threads,
-                            output_directory or "", overwrite, report)
+                            os.fspath(output_directory or ""), overwrite, report)
     return History(data)
 
 
 def load_history(path):
     """Reads a history file (RUN.sqlite) written by `combabc run`, `resume` or `enumerate`."""
     return History(_core.load_history(os.fspath(path)))
+
+
+def export(path, directory=None, *, overwrite=False, netcdf=True):
+    """`combabc export RUN.sqlite`: the CSV and JSON files, and inference_data.nc (netcdf=False
+    skips it), into `directory` (default export/ beside the history). Returns the directory. When
+    the NetCDF file cannot be made (no xarray for the report's python) the rest is written and a
+    UserWarning says why, as the CLI's note."""
+    outcome = _core.export(os.fspath(path), os.fspath(directory or ""), overwrite, netcdf)
+    if outcome["note"]:
+        warnings.warn(outcome["note"], stacklevel=2)
+    return outcome["directory"]
+
+
+def resume(path, *, threads=None, report=False):
+    """Continues an interrupted or killed run from its history file, as `combabc resume` (the
+    result equals an uninterrupted run's); returns its History. A finished run is a combabc.Error
+    (usage)."""
+    return History(_core.resume(os.fspath(path), -1 if threads is None else threads, report))
+
+
+def enumerate(config, *, thresholds=None, threads=None, output_directory=None, overwrite=False,
+              report=False, top=20, max_particles=100000):
+    """The exact ABC posterior of a config's problem by enumerating every configuration, as
+    `combabc enumerate` (thresholds: one per threshold component; default the config's final
+    ones). Returns the History of its one wave; History.enumeration holds directory (the
+    tables), configurations, accepted, evidence and wall_seconds."""
+    data = _core.enumerate(os.fspath(config), [float(t) for t in (thresholds or [])],
+                           -1 if threads is None else threads, os.fspath(output_directory or ""),
+                           overwrite, report, top, max_particles)
+    return History(data)
+
+
+class SensorModel:
+    """The simulator of a config file at its nominal values, as `combabc simulate CONFIG --clamps`
+    runs it: the built-in sensor at its [model] values (or the config's external simulator, which
+    works in "<config stem>.simulate.work" beside the config unless work_directory is given).
+
+    profile(clamps): one configuration, "0110..." (one character per clamp, 1 = fixed) or d
+    values of 0/1, to float64[m]: the sensor's |w| in metres at `positions` (normalised=True:
+    divided by its largest magnitude, the CSV's normalised column). profiles(clamps): n
+    configurations (uint8[n, d] or a list of strings) to float64[n, m]. The GIL is released
+    while the model works.
+    """
+
+    def __init__(self, config, *, work_directory=None):
+        config = os.fspath(config)
+        if work_directory is None:
+            stem = os.path.splitext(os.path.basename(config))[0]
+            work_directory = os.path.join(os.path.dirname(config), stem + ".simulate.work")
+        self.config = config
+        self._model = _core.NominalSimulator(config, os.fspath(work_directory))
+        self.dimension = self._model.dimension
+        self.positions = np.asarray(self._model.positions, dtype=np.float64)
+        self.output_name = self._model.output_name
+
+    def _bits(self, clamps):
+        if isinstance(clamps, str):
+            return self._model.parse(clamps)
+        return np.ascontiguousarray(clamps, dtype=np.uint8)
+
+    def profile(self, clamps, normalised=False):
+        values = self._model.simulate(self._bits(clamps))
+        return _normalised(values) if normalised else values
+
+    def profiles(self, clamps, normalised=False):
+        if not isinstance(clamps, np.ndarray) and all(isinstance(c, str) for c in clamps):
+            clamps = np.stack([self._model.parse(c) for c in clamps]) if clamps else \
+                np.zeros((0, self.dimension), dtype=np.uint8)
+        bits = np.ascontiguousarray(clamps, dtype=np.uint8)
+        if bits.ndim != 2:
+            raise ValueError(f"clamps: expected an array of shape (n, {self.dimension})")
+        values = self._model.simulate(bits)
+        return np.stack([_normalised(v) for v in values]) if normalised and len(values) else values
+
+    def __repr__(self):
+        return f"SensorModel({self.config!r}: {self.dimension} clamps, {len(self.positions)} outputs)"
+
+
+def _normalised(values):
+    peak = np.max(np.abs(values)) if values.size else 0.0
+    return values / peak if peak > 0 else np.zeros_like(values)

@@ -4,6 +4,8 @@ The column names follow `combabc export` (docs/history.md, "Export"): waves are 
 the DataFrames as in the CSV files, bits and indices stay 0-based.
 """
 
+import os
+
 import numpy as np
 
 
@@ -50,6 +52,16 @@ class History:
         self.path = data.get("path")
         self.status = data.get("status")
         self.report_directory = data.get("report_directory") or None
+        self.seed = data.get("seed")
+        # `enumerate` only: directory, configurations, accepted, evidence, wall_seconds.
+        self.enumeration = data.get("enumeration")
+        # The measured data (positions in position_unit); for a Problem, the observed data by
+        # index.
+        self.measured_position = np.asarray(data.get("measured_position", ()), dtype=np.float64)
+        self.measured_value = np.asarray(data.get("measured_value", ()), dtype=np.float64)
+        self.position_unit = data.get("position_unit") or "m"
+        self._provenance = {key: data.get(key) or "" for key in
+                            ("combabc_version", "config_path", "config_text", "end_time")}
 
     @property
     def dimension(self):
@@ -111,6 +123,33 @@ class History:
                        failures=len(w.failure_index))
             rows.append(row)
         return pd.DataFrame(rows)
+
+    def to_inference_data(self):
+        """The final wave in ArviZ's InferenceData layout: a dict of xarray Datasets, groups
+        posterior (bits and the continuous parameters; dims chain = 1, draw = particle),
+        sample_stats (weight, log_weight, distance per component, particle_index) and
+        observed_data (measured, by position), as `combabc export` writes in inference_data.nc
+        (docs/history.md, "NetCDF"). Needs xarray (python3-xarray)."""
+        from . import _netcdf
+        w = self.waves[-1]
+        attrs = {"inference_library_version": self._provenance["combabc_version"],
+                 "seed": self.seed if self.seed is not None else "", "wave": w.wave + 1,
+                 "termination": self.termination, "status": self.status or "",
+                 "estimator": self.estimator, "created_at": self._provenance["end_time"],
+                 "config_path": self._provenance["config_path"],
+                 "config_text": self._provenance["config_text"]}
+        return _netcdf.inference_data(
+            bits=w.bits, reals=w.reals, log_weight=w.log_weight, weight=w.weight,
+            distance=w.distance, index=w.index, bit_names=self.bit_names,
+            real_names=self.real_names, components=self.components,
+            measured_position=self.measured_position, measured_value=self.measured_value,
+            position_unit=self.position_unit, attrs=attrs)
+
+    def to_netcdf(self, path):
+        """to_inference_data() written to `path` (NetCDF-4, one group each; arviz.from_netcdf
+        reads it). Needs xarray and netCDF4 (python3-xarray python3-netcdf4)."""
+        from . import _netcdf
+        _netcdf.write_netcdf(self.to_inference_data(), os.fspath(path))
 
     def _selected(self, wave):
         if wave is None:

@@ -6,12 +6,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
@@ -59,6 +62,31 @@ E Parse(const std::string& text, const std::string& field) {
   return *value;
 }
 
+// Ctrl-C from Python: polled between batches on the thread that called the run (the Python thread
+// that started it, where Python runs its signal handlers), it runs them and stops the run when one
+// raised (KeyboardInterrupt). The run ends as interrupted (a config run stays resumable) and the
+// caller raises the error again.
+class PythonSignals final : public SmcObserver {
+ public:
+  bool ShouldStop() override {
+    if (raised_) return true;
+    const py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) raised_.emplace();  // takes the pending exception
+    return raised_.has_value();
+  }
+  // Raises the exception a signal handler raised, if any (GIL held), with `note` attached.
+  void RaiseIfInterrupted(const std::string& note) {
+    if (!raised_) return;
+    if (!note.empty() && py::hasattr(raised_->value(), "add_note")) {
+      raised_->value().attr("add_note")(note);
+    }
+    throw *raised_;
+  }
+
+ private:
+  std::optional<py::error_already_set> raised_;
+};
+
 HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
   HistoryNames names;
   for (int k = 0; k < metadata.dimension; ++k) {
@@ -95,6 +123,14 @@ py::dict LoadHistory(const std::string& path) {
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["seed"] = metadata.seed;
   result["path"] = path;
+  // What the NetCDF export records beside the particles (History.to_inference_data).
+  result["measured_position"] = metadata.measured.positions;
+  result["measured_value"] = metadata.measured.values;
+  result["position_unit"] = metadata.position_unit;
+  result["combabc_version"] = metadata.combabc_version;
+  result["config_path"] = metadata.config_path;
+  result["config_text"] = metadata.config_text;
+  result["end_time"] = metadata.end_time;
   return result;
 }
 
@@ -109,21 +145,128 @@ py::dict RunConfig(const std::string& config_path,
   request.threads = threads;
   request.overwrite = overwrite;
   request.report = report;
+  PythonSignals signals;
   services::RunOutcome outcome;
   {
     const py::gil_scoped_release release;
-    outcome = services::RunCalibration(request);
+    outcome = services::RunCalibration(request, &signals);
   }
+  signals.RaiseIfInterrupted("combabc: interrupted; continue with combabc.resume(\"" +
+                             outcome.history_path + "\")");
   // Read back from the file, so that the arrays are exactly what `combabc export` writes.
   py::dict result = LoadHistory(outcome.history_path);
   result["report_directory"] = outcome.report_directory;
   return result;
 }
 
+py::dict Resume(const std::string& history_path, int threads, bool report) {
+  PythonSignals signals;
+  services::RunOutcome outcome;
+  {
+    const py::gil_scoped_release release;
+    outcome = services::ResumeCalibration(history_path, threads, report, &signals);
+  }
+  signals.RaiseIfInterrupted("combabc: interrupted; continue with combabc.resume(\"" +
+                             outcome.history_path + "\")");
+  py::dict result = LoadHistory(outcome.history_path);
+  result["report_directory"] = outcome.report_directory;
+  return result;
+}
+
+py::dict Enumerate(const std::string& config_path,
+                   const std::vector<double>& thresholds,
+                   int threads,
+                   const std::string& output_directory,
+                   bool overwrite,
+                   bool report,
+                   int top,
+                   int max_particles) {
+  services::EnumerateRequest request;
+  request.config_path = config_path;
+  request.thresholds = thresholds;
+  request.threads = threads;
+  request.output_directory = output_directory;
+  request.overwrite = overwrite;
+  request.report = report;
+  request.top = top;
+  request.max_particles = max_particles;
+  PythonSignals signals;
+  services::EnumerateOutcome outcome;
+  {
+    const py::gil_scoped_release release;
+    outcome = services::RunEnumeration(request, &signals);
+  }
+  signals.RaiseIfInterrupted("combabc: enumeration interrupted; nothing written");
+  py::dict result = LoadHistory(outcome.history_path);
+  result["report_directory"] = outcome.report_directory;
+  py::dict enumeration;
+  enumeration["directory"] = outcome.enumeration_directory;
+  enumeration["configurations"] = outcome.configurations;
+  enumeration["accepted"] = outcome.accepted;
+  enumeration["evidence"] = outcome.evidence;
+  enumeration["wall_seconds"] = outcome.wall_seconds;
+  result["enumeration"] = enumeration;
+  return result;
+}
+
+py::dict Export(const std::string& history_path,
+                const std::string& directory,
+                bool overwrite,
+                bool netcdf) {
+  services::ExportOutcome outcome;
+  {
+    const py::gil_scoped_release release;
+    outcome = services::ExportHistory(history_path, directory, overwrite, netcdf);
+  }
+  py::dict result;
+  result["directory"] = outcome.directory;
+  result["netcdf_path"] = outcome.netcdf_path;
+  result["note"] = outcome.note;
+  return result;
+}
+
+// The config's simulator at its nominal values (services::NominalSimulator): SensorModel.
+std::unique_ptr<services::NominalSimulator> MakeNominal(const std::string& config_path,
+                                                        const std::string& work_directory) {
+  const py::gil_scoped_release release;
+  return std::make_unique<services::NominalSimulator>(LoadConfig(config_path), work_directory);
+}
+
+using Bits = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>;
+
+// bits: uint8[d] or uint8[n, d]; returns float64[m] or float64[n, m].
+py::array_t<double> SimulateNominal(const services::NominalSimulator& model, const Bits& bits) {
+  const auto d = static_cast<py::ssize_t>(model.dimension());
+  const auto m = static_cast<py::ssize_t>(model.output_size());
+  const bool single = bits.ndim() == 1;
+  if (!(bits.ndim() == 1 || bits.ndim() == 2) || bits.shape(bits.ndim() - 1) != d) {
+    throw py::value_error("clamps: expected " + std::to_string(d) + " values of 0/1 per " +
+                          "configuration, as an array of shape (" + std::to_string(d) +
+                          ",) or (n, " + std::to_string(d) + ")");
+  }
+  const py::ssize_t n = single ? 1 : bits.shape(0);
+  const std::uint8_t* in = bits.data();
+  for (py::ssize_t i = 0; i < n * d; ++i) {
+    if (in[i] > 1) throw py::value_error("clamps: every value must be 0 or 1");
+  }
+  py::array_t<double> out = single ? py::array_t<double>(m) : py::array_t<double>({n, m});
+  double* values = out.mutable_data();
+  {
+    const py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const std::vector<double> w =
+          model.Simulate(std::span<const std::uint8_t>(in + i * d, static_cast<std::size_t>(d)));
+      std::copy(w.begin(), w.end(), values + i * m);
+    }
+  }
+  return out;
+}
+
 py::dict RunSmc(const BinarySpace& bits,
                 const std::vector<ContinuousParameter>& reals,
                 const py::object& function,
                 bool batch,
+                bool with_rng,
                 const std::vector<double>& observed,
                 const SmcOptions& options) {
   if (observed.empty()) {
@@ -134,16 +277,18 @@ py::dict RunSmc(const BinarySpace& bits,
                                   batch,
                                   static_cast<int>(observed.size()),
                                   space.num_reals(),
-                                  py::module_::import("combabc._core").attr("SimulationFailed"));
+                                  py::module_::import("combabc._core").attr("SimulationFailed"),
+                                  with_rng);
   const EuclideanDistance distance(observed);
   SmcProblem problem;
   problem.space = &space;
   problem.simulator = &simulator;
   problem.distance = &distance;
+  PythonSignals signals;
   RunHistory history;
   try {
     const py::gil_scoped_release release;
-    history = RunCombinatorialSmc(problem, options);
+    history = RunCombinatorialSmc(problem, options, &signals);
   } catch (const std::exception& e) {
     // A Python exception that ended the run is raised again as itself, the engine's line (wave
     // and candidate) attached as a note.
@@ -156,6 +301,7 @@ py::dict RunSmc(const BinarySpace& bits,
     }
     throw *raised;
   }
+  signals.RaiseIfInterrupted("combabc: run interrupted");
   // Named as a history file of the same run would be.
   RunMetadata metadata;
   metadata.dimension = space.num_bits();
@@ -163,7 +309,9 @@ py::dict RunSmc(const BinarySpace& bits,
   metadata.reals = reals;
   metadata.distance_components = distance.components();
   metadata.estimator = ToString(options.estimator);
-  return HistoryToDict(history, NamesOf(metadata, history));
+  py::dict result = HistoryToDict(history, NamesOf(metadata, history));
+  result["seed"] = options.seed;
+  return result;
 }
 
 BinarySpace MakeBinarySpace(int dimension,
@@ -313,12 +461,46 @@ PYBIND11_MODULE(_core, m) {
         py::arg("output_directory") = std::string(),
         py::arg("overwrite") = false,
         py::arg("report") = false);
+  m.def("export",
+        &Export,
+        py::arg("history_path"),
+        py::arg("directory") = std::string(),
+        py::arg("overwrite") = false,
+        py::arg("netcdf") = true);
+  m.def("resume",
+        &Resume,
+        py::arg("history_path"),
+        py::arg("threads") = -1,
+        py::arg("report") = false);
+  m.def("enumerate",
+        &Enumerate,
+        py::arg("config_path"),
+        py::arg("thresholds") = std::vector<double>{},
+        py::arg("threads") = -1,
+        py::arg("output_directory") = std::string(),
+        py::arg("overwrite") = false,
+        py::arg("report") = false,
+        py::arg("top") = 20,
+        py::arg("max_particles") = 100000);
+  py::class_<services::NominalSimulator>(m, "NominalSimulator")
+      .def(py::init(&MakeNominal), py::arg("config_path"), py::arg("work_directory"))
+      .def_property_readonly("dimension", &services::NominalSimulator::dimension)
+      .def_property_readonly("positions", &services::NominalSimulator::positions)
+      .def_property_readonly("output_name", &services::NominalSimulator::output_name)
+      .def_property_readonly("is_sensor", &services::NominalSimulator::is_sensor)
+      .def("simulate", &SimulateNominal, py::arg("bits"))
+      .def("parse", [](const services::NominalSimulator& model, const std::string& clamps) {
+        // The CLI's --clamps check and messages, for a "0110..." string.
+        const std::vector<std::uint8_t> bits = model.ParseBits(clamps);
+        return py::array_t<std::uint8_t>(static_cast<py::ssize_t>(bits.size()), bits.data());
+      });
   m.def("run_smc",
         &RunSmc,
         py::arg("space"),
         py::arg("reals"),
         py::arg("simulator"),
         py::arg("batch"),
+        py::arg("rng"),
         py::arg("observed"),
         py::arg("options"));
 }

@@ -51,13 +51,32 @@ Doubles Checked(const py::object& result, std::vector<py::ssize_t> expected) {
 
 }  // namespace
 
-PythonSimulator::PythonSimulator(
-    py::object function, bool batch, int output_size, int num_reals, py::object simulation_failed)
+PythonSimulator::PythonSimulator(py::object function,
+                                 bool batch,
+                                 int output_size,
+                                 int num_reals,
+                                 py::object simulation_failed,
+                                 bool with_rng)
     : function_(std::move(function)),
       batch_(batch),
       output_size_(output_size),
       num_reals_(num_reals),
-      simulation_failed_(std::move(simulation_failed)) {}
+      simulation_failed_(std::move(simulation_failed)),
+      with_rng_(with_rng) {
+  if (with_rng_) default_rng_ = py::module_::import("numpy.random").attr("default_rng");
+}
+
+py::object PythonSimulator::Generator(RandomStream& rng) const {
+  // Two words: a SeedSequence of 128 bits, so distinct candidates never share a generator.
+  const std::uint64_t a = rng.Next();
+  const std::uint64_t b = rng.Next();
+  return default_rng_(py::make_tuple(a, b));
+}
+
+py::object PythonSimulator::Call(const py::tuple& args, const py::object& rng) const {
+  if (!with_rng_) return function_(*args);
+  return function_(*args, py::arg("rng") = rng);
+}
 
 std::optional<py::error_already_set> PythonSimulator::python_error() const {
   const std::lock_guard<std::mutex> lock(mutex_);
@@ -74,41 +93,52 @@ void PythonSimulator::Fatal(py::error_already_set& error) const {
   throw std::runtime_error("the Python simulator raised " + text);
 }
 
-void PythonSimulator::CallOne(const ParameterView& theta, std::span<double> out) const {
+void PythonSimulator::CallOne(const ParameterView& theta,
+                              RandomStream& rng,
+                              std::span<double> out) const {
   py::array_t<std::uint8_t> bits(static_cast<py::ssize_t>(theta.bits.size()), theta.bits.data());
+  const py::object generator = with_rng_ ? Generator(rng) : py::none();
   py::object result;
   if (num_reals_ > 0) {
     py::array_t<double> reals(static_cast<py::ssize_t>(theta.reals.size()), theta.reals.data());
-    result = function_(bits, reals);
+    result = Call(py::make_tuple(bits, reals), generator);
   } else {
-    result = function_(bits);
+    result = Call(py::make_tuple(bits), generator);
   }
   const Doubles values = Checked(result, {static_cast<py::ssize_t>(out.size())});
   std::memcpy(out.data(), values.data(), out.size() * sizeof(double));
 }
 
-void PythonSimulator::CallBatch(const ParameterBatch& batch, std::span<double> out) const {
+void PythonSimulator::CallBatch(const ParameterBatch& batch,
+                                std::span<RandomStream> rngs,
+                                std::span<double> out) const {
   const auto n = static_cast<py::ssize_t>(batch.count);
+  py::object generators = py::none();
+  if (with_rng_) {
+    py::list list;
+    for (std::size_t i = 0; i < batch.count; ++i) list.append(Generator(rngs[i]));
+    generators = list;
+  }
   py::array_t<std::uint8_t> bits({n, static_cast<py::ssize_t>(batch.num_bits)});
   std::memcpy(bits.mutable_data(), batch.bits.data(), batch.bits.size_bytes());
   py::object result;
   if (num_reals_ > 0) {
     py::array_t<double> reals({n, static_cast<py::ssize_t>(batch.num_reals)});
     std::memcpy(reals.mutable_data(), batch.reals.data(), batch.reals.size_bytes());
-    result = function_(bits, reals);
+    result = Call(py::make_tuple(bits, reals), generators);
   } else {
-    result = function_(bits);
+    result = Call(py::make_tuple(bits), generators);
   }
   const Doubles values = Checked(result, {n, static_cast<py::ssize_t>(output_size_)});
   std::memcpy(out.data(), values.data(), out.size() * sizeof(double));
 }
 
 void PythonSimulator::Simulate(const ParameterView& theta,
-                               RandomStream& /*rng*/,
+                               RandomStream& rng,
                                std::span<double> out) const {
   const py::gil_scoped_acquire gil;
   try {
-    CallOne(theta, out);
+    CallOne(theta, rng, out);
   } catch (py::error_already_set& e) {
     if (e.matches(simulation_failed_)) throw SimulationFailed(py::str(e.value()));
     Fatal(e);
@@ -116,7 +146,7 @@ void PythonSimulator::Simulate(const ParameterView& theta,
 }
 
 void PythonSimulator::SimulateBatch(const ParameterBatch& batch,
-                                    std::span<RandomStream> /*rngs*/,
+                                    std::span<RandomStream> rngs,
                                     std::span<double> out,
                                     BatchFailures& failures) const {
   const std::size_t m = static_cast<std::size_t>(output_size_);
@@ -125,7 +155,7 @@ void PythonSimulator::SimulateBatch(const ParameterBatch& batch,
   if (python_error()) throw std::runtime_error("the Python simulator raised earlier");
   if (batch_) {
     try {
-      CallBatch(batch, out);
+      CallBatch(batch, rngs, out);
     } catch (py::error_already_set& e) {
       if (!e.matches(simulation_failed_)) Fatal(e);
       // SimulationFailed from a batch call: every candidate of the call failed.
@@ -136,7 +166,7 @@ void PythonSimulator::SimulateBatch(const ParameterBatch& batch,
   }
   for (std::size_t i = 0; i < batch.count; ++i) {
     try {
-      CallOne(batch[i], out.subspan(i * m, m));
+      CallOne(batch[i], rngs[i], out.subspan(i * m, m));
     } catch (py::error_already_set& e) {
       if (!e.matches(simulation_failed_)) Fatal(e);
       failures.Fail(i, std::string(py::str(e.value())));

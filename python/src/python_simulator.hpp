@@ -17,13 +17,16 @@ class PythonSimulator final : public Simulator {
   // function: f(bits) or f(bits, reals) (reals only when num_reals > 0). Per sample (batch =
   // false) bits is uint8[d], reals float64[r], and f returns m values; batched, bits is
   // uint8[n, d], reals float64[n, r], and f returns an [n, m] array. simulation_failed: the Python
-  // exception type that marks one candidate failed (combabc.SimulationFailed). Made and destroyed
-  // with the GIL held.
+  // exception type that marks one candidate failed (combabc.SimulationFailed). with_rng: f also
+  // gets the keyword argument rng, a numpy Generator seeded from the candidate's own RandomStream
+  // (batched: a list of n of them), so that a stochastic simulator gives the same history for any
+  // thread count and batch size. Made and destroyed with the GIL held.
   PythonSimulator(pybind11::object function,
                   bool batch,
                   int output_size,
                   int num_reals,
-                  pybind11::object simulation_failed);
+                  pybind11::object simulation_failed,
+                  bool with_rng = false);
   int output_size() const override { return output_size_; }
   void Simulate(const ParameterView& theta,
                 RandomStream& rng,
@@ -39,8 +42,14 @@ class PythonSimulator final : public Simulator {
  private:
   // Call f (GIL held) for the whole batch / one candidate; a wrong output shape raises ValueError.
   // Python exceptions propagate as error_already_set.
-  void CallBatch(const ParameterBatch& batch, std::span<double> out) const;
-  void CallOne(const ParameterView& theta, std::span<double> out) const;
+  void CallBatch(const ParameterBatch& batch,
+                 std::span<RandomStream> rngs,
+                 std::span<double> out) const;
+  void CallOne(const ParameterView& theta, RandomStream& rng, std::span<double> out) const;
+  // f(args..., rng=...) when with_rng, else f(args...).
+  pybind11::object Call(const pybind11::tuple& args, const pybind11::object& rng) const;
+  // A numpy Generator seeded with two 64-bit words drawn from `rng`.
+  pybind11::object Generator(RandomStream& rng) const;
   // Keeps the first error and throws a C++ exception that ends the run.
   [[noreturn]] void Fatal(pybind11::error_already_set& error) const;
 
@@ -49,6 +58,8 @@ class PythonSimulator final : public Simulator {
   int output_size_;
   int num_reals_;
   pybind11::object simulation_failed_;
+  bool with_rng_;
+  pybind11::object default_rng_;  // numpy.random.default_rng, when with_rng
   mutable std::mutex mutex_;
   mutable std::optional<pybind11::error_already_set> error_;
 };

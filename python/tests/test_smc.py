@@ -190,3 +190,46 @@ def test_invalid_prior_raises():
         combabc.BinarySpace(dimension=3, prior_one=[0.5, 1.5, 0.5])
     with pytest.raises(combabc.Error, match="expected one of"):
         combabc.ContinuousParameter("x", kind="uniformm")
+
+
+def noisy(bits, rng):
+    return W @ bits + rng.normal(0.0, 0.5, size=3)
+
+
+def noisy_batch(bits, rng):
+    return np.stack([W @ b + g.normal(0.0, 0.5, size=3) for b, g in zip(bits, rng)])
+
+
+def test_stochastic_simulator_with_rng_is_reproducible_for_any_thread_count():
+    def run(simulator=noisy, batch=False, threads=1, seed=11):
+        space = combabc.BinarySpace(dimension=8, prior_one=PRIOR)
+        noisy_problem = combabc.Problem(space, simulator, OBSERVED, batch=batch, rng=True)
+        return combabc.run(noisy_problem, options(accepted_per_wave=300, seed=seed),
+                           threads=threads)
+
+    one = run()
+    same_history(one, run(threads=2))
+    same_history(one, run(noisy_batch, batch=True, threads=2))
+    # The noise is there: distances are not those of the noise-free model.
+    last = one.waves[-1]
+    assert not np.allclose(last.distance[:, 0],
+                           np.linalg.norm(last.bits @ W.T - OBSERVED, axis=1))
+    assert not np.array_equal(last.distance, run(seed=12).waves[-1].distance)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_ctrl_c_stops_a_python_run_with_keyboard_interrupt(threads):
+    import os
+    import signal
+    calls = []
+
+    def interrupted_once(bits):
+        calls.append(1)
+        if len(calls) == 200:
+            os.kill(os.getpid(), signal.SIGINT)  # as Ctrl-C in the terminal
+        return W @ bits
+
+    with pytest.raises(KeyboardInterrupt):
+        combabc.run(problem(interrupted_once), options(accepted_per_wave=3000), threads=threads)
+    # Stopped soon after, not at the end of the run (which takes several thousand calls).
+    assert len(calls) < 2000

@@ -159,14 +159,19 @@ AtomicFile::~AtomicFile() {
   if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
 }
 
-void AtomicFile::Commit() {
+void AtomicFile::Flush() {
   const std::string text = buffer_.str();
+  buffer_.str({});
   for (std::size_t done = 0; done < text.size();) {
     const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
     done += static_cast<std::size_t>(n);
   }
+}
+
+void AtomicFile::Commit() {
+  Flush();
   if (::fsync(fd_) != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
   const int closed = ::close(fd_);
   fd_ = -1;
@@ -236,6 +241,20 @@ std::ostream& OutputDirectory::Add(const std::string& name) {
   staged_.emplace_back(
       name, std::make_unique<AtomicFile>((WithoutTrailingSlash(path_) / name).string(), replace));
   return staged_.back().second->out();
+}
+
+std::string OutputDirectory::StagedPath(const std::string& name) {
+  for (const auto& [staged, file] : staged_) {
+    if (staged == name) {
+      file->Flush();
+      return file->temporary_path();
+    }
+  }
+  throw Error(ErrorKind::kSoftware, "not staged: " + name, path_);
+}
+
+void OutputDirectory::Discard(const std::string& name) {
+  std::erase_if(staged_, [&](const auto& staged) { return staged.first == name; });
 }
 
 void OutputDirectory::Commit() {

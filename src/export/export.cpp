@@ -339,6 +339,7 @@ void ExportRun(const HistoryStore& store,
   // Checked before the history is read; the files appear together at Commit().
   OutputDirectory directory(out_dir, options.overwrite);
   WriteAll(directory, store, options);
+  if (options.add_files) options.add_files(directory);
   directory.Commit();
 }
 

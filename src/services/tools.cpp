@@ -7,6 +7,7 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/services/calibration.hpp"
+#include "services/python_script.hpp"
 #include "services/simulator_factory.hpp"
 
 namespace combabc::services {
@@ -18,26 +19,87 @@ std::string Sibling(const std::string& history_path, const std::string& name) {
   return (parent.empty() ? fs::path(name) : parent / name).string();
 }
 
+constexpr const char* kNetcdfFile = "inference_data.nc";
+constexpr const char* kNetcdfNeeds =
+    "the NetCDF file needs Python 3 with xarray and netCDF4 (Debian: apt-get install "
+    "python3-xarray python3-netcdf4), or COMBABC_PYTHON naming such a python";
+
+// inference_data.nc (ArviZ's InferenceData layout, docs/history.md) made by
+// scripts/report/combabc_netcdf.py from the staged CSV and JSON files, so that its values are
+// theirs. Without the script's Python packages the export goes on without it and says why in
+// outcome.note; any other failure of the script fails the export (nothing is written).
+void AddNetcdf(OutputDirectory& dir, ExportOutcome& outcome) {
+  PythonScript tools;
+  try {
+    tools = FindPythonScript("combabc_netcdf.py", "COMBABC_NETCDF_SCRIPT", kNetcdfNeeds);
+  } catch (const Error& e) {
+    outcome.note = std::string("no ") + kNetcdfFile + ": " + e.what();
+    return;
+  }
+  dir.Add(kNetcdfFile);
+  const std::vector<std::string> args = {tools.python,
+                                         tools.script,
+                                         "--particles",
+                                         dir.StagedPath("particles.csv"),
+                                         "--measured",
+                                         dir.StagedPath("measured.csv"),
+                                         "--summary",
+                                         dir.StagedPath("summary.json"),
+                                         "--out",
+                                         dir.StagedPath(kNetcdfFile)};
+  const ProcessResult result = RunProcess(args, kNetcdfNeeds);
+  constexpr int kUnavailable = 69;  // EX_UNAVAILABLE: xarray or netCDF4 missing
+  if (result.status == kUnavailable) {
+    dir.Discard(kNetcdfFile);
+    outcome.note = std::string("no ") + kNetcdfFile + ": " +
+                   ScriptMessage(result.err, result.status, "combabc_netcdf");
+    return;
+  }
+  if (result.status != 0) {
+    throw Error(KindOfScriptStatus(result.status),
+                std::string(kNetcdfFile) + ": " +
+                    ScriptMessage(result.err, result.status, "combabc_netcdf"));
+  }
+  outcome.netcdf_path = (fs::path(dir.path()) / kNetcdfFile).string();
+}
+
 }  // namespace
 
-void SimulateConfiguration(const std::string& config_path,
-                           const std::string& clamps,
-                           const std::string& output_csv,
-                           bool overwrite) {
-  auto config = LoadConfig(config_path);
-  const bool sensor = config.simulator.kind == SimulatorKind::kSensor;
+NominalSimulator::NominalSimulator(CalibrationConfig config, const std::string& work_directory)
+    : config_(std::move(config)) {
+  const bool sensor = config_.simulator.kind == SimulatorKind::kSensor;
   // The nominal model: the sensor at its [model] values; an external simulator would need values
-  // for its continuous parameters, which this command does not take.
-  if (!config.reals.empty() && !sensor) {
+  // for its continuous parameters, which are not given here.
+  if (!config_.reals.empty() && !sensor) {
     throw Error(ErrorKind::kUsage,
                 "the simulator has continuous parameters ([parameters]); 'combabc simulate' "
                 "takes only the bits",
-                config_path);
+                config_.path);
   }
-  config.reals.clear();
-  // The sensor's raw amplitude in metres; the normalised column is derived below.
-  config.model.normalise = false;
-  const int dimension = config.space.dimension;  // checked before the costly precompute
+  config_.reals.clear();
+  // The sensor's raw amplitude in metres.
+  config_.model.normalise = false;
+  simulator_ = MakeSimulator(config_, work_directory).simulator;
+}
+
+NominalSimulator::~NominalSimulator() = default;
+
+int NominalSimulator::dimension() const { return config_.space.dimension; }
+
+const std::vector<double>& NominalSimulator::positions() const {
+  return config_.simulator.outputs.coordinates;
+}
+
+const std::string& NominalSimulator::output_name() const { return config_.simulator.outputs.name; }
+
+bool NominalSimulator::is_sensor() const {
+  return config_.simulator.kind == SimulatorKind::kSensor;
+}
+
+std::vector<std::uint8_t> NominalSimulator::ParseBits(const CalibrationConfig& config,
+                                                      const std::string& clamps) {
+  const bool sensor = config.simulator.kind == SimulatorKind::kSensor;
+  const int dimension = config.space.dimension;
   if (static_cast<int>(clamps.size()) != dimension) {
     throw Error(ErrorKind::kUsage,
                 "has " + std::to_string(clamps.size()) + " characters; the " +
@@ -61,31 +123,62 @@ void SimulateConfiguration(const std::string& config_path,
     }
     bits[k] = clamps[k] == '1';
   }
+  return bits;
+}
+
+std::vector<double> NominalSimulator::Simulate(std::span<const std::uint8_t> bits) const {
+  std::vector<double> out(static_cast<std::size_t>(simulator_->output_size()));
+  if (static_cast<int>(bits.size()) != dimension()) {
+    throw Error(ErrorKind::kUsage,
+                "has " + std::to_string(bits.size()) + " bits; the simulator has " +
+                    std::to_string(dimension()),
+                "",
+                0,
+                "clamps");
+  }
+  // The sensor draws nothing; an external simulator gets the config's seed, as in a run's first
+  // candidate stream.
+  RandomStream rng(config_.smc.seed, 0, 0);
+  const std::vector<double> no_reals;
+  try {
+    simulator_->Simulate({bits, no_reals}, rng, out);
+  } catch (const SimulationFailed& e) {
+    throw Error(
+        ErrorKind::kSoftware, std::string("the simulation failed: ") + e.what(), config_.path);
+  }
+  return out;
+}
+
+void SimulateConfiguration(const std::string& config_path,
+                           const std::string& clamps,
+                           const std::string& output_csv,
+                           bool overwrite) {
+  CalibrationConfig config = LoadConfig(config_path);
+  const bool sensor = config.simulator.kind == SimulatorKind::kSensor;
+  // Checked before the costly precompute.
+  if (!config.reals.empty() && !sensor) {
+    throw Error(ErrorKind::kUsage,
+                "the simulator has continuous parameters ([parameters]); 'combabc simulate' "
+                "takes only the bits",
+                config_path);
+  }
+  const std::vector<std::uint8_t> bits = NominalSimulator::ParseBits(config, clamps);
   // A unique temporary beside the target, renamed at the end: no partial CSV, nothing followed,
   // and an existing file refused before the precompute rather than after it.
   AtomicFile out(output_csv, overwrite);
   const fs::path csv(output_csv);
-  const BuiltSimulator built = MakeSimulator(
-      config, (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string());
-  const SimulatorOutputs& outputs = config.simulator.outputs;
-  std::vector<double> w(static_cast<std::size_t>(outputs.size()));
-  RandomStream rng(config.smc.seed, 0, 0);
-  const std::vector<double> no_reals;
-  try {
-    built.simulator->Simulate({bits, no_reals}, rng, w);
-  } catch (const SimulationFailed& e) {
-    throw Error(
-        ErrorKind::kSoftware, std::string("the simulation failed: ") + e.what(), config_path);
-  }
+  const NominalSimulator simulator(
+      std::move(config), (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string());
+  const std::vector<double> w = simulator.Simulate(bits);
   double peak = 0.0;
   for (double v : w) peak = std::max(peak, std::abs(v));
 
   out.out().precision(10);
   // The sensor's values are metres; an external simulator's are in its own unit.
-  out.out() << "position_m," << outputs.name << (sensor ? "_m" : "") << ",normalised\n";
+  out.out() << "position_m," << simulator.output_name() << (sensor ? "_m" : "") << ",normalised\n";
+  const std::vector<double>& x = simulator.positions();
   for (std::size_t i = 0; i < w.size(); ++i) {
-    out.out() << outputs.coordinates[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0)
-              << '\n';
+    out.out() << x[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0) << '\n';
   }
   out.Commit();
 }
@@ -107,14 +200,19 @@ VerifyOutcome VerifyHistory(const std::string& history_path) {
   return outcome;
 }
 
-std::string ExportHistory(const std::string& history_path,
-                          const std::string& directory,
-                          bool overwrite) {
-  std::string out = directory.empty() ? Sibling(history_path, "export") : directory;
+ExportOutcome ExportHistory(const std::string& history_path,
+                            const std::string& directory,
+                            bool overwrite,
+                            bool netcdf) {
+  ExportOutcome outcome;
+  outcome.directory = directory.empty() ? Sibling(history_path, "export") : directory;
   ExportOptions options;
   options.overwrite = overwrite;
-  ExportRun(history_path, out, options);
-  return out;
+  if (netcdf) {
+    options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, outcome); };
+  }
+  ExportRun(history_path, outcome.directory, options);
+  return outcome;
 }
 
 }  // namespace combabc::services

@@ -117,6 +117,28 @@ TEST_F(OutputFilesTest, NewDirectoryIsCreatedWithAManifest) {
   EXPECT_NE(Read(out / ".combabc-manifest").find("\na.csv\nb.csv\n"), std::string::npos);
 }
 
+// The NetCDF export: a helper process reads staged files and writes an added one by path.
+TEST_F(OutputFilesTest, StagedFilesCanBeReadAndWrittenByPathAndDiscarded) {
+  const fs::path out = dir_ / "export";
+  {
+    OutputDirectory directory(out.string(), false);
+    directory.Add("a.csv") << "first,";
+    const std::string staged = directory.StagedPath("a.csv");
+    EXPECT_EQ(Read(staged), "first,");
+    EXPECT_EQ(fs::path(staged).parent_path(), out);
+    directory.Add("b.nc");
+    Write(directory.StagedPath("b.nc"), "written by another process");
+    directory.Add("c.nc");
+    directory.Discard("c.nc");
+    EXPECT_EQ(KindOf([&] { directory.StagedPath("c.nc"); }), ErrorKind::kSoftware);
+    EXPECT_FALSE(fs::exists(out / "a.csv"));  // nothing appears before Commit
+    directory.Commit();
+  }
+  EXPECT_EQ(Read(out / "a.csv"), "first,");
+  EXPECT_EQ(Read(out / "b.nc"), "written by another process");
+  EXPECT_EQ(Listing(out), (std::set<std::string>{"a.csv", "b.nc", ".combabc-manifest"}));
+}
+
 TEST_F(OutputFilesTest, UncommittedDirectoryLeavesNothingBehind) {
   {
     OutputDirectory directory((dir_ / "export").string(), false);

@@ -31,6 +31,11 @@ class AtomicFile {
 
   std::ostream& out() { return buffer_; }
   const std::string& path() const { return path_; }
+  const std::string& temporary_path() const { return temp_path_; }
+
+  // Writes the text buffered so far into the temporary, so that another process can read it there
+  // (or, for a file left empty, write it: the export's NetCDF script). Commit() adds what follows.
+  void Flush();
 
   // Writes the buffered text, fsyncs it and renames it onto path(); a refusal (kCantCreate) leaves
   // what is at path() as it was.
@@ -84,6 +89,12 @@ class OutputDirectory {
   const std::string& path() const { return path_; }
   // A stream for file `name` (a plain file name), written at Commit().
   std::ostream& Add(const std::string& name);
+  // The temporary that `name` (added before) is staged in, holding what was written to it so far:
+  // a helper process reads a staged file there or writes an added, empty one (the NetCDF export).
+  // It is renamed into place at Commit() with the others.
+  std::string StagedPath(const std::string& name);
+  // Unstages `name` (a file a helper process could not write); its temporary is removed.
+  void Discard(const std::string& name);
   void Commit();
 
  private:

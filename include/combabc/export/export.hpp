@@ -2,9 +2,11 @@
 // Export of a run history to plain files for pandas, MATLAB and spreadsheets: one CSV per table
 // plus summary.json. Files and columns are documented in docs/history.md.
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
 
 namespace combabc {
@@ -17,6 +19,9 @@ struct ExportOptions {
   // Write into an existing out_dir that combabc did not write (no manifest), replacing only the
   // files of the same names; nothing else in it is ever removed.
   bool overwrite = false;
+  // Called with the CSV and JSON files staged, before anything is committed: adds files made
+  // from them (the NetCDF file, written by a script: services/tools.cpp). Empty: none.
+  std::function<void(OutputDirectory&)> add_files;
 };
 
 // Writes the files into out_dir under the rules of OutputDirectory (core/output_files.hpp): created

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "combabc/core/executor.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
+#include "combabc/samplers/simulator.hpp"
 
 namespace combabc::services {
 
@@ -79,6 +81,40 @@ struct EnumerateOutcome {
 // without final ones in the config: Error kUsage.
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress = nullptr);
 
+// The config's simulator at its nominal continuous values (the sensor at its [model] values; an
+// external simulator without continuous parameters), as `combabc simulate` runs it; the Python
+// module's SensorModel. Building it is the costly part (the sensor's precompute); Simulate may be
+// called from several threads at once (Simulator's contract).
+class NominalSimulator {
+ public:
+  // work_directory: where an external simulator makes its folders. A config whose external
+  // simulator has continuous parameters is refused (kUsage).
+  NominalSimulator(CalibrationConfig config, const std::string& work_directory);
+  ~NominalSimulator();
+  NominalSimulator(const NominalSimulator&) = delete;
+  NominalSimulator& operator=(const NominalSimulator&) = delete;
+
+  int dimension() const;
+  int output_size() const { return static_cast<int>(positions().size()); }
+  const std::vector<double>& positions() const;  // the outputs' coordinates (the sensor: metres)
+  const std::string& output_name() const;        // the sensor: "displacement"
+  bool is_sensor() const;
+  // One configuration's raw output (the sensor: |w| in metres along the centreline). A failed
+  // simulation is Error kSoftware.
+  std::vector<double> Simulate(std::span<const std::uint8_t> bits) const;
+  // "0110..." (one character per bit) as bits, checked against the config: kUsage naming
+  // --clamps.
+  static std::vector<std::uint8_t> ParseBits(const CalibrationConfig& config,
+                                             const std::string& clamps);
+  std::vector<std::uint8_t> ParseBits(const std::string& clamps) const {
+    return ParseBits(config_, clamps);
+  }
+
+ private:
+  CalibrationConfig config_;
+  std::unique_ptr<Simulator> simulator_;
+};
+
 // One bit configuration ("0110..." with one character per bit; for the sensor one per clamp,
 // 1 = fixed) through the config's simulator at its nominal continuous values, written as CSV:
 // position_m (the output coordinates), the output (the sensor's: displacement_m, raw metres) and
@@ -110,10 +146,20 @@ struct VerifyOutcome {
 // checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
 VerifyOutcome VerifyHistory(const std::string& history_path);
 
+struct ExportOutcome {
+  std::string directory;
+  std::string netcdf_path;  // empty when no NetCDF file was written
+  std::string note;         // why not, when it was asked for but its Python packages are missing
+};
+
 // CSV + JSON export (docs/history.md); default directory: export/ beside the history; directory
-// rules as for the report (`overwrite`: write into a directory combabc did not write).
-std::string ExportHistory(const std::string& history_path,
-                          const std::string& directory = {},
-                          bool overwrite = false);
+// rules as for the report (`overwrite`: write into a directory combabc did not write). With
+// `netcdf`, also inference_data.nc (ArviZ's InferenceData layout) by
+// scripts/report/combabc_netcdf.py when $COMBABC_PYTHON (default /usr/bin/python3) has xarray and
+// netCDF4; without them the rest is written and `note` says so.
+ExportOutcome ExportHistory(const std::string& history_path,
+                            const std::string& directory = {},
+                            bool overwrite = false,
+                            bool netcdf = true);
 
 }  // namespace combabc::services

@@ -1,0 +1,40 @@
+#pragma once
+// The Python scripts combabc runs (scripts/report/: the report, the NetCDF export): where the
+// interpreter and a script are, running one, and turning its failure into one combabc::Error line.
+#include <string>
+#include <vector>
+
+#include "combabc/core/error.hpp"
+
+namespace combabc::services {
+
+struct PythonScript {
+  std::string python;
+  std::string script;
+};
+
+// $COMBABC_PYTHON, else /usr/bin/python3 (Debian's, which has the packages; not a pyenv shim),
+// and the script `file_name` of scripts/report/: $<override_variable> when that is set, else the
+// source tree's, else the installed one. `needs` says what to install (the message when the python
+// is missing). Error kCantCreate when either is missing.
+PythonScript FindPythonScript(const std::string& file_name,
+                              const char* override_variable,
+                              const std::string& needs);
+
+struct ProcessResult {
+  int status = 0;
+  std::string err;  // everything the process wrote on stderr
+};
+
+// Runs args[0] with stdout discarded and stderr captured; kCantCreate (with `needs`) when it
+// cannot start.
+ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs);
+
+// The scripts exit with the sysexits code of what went wrong.
+ErrorKind KindOfScriptStatus(int status);
+
+// The script's own one-line message: its last line on stderr without the "<prefix>: " it starts
+// with, so that a failed script is one combabc error line.
+std::string ScriptMessage(const std::string& err, int status, const std::string& prefix);
+
+}  // namespace combabc::services
