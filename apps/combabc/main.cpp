@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -41,7 +42,10 @@ void PrintOutcome(const combabc::services::RunOutcome& outcome) {
     case Termination::kAcceptanceRateTooLow:
     case Termination::kWallTimeExceeded:
     case Termination::kTooManyFailures:
-      std::cerr << "stopped: " << summary.message << "\n";
+      std::cerr << "stopped: " << summary.message << "\n"
+                << "finished waves are kept; to go on, raise the limit: combabc resume "
+                << outcome.history_path << " "
+                << combabc::services::LimitOption(summary.termination) << " ...\n";
       break;
     default:
       break;
@@ -89,11 +93,38 @@ int main(int argc, char** argv) try {
   run->add_flag("-q,--quiet", quiet, "No progress display");
 
   std::string history;
-  int resume_threads = -1;
-  auto* resume = app.add_subcommand("resume", "Continue a killed or interrupted run");
+  combabc::services::ResumeRequest resume_request;
+  std::int64_t max_simulations = 0;
+  double max_wall_time = 0.0, min_acceptance_rate = 0.0, max_failure_fraction = 0.0;
+  auto* resume = app.add_subcommand(
+      "resume",
+      "Continue a killed or interrupted run, or one stopped on a limit (raise it with the options "
+      "below; they replace the config's [sampler] values and are recorded in the history)");
   resume->add_option("RUN.sqlite", history, "History file of the run")->required();
-  resume->add_option("-j,--threads", resume_threads, "Threads, 0 = all cores (default: the run's)")
+  resume
+      ->add_option(
+          "-j,--threads", resume_request.threads, "Threads, 0 = all cores (default: the run's)")
       ->check(CLI::Range(0, kMaxThreads));
+  auto* max_simulations_option =
+      resume->add_option("--max-simulations", max_simulations, "Simulation budget, 0 = no limit")
+          ->check(CLI::NonNegativeNumber);
+  auto* max_wall_time_option =
+      resume
+          ->add_option("--max-wall-time",
+                       max_wall_time,
+                       "Seconds this resume may run (each resume has its own), 0 = no limit")
+          ->check(CLI::NonNegativeNumber);
+  auto* min_acceptance_rate_option =
+      resume
+          ->add_option(
+              "--min-acceptance-rate", min_acceptance_rate, "Acceptance-rate floor, 0 = none")
+          ->check(CLI::Range(0.0, 1.0));
+  auto* max_failure_fraction_option =
+      resume
+          ->add_option("--max-failure-fraction",
+                       max_failure_fraction,
+                       "Failed simulations tolerated, as a fraction; 1 = never stop")
+          ->check(CLI::Range(0.0, 1.0));
   resume->add_flag("--no-report", no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", quiet, "No progress display");
 
@@ -186,6 +217,14 @@ int main(int argc, char** argv) try {
   }
   request.executor = executor;
   enumerate_request.executor = executor;
+  resume_request.history_path = history;
+  resume_request.report = !no_report;
+  resume_request.executor = executor;
+  combabc::services::StopLimits& limits = resume_request.limits;
+  if (max_simulations_option->count() > 0) limits.max_simulations = max_simulations;
+  if (max_wall_time_option->count() > 0) limits.max_wall_time_s = max_wall_time;
+  if (min_acceptance_rate_option->count() > 0) limits.min_acceptance_rate = min_acceptance_rate;
+  if (max_failure_fraction_option->count() > 0) limits.max_failure_fraction = max_failure_fraction;
   // The command itself; returns the exit code.
   auto run_command = [&]() -> int {
     combabc::cli::ProgressDisplay progress(primary && isatty(STDERR_FILENO) != 0);
@@ -196,8 +235,7 @@ int main(int argc, char** argv) try {
       if (*run || *resume) {
         request.report = !no_report;
         const auto outcome = *run ? combabc::services::RunCalibration(request, observer)
-                                  : combabc::services::ResumeCalibration(
-                                        history, resume_threads, !no_report, observer, executor);
+                                  : combabc::services::ResumeCalibration(resume_request, observer);
         PrintOutcome(outcome);
         interrupted = outcome.history.summary.termination == combabc::Termination::kInterrupted;
         if (interrupted) {

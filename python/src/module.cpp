@@ -164,7 +164,11 @@ py::dict Resume(const std::string& history_path, int threads, bool report) {
   services::RunOutcome outcome;
   {
     const py::gil_scoped_release release;
-    outcome = services::ResumeCalibration(history_path, threads, report, &signals);
+    services::ResumeRequest request;
+    request.history_path = history_path;
+    request.threads = threads;
+    request.report = report;
+    outcome = services::ResumeCalibration(request, &signals);
   }
   signals.RaiseIfInterrupted("combabc: interrupted; continue with combabc.resume(\"" +
                              outcome.history_path + "\")");

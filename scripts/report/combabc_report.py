@@ -169,6 +169,9 @@ def load_run(con):
     run["measured_x_cm"] = measured[:, 0] * scale
     run["measured_y"] = measured[:, 1]
     run["schema_version"] = con.execute("PRAGMA user_version").fetchone()[0]
+    # Stop limits a resume set over the config's (meta rows stop_limit_<key>; docs/history.md).
+    run["stop_limits"] = [(key[len("stop_limit_"):], value) for key, value in con.execute(
+        "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key")]
     run["reals"] = []
     if run["schema_version"] >= 3:
         run["reals"] = con.execute(
@@ -601,6 +604,8 @@ def write_index(waves, run, estimator, out, written, db_path, formats):
         ("Wall time (s)", fmt(run["wall_seconds"], ".1f")),
         ("Started", run["start_time"]), ("Ended", run["end_time"] or "—"),
         ("Resumed", f"{run['resume_count']} times"),
+        ("Stop limits set on resume", ", ".join(f"{k} = {v}" for k, v in run["stop_limits"])
+         or "—"),
         ("combabc", f"{run['combabc_version']} {run['git_hash']}".strip()),
     ]
     rows = "\n".join(f"<tr><th>{e(str(k))}</th><td>{e(str(v))}</td></tr>" for k, v in provenance)

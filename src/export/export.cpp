@@ -299,6 +299,11 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
     out << (i ? ", " : "") << JsonString(m.fingerprint[i].first) << ": "
         << JsonString(m.fingerprint[i].second);
   }
+  out << "},\n  \"stop_limits\": {";
+  for (std::size_t i = 0; i < m.stop_limits.size(); ++i) {
+    out << (i ? ", " : "") << JsonString(m.stop_limits[i].first) << ": "
+        << JsonString(m.stop_limits[i].second);
+  }
   out << "},\n  \"waves\": [";
   for (std::size_t t = 0; t < h.waves.size(); ++t) {
     const WaveRecord& w = h.waves[t];

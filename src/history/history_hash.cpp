@@ -130,6 +130,14 @@ std::uint64_t RunStateHash(Database& db) {
           "SELECT status, end_time, termination, message, resume_count, waves_completed, "
           "simulations, simulations_discarded, wall_seconds FROM run WHERE id = 1",
           9);
+  // The stop limits a resume raised (meta rows stop_limit_<key>): hashed only when there are any,
+  // so that the digest of a run never resumed with raised limits is what it always was.
+  if (db.QueryInt("SELECT count(*) FROM meta WHERE substr(key, 1, 11) = 'stop_limit_'") > 0) {
+    AddRows(hash,
+            db,
+            "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key",
+            2);
+  }
   return hash.value();
 }
 

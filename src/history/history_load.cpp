@@ -342,6 +342,9 @@ RunMetadata HistoryStore::LoadMetadata() const {
     m.measured.values.push_back(measured.Real(1));
   }
   m.schema_version = static_cast<int>(db.QueryInt("PRAGMA user_version"));
+  Statement limits(
+      db, "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key");
+  while (limits.Step()) m.stop_limits.emplace_back(limits.Text(0).substr(11), limits.Text(1));
   if (m.schema_version < 3) return m;  // no reals, default kernels, no fingerprint
   Statement reals(db, "SELECT name, kind, low, high, mean, sd FROM real ORDER BY i");
   while (reals.Step()) {
@@ -468,7 +471,8 @@ RunHistory HistoryStore::LoadHistory() const {
   return history;
 }
 
-ResumePoint HistoryStore::BeginResume() {
+ResumePoint HistoryStore::BeginResume(
+    const std::vector<std::pair<std::string, std::string>>& stop_limits) {
   Impl& impl = *impl_;
   impl.RequireWritable("resume the run");
   {
@@ -514,6 +518,10 @@ ResumePoint HistoryStore::BeginResume() {
       UPDATE run SET status = 'running', resume_count = resume_count + 1, end_time = '',
         termination = '', message = '', waves_completed = NULL, simulations = NULL,
         simulations_discarded = NULL, wall_seconds = NULL WHERE id = 1)sql");
+    Statement limit(impl.db, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)");
+    for (const auto& [key, value] : stop_limits) {
+      limit.Bind(1, "stop_limit_" + key).Bind(2, value).Run();
+    }
     impl.StoreRunHashes();
     transaction.Commit();
   }

@@ -29,6 +29,51 @@ std::string Describe(int wave, const SimulationFailure& failure) {
          ": " + failure.reason;
 }
 
+using Stop = std::optional<std::pair<Termination, std::string>>;
+
+// The failure ceiling, then the acceptance floor, over the run's state: `total` simulations with
+// `failures` failed in all, wave `wave` having accepted `accepted` of its `candidates`. One rule
+// for the engine (candidate by candidate) and for ImmediateStop (before a resume).
+Stop FailureOrFloorStop(const SmcOptions& options,
+                        std::int64_t total,
+                        std::int64_t failures,
+                        const std::string& last_failure,
+                        int wave,
+                        std::int64_t candidates,
+                        std::int64_t accepted) {
+  if (options.max_failure_fraction < 1.0 && total >= options.failure_fraction_after &&
+      static_cast<double>(failures) > options.max_failure_fraction * static_cast<double>(total)) {
+    char fraction[64];
+    std::snprintf(fraction,
+                  sizeof fraction,
+                  " (%.1f %% > %.4g %%)",
+                  100.0 * static_cast<double>(failures) / static_cast<double>(total),
+                  100.0 * options.max_failure_fraction);
+    return Stop({Termination::kTooManyFailures,
+                 std::to_string(failures) + " of " + std::to_string(total) + " simulations failed" +
+                     fraction + "; last failure: " + last_failure});
+  }
+  if (options.min_acceptance_rate > 0 && candidates >= options.acceptance_floor_after &&
+      static_cast<double>(accepted) <
+          options.min_acceptance_rate * static_cast<double>(candidates)) {
+    char rate[96];
+    std::snprintf(rate,
+                  sizeof rate,
+                  " candidates (rate %.3g), below min_acceptance_rate = %.3g",
+                  static_cast<double>(accepted) / static_cast<double>(candidates),
+                  options.min_acceptance_rate);
+    return Stop({Termination::kAcceptanceRateTooLow,
+                 "wave " + std::to_string(wave + 1) + " accepted " + std::to_string(accepted) +
+                     " of " + std::to_string(candidates) + rate});
+  }
+  return std::nullopt;
+}
+
+std::string BudgetMessage(const SmcOptions& options, int wave) {
+  return "simulation budget of " + std::to_string(options.max_simulations) + " reached in wave " +
+         std::to_string(wave + 1);
+}
+
 class SmcRun {
  public:
   SmcRun(const SmcProblem& problem, const SmcOptions& options, SmcObserver* observer)
@@ -158,8 +203,6 @@ class SmcRun {
   }
 
  private:
-  using Stop = std::optional<std::pair<Termination, std::string>>;
-
   bool AllFinal(const WaveRecord& wave) const {
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
       if (!schedules_[s].IsFinal(wave.wave, wave.thresholds[s])) return false;
@@ -303,35 +346,13 @@ class SmcRun {
   // total_ candidates and failures_ failures so far, this one included). Checked candidate by
   // candidate in index order, so that where a run stops does not depend on the batch sizes.
   Stop CheckCandidate(const WaveRecord& wave, std::int64_t index) const {
-    if (options_.max_failure_fraction < 1.0 && total_ >= options_.failure_fraction_after &&
-        static_cast<double>(failures_) >
-            options_.max_failure_fraction * static_cast<double>(total_)) {
-      char fraction[64];
-      std::snprintf(fraction,
-                    sizeof fraction,
-                    " (%.1f %% > %.4g %%)",
-                    100.0 * static_cast<double>(failures_) / static_cast<double>(total_),
-                    100.0 * options_.max_failure_fraction);
-      return Stop({Termination::kTooManyFailures,
-                   std::to_string(failures_) + " of " + std::to_string(total_) +
-                       " simulations failed" + fraction + "; last failure: " + last_failure_});
-    }
-    const std::int64_t candidates = index + 1;
-    if (options_.min_acceptance_rate > 0 && candidates >= options_.acceptance_floor_after &&
-        static_cast<double>(wave.particles.size()) <
-            options_.min_acceptance_rate * static_cast<double>(candidates)) {
-      char rate[96];
-      std::snprintf(rate,
-                    sizeof rate,
-                    " candidates (rate %.3g), below min_acceptance_rate = %.3g",
-                    static_cast<double>(wave.particles.size()) / static_cast<double>(candidates),
-                    options_.min_acceptance_rate);
-      return Stop({Termination::kAcceptanceRateTooLow,
-                   "wave " + std::to_string(wave.wave + 1) + " accepted " +
-                       std::to_string(wave.particles.size()) + " of " + std::to_string(candidates) +
-                       rate});
-    }
-    return std::nullopt;
+    return FailureOrFloorStop(options_,
+                              total_,
+                              failures_,
+                              last_failure_,
+                              wave.wave,
+                              index + 1,
+                              static_cast<std::int64_t>(wave.particles.size()));
   }
 
   // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires.
@@ -346,9 +367,7 @@ class SmcRun {
       std::int64_t size = BatchSize(wave, next_index, prior_rate);
       if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
       if (size <= 0) {
-        stop = Stop({Termination::kBudgetExhausted,
-                     "simulation budget of " + std::to_string(options_.max_simulations) +
-                         " reached in wave " + std::to_string(wave.wave + 1)});
+        stop = Stop({Termination::kBudgetExhausted, BudgetMessage(options_, wave.wave)});
         break;
       }
       batch.Evaluate(*executor_, options_.seed, wave.wave, next_index, size, proposal);
@@ -481,6 +500,34 @@ RunHistory RunCombinatorialSmc(const SmcProblem& problem,
   if (!options.IsValid(&why)) throw Error(ErrorKind::kConfig, why);
   SmcRun run(problem, options, observer);
   return run.Run(resume);
+}
+
+std::optional<std::pair<Termination, std::string>> ImmediateStop(const SmcOptions& options,
+                                                                 const ResumePoint& resume) {
+  std::int64_t total = 0;
+  std::int64_t failures = 0;
+  std::string last_failure;
+  for (const auto& w : resume.completed) {
+    total += w.candidates;
+    failures += static_cast<std::int64_t>(w.failures.size());
+    if (!w.failures.empty()) last_failure = Describe(w.wave, w.failures.back());
+  }
+  const int wave =
+      resume.has_partial ? resume.partial_wave : static_cast<int>(resume.completed.size());
+  const std::int64_t candidates = resume.has_partial ? resume.partial_next_index : 0;
+  total += candidates;
+  if (resume.has_partial) {
+    failures += static_cast<std::int64_t>(resume.partial_failures.size());
+    if (!resume.partial_failures.empty()) {
+      last_failure = Describe(wave, resume.partial_failures.back());
+    }
+  }
+  if (options.max_simulations > 0 && total >= options.max_simulations) {
+    return Stop({Termination::kBudgetExhausted, BudgetMessage(options, wave)});
+  }
+  const auto accepted =
+      resume.has_partial ? static_cast<std::int64_t>(resume.partial_accepted.size()) : 0;
+  return FailureOrFloorStop(options, total, failures, last_failure, wave, candidates, accepted);
 }
 
 RunHistory RunRejection(const SmcProblem& problem,

@@ -1,6 +1,7 @@
 #include "combabc/services/calibration.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -229,6 +230,56 @@ RunOutcome Execute(Problem& problem,
   return outcome;
 }
 
+// The terminations a raised limit can continue from (docs/history.md, "Resume").
+bool StoppedOnLimit(const RunMetadata& m) {
+  const auto t = ParseEnum<Termination>(m.termination);
+  return t && (*t == Termination::kBudgetExhausted || *t == Termination::kWallTimeExceeded ||
+               *t == Termination::kAcceptanceRateTooLow || *t == Termination::kTooManyFailures);
+}
+
+// Shortest round-trip text, as the config would say it (0.6, not 0.59999999999999998).
+std::string LimitText(double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  return std::string(text, end);
+}
+
+// Sets `smc`'s stop limits from those an earlier resume recorded, then from `given`; returns
+// every limit set this way as (key, value) text, to record in the history.
+std::vector<std::pair<std::string, std::string>> ApplyStopLimits(
+    const std::vector<std::pair<std::string, std::string>>& recorded,
+    const StopLimits& given,
+    SmcOptions& smc) {
+  std::vector<std::pair<std::string, std::string>> limits;
+  auto set = [&](const std::string& key, const std::string& value) {
+    // The history's text, or ours: written by BeginResume from LimitText or std::to_string.
+    if (key == "max_simulations") {
+      smc.max_simulations = std::strtoll(value.c_str(), nullptr, 10);
+    } else if (key == "max_wall_time") {
+      smc.max_wall_time_s = std::strtod(value.c_str(), nullptr);
+    } else if (key == "min_acceptance_rate") {
+      smc.min_acceptance_rate = std::strtod(value.c_str(), nullptr);
+    } else if (key == "max_failure_fraction") {
+      smc.max_failure_fraction = std::strtod(value.c_str(), nullptr);
+    } else {
+      return;  // a key a later combabc may record; this one does not know it
+    }
+    std::erase_if(limits, [&](const auto& kv) { return kv.first == key; });
+    limits.emplace_back(key, value);
+  };
+  for (const auto& [key, value] : recorded) set(key, value);
+  if (given.max_simulations) set("max_simulations", std::to_string(*given.max_simulations));
+  if (given.max_wall_time_s) set("max_wall_time", LimitText(*given.max_wall_time_s));
+  if (given.min_acceptance_rate) set("min_acceptance_rate", LimitText(*given.min_acceptance_rate));
+  if (given.max_failure_fraction) {
+    set("max_failure_fraction", LimitText(*given.max_failure_fraction));
+  }
+  std::string why;
+  if (!smc.IsValid(&why)) throw Error(ErrorKind::kUsage, "resume: " + why);
+  std::sort(limits.begin(), limits.end());
+  return limits;
+}
+
 }  // namespace
 
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
@@ -253,15 +304,26 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   return Execute(p, store ? &*store : nullptr, history_path, nullptr, request.report, progress);
 }
 
-RunOutcome ResumeCalibration(const std::string& history_path,
-                             int threads,
-                             bool report,
-                             SmcObserver* progress,
-                             const ExecutorFactory& executor) {
+std::string LimitOption(Termination stop) {
+  switch (stop) {
+    case Termination::kBudgetExhausted:
+      return "--max-simulations";
+    case Termination::kAcceptanceRateTooLow:
+      return "--min-acceptance-rate";
+    case Termination::kTooManyFailures:
+      return "--max-failure-fraction";
+    default:
+      return "--max-wall-time";
+  }
+}
+
+RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress) {
+  const std::string& history_path = request.history_path;
   // Read-only first: with a distributed executor every worker reads the run, and only the
   // primary, once known, locks and rewrites it.
   const auto metadata = HistoryStore::Open(history_path, true).LoadMetadata();
-  if (metadata.status == RunStatus::kFinished) {
+  const bool stopped = metadata.status == RunStatus::kFinished && StoppedOnLimit(metadata);
+  if (metadata.status == RunStatus::kFinished && !stopped) {
     throw Error(ErrorKind::kUsage,
                 "the run has already finished (" + metadata.termination +
                     "); nothing to resume. Use 'combabc report' or 'combabc export'",
@@ -269,13 +331,14 @@ RunOutcome ResumeCalibration(const std::string& history_path,
   }
   Problem p;
   p.config = ParseConfig(metadata.config_text, metadata.config_path);
-  if (threads >= 0) p.config.smc.threads = threads;
+  if (request.threads >= 0) p.config.smc.threads = request.threads;
   // The measured data as the run first used them, not as the CSV reads today.
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
   BuildModel(p, history_path);
   // The rebuilt problem must be the one the run started with, or the continuation would not
-  // equal an uninterrupted run. Checked before BeginResume rewrites anything.
+  // equal an uninterrupted run. Checked before BeginResume rewrites anything, and over the config
+  // as written: the stop limits below are not part of the run's identity.
   CheckResumeFingerprint(metadata.fingerprint,
                          FingerprintOf(p),
                          history_path,
@@ -283,13 +346,27 @@ RunOutcome ResumeCalibration(const std::string& history_path,
                          metadata.combabc_version,
                          COMBABC_VERSION,
                          p.simulator.handshake);
+  const auto limits = ApplyStopLimits(metadata.stop_limits, request.limits, p.config.smc);
+  if (stopped) {
+    // Resuming would only record the same stop again: say which limit to raise instead.
+    const ResumePoint point = HistoryStore::Open(history_path, true).LoadResumePoint();
+    if (const auto stop = ImmediateStop(p.config.smc, point)) {
+      throw Error(ErrorKind::kUsage,
+                  "resume: the run stopped (" + std::string(ToString(stop->first)) + ": " +
+                      stop->second + ") and would stop again at once; raise the limit with " +
+                      LimitOption(stop->first),
+                  history_path);
+    }
+  }
+  const auto& executor = request.executor;
+  const bool report = request.report;
   MakeExecutor(p, executor);
   std::optional<HistoryStore> store;
   ResumePoint resume;
   OnPrimary(*p.executor, [&] {
     if (report) CheckReportPossible(ReportDirectory(history_path));
     store.emplace(HistoryStore::Open(history_path));
-    resume = store->BeginResume();
+    resume = store->BeginResume(limits);
   });
   // The other workers read the resume point as the primary's BeginResume left it, before the
   // primary writes anything more (the second join).

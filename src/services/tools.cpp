@@ -197,6 +197,14 @@ VerifyOutcome VerifyHistory(const std::string& history_path) {
                                ? ", checksums verified)"
                                : "; no checksums (schema v" + std::to_string(check.schema_version) +
                                      "): structure checked only)"));
+  // The limits the run ran under, where a resume changed the config's (docs/history.md).
+  const RunMetadata metadata = HistoryStore::Open(history_path, true).LoadMetadata();
+  std::string limits;
+  for (const auto& [key, value] : metadata.stop_limits) {
+    if (!limits.empty()) limits += ", ";
+    limits.append(key).append(" = ").append(value);
+  }
+  if (!limits.empty()) outcome.lines.back() += "; stop limits set on resume: " + limits;
   return outcome;
 }
 

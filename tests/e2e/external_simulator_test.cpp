@@ -172,6 +172,53 @@ TEST_F(ExternalSimulatorCli, FailedSimulationsAreRecordedAndTheRunGoesOn) {
   EXPECT_FALSE(fs::exists(dir_ / "out/history.work"));
 }
 
+// A run stopped by the failure ceiling (the worker fails for every configuration starting 11, about
+// a quarter of them) continues with `resume --max-failure-fraction` to the history of a run that
+// had the raised ceiling from the start; without it, resume refuses (exit 64, one line).
+TEST_F(ExternalSimulatorCli, ARunStoppedForFailuresResumesWithARaisedCeiling) {
+  const std::string config = Config("worker.toml", 10);
+  std::string worker = ReadFile(dir_ / "worker.py");
+  const std::string at = "    try:\n";
+  worker.replace(worker.find(at),
+                 at.size(),
+                 "    try:\n        if bits.startswith('11'):\n"
+                 "            raise ValueError('no convergence')\n");
+  std::ofstream(dir_ / "worker.py") << worker;
+  const std::string text = ReadFile(config);
+  auto with_ceiling = [&](const std::string& name, const std::string& fraction) {
+    std::string changed = text;
+    changed.replace(
+        changed.find("seed = 11"),
+        9,
+        "seed = 11\nmax_failure_fraction = " + fraction + "\nfailure_fraction_after = 20");
+    std::ofstream(dir_ / name) << changed;
+    return dir_ / name;
+  };
+  const auto whole = RunCli(
+      {"run", with_ceiling("whole.toml", "0.6"), "-o", dir_ / "whole", "--no-report"}, dir_.path());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const std::string stopped = dir_ / "stopped/history.sqlite";
+  const auto r =
+      RunCli({"run", with_ceiling("stopped.toml", "0.1"), "-o", dir_ / "stopped", "--no-report"},
+             dir_.path());
+  ASSERT_EQ(r.exit_code, 69) << r.err;
+  EXPECT_NE(r.err.find("--max-failure-fraction"), std::string::npos) << r.err;
+  const auto refused = RunCli({"resume", stopped, "--no-report"}, dir_.path());
+  EXPECT_EQ(refused.exit_code, 64) << refused.err;
+  EXPECT_NE(refused.err.find("resume: the run stopped (too_many_failures: "), std::string::npos)
+      << refused.err;
+  const auto resumed =
+      RunCli({"resume", stopped, "--no-report", "--max-failure-fraction", "0.6"}, dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(HistoryStore::Open(dir_ / "whole/history.sqlite", true).LoadHistory(),
+                          HistoryStore::Open(stopped, true).LoadHistory(),
+                          &where))
+      << where;
+  EXPECT_EQ(HistoryStore::Open(stopped, true).LoadMetadata().stop_limits,
+            (std::vector<std::pair<std::string, std::string>>{{"max_failure_fraction", "0.6"}}));
+}
+
 // A worker run killed mid-wave (SIGKILL: its workers see their stdin close and exit) resumes to the
 // uninterrupted run's history. The worker sleeps 3 ms per request so that the run can be caught
 // mid-wave.

@@ -515,6 +515,31 @@ TEST_F(HistoryStoreTest, OpenForeignOrNewerDatabaseIsDataError) {
   EXPECT_NE(std::string(error.what()).find("newer"), std::string::npos) << error.what();
 }
 
+// The stop limits a resume sets are kept (a later resume replaces a key, keeps the others) and
+// checksummed: a hand-edited limit is a corrupt history, not a silently different run.
+TEST_F(HistoryStoreTest, StopLimitsSetOnResumeAreKeptAndChecksummed) {
+  const std::string path = Path("RUN.db");
+  HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
+  EXPECT_TRUE(HistoryStore::Open(path, true).LoadMetadata().stop_limits.empty());
+  HistoryStore::Open(path).BeginResume({{"max_failure_fraction", "0.5"}, {"max_simulations", "9"}});
+  HistoryStore::Open(path).BeginResume({{"max_simulations", "20"}});
+  using Limits = std::vector<std::pair<std::string, std::string>>;
+  EXPECT_EQ(HistoryStore::Open(path, true).LoadMetadata().stop_limits,
+            (Limits{{"max_failure_fraction", "0.5"}, {"max_simulations", "20"}}));
+  EXPECT_TRUE(HistoryStore::Verify(path).problems.empty());
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_exec(db,
+               "UPDATE meta SET value = '2000' WHERE key = 'stop_limit_max_simulations'",
+               nullptr,
+               nullptr,
+               nullptr);
+  sqlite3_close(db);
+  const Error error = Catch([&] { HistoryStore::Open(path, true); });
+  EXPECT_EQ(error.kind(), ErrorKind::kData);
+  EXPECT_NE(std::string(error.what()).find("run_state_hash"), std::string::npos) << error.what();
+}
+
 TEST_F(HistoryStoreTest, ReadOnlyStoreRefusesWrites) {
   const std::string path = Path("RUN.db");
   HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));

@@ -85,6 +85,10 @@ struct RunMetadata {
   // stored as meta rows fingerprint_<part>. Opaque to the history: the services layer computes
   // the parts and resume compares them (docs/history.md, "Fingerprint"). Empty before v3.
   std::vector<std::pair<std::string, std::string>> fingerprint;
+  // The stop limits a resume set over the config's (`combabc resume --max-simulations` ...), as
+  // (key, value) pairs by key, e.g. ("max_simulations", "20000"); stored as meta rows
+  // stop_limit_<key>, covered by run_state_hash. Empty when no resume changed a limit.
+  std::vector<std::pair<std::string, std::string>> stop_limits;
 
   int schema_version = kHistorySchemaVersion;  // as read from the file
 };
@@ -143,8 +147,9 @@ class HistoryStore final : public SmcObserver {
 
   // Before resuming: drops whatever lies beyond the resume point (waves after the partial one,
   // the partial wave's end-of-wave statistics), marks the run running again, counts the resume,
-  // and returns the resume point.
-  ResumePoint BeginResume();
+  // records `stop_limits` (RunMetadata::stop_limits; a key already there is replaced), and
+  // returns the resume point.
+  ResumePoint BeginResume(const std::vector<std::pair<std::string, std::string>>& stop_limits = {});
   // Records the summary and end time; status becomes finished, or interrupted for
   // Termination::kInterrupted. Leaves a single self-contained file (no -wal beside it).
   void Finish(const RunSummary& summary);

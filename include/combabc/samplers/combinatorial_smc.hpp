@@ -1,5 +1,8 @@
 #pragma once
 // Combinatorial ABC-SMC (paper section 3) and ABC rejection (paper Algorithm 1).
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "combabc/core/executor.hpp"
@@ -49,6 +52,12 @@ RunHistory RunCombinatorialSmc(const SmcProblem& problem,
                                const SmcOptions& options,
                                SmcObserver* observer = nullptr,
                                const ResumePoint* resume = nullptr);
+
+// The stop (budget, failure ceiling or acceptance floor) that a run continued from `resume` under
+// `options` would make before simulating anything more, if any: what a resume of a stopped run
+// checks before it rewrites the history (services::ResumeCalibration).
+std::optional<std::pair<Termination, std::string>> ImmediateStop(const SmcOptions& options,
+                                                                 const ResumePoint& resume);
 
 // ABC rejection (Algorithm 1): propose from the prior until n accepted with the given thresholds
 // (one per threshold component). One wave of the same machinery.

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -41,13 +42,32 @@ struct RunOutcome {
 // `progress` sees every wave start, batch and wave end (the CLI's progress bar) and may interrupt.
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress = nullptr);
 
-// Continues an interrupted or killed run from its history file; the result equals an
-// uninterrupted run's. A finished run is reported as such (kUsage).
-RunOutcome ResumeCalibration(const std::string& history_path,
-                             int threads = -1,
-                             bool report = true,
-                             SmcObserver* progress = nullptr,
-                             const ExecutorFactory& executor = {});
+// Stop limits a resume sets over the run's config (docs/history.md, "Resume"); unset = as the run
+// had them. Not part of the run's fingerprint: they decide where a run stops, not what it samples.
+struct StopLimits {
+  std::optional<std::int64_t> max_simulations;  // [smc] max_simulations
+  std::optional<double> max_wall_time_s;        // [smc] max_wall_time
+  std::optional<double> min_acceptance_rate;    // [smc] min_acceptance_rate
+  std::optional<double> max_failure_fraction;   // [smc] max_failure_fraction
+};
+
+struct ResumeRequest {
+  std::string history_path;
+  int threads = -1;          // overrides the run's threads when >= 0
+  bool report = true;        // write the report (report/ beside the history) when it ends
+  StopLimits limits;         // recorded in the history; later resumes keep them
+  ExecutorFactory executor;  // empty: threads on this machine
+};
+
+// Continues an interrupted or killed run, or one that stopped on a limit (budget, wall time,
+// acceptance floor, failure ceiling), from its history file; the result equals an uninterrupted
+// run's under the same limits. Refused (kUsage): a run that ended on its own (target, waves,
+// enumeration), and a stopped run whose limits would stop it again before any simulation.
+RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress = nullptr);
+
+// The `combabc resume` option that raises the limit a run stopped on (e.g. "--max-simulations"
+// for Termination::kBudgetExhausted).
+std::string LimitOption(Termination stop);
 
 struct EnumerateRequest {
   std::string config_path;

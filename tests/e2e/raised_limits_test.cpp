@@ -1,0 +1,183 @@
+// A run stopped on a limit continues with `combabc resume --max-simulations ...` (or another raised
+// stop limit) from where it stopped, to the history an uninterrupted run under the raised limit
+// writes; without a raised limit it is refused, and a run that ended on its own still is. Tiny
+// sensor runs (3 + 3 clamps, a 2 x 2 mesh per section), so that this stays a unit test. The
+// failure ceiling is tested with a failing worker in external_simulator_test.cpp.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "cli_runner.hpp"
+#include "combabc/history/history_store.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kConfig = R"([model.clamps]
+per_edge = 3
+
+[model.mesh]
+elements_per_section = 2
+elements_across_width = 2
+
+[data]
+csv = "data.csv"
+position_column = "position_m"
+displacement_column = "displacement_m"
+position_unit = "m"
+displacement_unit = "m"
+
+[metric]
+[[metric.component]]
+type = "least_squares"
+window = [0.31, 0.58]
+
+[sampler]
+seed = 5
+waves = 3
+accepted_per_wave = 30
+threads = 2
+LIMITS
+[output]
+directory = "out"
+)";
+
+class RaisedLimits : public ::testing::Test {
+ protected:
+  RaisedLimits() : dir_("e2e-raised-limits") {
+    std::ofstream out(dir_ / "data.csv");
+    out << "position_m,displacement_m\n";
+    for (int i = 31; i < 60; i += 3) {
+      out << i / 100.0 << "," << 1.0 - std::abs(i / 100.0 - 0.45) << "\n";
+    }
+  }
+
+  // Runs the config with `limits` ([sampler] lines) into `name`/; returns its history.
+  std::string Run(const std::string& name, const std::string& limits, int expect_exit = 0) {
+    std::string config = kConfig;
+    config.replace(config.find("LIMITS"), 6, limits);
+    std::ofstream(dir_ / (name + ".toml")) << config;
+    const auto r =
+        RunCli({"run", dir_ / (name + ".toml"), "-o", dir_ / name, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, expect_exit) << r.err;
+    return (dir_.path() / name / "history.sqlite").string();
+  }
+
+  RunMetadata Metadata(const std::string& history) const {
+    return HistoryStore::Open(history, true).LoadMetadata();
+  }
+
+  // The exported particles, marginals and curves of `history` (into `history`'s export/).
+  std::string Exported(const std::string& history) const {
+    const auto r = RunCli({"export", history}, dir_.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const fs::path dir = fs::path(history).parent_path() / "export";
+    return ReadFile(dir / "particles.csv") + ReadFile(dir / "marginals.csv") +
+           ReadFile(dir / "curves.csv");
+  }
+
+  void ExpectSameRun(const std::string& whole, const std::string& resumed) const {
+    std::string where;
+    EXPECT_TRUE(SameHistory(HistoryStore::Open(whole, true).LoadHistory(),
+                            HistoryStore::Open(resumed, true).LoadHistory(),
+                            &where))
+        << where;
+    EXPECT_EQ(Exported(whole), Exported(resumed));
+  }
+
+  ScratchDir dir_;
+};
+
+// The budget stops the run candidate-exactly; a resume with a larger budget continues from that
+// candidate and ends where an uninterrupted run with the larger budget ends, particle for
+// particle; the raised limit is recorded (verify: OK) and kept by a later resume.
+TEST_F(RaisedLimits, ABudgetStopResumesWithALargerBudgetToTheUninterruptedRun) {
+  const std::string whole = Run("whole", "max_simulations = 100000\n");
+  const RunMetadata finished = Metadata(whole);
+  ASSERT_EQ(finished.termination, "max_waves") << finished.summary_message;
+  const auto total = HistoryStore::Open(whole, true).LoadHistory().summary.simulations;
+  ASSERT_GT(total, 60) << "the budget below must fall inside a wave after the first";
+
+  const std::string stopped = Run("stopped", "max_simulations = " + std::to_string(total - 7));
+  ASSERT_EQ(Metadata(stopped).termination, "budget_exhausted");
+
+  // Without a raised limit: refused, one line, nothing rewritten.
+  const auto again = RunCli({"resume", stopped, "--no-report"}, dir_.path());
+  EXPECT_EQ(again.exit_code, 64) << again.err;
+  EXPECT_NE(again.err.find("resume: the run stopped (budget_exhausted: simulation budget of " +
+                           std::to_string(total - 7) +
+                           " reached in wave 3) and would stop again at once; raise the "
+                           "limit with --max-simulations"),
+            std::string::npos)
+      << again.err;
+  EXPECT_EQ(again.err.find('\n'), again.err.size() - 1) << "one line: " << again.err;
+  EXPECT_EQ(Metadata(stopped).resume_count, 0);
+  // Given again, but not raised: refused too.
+  const auto same =
+      RunCli({"resume", stopped, "--no-report", "--max-simulations", std::to_string(total - 7)},
+             dir_.path());
+  EXPECT_EQ(same.exit_code, 64) << same.err;
+
+  const auto resumed =
+      RunCli({"resume", stopped, "--no-report", "--max-simulations", "100000"}, dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const RunMetadata after = Metadata(stopped);
+  EXPECT_EQ(after.termination, "max_waves");
+  EXPECT_EQ(after.resume_count, 1);
+  EXPECT_EQ(after.stop_limits,
+            (std::vector<std::pair<std::string, std::string>>{{"max_simulations", "100000"}}));
+  ExpectSameRun(whole, stopped);
+  const auto verify = RunCli({"verify", stopped}, dir_.path());
+  EXPECT_EQ(verify.exit_code, 0) << verify.err;
+  EXPECT_NE(verify.out.find("stop limits set on resume: max_simulations = 100000"),
+            std::string::npos)
+      << verify.out;
+}
+
+// The acceptance floor: a wave that accepts too rarely ends the run; a lower floor continues it.
+TEST_F(RaisedLimits, AnAcceptanceFloorStopResumesWithALowerFloor) {
+  const std::string whole = Run("whole", "");
+  const std::string stopped =
+      Run("stopped", "min_acceptance_rate = 0.9\nacceptance_floor_after = 20\n");
+  ASSERT_EQ(Metadata(stopped).termination, "acceptance_rate_too_low");
+  const auto refused = RunCli({"resume", stopped, "--no-report"}, dir_.path());
+  EXPECT_EQ(refused.exit_code, 64) << refused.err;
+  EXPECT_NE(refused.err.find("--min-acceptance-rate"), std::string::npos) << refused.err;
+  // The config's default floor (1e-4) is what the whole run had.
+  const auto resumed =
+      RunCli({"resume", stopped, "--no-report", "--min-acceptance-rate", "1e-4"}, dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  // acceptance_floor_after = 20 stays: at 1e-4 it cannot fire in runs this small.
+  ExpectSameRun(whole, stopped);
+}
+
+// A wall-time stop resumes as it is (each resume has its own clock), or with another limit.
+TEST_F(RaisedLimits, AWallTimeStopResumesAndARunThatEndedOnItsOwnIsRefused) {
+  const std::string whole = Run("whole", "");
+  const auto refused =
+      RunCli({"resume", whole, "--no-report", "--max-simulations", "9"}, dir_.path());
+  EXPECT_EQ(refused.exit_code, 64) << refused.err;
+  EXPECT_NE(refused.err.find("the run has already finished (max_waves)"), std::string::npos)
+      << refused.err;
+  // A bad limit is a usage error before anything is read.
+  const auto bad = RunCli({"resume", whole, "--max-failure-fraction", "2"}, dir_.path());
+  EXPECT_EQ(bad.exit_code, 64) << bad.err;
+
+  // Small batches, so that the clock (checked between batches) stops a wave before its end.
+  const std::string stopped = Run("stopped", "max_wall_time = 1e-9\nbatch_size = 8\n");
+  ASSERT_EQ(Metadata(stopped).termination, "wall_time_exceeded");
+  const auto resumed = RunCli({"resume", stopped, "--no-report"}, dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  // Its own clock stopped it again after one batch: still wall_time_exceeded, a batch further.
+  EXPECT_EQ(Metadata(stopped).termination, "wall_time_exceeded");
+  const auto unlimited =
+      RunCli({"resume", stopped, "--no-report", "--max-wall-time", "0"}, dir_.path());
+  ASSERT_EQ(unlimited.exit_code, 0) << unlimited.err;
+  ExpectSameRun(whole, stopped);
+}
+
+}  // namespace
+}  // namespace combabc::testing
