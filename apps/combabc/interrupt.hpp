@@ -7,8 +7,11 @@
 // default action and ends the process at once, and so does a second signal during a wave, so the
 // program is killable at every stage.
 #include <signal.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <string>
 
 #include "combabc/samplers/observer.hpp"
 
@@ -17,8 +20,17 @@ namespace combabc::cli {
 namespace interrupt_internal {
 inline std::atomic<bool> armed{false};
 inline std::atomic<bool> requested{false};
+// The line SIGTERM prints first (SetTermNote); empty: none. Written with write(2), the only
+// output a signal handler may make.
+inline char term_note[2048];
+inline std::atomic<std::size_t> term_note_size{0};
+inline std::atomic<bool> term_noted{false};
 
 extern "C" inline void OnSignal(int signal_number) {
+  const std::size_t note = term_note_size.load();
+  if (signal_number == SIGTERM && note > 0 && !term_noted.exchange(true)) {
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, term_note, note);
+  }
   if (!armed.load() || requested.exchange(true)) {
     // Nothing resumable in flight, or the user insists: die by the signal (default action).
     ::signal(signal_number, SIG_DFL);
@@ -28,6 +40,19 @@ extern "C" inline void OnSignal(int signal_number) {
 }  // namespace interrupt_internal
 
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs lock-free flags");
+static_assert(std::atomic<std::size_t>::is_always_lock_free,
+              "the signal handler needs a lock-free size");
+
+// Under mpirun, the line rank 0 prints on SIGTERM before the signal takes its usual course.
+// mpirun ends a job whose rank died (or that was itself signalled) by SIGCONT, SIGTERM and, one
+// second later (odls_base_sigkill_timeout), SIGKILL to every surviving rank; rank 0 is then
+// usually blocked in a collective with the dead rank and would die without a word (docs/mpi.md).
+inline void SetTermNote(const std::string& line) {
+  interrupt_internal::term_note_size = 0;  // not read while it changes
+  const std::size_t size = std::min(line.size(), sizeof interrupt_internal::term_note);
+  std::copy_n(line.data(), size, interrupt_internal::term_note);
+  interrupt_internal::term_note_size = size;
+}
 
 // Wraps the display (or nothing, with -q): arms the graceful handler while a wave runs and asks
 // the engine to stop once a signal came.

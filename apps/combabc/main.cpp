@@ -217,6 +217,22 @@ int main(int argc, char** argv) try {
   }
   request.executor = executor;
   enumerate_request.executor = executor;
+  // Under mpirun, rank 0's word if mpirun ends the job (a rank died): where the committed work is.
+  const bool under_mpirun = static_cast<bool>(executor);
+  auto note_history = [&](const std::string& path) {
+    if (!primary || !under_mpirun) return;
+    combabc::cli::SetTermNote(
+        "combabc: SIGTERM from mpirun (a rank died, or the job was stopped): the batches "
+        "committed so far are kept in " +
+        path + "; continue with: combabc resume " + path + "\n");
+  };
+  request.on_history_path = note_history;
+  if (*resume) note_history(history);
+  if (*enumerate && primary && under_mpirun) {
+    combabc::cli::SetTermNote(
+        "combabc: SIGTERM from mpirun (a rank died, or the job was stopped): the enumeration "
+        "ends; nothing is written (an enumeration cannot be resumed)\n");
+  }
   resume_request.history_path = history;
   resume_request.report = !no_report;
   resume_request.executor = executor;

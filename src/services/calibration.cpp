@@ -291,6 +291,7 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
                               ? ResolvePath(p.config.directory, p.config.output.directory)
                               : request.output_directory;
   const std::string history_path = (fs::path(directory) / p.config.output.database).string();
+  if (request.on_history_path) request.on_history_path(history_path);
   std::string created;
   OnPrimary(*p.executor, [&] {
     if (request.report) CheckReportPossible(ReportDirectory(history_path));

@@ -1,6 +1,7 @@
 // The executor conformance test (issue 10): the same run through 1 and 2 threads and
 // `mpirun -np 1/2/3` gives the same history; a rank killed mid-run ends the run with a non-zero
-// exit and mpirun's message naming the rank, keeps the finished waves, and `combabc resume`
+// exit, mpirun's message naming the rank and rank 0's naming the history to resume, keeps the
+// finished waves (verify: OK), and `combabc resume`
 // (without MPI, or under mpirun) completes it to the uninterrupted history. Tiny sensor model
 // (3 + 3 clamps, a 2 x 2 mesh per section), so that it stays a few seconds.
 #include <fcntl.h>
@@ -210,6 +211,15 @@ TEST_F(MpiRun, ARankKilledMidRunEndsTheRunAndResumeCompletesIt) {
   const CliResult r = WaitCli(mpirun, dir_.path());
   EXPECT_NE(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("rank 1"), std::string::npos) << r.err;  // mpirun names the rank
+  // Rank 0 says where the work is, on mpirun's SIGTERM, before mpirun's SIGKILL.
+  EXPECT_NE(r.err.find("combabc: SIGTERM from mpirun (a rank died, or the job was stopped): the "
+                       "batches committed so far are kept in " +
+                       history + "; continue with: combabc resume " + history + "\n"),
+            std::string::npos)
+      << r.err;
+  const CliResult verify = Launch(0, {"verify", history}, dir_.path());
+  EXPECT_EQ(verify.exit_code, 0) << verify.err;
+  EXPECT_NE(verify.out.find(": OK ("), std::string::npos) << verify.out;
 
   // The finished waves are kept; the run is not marked finished.
   const RunHistory kept = Load(history);

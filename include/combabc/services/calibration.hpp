@@ -31,6 +31,9 @@ struct RunRequest {
   bool overwrite = false;        // replace an existing history file
   bool report = true;            // write the report (report/ beside the history) when it ends
   ExecutorFactory executor;      // empty: threads on this machine
+  // Called with the history's path once it is known, before the history is created (the CLI
+  // prepares the line it prints if mpirun ends the job; docs/mpi.md). May be empty.
+  std::function<void(const std::string&)> on_history_path;
 };
 
 struct RunOutcome {
