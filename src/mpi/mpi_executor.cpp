@@ -179,6 +179,11 @@ bool MpiExecutor::FromPrimary(bool value) {
   return flag != 0;
 }
 
+double MpiExecutor::FromPrimary(double value) {
+  Check(MPI_Bcast(&value, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  return value;
+}
+
 int ExitCodeOfPrimary(int code) {
   int shared = code;
   if (MPI_Bcast(&shared, 1, MPI_INT, 0, MPI_COMM_WORLD) != MPI_SUCCESS) return code;

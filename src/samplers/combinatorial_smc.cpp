@@ -19,6 +19,11 @@ using Clock = std::chrono::steady_clock;
 
 // A quantile temperature schedule falls at least by this factor per wave (docs/algorithm.md).
 constexpr double kMaxTemperatureRatio = 0.5;
+// Bounds on one worker's share of an automatic batch, in seconds of simulation (BatchSize).
+constexpr double kMinBatchSeconds = 0.05;
+constexpr double kMaxBatchSeconds = 5.0;
+// Acceptances after which a wave's batches are sized from its own acceptance rate.
+constexpr std::size_t kOwnRateAfter = 10;
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -327,19 +332,48 @@ class SmcRun {
     return true;
   }
 
+  // The automatic batch size (docs/algorithm.md, "Batch size"): the candidates the wave is
+  // expected to still need, within bounds set by the measured cost of a simulation. Only how many
+  // candidates past the wave's last acceptance get simulated (and discarded) depends on it, never
+  // the history: candidates are accepted in index order.
   std::int64_t BatchSize(const WaveRecord& wave, std::int64_t next_index, double prior_rate) const {
     if (options_.batch_size > 0) return options_.batch_size;
+    const std::int64_t workers = executor_->concurrency();
+    // Cost unknown (the run's first batch, or a resume's): one candidate per worker measures it.
+    if (!(cost_s_ > 0.0)) return workers;
     const auto needed =
         options_.accepted_per_wave - static_cast<std::int64_t>(wave.particles.size());
-    double rate = next_index > 0
-                      ? static_cast<double>(wave.particles.size()) / static_cast<double>(next_index)
-                      : prior_rate;
-    rate = std::max(rate, 1e-4);
+    // The wave's own rate once it has a few acceptances; before, the previous wave's, which may
+    // be far off (thresholds and proposal changed): then only half the candidates it predicts,
+    // and the wave's own rate sizes the rest.
+    const bool own_rate = wave.particles.size() >= kOwnRateAfter;
+    const double rate = std::max(
+        own_rate ? static_cast<double>(wave.particles.size()) / static_cast<double>(next_index)
+                 : prior_rate,
+        1e-4);
     const auto expected = static_cast<std::int64_t>(std::ceil(static_cast<double>(needed) / rate));
-    // Big enough to keep every thread busy and amortise a checkpoint, small enough that a
-    // killed run loses little and the overshoot past the last acceptance stays small.
-    const std::int64_t lo = 32LL * executor_->concurrency();
-    return std::clamp<std::int64_t>(expected + expected / 16, lo, std::max<std::int64_t>(lo, 4096));
+    const std::int64_t wanted = own_rate ? expected + expected / 16 : (expected + 1) / 2;
+    // At least kMinBatchSeconds of work per worker, so that the fixed cost of a batch (the
+    // checkpoint, about 2 ms, and the executor's synchronisation) stays small: 32 candidates per
+    // worker for simulations under 1.6 ms, one for those over 50 ms. At most kMaxBatchSeconds, so
+    // that a slow simulator's run is checkpointed, shows progress and stops on Ctrl-C often.
+    const auto per_worker = [&](double seconds) {
+      return static_cast<std::int64_t>(std::clamp(std::ceil(seconds / cost_s_), 1.0, 4096.0));
+    };
+    const std::int64_t lo = workers * std::min<std::int64_t>(32, per_worker(kMinBatchSeconds));
+    const std::int64_t hi =
+        std::max(lo, std::min<std::int64_t>(4096, workers * per_worker(kMaxBatchSeconds)));
+    return std::clamp<std::int64_t>(wanted, lo, hi);
+  }
+
+  // Records the batch just evaluated: `size` candidates in `seconds`. The primary's measure is
+  // every worker's, so that all size the next batch alike.
+  void MeasureCost(std::int64_t size, double seconds) {
+    if (options_.batch_size > 0) return;
+    const std::int64_t workers = executor_->concurrency();
+    const double rounds = std::ceil(static_cast<double>(size) / static_cast<double>(workers));
+    // Never 0, which would mean "unknown" (a batch faster than the clock's resolution).
+    cost_s_ = executor_->FromPrimary(std::max(seconds / rounds, 1e-9));
   }
 
   // The stop, if any, that candidate `index` of `wave` triggers once it is counted (run-wide:
@@ -370,7 +404,9 @@ class SmcRun {
         stop = Stop({Termination::kBudgetExhausted, BudgetMessage(options_, wave.wave)});
         break;
       }
+      const auto batch_start = Clock::now();
       batch.Evaluate(*executor_, options_.seed, wave.wave, next_index, size, proposal);
+      MeasureCost(size, Seconds(batch_start));
       // Accept in index order, never completion order: the first n accepted candidates win.
       const std::size_t before = wave.particles.size();
       const std::size_t failures_before = wave.failures.size();
@@ -480,6 +516,7 @@ class SmcRun {
   std::int64_t failures_ = 0;  // failed simulations among total_
   std::string last_failure_;   // the latest of them, described for the stop message
   double last_rate_ = 1.0;
+  double cost_s_ = 0.0;  // seconds a worker spends per candidate, the last batch's; 0 = unknown
 };
 
 void CheckProblem(const SmcProblem& problem) {

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "toy_models.hpp"
@@ -57,6 +59,44 @@ TEST(Determinism, BatchSizeDoesNotChangeTheHistory) {
     o.batch_size = batch;
     std::string where;
     EXPECT_TRUE(SameHistory(reference, s.Run(o), &where)) << "batch " << batch << ": " << where;
+  }
+}
+
+// A simulator that takes at least `seconds` per call, like an external program.
+class SlowSimulator : public testing::NoisySimulator {
+ public:
+  SlowSimulator(int d, double sigma, double seconds)
+      : NoisySimulator(d, sigma), seconds_(seconds) {}
+  void Simulate(const ParameterView& theta,
+                RandomStream& rng,
+                std::span<double> out) const override {
+    std::this_thread::sleep_for(std::chrono::duration<double>(seconds_));
+    NoisySimulator::Simulate(theta, rng, out);
+  }
+
+ private:
+  double seconds_;
+};
+
+// The automatic batch size follows the measured cost of a simulation (docs/algorithm.md, "Batch
+// size"): timing changes how many candidates are simulated past a wave's last acceptance, never
+// the history. With 10 ms simulations on 2 threads a batch is at least 2 x ceil(50 ms / cost) <= 10
+// candidates (a loaded machine only makes the cost larger and the batches smaller), where it was
+// at least 32 x 2 = 64 before: the overshoot stays far below that.
+TEST(Determinism, AutomaticBatchesFollowTheSimulationCostAndLeaveTheHistoryAlone) {
+  ToyRun s;
+  const SlowSimulator slow(20, 0.25, 0.01);
+  auto o = s.options(Estimator::kImportance, 2);
+  o.num_waves = 3;
+  o.accepted_per_wave = 12;
+  const auto automatic = RunCombinatorialSmc({&s.space, &slow, &s.dist}, o);
+  o.batch_size = 1;
+  const auto one_by_one = s.Run(o);  // the fast simulator: the same draws, instantly
+  std::string where;
+  EXPECT_TRUE(SameHistory(one_by_one, automatic, &where)) << where;
+  EXPECT_EQ(one_by_one.summary.simulations_discarded, 0);
+  for (const WaveRecord& w : automatic.waves) {
+    EXPECT_LT(w.discarded, 32) << "wave " << w.wave << " of " << w.candidates << " candidates";
   }
 }
 
@@ -116,10 +156,12 @@ TEST(Determinism, ResumingFromAnyCheckpointReproducesTheUninterruptedRun) {
 }
 
 // The summary's overshoot count is part of the run's outcome: a resumed run must count the waves
-// before the resume too, and size its batches as the uninterrupted run did.
+// before the resume too (with a fixed batch_size its batches are the uninterrupted run's).
 TEST(Determinism, ResumedRunCountsTheSameDiscardedSimulations) {
   ToyRun s;
-  const auto o = s.options(Estimator::kPaper, 2);  // adaptive batch sizes (batch_size = 0)
+  // A fixed batch size: automatic ones follow the measured simulation cost, hence the clock.
+  auto o = s.options(Estimator::kPaper, 2);
+  o.batch_size = 96;
   Checkpoints checkpoints;
   const auto reference = s.Run(o, &checkpoints);
   ASSERT_GT(reference.summary.simulations_discarded, 0) << "the toy run must overshoot";

@@ -153,6 +153,8 @@ TEST(MpiExecutor, DecisionsAreThePrimarys) {
   EXPECT_EQ(executor.primary(), executor.rank() == 0);
   EXPECT_EQ(executor.FromPrimary(executor.rank() == 0), true);
   EXPECT_EQ(executor.FromPrimary(executor.rank() != 0), false);
+  // A number (the measured simulation cost that sizes the batches): the primary's, exactly.
+  EXPECT_EQ(executor.FromPrimary(0.125 + executor.rank()), 0.125);
   EXPECT_EQ(ExitCodeOfPrimary(executor.rank() == 0 ? 73 : 0), 73);
 }
 

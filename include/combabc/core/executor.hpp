@@ -52,6 +52,8 @@ class Executor {
   // The primary's value, on every worker: for decisions that are not a function of the inputs
   // (the wall clock, an interruption) and must nevertheless be the same everywhere.
   virtual bool FromPrimary(bool value) { return value; }
+  // The same for a number (the measured cost of a simulation, which sizes the batches).
+  virtual double FromPrimary(double value) { return value; }
 };
 
 // Shared memory: ranges run on a ThreadPool (threads = 0: all cores; 1: inline, no threads).

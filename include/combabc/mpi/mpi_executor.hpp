@@ -43,6 +43,7 @@ class MpiExecutor : public Executor {
   bool primary() const override { return rank_ == 0; }
   void Join(const std::exception_ptr& error) override;
   bool FromPrimary(bool value) override;
+  double FromPrimary(double value) override;
 
   int rank() const { return rank_; }
   int size() const { return size_; }
