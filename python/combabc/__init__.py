@@ -114,11 +114,16 @@ def export(path, directory=None, *, overwrite=False, netcdf=True):
     return outcome["directory"]
 
 
-def resume(path, *, threads=None, report=False):
+def resume(path, *, threads=None, report=False, max_simulations=None, max_wall_time=None,
+           min_acceptance_rate=None, max_failure_fraction=None):
     """Continues an interrupted or killed run from its history file, as `combabc resume` (the
-    result equals an uninterrupted run's); returns its History. A finished run is a combabc.Error
-    (usage)."""
-    return History(_core.resume(os.fspath(path), -1 if threads is None else threads, report))
+    result equals an uninterrupted run's); returns its History. A run that stopped on a limit
+    continues with that limit raised (the keywords are `combabc resume`'s --max-simulations,
+    --max-wall-time (seconds), --min-acceptance-rate and --max-failure-fraction). A finished run,
+    or a stopped one whose limits would stop it again at once, is a combabc.Error (usage)."""
+    return History(_core.resume(os.fspath(path), -1 if threads is None else threads, report,
+                                max_simulations, max_wall_time, min_acceptance_rate,
+                                max_failure_fraction))
 
 
 def enumerate(config, *, thresholds=None, threads=None, output_directory=None, overwrite=False,

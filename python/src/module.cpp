@@ -159,7 +159,13 @@ py::dict RunConfig(const std::string& config_path,
   return result;
 }
 
-py::dict Resume(const std::string& history_path, int threads, bool report) {
+py::dict Resume(const std::string& history_path,
+               int threads,
+               bool report,
+               std::optional<std::int64_t> max_simulations,
+               std::optional<double> max_wall_time,
+               std::optional<double> min_acceptance_rate,
+               std::optional<double> max_failure_fraction) {
   PythonSignals signals;
   services::RunOutcome outcome;
   {
@@ -168,6 +174,7 @@ py::dict Resume(const std::string& history_path, int threads, bool report) {
     request.history_path = history_path;
     request.threads = threads;
     request.report = report;
+    request.limits = {max_simulations, max_wall_time, min_acceptance_rate, max_failure_fraction};
     outcome = services::ResumeCalibration(request, &signals);
   }
   signals.RaiseIfInterrupted("combabc: interrupted; continue with combabc.resume(\"" +
@@ -475,7 +482,11 @@ PYBIND11_MODULE(_core, m) {
         &Resume,
         py::arg("history_path"),
         py::arg("threads") = -1,
-        py::arg("report") = false);
+        py::arg("report") = false,
+        py::arg("max_simulations") = py::none(),
+        py::arg("max_wall_time") = py::none(),
+        py::arg("min_acceptance_rate") = py::none(),
+        py::arg("max_failure_fraction") = py::none());
   m.def("enumerate",
         &Enumerate,
         py::arg("config_path"),

@@ -117,6 +117,25 @@ def test_resume_of_a_finished_run_is_a_usage_error(tmp_path):
     assert raised.value.kind == "usage error"
 
 
+def test_a_run_stopped_on_its_budget_resumes_with_a_raised_limit(tmp_path):
+    (tmp_path / "whole").mkdir()
+    (tmp_path / "stopped").mkdir()
+    whole = combabc.run(small_config(tmp_path / "whole", waves=3))
+    total = int(whole.summary["simulations"])
+    assert total > 60  # the budget below falls inside a wave after the first
+    config = small_config(tmp_path / "stopped", waves=3)
+    config.write_text(config.read_text().replace("[sampler]\n",
+                                                 f"[sampler]\nmax_simulations = {total - 5}\n"))
+    stopped = combabc.run(config)
+    assert stopped.termination == "budget_exhausted"
+    with pytest.raises(combabc.Error) as raised:  # the same limit would stop it again at once
+        combabc.resume(stopped.path)
+    assert raised.value.kind == "usage error" and "--max-simulations" in str(raised.value)
+    resumed = combabc.resume(stopped.path, max_simulations=total + 1000)
+    assert resumed.termination == whole.termination
+    pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)
+
+
 CHILD = """
 import sys
 import combabc
