@@ -160,12 +160,12 @@ py::dict RunConfig(const std::string& config_path,
 }
 
 py::dict Resume(const std::string& history_path,
-               int threads,
-               bool report,
-               std::optional<std::int64_t> max_simulations,
-               std::optional<double> max_wall_time,
-               std::optional<double> min_acceptance_rate,
-               std::optional<double> max_failure_fraction) {
+                int threads,
+                bool report,
+                std::optional<std::int64_t> max_simulations,
+                std::optional<double> max_wall_time,
+                std::optional<double> min_acceptance_rate,
+                std::optional<double> max_failure_fraction) {
   PythonSignals signals;
   services::RunOutcome outcome;
   {
