@@ -219,24 +219,19 @@ TEST_F(ExternalSimulatorCli, ARunStoppedForFailuresResumesWithARaisedCeiling) {
             (std::vector<std::pair<std::string, std::string>>{{"max_failure_fraction", "0.6"}}));
 }
 
-// A worker run killed mid-wave (SIGKILL: its workers see their stdin close and exit) resumes to the
-// uninterrupted run's history. The worker sleeps 3 ms per request so that the run can be caught
-// mid-wave.
-TEST_F(ExternalSimulatorCli, AWorkerRunKilledMidWaveResumesToTheUninterruptedHistory) {
-  std::string config = Config("worker.toml", 30);
-  std::string worker = ReadFile(dir_ / "worker.py");
-  const std::string loop = "for line in sys.stdin:";
-  worker.replace(
-      worker.find(loop), loop.size(), "import time\nfor line in sys.stdin:\n    time.sleep(0.003)");
-  std::ofstream(dir_ / "worker.py") << worker;
+// A run killed mid-wave (SIGKILL; a worker sees its stdin close and exits, a command's process
+// group is its own) resumes to the uninterrupted run's history. The worker sleeps 3 ms per
+// request so that the run can be caught mid-wave; a command costs a Python start-up per call.
+void ExpectKilledMidWaveResumesToTheUninterruptedHistory(const ScratchDir& dir,
+                                                         const std::string& config) {
   std::string text = ReadFile(config);
   text.replace(text.find("seed = 11"), 9, "seed = 11\nbatch_size = 4\nthreads = 1");
   std::ofstream(config) << text;
 
-  const auto whole = RunCli({"run", config, "-o", dir_ / "whole", "--no-report"}, dir_.path());
+  const auto whole = RunCli({"run", config, "-o", dir / "whole", "--no-report"}, dir.path());
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
-  const std::string killed_db = dir_ / "killed/history.sqlite";
-  const pid_t pid = SpawnCli({"run", config, "-o", dir_ / "killed", "--no-report"}, dir_.path());
+  const std::string killed_db = dir / "killed/history.sqlite";
+  const pid_t pid = SpawnCli({"run", config, "-o", dir / "killed", "--no-report"}, dir.path());
   ASSERT_GT(pid, 0);
   bool killed = false;
   for (int i = 0; i < 20000 && !killed; ++i) {
@@ -250,16 +245,30 @@ TEST_F(ExternalSimulatorCli, AWorkerRunKilledMidWaveResumesToTheUninterruptedHis
       // Not created yet, or mid-write: try again.
     }
   }
-  const auto dead = WaitCli(pid, dir_.path());
+  const auto dead = WaitCli(pid, dir.path());
   ASSERT_TRUE(killed) << "the run finished before it could be killed";
   ASSERT_EQ(dead.exit_code, 128 + SIGKILL);
-  const auto resumed = RunCli({"resume", killed_db, "--no-report"}, dir_.path());
+  const auto resumed = RunCli({"resume", killed_db, "--no-report"}, dir.path());
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
   std::string where;
-  EXPECT_TRUE(SameHistory(HistoryStore::Open(dir_ / "whole/history.sqlite", true).LoadHistory(),
+  EXPECT_TRUE(SameHistory(HistoryStore::Open(dir / "whole/history.sqlite", true).LoadHistory(),
                           HistoryStore::Open(killed_db, true).LoadHistory(),
                           &where))
       << where;
+}
+
+TEST_F(ExternalSimulatorCli, AWorkerRunKilledMidWaveResumesToTheUninterruptedHistory) {
+  const std::string config = Config("worker.toml", 30);
+  std::string worker = ReadFile(dir_ / "worker.py");
+  const std::string loop = "for line in sys.stdin:";
+  worker.replace(
+      worker.find(loop), loop.size(), "import time\nfor line in sys.stdin:\n    time.sleep(0.003)");
+  std::ofstream(dir_ / "worker.py") << worker;
+  ExpectKilledMidWaveResumesToTheUninterruptedHistory(dir_, config);
+}
+
+TEST_F(ExternalSimulatorCli, ACommandRunKilledMidWaveResumesToTheUninterruptedHistory) {
+  ExpectKilledMidWaveResumesToTheUninterruptedHistory(dir_, Config("command.toml", 5));
 }
 
 // README.md's "Bring your own simulator" shows examples/custom-simulator/worker.py verbatim, so
