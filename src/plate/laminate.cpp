@@ -1,6 +1,7 @@
 #include "combabc/plate/laminate.hpp"
 
 #include <array>
+#include <cmath>
 #include <sstream>
 
 #include "combabc/core/check.hpp"
@@ -71,6 +72,65 @@ void ShearStiffness(const std::vector<Layer>& layers, PlateSection* section) {
   section->shear_imag = section->shear_real * (loss_compliance / compliance);
 }
 
+// The refined zigzag theory's stiffnesses (laminate.hpp, PlateSection::zigzag_*). The integrands
+// are at most quadratic in z within a layer (z and phi are linear there), so 2-point Gauss is
+// exact.
+void ZigzagStiffness(const std::vector<Layer>& layers, PlateSection* section) {
+  constexpr std::array<double, 2> kPoint = {0.2113248654051871, 0.7886751345948129};
+  double compliance = 0.0;  // sum h_k / G_k
+  for (const Layer& layer : layers) {
+    compliance += layer.thickness * 2.0 * (1.0 + layer.poisson_ratio) / layer.youngs_modulus;
+  }
+  const double mean_shear = section->thickness / compliance;
+  std::vector<double> slope;
+  bool zigzag = false;
+  for (const Layer& layer : layers) {
+    const double shear_modulus = layer.youngs_modulus / (2.0 * (1.0 + layer.poisson_ratio));
+    slope.push_back(mean_shear / shear_modulus - 1.0);
+    zigzag = zigzag || std::abs(slope.back()) > 1e-6;
+  }
+  if (!zigzag) slope.assign(layers.size(), 0.0);
+  double phi_bottom = 0.0;
+  double z = 0.0;
+  for (std::size_t k = 0; k < layers.size(); ++k) {
+    const Layer& layer = layers[k];
+    const Eigen::Matrix3d q = layer.youngs_modulus * ReducedStiffnessShape(layer.poisson_ratio);
+    const double shear_modulus = layer.youngs_modulus / (2.0 * (1.0 + layer.poisson_ratio));
+    double z_phi = 0.0;
+    double phi_phi = 0.0;
+    double z_z = 0.0;
+    for (double point : kPoint) {
+      const double t = point * layer.thickness;
+      const double zz = z + t - section->neutral_plane;
+      const double phi = phi_bottom + slope[k] * t;
+      z_phi += 0.5 * layer.thickness * zz * phi;
+      phi_phi += 0.5 * layer.thickness * phi * phi;
+      z_z += 0.5 * layer.thickness * zz * zz;
+    }
+    PlateSection::Matrix6d bending = PlateSection::Matrix6d::Zero();
+    bending.topLeftCorner<3, 3>() = z_z * q;
+    bending.topRightCorner<3, 3>() = -z_phi * q;
+    bending.bottomLeftCorner<3, 3>() = -z_phi * q;
+    bending.bottomRightCorner<3, 3>() = phi_phi * q;
+    Eigen::Matrix2d shear;
+    shear << 1.0, slope[k], slope[k], slope[k] * slope[k];
+    shear *= shear_modulus * layer.thickness;
+    section->zigzag_bending_real += bending;
+    section->zigzag_bending_imag += layer.loss_factor * bending;
+    section->zigzag_shear_real += shear;
+    section->zigzag_shear_imag += layer.loss_factor * shear;
+    phi_bottom += slope[k] * layer.thickness;
+    z += layer.thickness;
+  }
+  // The theta block is the classical D (same integral; taken from there so both are one number).
+  section->zigzag_bending_real.topLeftCorner<3, 3>() = section->bending_real;
+  section->zigzag_bending_imag.topLeftCorner<3, 3>() = section->bending_imag;
+  if (!zigzag) {
+    section->zigzag_shear_real(1, 1) = section->zigzag_shear_real(0, 0);
+    section->zigzag_shear_imag(1, 1) = section->zigzag_shear_imag(0, 0);
+  }
+}
+
 }  // namespace
 
 bool Layer::IsValid(std::string* why, const std::string& prefix) const {
@@ -122,6 +182,7 @@ PlateSection EquivalentSingleLayer(const std::vector<Layer>& layers) {
     z += layer.thickness;
   }
   ShearStiffness(layers, &section);
+  ZigzagStiffness(layers, &section);
   return section;
 }
 

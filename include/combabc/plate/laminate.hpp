@@ -27,6 +27,7 @@ struct Layer {
 // deformation theory: shear force = (S_real + i S_imag) shear strain, in both directions (the
 // layers are isotropic, so A44 = A55 and A45 = 0).
 struct PlateSection {
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
   Eigen::Matrix3d bending_real = Eigen::Matrix3d::Zero();  // N m
   Eigen::Matrix3d bending_imag = Eigen::Matrix3d::Zero();  // N m (loss part)
   double shear_real = 0.0;                                 // N/m
@@ -34,6 +35,23 @@ struct PlateSection {
   double mass_per_area = 0.0;                              // kg/m^2 (rotary inertia neglected)
   double thickness = 0.0;                                  // m, total
   double neutral_plane = 0.0;                              // m above the bottom face
+
+  // Refined zigzag theory (Tessler, Di Sciuva & Gherlone, J. Compos. Mater. 44 (2010) 1303;
+  // docs/model.md, "Plate theories"): in-plane displacements -z theta + phi(z) psi, phi the
+  // piecewise-linear zigzag function, zero on both faces, of slope beta_k = G / G_k - 1 in layer
+  // k (G the thickness-harmonic mean of the layers' shear moduli; z from the neutral plane).
+  // zigzag_bending acts on (theta_x,x, theta_y,y, theta_x,y + theta_y,x, the same of psi):
+  // [[D, -sum Q_k int z phi], [-sum Q_k int z phi, sum Q_k int phi^2]] (N m; its top left block
+  // is bending_real); zigzag_shear on (w_,a - theta_a, psi_a) in each direction a:
+  // [[sum G_k h_k, sum G_k beta_k h_k], [., sum G_k beta_k^2 h_k]] (N/m). The zigzag function
+  // comes from the elastic moduli; the loss parts weight each layer's loss factor by its share
+  // (complex moduli E_k (1 + i eta_k) with phi fixed). Without a zigzag (every |beta_k| below
+  // 1e-6: equal shear moduli) psi moves nothing; it is then given a shear stiffness sum G_k h_k
+  // of its own, uncoupled, so that it stays zero instead of making the stiffness singular.
+  Matrix6d zigzag_bending_real = Matrix6d::Zero();
+  Matrix6d zigzag_bending_imag = Matrix6d::Zero();
+  Eigen::Matrix2d zigzag_shear_real = Eigen::Matrix2d::Zero();
+  Eigen::Matrix2d zigzag_shear_imag = Eigen::Matrix2d::Zero();
 };
 
 // Layers are listed from the bottom face up. The shear stiffness is energy-consistent (see
