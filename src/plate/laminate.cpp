@@ -126,8 +126,12 @@ void ZigzagStiffness(const std::vector<Layer>& layers, PlateSection* section) {
   section->zigzag_bending_real.topLeftCorner<3, 3>() = section->bending_real;
   section->zigzag_bending_imag.topLeftCorner<3, 3>() = section->bending_imag;
   if (!zigzag) {
+    // psi moves nothing: uncoupled stiffnesses of its own (the theta ones), so that it stays
+    // zero. The bending part is needed too: the tied shear strains see only edge midpoint values.
     section->zigzag_shear_real(1, 1) = section->zigzag_shear_real(0, 0);
     section->zigzag_shear_imag(1, 1) = section->zigzag_shear_imag(0, 0);
+    section->zigzag_bending_real.bottomRightCorner<3, 3>() = section->bending_real;
+    section->zigzag_bending_imag.bottomRightCorner<3, 3>() = section->bending_imag;
   }
 }
 

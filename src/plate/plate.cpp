@@ -12,6 +12,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/plate/bfs_element.hpp"
 #include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/rzt_element.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -34,6 +35,48 @@ void CheckAxis(const std::vector<double>& v, const char* name) {
   }
 }
 
+// The element family of each theory (element.hpp): its matrices, w shape functions and their
+// integrals over a sub-rectangle.
+ElementMatrices FamilyMatrices(PlateTheory theory,
+                               double hx,
+                               double hy,
+                               const PlateSection& section) {
+  switch (theory) {
+    case PlateTheory::kKirchhoff:
+      break;
+    case PlateTheory::kFsdt:
+      return Mitc4ElementMatrices(hx, hy, section);
+    case PlateTheory::kRzt:
+      return RztElementMatrices(hx, hy, section);
+  }
+  return ComputeElementMatrices(hx, hy, section.bending_real, section.bending_imag);
+}
+
+ElementVector FamilyShapeValues(PlateTheory theory, double hx, double hy, double x, double y) {
+  switch (theory) {
+    case PlateTheory::kKirchhoff:
+      break;
+    case PlateTheory::kFsdt:
+      return Mitc4ShapeValues(hx, hy, x, y);
+    case PlateTheory::kRzt:
+      return RztShapeValues(hx, hy, x, y);
+  }
+  return ShapeValues(hx, hy, x, y);
+}
+
+ElementVector FamilyShapeIntegral(
+    PlateTheory theory, double hx, double hy, double x0, double x1, double y0, double y1) {
+  switch (theory) {
+    case PlateTheory::kKirchhoff:
+      break;
+    case PlateTheory::kFsdt:
+      return Mitc4ShapeIntegral(hx, hy, x0, x1, y0, y1);
+    case PlateTheory::kRzt:
+      return RztShapeIntegral(hx, hy, x0, x1, y0, y1);
+  }
+  return ShapeIntegral(hx, hy, x0, x1, y0, y1);
+}
+
 }  // namespace
 
 Grid UniformGrid(double length, double width, int nx, int ny) {
@@ -44,27 +87,32 @@ Grid UniformGrid(double length, double width, int nx, int ny) {
   return grid;
 }
 
-std::uint8_t SupportMask(Edge edge, Support support) {
+std::uint8_t SupportMask(Edge edge, Support support, PlateTheory theory) {
+  const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
   switch (support) {
     case Support::kFree:
       return 0;
     case Support::kClamped:
-      return 0xF;
+      return static_cast<std::uint8_t>((1U << DofsPerNode(theory)) - 1U);
     case Support::kSimplySupported:
       // w = 0 along the edge also makes its tangential derivative vanish: w_x on y = const edges
-      // (bit 1), w_y on x = const edges (bit 2). The normal slope and the twist stay free.
-      return (edge == Edge::kBottom || edge == Edge::kTop) ? 0x3 : 0x5;
+      // (bit 1), w_y on x = const edges (bit 2). The normal slope and the twist stay free. In the
+      // refined zigzag theory the tangential zigzag amplitude is held too (psi_x, bit 3, on
+      // y = const; psi_y, bit 4, on x = const), as the tangential rotation is.
+      if (theory == PlateTheory::kRzt) return along_x ? 0xB : 0x15;
+      return along_x ? 0x3 : 0x5;
   }
   return 0;
 }
 
-Constraints::Constraints(const Grid& grid, int dofs_per_node)
+Constraints::Constraints(const Grid& grid, PlateTheory theory)
     : x_(grid.x),
       y_(grid.y),
-      dofs_per_node_(dofs_per_node),
-      all_dofs_(static_cast<std::uint8_t>((1U << dofs_per_node) - 1U)),
+      theory_(theory),
+      dofs_per_node_(DofsPerNode(theory)),
+      all_dofs_(static_cast<std::uint8_t>((1U << dofs_per_node_) - 1U)),
       masks_(grid.x.size() * grid.y.size(), 0) {
-  COMBABC_CHECK(dofs_per_node >= 1 && dofs_per_node <= kMaxDofsPerNode);
+  COMBABC_CHECK(dofs_per_node_ >= 1 && dofs_per_node_ <= kMaxDofsPerNode);
 }
 
 void Constraints::AddEdgeSupport(Edge edge, Support support) {
@@ -74,7 +122,7 @@ void Constraints::AddEdgeSupport(Edge edge, Support support) {
 }
 
 void Constraints::AddEdgeSupport(Edge edge, double from, double to, Support support) {
-  const std::uint8_t mask = SupportMask(edge, support) & all_dofs_;
+  const std::uint8_t mask = SupportMask(edge, support, theory_) & all_dofs_;
   const int ny1 = static_cast<int>(y_.size());
   const bool along_x = edge == Edge::kBottom || edge == Edge::kTop;
   const std::vector<double>& axis = along_x ? x_ : y_;
@@ -139,10 +187,7 @@ Plate::Plate(Grid grid,
       if (kind < 0) {
         kind = static_cast<int>(sizes.size());
         sizes.emplace_back(hx, hy);
-        unique_elements_.push_back(
-            theory_ == PlateTheory::kFsdt
-                ? Mitc4ElementMatrices(hx, hy, section_)
-                : ComputeElementMatrices(hx, hy, section_.bending_real, section_.bending_imag));
+        unique_elements_.push_back(FamilyMatrices(theory_, hx, hy, section_));
       }
       element_kind_[ex * ny + ey] = kind;
     }
@@ -194,9 +239,7 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
       const double lx1 = bx - grid_.x[ex];
       const double ly0 = ay - grid_.y[ey];
       const double ly1 = by - grid_.y[ey];
-      const ElementVector fe = theory_ == PlateTheory::kFsdt
-                                   ? Mitc4ShapeIntegral(hx, hy, lx0, lx1, ly0, ly1)
-                                   : ShapeIntegral(hx, hy, lx0, lx1, ly0, ly1);
+      const ElementVector fe = FamilyShapeIntegral(theory_, hx, hy, lx0, lx1, ly0, ly1);
       for (int k = 0; k < element_dofs(); ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
     }
   }
@@ -316,8 +359,7 @@ void Plate::InterpolationRow(double x,
   const int ey = Locate(grid_.y, y);
   const double hx = grid_.x[ex + 1] - grid_.x[ex];
   const double hy = grid_.y[ey + 1] - grid_.y[ey];
-  *row = theory_ == PlateTheory::kFsdt ? Mitc4ShapeValues(hx, hy, x - grid_.x[ex], y - grid_.y[ey])
-                                       : ShapeValues(hx, hy, x - grid_.x[ex], y - grid_.y[ey]);
+  *row = FamilyShapeValues(theory_, hx, hy, x - grid_.x[ex], y - grid_.y[ey]);
   for (int k = 0; k < element_dofs(); ++k) dofs[k] = ElementDof(ex, ey, k);
 }
 

@@ -67,10 +67,10 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
       // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
       // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
       options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
-      SupportMask(Edge::kBottom, options_.fixed_support),
-      SupportMask(Edge::kTop, options_.fixed_support),
-      SupportMask(Edge::kLeft, options_.short_edge_start),
-      SupportMask(Edge::kRight, options_.short_edge_end),
+      SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
+      SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
       plate_->LoadVector(SensorLoad(options_)),
       options_.frequency_hz,
       options_.output_positions,
@@ -84,12 +84,26 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
   const PlateSection& section = plate_->section();
   const double eta = section.bending_imag(0, 0) / section.bending_real(0, 0);
   // In FSDT the shear stiffness must carry the same eta (it does not for the default laminate:
-  // the shear follows the core's loss factor).
+  // the shear follows the core's loss factor), in RZT every zigzag stiffness.
+  auto proportional = [eta](const auto& imag, const auto& real) {
+    return (imag - eta * real).cwiseAbs().maxCoeff() <= 1e-14 * real.cwiseAbs().maxCoeff();
+  };
+  bool theory_proportional = true;
+  switch (options_.theory) {
+    case PlateTheory::kKirchhoff:
+      break;
+    case PlateTheory::kFsdt:
+      theory_proportional =
+          std::abs(section.shear_imag - eta * section.shear_real) <= 1e-14 * section.shear_real;
+      break;
+    case PlateTheory::kRzt:
+      theory_proportional =
+          proportional(section.zigzag_bending_imag, section.zigzag_bending_real) &&
+          proportional(section.zigzag_shear_imag, section.zigzag_shear_real);
+      break;
+  }
   continuous_->proportional =
-      (section.bending_imag - eta * section.bending_real).cwiseAbs().maxCoeff() <=
-          1e-14 * section.bending_real.cwiseAbs().maxCoeff() &&
-      (options_.theory != PlateTheory::kFsdt ||
-       std::abs(section.shear_imag - eta * section.shear_real) <= 1e-14 * section.shear_real);
+      proportional(section.bending_imag, section.bending_real) && theory_proportional;
   continuous_->own_loss_factor = eta;
 }
 
@@ -120,10 +134,10 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
         options_.clamps_per_edge,
         options_.elements_per_section,
         own,
-        SupportMask(Edge::kBottom, options_.fixed_support),
-        SupportMask(Edge::kTop, options_.fixed_support),
-        SupportMask(Edge::kLeft, options_.short_edge_start),
-        SupportMask(Edge::kRight, options_.short_edge_end),
+        SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
+        SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
+        SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
+        SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
         plate_->LoadVector(SensorLoad(options_)),
         options_.output_positions,
         options_.output_y_fraction * options_.width,

@@ -4,8 +4,9 @@
 // rectangle; local dof DofsPerNode (a + 2 b) + k belongs to corner (a, b), a, b in {0, 1}, at
 // (a hx, b hy) from the element's lower left corner. Dof k = 0 is w, 1 and 2 are the slopes
 // along x and y (w_x, w_y in Kirchhoff theory; the rotations phi_x, phi_y of the normal, which
-// equal them in the thin limit, in first-order shear deformation theory), so the support masks
-// read the same for every family (plate.hpp, SupportMask).
+// equal them in the thin limit, in first-order shear deformation theory and the refined zigzag
+// theory), so the support masks read alike for every family (plate.hpp, SupportMask); the zigzag
+// amplitudes psi_x, psi_y of the refined zigzag theory are dofs 3 and 4.
 #include <utility>
 
 #include <Eigen/Dense>
@@ -21,12 +22,27 @@ enum class PlateTheory {
   // First-order shear deformation (Reissner-Mindlin) with an energy-consistent shear stiffness of
   // the laminate (laminate.hpp); MITC4 elements (mitc4_element.hpp), dofs (w, phi_x, phi_y).
   kFsdt,
+  // Refined zigzag theory (Tessler, Di Sciuva & Gherlone 2009/2010), a layer-wise theory for
+  // sandwiches with a soft core: the in-plane displacements add a piecewise-linear zigzag
+  // function of the layers' shear moduli times amplitudes psi (laminate.hpp); RZT4 elements
+  // (rzt_element.hpp), dofs (w, theta_x, theta_y, psi_x, psi_y).
+  kRzt,
 };
 
-inline constexpr int kMaxDofsPerNode = 4;
+inline constexpr int kMaxDofsPerNode = 5;
 inline constexpr int kMaxElementDofs = 4 * kMaxDofsPerNode;
 
-constexpr int DofsPerNode(PlateTheory theory) { return theory == PlateTheory::kFsdt ? 3 : 4; }
+constexpr int DofsPerNode(PlateTheory theory) {
+  switch (theory) {
+    case PlateTheory::kKirchhoff:
+      return 4;
+    case PlateTheory::kFsdt:
+      return 3;
+    case PlateTheory::kRzt:
+      return 5;
+  }
+  return 4;
+}
 
 // Sized per family at run time, stored inline (no heap) up to the largest family.
 using ElementMatrix = Eigen::Matrix<double,
@@ -56,6 +72,7 @@ struct EnumNames<plate::PlateTheory> {
   static constexpr std::pair<plate::PlateTheory, const char*> kNames[] = {
       {plate::PlateTheory::kKirchhoff, "kirchhoff"},
       {plate::PlateTheory::kFsdt, "fsdt"},
+      {plate::PlateTheory::kRzt, "rzt"},
   };
 };
 

@@ -46,8 +46,9 @@ struct PlateSection {
   // [[sum G_k h_k, sum G_k beta_k h_k], [., sum G_k beta_k^2 h_k]] (N/m). The zigzag function
   // comes from the elastic moduli; the loss parts weight each layer's loss factor by its share
   // (complex moduli E_k (1 + i eta_k) with phi fixed). Without a zigzag (every |beta_k| below
-  // 1e-6: equal shear moduli) psi moves nothing; it is then given a shear stiffness sum G_k h_k
-  // of its own, uncoupled, so that it stays zero instead of making the stiffness singular.
+  // 1e-6: equal shear moduli) psi moves nothing; it is then given the shear stiffness sum G_k h_k
+  // and the bending stiffness D of its own, uncoupled, so that it stays zero instead of making
+  // the stiffness singular (RZT is then FSDT without a shear correction factor).
   Matrix6d zigzag_bending_real = Matrix6d::Zero();
   Matrix6d zigzag_bending_imag = Matrix6d::Zero();
   Eigen::Matrix2d zigzag_shear_real = Eigen::Matrix2d::Zero();

@@ -1,14 +1,15 @@
 #pragma once
 // A rectangular plate on a structured grid of rectangular elements of one family (element.hpp:
 // Kirchhoff theory on Bogner-Fox-Schmit elements, or first-order shear deformation theory on MITC4
-// elements), with
+// elements, or the refined zigzag theory on RZT4 elements), with
 // per-edge-segment supports, an optional Winkler foundation, point or patch loads, and static,
 // harmonic and modal solves. The sensor simulator (sensor_model.hpp) is built on this; the
 // validation tests use it directly.
 //
 // Degrees of freedom: node (i, j) at (grid.x[i], grid.y[j]) has index i (ny + 1) + j and dofs
 // n node + k with n = dofs_per_node(): k = 0 w, 1 w_x, 2 w_y, 3 w_xy for Kirchhoff; k = 0 w,
-// 1 phi_x, 2 phi_y for FSDT (cross-section-major, so the dofs of one cross-section x = grid.x[i]
+// 1 phi_x, 2 phi_y for FSDT; k = 0 w, 1 theta_x, 2 theta_y, 3 psi_x, 4 psi_y for RZT
+// (cross-section-major, so the dofs of one cross-section x = grid.x[i]
 // are contiguous, which the section condensation relies on).
 #include <complex>
 #include <cstdint>
@@ -30,7 +31,8 @@ enum class Support {
   kSimplySupported,  // w = 0 and the tangential slope = 0 along the edge
   kClamped,          // w = 0 and both slopes = 0 (so all four BFS dofs vanish on the edge; in
                      // FSDT w and both rotations of the normal, a "hard" clamp that holds the
-                     // whole edge face, as a clamp gripping the strip over its thickness does)
+                     // whole edge face, as a clamp gripping the strip over its thickness does;
+                     // in RZT also both zigzag amplitudes, for the same reason)
 };
 }  // namespace combabc::plate
 
@@ -68,7 +70,7 @@ Grid UniformGrid(double length, double width, int nx, int ny);
 // Which dofs are fixed: one bit mask per node (bit k fixes dof k of dofs_per_node).
 class Constraints {
  public:
-  explicit Constraints(const Grid& grid, int dofs_per_node = DofsPerNode(PlateTheory::kKirchhoff));
+  explicit Constraints(const Grid& grid, PlateTheory theory = PlateTheory::kKirchhoff);
 
   // Supports the nodes of `edge` whose coordinate along the edge lies in the closed interval
   // [from, to] (a tolerance of 1e-9 of the edge length). Masks are OR-ed, so a node shared by a
@@ -87,17 +89,19 @@ class Constraints {
  private:
   std::vector<double> x_;
   std::vector<double> y_;
+  PlateTheory theory_;
   int dofs_per_node_;
   std::uint8_t all_dofs_;  // the mask of every dof of a node
   std::vector<std::uint8_t> masks_;
 };
 
-// Mask of the dofs fixed by `support` on a node of `edge` (see Support). The same for every
-// theory: dofs 0-2 mean (w, slope along x, slope along y) in each family, and bit 3 (w_xy,
-// Kirchhoff only) is dropped by Constraints where a family has 3 dofs. Simply supported is the
-// "hard" support in FSDT: w and the rotation about the edge's normal (the tangential slope) are
-// fixed.
-std::uint8_t SupportMask(Edge edge, Support support);
+// Mask of the dofs fixed by `support` on a node of `edge` (see Support) in `theory`'s dof layout:
+// dofs 0-2 mean (w, slope along x, slope along y) in each family. Clamped fixes every dof of
+// the node (in RZT also the zigzag amplitudes: a clamp gripping the whole thickness stops the
+// zigzag of the in-plane displacements as well). Simply supported is the "hard" support in FSDT
+// and RZT: w and the rotation about the edge's normal (the tangential slope) are fixed, and in
+// RZT the tangential zigzag amplitude, which the Navier solution of the theory also has.
+std::uint8_t SupportMask(Edge edge, Support support, PlateTheory theory);
 
 // A transverse force of amplitude `force` (N) at (x, y): a point load when patch_length and
 // patch_width are 0, else a uniform pressure on the patch_length x patch_width rectangle centred
@@ -130,7 +134,7 @@ class Plate {
   int dofs_per_node() const { return DofsPerNode(theory_); }
   int element_dofs() const { return 4 * DofsPerNode(theory_); }
   // An empty constraint set of this plate's dof layout.
-  Constraints NewConstraints() const { return Constraints(grid_, dofs_per_node()); }
+  Constraints NewConstraints() const { return Constraints(grid_, theory_); }
   const PlateSection& section() const { return section_; }
   double foundation_stiffness() const { return foundation_stiffness_; }
   double foundation_loss_factor() const { return foundation_loss_factor_; }

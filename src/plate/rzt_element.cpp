@@ -1,0 +1,107 @@
+#include "combabc/plate/rzt_element.hpp"
+
+#include <array>
+
+#include "combabc/plate/mitc4_element.hpp"
+
+namespace combabc::plate {
+namespace {
+
+// 2-point Gauss-Legendre on [0, 1]: exact for every product of bilinear functions and for the
+// assumed shear strains (linear in one direction, constant in the other).
+constexpr std::array<double, 2> kGaussPoint = {0.2113248654051871, 0.7886751345948129};
+constexpr double kGaussWeight = 0.5;
+
+using ShearRows = Eigen::Matrix<double, 2, kRztElementDofs>;
+
+int LocalDof(int a, int b, int k) { return kRztDofsPerNode * (a + 2 * b) + k; }
+
+double Linear(int a, double s) { return a == 0 ? 1.0 - s : s; }
+double LinearSlope(int a) { return a == 0 ? -1.0 : 1.0; }
+
+// Displacement-based shear strain rows at local (s, t) in [0, 1]^2 in direction `dir` (0 x,
+// 1 y): row 0 w_,dir - theta_dir, row 1 psi_dir.
+ShearRows Shear(int dir, double hx, double hy, double s, double t) {
+  ShearRows rows = ShearRows::Zero();
+  for (int b = 0; b < 2; ++b) {
+    for (int a = 0; a < 2; ++a) {
+      const double n = Linear(a, s) * Linear(b, t);
+      rows(0, LocalDof(a, b, 0)) =
+          dir == 0 ? LinearSlope(a) / hx * Linear(b, t) : Linear(a, s) * LinearSlope(b) / hy;
+      rows(0, LocalDof(a, b, 1 + dir)) = -n;
+      rows(1, LocalDof(a, b, 3 + dir)) = n;
+    }
+  }
+  return rows;
+}
+
+// Copies the w entries of a MITC4 vector (3 dofs per node) into the RZT layout.
+ElementVector FromMitc4(const ElementVector& mitc4) {
+  ElementVector n = ElementVector::Zero(kRztElementDofs);
+  for (int corner = 0; corner < 4; ++corner) {
+    n(kRztDofsPerNode * corner) = mitc4(kMitc4DofsPerNode * corner);
+  }
+  return n;
+}
+
+}  // namespace
+
+ElementVector RztShapeValues(double hx, double hy, double x, double y) {
+  return FromMitc4(Mitc4ShapeValues(hx, hy, x, y));
+}
+
+ElementVector RztShapeIntegral(double hx, double hy, double x0, double x1, double y0, double y1) {
+  return FromMitc4(Mitc4ShapeIntegral(hx, hy, x0, x1, y0, y1));
+}
+
+ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& section) {
+  // Tying points (Bathe & Dvorkin 1985): the x shear strains at the midpoints of the edges t = 0
+  // and t = 1, interpolated linearly in t; the y ones at the midpoints of s = 0 and s = 1,
+  // linearly in s.
+  const ShearRows bottom = Shear(0, hx, hy, 0.5, 0.0);
+  const ShearRows top = Shear(0, hx, hy, 0.5, 1.0);
+  const ShearRows left = Shear(1, hx, hy, 0.0, 0.5);
+  const ShearRows right = Shear(1, hx, hy, 1.0, 0.5);
+
+  ElementMatrices m;
+  m.stiffness_real.setZero(kRztElementDofs, kRztElementDofs);
+  m.stiffness_imag.setZero(kRztElementDofs, kRztElementDofs);
+  m.mass_unit.setZero(kRztElementDofs, kRztElementDofs);
+  for (double s : kGaussPoint) {
+    for (double t : kGaussPoint) {
+      const double weight = kGaussWeight * kGaussWeight * hx * hy;
+      // Curvatures of theta (rows 0-2) and psi (rows 3-5).
+      Eigen::Matrix<double, 6, kRztElementDofs> bending =
+          Eigen::Matrix<double, 6, kRztElementDofs>::Zero();
+      Eigen::Matrix<double, kRztElementDofs, 1> n =
+          Eigen::Matrix<double, kRztElementDofs, 1>::Zero();
+      for (int b = 0; b < 2; ++b) {
+        for (int a = 0; a < 2; ++a) {
+          const double dx = LinearSlope(a) / hx * Linear(b, t);
+          const double dy = Linear(a, s) * LinearSlope(b) / hy;
+          for (int field = 0; field < 2; ++field) {  // theta, psi
+            const int row = 3 * field;
+            const int dof = 1 + 2 * field;
+            bending(row + 0, LocalDof(a, b, dof)) = dx;
+            bending(row + 1, LocalDof(a, b, dof + 1)) = dy;
+            bending(row + 2, LocalDof(a, b, dof)) = dy;
+            bending(row + 2, LocalDof(a, b, dof + 1)) = dx;
+          }
+          n(LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
+        }
+      }
+      const ShearRows shear_x = (1.0 - t) * bottom + t * top;
+      const ShearRows shear_y = (1.0 - s) * left + s * right;
+      m.stiffness_real += weight * (bending.transpose() * section.zigzag_bending_real * bending +
+                                    shear_x.transpose() * section.zigzag_shear_real * shear_x +
+                                    shear_y.transpose() * section.zigzag_shear_real * shear_y);
+      m.stiffness_imag += weight * (bending.transpose() * section.zigzag_bending_imag * bending +
+                                    shear_x.transpose() * section.zigzag_shear_imag * shear_x +
+                                    shear_y.transpose() * section.zigzag_shear_imag * shear_y);
+      m.mass_unit += weight * n * n.transpose();
+    }
+  }
+  return m;
+}
+
+}  // namespace combabc::plate
