@@ -4,7 +4,7 @@
 // peak) between a mesh and one `factor_x` / `factor_y` times finer along / across the strip.
 //   convergence_study [elements_per_section elements_across_width factor_x factor_y
 //                      configurations seed length_grading width_grading theory]
-// (theory: "kirchhoff", the default, or "fsdt")
+// (theory: "kirchhoff", the default, "fsdt" or "rzt")
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -121,8 +121,8 @@ double SensorOptions::EstimatedContinuousMemoryBytes(bool loss_factor_unknown) c
     one_loss_factor = one_loss_factor && layer.loss_factor == layers.front().loss_factor;
     one_poisson_ratio = one_poisson_ratio && layer.poisson_ratio == layers.front().poisson_ratio;
   }
-  // In FSDT one Poisson ratio is not enough: the shear stiffness weights the loss factors by the
-  // shear energy, not the bending energy.
+  // In FSDT and RZT one Poisson ratio is not enough: the shear (and RZT's zigzag) stiffnesses
+  // weight the loss factors by their own energies, not the bending energy.
   const bool proportional =
       one_loss_factor || (one_poisson_ratio && theory == PlateTheory::kKirchhoff);
   const double table_parts = loss_factor_unknown || proportional ? 1.0 : 2.0;

@@ -84,7 +84,7 @@ bool SensorOptions::IsValid(std::string* why) const {
     return Fail(why, "fixed_support", ToString(fixed_support), "must not be free");
   }
   if (std::string_view(ToString(theory)) == "?") {
-    return Fail(why, "theory", static_cast<int>(theory), "must be kirchhoff or fsdt");
+    return Fail(why, "theory", static_cast<int>(theory), "must be kirchhoff, fsdt or rzt");
   }
   if (!InRange(load_force, -1e6, 1e6)) {
     return Fail(why, "load_force", load_force, "must be in [-1e6, 1e6] N");

@@ -260,9 +260,12 @@ TEST(Config, ModelTheorySelectsThePlateTheory) {
   EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.theory, plate::PlateTheory::kKirchhoff);
   EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"fsdt\"\n", "inline.toml").model.theory,
             plate::PlateTheory::kFsdt);
+  EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"rzt\"\n", "inline.toml").model.theory,
+            plate::PlateTheory::kRzt);
   const Error e = ConfigError(kMinimal + "[model]\ntheory = \"mindlin\"\n");
   ExpectLocated(e, "inline.toml", 6, "model.theory");
-  EXPECT_NE(std::string(e.what()).find("\"kirchhoff\", \"fsdt\""), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("\"kirchhoff\", \"fsdt\", \"rzt\""), std::string::npos)
+      << e.what();
 }
 
 TEST(Config, ModelErrorsNameTheKey) {

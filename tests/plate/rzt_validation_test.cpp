@@ -139,7 +139,8 @@ TEST(RztValidation, ZigzagStiffnessOfTheSensorLaminate) {
   Eigen::Matrix2d shear;
   shear(0, 0) = 2 * g_face * 1.5e-3 + g_core * 1.0e-3;
   shear(0, 1) = shear(1, 0) = 2 * g_face * 1.5e-3 * beta_face + g_core * 1.0e-3 * beta_core;
-  shear(1, 1) = 2 * g_face * 1.5e-3 * beta_face * beta_face + g_core * 1.0e-3 * beta_core * beta_core;
+  shear(1, 1) =
+      2 * g_face * 1.5e-3 * beta_face * beta_face + g_core * 1.0e-3 * beta_core * beta_core;
   EXPECT_LT((section.zigzag_shear_real - shear).norm(), 1e-12 * shear.norm());
   // sum G_k beta_k h_k = G h - sum G_k h_k and sum G_k beta_k^2 h_k = G h - 2 (G h) + sum G_k h_k
   // ... both from G_k (1 + beta_k) = G.
@@ -215,7 +216,8 @@ TEST(RztValidation, ElementConvergesToTheClosedForm) {
     for (int n : {8, 16, 32}) {
       const double fe = SinusoidalCentre(PlateTheory::kRzt, section, side, n);
       const double error = std::abs(fe / exact - 1.0);
-      std::printf("a = %.0f mm, %d x %d: FE RZT / closed form %.6f\n", side * 1e3, n, n, fe / exact);
+      std::printf(
+          "a = %.0f mm, %d x %d: FE RZT / closed form %.6f\n", side * 1e3, n, n, fe / exact);
       if (n > 8) {
         EXPECT_LT(error, previous / 3.0) << n;
       }

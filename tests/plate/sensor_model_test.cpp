@@ -6,6 +6,7 @@
 #include <random>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -104,6 +105,20 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveFsdt) {
   ExpectFastEqualsFull(o, 20, 12);
 }
 
+// RZT (RZT4, 5 dofs per node, the zigzag amplitudes among the condensed dofs) through the same
+// condensation; the other supports too (a clamp also holds the zigzag, simply supported the
+// tangential rotation and zigzag).
+TEST(PlateSensorModel, FastPathEqualsFullSolveRzt) {
+  SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kRzt;
+  ExpectFastEqualsFull(o, 40, 13);
+  o.fixed_support = Support::kSimplySupported;
+  o.short_edge_start = Support::kClamped;
+  o.load_x = 0.3712;
+  o.load_patch_length = 0.0;
+  ExpectFastEqualsFull(o, 20, 14);
+}
+
 // The pivoting-LU path (the LDL^T fallback) on its own.
 TEST(PlateSensorModel, FastPathWithPivotingLuEqualsFullSolve) {
   SensorOptions o = CoarseOptions();
@@ -138,13 +153,17 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
 // The estimate that refuses oversized models must track what the precompute really keeps: above
 // it (it also counts transients) but not so far above that useful meshes are refused.
 TEST(PlateSensorModel, MemoryEstimateBoundsThePrecompute) {
-  for (const int across : {6, 12}) {
+  // RZT (5 dofs per node) at the default width: the estimate scales with the dofs per node.
+  for (const auto& [across, theory] : {std::pair{6, PlateTheory::kKirchhoff},
+                                       std::pair{12, PlateTheory::kKirchhoff},
+                                       std::pair{6, PlateTheory::kRzt}}) {
     SensorOptions o;
     o.elements_across_width = across;
+    o.theory = theory;
     const SensorModel model(o);
     const auto kept = static_cast<double>(model.PrecomputedBytes());
-    EXPECT_GE(o.EstimatedMemoryBytes(), kept) << across;
-    EXPECT_LE(o.EstimatedMemoryBytes(), 2.5 * kept) << across;
+    EXPECT_GE(o.EstimatedMemoryBytes(), kept) << across << ToString(theory);
+    EXPECT_LE(o.EstimatedMemoryBytes(), 2.5 * kept) << across << ToString(theory);
   }
   // Regression: elements_across_width = 1000 was accepted and needed 5.5-10 GB.
   SensorOptions o;

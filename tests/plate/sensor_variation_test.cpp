@@ -205,6 +205,14 @@ TEST(PlateSensorVariation, EqualsFullSolveFsdt) {
   ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
 }
 
+// RZT through the continuous-unknowns path: its zigzag stiffnesses carry the core's loss factor
+// as FSDT's shear does, so the layers' own factors take the complex K_base too.
+TEST(PlateSensorVariation, EqualsFullSolveRzt) {
+  SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kRzt;
+  ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
+}
+
 // The proportional default laminate needs one precompute for both loss-factor kinds.
 TEST(PlateSensorVariation, ProportionalLaminateSharesOnePrecompute) {
   const SensorModel model(CoarseOptions());
@@ -385,15 +393,19 @@ TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
     int along, across;
     bool own_loss_factors;  // a laminate whose imaginary stiffness is not proportional
     std::optional<double> loss_factor;
+    PlateTheory theory = PlateTheory::kKirchhoff;
   };
+  // RZT: 5 dofs per node, and the default laminate is not proportionally damped in it.
   for (const Case& c : {Case{4, 2, false, std::nullopt},
                         Case{6, 4, false, std::nullopt},
                         Case{4, 2, true, std::nullopt},
-                        Case{4, 2, true, 0.05}}) {
+                        Case{4, 2, true, 0.05},
+                        Case{4, 2, false, std::nullopt, PlateTheory::kRzt}}) {
     SCOPED_TRACE(std::to_string(c.along) + " x " + std::to_string(c.across) +
                  (c.own_loss_factors ? ", own loss factors" : "") +
-                 (c.loss_factor ? ", loss_factor unknown" : ""));
+                 (c.loss_factor ? ", loss_factor unknown" : "") + ", " + ToString(c.theory));
     SensorOptions o;
+    o.theory = c.theory;
     o.elements_per_section = c.along;
     o.elements_across_width = c.across;
     if (c.own_loss_factors) {
