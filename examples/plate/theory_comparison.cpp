@@ -1,7 +1,8 @@
-// Kirchhoff against first-order shear deformation theory on the sensor of the 45 cm example
-// (docs/model.md, "Plate theories"): the un-normalised peak |w| and the largest difference of the
-// normalised profiles for a few clamp configurations, at the default mesh and finer ones (the
-// FSDT elements are bilinear, so their mesh convergence is checked here too).
+// Kirchhoff against first-order shear deformation theory and the refined zigzag theory on the
+// sensor of the 45 cm example (docs/model.md, "Plate theories"): the un-normalised peak |w| and
+// the largest difference of the normalised profiles from Kirchhoff's for a few clamp
+// configurations, at the default mesh and finer ones (the FSDT and RZT elements are bilinear, so
+// their mesh convergence is checked here too).
 // Usage: plate_theory_comparison [max refinement factor, default 4]
 #include <algorithm>
 #include <chrono>
@@ -72,7 +73,7 @@ int main(int argc, char** argv) {
   base.load_force = 0.042;
   for (int factor = 1; factor <= max_factor; factor *= 2) {
     std::vector<std::vector<std::vector<double>>> profiles;  // theory, case
-    for (PlateTheory theory : {PlateTheory::kKirchhoff, PlateTheory::kFsdt}) {
+    for (PlateTheory theory : {PlateTheory::kKirchhoff, PlateTheory::kFsdt, PlateTheory::kRzt}) {
       SensorOptions o = base;
       o.theory = theory;
       o.elements_per_section *= factor;
@@ -92,21 +93,28 @@ int main(int argc, char** argv) {
       profiles.emplace_back();
       for (const Case& c : cases) profiles.back().push_back(Magnitudes(model, c.clamps));
     }
-    std::printf("%-36s %14s %14s %10s %12s\n",
+    std::printf("%-36s %12s %12s %12s %9s %9s %10s %10s\n",
                 "configuration",
-                "peak K (um)",
-                "peak FSDT (um)",
+                "K (um)",
+                "FSDT (um)",
+                "RZT (um)",
                 "FSDT / K",
-                "profile diff");
+                "RZT / K",
+                "diff FSDT",
+                "diff RZT");
     for (std::size_t k = 0; k < cases.size(); ++k) {
       const double pk = Peak(profiles[0][k]);
       const double pf = Peak(profiles[1][k]);
-      std::printf("%-36s %14.4f %14.4f %10.4f %11.2f%%\n",
+      const double pr = Peak(profiles[2][k]);
+      std::printf("%-36s %12.4f %12.4f %12.4f %9.4f %9.4f %9.2f%% %9.2f%%\n",
                   cases[k].name,
                   pk * 1e6,
                   pf * 1e6,
+                  pr * 1e6,
                   pf / pk,
-                  100.0 * ProfileDifference(profiles[1][k], profiles[0][k]));
+                  pr / pk,
+                  100.0 * ProfileDifference(profiles[1][k], profiles[0][k]),
+                  100.0 * ProfileDifference(profiles[2][k], profiles[0][k]));
     }
   }
   return 0;

@@ -38,7 +38,7 @@ ShearRows Shear(int dir, double hx, double hy, double s, double t) {
 // Copies the w entries of a MITC4 vector (3 dofs per node) into the RZT layout.
 ElementVector FromMitc4(const ElementVector& mitc4) {
   ElementVector n = ElementVector::Zero(kRztElementDofs);
-  for (int corner = 0; corner < 4; ++corner) {
+  for (Eigen::Index corner = 0; corner < 4; ++corner) {
     n(kRztDofsPerNode * corner) = mitc4(kMitc4DofsPerNode * corner);
   }
   return n;

@@ -40,11 +40,12 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
   EXPECT_LT(worst, kFastPathTol);
 }
 
-// FSDT (MITC4) at twice the default mesh in each direction (20 x 12 per section, closer to what
-// its bilinear elements need: docs/model.md, "Plate theories"), 40 configurations.
-TEST(PlateSensorSlow, FastPathEqualsFullSolveFsdtRefinedMesh) {
+// FSDT (MITC4) and RZT (RZT4) at twice the default mesh in each direction (20 x 12 per section,
+// closer to what their bilinear elements need: docs/model.md, "Plate theories"), 40
+// configurations each.
+void ExpectFastEqualsFullRefinedMesh(PlateTheory theory) {
   SensorOptions options;
-  options.theory = PlateTheory::kFsdt;
+  options.theory = theory;
   options.elements_per_section = 20;
   options.elements_across_width = 12;
   const SensorModel model{options};
@@ -65,10 +66,19 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveFsdtRefinedMesh) {
     }
     worst = std::max(worst, diff / *std::max_element(full.begin(), full.end()));
   }
-  std::printf("FSDT 20 x 12: worst relative difference over %d configurations: %.2e\n",
+  std::printf("%s 20 x 12: worst relative difference over %d configurations: %.2e\n",
+              ToString(theory),
               kConfigurations,
               worst);
   EXPECT_LT(worst, kFastPathTol);
+}
+
+TEST(PlateSensorSlow, FastPathEqualsFullSolveFsdtRefinedMesh) {
+  ExpectFastEqualsFullRefinedMesh(PlateTheory::kFsdt);
+}
+
+TEST(PlateSensorSlow, FastPathEqualsFullSolveRztRefinedMesh) {
+  ExpectFastEqualsFullRefinedMesh(PlateTheory::kRzt);
 }
 
 // The continuous-unknowns path against the full solve of the model built with the same values,

@@ -60,9 +60,10 @@ struct SensorOptions {
   double length = 0.90;  // paper section 4
   double width = 0.04;   // assumption: a strip a few centimetres wide
   std::vector<Layer> layers = DefaultSensorLayers();
-  // Plate theory of the equivalent single layer (element.hpp): Kirchhoff (Bogner-Fox-Schmit
-  // elements) or first-order shear deformation with an energy-consistent shear stiffness (MITC4
-  // elements; docs/model.md, "Plate theories"). Both run the same fast path.
+  // Plate theory (element.hpp): Kirchhoff (Bogner-Fox-Schmit elements), first-order shear
+  // deformation with an energy-consistent shear stiffness (MITC4 elements) or the layer-wise
+  // refined zigzag theory (RZT4 elements; docs/model.md, "Plate theories"). All run the same fast
+  // paths.
   PlateTheory theory = PlateTheory::kKirchhoff;
 
   // Winkler foundation of the pipe bottom under the strip: pressure k_f (1 + i eta_f) w.
