@@ -142,10 +142,11 @@ TEST(RztValidation, ZigzagStiffnessOfTheSensorLaminate) {
   shear(1, 1) =
       2 * g_face * 1.5e-3 * beta_face * beta_face + g_core * 1.0e-3 * beta_core * beta_core;
   EXPECT_LT((section.zigzag_shear_real - shear).norm(), 1e-12 * shear.norm());
-  // sum G_k beta_k h_k = G h - sum G_k h_k and sum G_k beta_k^2 h_k = G h - 2 (G h) + sum G_k h_k
-  // ... both from G_k (1 + beta_k) = G.
+  // From G_k (1 + beta_k) = G and sum h_k / G_k = h / G: sum G_k beta_k h_k = G h - sum G_k h_k
+  // and sum G_k beta_k^2 h_k = sum G_k h_k - G h.
   const double g = 8.0 / 3.0 * g_core;
   EXPECT_NEAR(section.zigzag_shear_real(0, 1), g * 4e-3 - shear(0, 0), 1e-9 * shear(0, 0));
+  EXPECT_NEAR(section.zigzag_shear_real(1, 1), shear(0, 0) - g * 4e-3, 1e-9 * shear(0, 0));
   // Loss parts: the layers' loss factors weighted by their shares.
   const double shear_imag = 2 * 0.10 * g_face * 1.5e-3 + 0.15 * g_core * 1.0e-3;
   EXPECT_NEAR(section.zigzag_shear_imag(0, 0), shear_imag, 1e-12 * shear_imag);
