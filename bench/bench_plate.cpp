@@ -78,31 +78,26 @@ void BM_SensorProfileFullSolve(benchmark::State& state) {
 }
 BENCHMARK(BM_SensorProfileFullSolve)->Unit(benchmark::kMillisecond);
 
-// The same three with first-order shear deformation theory (MITC4, 3 dofs per node) at the
-// default mesh (docs/model.md, "Plate theories").
-SensorOptions FsdtOptions() {
+// The same three with first-order shear deformation theory (MITC4, 3 dofs per node) and the
+// refined zigzag theory (RZT4, 5 dofs per node) at the default mesh (docs/model.md, "Plate
+// theories").
+SensorOptions TheoryOptions(combabc::plate::PlateTheory theory) {
   SensorOptions options;
-  options.theory = combabc::plate::PlateTheory::kFsdt;
+  options.theory = theory;
   return options;
 }
 
-const SensorModel& FsdtModel() {
-  static const SensorModel model{FsdtOptions()};
-  return model;
-}
-
-void BM_SensorPrecomputeFsdt(benchmark::State& state) {
+void SensorPrecompute(benchmark::State& state, combabc::plate::PlateTheory theory) {
   for (auto _ : state) {
-    SensorModel model{FsdtOptions()};
+    SensorModel model{TheoryOptions(theory)};
     benchmark::DoNotOptimize(&model);
   }
 }
-BENCHMARK(BM_SensorPrecomputeFsdt)->Unit(benchmark::kMillisecond);
 
-// Arg: mesh refinement factor in both directions (1 = the default 10 x 6 per section; FSDT needs
-// finer meshes than Kirchhoff, docs/model.md).
-void BM_SensorProfileFastFsdt(benchmark::State& state) {
-  SensorOptions options = FsdtOptions();
+// Arg: mesh refinement factor in both directions (1 = the default 10 x 6 per section; FSDT and
+// RZT need finer meshes than Kirchhoff, docs/model.md).
+void SensorProfileFast(benchmark::State& state, combabc::plate::PlateTheory theory) {
+  SensorOptions options = TheoryOptions(theory);
   options.elements_per_section *= static_cast<int>(state.range(0));
   options.elements_across_width *= static_cast<int>(state.range(0));
   const SensorModel model{options};
@@ -114,10 +109,9 @@ void BM_SensorProfileFastFsdt(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data());
   }
 }
-BENCHMARK(BM_SensorProfileFastFsdt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
-void BM_SensorProfileFullSolveFsdt(benchmark::State& state) {
-  const SensorModel& model = FsdtModel();
+void SensorProfileFullSolve(benchmark::State& state, combabc::plate::PlateTheory theory) {
+  const SensorModel model{TheoryOptions(theory)};
   const auto configs = Configurations(16, model.num_clamps());
   std::vector<double> out(model.num_outputs());
   std::size_t i = 0;
@@ -126,7 +120,32 @@ void BM_SensorProfileFullSolveFsdt(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data());
   }
 }
+
+void BM_SensorPrecomputeFsdt(benchmark::State& state) {
+  SensorPrecompute(state, combabc::plate::PlateTheory::kFsdt);
+}
+BENCHMARK(BM_SensorPrecomputeFsdt)->Unit(benchmark::kMillisecond);
+void BM_SensorProfileFastFsdt(benchmark::State& state) {
+  SensorProfileFast(state, combabc::plate::PlateTheory::kFsdt);
+}
+BENCHMARK(BM_SensorProfileFastFsdt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+void BM_SensorProfileFullSolveFsdt(benchmark::State& state) {
+  SensorProfileFullSolve(state, combabc::plate::PlateTheory::kFsdt);
+}
 BENCHMARK(BM_SensorProfileFullSolveFsdt)->Unit(benchmark::kMillisecond);
+
+void BM_SensorPrecomputeRzt(benchmark::State& state) {
+  SensorPrecompute(state, combabc::plate::PlateTheory::kRzt);
+}
+BENCHMARK(BM_SensorPrecomputeRzt)->Unit(benchmark::kMillisecond);
+void BM_SensorProfileFastRzt(benchmark::State& state) {
+  SensorProfileFast(state, combabc::plate::PlateTheory::kRzt);
+}
+BENCHMARK(BM_SensorProfileFastRzt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+void BM_SensorProfileFullSolveRzt(benchmark::State& state) {
+  SensorProfileFullSolve(state, combabc::plate::PlateTheory::kRzt);
+}
+BENCHMARK(BM_SensorProfileFullSolveRzt)->Unit(benchmark::kMillisecond);
 
 // Continuous unknowns (SensorModel::Profile with a SensorVariation): every call has its own
 // foundation stiffness, stiffness scale and (unless `own_loss`) loss factor, drawn over ranges a
