@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
       "%d configurations: "
       "worst %.4f, mean %.4f, worst in 48-80 cm %.4f (precompute %.1f s, solves %.1f s)\n",
       coarse_options.length_grading,
-      coarse_options.width_grading,
+      coarse_options.WidthGrading(),
       m,
       ny,
       1e3 * coarse_options.length / (18.0 * m),

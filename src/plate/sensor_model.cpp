@@ -29,7 +29,7 @@ Grid SensorGrid(const SensorOptions& o) {
   }
   grid.x.push_back(o.length);
   for (int j = 0; j <= o.elements_across_width; ++j) {
-    grid.y.push_back(o.width * Graded(j, o.elements_across_width, o.width_grading));
+    grid.y.push_back(o.width * Graded(j, o.elements_across_width, o.WidthGrading()));
   }
   grid.y.back() = o.width;
   return grid;

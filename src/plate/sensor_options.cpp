@@ -142,8 +142,8 @@ bool SensorOptions::IsValid(std::string* why) const {
   if (!InRange(length_grading, 1.0, 3.0)) {
     return Fail(why, "length_grading", length_grading, "must be in [1, 3]");
   }
-  if (!InRange(width_grading, 1.0, 3.0)) {
-    return Fail(why, "width_grading", width_grading, "must be in [1, 3]");
+  if (!InRange(WidthGrading(), 1.0, 3.0)) {
+    return Fail(why, "width_grading", WidthGrading(), "must be in [1, 3]");
   }
   if (!(memory_limit_bytes > 0.0) || !std::isfinite(memory_limit_bytes)) {
     return Fail(why, "memory_limit_bytes", memory_limit_bytes, "must be finite and > 0");

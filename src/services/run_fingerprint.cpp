@@ -166,7 +166,7 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
       .Add("elements_per_section", s.elements_per_section)
       .Add("elements_across_width", s.elements_across_width)
       .Add("length_grading", s.length_grading)
-      .Add("width_grading", s.width_grading)
+      .Add("width_grading", s.WidthGrading())
       .Add("always_pivot", s.always_pivot);
   // Added only when not the original Kirchhoff model, so histories written before the key
   // existed keep their fingerprint.

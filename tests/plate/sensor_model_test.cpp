@@ -64,6 +64,28 @@ SensorOptions CoarseOptions() {
   return o;
 }
 
+// The width is graded towards the edges for Kirchhoff's cubic elements and uniform for the
+// bilinear shear elements (docs/model.md, "Mesh convergence of the shear theories"), unless set.
+TEST(PlateSensorModel, WidthGradingDefaultsToTheTheorysOwn) {
+  const auto first_element = [](const SensorOptions& o) {
+    const SensorModel model(o);
+    const std::vector<double>& y = model.plate().grid().y;
+    return (y[1] - y[0]) / (y.back() - y.front());
+  };
+  SensorOptions o = CoarseOptions();
+  o.elements_across_width = 4;
+  const double uniform = 1.0 / 4;
+  o.theory = PlateTheory::kKirchhoff;
+  EXPECT_LT(first_element(o), 0.5 * uniform);
+  for (PlateTheory theory : {PlateTheory::kFsdt, PlateTheory::kRzt}) {
+    o.theory = theory;
+    EXPECT_NEAR(first_element(o), uniform, 1e-12);
+    o.width_grading = 3.0;
+    EXPECT_LT(first_element(o), 0.5 * uniform);
+    o.width_grading.reset();
+  }
+}
+
 TEST(PlateSensorModel, FastPathEqualsFullSolveCoarseMesh) {
   ExpectFastEqualsFull(CoarseOptions(), 40, 1);
 }
