@@ -11,14 +11,9 @@
 #include <cstring>
 #include <filesystem>
 
-extern char** environ;
+#include "combabc/core/install_paths.hpp"
 
-#ifndef COMBABC_REPORT_SCRIPT_SOURCE
-#define COMBABC_REPORT_SCRIPT_SOURCE ""
-#endif
-#ifndef COMBABC_REPORT_SCRIPT_INSTALLED
-#define COMBABC_REPORT_SCRIPT_INSTALLED ""
-#endif
+extern char** environ;
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -41,17 +36,16 @@ PythonScript FindPythonScript(const std::string& file_name,
     }
     return tools;
   }
-  // Every script lives beside the report's (scripts/report/, installed together).
-  for (const char* report : {COMBABC_REPORT_SCRIPT_SOURCE, COMBABC_REPORT_SCRIPT_INSTALLED}) {
-    if (!*report) continue;
-    const fs::path candidate = fs::path(report).parent_path() / file_name;
-    if (fs::is_regular_file(candidate)) {
-      tools.script = candidate.string();
-      return tools;
-    }
+  // Every script lives beside the report's: scripts/report/ in the source tree, installed to
+  // share/combabc/report/, found relative to the binary (core/install_paths.hpp).
+  const auto candidates = DataFileCandidates("report/" + file_name, "scripts/report/" + file_name);
+  tools.script = FindDataFile(candidates).string();
+  if (tools.script.empty()) {
+    throw Error(ErrorKind::kCantCreate,
+                "script " + file_name + " not found at " + DescribeCandidates(candidates) +
+                    "; set " + override_variable + " to its path");
   }
-  throw Error(ErrorKind::kCantCreate,
-              "script " + file_name + " not found; set " + override_variable + " to its path");
+  return tools;
 }
 
 ErrorKind KindOfScriptStatus(int status) {
