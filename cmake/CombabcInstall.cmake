@@ -56,6 +56,12 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "python3, python3-numpy, python3-matplotlib")
+if(COMBABC_HAVE_PYTHON)  # the module is built for one Python minor version
+  set(py ${Python3_VERSION_MAJOR}.${Python3_VERSION_MINOR})
+  math(EXPR next "${Python3_VERSION_MINOR} + 1")
+  string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS
+    ", python3 (>= ${py}~), python3 (<< ${Python3_VERSION_MAJOR}.${next})")
+endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
   "python3-pandas, libeigen3-dev, libsqlite3-dev, libtomlplusplus-dev, pkg-config, bash-completion")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "openmpi-bin")

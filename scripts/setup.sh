@@ -18,6 +18,7 @@ packages=(
   python3-pytest python3-pandas             # its tests and DataFrames
   python3-xarray python3-netcdf4            # export's inference_data.nc (ArviZ layout)
   chromium               # the report page's browser test (ctest -L browser), headless
+  dpkg-dev file man-db   # the .deb: cpack's dpkg-shlibdeps and ELF detection; man for its check
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging, browser) and clang-tidy on it, the unit tests again under
+# unit, statistical, slow, packaging, browser), its .deb installed and run (scripts/check-deb.sh,
+# as root), and clang-tidy on it, the unit tests again under
 # ASan+UBSan, the tests labelled threads under ThreadSanitizer, the layering and formatting checks,
 # and a bounded fuzzing run of the input readers (COMBABC_FUZZ_SECONDS per target, default 30; 0
 # skips it; docs/fuzzing.md). Run scripts/setup.sh first (the README's test command does both).
@@ -18,6 +19,9 @@ echo "== Release build, warnings as errors"
 cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
 cmake --build build-ci -j "$jobs"
 ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
+
+echo "== the .deb (cpack): installed, runs the demo with /usr/bin/combabc, man page, Python (root only)"
+bash scripts/check-deb.sh build-ci
 
 echo "== clang-tidy on the Release build's sources (.clang-tidy; any warning fails)"
 bash scripts/check-tidy.sh build-ci
