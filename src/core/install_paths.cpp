@@ -54,12 +54,13 @@ bool InTree(const fs::path& file, const char* tree) {
   std::error_code ec;
   const fs::path root = fs::weakly_canonical(tree, ec);
   if (ec) return false;
-  const auto [root_end, file_it] = std::mismatch(root.begin(), root.end(), file.begin(), file.end());
-  (void)file_it;
-  return root_end == root.end();
+  // `file` lies under `root` when every component of root begins it.
+  return std::mismatch(root.begin(), root.end(), file.begin(), file.end()).first == root.end();
 }
 
-void Add(std::vector<fs::path>& out, const fs::path& dir, const char* step,
+void Add(std::vector<fs::path>& out,
+         const fs::path& dir,
+         const char* step,
          const std::string& relative) {
   if (dir.empty() || *step == '\0') return;
   const fs::path candidate = (dir / step / relative).lexically_normal();
