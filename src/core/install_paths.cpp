@@ -76,13 +76,20 @@ std::vector<fs::path> DataFileCandidates(const std::string& relative,
                                          const std::string& source_relative) {
   std::vector<fs::path> out;
   const fs::path exe = Executable();
-  Add(out, exe.parent_path(), COMBABC_DATA_FROM_BINDIR, relative);
   const fs::path object = SharedObject();
-  Add(out, object.parent_path(), COMBABC_DATA_FROM_LIBDIR, relative);
-  Add(out, object.parent_path(), COMBABC_DATA_FROM_PYTHONDIR, relative);
-  if (InTree(exe, COMBABC_BUILD_TREE) || InTree(object, COMBABC_BUILD_TREE)) {
+  // The binary holding this code: a build-tree one reads the source tree first, even when an
+  // installed combabc is beside the executable (python3 from the build tree, /usr installed).
+  if (InTree(object.empty() ? exe : object, COMBABC_BUILD_TREE)) {
     Add(out, COMBABC_SOURCE_TREE, ".", source_relative);
   }
+  // Its own install first: a shared libcombabc_*.so in lib/, the Python module in its package.
+  const std::string name = object.filename().string();
+  if (name.rfind("libcombabc", 0) == 0) {
+    Add(out, object.parent_path(), COMBABC_DATA_FROM_LIBDIR, relative);
+  } else if (name.rfind("_core", 0) == 0) {
+    Add(out, object.parent_path(), COMBABC_DATA_FROM_PYTHONDIR, relative);
+  }
+  Add(out, exe.parent_path(), COMBABC_DATA_FROM_BINDIR, relative);
   return out;
 }
 
