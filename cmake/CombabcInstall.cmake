@@ -63,7 +63,7 @@ if(COMBABC_HAVE_PYTHON)  # the module is built for one Python minor version
     ", python3 (>= ${py}~), python3 (<< ${Python3_VERSION_MAJOR}.${next})")
 endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
-  "python3-pandas, libeigen3-dev, libsqlite3-dev, libtomlplusplus-dev, pkg-config, bash-completion")
+  "python3-pandas, python3-xarray, python3-netcdf4, libeigen3-dev, libsqlite3-dev, libtomlplusplus-dev, pkg-config, bash-completion")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "openmpi-bin")
 set(CPACK_GENERATOR DEB)
 include(CPack)

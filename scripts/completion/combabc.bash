@@ -14,12 +14,16 @@ _combabc() {
   local opts files
   case $cmd in
     run) opts="-h --help -o --output -j --threads --overwrite --no-report -q --quiet"; files=toml ;;
-    resume) opts="-h --help -j --threads --no-report -q --quiet"; files=sqlite ;;
+    resume)
+      opts="-h --help -j --threads --max-simulations --max-wall-time --min-acceptance-rate
+            --max-failure-fraction --no-report -q --quiet"
+      files=sqlite ;;
     enumerate)
       opts="-h --help --threshold -o --output -j --threads --overwrite --top --no-report -q --quiet"
       files=toml ;;
     simulate) opts="-h --help --clamps -o --output --overwrite"; files=toml ;;
-    report | export) opts="-h --help -o --output --overwrite"; files=sqlite ;;
+    report) opts="-h --help -o --output --overwrite"; files=sqlite ;;
+    export) opts="-h --help -o --output --overwrite --no-netcdf"; files=sqlite ;;
     verify) opts="-h --help"; files=sqlite ;;
     *)
       mapfile -t COMPREPLY < <(compgen -W "$commands -h --help --version" -- "$cur")
@@ -33,7 +37,7 @@ _combabc() {
         mapfile -t COMPREPLY < <(compgen -d -- "$cur")
       fi
       return ;;
-    -j | --threads | --threshold | --top | --clamps) COMPREPLY=(); return ;;
+    -j | --threads | --threshold | --top | --clamps | --max-*| --min-*) COMPREPLY=(); return ;;
   esac
   if [[ $cur == -* ]]; then
     mapfile -t COMPREPLY < <(compgen -W "$opts" -- "$cur")

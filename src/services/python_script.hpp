@@ -16,8 +16,8 @@ struct PythonScript {
 // $COMBABC_PYTHON, else /usr/bin/python3 (Debian's, which has the packages; not a pyenv shim),
 // and the script `file_name` of scripts/report/: $<override_variable> when that is set, else the
 // installed one of the install that runs (share/combabc/report/, found relative to the binary:
-// core/install_paths.hpp), or for a build-tree binary the source tree's. `needs` says what to install (the message when the python
-// is missing). Error kCantCreate when either is missing.
+// core/install_paths.hpp), or for a build-tree binary the source tree's. `needs` says what to
+// install (the message when the python is missing). Error kCantCreate when either is missing.
 PythonScript FindPythonScript(const std::string& file_name,
                               const char* override_variable,
                               const std::string& needs);
