@@ -7,7 +7,8 @@
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "relocation test step failed (${rc}): ${ARGN}")
+    # The moved install stays for a look; it is removed when the test passes.
+    message(FATAL_ERROR "relocation test step failed (${rc}): ${ARGN} (install in ${moved})")
   endif()
 endfunction()
 function(expect_file path)
