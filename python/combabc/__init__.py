@@ -20,14 +20,16 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._core import (BinarySpace, ContinuousParameter, Error, SimulationFailed, SmcOptions,
+from ._core import (BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
+                    ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
 from .history import History, Wave
 
 __version__ = _core.__version__
-__all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "Problem", "SensorModel",
-           "SimulationFailed", "SmcOptions", "ThresholdSchedule", "Wave", "enumerate",
-           "export", "load_history", "make_options", "resume", "run"]
+__all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "LogisticKernelOptions",
+           "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
+           "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
+           "load_history", "make_options", "resume", "run"]
 
 
 class Problem:
@@ -36,27 +38,42 @@ class Problem:
     space: a BinarySpace (dimension, prior, ties, names). simulator: f(bits) -> ndarray[m], or
     f(bits, reals) when `reals` (a list of ContinuousParameter) is not empty; bits is uint8[d],
     reals float64[r]. With batch=True f receives uint8[n, d] (and float64[n, r]) and returns
-    float64[n, m]. observed: the data y (m values); the distance is Euclidean, one threshold
-    component named "euclidean". Raise combabc.SimulationFailed for a candidate that failed (a
-    NaN output counts as failed too); any other exception ends the run and reaches the caller.
-    rng=True: f also gets the keyword argument rng, a numpy Generator seeded from the candidate's
-    own random stream (batched: a list of n, one per row), so that a stochastic simulator gives the
-    same history for any thread count.
+    float64[n, m]. observed: the data y (m values). Raise combabc.SimulationFailed for a
+    candidate that failed (a NaN output counts as failed too); any other exception ends the run
+    and reaches the caller. rng=True: f also gets the keyword argument rng, a numpy Generator
+    seeded from the candidate's own random stream (batched: a list of n, one per row), so that a
+    stochastic simulator gives the same history for any thread count.
+
+    distance: None for the Euclidean distance to `observed` (one threshold component named
+    "euclidean"), or d(output, observed) -> a number (one component named "distance"); with
+    components=["a", "b"] it returns those k values as a 1-D array, one threshold schedule per
+    component. distance_batch (default: batch): d(outputs float64[n, m], observed) -> float64[n]
+    (or [n, k]). A NaN distance or combabc.SimulationFailed fails the candidate, as for the
+    simulator.
     """
 
-    def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False):
+    def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
+                 distance=None, components=None, distance_batch=None):
         self.space = space
         self.simulator = simulator
         self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.reals = list(reals)
         self.batch = bool(batch)
         self.rng = bool(rng)
+        if distance is not None and not callable(distance):
+            raise TypeError(f"distance must be callable or None, not {type(distance).__name__}")
+        self.distance = distance
+        self.components = [str(c) for c in components] if components is not None else []
+        if components is not None and not self.components:
+            raise ValueError("components: name at least one distance component")
+        self.distance_batch = self.batch if distance_batch is None else bool(distance_batch)
 
 
 def make_options(**fields):
     """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
     may be a list of ThresholdSchedule or, for one threshold component, a list of numbers (one
-    per wave)."""
+    per wave). proposal=ProposalOptions(...) picks the kernels, tempering=TemperingSchedule(...)
+    tempers the binary proposal toward the prior (paper Eq. 3)."""
     options = SmcOptions()
     thresholds = fields.pop("thresholds", None)
     if thresholds is not None:
@@ -85,7 +102,8 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
         if threads is not None:
             options.threads = threads
         data = _core.run_smc(what.space, what.reals, what.simulator, what.batch, what.rng,
-                             what.observed, options)
+                             what.observed, options, distance=what.distance,
+                             distance_batch=what.distance_batch, components=what.components)
         # The data's coordinate is the output's index (the NetCDF export's observed_data).
         data.update(measured_position=np.arange(len(what.observed), dtype=np.float64),
                     measured_value=what.observed, position_unit="index",

@@ -273,28 +273,50 @@ py::array_t<double> SimulateNominal(const services::NominalSimulator& model, con
   return out;
 }
 
+// distance: None (Euclidean to `observed`) or a Python callable (PythonDistance; components: the
+// names of its k values, empty for one value named "distance").
 py::dict RunSmc(const BinarySpace& bits,
                 const std::vector<ContinuousParameter>& reals,
                 const py::object& function,
                 bool batch,
                 bool with_rng,
                 const std::vector<double>& observed,
-                const SmcOptions& options) {
+                const SmcOptions& options,
+                const py::object& distance_function,
+                bool distance_batch,
+                const std::vector<std::string>& components) {
   if (observed.empty()) {
     throw Error(ErrorKind::kConfig, "the observed data are empty", {}, 0, "observed");
+  }
+  std::optional<PythonDistance> python_distance;
+  std::unique_ptr<Distance> distance;
+  const auto m = static_cast<int>(observed.size());
+  if (distance_function.is_none()) {
+    if (!components.empty()) {
+      throw Error(ErrorKind::kConfig,
+                  "components name the values of a distance written in Python; the built-in "
+                  "Euclidean distance has one, \"euclidean\"",
+                  {},
+                  0,
+                  "components");
+    }
+    distance = std::make_unique<EuclideanDistance>(observed);
+  } else {
+    python_distance.emplace(distance_function, distance_batch, components, observed);
+    distance = std::make_unique<TailDistance>(python_distance->names(), m);
   }
   const ParameterSpace space(bits, reals);
   const PythonSimulator simulator(function,
                                   batch,
-                                  static_cast<int>(observed.size()),
+                                  m,
                                   space.num_reals(),
                                   py::module_::import("combabc._core").attr("SimulationFailed"),
-                                  with_rng);
-  const EuclideanDistance distance(observed);
+                                  with_rng,
+                                  python_distance ? &*python_distance : nullptr);
   SmcProblem problem;
   problem.space = &space;
   problem.simulator = &simulator;
-  problem.distance = &distance;
+  problem.distance = distance.get();
   PythonSignals signals;
   RunHistory history;
   try {
@@ -313,12 +335,18 @@ py::dict RunSmc(const BinarySpace& bits,
     throw *raised;
   }
   signals.RaiseIfInterrupted("combabc: run interrupted");
+  // A Python distance's values rode after the outputs (TailDistance): the outputs are the m first.
+  for (WaveRecord& wave : history.waves) {
+    for (Particle& p : wave.particles) {
+      if (p.output.size() > observed.size()) p.output.resize(observed.size());
+    }
+  }
   // Named as a history file of the same run would be.
   RunMetadata metadata;
   metadata.dimension = space.num_bits();
   for (int k = 0; k < space.num_bits(); ++k) metadata.bit_names.push_back(bits.name(k));
   metadata.reals = reals;
-  metadata.distance_components = distance.components();
+  metadata.distance_components = distance->components();
   metadata.estimator = ToString(options.estimator);
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["seed"] = options.seed;
@@ -337,6 +365,131 @@ BinarySpace MakeBinarySpace(int dimension,
   options.tied = tied;
   options.names = names;
   return BinarySpace(options);
+}
+
+// An options struct made from keywords is checked at once, with the engine's message (its
+// IsValid) as combabc.Error; fields set later are checked when the run starts (SmcOptions).
+void Require(bool valid, const std::string& why) {
+  if (!valid) throw Error(ErrorKind::kConfig, why);
+}
+
+// The proposal kernels and tempering (SmcOptions::proposal, ::tempering; [proposal] and
+// [sampler.tempering] in a config, docs/config.md), their choices by the config's names.
+void BindProposalTypes(py::module_& m) {
+  const LogisticKernelOptions logistic_defaults;
+  py::class_<LogisticKernelOptions>(m, "LogisticKernelOptions")
+      .def(py::init([](double min_correlation,
+                       int max_predecessors,
+                       double ridge,
+                       double min_marginal,
+                       double clip) {
+             LogisticKernelOptions o;
+             o.min_correlation = min_correlation;
+             o.max_predecessors = max_predecessors;
+             o.ridge = ridge;
+             o.min_marginal = min_marginal;
+             o.clip = clip;
+             std::string why;
+             Require(o.IsValid(&why), why);
+             return o;
+           }),
+           py::kw_only(),
+           py::arg("min_correlation") = logistic_defaults.min_correlation,
+           py::arg("max_predecessors") = logistic_defaults.max_predecessors,
+           py::arg("ridge") = logistic_defaults.ridge,
+           py::arg("min_marginal") = logistic_defaults.min_marginal,
+           py::arg("clip") = logistic_defaults.clip)
+      .def_readwrite("min_correlation", &LogisticKernelOptions::min_correlation)
+      .def_readwrite("max_predecessors", &LogisticKernelOptions::max_predecessors)
+      .def_readwrite("ridge", &LogisticKernelOptions::ridge)
+      .def_readwrite("min_marginal", &LogisticKernelOptions::min_marginal)
+      .def_readwrite("clip", &LogisticKernelOptions::clip)
+      .def("is_valid", [](const LogisticKernelOptions& o) {
+        std::string why;
+        const bool ok = o.IsValid(&why);
+        return py::make_tuple(ok, why);
+      });
+
+  const ProposalOptions proposal_defaults;
+  py::class_<ProposalOptions>(m, "ProposalOptions")
+      .def(py::init([](const std::string& kind,
+                       const LogisticKernelOptions& logistic,
+                       const std::string& continuous,
+                       double scale) {
+             ProposalOptions o;
+             o.binary = Parse<BinaryKernelKind>(kind, "kind");
+             o.logistic = logistic;
+             o.continuous = Parse<ContinuousKernelKind>(continuous, "continuous");
+             o.scale = scale;
+             std::string why;
+             Require(o.IsValid(&why), why);
+             return o;
+           }),
+           py::kw_only(),
+           py::arg("kind") = ToString(proposal_defaults.binary),
+           py::arg("logistic") = proposal_defaults.logistic,
+           py::arg("continuous") = ToString(proposal_defaults.continuous),
+           py::arg("scale") = proposal_defaults.scale)
+      .def_property(
+          "kind",
+          [](const ProposalOptions& o) { return ToString(o.binary); },
+          [](ProposalOptions& o, const std::string& text) {
+            o.binary = Parse<BinaryKernelKind>(text, "kind");
+          })
+      .def_readwrite("logistic", &ProposalOptions::logistic)
+      .def_property(
+          "continuous",
+          [](const ProposalOptions& o) { return ToString(o.continuous); },
+          [](ProposalOptions& o, const std::string& text) {
+            o.continuous = Parse<ContinuousKernelKind>(text, "continuous");
+          })
+      .def_readwrite("scale", &ProposalOptions::scale)
+      .def("is_valid", [](const ProposalOptions& o) {
+        std::string why;
+        const bool ok = o.IsValid(&why);
+        return py::make_tuple(ok, why);
+      });
+
+  const TemperingSchedule tempering_defaults;
+  py::class_<TemperingSchedule>(m, "TemperingSchedule")
+      .def(py::init([](const std::string& kind,
+                       const std::string& form,
+                       double phi0,
+                       std::vector<double> values) {
+             TemperingSchedule s;
+             s.kind = Parse<TemperingKind>(kind, "kind");
+             s.form = Parse<TemperingForm>(form, "form");
+             s.phi0 = phi0;
+             s.values = std::move(values);
+             std::string why;
+             Require(s.IsValid("TemperingSchedule", &why), why);
+             return s;
+           }),
+           py::kw_only(),
+           py::arg("kind") = ToString(tempering_defaults.kind),
+           py::arg("form") = ToString(tempering_defaults.form),
+           py::arg("phi0") = tempering_defaults.phi0,
+           py::arg("values") = tempering_defaults.values)
+      .def_property(
+          "kind",
+          [](const TemperingSchedule& s) { return ToString(s.kind); },
+          [](TemperingSchedule& s, const std::string& text) {
+            s.kind = Parse<TemperingKind>(text, "kind");
+          })
+      .def_property(
+          "form",
+          [](const TemperingSchedule& s) { return ToString(s.form); },
+          [](TemperingSchedule& s, const std::string& text) {
+            s.form = Parse<TemperingForm>(text, "form");
+          })
+      .def_readwrite("phi0", &TemperingSchedule::phi0)
+      .def_readwrite("values", &TemperingSchedule::values)
+      .def("phi", &TemperingSchedule::Phi, py::arg("wave"), py::arg("planned_waves"))
+      .def("is_valid", [](const TemperingSchedule& s) {
+        std::string why;
+        const bool ok = s.IsValid("TemperingSchedule", &why);
+        return py::make_tuple(ok, why);
+      });
 }
 
 void BindTypes(py::module_& m) {
@@ -408,11 +561,15 @@ void BindTypes(py::module_& m) {
       .def_readwrite("initial", &ThresholdSchedule::initial)
       .def_readwrite("target", &ThresholdSchedule::target);
 
+  BindProposalTypes(m);
+
   py::class_<SmcOptions>(m, "SmcOptions")
       .def(py::init<>())
       .def_readwrite("num_waves", &SmcOptions::num_waves)
       .def_readwrite("accepted_per_wave", &SmcOptions::accepted_per_wave)
       .def_readwrite("thresholds", &SmcOptions::thresholds)
+      .def_readwrite("tempering", &SmcOptions::tempering)
+      .def_readwrite("proposal", &SmcOptions::proposal)
       .def_property(
           "estimator",
           [](const SmcOptions& o) { return ToString(o.estimator); },
@@ -517,5 +674,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("batch"),
         py::arg("rng"),
         py::arg("observed"),
-        py::arg("options"));
+        py::arg("options"),
+        py::arg("distance") = py::none(),
+        py::arg("distance_batch") = false,
+        py::arg("components") = std::vector<std::string>{});
 }
