@@ -84,8 +84,9 @@ class PythonSimulator final : public Simulator {
                      std::span<RandomStream> rngs,
                      std::span<double> out,
                      BatchFailures& failures) const override;
-  // The first exception the simulator or distance raised that ended the run (not SimulationFailed), if any:
-  // the caller raises it again in Python once the run has returned. Read with the GIL held.
+  // The first exception the simulator or distance raised that ended the run (not
+  // SimulationFailed), if any: the caller raises it again in Python once the run has returned.
+  // Read with the GIL held.
   std::optional<pybind11::error_already_set> python_error() const;
 
  private:
