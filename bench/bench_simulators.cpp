@@ -158,8 +158,9 @@ BENCHMARK(BM_BareSpawnEcho)->Unit(benchmark::kMicrosecond)->UseRealTime();
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "--as-worker") == 0)
+  if (argc >= 2 && std::strcmp(argv[1], "--as-worker") == 0) {
     return RunAsWorker(argc >= 3 ? argv[2] : nullptr);
+  }
   if (argc >= 2 && std::strcmp(argv[1], "--as-command") == 0) return RunAsCommand();
   self_path = fs::canonical("/proc/self/exe").string();
   benchmark::Initialize(&argc, argv);
