@@ -58,9 +58,9 @@ using ElementVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 
 // mass_unit acts on w only (translational inertia of unit mass per area, which the foundation
 // shares). rotary_inertia is the consistent mass of the rotations (and zigzag amplitudes) of the
 // shear-deformable theories, zero for Kirchhoff; it enters the modal mass
-// rho h mass_unit + rotary_inertia, and not the harmonic solve at the sensor's 5 Hz, where it
-// moves the profile by less than 1e-5 of its peak (docs/model.md, "Natural frequencies of thick
-// plates").
+// rho h mass_unit + rotary_inertia, and not the harmonic solve (nor its fast paths): at the
+// sensor's 5 Hz it would move the profile by about 2e-5 of its peak (docs/model.md, "Natural
+// frequencies of thick plates").
 struct ElementMatrices {
   ElementMatrix stiffness_real;
   ElementMatrix stiffness_imag;
