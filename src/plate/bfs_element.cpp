@@ -78,6 +78,8 @@ ElementMatrices ComputeElementMatrices(double hx,
   m.stiffness_real.setZero(kBfsElementDofs, kBfsElementDofs);
   m.stiffness_imag.setZero(kBfsElementDofs, kBfsElementDofs);
   m.mass_unit.setZero(kBfsElementDofs, kBfsElementDofs);
+  // Kirchhoff theory here neglects rotary inertia (thin plates: h^2 / 12 against wavelength^2).
+  m.rotary_inertia.setZero(kBfsElementDofs, kBfsElementDofs);
   for (int i = 0; i < 4; ++i) {
     const Hermite bx = HermiteAt(hx, hx * kGaussPoint[i]);
     for (int j = 0; j < 4; ++j) {

@@ -99,6 +99,7 @@ void ZigzagStiffness(const std::vector<Layer>& layers, PlateSection* section) {
     double z_phi = 0.0;
     double phi_phi = 0.0;
     double z_z = 0.0;
+    // Integrals of the zigzag inertia (PlateSection::zigzag_inertia): the same ones, by density.
     for (double point : kPoint) {
       const double t = point * layer.thickness;
       const double zz = z + t - section->neutral_plane;
@@ -119,12 +120,16 @@ void ZigzagStiffness(const std::vector<Layer>& layers, PlateSection* section) {
     section->zigzag_bending_imag += layer.loss_factor * bending;
     section->zigzag_shear_real += shear;
     section->zigzag_shear_imag += layer.loss_factor * shear;
+    Eigen::Matrix2d inertia;
+    inertia << z_z, -z_phi, -z_phi, phi_phi;
+    section->zigzag_inertia += layer.density * inertia;
     phi_bottom += slope[k] * layer.thickness;
     z += layer.thickness;
   }
   // The theta block is the classical D (same integral; taken from there so both are one number).
   section->zigzag_bending_real.topLeftCorner<3, 3>() = section->bending_real;
   section->zigzag_bending_imag.topLeftCorner<3, 3>() = section->bending_imag;
+  section->zigzag_inertia(0, 0) = section->rotary_inertia;
   if (!zigzag) {
     // psi moves nothing: uncoupled stiffnesses of its own (the theta ones), so that it stays
     // zero. The bending part is needed too: the tied shear strains see only edge midpoint values.
@@ -183,6 +188,7 @@ PlateSection EquivalentSingleLayer(const std::vector<Layer>& layers) {
         layer.youngs_modulus * second_moment * ReducedStiffnessShape(layer.poisson_ratio);
     section.bending_real += d;
     section.bending_imag += layer.loss_factor * d;
+    section.rotary_inertia += layer.density * second_moment;
     z += layer.thickness;
   }
   ShearStiffness(layers, &section);

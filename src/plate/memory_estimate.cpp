@@ -19,8 +19,9 @@ namespace {
 constexpr double kComplexBytes = 16.0;
 // Bytes per plate dof for the load vector, dof maps and the sparse stiffness of a section.
 constexpr double kBytesPerDof = 64.0;
-// One set of element matrices (stiffness and mass, 16 x 16 doubles, and their workspace).
-constexpr double kBytesPerElementKind = 4096.0;
+// One set of element matrices (stiffness, mass and rotary inertia: four matrices of at most
+// 20 x 20 doubles stored inline, and their workspace).
+constexpr double kBytesPerElementKind = 16384.0;
 
 // Whether section s is touched by the load (a point load or a patch; clipping does not matter).
 bool Loaded(const SensorOptions& o, int s) {

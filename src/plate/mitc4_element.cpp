@@ -68,12 +68,17 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
   m.stiffness_real.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
   m.stiffness_imag.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
   m.mass_unit.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
+  m.rotary_inertia.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
   for (double s : kGaussPoint) {
     for (double t : kGaussPoint) {
       const double weight = kGaussWeight * kGaussWeight * hx * hy;
       Eigen::Matrix<double, 3, kMitc4ElementDofs> bending =
           Eigen::Matrix<double, 3, kMitc4ElementDofs>::Zero();
       Eigen::Matrix<double, kMitc4ElementDofs, 1> n =
+          Eigen::Matrix<double, kMitc4ElementDofs, 1>::Zero();
+      Eigen::Matrix<double, kMitc4ElementDofs, 1> n_phi_x =
+          Eigen::Matrix<double, kMitc4ElementDofs, 1>::Zero();
+      Eigen::Matrix<double, kMitc4ElementDofs, 1> n_phi_y =
           Eigen::Matrix<double, kMitc4ElementDofs, 1>::Zero();
       for (int b = 0; b < 2; ++b) {
         for (int a = 0; a < 2; ++a) {
@@ -84,6 +89,8 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
           bending(2, LocalDof(a, b, 1)) = dy;  // phi_x,y + phi_y,x
           bending(2, LocalDof(a, b, 2)) = dx;
           n(LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
+          n_phi_x(LocalDof(a, b, 1)) = Linear(a, s) * Linear(b, t);
+          n_phi_y(LocalDof(a, b, 2)) = Linear(a, s) * Linear(b, t);
         }
       }
       Eigen::Matrix<double, 2, kMitc4ElementDofs> shear;
@@ -96,6 +103,8 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
       m.stiffness_imag += weight * (bending.transpose() * section.bending_imag * bending +
                                     section.shear_imag * shear_product);
       m.mass_unit += weight * n * n.transpose();
+      m.rotary_inertia += weight * section.rotary_inertia *
+                          (n_phi_x * n_phi_x.transpose() + n_phi_y * n_phi_y.transpose());
     }
   }
   return m;

@@ -16,25 +16,35 @@
 namespace combabc::plate {
 namespace {
 
+// M = rho h M_1 + R: translational and rotary inertia, assembled apart so that the Kirchhoff
+// mass (R = 0) stays bit-identical to rho h M_1.
 Eigen::SparseMatrix<double> AssembleMass(const Plate& plate, const std::vector<int>& map, int n) {
-  std::vector<Eigen::Triplet<double>> triplets;
+  std::vector<Eigen::Triplet<double>> unit_triplets;
+  std::vector<Eigen::Triplet<double>> rotary_triplets;
   const Grid& grid = plate.grid();
   for (int ex = 0; ex < grid.nx(); ++ex) {
     for (int ey = 0; ey < grid.ny(); ++ey) {
-      const ElementMatrix& m = plate.Element(ex, ey).mass_unit;
+      const ElementMatrices& e = plate.Element(ex, ey);
       int global[kMaxElementDofs];
       for (int k = 0; k < plate.element_dofs(); ++k) global[k] = map[plate.ElementDof(ex, ey, k)];
       for (int c = 0; c < plate.element_dofs(); ++c) {
         if (global[c] < 0) continue;
         for (int r = 0; r < plate.element_dofs(); ++r) {
-          if (global[r] >= 0) triplets.emplace_back(global[r], global[c], m(r, c));
+          if (global[r] < 0) continue;
+          unit_triplets.emplace_back(global[r], global[c], e.mass_unit(r, c));
+          if (e.rotary_inertia(r, c) != 0.0) {
+            rotary_triplets.emplace_back(global[r], global[c], e.rotary_inertia(r, c));
+          }
         }
       }
     }
   }
   Eigen::SparseMatrix<double> mass(n, n);
-  mass.setFromTriplets(triplets.begin(), triplets.end());
-  return mass * plate.section().mass_per_area;
+  mass.setFromTriplets(unit_triplets.begin(), unit_triplets.end());
+  if (rotary_triplets.empty()) return mass * plate.section().mass_per_area;
+  Eigen::SparseMatrix<double> rotary(n, n);
+  rotary.setFromTriplets(rotary_triplets.begin(), rotary_triplets.end());
+  return mass * plate.section().mass_per_area + rotary;
 }
 
 }  // namespace

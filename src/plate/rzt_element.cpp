@@ -67,6 +67,7 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
   m.stiffness_real.setZero(kRztElementDofs, kRztElementDofs);
   m.stiffness_imag.setZero(kRztElementDofs, kRztElementDofs);
   m.mass_unit.setZero(kRztElementDofs, kRztElementDofs);
+  m.rotary_inertia.setZero(kRztElementDofs, kRztElementDofs);
   for (double s : kGaussPoint) {
     for (double t : kGaussPoint) {
       const double weight = kGaussWeight * kGaussWeight * hx * hy;
@@ -75,6 +76,9 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
           Eigen::Matrix<double, 6, kRztElementDofs>::Zero();
       Eigen::Matrix<double, kRztElementDofs, 1> n =
           Eigen::Matrix<double, kRztElementDofs, 1>::Zero();
+      // (theta_a, psi_a) at the point, direction a = x (rows 0-1) and y (rows 2-3).
+      Eigen::Matrix<double, 4, kRztElementDofs> rotation =
+          Eigen::Matrix<double, 4, kRztElementDofs>::Zero();
       for (int b = 0; b < 2; ++b) {
         for (int a = 0; a < 2; ++a) {
           const double dx = LinearSlope(a) / hx * Linear(b, t);
@@ -88,6 +92,11 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
             bending(row + 2, LocalDof(a, b, dof + 1)) = dx;
           }
           n(LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
+          for (int dir = 0; dir < 2; ++dir) {
+            const Eigen::Index row = 2 * static_cast<Eigen::Index>(dir);
+            rotation(row, LocalDof(a, b, 1 + dir)) = Linear(a, s) * Linear(b, t);
+            rotation(row + 1, LocalDof(a, b, 3 + dir)) = Linear(a, s) * Linear(b, t);
+          }
         }
       }
       const ShearRows shear_x = (1.0 - t) * bottom + t * top;
@@ -99,6 +108,10 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
                                     shear_x.transpose() * section.zigzag_shear_imag * shear_x +
                                     shear_y.transpose() * section.zigzag_shear_imag * shear_y);
       m.mass_unit += weight * n * n.transpose();
+      for (Eigen::Index row : {0, 2}) {
+        const auto rows = rotation.middleRows<2>(row);
+        m.rotary_inertia += weight * rows.transpose() * section.zigzag_inertia * rows;
+      }
     }
   }
   return m;

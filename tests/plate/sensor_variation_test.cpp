@@ -196,9 +196,10 @@ TEST(PlateSensorVariation, LayersOwnLossFactorsNotProportional) {
   ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
 }
 
-// FSDT through the continuous-unknowns path: its mass acts on w only (no rotary inertia), so the
-// series bound works with a semidefinite M; and the default laminate's shear stiffness carries
-// the core's loss factor, so the layers' own factors take the complex K_base.
+// FSDT through the continuous-unknowns path: its harmonic mass acts on w only (rotary inertia is
+// modal only, element.hpp), so the series bound works with a semidefinite M; and the default
+// laminate's shear stiffness carries the core's loss factor, so the layers' own factors take the
+// complex K_base.
 TEST(PlateSensorVariation, EqualsFullSolveFsdt) {
   SensorOptions o = CoarseOptions();
   o.theory = PlateTheory::kFsdt;

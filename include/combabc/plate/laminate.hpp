@@ -32,9 +32,14 @@ struct PlateSection {
   Eigen::Matrix3d bending_imag = Eigen::Matrix3d::Zero();  // N m (loss part)
   double shear_real = 0.0;                                 // N/m
   double shear_imag = 0.0;                                 // N/m (loss part)
-  double mass_per_area = 0.0;                              // kg/m^2 (rotary inertia neglected)
-  double thickness = 0.0;                                  // m, total
-  double neutral_plane = 0.0;                              // m above the bottom face
+  double mass_per_area = 0.0;                              // kg/m^2, sum rho_k h_k
+  // Rotary inertia of the normal, sum rho_k int (z - z_n)^2 dz (kg, i.e. kg m^2 per m^2): the
+  // kinetic energy of the in-plane motion -z phi of the first-order theory (z about the neutral
+  // plane, as D; the first mass moment of an unsymmetric laminate, which couples to the membrane
+  // motion, is neglected with the membrane stiffness).
+  double rotary_inertia = 0.0;
+  double thickness = 0.0;      // m, total
+  double neutral_plane = 0.0;  // m above the bottom face
 
   // Refined zigzag theory (Tessler, Di Sciuva & Gherlone, J. Compos. Mater. 44 (2010) 1303;
   // docs/model.md, "Plate theories"): in-plane displacements -z theta + phi(z) psi, phi the
@@ -53,6 +58,10 @@ struct PlateSection {
   Matrix6d zigzag_bending_imag = Matrix6d::Zero();
   Eigen::Matrix2d zigzag_shear_real = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d zigzag_shear_imag = Eigen::Matrix2d::Zero();
+  // Inertia of the zigzag kinematics on (theta_a, psi_a) in each direction a, from the kinetic
+  // energy of u_a = -z theta_a + phi psi_a: [[sum rho_k int z^2, -sum rho_k int z phi],
+  // [., sum rho_k int phi^2]] (kg; top left = rotary_inertia).
+  Eigen::Matrix2d zigzag_inertia = Eigen::Matrix2d::Zero();
 };
 
 // Layers are listed from the bottom face up. The shear stiffness is energy-consistent (see

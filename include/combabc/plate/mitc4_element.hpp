@@ -19,7 +19,8 @@ inline constexpr int kMitc4DofsPerNode = 3;
 inline constexpr int kMitc4ElementDofs = 12;
 
 // stiffness: bending (2 x 2 Gauss, exact) plus the assumed-strain shear (2 x 2 Gauss, exact for
-// it); mass_unit: the consistent w mass, integral of N^T N.
+// it); mass_unit: the consistent w mass, integral of N^T N; rotary_inertia: the consistent mass of
+// the rotations, PlateSection::rotary_inertia times the integral of N^T N on phi_x and phi_y.
 ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& section);
 
 // Values of the w shape functions at local (x, y) in [0, hx] x [0, hy] (zero on rotation dofs).

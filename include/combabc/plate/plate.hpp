@@ -172,8 +172,9 @@ class Plate {
                                  const Eigen::VectorXd& load_vector,
                                  double frequency_hz) const;
 
-  // Undamped natural frequencies (real parts of the stiffnesses) and mass-normalised mode shapes
-  // by shift-invert subspace iteration; `count` lowest.
+  // Undamped natural frequencies (real parts of the stiffnesses; mass rho h M_1 plus the rotary
+  // inertia of FSDT and RZT, element.hpp) and mass-normalised mode shapes by shift-invert subspace
+  // iteration; `count` lowest.
   Modes ComputeModes(const Constraints& constraints, int count) const;
 
   // Deflection w at (x, y) interpolated with the element shape functions.

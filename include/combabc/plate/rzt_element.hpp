@@ -18,7 +18,8 @@ inline constexpr int kRztDofsPerNode = 5;
 inline constexpr int kRztElementDofs = 20;
 
 // stiffness: bending (2 x 2 Gauss, exact) plus the assumed-strain shear (2 x 2 Gauss, exact for
-// it); mass_unit: the consistent w mass, integral of N^T N.
+// it); mass_unit: the consistent w mass, integral of N^T N; rotary_inertia: the consistent mass of
+// (theta, psi) with PlateSection::zigzag_inertia.
 ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& section);
 
 // Values of the w shape functions at local (x, y) in [0, hx] x [0, hy] (zero on the other dofs).
