@@ -12,6 +12,7 @@
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -21,32 +22,8 @@ namespace fs = std::filesystem;
 constexpr double kLow = 2e4;  // N/m^3, the uniform prior's support
 constexpr double kHigh = 2e5;
 
-constexpr const char* kConfig = R"([model.clamps]
-per_edge = 3
-
-[model.mesh]
-elements_per_section = 2
-elements_across_width = 2
-
-[data]
-csv = "data.csv"
-position_column = "position_m"
-displacement_column = "displacement_m"
-position_unit = "m"
-displacement_unit = "m"
-
-[metric]
-[[metric.component]]
-type = "least_squares"
-window = [0.31, 0.58]
-
-[sampler]
-seed = 5
-waves = 3
-accepted_per_wave = 30
-estimator = "importance"
-
-[proposal]
+const std::string kConfig = TinySensorConfig(
+    "seed = 5\nwaves = 3\naccepted_per_wave = 30\nestimator = \"importance\"\n", R"([proposal]
 kind = "logistic"
 
 [parameters.foundation_stiffness]
@@ -56,7 +33,7 @@ high = 2e5
 
 [output]
 directory = "out"
-)";
+)");
 
 // Splits one CSV line (the export writes no quoted commas in these files).
 std::vector<std::string> Fields(const std::string& line) {
@@ -72,12 +49,7 @@ class MixedRun : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new ScratchDir("e2e-mixed");
     std::ofstream(*dir_ / "run.toml") << kConfig;
-    std::ofstream data(*dir_ / "data.csv");
-    data << "position_m,displacement_m\n";
-    for (int i = 31; i < 60; i += 3) {
-      data << i / 100.0 << "," << 1.0 - std::abs(i / 100.0 - 0.45) << "\n";
-    }
-    data.close();
+    WriteTinySensorData(dir_->path());
     run_ = new CliResult(RunCli({"run", *dir_ / "run.toml", "--no-report"}, dir_->path()));
   }
   static void TearDownTestSuite() {

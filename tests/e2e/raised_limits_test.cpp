@@ -10,50 +10,20 @@
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kConfig = R"([model.clamps]
-per_edge = 3
-
-[model.mesh]
-elements_per_section = 2
-elements_across_width = 2
-
-[data]
-csv = "data.csv"
-position_column = "position_m"
-displacement_column = "displacement_m"
-position_unit = "m"
-displacement_unit = "m"
-
-[metric]
-[[metric.component]]
-type = "least_squares"
-window = [0.31, 0.58]
-
-[sampler]
-seed = 5
-waves = 3
-accepted_per_wave = 30
-threads = 2
-LIMITS
-[output]
-directory = "out"
-)";
+const std::string kConfig =
+    TinySensorConfig("seed = 5\nwaves = 3\naccepted_per_wave = 30\nthreads = 2\nLIMITS",
+                     "[output]\ndirectory = \"out\"\n");
 
 class RaisedLimits : public ::testing::Test {
  protected:
-  RaisedLimits() : dir_("e2e-raised-limits") {
-    std::ofstream out(dir_ / "data.csv");
-    out << "position_m,displacement_m\n";
-    for (int i = 31; i < 60; i += 3) {
-      out << i / 100.0 << "," << 1.0 - std::abs(i / 100.0 - 0.45) << "\n";
-    }
-  }
+  RaisedLimits() : dir_("e2e-raised-limits") { WriteTinySensorData(dir_.path()); }
 
   // Runs the config with `limits` ([sampler] lines) into `name`/; returns its history.
   std::string Run(const std::string& name, const std::string& limits, int expect_exit = 0) {

@@ -9,47 +9,17 @@
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kConfig = R"([model.clamps]
-per_edge = 3
+const std::string kConfig = TinySensorConfig("seed = 3\nwaves = 2\naccepted_per_wave = 5\n",
+                                             "[output]\ndirectory = \"out\"\n");
 
-[model.mesh]
-elements_per_section = 2
-elements_across_width = 2
-
-[data]
-csv = "data.csv"
-position_column = "position_m"
-displacement_column = "displacement_m"
-position_unit = "m"
-displacement_unit = "m"
-
-[metric]
-[[metric.component]]
-type = "least_squares"
-window = [0.31, 0.58]
-
-[sampler]
-seed = 3
-waves = 2
-accepted_per_wave = 5
-
-[output]
-directory = "out"
-)";
-
-void WriteData(const ScratchDir& dir, double peak) {
-  std::ofstream out(dir / "data.csv");
-  out << "position_m,displacement_m\n";
-  for (int i = 31; i < 60; i += 3) {
-    out << i / 100.0 << "," << peak - std::abs(i / 100.0 - 0.45) << "\n";
-  }
-}
+void WriteData(const ScratchDir& dir, double peak) { WriteTinySensorData(dir.path(), peak); }
 
 // A run that stops on one of its stopping rules says why on stderr, and keeps its history.
 TEST(Stopping, TheReasonIsOnScreen) {

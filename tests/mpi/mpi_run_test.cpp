@@ -23,6 +23,7 @@
 
 #include "combabc/history/history_store.hpp"
 #include "e2e/cli_runner.hpp"
+#include "e2e/tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -30,29 +31,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string Config(int waves, int accepted) {
-  return R"([model.clamps]
-per_edge = 3
-
-[model.mesh]
-elements_per_section = 2
-elements_across_width = 2
-
-[data]
-csv = "data.csv"
-position_column = "position_m"
-displacement_column = "displacement_m"
-position_unit = "m"
-displacement_unit = "m"
-
-[metric]
-[[metric.component]]
-type = "least_squares"
-window = [0.31, 0.58]
-
-[sampler]
-seed = 3
-waves = )" +
-         std::to_string(waves) + "\naccepted_per_wave = " + std::to_string(accepted) + "\n";
+  return TinySensorConfig("seed = 3\nwaves = " + std::to_string(waves) +
+                          "\naccepted_per_wave = " + std::to_string(accepted) + "\n");
 }
 
 // `mpirun --oversubscribe -np N combabc ARGS` (np = 0: combabc without mpirun), output to files in
@@ -131,11 +111,7 @@ class MpiRun : public ::testing::Test {
     // CI runs as root; Open MPI refuses that unless told twice.
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
-    std::ofstream data(dir_ / "data.csv");
-    data << "position_m,displacement_m\n";
-    for (int i = 31; i < 60; i += 3) {
-      data << i / 100.0 << "," << 1e-3 - std::abs(i / 100.0 - 0.45) << "\n";
-    }
+    WriteTinySensorData(dir_.path(), 1e-3);
   }
   void WriteConfig(const std::string& name, int waves, int accepted) {
     std::ofstream(dir_ / name) << Config(waves, accepted);
