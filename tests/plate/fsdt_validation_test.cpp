@@ -13,35 +13,18 @@
 
 #include "combabc/plate/plate.hpp"
 #include "layered_exact.hpp"
+#include "plate_test_support.hpp"
 
 namespace combabc::plate {
 namespace {
 
+using testing::SensorLaminate;
+using testing::SinusoidalCentre;
+using testing::UniformCentre;
+
 constexpr double kModulus = 2.0e11;  // Pa
 constexpr double kPoisson = 0.3;
 constexpr double kDensity = 7800.0;
-
-Constraints SimplySupported(const Plate& plate) {
-  Constraints c = plate.NewConstraints();
-  for (Edge edge : {Edge::kLeft, Edge::kBottom, Edge::kRight, Edge::kTop}) {
-    c.AddEdgeSupport(edge, Support::kSimplySupported);
-  }
-  return c;
-}
-
-Load UniformPressure(double side, double pressure) {
-  Load load;
-  load.x = load.y = 0.5 * side;
-  load.patch_length = load.patch_width = side;
-  load.force = pressure * side * side;
-  return load;
-}
-
-double CentreStatic(PlateTheory theory, const PlateSection& section, double side, int n) {
-  const Plate plate(UniformGrid(side, side, n, n), section, 0.0, 0.0, theory);
-  const Eigen::VectorXd u = plate.SolveStatic(SimplySupported(plate), UniformPressure(side, 1.0));
-  return plate.Deflection(u, 0.5 * side, 0.5 * side);
-}
 
 // Navier series of a simply supported (hard support) isotropic Mindlin plate under unit uniform
 // pressure at its centre: w_mn = q_mn (1 / (D k^4) + 1 / (S k^2)), k^2 = (m^2 + n^2) pi^2 / a^2,
@@ -70,9 +53,9 @@ TEST(FsdtValidation, ThinLimitMatchesKirchhoffWithoutLocking) {
   const double side = 1.0;
   for (double ratio : {1e-3, 1e-5}) {
     const PlateSection section = IsotropicSection(ratio * side, kModulus, kPoisson, kDensity);
-    const double kirchhoff = CentreStatic(PlateTheory::kKirchhoff, section, side, 8);
-    const double fsdt8 = CentreStatic(PlateTheory::kFsdt, section, side, 8);
-    const double fsdt16 = CentreStatic(PlateTheory::kFsdt, section, side, 16);
+    const double kirchhoff = UniformCentre(PlateTheory::kKirchhoff, section, side, 8);
+    const double fsdt8 = UniformCentre(PlateTheory::kFsdt, section, side, 8);
+    const double fsdt16 = UniformCentre(PlateTheory::kFsdt, section, side, 16);
     std::printf("h/a = %g: FSDT 8x8 / Kirchhoff %.6f, 16x16 / Kirchhoff %.6f\n",
                 ratio,
                 fsdt8 / kirchhoff,
@@ -97,8 +80,8 @@ TEST(FsdtValidation, ThickPlateMatchesNavierSeries) {
     EXPECT_NEAR(section.shear_real / (5.0 / 6.0 * shear_modulus * h), 1.0, 1e-12);
     const double reference =
         NavierMindlinCentre(section.bending_real(0, 0), section.shear_real, side, 2001);
-    const double fsdt = CentreStatic(PlateTheory::kFsdt, section, side, 16);
-    const double kirchhoff = CentreStatic(PlateTheory::kKirchhoff, section, side, 16);
+    const double fsdt = UniformCentre(PlateTheory::kFsdt, section, side, 16);
+    const double kirchhoff = UniformCentre(PlateTheory::kKirchhoff, section, side, 16);
     std::printf("h/a = %g: FSDT / Navier %.5f, Kirchhoff / Navier %.5f\n",
                 ratio,
                 fsdt / reference,
@@ -106,56 +89,6 @@ TEST(FsdtValidation, ThickPlateMatchesNavierSeries) {
     EXPECT_NEAR(fsdt / reference, 1.0, 0.005);
     EXPECT_LT(kirchhoff / reference, 0.96);
   }
-}
-
-// The default sensor's laminate (docs/model.md): faces 1.5 mm, E 30 MPa; core 1.0 mm, E 5 MPa.
-std::vector<Layer> SensorLaminate() {
-  Layer face;
-  face.thickness = 1.5e-3;
-  face.youngs_modulus = 30e6;
-  face.poisson_ratio = 0.45;
-  face.density = 1150.0;
-  Layer core = face;
-  core.thickness = 1.0e-3;
-  core.youngs_modulus = 5e6;
-  core.density = 1100.0;
-  return {face, core, face};
-}
-
-// A load vector of the pressure q0 sin(pi x / a) sin(pi y / a) by 3 x 3 Gauss points per element
-// (the discretisation error of the load is then far below the element's).
-Eigen::VectorXd SinusoidalLoad(const Plate& plate, double side) {
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(plate.num_dofs());
-  const double points[3] = {0.1127016653792583, 0.5, 0.8872983346207417};
-  const double weights[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-  const Grid& grid = plate.grid();
-  for (int ex = 0; ex < grid.nx(); ++ex) {
-    for (int ey = 0; ey < grid.ny(); ++ey) {
-      const double hx = grid.x[ex + 1] - grid.x[ex];
-      const double hy = grid.y[ey + 1] - grid.y[ey];
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-          const double x = grid.x[ex] + points[i] * hx;
-          const double y = grid.y[ey] + points[j] * hy;
-          const double p = std::sin(M_PI * x / side) * std::sin(M_PI * y / side);
-          int dofs[kMaxElementDofs];
-          ElementVector row;
-          plate.InterpolationRow(x, y, dofs, &row);
-          for (int k = 0; k < plate.element_dofs(); ++k) {
-            f(dofs[k]) += weights[i] * weights[j] * hx * hy * p * row(k);
-          }
-        }
-      }
-    }
-  }
-  return f;
-}
-
-double SinusoidalCentre(PlateTheory theory, const PlateSection& section, double side, int n) {
-  const Plate plate(UniformGrid(side, side, n, n), section, 0.0, 0.0, theory);
-  const Eigen::VectorXcd u =
-      plate.SolveHarmonic(SimplySupported(plate), SinusoidalLoad(plate, side), 0.0);
-  return plate.Deflection(u, 0.5 * side, 0.5 * side).real();
 }
 
 // The 3D reference itself: thin limit equals Kirchhoff's closed form; a single layer split into
