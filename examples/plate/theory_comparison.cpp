@@ -4,10 +4,7 @@
 // configurations, at the default mesh and finer ones (the FSDT and RZT elements are bilinear, so
 // their mesh convergence is checked here too).
 // Usage: plate_theory_comparison [max refinement factor, default 4]
-#include <algorithm>
 #include <chrono>
-#include <cmath>
-#include <complex>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -15,10 +12,15 @@
 #include <vector>
 
 #include "combabc/plate/sensor_model.hpp"
+#include "profile_metrics.hpp"
 
 using combabc::plate::PlateTheory;
 using combabc::plate::SensorModel;
 using combabc::plate::SensorOptions;
+using plate_examples::BothEdges;
+using plate_examples::Magnitudes;
+using plate_examples::Peak;
+using plate_examples::ProfileDifference;
 
 namespace {
 
@@ -26,34 +28,6 @@ struct Case {
   const char* name;
   std::vector<std::uint8_t> clamps;
 };
-
-// Sections s (1-based, 5 cm each) of both edges fixed where pick(s) is true.
-template <typename Pick>
-std::vector<std::uint8_t> BothEdges(Pick pick) {
-  std::vector<std::uint8_t> c(36, 0);
-  for (int s = 1; s <= 18; ++s) c[s - 1] = c[s + 17] = pick(s) ? 1 : 0;
-  return c;
-}
-
-std::vector<double> Magnitudes(const SensorModel& model, const std::vector<std::uint8_t>& clamps) {
-  std::vector<std::complex<double>> w(model.num_outputs());
-  model.ComplexProfile(clamps, w);
-  std::vector<double> out(w.size());
-  for (std::size_t k = 0; k < w.size(); ++k) out[k] = std::abs(w[k]);
-  return out;
-}
-
-double Peak(const std::vector<double>& p) { return *std::max_element(p.begin(), p.end()); }
-
-double ProfileDifference(const std::vector<double>& a, const std::vector<double>& b) {
-  const double peak_a = Peak(a);
-  const double peak_b = Peak(b);
-  double d = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    d = std::max(d, std::abs(a[k] / peak_a - b[k] / peak_b));
-  }
-  return d;
-}
 
 }  // namespace
 
