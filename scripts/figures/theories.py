@@ -13,7 +13,8 @@ from RZT's, in per cent of the peak. --coarse adds the same from a second CSV (a
 thin lines, to show what the mesh moves.
 
 OUT.png is written only if it does not exist, unless --overwrite. Failures are one line on
-stderr: status 66 input missing, 65 bad CSV, 69 numpy/matplotlib missing, 73 OUT refused.
+stderr: status 66 input missing, 65 bad CSV, 69 numpy/matplotlib missing, 73 OUT refused or
+not writable (no partial figure is left).
 Needs numpy and matplotlib only (Debian: python3-numpy python3-matplotlib).
 """
 
@@ -21,6 +22,7 @@ import argparse
 import csv
 import os
 import sys
+import tempfile
 
 EX_DATAERR, EX_NOINPUT, EX_UNAVAILABLE, EX_CANTCREAT = 65, 66, 69, 73
 
@@ -169,7 +171,20 @@ def main():
     out_dir = os.path.dirname(os.path.abspath(args.out))
     if not os.path.isdir(out_dir):
         fail(EX_CANTCREAT, f"{args.out}: no directory {out_dir}")
-    fig.savefig(args.out, dpi=90)
+    # Written beside OUT and renamed, so that a failure leaves no partial figure.
+    partial = None
+    try:
+        fd, partial = tempfile.mkstemp(prefix=".theories-", suffix=".png", dir=out_dir)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)  # mkstemp makes it private; a figure is not
+        with os.fdopen(fd, "wb") as f:
+            fig.savefig(f, format="png", dpi=90)
+        os.replace(partial, args.out)
+    except OSError as e:
+        if partial is not None and os.path.exists(partial):
+            os.unlink(partial)
+        fail(EX_CANTCREAT, f"{args.out}: {e.strerror}")
 
 
 if __name__ == "__main__":
