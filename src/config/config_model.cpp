@@ -66,6 +66,7 @@ std::string ModelKeyOf(const std::string& field) {
       {"output_y_fraction", "model.output.y_fraction"},
       {"elements_per_section", "model.mesh.elements_per_section"},
       {"elements_across_width", "model.mesh.elements_across_width"},
+      {"element_order", "model.mesh.element_order"},
       {"memory_limit_bytes", "memory_limit_gb"},
   };
   if (field.rfind("layers[", 0) == 0) {
@@ -302,6 +303,10 @@ void ParseModelSection(TableReader& root, CalibrationConfig* config) {
           "elements_per_section", m.elements_per_section, 1, plate::kMaxElementsPerSection);
       m.elements_across_width = mesh->IntegerIn(
           "elements_across_width", m.elements_across_width, 1, plate::kMaxElementsAcrossWidth);
+      // The range here; kirchhoff with 2 is refused by SensorOptions::IsValid below, which names
+      // the field.
+      Note(sources, "element_order", *mesh, "element_order");
+      m.element_order = mesh->IntegerIn("element_order", m.element_order, 1, 2);
       mesh->Finish();
     }
     t->Finish();

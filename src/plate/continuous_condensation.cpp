@@ -77,7 +77,7 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
                                                double output_y,
                                                bool always_pivot)
     : num_sections_(num_sections),
-      elements_per_section_(elements_per_section),
+      intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
       nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
       own_loss_factors_(own_loss_factors),
@@ -87,7 +87,8 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
       end_mask_(end_mask),
       always_pivot_(always_pivot) {
   const Grid& grid = plate.grid();
-  const int m = elements_per_section;
+  // Grid intervals per section (2 per element at element order 2), as SectionCondensation.
+  const int m = intervals_per_section_;
   COMBABC_CHECK(grid.nx() == num_sections * m);
   // Outputs by section, as SectionCondensation assigns them.
   section_outputs_.resize(num_sections);
@@ -196,7 +197,8 @@ void ContinuousCondensation::Precompute(const Plate& plate,
                                         const Eigen::VectorXd& load_vector,
                                         const std::vector<double>& output_x,
                                         double output_y) {
-  const int m = elements_per_section_;
+  const int m = intervals_per_section_;
+  const int elements = m / plate.element_order();
   const int n_local = (m + 1) * nc_;
   const int nb = 2 * nc_;
   // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
@@ -218,8 +220,8 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   std::vector<Eigen::Triplet<Complex>> m_triplets;
   std::vector<Eigen::Triplet<double>> real_triplets;
   std::vector<Eigen::Triplet<double>> mass_triplets;
-  for (int ex = section * m; ex < (section + 1) * m; ++ex) {
-    for (int ey = 0; ey < ny_; ++ey) {
+  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
       const int ne = plate.element_dofs();
       int local[kMaxElementDofs];

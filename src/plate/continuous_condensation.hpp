@@ -161,7 +161,7 @@ class ContinuousCondensation {
   }
 
   int num_sections_;
-  int elements_per_section_;
+  int intervals_per_section_;  // grid intervals: elements_per_section x the element order
   int ny_;
   int nc_;
   bool own_loss_factors_;

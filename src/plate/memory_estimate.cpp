@@ -20,8 +20,8 @@ constexpr double kComplexBytes = 16.0;
 // Bytes per plate dof for the load vector, dof maps and the sparse stiffness of a section.
 constexpr double kBytesPerDof = 64.0;
 // One set of element matrices (stiffness, mass and rotary inertia: four matrices of at most
-// 20 x 20 doubles stored inline, and their workspace).
-constexpr double kBytesPerElementKind = 16384.0;
+// 45 x 45 doubles stored inline whatever the family, kMaxElementDofs, and their workspace).
+constexpr double kBytesPerElementKind = 81920.0;
 
 // Whether section s is touched by the load (a point load or a patch; clipping does not matter).
 bool Loaded(const SensorOptions& o, int s) {
@@ -64,7 +64,10 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const int group_size = sections % 3 == 0 ? 3 : (sections % 2 == 0 ? 2 : 1);
   const int groups = sections / group_size;
   const double group_states = std::pow(4.0, group_size);
-  const double nc = DofsPerNode(theory) * (elements_across_width + 1.0);
+  // Grid intervals: 2 per element at element order 2 (the mid-side node lines).
+  const int along = element_order * elements_per_section;
+  const int across = element_order * elements_across_width;
+  const double nc = DofsPerNode(theory) * (across + 1.0);
   const double piece_bytes = 4.0 * nc * nc * kComplexBytes;  // 2 nc x 2 nc, or its blocks
   const double output_row_bytes = 2.0 * nc * kComplexBytes;  // one output's map row
 
@@ -98,12 +101,12 @@ double SensorOptions::EstimatedMemoryBytes() const {
   // Transients, one at a time: condensing a section (dense interior-to-boundary maps and the
   // sparse LU of its interior) or composing a group (dense blocks of group_size - 1 interior
   // cross-sections).
-  const double interior = (elements_per_section - 1) * nc;
+  const double interior = (along - 1) * nc;
   const double condense = 5.0 * interior * 2.0 * nc * kComplexBytes;
   const double compose = 24.0 * nc * nc * kComplexBytes * group_size * group_size;
   bytes += std::max(condense, compose);
   // The plate: dofs and the distinct element sizes of the graded mesh.
-  const double dofs = nc * (static_cast<double>(sections) * elements_per_section + 1);
+  const double dofs = nc * (static_cast<double>(sections) * along + 1);
   // Integer halves on purpose: the graded mesh mirrors about the middle, so about half its
   // element sizes are distinct.
   const int distinct_along = elements_per_section / 2 + 1;
@@ -128,12 +131,15 @@ double SensorOptions::EstimatedContinuousMemoryBytes(bool loss_factor_unknown) c
       one_loss_factor || (one_poisson_ratio && theory == PlateTheory::kKirchhoff);
   const double table_parts = loss_factor_unknown || proportional ? 1.0 : 2.0;
   const double real_bytes = 8.0;
-  const double nc = DofsPerNode(theory) * (elements_across_width + 1.0);
+  const int along = element_order * elements_per_section;  // grid intervals, as above
+  const double nc = DofsPerNode(theory) * (element_order * elements_across_width + 1.0);
   const double nb = 2.0 * nc;  // a section's two end cross-sections
   // Interior dofs (an upper bound: clamped edge dofs are removed) and their sparse matrices: a
-  // node couples with at most 9 nodes x 4 dofs; entry and row index, plus the column starts.
-  const double interior = (elements_per_section - 1) * nc;
-  const double sparse = interior * 36.0 * (kComplexBytes + 4.0) + (interior + 1.0) * 4.0;
+  // node couples with at most 9 nodes x 4 dofs (25 nodes x its dofs at element order 2); entry
+  // and row index, plus the column starts.
+  const double interior = (along - 1) * nc;
+  const double couplings = element_order == 2 ? 25.0 * DofsPerNode(theory) : 36.0;
+  const double sparse = interior * couplings * (kComplexBytes + 4.0) + (interior + 1.0) * 4.0;
   const double terms =
       interior > 0.0 ? ContinuousCondensation::TermsFor(ContinuousCondensation::kMaxRatio) : 0.0;
   const double packed = nc * (nc + 1.0) + nc * nc;  // a packed piece's entries

@@ -21,9 +21,8 @@ namespace {
 Eigen::SparseMatrix<double> AssembleMass(const Plate& plate, const std::vector<int>& map, int n) {
   std::vector<Eigen::Triplet<double>> unit_triplets;
   std::vector<Eigen::Triplet<double>> rotary_triplets;
-  const Grid& grid = plate.grid();
-  for (int ex = 0; ex < grid.nx(); ++ex) {
-    for (int ey = 0; ey < grid.ny(); ++ey) {
+  for (int ex = 0; ex < plate.num_elements_x(); ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
       int global[kMaxElementDofs];
       for (int k = 0; k < plate.element_dofs(); ++k) global[k] = map[plate.ElementDof(ex, ey, k)];

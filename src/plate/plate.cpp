@@ -12,6 +12,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/plate/bfs_element.hpp"
 #include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/mitc9_element.hpp"
 #include "combabc/plate/rzt_element.hpp"
 
 namespace combabc::plate {
@@ -35,24 +36,26 @@ void CheckAxis(const std::vector<double>& v, const char* name) {
   }
 }
 
-// The element family of each theory (element.hpp): its matrices, w shape functions and their
-// integrals over a sub-rectangle.
-ElementMatrices FamilyMatrices(PlateTheory theory,
-                               double hx,
-                               double hy,
-                               const PlateSection& section) {
+// The element family of each theory and order (element.hpp): its matrices, w shape functions and
+// their integrals over a sub-rectangle.
+ElementMatrices FamilyMatrices(
+    PlateTheory theory, int order, double hx, double hy, const PlateSection& section) {
   switch (theory) {
     case PlateTheory::kKirchhoff:
       break;
     case PlateTheory::kFsdt:
-      return Mitc4ElementMatrices(hx, hy, section);
+      return order == 2 ? Mitc9ElementMatrices(hx, hy, section)
+                        : Mitc4ElementMatrices(hx, hy, section);
     case PlateTheory::kRzt:
-      return RztElementMatrices(hx, hy, section);
+      return order == 2 ? Rzt9ElementMatrices(hx, hy, section)
+                        : RztElementMatrices(hx, hy, section);
   }
   return ComputeElementMatrices(hx, hy, section.bending_real, section.bending_imag);
 }
 
-ElementVector FamilyShapeValues(PlateTheory theory, double hx, double hy, double x, double y) {
+ElementVector FamilyShapeValues(
+    PlateTheory theory, int order, double hx, double hy, double x, double y) {
+  if (order == 2) return Quad9ShapeValues(DofsPerNode(theory), hx, hy, x, y);
   switch (theory) {
     case PlateTheory::kKirchhoff:
       break;
@@ -64,8 +67,15 @@ ElementVector FamilyShapeValues(PlateTheory theory, double hx, double hy, double
   return ShapeValues(hx, hy, x, y);
 }
 
-ElementVector FamilyShapeIntegral(
-    PlateTheory theory, double hx, double hy, double x0, double x1, double y0, double y1) {
+ElementVector FamilyShapeIntegral(PlateTheory theory,
+                                  int order,
+                                  double hx,
+                                  double hy,
+                                  double x0,
+                                  double x1,
+                                  double y0,
+                                  double y1) {
+  if (order == 2) return Quad9ShapeIntegral(DofsPerNode(theory), hx, hy, x0, x1, y0, y1);
   switch (theory) {
     case PlateTheory::kKirchhoff:
       break;
@@ -75,6 +85,27 @@ ElementVector FamilyShapeIntegral(
       return RztShapeIntegral(hx, hy, x0, x1, y0, y1);
   }
   return ShapeIntegral(hx, hy, x0, x1, y0, y1);
+}
+
+// Element order 2: an even number of intervals, each odd node at its element's midpoint (the
+// 9-node element is formulated on a rectangle with its mid-side nodes there).
+void CheckQuadraticAxis(const std::vector<double>& v, const char* name) {
+  if ((v.size() - 1) % 2 != 0) {
+    throw Error(ErrorKind::kConfig,
+                "element order 2 needs an even number of grid intervals (2 per element)",
+                "",
+                0,
+                name);
+  }
+  for (std::size_t k = 1; k + 1 < v.size(); k += 2) {
+    if (std::abs(v[k] - 0.5 * (v[k - 1] + v[k + 1])) > 1e-9 * (v[k + 1] - v[k - 1])) {
+      throw Error(ErrorKind::kConfig,
+                  "element order 2 needs each mid-side node at its element's midpoint",
+                  "",
+                  0,
+                  name);
+    }
+  }
 }
 
 }  // namespace
@@ -159,22 +190,39 @@ Plate::Plate(Grid grid,
              PlateSection section,
              double foundation_stiffness,
              double foundation_loss_factor,
-             PlateTheory theory)
+             PlateTheory theory,
+             int element_order)
     : grid_(std::move(grid)),
       section_(std::move(section)),
       foundation_stiffness_(foundation_stiffness),
       foundation_loss_factor_(foundation_loss_factor),
-      theory_(theory) {
+      theory_(theory),
+      order_(element_order) {
   CheckAxis(grid_.x, "Grid::x");
   CheckAxis(grid_.y, "Grid::y");
-  const int nx = grid_.nx();
-  const int ny = grid_.ny();
+  if (order_ != 1 && order_ != 2) {
+    throw Error(ErrorKind::kConfig, "element order must be 1 or 2", "", 0, "element_order");
+  }
+  if (order_ == 2) {
+    if (theory_ == PlateTheory::kKirchhoff) {
+      throw Error(ErrorKind::kConfig,
+                  "element order 2 is for the shear theories (fsdt, rzt); kirchhoff has cubic "
+                  "elements already",
+                  "",
+                  0,
+                  "element_order");
+    }
+    CheckQuadraticAxis(grid_.x, "Grid::x");
+    CheckQuadraticAxis(grid_.y, "Grid::y");
+  }
+  const int nx = num_elements_x();
+  const int ny = num_elements_y();
   element_kind_.resize(static_cast<std::size_t>(nx) * ny);
   std::vector<std::pair<double, double>> sizes;
   for (int ex = 0; ex < nx; ++ex) {
     for (int ey = 0; ey < ny; ++ey) {
-      const double hx = grid_.x[ex + 1] - grid_.x[ex];
-      const double hy = grid_.y[ey + 1] - grid_.y[ey];
+      const double hx = grid_.x[order_ * (ex + 1)] - grid_.x[order_ * ex];
+      const double hy = grid_.y[order_ * (ey + 1)] - grid_.y[order_ * ey];
       // Elements of equal size (to 1e-12 relative) share one set of matrices.
       int kind = -1;
       for (std::size_t k = 0; k < sizes.size(); ++k) {
@@ -187,7 +235,7 @@ Plate::Plate(Grid grid,
       if (kind < 0) {
         kind = static_cast<int>(sizes.size());
         sizes.emplace_back(hx, hy);
-        unique_elements_.push_back(FamilyMatrices(theory_, hx, hy, section_));
+        unique_elements_.push_back(FamilyMatrices(theory_, order_, hx, hy, section_));
       }
       element_kind_[ex * ny + ey] = kind;
     }
@@ -196,10 +244,10 @@ Plate::Plate(Grid grid,
 
 int Plate::ElementDof(int ex, int ey, int local) const {
   const int n = dofs_per_node();
-  const int corner = local / n;
-  const int a = corner & 1;
-  const int b = corner >> 1;
-  return n * Node(ex + a, ey + b) + local % n;
+  const int node = local / n;
+  const int a = node % (order_ + 1);
+  const int b = node / (order_ + 1);
+  return n * Node(order_ * ex + a, order_ * ey + b) + local % n;
 }
 
 std::complex<double> Plate::MassCoefficient(double frequency_hz) const {
@@ -225,21 +273,22 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
   const double y1 = std::min(width, load.y + 0.5 * load.patch_width);
   COMBABC_CHECK(x1 > x0 && y1 > y0);
   const double pressure = load.force / ((x1 - x0) * (y1 - y0));
-  for (int ex = 0; ex < grid_.nx(); ++ex) {
-    const double ax = std::max(x0, grid_.x[ex]);
-    const double bx = std::min(x1, grid_.x[ex + 1]);
+  const int p = order_;
+  for (int ex = 0; ex < num_elements_x(); ++ex) {
+    const double ax = std::max(x0, grid_.x[p * ex]);
+    const double bx = std::min(x1, grid_.x[p * (ex + 1)]);
     if (bx <= ax) continue;
-    for (int ey = 0; ey < grid_.ny(); ++ey) {
-      const double ay = std::max(y0, grid_.y[ey]);
-      const double by = std::min(y1, grid_.y[ey + 1]);
+    for (int ey = 0; ey < num_elements_y(); ++ey) {
+      const double ay = std::max(y0, grid_.y[p * ey]);
+      const double by = std::min(y1, grid_.y[p * (ey + 1)]);
       if (by <= ay) continue;
-      const double hx = grid_.x[ex + 1] - grid_.x[ex];
-      const double hy = grid_.y[ey + 1] - grid_.y[ey];
-      const double lx0 = ax - grid_.x[ex];
-      const double lx1 = bx - grid_.x[ex];
-      const double ly0 = ay - grid_.y[ey];
-      const double ly1 = by - grid_.y[ey];
-      const ElementVector fe = FamilyShapeIntegral(theory_, hx, hy, lx0, lx1, ly0, ly1);
+      const double hx = grid_.x[p * (ex + 1)] - grid_.x[p * ex];
+      const double hy = grid_.y[p * (ey + 1)] - grid_.y[p * ey];
+      const double lx0 = ax - grid_.x[p * ex];
+      const double lx1 = bx - grid_.x[p * ex];
+      const double ly0 = ay - grid_.y[p * ey];
+      const double ly1 = by - grid_.y[p * ey];
+      const ElementVector fe = FamilyShapeIntegral(theory_, p, hx, hy, lx0, lx1, ly0, ly1);
       for (int k = 0; k < element_dofs(); ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
     }
   }
@@ -262,9 +311,9 @@ Eigen::SparseMatrix<std::complex<double>> Plate::DynamicStiffness(
   const std::complex<double> i_unit(0.0, 1.0);
   std::vector<Eigen::Triplet<std::complex<double>>> triplets;
   const int ne = element_dofs();
-  triplets.reserve(static_cast<std::size_t>(grid_.nx()) * grid_.ny() * ne * ne);
-  for (int ex = 0; ex < grid_.nx(); ++ex) {
-    for (int ey = 0; ey < grid_.ny(); ++ey) {
+  triplets.reserve(static_cast<std::size_t>(num_elements_x()) * num_elements_y() * ne * ne);
+  for (int ex = 0; ex < num_elements_x(); ++ex) {
+    for (int ey = 0; ey < num_elements_y(); ++ey) {
       const ElementMatrices& e = Element(ex, ey);
       int global[kMaxElementDofs];
       for (int k = 0; k < ne; ++k) global[k] = map[ElementDof(ex, ey, k)];
@@ -355,11 +404,12 @@ void Plate::InterpolationRow(double x,
                              double y,
                              int dofs[kMaxElementDofs],
                              ElementVector* row) const {
-  const int ex = Locate(grid_.x, x);
-  const int ey = Locate(grid_.y, y);
-  const double hx = grid_.x[ex + 1] - grid_.x[ex];
-  const double hy = grid_.y[ey + 1] - grid_.y[ey];
-  *row = FamilyShapeValues(theory_, hx, hy, x - grid_.x[ex], y - grid_.y[ey]);
+  const int p = order_;
+  const int ex = Locate(grid_.x, x) / p;
+  const int ey = Locate(grid_.y, y) / p;
+  const double hx = grid_.x[p * (ex + 1)] - grid_.x[p * ex];
+  const double hy = grid_.y[p * (ey + 1)] - grid_.y[p * ey];
+  *row = FamilyShapeValues(theory_, p, hx, hy, x - grid_.x[p * ex], y - grid_.y[p * ey]);
   for (int k = 0; k < element_dofs(); ++k) dofs[k] = ElementDof(ex, ey, k);
 }
 

@@ -24,7 +24,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
                                          double output_y,
                                          bool always_pivot)
     : num_sections_(num_sections),
-      elements_per_section_(elements_per_section),
+      intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
       nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
       fixed_mask_a_(fixed_mask_a),
@@ -34,7 +34,10 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       group_size_(group_size),
       always_pivot_(always_pivot) {
   const Grid& grid = plate.grid();
-  COMBABC_CHECK(grid.nx() == num_sections * elements_per_section);
+  // Node arithmetic below counts grid intervals: 2 per element at element order 2, whose
+  // mid-side node lines are interior to their section like any other.
+  const int intervals = intervals_per_section_;
+  COMBABC_CHECK(grid.nx() == num_sections * intervals);
   COMBABC_CHECK(group_size >= 1 && num_sections % group_size == 0);
   // Each output belongs to the section of the element that holds it (an output on a section
   // boundary depends only on that cross-section's dofs, so either neighbour is exact).
@@ -45,15 +48,15 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     ElementVector row;
     plate.InterpolationRow(output_x[o], output_y, dofs, &row);
     const int cross_section = dofs[0] / nc_;
-    const int section = cross_section / elements_per_section;
+    const int section = cross_section / intervals;
     section_outputs_[section].push_back(static_cast<int>(o));
     const auto first_node =
-        static_cast<std::size_t>(section) * static_cast<std::size_t>(elements_per_section);
+        static_cast<std::size_t>(section) * static_cast<std::size_t>(intervals);
     relative_x[section].push_back(output_x[o] - grid.x[first_node]);
   }
   for (int c = 0; c <= num_sections; ++c) {
     boundary_load_.push_back(
-        load_vector.segment(static_cast<Eigen::Index>(c) * elements_per_section * nc_, nc_)
+        load_vector.segment(static_cast<Eigen::Index>(c) * intervals * nc_, nc_)
             .cast<std::complex<double>>());
   }
   // Sections with the same element sizes, no interior load and outputs at the same relative
@@ -61,18 +64,18 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   const double tol = 1e-12 * grid.x.back();
   const auto same_section = [&](int s, int t) {
     const auto interior = [&](int k) {
-      return load_vector.segment((static_cast<Eigen::Index>(k) * elements_per_section + 1) * nc_,
-                                 static_cast<Eigen::Index>(elements_per_section - 1) * nc_);
+      return load_vector.segment((static_cast<Eigen::Index>(k) * intervals + 1) * nc_,
+                                 static_cast<Eigen::Index>(intervals - 1) * nc_);
     };
-    if (elements_per_section > 1 &&
+    if (intervals > 1 &&
         (interior(s).cwiseAbs().maxCoeff() != 0.0 || interior(t).cwiseAbs().maxCoeff() != 0.0)) {
       return false;
     }
-    for (int e = 0; e < elements_per_section; ++e) {
+    for (int e = 0; e < intervals; ++e) {
       const double hs =
-          grid.x[s * elements_per_section + e + 1] - grid.x[s * elements_per_section + e];
+          grid.x[s * intervals + e + 1] - grid.x[s * intervals + e];
       const double ht =
-          grid.x[t * elements_per_section + e + 1] - grid.x[t * elements_per_section + e];
+          grid.x[t * intervals + e + 1] - grid.x[t * intervals + e];
       if (std::abs(hs - ht) > tol) return false;
     }
     if (relative_x[s].size() != relative_x[t].size()) return false;
@@ -288,9 +291,10 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
                                                          double frequency_hz,
                                                          const std::vector<double>& output_x,
                                                          double output_y) const {
-  const int m = elements_per_section_;
+  const int m = intervals_per_section_;
   const int n_local = (m + 1) * nc_;
   const int offset = section * m * nc_;
+  const int elements = m / plate.element_order();
   // Classify local dofs: boundary (index into [left; right]), interior (index into I), or fixed.
   std::vector<int> boundary_index;
   std::vector<int> interior_index;
@@ -302,8 +306,8 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   Eigen::MatrixXcd s_bb = Eigen::MatrixXcd::Zero(nb, nb);
   Eigen::MatrixXcd s_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
   std::vector<Eigen::Triplet<std::complex<double>>> triplets;
-  for (int ex = section * m; ex < (section + 1) * m; ++ex) {
-    for (int ey = 0; ey < ny_; ++ey) {
+  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
       const ElementMatrices& e = plate.Element(ex, ey);
       const int ne = plate.element_dofs();
       int local[kMaxElementDofs];

@@ -61,7 +61,8 @@ inline void CrossSectionFreeDofs(int nc,
   }
 }
 
-// The local dofs of one clamp section of m elements ((m + 1) cross-sections of nc dofs):
+// The local dofs of one clamp section of m grid intervals ((m + 1) cross-sections of nc dofs;
+// m = 2 x its elements at element order 2, whose mid-side node lines are cross-sections too):
 // boundary[d] indexes [left; right] for the first and last cross-sections, interior[d] indexes
 // the section's interior unknowns, -1 otherwise (a dof fixed by a clamp); returns the interior
 // count. `state` bit 0 / bit 1: the edge-A / edge-B clamp is fixed. Shared by both condensations.
@@ -98,7 +99,8 @@ inline int ClassifySectionDofs(int m,
 
 class SectionCondensation {
  public:
-  // `plate` must have num_sections * elements_per_section elements along x. Masks: dofs fixed on
+  // `plate` must have num_sections * elements_per_section elements along x (any element order).
+  // Masks: dofs fixed on
   // an edge-A / edge-B node by a fixed section, and on every node of the first / last
   // cross-section by the short edges.
   // group_size must divide num_sections (1 disables grouping).
@@ -161,9 +163,9 @@ class SectionCondensation {
   }
 
   int num_sections_;
-  int elements_per_section_;
+  int intervals_per_section_;  // grid intervals: elements_per_section x the element order
   int ny_;
-  int nc_;  // dofs per cross-section, 4 (ny + 1)
+  int nc_;  // dofs per cross-section, dofs_per_node (ny + 1) over the grid's ny
   std::uint8_t fixed_mask_a_;
   std::uint8_t fixed_mask_b_;
   std::uint8_t start_mask_;

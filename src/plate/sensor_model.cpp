@@ -18,18 +18,30 @@ double Graded(int k, int n, double grading) {
   return t <= 0.5 ? 0.5 * std::pow(2.0 * t, grading) : 1.0 - 0.5 * std::pow(2.0 - 2.0 * t, grading);
 }
 
-// Node lines on every section boundary, `elements_per_section` elements in each section.
+// Node lines on every section boundary, `elements_per_section` elements in each section; at
+// element order 2 a node line at each element's midpoint too.
 Grid SensorGrid(const SensorOptions& o) {
   Grid grid;
   const double section = o.length / o.clamps_per_edge;
+  const int m = o.elements_per_section;
   for (int s = 0; s < o.clamps_per_edge; ++s) {
-    for (int e = 0; e < o.elements_per_section; ++e) {
-      grid.x.push_back(section * (s + Graded(e, o.elements_per_section, o.length_grading)));
+    for (int e = 0; e < m; ++e) {
+      const double x0 = section * (s + Graded(e, m, o.length_grading));
+      grid.x.push_back(x0);
+      if (o.element_order == 2) {
+        const double x1 = section * (s + Graded(e + 1, m, o.length_grading));
+        grid.x.push_back(0.5 * (x0 + x1));
+      }
     }
   }
   grid.x.push_back(o.length);
-  for (int j = 0; j <= o.elements_across_width; ++j) {
-    grid.y.push_back(o.width * Graded(j, o.elements_across_width, o.WidthGrading()));
+  const int n = o.elements_across_width;
+  for (int j = 0; j <= n; ++j) {
+    const double y0 = o.width * Graded(j, n, o.WidthGrading());
+    grid.y.push_back(y0);
+    if (o.element_order == 2 && j < n) {
+      grid.y.push_back(0.5 * (y0 + o.width * Graded(j + 1, n, o.WidthGrading())));
+    }
   }
   grid.y.back() = o.width;
   return grid;
@@ -59,7 +71,8 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    EquivalentSingleLayer(options_.layers),
                                    options_.foundation_stiffness,
                                    options_.foundation_loss_factor,
-                                   options_.theory);
+                                   options_.theory,
+                                   options_.element_order);
   condensation_ = std::make_unique<SectionCondensation>(
       *plate_,
       options_.clamps_per_edge,
@@ -195,7 +208,8 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
   COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
   Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
-  const auto m = static_cast<std::size_t>(options_.elements_per_section);
+  // Grid intervals per section (2 per element at element order 2).
+  const auto m = static_cast<std::size_t>(options_.element_order * options_.elements_per_section);
   for (int s = 0; s < n; ++s) {
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
     const double start = x[static_cast<std::size_t>(s) * m];

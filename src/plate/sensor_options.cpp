@@ -139,6 +139,16 @@ bool SensorOptions::IsValid(std::string* why) const {
                 elements_across_width,
                 ("must be in [1, " + std::to_string(kMaxElementsAcrossWidth) + "]").c_str());
   }
+  if (element_order != 1 && element_order != 2) {
+    return Fail(why, "element_order", element_order, "must be 1 or 2");
+  }
+  if (element_order == 2 && theory == PlateTheory::kKirchhoff) {
+    return Fail(why,
+                "element_order",
+                element_order,
+                "must be 1 with theory kirchhoff (its elements are cubic already; 2 is for fsdt "
+                "and rzt)");
+  }
   if (!InRange(length_grading, 1.0, 3.0)) {
     return Fail(why, "length_grading", length_grading, "must be in [1, 3]");
   }

@@ -171,6 +171,8 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
   // Added only when not the original Kirchhoff model, so histories written before the key
   // existed keep their fingerprint.
   if (s.theory != plate::PlateTheory::kKirchhoff) c.Add("theory", static_cast<int>(s.theory));
+  // Likewise only when not the original bilinear order.
+  if (s.element_order != 1) c.Add("element_order", s.element_order);
   return c.Digest();
 }
 

@@ -40,10 +40,12 @@ inline Constraints SimplySupported(const Plate& plate) {
   return c;
 }
 
-// Static centre deflection of the simply supported square of side `side` on an n x n mesh under
-// unit uniform pressure.
-inline double UniformCentre(PlateTheory theory, const PlateSection& section, double side, int n) {
-  const Plate plate(UniformGrid(side, side, n, n), section, 0.0, 0.0, theory);
+// Static centre deflection of the simply supported square of side `side` on a mesh of n x n
+// elements of element order `order` (plate.hpp) under unit uniform pressure.
+inline double UniformCentre(
+    PlateTheory theory, const PlateSection& section, double side, int n, int order = 1) {
+  const Plate plate(
+      UniformGrid(side, side, order * n, order * n), section, 0.0, 0.0, theory, order);
   Load load;
   load.x = load.y = 0.5 * side;
   load.patch_length = load.patch_width = side;
@@ -52,8 +54,9 @@ inline double UniformCentre(PlateTheory theory, const PlateSection& section, dou
   return plate.Deflection(u, 0.5 * side, 0.5 * side);
 }
 
-// A load vector of the pressure sin(pi x / a) sin(pi y / a) by 3 x 3 Gauss points per element
-// (the discretisation error of the load is then far below the element's).
+// A load vector of the pressure sin(pi x / a) sin(pi y / a) by 3 x 3 Gauss points per grid
+// interval (the discretisation error of the load is then far below the element's, of either
+// order).
 inline Eigen::VectorXd SinusoidalLoad(const Plate& plate, double side) {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(plate.num_dofs());
   const double points[3] = {0.1127016653792583, 0.5, 0.8872983346207417};
@@ -81,13 +84,13 @@ inline Eigen::VectorXd SinusoidalLoad(const Plate& plate, double side) {
   return f;
 }
 
-// Static centre deflection of the simply supported square of side `side` on an n x n mesh under
-// the unit sinusoidal load (real part: SolveHarmonic at 0 Hz).
-inline double SinusoidalCentre(PlateTheory theory,
-                               const PlateSection& section,
-                               double side,
-                               int n) {
-  const Plate plate(UniformGrid(side, side, n, n), section, 0.0, 0.0, theory);
+// Static centre deflection of the simply supported square of side `side` on a mesh of n x n
+// elements of element order `order` under the unit sinusoidal load (real part: SolveHarmonic at
+// 0 Hz).
+inline double SinusoidalCentre(
+    PlateTheory theory, const PlateSection& section, double side, int n, int order = 1) {
+  const Plate plate(
+      UniformGrid(side, side, order * n, order * n), section, 0.0, 0.0, theory, order);
   const Eigen::VectorXcd u =
       plate.SolveHarmonic(SimplySupported(plate), SinusoidalLoad(plate, side), 0.0);
   return plate.Deflection(u, 0.5 * side, 0.5 * side).real();

@@ -1,8 +1,10 @@
 #pragma once
 // What every plate element family shares: the plate theory that selects the family, and the
-// element matrix types. A family has `DofsPerNode(theory)` dofs at each of the 4 corners of a
-// rectangle; local dof DofsPerNode (a + 2 b) + k belongs to corner (a, b), a, b in {0, 1}, at
-// (a hx, b hy) from the element's lower left corner. Dof k = 0 is w, 1 and 2 are the slopes
+// element matrix types. A family of order p (1: bilinear or cubic Hermite at the 4 corners; 2:
+// the 9-node quadratic rectangles of the shear theories, mitc9_element.hpp) has
+// `DofsPerNode(theory)` dofs at each of the (p + 1)^2 nodes of a rectangle; local dof
+// DofsPerNode (a + (p + 1) b) + k belongs to node (a, b), a, b in {0, ..., p}, at
+// (a hx / p, b hy / p) from the element's lower left corner. Dof k = 0 is w, 1 and 2 are the slopes
 // along x and y (w_x, w_y in Kirchhoff theory; the rotations phi_x, phi_y of the normal, which
 // equal them in the thin limit, in first-order shear deformation theory and the refined zigzag
 // theory), so the support masks read alike for every family (plate.hpp, SupportMask); the zigzag
@@ -20,17 +22,19 @@ enum class PlateTheory {
   // elements (bfs_element.hpp), dofs (w, w_x, w_y, w_xy).
   kKirchhoff,
   // First-order shear deformation (Reissner-Mindlin) with an energy-consistent shear stiffness of
-  // the laminate (laminate.hpp); MITC4 elements (mitc4_element.hpp), dofs (w, phi_x, phi_y).
+  // the laminate (laminate.hpp); MITC4 elements (mitc4_element.hpp) or,
+  // at element order 2, MITC9 (mitc9_element.hpp); dofs (w, phi_x, phi_y).
   kFsdt,
   // Refined zigzag theory (Tessler, Di Sciuva & Gherlone 2009/2010), a layer-wise theory for
   // sandwiches with a soft core: the in-plane displacements add a piecewise-linear zigzag
   // function of the layers' shear moduli times amplitudes psi (laminate.hpp); RZT4 elements
-  // (rzt_element.hpp), dofs (w, theta_x, theta_y, psi_x, psi_y).
+  // (rzt_element.hpp) or RZT9 at element order 2 (mitc9_element.hpp), dofs (w, theta_x, theta_y, psi_x, psi_y).
   kRzt,
 };
 
 inline constexpr int kMaxDofsPerNode = 5;
-inline constexpr int kMaxElementDofs = 4 * kMaxDofsPerNode;
+inline constexpr int kMaxElementNodes = 9;  // the quadratic rectangle
+inline constexpr int kMaxElementDofs = kMaxElementNodes * kMaxDofsPerNode;
 
 constexpr int DofsPerNode(PlateTheory theory) {
   switch (theory) {

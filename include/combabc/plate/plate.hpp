@@ -1,10 +1,15 @@
 #pragma once
 // A rectangular plate on a structured grid of rectangular elements of one family (element.hpp:
 // Kirchhoff theory on Bogner-Fox-Schmit elements, or first-order shear deformation theory on MITC4
-// elements, or the refined zigzag theory on RZT4 elements), with
+// or MITC9 elements, or the refined zigzag theory on RZT4 or RZT9 elements), with
 // per-edge-segment supports, an optional Winkler foundation, point or patch loads, and static,
 // harmonic and modal solves. The sensor simulator (sensor_model.hpp) is built on this; the
 // validation tests use it directly.
+//
+// Element order (Plate's element_order): 1, every grid interval is an element (BFS, MITC4,
+// RZT4); 2 (shear theories only), each element spans 2 x 2 grid intervals with the 9-node
+// quadratic rectangles of mitc9_element.hpp, so the grid lists the mid-side nodes too and
+// element (ex, ey) has its corners at grid nodes (2 ex, 2 ey) and (2 ex + 2, 2 ey + 2).
 //
 // Degrees of freedom: node (i, j) at (grid.x[i], grid.y[j]) has index i (ny + 1) + j and dofs
 // n node + k with n = dofs_per_node(): k = 0 w, 1 w_x, 2 w_y, 3 w_xy for Kirchhoff; k = 0 w,
@@ -62,8 +67,9 @@ enum class Edge {
 struct Grid {
   std::vector<double> x;
   std::vector<double> y;
-  int nx() const { return static_cast<int>(x.size()) - 1; }  // elements along x
-  int ny() const { return static_cast<int>(y.size()) - 1; }  // elements along y
+  // Node intervals (the elements at element order 1).
+  int nx() const { return static_cast<int>(x.size()) - 1; }
+  int ny() const { return static_cast<int>(y.size()) - 1; }
 };
 Grid UniformGrid(double length, double width, int nx, int ny);
 
@@ -122,17 +128,24 @@ struct Modes {
 class Plate {
  public:
   // foundation_stiffness: Winkler modulus k_f (N/m^3) acting on the whole plate, with loss factor
-  // eta_f (reaction k_f (1 + i eta_f) w).
+  // eta_f (reaction k_f (1 + i eta_f) w). element_order 2 needs a shear theory, an even number
+  // of grid intervals along both axes and each odd node at the midpoint of its element (throws
+  // combabc::Error otherwise).
   Plate(Grid grid,
         PlateSection section,
         double foundation_stiffness = 0.0,
         double foundation_loss_factor = 0.0,
-        PlateTheory theory = PlateTheory::kKirchhoff);
+        PlateTheory theory = PlateTheory::kKirchhoff,
+        int element_order = 1);
 
   const Grid& grid() const { return grid_; }
   PlateTheory theory() const { return theory_; }
   int dofs_per_node() const { return DofsPerNode(theory_); }
-  int element_dofs() const { return 4 * DofsPerNode(theory_); }
+  int element_order() const { return order_; }
+  int element_dofs() const { return (order_ + 1) * (order_ + 1) * DofsPerNode(theory_); }
+  // Elements along x and y.
+  int num_elements_x() const { return grid_.nx() / order_; }
+  int num_elements_y() const { return grid_.ny() / order_; }
   // An empty constraint set of this plate's dof layout.
   Constraints NewConstraints() const { return Constraints(grid_, theory_); }
   const PlateSection& section() const { return section_; }
@@ -144,7 +157,7 @@ class Plate {
   // Global dof of local dof `local` of element (ex, ey).
   int ElementDof(int ex, int ey, int local) const;
   const ElementMatrices& Element(int ex, int ey) const {
-    return unique_elements_[element_kind_[ex * grid_.ny() + ey]];
+    return unique_elements_[element_kind_[ex * num_elements_y() + ey]];
   }
 
   // Coefficient of mass_unit in the dynamic stiffness at `frequency_hz`:
@@ -190,8 +203,9 @@ class Plate {
   double foundation_stiffness_;
   double foundation_loss_factor_;
   PlateTheory theory_;
+  int order_;
   std::vector<ElementMatrices> unique_elements_;  // one per distinct (hx, hy)
-  std::vector<int> element_kind_;                 // ex * ny + ey -> index into unique_elements_
+  std::vector<int> element_kind_;  // ex * num_elements_y() + ey -> index into unique_elements_
 };
 
 }  // namespace combabc::plate
