@@ -214,6 +214,20 @@ TEST(PlateSensorVariation, EqualsFullSolveRzt) {
   ExpectVariationsEqualFullSolve(o, TypicalVariations(), 8);
 }
 
+// Element order 2 (MITC9 / RZT9) through the continuous-unknowns path: the sections' mid-side
+// node lines are interior dofs of the series and of the direct condensation alike (measured
+// worst 3e-11 against kVariationTol, the floating undamped strip as at order 1).
+TEST(PlateSensorVariation, EqualsFullSolveQuadratic) {
+  for (PlateTheory theory : {PlateTheory::kFsdt, PlateTheory::kRzt}) {
+    SensorOptions o = CoarseOptions();
+    o.theory = theory;
+    o.element_order = 2;
+    o.elements_per_section = 2;
+    o.elements_across_width = 1;
+    ExpectVariationsEqualFullSolve(o, TypicalVariations(), 6);
+  }
+}
+
 // The proportional default laminate needs one precompute for both loss-factor kinds.
 TEST(PlateSensorVariation, ProportionalLaminateSharesOnePrecompute) {
   const SensorModel model(CoarseOptions());
@@ -395,18 +409,21 @@ TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
     bool own_loss_factors;  // a laminate whose imaginary stiffness is not proportional
     std::optional<double> loss_factor;
     PlateTheory theory = PlateTheory::kKirchhoff;
+    int element_order = 1;
   };
   // RZT: 5 dofs per node, and the default laminate is not proportionally damped in it.
   for (const Case& c : {Case{4, 2, false, std::nullopt},
                         Case{6, 4, false, std::nullopt},
                         Case{4, 2, true, std::nullopt},
                         Case{4, 2, true, 0.05},
-                        Case{4, 2, false, std::nullopt, PlateTheory::kRzt}}) {
+                        Case{4, 2, false, std::nullopt, PlateTheory::kRzt},
+                        Case{2, 1, false, std::nullopt, PlateTheory::kRzt, 2}}) {
     SCOPED_TRACE(std::to_string(c.along) + " x " + std::to_string(c.across) +
                  (c.own_loss_factors ? ", own loss factors" : "") +
                  (c.loss_factor ? ", loss_factor unknown" : "") + ", " + ToString(c.theory));
     SensorOptions o;
     o.theory = c.theory;
+    o.element_order = c.element_order;
     o.elements_per_section = c.along;
     o.elements_across_width = c.across;
     if (c.own_loss_factors) {
