@@ -142,6 +142,28 @@ void BM_SensorProfileFastRzt(benchmark::State& state) {
   SensorProfileFast(state, combabc::plate::PlateTheory::kRzt);
 }
 BENCHMARK(BM_SensorProfileFastRzt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+// RZT on 9-node quadratic elements (SensorOptions::element_order = 2). Args: elements per
+// section and across the width; 3 across have the default 6 bilinear ones' 7 node lines, so the
+// same per-configuration cost (docs/model.md, "Mesh convergence of the shear theories").
+void BM_SensorProfileFastRztQuadratic(benchmark::State& state) {
+  SensorOptions options = TheoryOptions(combabc::plate::PlateTheory::kRzt);
+  options.element_order = 2;
+  options.elements_per_section = static_cast<int>(state.range(0));
+  options.elements_across_width = static_cast<int>(state.range(1));
+  const SensorModel model{options};
+  const auto configs = Configurations(256, model.num_clamps());
+  std::vector<double> out(model.num_outputs());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    model.Profile(configs[i++ % configs.size()], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(BM_SensorProfileFastRztQuadratic)
+    ->Args({5, 3})
+    ->Args({10, 3})
+    ->Args({5, 6})
+    ->Unit(benchmark::kMicrosecond);
 void BM_SensorProfileFullSolveRzt(benchmark::State& state) {
   SensorProfileFullSolve(state, combabc::plate::PlateTheory::kRzt);
 }

@@ -3,8 +3,9 @@
 // max_x | p_h(x) - p_ref(x) | (p normalised to a maximum of 1, so the error is in units of the
 // peak) between a mesh and one `factor_x` / `factor_y` times finer along / across the strip.
 //   convergence_study [elements_per_section elements_across_width factor_x factor_y
-//                      configurations seed length_grading width_grading theory]
-// (theory: "kirchhoff", the default, "fsdt" or "rzt")
+//                      configurations seed length_grading width_grading theory element_order]
+// (theory: "kirchhoff", the default, "fsdt" or "rzt"; element_order 1, the default, or 2 for
+// the shear theories' 9-node quadratic elements, on both meshes)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
     }
     coarse_options.theory = *theory;
   }
+  if (argc > 10) coarse_options.element_order = std::atoi(argv[10]);
   coarse_options.elements_per_section = m;
   coarse_options.elements_across_width = ny;
   SensorOptions fine_options = coarse_options;
@@ -74,11 +76,13 @@ int main(int argc, char** argv) {
   }
   const auto t2 = std::chrono::steady_clock::now();
   std::printf(
-      "grading %.1f/%.1f, mesh %d x %d per section (h_x = %.2f mm, h_y = %.2f mm) vs %dx%d finer, "
+      "grading %.1f/%.1f, order %d, mesh %d x %d per section (h_x = %.2f mm, h_y = %.2f mm) vs "
+      "%dx%d finer, "
       "%d configurations: "
       "worst %.4f, mean %.4f, worst in 48-80 cm %.4f (precompute %.1f s, solves %.1f s)\n",
       coarse_options.length_grading,
       coarse_options.WidthGrading(),
+      coarse_options.element_order,
       m,
       ny,
       1e3 * coarse_options.length / (18.0 * m),
