@@ -37,8 +37,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "unknown theory %s\n", argv[k]);
       return 2;
     }
-    meshes.push_back({*theory, std::atoi(argv[k + 1]), std::atoi(argv[k + 2]),
-                      std::atoi(argv[k + 3])});
+    meshes.push_back(
+        {*theory, std::atoi(argv[k + 1]), std::atoi(argv[k + 2]), std::atoi(argv[k + 3])});
   }
   if (meshes.empty()) {
     for (const auto& [along, across] :
@@ -61,15 +61,16 @@ int main(int argc, char** argv) {
     model.ComplexProfile(clamps, w);
     double peak = 0.0;
     for (const auto& v : w) peak = std::max(peak, std::abs(v));
-    std::printf("%s order %d, %d x %d per section (%d node lines across): all fixed peak %.4f um "
-                "(precompute %.2f s)\n",
-                combabc::ToString(mesh.theory),
-                mesh.order,
-                mesh.along,
-                mesh.across,
-                mesh.order * mesh.across + 1,
-                peak * 1e6,
-                std::chrono::duration<double>(t1 - t0).count());
+    std::printf(
+        "%s order %d, %d x %d per section (%d node lines across): all fixed peak %.4f um "
+        "(precompute %.2f s)\n",
+        combabc::ToString(mesh.theory),
+        mesh.order,
+        mesh.along,
+        mesh.across,
+        mesh.order * mesh.across + 1,
+        peak * 1e6,
+        std::chrono::duration<double>(t1 - t0).count());
   }
   return 0;
 }

@@ -79,8 +79,8 @@ struct Quad9 {
     for (int i = 0; i < 2; ++i) {
       for (int j = 0; j < 3; ++j) {
         // Direction x: linear in r, quadratic in s; direction y: the transpose.
-        const double h = d == 0 ? TieLinear(i, r) * TieQuadratic(j, s)
-                                : TieLinear(i, s) * TieQuadratic(j, r);
+        const double h =
+            d == 0 ? TieLinear(i, r) * TieQuadratic(j, s) : TieLinear(i, s) * TieQuadratic(j, r);
         rows += h * tied[3 * i + j];
       }
     }

@@ -50,8 +50,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     const int cross_section = dofs[0] / nc_;
     const int section = cross_section / intervals;
     section_outputs_[section].push_back(static_cast<int>(o));
-    const auto first_node =
-        static_cast<std::size_t>(section) * static_cast<std::size_t>(intervals);
+    const auto first_node = static_cast<std::size_t>(section) * static_cast<std::size_t>(intervals);
     relative_x[section].push_back(output_x[o] - grid.x[first_node]);
   }
   for (int c = 0; c <= num_sections; ++c) {
@@ -72,10 +71,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       return false;
     }
     for (int e = 0; e < intervals; ++e) {
-      const double hs =
-          grid.x[s * intervals + e + 1] - grid.x[s * intervals + e];
-      const double ht =
-          grid.x[t * intervals + e + 1] - grid.x[t * intervals + e];
+      const double hs = grid.x[s * intervals + e + 1] - grid.x[s * intervals + e];
+      const double ht = grid.x[t * intervals + e + 1] - grid.x[t * intervals + e];
       if (std::abs(hs - ht) > tol) return false;
     }
     if (relative_x[s].size() != relative_x[t].size()) return false;

@@ -272,8 +272,8 @@ TEST(Config, MeshElementOrderIsForTheShearTheories) {
   EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.element_order, 1);
   const std::string rzt = kMinimal + "[model]\ntheory = \"rzt\"\n[model.mesh]\n";
   EXPECT_EQ(ParseConfig(rzt + "element_order = 2\n", "inline.toml").model.element_order, 2);
-  ExpectLocated(ConfigError(rzt + "element_order = 3\n"), "inline.toml", 8,
-                "model.mesh.element_order");
+  ExpectLocated(
+      ConfigError(rzt + "element_order = 3\n"), "inline.toml", 8, "model.mesh.element_order");
   const Error e = ConfigError(kMinimal + "[model.mesh]\nelement_order = 2\n");
   ExpectLocated(e, "inline.toml", 6, "model.mesh.element_order");
   EXPECT_NE(std::string(e.what()).find("kirchhoff"), std::string::npos) << e.what();

@@ -35,7 +35,9 @@ PlateSection Sandwich() {
 }
 
 // Nodal values of a field given per node by (x, y) -> dofs of the node, element layout.
-Eigen::VectorXd ElementField(int n, double hx, double hy,
+Eigen::VectorXd ElementField(int n,
+                             double hx,
+                             double hy,
                              const std::function<Eigen::VectorXd(double, double)>& field) {
   Eigen::VectorXd u(9 * n);
   for (int b = 0; b < 3; ++b) {
@@ -85,7 +87,10 @@ TEST(Mitc9Element, RigidMotionsCostNoEnergy) {
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m.stiffness_real);
     const Eigen::VectorXd lambda = eig.eigenvalues();
     EXPECT_LT(std::abs(lambda(2)), 1e-12 * lambda(lambda.size() - 1));
-    std::printf("%s: eigenvalues 3, 4 / largest %.3g, %.3g\n", theory == PlateTheory::kFsdt ? "MITC9" : "RZT9", lambda(2) / lambda(lambda.size() - 1), lambda(3) / lambda(lambda.size() - 1));
+    std::printf("%s: eigenvalues 3, 4 / largest %.3g, %.3g\n",
+                theory == PlateTheory::kFsdt ? "MITC9" : "RZT9",
+                lambda(2) / lambda(lambda.size() - 1),
+                lambda(3) / lambda(lambda.size() - 1));
     EXPECT_GT(lambda(3), 1e-11 * lambda(lambda.size() - 1));
   }
 }
@@ -127,8 +132,8 @@ TEST(Mitc9Element, ConstantStrainPatchTests) {
     const double bend_exact = kappa.dot(section.bending_real * kappa) * area;
     EXPECT_NEAR(bend.dot(k * bend) / bend_exact, 1.0, 1e-10);
     const Eigen::VectorXd shear = nodal([](double x, double y, double* d) { d[0] = x + 2.0 * y; });
-    const double s = theory == PlateTheory::kFsdt ? section.shear_real
-                                                  : section.zigzag_shear_real(0, 0);
+    const double s =
+        theory == PlateTheory::kFsdt ? section.shear_real : section.zigzag_shear_real(0, 0);
     EXPECT_NEAR(shear.dot(k * shear) / (s * 5.0 * area), 1.0, 1e-10);
   }
 }

@@ -28,7 +28,8 @@ enum class PlateTheory {
   // Refined zigzag theory (Tessler, Di Sciuva & Gherlone 2009/2010), a layer-wise theory for
   // sandwiches with a soft core: the in-plane displacements add a piecewise-linear zigzag
   // function of the layers' shear moduli times amplitudes psi (laminate.hpp); RZT4 elements
-  // (rzt_element.hpp) or RZT9 at element order 2 (mitc9_element.hpp), dofs (w, theta_x, theta_y, psi_x, psi_y).
+  // (rzt_element.hpp) or RZT9 at element order 2 (mitc9_element.hpp), dofs (w, theta_x, theta_y,
+  // psi_x, psi_y).
   kRzt,
 };
 
