@@ -177,11 +177,13 @@ ElementMatrices Rzt9ElementMatrices(double hx, double hy, const PlateSection& se
 }
 
 ElementVector Quad9ShapeValues(int dofs_per_node, double hx, double hy, double x, double y) {
-  ElementVector n = ElementVector::Zero(kQuad9Nodes * dofs_per_node);
+  ElementVector n = ElementVector::Zero(static_cast<Eigen::Index>(kQuad9Nodes) * dofs_per_node);
   const double r = 2.0 * x / hx - 1.0;
   const double s = 2.0 * y / hy - 1.0;
   for (int b = 0; b < 3; ++b) {
-    for (int a = 0; a < 3; ++a) n(dofs_per_node * (a + 3 * b)) = Lagrange(a, r) * Lagrange(b, s);
+    for (int a = 0; a < 3; ++a) {
+      n(static_cast<Eigen::Index>(dofs_per_node) * (a + 3 * b)) = Lagrange(a, r) * Lagrange(b, s);
+    }
   }
   return n;
 }
@@ -189,7 +191,7 @@ ElementVector Quad9ShapeValues(int dofs_per_node, double hx, double hy, double x
 ElementVector Quad9ShapeIntegral(
     int dofs_per_node, double hx, double hy, double x0, double x1, double y0, double y1) {
   // Biquadratic integrand: 3-point Gauss on the sub-rectangle is exact.
-  ElementVector f = ElementVector::Zero(kQuad9Nodes * dofs_per_node);
+  ElementVector f = ElementVector::Zero(static_cast<Eigen::Index>(kQuad9Nodes) * dofs_per_node);
   for (int p = 0; p < 3; ++p) {
     for (int q = 0; q < 3; ++q) {
       const double x = x0 + 0.5 * (x1 - x0) * (1.0 + kGaussPoint[p]);
