@@ -42,12 +42,17 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
 
 // FSDT (MITC4) and RZT (RZT4) at twice the default mesh in each direction (20 x 12 per section,
 // closer to what their bilinear elements need: docs/model.md, "Plate theories"), 40
-// configurations each.
-void ExpectFastEqualsFullRefinedMesh(PlateTheory theory) {
+// configurations each; and the quadratic elements (element order 2) at the meshes of
+// docs/model.md, "Quadratic elements".
+void ExpectFastEqualsFullRefinedMesh(PlateTheory theory,
+                                     int order = 1,
+                                     int along = 20,
+                                     int across = 12) {
   SensorOptions options;
   options.theory = theory;
-  options.elements_per_section = 20;
-  options.elements_across_width = 12;
+  options.element_order = order;
+  options.elements_per_section = along;
+  options.elements_across_width = across;
   const SensorModel model{options};
   std::mt19937_64 rng(6);
   std::vector<double> fast(model.num_outputs());
@@ -66,8 +71,11 @@ void ExpectFastEqualsFullRefinedMesh(PlateTheory theory) {
     }
     worst = std::max(worst, diff / *std::max_element(full.begin(), full.end()));
   }
-  std::printf("%s 20 x 12: worst relative difference over %d configurations: %.2e\n",
+  std::printf("%s order %d, %d x %d: worst relative difference over %d configurations: %.2e\n",
               ToString(theory),
+              order,
+              along,
+              across,
               kConfigurations,
               worst);
   EXPECT_LT(worst, kFastPathTol);
@@ -79,6 +87,12 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveFsdtRefinedMesh) {
 
 TEST(PlateSensorSlow, FastPathEqualsFullSolveRztRefinedMesh) {
   ExpectFastEqualsFullRefinedMesh(PlateTheory::kRzt);
+}
+
+TEST(PlateSensorSlow, FastPathEqualsFullSolveQuadraticMeshes) {
+  ExpectFastEqualsFullRefinedMesh(PlateTheory::kRzt, 2, 10, 3);
+  ExpectFastEqualsFullRefinedMesh(PlateTheory::kRzt, 2, 10, 6);
+  ExpectFastEqualsFullRefinedMesh(PlateTheory::kFsdt, 2, 10, 3);
 }
 
 // The continuous-unknowns path against the full solve of the model built with the same values,
