@@ -18,6 +18,9 @@
 namespace combabc::plate {
 namespace {
 
+// Grid line k of an axis (k counts node intervals, 2 per element at element order 2).
+double At(const std::vector<double>& v, int k) { return v[static_cast<std::size_t>(k)]; }
+
 // Index of the interval [v[k], v[k+1]] that contains t (clamped to the ends).
 int Locate(const std::vector<double>& v, double t) {
   const auto it = std::upper_bound(v.begin(), v.end(), t);
@@ -221,8 +224,8 @@ Plate::Plate(Grid grid,
   std::vector<std::pair<double, double>> sizes;
   for (int ex = 0; ex < nx; ++ex) {
     for (int ey = 0; ey < ny; ++ey) {
-      const double hx = grid_.x[order_ * (ex + 1)] - grid_.x[order_ * ex];
-      const double hy = grid_.y[order_ * (ey + 1)] - grid_.y[order_ * ey];
+      const double hx = At(grid_.x, order_ * (ex + 1)) - At(grid_.x, order_ * ex);
+      const double hy = At(grid_.y, order_ * (ey + 1)) - At(grid_.y, order_ * ey);
       // Elements of equal size (to 1e-12 relative) share one set of matrices.
       int kind = -1;
       for (std::size_t k = 0; k < sizes.size(); ++k) {
@@ -275,19 +278,19 @@ Eigen::VectorXd Plate::LoadVector(const Load& load) const {
   const double pressure = load.force / ((x1 - x0) * (y1 - y0));
   const int p = order_;
   for (int ex = 0; ex < num_elements_x(); ++ex) {
-    const double ax = std::max(x0, grid_.x[p * ex]);
-    const double bx = std::min(x1, grid_.x[p * (ex + 1)]);
+    const double ax = std::max(x0, At(grid_.x, p * ex));
+    const double bx = std::min(x1, At(grid_.x, p * (ex + 1)));
     if (bx <= ax) continue;
     for (int ey = 0; ey < num_elements_y(); ++ey) {
-      const double ay = std::max(y0, grid_.y[p * ey]);
-      const double by = std::min(y1, grid_.y[p * (ey + 1)]);
+      const double ay = std::max(y0, At(grid_.y, p * ey));
+      const double by = std::min(y1, At(grid_.y, p * (ey + 1)));
       if (by <= ay) continue;
-      const double hx = grid_.x[p * (ex + 1)] - grid_.x[p * ex];
-      const double hy = grid_.y[p * (ey + 1)] - grid_.y[p * ey];
-      const double lx0 = ax - grid_.x[p * ex];
-      const double lx1 = bx - grid_.x[p * ex];
-      const double ly0 = ay - grid_.y[p * ey];
-      const double ly1 = by - grid_.y[p * ey];
+      const double hx = At(grid_.x, p * (ex + 1)) - At(grid_.x, p * ex);
+      const double hy = At(grid_.y, p * (ey + 1)) - At(grid_.y, p * ey);
+      const double lx0 = ax - At(grid_.x, p * ex);
+      const double lx1 = bx - At(grid_.x, p * ex);
+      const double ly0 = ay - At(grid_.y, p * ey);
+      const double ly1 = by - At(grid_.y, p * ey);
       const ElementVector fe = FamilyShapeIntegral(theory_, p, hx, hy, lx0, lx1, ly0, ly1);
       for (int k = 0; k < element_dofs(); ++k) f(ElementDof(ex, ey, k)) += pressure * fe(k);
     }
@@ -407,9 +410,9 @@ void Plate::InterpolationRow(double x,
   const int p = order_;
   const int ex = Locate(grid_.x, x) / p;
   const int ey = Locate(grid_.y, y) / p;
-  const double hx = grid_.x[p * (ex + 1)] - grid_.x[p * ex];
-  const double hy = grid_.y[p * (ey + 1)] - grid_.y[p * ey];
-  *row = FamilyShapeValues(theory_, p, hx, hy, x - grid_.x[p * ex], y - grid_.y[p * ey]);
+  const double hx = At(grid_.x, p * (ex + 1)) - At(grid_.x, p * ex);
+  const double hy = At(grid_.y, p * (ey + 1)) - At(grid_.y, p * ey);
+  *row = FamilyShapeValues(theory_, p, hx, hy, x - At(grid_.x, p * ex), y - At(grid_.y, p * ey));
   for (int k = 0; k < element_dofs(); ++k) dofs[k] = ElementDof(ex, ey, k);
 }
 
