@@ -209,7 +209,8 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
   Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
   // Grid intervals per section (2 per element at element order 2).
-  const auto m = static_cast<std::size_t>(options_.element_order * options_.elements_per_section);
+  const auto m = static_cast<std::size_t>(options_.element_order) *
+                 static_cast<std::size_t>(options_.elements_per_section);
   for (int s = 0; s < n; ++s) {
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
     const double start = x[static_cast<std::size_t>(s) * m];

@@ -35,7 +35,7 @@ PlateSection Sandwich() {
 }
 
 // Nodal values of a field given per node by (x, y) -> dofs of the node, element layout.
-Eigen::VectorXd ElementField(int n,
+Eigen::VectorXd ElementField(Eigen::Index n,
                              double hx,
                              double hy,
                              const std::function<Eigen::VectorXd(double, double)>& field) {
@@ -85,7 +85,7 @@ TEST(Mitc9Element, RigidMotionsCostNoEnergy) {
     // (measured 3e-7 (MITC9) and 2e-8 (RZT9) of the largest: soft bending of a 12 x 7 mm
     // element next to its shear stiffness; round-off sits near 1e-16, so the bound is 1e-11).
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m.stiffness_real);
-    const Eigen::VectorXd lambda = eig.eigenvalues();
+    const Eigen::VectorXd& lambda = eig.eigenvalues();
     EXPECT_LT(std::abs(lambda(2)), 1e-12 * lambda(lambda.size() - 1));
     std::printf("%s: eigenvalues 3, 4 / largest %.3g, %.3g\n",
                 theory == PlateTheory::kFsdt ? "MITC9" : "RZT9",
@@ -115,7 +115,7 @@ TEST(Mitc9Element, ConstantStrainPatchTests) {
     std::vector<int> free;
     const Eigen::SparseMatrix<double> k = plate.DynamicStiffness(none, 0.0, &free).real();
     ASSERT_EQ(static_cast<int>(free.size()), plate.num_dofs());
-    const int n = plate.dofs_per_node();
+    const Eigen::Index n = plate.dofs_per_node();
     auto nodal = [&](const std::function<void(double, double, double*)>& field) {
       Eigen::VectorXd u = Eigen::VectorXd::Zero(plate.num_dofs());
       for (int i = 0; i <= grid.nx(); ++i) {
@@ -145,7 +145,7 @@ TEST(Mitc9Element, ShapeFunctionsReproduceQuadratics) {
   auto f = [](double x, double y) { return 1.0 + 3.0 * x - y + 40.0 * x * x + 70.0 * x * y * y; };
   Eigen::VectorXd u = Eigen::VectorXd::Zero(27);
   for (int b = 0; b < 3; ++b) {
-    for (int a = 0; a < 3; ++a) u(3 * (a + 3 * b)) = f(0.5 * a * hx, 0.5 * b * hy);
+    for (int a = 0; a < 3; ++a) u(Eigen::Index{3} * (a + 3 * b)) = f(0.5 * a * hx, 0.5 * b * hy);
   }
   for (double x : {0.0, 0.0013, 0.007}) {
     for (double y : {0.0005, 0.003}) {
