@@ -76,6 +76,34 @@ inline void SubScaled2Split(double* __restrict cr,
   }
 }
 
+// c -= x0 s0 + x1 s1 + x2 s2 + x3 s3 (x_k at x + k ldx, s_k = (sr[k], si[k])): four axpys in one
+// pass.
+inline void SubScaled4Split(double* __restrict cr,
+                            double* __restrict ci,
+                            const double* __restrict xr,
+                            const double* __restrict xi,
+                            std::ptrdiff_t ldx,
+                            const double* sr,
+                            const double* si,
+                            std::ptrdiff_t len) {
+  const double s0r = sr[0], s0i = si[0], s1r = sr[1], s1i = si[1];
+  const double s2r = sr[2], s2i = si[2], s3r = sr[3], s3i = si[3];
+  const double* __restrict x0r = xr;
+  const double* __restrict x0i = xi;
+  const double* __restrict x1r = xr + ldx;
+  const double* __restrict x1i = xi + ldx;
+  const double* __restrict x2r = xr + 2 * ldx;
+  const double* __restrict x2i = xi + 2 * ldx;
+  const double* __restrict x3r = xr + 3 * ldx;
+  const double* __restrict x3i = xi + 3 * ldx;
+  for (std::ptrdiff_t k = 0; k < len; ++k) {
+    cr[k] -= ((x0r[k] * s0r - x0i[k] * s0i) + (x1r[k] * s1r - x1i[k] * s1i)) +
+             ((x2r[k] * s2r - x2i[k] * s2i) + (x3r[k] * s3r - x3i[k] * s3i));
+    ci[k] -= ((x0r[k] * s0i + x0i[k] * s0r) + (x1r[k] * s1i + x1i[k] * s1r)) +
+             ((x2r[k] * s2i + x2i[k] * s2r) + (x3r[k] * s3i + x3i[k] * s3r));
+  }
+}
+
 // FactorLdlt in split storage: the leading n x n block of the rows x n matrix (re, im, ld) becomes
 // L D L^T in place (reads only its lower triangle), the rows below it become B L^{-T} D^{-1}.
 // Right-looking: each pivot's column updates the later columns by complex axpys, so the

@@ -274,27 +274,31 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     for (Index c = 0; c < m; ++c) {
       std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
       std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
+      // Q(c, l) for this column, contiguous for SubScaled4Split.
+      double* qcr = ws.small.re.data();
+      double* qci = ws.small.im.data();
+      for (Index l = 0; l < r; ++l) {
+        qcr[l] = qr[l * m + c];
+        qci[l] = qi[l * m + c];
+      }
       Index l = 0;
-      for (; l + 1 < r; l += 2) {
-        SubScaled2Split(nr + c * ldn + c,
+      for (; l + 3 < r; l += 4) {
+        SubScaled4Split(nr + c * ldn + c,
                         ni + c * ldn + c,
                         tr + l * m + c,
                         ti + l * m + c,
-                        qr[l * m + c],
-                        qi[l * m + c],
-                        tr + (l + 1) * m + c,
-                        ti + (l + 1) * m + c,
-                        qr[(l + 1) * m + c],
-                        qi[(l + 1) * m + c],
+                        m,
+                        qcr + l,
+                        qci + l,
                         m - c);
       }
-      if (l < r) {
+      for (; l < r; ++l) {
         SubScaledSplit(nr + c * ldn + c,
                        ni + c * ldn + c,
                        tr + l * m + c,
                        ti + l * m + c,
-                       qr[l * m + c],
-                       qi[l * m + c],
+                       qcr[l],
+                       qci[l],
                        m - c);
       }
       double br = ws.rhs[i + 1].re[c];
