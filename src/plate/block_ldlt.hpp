@@ -5,6 +5,7 @@
 // keeps it inlined in its hot loop as before.
 #include <algorithm>
 #include <complex>
+#include <cstddef>
 
 #include <Eigen/Dense>
 
@@ -35,6 +36,149 @@ inline bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a, Eigen::Ref<Eigen::VectorX
     if (!(std::norm(d) > kPivotTol * kPivotTol * scale2)) return false;
     const std::complex<double> inverse = std::conj(d) / std::norm(d);
     a.col(j).tail(rows - j - 1) *= inverse;
+  }
+  return true;
+}
+
+// Split storage: a complex matrix as two column-major arrays of doubles (real and imaginary parts,
+// leading dimension ld). Plain loops over them vectorize with SSE2 alone; interleaved
+// std::complex needs shuffles, and its operator* calls __muldc3 unless -ffast-math.
+
+// c -= x s over `len` entries (complex axpy in split storage).
+inline void SubScaledSplit(double* __restrict cr,
+                           double* __restrict ci,
+                           const double* __restrict xr,
+                           const double* __restrict xi,
+                           double sr,
+                           double si,
+                           std::ptrdiff_t len) {
+  for (std::ptrdiff_t t = 0; t < len; ++t) {
+    cr[t] -= xr[t] * sr - xi[t] * si;
+    ci[t] -= xr[t] * si + xi[t] * sr;
+  }
+}
+
+// c -= x s + y t: two axpys in one pass over c (half the loads and stores of c).
+inline void SubScaled2Split(double* __restrict cr,
+                            double* __restrict ci,
+                            const double* __restrict xr,
+                            const double* __restrict xi,
+                            double sr,
+                            double si,
+                            const double* __restrict yr,
+                            const double* __restrict yi,
+                            double tr,
+                            double ti,
+                            std::ptrdiff_t len) {
+  for (std::ptrdiff_t k = 0; k < len; ++k) {
+    cr[k] -= (xr[k] * sr - xi[k] * si) + (yr[k] * tr - yi[k] * ti);
+    ci[k] -= (xr[k] * si + xi[k] * sr) + (yr[k] * ti + yi[k] * tr);
+  }
+}
+
+// c -= x0 s0 + x1 s1 + x2 s2 + x3 s3 (x_k at x + k ldx, s_k = (sr[k], si[k])): four axpys in one
+// pass.
+inline void SubScaled4Split(double* __restrict cr,
+                            double* __restrict ci,
+                            const double* __restrict xr,
+                            const double* __restrict xi,
+                            std::ptrdiff_t ldx,
+                            const double* sr,
+                            const double* si,
+                            std::ptrdiff_t len) {
+  const double s0r = sr[0], s0i = si[0], s1r = sr[1], s1i = si[1];
+  const double s2r = sr[2], s2i = si[2], s3r = sr[3], s3i = si[3];
+  const double* __restrict x0r = xr;
+  const double* __restrict x0i = xi;
+  const double* __restrict x1r = xr + ldx;
+  const double* __restrict x1i = xi + ldx;
+  const double* __restrict x2r = xr + 2 * ldx;
+  const double* __restrict x2i = xi + 2 * ldx;
+  const double* __restrict x3r = xr + 3 * ldx;
+  const double* __restrict x3i = xi + 3 * ldx;
+  for (std::ptrdiff_t k = 0; k < len; ++k) {
+    cr[k] -= ((x0r[k] * s0r - x0i[k] * s0i) + (x1r[k] * s1r - x1i[k] * s1i)) +
+             ((x2r[k] * s2r - x2i[k] * s2i) + (x3r[k] * s3r - x3i[k] * s3i));
+    ci[k] -= ((x0r[k] * s0i + x0i[k] * s0r) + (x1r[k] * s1i + x1i[k] * s1r)) +
+             ((x2r[k] * s2i + x2i[k] * s2r) + (x3r[k] * s3i + x3i[k] * s3r));
+  }
+}
+
+// FactorLdlt in split storage: the leading n x n block of the rows x n matrix (re, im, ld) becomes
+// L D L^T in place (reads only its lower triangle), the rows below it become B L^{-T} D^{-1}.
+// Right-looking: each pivot's column updates the later columns by complex axpys, so the
+// inner loops are long, contiguous and free of calls.
+inline bool FactorLdltSplit(
+    double* re, double* im, std::ptrdiff_t ld, std::ptrdiff_t rows, std::ptrdiff_t n) {
+  double scale2 = 0.0;
+  for (std::ptrdiff_t j = 0; j < n; ++j) {
+    const double* cr = re + j * ld;
+    const double* ci = im + j * ld;
+    for (std::ptrdiff_t t = j; t < n; ++t) scale2 = std::max(scale2, cr[t] * cr[t] + ci[t] * ci[t]);
+  }
+  // Pivots two at a time: column j + 1 takes pivot j's update first, then both update the later
+  // columns in one pass (SubScaled2Split).
+  const auto pivot = [&](std::ptrdiff_t j, double* ir, double* ii) {
+    const double dr = re[j * ld + j];
+    const double di = im[j * ld + j];
+    const double d2 = dr * dr + di * di;
+    *ir = dr / d2;  // 1 / d
+    *ii = -di / d2;
+    return d2 > kPivotTol * kPivotTol * scale2;
+  };
+  // Column j scaled by 1 / d_j below its pivot, once no later column needs it unscaled.
+  const auto scale_column = [&](std::ptrdiff_t j, double ir, double ii) {
+    double* xr = re + j * ld;
+    double* xi = im + j * ld;
+    for (std::ptrdiff_t t = j + 1; t < rows; ++t) {
+      const double ar = xr[t];
+      const double ai = xi[t];
+      xr[t] = ar * ir - ai * ii;
+      xi[t] = ar * ii + ai * ir;
+    }
+  };
+  std::ptrdiff_t j = 0;
+  for (; j + 1 < n; j += 2) {
+    double ir0 = 0.0;
+    double ii0 = 0.0;
+    double ir1 = 0.0;
+    double ii1 = 0.0;
+    if (!pivot(j, &ir0, &ii0)) return false;
+    const double* xr = re + j * ld;
+    const double* xi = im + j * ld;
+    const double* yr = re + (j + 1) * ld;
+    const double* yi = im + (j + 1) * ld;
+    // Column j + 1 -= x (x_{j+1} / d_j).
+    SubScaledSplit(re + (j + 1) * ld + j + 1,
+                   im + (j + 1) * ld + j + 1,
+                   xr + j + 1,
+                   xi + j + 1,
+                   xr[j + 1] * ir0 - xi[j + 1] * ii0,
+                   xr[j + 1] * ii0 + xi[j + 1] * ir0,
+                   rows - j - 1);
+    if (!pivot(j + 1, &ir1, &ii1)) return false;
+    // Schur complement of both pivots: column k -= x (x_k / d_j) + y (y_k / d_{j+1}).
+    for (std::ptrdiff_t k = j + 2; k < n; ++k) {
+      SubScaled2Split(re + k * ld + k,
+                      im + k * ld + k,
+                      xr + k,
+                      xi + k,
+                      xr[k] * ir0 - xi[k] * ii0,
+                      xr[k] * ii0 + xi[k] * ir0,
+                      yr + k,
+                      yi + k,
+                      yr[k] * ir1 - yi[k] * ii1,
+                      yr[k] * ii1 + yi[k] * ir1,
+                      rows - k);
+    }
+    scale_column(j, ir0, ii0);
+    scale_column(j + 1, ir1, ii1);
+  }
+  if (j < n) {
+    double ir = 0.0;
+    double ii = 0.0;
+    if (!pivot(j, &ir, &ii)) return false;
+    scale_column(j, ir, ii);
   }
   return true;
 }

@@ -10,11 +10,12 @@
 // solve is followed by a residual check, and a dense partial-pivoting LU of the whole condensed
 // system is the fallback.
 //
-// Performance (docs/benchmarks.md): the coupling between neighbouring rows is a group's
-// end-to-end block, numerically of low rank (SectionCondensation's constructor factors it as
-// P Q^T), so a Schur complement costs O(n^2 r) rather than O(n^3); the triangular solves with
-// P and the right-hand side ride along inside the factorization's matrix-vector products; the
-// workspace is per thread and reused, and the cached blocks are read as contiguous columns.
+// Performance (docs/benchmarks.md, docs/model.md "Performance"): the coupling between
+// neighbouring rows is a group's end-to-end block, numerically of low rank (SectionCondensation's
+// constructor factors it as P Q^T), so a Schur complement costs O(n^2 r) rather than O(n^3); the
+// triangular solves with P and the right-hand side ride along inside the factorization. All the
+// per-configuration algebra runs on split real/imaginary arrays (block_ldlt.hpp) in plain loops
+// that the compiler vectorizes, two axpys per pass; the workspace is per thread and reused.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -26,47 +27,85 @@
 namespace combabc::plate {
 namespace {
 
+using Index = std::ptrdiff_t;
+
+// A complex matrix or vector in split storage (block_ldlt.hpp), column-major; the leading
+// dimension is chosen per use.
+struct Split {
+  std::vector<double> re;
+  std::vector<double> im;
+  void Resize(Index size) {
+    re.resize(static_cast<std::size_t>(size));
+    im.resize(static_cast<std::size_t>(size));
+  }
+};
+
 struct Workspace {
   int nc = -1;
   int rows = -1;
-  // Pivot blocks F_i, LDL^T in place, with P_i^T and the right-hand side carried below them.
-  std::vector<Eigen::MatrixXcd> factor;
-  std::vector<Eigen::MatrixXcd> diagonal;  // assembled diagonal blocks (for the residual)
+  // Pivot blocks F_i ((n + r + 1) x n, leading dimension n + r + 1), LDL^T in place, with P_i^T
+  // and the right-hand side carried below them.
+  std::vector<Split> factor;
+  std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
+  std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
   // Coupling U_i between rows i and i + 1 as P_i Q_i^T (n_i x r_i and n_{i+1} x r_i).
-  std::vector<Eigen::MatrixXcd> p;
-  std::vector<Eigen::MatrixXcd> q;
-  std::vector<Eigen::Index> rank;
-  std::vector<Eigen::VectorXcd> rhs;
-  std::vector<Eigen::VectorXcd> u;
+  std::vector<Split> p;
+  std::vector<Split> q;
+  std::vector<Index> rank;
+  std::vector<Split> rhs;
+  std::vector<Split> u;
   std::vector<std::vector<int>> free;
-  Eigen::MatrixXcd v;  // D V
-  Eigen::MatrixXcd s;  // S = V^T D V
-  Eigen::MatrixXcd t;  // Q S
-  Eigen::VectorXcd tmp;
-  Eigen::VectorXcd small;
-  Eigen::VectorXcd ends;
-  Eigen::VectorXcd values;
+  Split s;  // [S; c^T], (r + 1) x r: S = V^T D V, c = V^T D w
+  Split t;  // Q S, m x r
+  Split y;
+  Split small;
 
   void Reserve(int nc_, int rows_) {
     if (nc_ == nc && rows_ <= rows) return;
     nc = nc_;
     rows = std::max(rows_, rows);
-    factor.assign(rows, Eigen::MatrixXcd(2 * nc + 1, nc));
-    diagonal.assign(rows, Eigen::MatrixXcd(nc, nc));
-    p.assign(rows, Eigen::MatrixXcd(nc, nc));
-    q.assign(rows, Eigen::MatrixXcd(nc, nc));
+    const Index n = nc;
+    factor.assign(rows, Split{});
+    diagonal.assign(rows, Split{});
+    p.assign(rows, Split{});
+    q.assign(rows, Split{});
+    rhs.assign(rows, Split{});
+    u.assign(rows, Split{});
+    for (int i = 0; i < rows; ++i) {
+      factor[i].Resize((2 * n + 1) * n);
+      diagonal[i].Resize(n * n);
+      p[i].Resize(n * n);
+      q[i].Resize(n * n);
+      rhs[i].Resize(n);
+      u[i].Resize(n);
+    }
+    diagonal_max2.assign(rows, 0.0);
     rank.assign(rows, 0);
-    rhs.assign(rows, Eigen::VectorXcd(nc));
-    u.assign(rows + 2, Eigen::VectorXcd(nc));
     free.assign(rows, {});
-    v.resize(nc, nc);
-    s.resize(nc, nc);
-    t.resize(nc, nc);
-    tmp.resize(nc);
-    small.resize(nc);
-    ends.resize(2 * static_cast<Eigen::Index>(nc));
+    s.Resize((n + 1) * n);
+    t.Resize(n * n);
+    y.Resize(n);
+    small.Resize(n);
   }
 };
+
+// Complex dot product sum_k x_k y_k (no conjugation) of split vectors.
+inline void DotSplit(const double* xr,
+                     const double* xi,
+                     const double* yr,
+                     const double* yi,
+                     Index len,
+                     double* out_r,
+                     double* out_i) {
+  double sr = 0.0;
+  double si = 0.0;
+  for (Index k = 0; k < len; ++k) {
+    sr += xr[k] * yr[k] - xi[k] * yi[k];
+    si += xr[k] * yi[k] + xi[k] * yr[k];
+  }
+  *out_r = sr;
+  *out_i = si;
+}
 
 }  // namespace
 
@@ -78,9 +117,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
   const int rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
   thread_local Workspace ws;
   ws.Reserve(nc, std::max(rows, 1));
-  if (ws.values.size() < static_cast<Eigen::Index>(w.size())) {
-    ws.values.resize(static_cast<Eigen::Index>(w.size()));
-  }
+  if (ws.y.re.size() < w.size()) ws.y.Resize(static_cast<Index>(w.size()));
   // Free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes it.
   for (int i = 0; i < rows; ++i) {
     const int x = (i + 1) * group_size_;
@@ -88,6 +125,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
     FreeDofs(x, a, b, &ws.free[i]);
   }
+  const auto size = [&](int i) { return static_cast<Index>(ws.free[i].size()); };
   // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
   // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
   // i + 1's, in its factored form.
@@ -95,169 +133,357 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     const Piece& left = GroupPieceOf(i, clamps);
     const Piece& right = GroupPieceOf(i + 1, clamps);
     const std::vector<int>& f = ws.free[i];
-    const Eigen::Index n = static_cast<Eigen::Index>(f.size());
-    auto a = ws.diagonal[i].topLeftCorner(n, n);
-    for (Eigen::Index c = 0; c < n; ++c) {
-      const std::complex<double>* lc =
-          left.right_block.data() + static_cast<Eigen::Index>(f[c]) * nc;
-      const std::complex<double>* rc =
-          right.left_block.data() + static_cast<Eigen::Index>(f[c]) * nc;
-      for (Eigen::Index r = c; r < n; ++r) a(r, c) = lc[f[r]] + rc[f[r]];
+    const Index n = size(i);
+    double* ar = ws.diagonal[i].re.data();
+    double* ai = ws.diagonal[i].im.data();
+    double max2 = 0.0;
+    for (Index c = 0; c < n; ++c) {
+      const std::complex<double>* lc = left.right_block.data() + Index{f[c]} * nc;
+      const std::complex<double>* rc = right.left_block.data() + Index{f[c]} * nc;
+      for (Index r = c; r < n; ++r) {
+        const std::complex<double> v = lc[f[r]] + rc[f[r]];
+        ar[c * n + r] = v.real();
+        ai[c * n + r] = v.imag();
+        // Not std::norm: without -ffast-math libstdc++ computes it as |v|^2 through hypot.
+        max2 = std::max(max2, v.real() * v.real() + v.imag() * v.imag());
+      }
     }
-    ws.rhs[i].head(n) = left.load.tail(nc)(f);
-    ws.rhs[i].head(n) += right.load.head(nc)(f);
+    ws.diagonal_max2[i] = max2;
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
-    ws.rhs[i].head(n) += boundary_load_[boundary](f);
+    for (Index k = 0; k < n; ++k) {
+      const std::complex<double> v =
+          left.load(left.left_size + f[k]) + right.load(f[k]) + boundary_load_[boundary](f[k]);
+      ws.rhs[i].re[k] = v.real();
+      ws.rhs[i].im[k] = v.imag();
+    }
+    ws.rank[i] = 0;
     if (i + 1 < rows) {
-      const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      const Eigen::Index r = right.coupling_left.cols();
+      const std::vector<int>& g = ws.free[i + 1];
+      const Index m = size(i + 1);
+      const Index r = right.coupling_left.cols();
       ws.rank[i] = r;
-      ws.p[i].topLeftCorner(n, r) = right.coupling_left(f, Eigen::all);
-      ws.q[i].topLeftCorner(m, r) = right.coupling_right(ws.free[i + 1], Eigen::all);
+      for (Index l = 0; l < r; ++l) {
+        const std::complex<double>* pc = right.coupling_left.data() + l * nc;
+        const std::complex<double>* qc = right.coupling_right.data() + l * nc;
+        for (Index k = 0; k < n; ++k) {
+          ws.p[i].re[l * n + k] = pc[f[k]].real();
+          ws.p[i].im[l * n + k] = pc[f[k]].imag();
+        }
+        for (Index k = 0; k < m; ++k) {
+          ws.q[i].re[l * m + k] = qc[g[k]].real();
+          ws.q[i].im[l * m + k] = qc[g[k]].imag();
+        }
+      }
     }
   }
   // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i. With
-  // U_i = P_i Q_i^T, V_i = D_i^{-1} L_i^{-1} P_i (from FactorLdlt's carried rows) and
+  // U_i = P_i Q_i^T, V_i = D_i^{-1} L_i^{-1} P_i (from the factorization's carried rows) and
   // S_i = V_i^T D_i V_i: U_i^T F_i^{-1} U_i = Q_i S_i Q_i^T. The right-hand side is eliminated
   // alongside: row i's carried last row becomes w_i = D_i^{-1} L_i^{-1} r'_i, and
-  // r'_{i+1} = r_{i+1} - Q_i V_i^T D_i w_i.
-  const auto carried = [&](int i) { return i + 1 < rows ? ws.rank[i] : Eigen::Index{0}; };
+  // r'_{i+1} = r_{i+1} - Q_i c_i with c_i = V_i^T D_i w_i.
   bool ok = !always_pivot_;
   for (int i = 0; i < rows && ok; ++i) {
-    const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
-    const Eigen::Index r = carried(i);
-    auto ext = ws.factor[i].topLeftCorner(n + r + 1, n);
+    const Index n = size(i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + 1;
+    double* fr = ws.factor[i].re.data();
+    double* fi = ws.factor[i].im.data();
     if (i == 0) {
-      ext.topRows(n).triangularView<Eigen::Lower>() = ws.diagonal[0].topLeftCorner(n, n);
-      ext.row(n + r) = ws.rhs[0].head(n).transpose();
+      const double* ar = ws.diagonal[0].re.data();
+      const double* ai = ws.diagonal[0].im.data();
+      for (Index c = 0; c < n; ++c) {
+        std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
+        std::copy(ai + c * n + c, ai + (c + 1) * n, fi + c * ld + c);
+        fr[c * ld + n + r] = ws.rhs[0].re[c];
+        fi[c * ld + n + r] = ws.rhs[0].im[c];
+      }
     }
-    if (r > 0) ext.middleRows(n, r) = ws.p[i].topLeftCorner(n, r).transpose();
-    ok = FactorLdlt(ext, ws.tmp.head(n));
-    if (!ok) break;
-    if (i + 1 < rows) {
-      const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      const Eigen::Index rn = carried(i + 1);
-      const auto vt = ext.middleRows(n, r);  // V_i^T
-      auto dv = ws.v.topLeftCorner(n, r);    // D_i V_i
-      dv.noalias() = ext.diagonal().asDiagonal() * vt.transpose();
-      auto sm = ws.s.topLeftCorner(r, r);
-      sm.noalias() = vt.lazyProduct(dv);
-      auto qi = ws.q[i].topLeftCorner(m, r);
-      auto t = ws.t.topLeftCorner(m, r);
-      t.noalias() = qi.lazyProduct(sm);
-      auto next = ws.factor[i + 1].topLeftCorner(m + rn + 1, m);
-      // The Schur complement is symmetric and FactorLdlt reads only the lower triangle.
-      next.topRows(m).triangularView<Eigen::Lower>() = ws.diagonal[i + 1].topLeftCorner(m, m);
-      next.topRows(m).triangularView<Eigen::Lower>() -= t * qi.transpose();
-      auto c = ws.small.head(r);
-      c.noalias() = dv.transpose() * ext.row(n + r).transpose();
-      auto b = ws.tmp.head(m);
-      b = ws.rhs[i + 1].head(m);
-      b.noalias() -= qi * c;
-      next.row(m + rn) = b.transpose();
+    for (Index l = 0; l < r; ++l) {
+      for (Index k = 0; k < n; ++k) {
+        fr[k * ld + n + l] = ws.p[i].re[l * n + k];
+        fi[k * ld + n + l] = ws.p[i].im[l * n + k];
+      }
+    }
+    ok = FactorLdltSplit(fr, fi, ld, ld, n);
+    if (!ok || i + 1 == rows) break;
+    // [S; c^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T the carried rows of column j; S is
+    // symmetric: the lower triangle, then mirrored.
+    double* sr = ws.s.re.data();
+    double* si = ws.s.im.data();
+    const Index ls = r + 1;
+    std::fill(sr, sr + ls * r, 0.0);
+    std::fill(si, si + ls * r, 0.0);
+    for (Index j = 0; j < n; ++j) {
+      const double* xr = fr + j * ld + n;
+      const double* xi = fi + j * ld + n;
+      const double dr = fr[j * ld + j];
+      const double di = fi[j * ld + j];
+      for (Index l = 0; l < r; ++l) {
+        // -(d v_l): SubScaledSplit subtracts.
+        SubScaledSplit(sr + l * ls + l,
+                       si + l * ls + l,
+                       xr + l,
+                       xi + l,
+                       -(dr * xr[l] - di * xi[l]),
+                       -(dr * xi[l] + di * xr[l]),
+                       ls - l);
+      }
+    }
+    for (Index l = 0; l < r; ++l) {
+      for (Index k = 0; k < l; ++k) {
+        sr[l * ls + k] = sr[k * ls + l];
+        si[l * ls + k] = si[k * ls + l];
+      }
+    }
+    // T = Q S (m x r).
+    const Index m = size(i + 1);
+    const Index rn = ws.rank[i + 1];
+    const Index ldn = m + rn + 1;
+    const double* qr = ws.q[i].re.data();
+    const double* qi = ws.q[i].im.data();
+    double* tr = ws.t.re.data();
+    double* ti = ws.t.im.data();
+    std::fill(tr, tr + m * r, 0.0);
+    std::fill(ti, ti + m * r, 0.0);
+    for (Index l = 0; l < r; ++l) {
+      Index k = 0;
+      for (; k + 1 < r; k += 2) {
+        SubScaled2Split(tr + l * m,
+                        ti + l * m,
+                        qr + k * m,
+                        qi + k * m,
+                        -sr[l * ls + k],
+                        -si[l * ls + k],
+                        qr + (k + 1) * m,
+                        qi + (k + 1) * m,
+                        -sr[l * ls + k + 1],
+                        -si[l * ls + k + 1],
+                        m);
+      }
+      if (k < r) {
+        SubScaledSplit(
+            tr + l * m, ti + l * m, qr + k * m, qi + k * m, -sr[l * ls + k], -si[l * ls + k], m);
+      }
+    }
+    // F_{i+1} = A_{i+1} - T Q^T (lower triangle; FactorLdltSplit reads only that), and its
+    // carried right-hand side r_{i+1} - Q c.
+    double* nr = ws.factor[i + 1].re.data();
+    double* ni = ws.factor[i + 1].im.data();
+    const double* ar = ws.diagonal[i + 1].re.data();
+    const double* ai = ws.diagonal[i + 1].im.data();
+    for (Index c = 0; c < m; ++c) {
+      std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
+      std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
+      // Q(c, l) for this column, contiguous for SubScaled4Split.
+      double* qcr = ws.small.re.data();
+      double* qci = ws.small.im.data();
+      for (Index l = 0; l < r; ++l) {
+        qcr[l] = qr[l * m + c];
+        qci[l] = qi[l * m + c];
+      }
+      Index l = 0;
+      for (; l + 3 < r; l += 4) {
+        SubScaled4Split(nr + c * ldn + c,
+                        ni + c * ldn + c,
+                        tr + l * m + c,
+                        ti + l * m + c,
+                        m,
+                        qcr + l,
+                        qci + l,
+                        m - c);
+      }
+      for (; l < r; ++l) {
+        SubScaledSplit(nr + c * ldn + c,
+                       ni + c * ldn + c,
+                       tr + l * m + c,
+                       ti + l * m + c,
+                       qcr[l],
+                       qci[l],
+                       m - c);
+      }
+      double br = ws.rhs[i + 1].re[c];
+      double bi = ws.rhs[i + 1].im[c];
+      for (Index k = 0; k < r; ++k) {
+        const double cr = sr[k * ls + r];
+        const double ci = si[k * ls + r];
+        br -= qr[k * m + c] * cr - qi[k * m + c] * ci;
+        bi -= qr[k * m + c] * ci + qi[k * m + c] * cr;
+      }
+      nr[c * ldn + m + rn] = br;
+      ni[c * ldn + m + rn] = bi;
     }
   }
   // Back substitution: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
   for (int i = rows - 1; i >= 0 && ok; --i) {
-    const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
-    const Eigen::Index r = carried(i);
-    const auto ext = ws.factor[i].topLeftCorner(n + r + 1, n);
-    auto y = ws.tmp.head(n);
-    y = ext.row(n + r).transpose();
+    const Index n = size(i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + 1;
+    const double* fr = ws.factor[i].re.data();
+    const double* fi = ws.factor[i].im.data();
+    double* yr = ws.u[i].re.data();
+    double* yi = ws.u[i].im.data();
+    double* cr = ws.small.re.data();
+    double* ci = ws.small.im.data();
     if (r > 0) {
-      const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-      auto c = ws.small.head(r);
-      c.noalias() = ws.q[i].topLeftCorner(m, r).transpose() * ws.u[i + 1].head(m);
-      y.noalias() -= ext.middleRows(n, r).transpose() * c;
+      const Index m = size(i + 1);
+      for (Index l = 0; l < r; ++l) {
+        DotSplit(ws.q[i].re.data() + l * m,
+                 ws.q[i].im.data() + l * m,
+                 ws.u[i + 1].re.data(),
+                 ws.u[i + 1].im.data(),
+                 m,
+                 cr + l,
+                 ci + l);
+      }
     }
-    ext.topRows(n).transpose().triangularView<Eigen::UnitUpper>().solveInPlace(y);
-    ws.u[i].head(n) = y;
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T c, both carried in column j below the pivot block.
+      double vr = 0.0;
+      double vi = 0.0;
+      DotSplit(fr + j * ld + n, fi + j * ld + n, cr, ci, r, &vr, &vi);
+      yr[j] = fr[j * ld + n + r] - vr;
+      yi[j] = fi[j * ld + n + r] - vi;
+    }
+    for (Index j = n - 1; j >= 0; --j) {
+      double vr = 0.0;
+      double vi = 0.0;
+      DotSplit(
+          fr + j * ld + j + 1, fi + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
+      yr[j] -= vr;
+      yi[j] -= vi;
+    }
   }
   // Residual of the assembled system; the unpivoted path must earn its result.
   if (ok) {
     double residual = 0.0;
     double scale = 0.0;
+    bool finite = true;
+    double* zr = ws.y.re.data();
+    double* zi = ws.y.im.data();
+    double* cr = ws.small.re.data();
+    double* ci = ws.small.im.data();
     for (int i = 0; i < rows; ++i) {
-      const Eigen::Index n = static_cast<Eigen::Index>(ws.free[i].size());
-      auto r = ws.tmp.head(n);
-      const auto a = ws.diagonal[i].topLeftCorner(n, n);  // lower triangle of a symmetric block
-      r.noalias() = a.triangularView<Eigen::Lower>() * ws.u[i].head(n);
-      r.noalias() += a.triangularView<Eigen::StrictlyLower>().transpose() * ws.u[i].head(n);
-      r -= ws.rhs[i].head(n);
-      if (i + 1 < rows) {
-        const Eigen::Index m = static_cast<Eigen::Index>(ws.free[i + 1].size());
-        const Eigen::Index k = ws.rank[i];
-        auto c = ws.small.head(k);
-        c.noalias() = ws.q[i].topLeftCorner(m, k).transpose() * ws.u[i + 1].head(m);
-        r.noalias() += ws.p[i].topLeftCorner(n, k) * c;
+      const Index n = size(i);
+      const double* ar = ws.diagonal[i].re.data();
+      const double* ai = ws.diagonal[i].im.data();
+      const double* ur = ws.u[i].re.data();
+      const double* ui = ws.u[i].im.data();
+      // z = A u - rhs, A symmetric from its lower triangle.
+      for (Index k = 0; k < n; ++k) {
+        zr[k] = -ws.rhs[i].re[k];
+        zi[k] = -ws.rhs[i].im[k];
       }
-      if (i > 0) {
-        const Eigen::Index p = static_cast<Eigen::Index>(ws.free[i - 1].size());
-        const Eigen::Index k = ws.rank[i - 1];
-        auto c = ws.small.head(k);
-        c.noalias() = ws.p[i - 1].topLeftCorner(p, k).transpose() * ws.u[i - 1].head(p);
-        r.noalias() += ws.q[i - 1].topLeftCorner(n, k) * c;
+      for (Index c = 0; c < n; ++c) {
+        SubScaledSplit(zr + c, zi + c, ar + c * n + c, ai + c * n + c, -ur[c], -ui[c], n - c);
+        double vr = 0.0;
+        double vi = 0.0;
+        DotSplit(
+            ar + c * n + c + 1, ai + c * n + c + 1, ur + c + 1, ui + c + 1, n - c - 1, &vr, &vi);
+        zr[c] += vr;
+        zi[c] += vi;
       }
+      // + P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
+      const auto couple = [&](const Split& a, const Split& b, Index k, Index na, Index nb, int j) {
+        for (Index l = 0; l < k; ++l) {
+          DotSplit(b.re.data() + l * nb,
+                   b.im.data() + l * nb,
+                   ws.u[j].re.data(),
+                   ws.u[j].im.data(),
+                   nb,
+                   cr + l,
+                   ci + l);
+          SubScaledSplit(zr, zi, a.re.data() + l * na, a.im.data() + l * na, -cr[l], -ci[l], na);
+        }
+      };
+      if (i + 1 < rows) couple(ws.p[i], ws.q[i], ws.rank[i], n, size(i + 1), i + 1);
+      if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, size(i - 1), i - 1);
       // Squared moduli (max |.|^2) to keep hypot off the hot path.
-      residual = std::max(residual, r.cwiseAbs2().maxCoeff());
-      double a2 = 0.0;
-      for (Eigen::Index j = 0; j < n; ++j) {
-        a2 = std::max(a2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
+      double z2 = 0.0;
+      double z2_sum = 0.0;  // NaN-propagating, unlike std::max
+      double b2 = 0.0;
+      double u2 = 0.0;
+      for (Index k = 0; k < n; ++k) {
+        const double v = zr[k] * zr[k] + zi[k] * zi[k];
+        z2 = std::max(z2, v);
+        z2_sum += v;
+        b2 = std::max(b2, ws.rhs[i].re[k] * ws.rhs[i].re[k] + ws.rhs[i].im[k] * ws.rhs[i].im[k]);
+        u2 = std::max(u2, ur[k] * ur[k] + ui[k] * ui[k]);
       }
-      scale = std::max(scale,
-                       std::sqrt(ws.rhs[i].head(n).cwiseAbs2().maxCoeff()) +
-                           std::sqrt(a2 * ws.u[i].head(n).cwiseAbs2().maxCoeff()));
+      residual = std::max(residual, z2);
+      finite = finite && std::isfinite(z2_sum);
+      scale = std::max(scale, std::sqrt(b2) + std::sqrt(ws.diagonal_max2[i] * u2));
     }
-    ok = std::sqrt(residual) <= kResidualTol * scale;
+    ok = finite && std::sqrt(residual) <= kResidualTol * scale;
   }
   if (!ok) {
     // Fallback: dense partial-pivoting LU of the whole condensed system.
-    std::vector<Eigen::Index> offset(rows + 1, 0);
-    for (int i = 0; i < rows; ++i) {
-      offset[i + 1] = offset[i] + static_cast<Eigen::Index>(ws.free[i].size());
-    }
+    const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a) {
+      Eigen::MatrixXcd out(rows_a, cols_a);
+      for (Index c = 0; c < cols_a; ++c) {
+        for (Index k = 0; k < rows_a; ++k) {
+          out(k, c) = {a.re[c * rows_a + k], a.im[c * rows_a + k]};
+        }
+      }
+      return out;
+    };
+    std::vector<Index> offset(rows + 1, 0);
+    for (int i = 0; i < rows; ++i) offset[i + 1] = offset[i] + size(i);
     Eigen::MatrixXcd big = Eigen::MatrixXcd::Zero(offset[rows], offset[rows]);
     Eigen::VectorXcd big_rhs(offset[rows]);
     for (int i = 0; i < rows; ++i) {
-      const Eigen::Index n = offset[i + 1] - offset[i];
-      const auto a = ws.diagonal[i].topLeftCorner(n, n);
+      const Index n = size(i);
+      const Eigen::MatrixXcd a = complex_matrix(ws.diagonal[i], n, n);
       auto block = big.block(offset[i], offset[i], n, n);
       block.triangularView<Eigen::Lower>() = a;
       block.triangularView<Eigen::StrictlyUpper>() = a.transpose();
-      big_rhs.segment(offset[i], n) = ws.rhs[i].head(n);
+      big_rhs.segment(offset[i], n) = complex_matrix(ws.rhs[i], n, 1);
       if (i + 1 < rows) {
-        const Eigen::Index m = offset[i + 2] - offset[i + 1];
-        const Eigen::Index r = ws.rank[i];
+        const Index m = size(i + 1);
+        const Index r = ws.rank[i];
         const Eigen::MatrixXcd coupling =
-            ws.p[i].topLeftCorner(n, r) * ws.q[i].topLeftCorner(m, r).transpose();
+            complex_matrix(ws.p[i], n, r) * complex_matrix(ws.q[i], m, r).transpose();
         big.block(offset[i], offset[i + 1], n, m) = coupling;
         big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
       }
     }
     const Eigen::VectorXcd solution = big.partialPivLu().solve(big_rhs);
     for (int i = 0; i < rows; ++i) {
-      ws.u[i].head(offset[i + 1] - offset[i]) =
-          solution.segment(offset[i], offset[i + 1] - offset[i]);
+      for (Index k = 0; k < size(i); ++k) {
+        ws.u[i].re[k] = solution(offset[i] + k).real();
+        ws.u[i].im[k] = solution(offset[i] + k).imag();
+      }
     }
   }
-  // Outputs of group g from its kept end cross-sections (rows g - 1 and g).
+  // Outputs of group g from its kept end cross-sections (rows g - 1 and g): the offset plus the
+  // output map's columns of the free end dofs (fixed ones are zero) times their values.
   for (int g = 0; g < ng; ++g) {
     const std::vector<int>& outputs = group_outputs_[g];
     if (outputs.empty()) continue;
     const Piece& piece = GroupPieceOf(g, clamps);
-    auto ends = ws.ends.head(piece.left_size + piece.right_size);
-    ends.setZero();
-    if (piece.left_size > 0) {
-      ends(ws.free[g - 1]) = ws.u[g - 1].head(static_cast<Eigen::Index>(ws.free[g - 1].size()));
+    const Index n_out = piece.output_map.rows();
+    double* vr = ws.y.re.data();
+    double* vi = ws.y.im.data();
+    for (Index k = 0; k < n_out; ++k) {
+      vr[k] = piece.output_offset(k).real();
+      vi[k] = piece.output_offset(k).imag();
     }
-    if (piece.right_size > 0) {
-      ends.tail(nc)(ws.free[g]) = ws.u[g].head(static_cast<Eigen::Index>(ws.free[g].size()));
-    }
-    auto values = ws.values.head(piece.output_map.rows());
-    values = piece.output_offset;
-    values.noalias() += piece.output_map * ends;
+    const auto add_end = [&](int i, Index offset) {
+      const std::vector<int>& f = ws.free[i];
+      for (Index k = 0; k < size(i); ++k) {
+        const double* column =
+            reinterpret_cast<const double*>(piece.output_map.data() + (offset + f[k]) * n_out);
+        const double ur = ws.u[i].re[k];
+        const double ui = ws.u[i].im[k];
+        for (Index t = 0; t < n_out; ++t) {
+          vr[t] += column[2 * t] * ur - column[2 * t + 1] * ui;
+          vi[t] += column[2 * t] * ui + column[2 * t + 1] * ur;
+        }
+      }
+    };
+    if (piece.left_size > 0) add_end(g - 1, 0);
+    if (piece.right_size > 0) add_end(g, piece.left_size);
     for (std::size_t k = 0; k < outputs.size(); ++k) {
-      w[outputs[k]] = values(static_cast<Eigen::Index>(k));
+      w[outputs[k]] = {vr[k], vi[k]};
     }
   }
 }
