@@ -6,7 +6,8 @@ theory / 3D and the largest difference of the two profiles, each divided by its 
 the peak.
 
     /usr/bin/python3 examples/plate/solid3d/compare.py [--combabc build/apps/combabc]
-        [--out results-solid3d] [--mesh 40x24] [--solid 10x8x2] [--theories kirchhoff,fsdt,rzt]
+        [--out results-solid3d] [--mesh 40x24] [--solid 10x8x2] [--face top|mid]
+        [--theories kirchhoff:20x12,fsdt,rzt] [--cases 1,3]
 
 Every profile is cached as a CSV in --out (3D: solid-<mesh>-<clamps>.csv; combabc:
 <theory>-<mesh>-<clamps>.csv), so a second run with more meshes only computes what is new.
@@ -130,7 +131,8 @@ def main():
                    help="combabc elements per section x across the width")
     p.add_argument("--solid", type=lambda t: mesh_arg(t, 3), default=(10, 8, 2),
                    help="3D elements per section x across x per layer")
-    p.add_argument("--theories", default="kirchhoff,fsdt,rzt")
+    p.add_argument("--theories", default="kirchhoff,fsdt,rzt",
+                   help="comma-separated theory[:PERxACROSS], e.g. kirchhoff:20x12,rzt (--mesh)")
     p.add_argument("--cases", default="", help="indices (0-5) of the cases, comma-separated")
     p.add_argument("--threads", type=int, default=1, help="ccx threads")
     p.add_argument("--face", choices=("top", "mid"), default="top",
@@ -139,19 +141,23 @@ def main():
     out = pathlib.Path(a.out)
     os.makedirs(out, exist_ok=True)
     picked = [CASES[int(i)] for i in a.cases.split(",")] if a.cases else CASES
-    theories = a.theories.split(",")
-    print(f"3D mesh {a.solid[0] * 18} x {a.solid[1]} x {a.solid[2] * 3}; combabc "
-          f"{a.mesh[0]} x {a.mesh[1]} per section; loss factors 0; against the 3D "
+    theories = []
+    for spec in a.theories.split(","):
+        name, _, mesh = spec.partition(":")
+        theories.append((name, mesh_arg(mesh, 2) if mesh else a.mesh))
+    print(f"3D mesh {a.solid[0] * 18} x {a.solid[1]} x {a.solid[2] * 3}; combabc meshes per "
+          f"section as named; loss factors 0; against the 3D "
           f"{'top face' if a.face == 'top' else 'mid-plane'}\n")
     print("| configuration | clamps | 3D peak (um) | top / mid-plane | "
-          + " | ".join(f"{t} peak ratio | {t} profile diff" for t in theories) + " |")
+          + " | ".join(f"{t} {m[0]}x{m[1]} peak ratio | profile diff" for t, m in theories)
+          + " |")
     print("|---|---|---|---|" + "---|---|" * len(theories))
     for name, clamps in picked:
         top, mid = solid(a.solid, clamps, out, a.threads)
         row = [name, f"`{clamps}`", f"{max(top):.4g}", f"{max(top) / max(mid):.4f}"]
-        for theory in theories:
+        for theory, mesh in theories:
             reference = top if a.face == "top" else mid
-            ratio, diff = compare(builtin(a.combabc, theory, a.mesh, clamps, out), reference)
+            ratio, diff = compare(builtin(a.combabc, theory, mesh, clamps, out), reference)
             row += [f"{ratio:.3f}", f"{diff:.1f} %"]
         print("| " + " | ".join(row) + " |", flush=True)
 
