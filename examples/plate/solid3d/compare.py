@@ -7,10 +7,11 @@ the peak.
 
     /usr/bin/python3 examples/plate/solid3d/compare.py [--combabc build/apps/combabc]
         [--out results-solid3d] [--mesh 40x24] [--solid 10x8x2] [--face top|mid]
-        [--theories kirchhoff:20x12,fsdt,rzt] [--cases 1,3]
+        [--theories kirchhoff:20x12,fsdt,rzt:10x3:2] [--cases 1,3]
 
 Every profile is cached as a CSV in --out (3D: solid-<mesh>-<clamps>.csv; combabc:
-<theory>-<mesh>-<clamps>.csv), so a second run with more meshes only computes what is new.
+<theory>-<mesh>[-order2]-<clamps>.csv), so a second run with more meshes only computes what is
+new. Order 2 puts FSDT on MITC9 and RZT on RZT9 elements ([model.mesh] element_order).
 """
 import argparse
 import csv
@@ -39,7 +40,7 @@ CASES = [
 ]
 
 
-def model_table(theory, per_section, across):
+def model_table(theory, per_section, across, order=1):
     """least_squares.toml's [model] with every loss factor 0, the theory and the mesh."""
     out, in_model = [], False
     for line in SOURCE.read_text(encoding="utf-8").splitlines():
@@ -47,7 +48,7 @@ def model_table(theory, per_section, across):
             in_model = line.startswith("[model") or line.startswith("[[model")
             if in_model and line.strip() == "[model.mesh]":
                 out += [line, f"elements_per_section = {per_section}",
-                        f"elements_across_width = {across}"]
+                        f"elements_across_width = {across}", f"element_order = {order}"]
                 in_model = False  # its keys are replaced
                 continue
         if not in_model:
@@ -86,14 +87,16 @@ def read_column(path, column):
 
 
 def builtin(combabc, theory, mesh, clamps, out):
-    path = out / f"{theory}-{mesh[0]}x{mesh[1]}-{clamps}.csv"
+    """mesh: (per section, across, element order)."""
+    name = f"{theory}-{mesh[0]}x{mesh[1]}" + ("-order2" if mesh[2] == 2 else "")
+    path = out / f"{name}-{clamps}.csv"
     if not path.exists():
-        config = out / f"{theory}-{mesh[0]}x{mesh[1]}.toml"
+        config = out / f"{name}.toml"
         config.write_text(model_table(theory, *mesh) + REST, encoding="utf-8")
         start = time.perf_counter()
         subprocess.run([combabc, "simulate", str(config), "--clamps", clamps, "-o", str(path)],
                        check=True, stdout=subprocess.DEVNULL)
-        print(f"# combabc simulate {theory} {mesh[0]} x {mesh[1]}: "
+        print(f"# combabc simulate {name}: "
               f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
     return [1e6 * v for v in read_column(path, "displacement_m")]
 
@@ -132,7 +135,8 @@ def main():
     p.add_argument("--solid", type=lambda t: mesh_arg(t, 3), default=(10, 8, 2),
                    help="3D elements per section x across x per layer")
     p.add_argument("--theories", default="kirchhoff,fsdt,rzt",
-                   help="comma-separated theory[:PERxACROSS], e.g. kirchhoff:20x12,rzt (--mesh)")
+                   help="comma-separated theory[:PERxACROSS[:ORDER]], e.g. "
+                   "kirchhoff:20x12,rzt:10x3:2 (default mesh --mesh, order 1)")
     p.add_argument("--cases", default="", help="indices (0-5) of the cases, comma-separated")
     p.add_argument("--threads", type=int, default=1, help="ccx threads")
     p.add_argument("--face", choices=("top", "mid"), default="top",
@@ -143,13 +147,15 @@ def main():
     picked = [CASES[int(i)] for i in a.cases.split(",")] if a.cases else CASES
     theories = []
     for spec in a.theories.split(","):
-        name, _, mesh = spec.partition(":")
-        theories.append((name, mesh_arg(mesh, 2) if mesh else a.mesh))
+        name, _, rest = spec.partition(":")
+        mesh, _, order = rest.partition(":")
+        theories.append((name, (*(mesh_arg(mesh, 2) if mesh else a.mesh), int(order or 1))))
     print(f"3D mesh {a.solid[0] * 18} x {a.solid[1]} x {a.solid[2] * 3}; combabc meshes per "
           f"section as named; loss factors 0; against the 3D "
           f"{'top face' if a.face == 'top' else 'mid-plane'}\n")
     print("| configuration | clamps | 3D peak (um) | top / mid-plane | "
-          + " | ".join(f"{t} {m[0]}x{m[1]} peak ratio | profile diff" for t, m in theories)
+          + " | ".join(f"{t} {m[0]}x{m[1]}{' order 2' if m[2] == 2 else ''} peak ratio | "
+                       "profile diff" for t, m in theories)
           + " |")
     print("|---|---|---|---|" + "---|---|" * len(theories))
     for name, clamps in picked:
