@@ -78,9 +78,10 @@ void BM_SensorProfileFullSolve(benchmark::State& state) {
 }
 BENCHMARK(BM_SensorProfileFullSolve)->Unit(benchmark::kMillisecond);
 
-// The same three with first-order shear deformation theory (MITC4, 3 dofs per node) and the
-// refined zigzag theory (RZT4, 5 dofs per node) at the default mesh (docs/model.md, "Plate
-// theories").
+// The same three per theory at that theory's default mesh (docs/model.md, "Plate theories"):
+// Kirchhoff (BFS, 10 x 6 per section), first-order shear deformation (MITC9, 3 dofs per node)
+// and the refined zigzag theory (RZT9, 5 dofs per node), both 10 x 3 quadratic elements; the
+// plain benchmarks above are the default sensor, RZT.
 SensorOptions TheoryOptions(combabc::plate::PlateTheory theory) {
   SensorOptions options;
   options.theory = theory;
@@ -94,12 +95,11 @@ void SensorPrecompute(benchmark::State& state, combabc::plate::PlateTheory theor
   }
 }
 
-// Arg: mesh refinement factor in both directions (1 = the default 10 x 6 per section; FSDT and
-// RZT need finer meshes than Kirchhoff, docs/model.md).
+// Arg: mesh refinement factor in both directions (1 = the theory's default mesh).
 void SensorProfileFast(benchmark::State& state, combabc::plate::PlateTheory theory) {
   SensorOptions options = TheoryOptions(theory);
   options.elements_per_section *= static_cast<int>(state.range(0));
-  options.elements_across_width *= static_cast<int>(state.range(0));
+  options.elements_across_width = options.ElementsAcrossWidth() * static_cast<int>(state.range(0));
   const SensorModel model{options};
   const auto configs = Configurations(256, model.num_clamps());
   std::vector<double> out(model.num_outputs());
@@ -121,6 +121,19 @@ void SensorProfileFullSolve(benchmark::State& state, combabc::plate::PlateTheory
   }
 }
 
+void BM_SensorPrecomputeKirchhoff(benchmark::State& state) {
+  SensorPrecompute(state, combabc::plate::PlateTheory::kKirchhoff);
+}
+BENCHMARK(BM_SensorPrecomputeKirchhoff)->Unit(benchmark::kMillisecond);
+void BM_SensorProfileFastKirchhoff(benchmark::State& state) {
+  SensorProfileFast(state, combabc::plate::PlateTheory::kKirchhoff);
+}
+BENCHMARK(BM_SensorProfileFastKirchhoff)->Arg(1)->Unit(benchmark::kMicrosecond);
+void BM_SensorProfileFullSolveKirchhoff(benchmark::State& state) {
+  SensorProfileFullSolve(state, combabc::plate::PlateTheory::kKirchhoff);
+}
+BENCHMARK(BM_SensorProfileFullSolveKirchhoff)->Unit(benchmark::kMillisecond);
+
 void BM_SensorPrecomputeFsdt(benchmark::State& state) {
   SensorPrecompute(state, combabc::plate::PlateTheory::kFsdt);
 }
@@ -128,7 +141,7 @@ BENCHMARK(BM_SensorPrecomputeFsdt)->Unit(benchmark::kMillisecond);
 void BM_SensorProfileFastFsdt(benchmark::State& state) {
   SensorProfileFast(state, combabc::plate::PlateTheory::kFsdt);
 }
-BENCHMARK(BM_SensorProfileFastFsdt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SensorProfileFastFsdt)->Arg(1)->Unit(benchmark::kMicrosecond);
 void BM_SensorProfileFullSolveFsdt(benchmark::State& state) {
   SensorProfileFullSolve(state, combabc::plate::PlateTheory::kFsdt);
 }
@@ -141,15 +154,15 @@ BENCHMARK(BM_SensorPrecomputeRzt)->Unit(benchmark::kMillisecond);
 void BM_SensorProfileFastRzt(benchmark::State& state) {
   SensorProfileFast(state, combabc::plate::PlateTheory::kRzt);
 }
-BENCHMARK(BM_SensorProfileFastRzt)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
-// RZT on 9-node quadratic elements (SensorOptions::element_order = 2). Args: elements per
-// section and across the width; 3 across have the default 6 bilinear ones' 7 node lines, so the
-// same per-configuration cost (docs/model.md, "Mesh convergence of the shear theories").
-void BM_SensorProfileFastRztQuadratic(benchmark::State& state) {
+BENCHMARK(BM_SensorProfileFastRzt)->Arg(1)->Unit(benchmark::kMicrosecond);
+// RZT on other meshes. Args: element order (1: bilinear RZT4, 2: quadratic RZT9), elements per
+// section and across the width; 3 quadratic elements across have 6 bilinear ones' 7 node lines,
+// so the same per-configuration cost (docs/model.md, "Quadratic elements").
+void BM_SensorProfileFastRztMesh(benchmark::State& state) {
   SensorOptions options = TheoryOptions(combabc::plate::PlateTheory::kRzt);
-  options.element_order = 2;
-  options.elements_per_section = static_cast<int>(state.range(0));
-  options.elements_across_width = static_cast<int>(state.range(1));
+  options.element_order = static_cast<int>(state.range(0));
+  options.elements_per_section = static_cast<int>(state.range(1));
+  options.elements_across_width = static_cast<int>(state.range(2));
   const SensorModel model{options};
   const auto configs = Configurations(256, model.num_clamps());
   std::vector<double> out(model.num_outputs());
@@ -159,10 +172,11 @@ void BM_SensorProfileFastRztQuadratic(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data());
   }
 }
-BENCHMARK(BM_SensorProfileFastRztQuadratic)
-    ->Args({5, 3})
-    ->Args({10, 3})
-    ->Args({5, 6})
+BENCHMARK(BM_SensorProfileFastRztMesh)
+    ->Args({1, 10, 6})
+    ->Args({1, 20, 12})
+    ->Args({2, 5, 3})
+    ->Args({2, 10, 6})
     ->Unit(benchmark::kMicrosecond);
 void BM_SensorProfileFullSolveRzt(benchmark::State& state) {
   SensorProfileFullSolve(state, combabc::plate::PlateTheory::kRzt);

@@ -22,7 +22,7 @@ using combabc::plate::SensorOptions;
 
 int main(int argc, char** argv) {
   const int m = argc > 1 ? std::atoi(argv[1]) : SensorOptions{}.elements_per_section;
-  const int ny = argc > 2 ? std::atoi(argv[2]) : SensorOptions{}.elements_across_width;
+  const int ny = argc > 2 ? std::atoi(argv[2]) : SensorOptions{}.ElementsAcrossWidth();
   const int factor_x = argc > 3 ? std::atoi(argv[3]) : 4;
   const int factor_y = argc > 4 ? std::atoi(argv[4]) : 4;
   const int configurations = argc > 5 ? std::atoi(argv[5]) : 200;
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
       "worst %.4f, mean %.4f, worst in 48-80 cm %.4f (precompute %.1f s, solves %.1f s)\n",
       coarse_options.length_grading,
       coarse_options.WidthGrading(),
-      coarse_options.element_order,
+      coarse_options.ElementOrder(),
       m,
       ny,
       1e3 * coarse_options.length / (18.0 * m),

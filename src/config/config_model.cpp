@@ -301,12 +301,16 @@ void ParseModelSection(TableReader& root, CalibrationConfig* config) {
       Note(sources, "elements_across_width", *mesh, "elements_across_width");
       m.elements_per_section = mesh->IntegerIn(
           "elements_per_section", m.elements_per_section, 1, plate::kMaxElementsPerSection);
-      m.elements_across_width = mesh->IntegerIn(
-          "elements_across_width", m.elements_across_width, 1, plate::kMaxElementsAcrossWidth);
+      // Unset keys stay unset: the theory's own defaults (SensorOptions::ElementOrder(),
+      // ElementsAcrossWidth()).
+      if (mesh->Has("elements_across_width")) {
+        m.elements_across_width =
+            mesh->IntegerIn("elements_across_width", 0, 1, plate::kMaxElementsAcrossWidth);
+      }
       // The range here; kirchhoff with 2 is refused by SensorOptions::IsValid below, which names
       // the field.
       Note(sources, "element_order", *mesh, "element_order");
-      m.element_order = mesh->IntegerIn("element_order", m.element_order, 1, 2);
+      if (mesh->Has("element_order")) m.element_order = mesh->IntegerIn("element_order", 0, 1, 2);
       mesh->Finish();
     }
     t->Finish();

@@ -65,8 +65,8 @@ double SensorOptions::EstimatedMemoryBytes() const {
   const int groups = sections / group_size;
   const double group_states = std::pow(4.0, group_size);
   // Grid intervals: 2 per element at element order 2 (the mid-side node lines).
-  const int along = element_order * elements_per_section;
-  const int across = element_order * elements_across_width;
+  const int along = ElementOrder() * elements_per_section;
+  const int across = ElementOrder() * ElementsAcrossWidth();
   const double nc = DofsPerNode(theory) * (across + 1.0);
   const double piece_bytes = 4.0 * nc * nc * kComplexBytes;  // 2 nc x 2 nc, or its blocks
   const double output_row_bytes = 2.0 * nc * kComplexBytes;  // one output's map row
@@ -110,7 +110,7 @@ double SensorOptions::EstimatedMemoryBytes() const {
   // Integer halves on purpose: the graded mesh mirrors about the middle, so about half its
   // element sizes are distinct.
   const int distinct_along = elements_per_section / 2 + 1;
-  const int distinct_across = elements_across_width / 2 + 1;
+  const int distinct_across = ElementsAcrossWidth() / 2 + 1;
   const double element_kinds = static_cast<double>(distinct_along) * distinct_across;
   bytes += dofs * kBytesPerDof + element_kinds * kBytesPerElementKind;
   return bytes;
@@ -131,14 +131,14 @@ double SensorOptions::EstimatedContinuousMemoryBytes(bool loss_factor_unknown) c
       one_loss_factor || (one_poisson_ratio && theory == PlateTheory::kKirchhoff);
   const double table_parts = loss_factor_unknown || proportional ? 1.0 : 2.0;
   const double real_bytes = 8.0;
-  const int along = element_order * elements_per_section;  // grid intervals, as above
-  const double nc = DofsPerNode(theory) * (element_order * elements_across_width + 1.0);
+  const int along = ElementOrder() * elements_per_section;  // grid intervals, as above
+  const double nc = DofsPerNode(theory) * (ElementOrder() * ElementsAcrossWidth() + 1.0);
   const double nb = 2.0 * nc;  // a section's two end cross-sections
   // Interior dofs (an upper bound: clamped edge dofs are removed) and their sparse matrices: a
   // node couples with at most 9 nodes x 4 dofs (25 nodes x its dofs at element order 2); entry
   // and row index, plus the column starts.
   const double interior = (along - 1) * nc;
-  const double couplings = element_order == 2 ? 25.0 * DofsPerNode(theory) : 36.0;
+  const double couplings = ElementOrder() == 2 ? 25.0 * DofsPerNode(theory) : 36.0;
   const double sparse = interior * couplings * (kComplexBytes + 4.0) + (interior + 1.0) * 4.0;
   const double terms =
       interior > 0.0 ? ContinuousCondensation::TermsFor(ContinuousCondensation::kMaxRatio) : 0.0;

@@ -28,18 +28,18 @@ Grid SensorGrid(const SensorOptions& o) {
     for (int e = 0; e < m; ++e) {
       const double x0 = section * (s + Graded(e, m, o.length_grading));
       grid.x.push_back(x0);
-      if (o.element_order == 2) {
+      if (o.ElementOrder() == 2) {
         const double x1 = section * (s + Graded(e + 1, m, o.length_grading));
         grid.x.push_back(0.5 * (x0 + x1));
       }
     }
   }
   grid.x.push_back(o.length);
-  const int n = o.elements_across_width;
+  const int n = o.ElementsAcrossWidth();
   for (int j = 0; j <= n; ++j) {
     const double y0 = o.width * Graded(j, n, o.WidthGrading());
     grid.y.push_back(y0);
-    if (o.element_order == 2 && j < n) {
+    if (o.ElementOrder() == 2 && j < n) {
       grid.y.push_back(0.5 * (y0 + o.width * Graded(j + 1, n, o.WidthGrading())));
     }
   }
@@ -72,7 +72,7 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    options_.foundation_stiffness,
                                    options_.foundation_loss_factor,
                                    options_.theory,
-                                   options_.element_order);
+                                   options_.ElementOrder());
   condensation_ = std::make_unique<SectionCondensation>(
       *plate_,
       options_.clamps_per_edge,
@@ -209,7 +209,7 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
   Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
   // Grid intervals per section (2 per element at element order 2).
-  const auto m = static_cast<std::size_t>(options_.element_order) *
+  const auto m = static_cast<std::size_t>(options_.ElementOrder()) *
                  static_cast<std::size_t>(options_.elements_per_section);
   for (int s = 0; s < n; ++s) {
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).

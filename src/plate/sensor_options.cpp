@@ -133,19 +133,19 @@ bool SensorOptions::IsValid(std::string* why) const {
                 elements_per_section,
                 ("must be in [1, " + std::to_string(kMaxElementsPerSection) + "]").c_str());
   }
-  if (elements_across_width < 1 || elements_across_width > kMaxElementsAcrossWidth) {
+  if (ElementsAcrossWidth() < 1 || ElementsAcrossWidth() > kMaxElementsAcrossWidth) {
     return Fail(why,
                 "elements_across_width",
-                elements_across_width,
+                ElementsAcrossWidth(),
                 ("must be in [1, " + std::to_string(kMaxElementsAcrossWidth) + "]").c_str());
   }
-  if (element_order != 1 && element_order != 2) {
-    return Fail(why, "element_order", element_order, "must be 1 or 2");
+  if (ElementOrder() != 1 && ElementOrder() != 2) {
+    return Fail(why, "element_order", ElementOrder(), "must be 1 or 2");
   }
-  if (element_order == 2 && theory == PlateTheory::kKirchhoff) {
+  if (ElementOrder() == 2 && theory == PlateTheory::kKirchhoff) {
     return Fail(why,
                 "element_order",
-                element_order,
+                ElementOrder(),
                 "must be 1 with theory kirchhoff (its elements are cubic already; 2 is for fsdt "
                 "and rzt)");
   }
@@ -173,7 +173,8 @@ bool SensorOptions::IsValid(std::string* why) const {
       }
     };
     SensorOptions o = *this;
-    o.elements_across_width = std::min(elements_across_width, defaults.elements_across_width);
+    // The default of this model's theory and order (6 node intervals across).
+    o.elements_across_width = std::min(ElementsAcrossWidth(), 6 / ElementOrder());
     consider("elements_across_width", o);
     o = *this;
     o.elements_per_section = std::min(elements_per_section, defaults.elements_per_section);
@@ -186,7 +187,7 @@ bool SensorOptions::IsValid(std::string* why) const {
     consider("output_positions.size()", o);
     const std::string field = culprit;
     double value = static_cast<double>(output_positions.size());
-    if (field == "elements_across_width") value = elements_across_width;
+    if (field == "elements_across_width") value = ElementsAcrossWidth();
     if (field == "elements_per_section") value = elements_per_section;
     if (field == "clamps_per_edge") value = clamps_per_edge;
     if (field == "memory_limit_bytes") value = memory_limit_bytes;

@@ -149,6 +149,13 @@ Fingerprint FingerprintOf(const Problem& p) {
   return ComputeFingerprint(inputs);
 }
 
+// The same parts with the same digests, in any order (the history stores them sorted).
+bool SameFingerprint(Fingerprint a, Fingerprint b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  return a == b;
+}
+
 // A new run's problem from its config file: the config (threads >= 0 overrides the config's), the
 // measured data read from disk and the metric; BuildModelIn follows once the output folder
 // exists. (A resume takes the data stored in its history.)
@@ -337,6 +344,21 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
   BuildModel(p, history_path);
+  // A sensor run written before RZT became the default (combabc before 2026-11-23) has no
+  // [model] theory in its config because it was Kirchhoff then: its stored
+  // fingerprint says so, and it resumes as the run it was (its finished waves stay usable).
+  const plate::SensorOptions& model = p.config.model;
+  if (p.config.simulator.kind == SimulatorKind::kSensor &&
+      model.theory == plate::PlateTheory::kRzt &&
+      !SameFingerprint(FingerprintOf(p), metadata.fingerprint)) {
+    Problem kirchhoff;
+    kirchhoff.config = p.config;
+    kirchhoff.config.model.theory = plate::PlateTheory::kKirchhoff;
+    kirchhoff.data_positions = p.data_positions;
+    kirchhoff.data_values = p.data_values;
+    BuildModel(kirchhoff, history_path);
+    if (SameFingerprint(FingerprintOf(kirchhoff), metadata.fingerprint)) p = std::move(kirchhoff);
+  }
   // The rebuilt problem must be the one the run started with, or the continuation would not
   // equal an uninterrupted run. Checked before BeginResume rewrites anything, and over the config
   // as written: the stop limits below are not part of the run's identity.

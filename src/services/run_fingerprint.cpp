@@ -164,7 +164,7 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
       .Add("output_y_fraction", s.output_y_fraction)
       .Add("normalise", s.normalise)
       .Add("elements_per_section", s.elements_per_section)
-      .Add("elements_across_width", s.elements_across_width)
+      .Add("elements_across_width", s.ElementsAcrossWidth())
       .Add("length_grading", s.length_grading)
       .Add("width_grading", s.WidthGrading())
       .Add("always_pivot", s.always_pivot);
@@ -172,7 +172,7 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
   // existed keep their fingerprint.
   if (s.theory != plate::PlateTheory::kKirchhoff) c.Add("theory", static_cast<int>(s.theory));
   // Likewise only when not the original bilinear order.
-  if (s.element_order != 1) c.Add("element_order", s.element_order);
+  if (s.ElementOrder() != 1) c.Add("element_order", s.ElementOrder());
   return c.Digest();
 }
 

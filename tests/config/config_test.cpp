@@ -257,7 +257,9 @@ TEST(Config, ModelKeysAreOptionalAndDefaultsComeFromSensorOptions) {
 }
 
 TEST(Config, ModelTheorySelectsThePlateTheory) {
-  EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.theory, plate::PlateTheory::kKirchhoff);
+  EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.theory, plate::PlateTheory::kRzt);
+  EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"kirchhoff\"\n", "inline.toml").model.theory,
+            plate::PlateTheory::kKirchhoff);
   EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"fsdt\"\n", "inline.toml").model.theory,
             plate::PlateTheory::kFsdt);
   EXPECT_EQ(ParseConfig(kMinimal + "[model]\ntheory = \"rzt\"\n", "inline.toml").model.theory,
@@ -269,13 +271,23 @@ TEST(Config, ModelTheorySelectsThePlateTheory) {
 }
 
 TEST(Config, MeshElementOrderIsForTheShearTheories) {
-  EXPECT_EQ(ParseConfig(kMinimal, "inline.toml").model.element_order, 1);
+  // Unset, the theory's own: 2 for the default RZT, 1 for Kirchhoff; the width's default follows
+  // (6 node intervals across).
+  const plate::SensorOptions defaults = ParseConfig(kMinimal, "inline.toml").model;
+  EXPECT_FALSE(defaults.element_order.has_value());
+  EXPECT_EQ(defaults.ElementOrder(), 2);
+  EXPECT_EQ(defaults.ElementsAcrossWidth(), 3);
+  const std::string kirchhoff = kMinimal + "[model]\ntheory = \"kirchhoff\"\n[model.mesh]\n";
+  const plate::SensorOptions k = ParseConfig(kirchhoff, "inline.toml").model;
+  EXPECT_EQ(k.ElementOrder(), 1);
+  EXPECT_EQ(k.ElementsAcrossWidth(), 6);
   const std::string rzt = kMinimal + "[model]\ntheory = \"rzt\"\n[model.mesh]\n";
-  EXPECT_EQ(ParseConfig(rzt + "element_order = 2\n", "inline.toml").model.element_order, 2);
+  EXPECT_EQ(ParseConfig(rzt + "element_order = 1\n", "inline.toml").model.ElementOrder(), 1);
+  EXPECT_EQ(ParseConfig(rzt + "element_order = 1\n", "inline.toml").model.ElementsAcrossWidth(), 6);
   ExpectLocated(
       ConfigError(rzt + "element_order = 3\n"), "inline.toml", 8, "model.mesh.element_order");
-  const Error e = ConfigError(kMinimal + "[model.mesh]\nelement_order = 2\n");
-  ExpectLocated(e, "inline.toml", 6, "model.mesh.element_order");
+  const Error e = ConfigError(kirchhoff + "element_order = 2\n");
+  ExpectLocated(e, "inline.toml", 8, "model.mesh.element_order");
   EXPECT_NE(std::string(e.what()).find("kirchhoff"), std::string::npos) << e.what();
 }
 

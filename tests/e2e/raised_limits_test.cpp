@@ -149,5 +149,25 @@ TEST_F(RaisedLimits, AWallTimeStopResumesAndARunThatEndedOnItsOwnIsRefused) {
   ExpectSameRun(whole, stopped);
 }
 
+// tests/e2e/data/kirchhoff_default_history.sqlite: a budget-stopped run written by combabc
+// before RZT became the sensor's default (examples/sensor-45cm/least_squares.toml at that
+// version, reduced to 6 + 6 clamps and a 2 x 2 mesh, max_simulations = 40), whose config has no
+// [model] theory because it meant Kirchhoff. Reading that config today gives RZT, whose
+// fingerprint differs; the resume must recognise the old default and continue the run it was.
+TEST(OldDefaultTheory, AHistoryFromBeforeRztWasTheDefaultResumesAsKirchhoff) {
+  ScratchDir dir("e2e-old-default-theory");
+  const fs::path history = dir.path() / "history.sqlite";
+  fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "tests/e2e/data/kirchhoff_default_history.sqlite",
+                history);
+  const RunMetadata before = HistoryStore::Open(history, true).LoadMetadata();
+  ASSERT_EQ(before.termination, "budget_exhausted");
+  ASSERT_EQ(before.config_text.find("theory"), std::string::npos);
+  const auto r =
+      RunCli({"resume", history, "--no-report", "--max-simulations", "100000"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const RunMetadata after = HistoryStore::Open(history, true).LoadMetadata();
+  EXPECT_EQ(after.termination, "max_waves");
+}
+
 }  // namespace
 }  // namespace combabc::testing

@@ -50,7 +50,7 @@ std::string Config(const std::string& metric, int waves) {
 void WriteData(const CalibrationConfig& base, const fs::path& csv) {
   plate::SensorOptions o = base.model;
   o.elements_per_section *= 2;
-  o.elements_across_width *= 2;
+  o.elements_across_width = 2 * o.ElementsAcrossWidth();
   o.foundation_stiffness *= 1.2;
   o.normalise = true;
   o.output_positions.clear();

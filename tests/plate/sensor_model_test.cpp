@@ -80,6 +80,7 @@ TEST(PlateSensorModel, WidthGradingDefaultsToTheTheorysOwn) {
   const double uniform = 1.0 / 4;
   o.theory = PlateTheory::kKirchhoff;
   EXPECT_LT(first_element(o), 0.5 * uniform);
+  o.element_order = 1;  // bilinear: y[1] is an element boundary (at order 2, a mid-side node)
   for (PlateTheory theory : {PlateTheory::kFsdt, PlateTheory::kRzt}) {
     o.theory = theory;
     EXPECT_NEAR(first_element(o), uniform, 1e-12);
@@ -117,11 +118,25 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveAboveResonance) {
   ExpectFastEqualsFull(o, 20, 5);
 }
 
+// The tests above run the default theory (RZT, quadratic elements); Kirchhoff (BFS, 4 dofs per
+// node, a graded width) through the same condensation, the other supports too.
+TEST(PlateSensorModel, FastPathEqualsFullSolveKirchhoff) {
+  SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kKirchhoff;
+  ExpectFastEqualsFull(o, 40, 15);
+  o.fixed_support = Support::kSimplySupported;
+  o.short_edge_start = Support::kClamped;
+  o.load_x = 0.3712;
+  o.load_patch_length = 0.0;
+  ExpectFastEqualsFull(o, 20, 16);
+}
+
 // FSDT (MITC4, 3 dofs per node) through the same condensation: the identity is algebraic, so
 // the same tolerance; the other supports too (simply supported is the hard support in FSDT).
 TEST(PlateSensorModel, FastPathEqualsFullSolveFsdt) {
   SensorOptions o = CoarseOptions();
   o.theory = PlateTheory::kFsdt;
+  o.element_order = 1;  // bilinear; the quadratic elements below
   ExpectFastEqualsFull(o, 40, 11);
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
@@ -136,6 +151,7 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveFsdt) {
 TEST(PlateSensorModel, FastPathEqualsFullSolveRzt) {
   SensorOptions o = CoarseOptions();
   o.theory = PlateTheory::kRzt;
+  o.element_order = 1;  // bilinear; the quadratic elements below
   ExpectFastEqualsFull(o, 40, 13);
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
@@ -170,6 +186,7 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveQuadratic) {
 // Element order 2 is for the shear theories: Kirchhoff's elements are cubic already.
 TEST(PlateSensorModel, ElementOrderIsCheckedAndNamed) {
   SensorOptions o = CoarseOptions();
+  o.theory = PlateTheory::kKirchhoff;
   o.element_order = 2;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
@@ -185,7 +202,7 @@ TEST(PlateSensorModel, ElementOrderIsCheckedAndNamed) {
   const SensorModel model(o);
   const Grid& grid = model.plate().grid();
   EXPECT_EQ(grid.nx(), 2 * o.clamps_per_edge * o.elements_per_section);
-  EXPECT_EQ(grid.ny(), 2 * o.elements_across_width);
+  EXPECT_EQ(grid.ny(), 2 * o.ElementsAcrossWidth());
   EXPECT_EQ(model.plate().num_elements_x(), o.clamps_per_edge * o.elements_per_section);
   for (std::size_t k = 1; k + 1 < grid.x.size(); k += 2) {
     EXPECT_NEAR(grid.x[k], 0.5 * (grid.x[k - 1] + grid.x[k + 1]), 1e-15);

@@ -286,8 +286,8 @@ double RotaryInertiaEffect(const SensorOptions& options, const std::vector<std::
   const Constraints constraints = model.ConfigurationConstraints(clamps);
   const Eigen::VectorXcd u = model.Field(clamps);
   std::vector<Eigen::Triplet<double>> triplets;
-  for (int ex = 0; ex < plate.grid().nx(); ++ex) {
-    for (int ey = 0; ey < plate.grid().ny(); ++ey) {
+  for (int ex = 0; ex < plate.num_elements_x(); ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
       const ElementMatrix& r = plate.Element(ex, ey).rotary_inertia;
       for (int c = 0; c < plate.element_dofs(); ++c) {
         for (int q = 0; q < plate.element_dofs(); ++q) {
@@ -351,7 +351,7 @@ TEST(ThickPlateModes, RotaryInertiaBarelyMovesTheSensorProfileAtFiveHertz) {
 
 TEST(ThickPlateModes, RotaryInertiaBarelyMovesTheDefaultSensorProfileAtFiveHertz) {
   ExpectRotaryInertiaNegligible(SensorOptions{}.elements_per_section,
-                                SensorOptions{}.elements_across_width);
+                                SensorOptions{}.ElementsAcrossWidth());
 }
 
 }  // namespace

@@ -63,8 +63,9 @@ struct SensorOptions {
   // Plate theory (element.hpp): Kirchhoff (Bogner-Fox-Schmit elements), first-order shear
   // deformation with an energy-consistent shear stiffness (MITC4 elements) or the layer-wise
   // refined zigzag theory (RZT4 elements; docs/model.md, "Plate theories"). All run the same fast
-  // paths.
-  PlateTheory theory = PlateTheory::kKirchhoff;
+  // paths. The default is RZT: near fixed clamps the soft core's shear decides the answer, and
+  // against a layered 3D solid RZT is the closest (docs/model.md, "Choice of the default").
+  PlateTheory theory = PlateTheory::kRzt;
 
   // Winkler foundation of the pipe bottom under the strip: pressure k_f (1 + i eta_f) w.
   double foundation_stiffness = 5.0e4;  // N/m^3, >= 0 (assumption)
@@ -95,17 +96,24 @@ struct SensorOptions {
   bool normalise = true;           // divide by the maximum, as in the paper's figures
 
   // Mesh: elements per clamp section along x and across the width (docs/model.md, "Convergence
-  // study": with the gradings below, within 2 % of the peak of a 4x finer mesh over 200 random
-  // configurations).
+  // study" and "Mesh convergence of the shear theories": with the gradings below, the default
+  // meshes are within about 2 % of the peak of a 4x finer mesh in the normalised profile).
   int elements_per_section = 10;
-  int elements_across_width = 6;
+  // Unset: the theory's own (ElementsAcrossWidth()): 6 node intervals across the width, i.e. 6
+  // elements of order 1 or 3 of order 2 (the fast path's cost is set by the node lines).
+  std::optional<int> elements_across_width;
   // Element order of the shear theories (plate.hpp): 1, bilinear MITC4 / RZT4 elements; 2, the
   // 9-node quadratic MITC9 / RZT9 (mitc9_element.hpp), each element spanning 2 x 2 node
   // intervals (so 3 across the width cost the fast path what 6 bilinear ones do, for a far
-  // smaller discretisation error: docs/model.md, "Mesh convergence of the shear theories").
-  // Kirchhoff takes only 1. The gradings below place the element boundaries; mid-side nodes sit
-  // at the element midpoints.
-  int element_order = 1;
+  // smaller discretisation error: docs/model.md, "Quadratic elements"). Kirchhoff takes only 1.
+  // Unset: the theory's own (ElementOrder()): 1 for Kirchhoff (cubic BFS elements), 2 for FSDT
+  // and RZT. The gradings below place the element boundaries; mid-side nodes sit at the element
+  // midpoints.
+  std::optional<int> element_order;
+  int ElementOrder() const {
+    return element_order.value_or(theory == PlateTheory::kKirchhoff ? 1 : 2);
+  }
+  int ElementsAcrossWidth() const { return elements_across_width.value_or(6 / ElementOrder()); }
   // Grading exponents p in [1, 3]: node t in [0, 1] of each section (along x) and of the width
   // (along y) is placed at (2t)^p / 2 for t <= 1/2 and symmetrically above, so elements shrink
   // towards the section ends and the edges, where clamped/free transitions are singular points
