@@ -63,7 +63,7 @@ TEST(MetricWindows, ThePapersRiseWindowOnDataThatFallThereStopsBeforeSampling) {
       "preset = \"split_least_squares\"\n",
       "[data.gaussian_extension]\nimpact_position = 70\nfit_points = 3\nspacing = 1\n");
   EXPECT_NE(err.find("config.toml:16: metric.component[3]: rise 76-78 cm (Eq. 7 H1): the "
-                     "measured data fall by 13 % of their peak over this window, so the "
+                     "measured data fall by 6 % of their peak over this window, so the "
                      "indicator would reject the truth"),
             std::string::npos)
       << err;
