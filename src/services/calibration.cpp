@@ -137,9 +137,10 @@ void BuildModelIn(Problem& p, const std::string& history_path, const std::string
   }
 }
 
-Fingerprint FingerprintOf(const Problem& p) {
+// `config` defaults to the problem's own; resume also asks what another reading of it would give.
+Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config = nullptr) {
   FingerprintInputs inputs;
-  inputs.config = &p.config;
+  inputs.config = config != nullptr ? config : &p.config;
   inputs.space = &*p.space;
   inputs.data_positions = p.data_positions;
   inputs.data_values = p.data_values;
@@ -347,23 +348,28 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   // A sensor run written before RZT became the default (combabc before 2026-11-23) has no
   // [model] theory in its config because it was Kirchhoff then: its stored
   // fingerprint says so, and it resumes as the run it was (its finished waves stay usable).
-  const plate::SensorOptions& model = p.config.model;
+  // The model is rebuilt only when that reading is the one the fingerprint matches.
+  Fingerprint now = FingerprintOf(p);
   if (p.config.simulator.kind == SimulatorKind::kSensor &&
-      model.theory == plate::PlateTheory::kRzt &&
-      !SameFingerprint(FingerprintOf(p), metadata.fingerprint)) {
-    Problem kirchhoff;
-    kirchhoff.config = p.config;
-    kirchhoff.config.model.theory = plate::PlateTheory::kKirchhoff;
-    kirchhoff.data_positions = p.data_positions;
-    kirchhoff.data_values = p.data_values;
-    BuildModel(kirchhoff, history_path);
-    if (SameFingerprint(FingerprintOf(kirchhoff), metadata.fingerprint)) p = std::move(kirchhoff);
+      p.config.model.theory == plate::PlateTheory::kRzt &&
+      !SameFingerprint(now, metadata.fingerprint)) {
+    CalibrationConfig kirchhoff = p.config;
+    kirchhoff.model.theory = plate::PlateTheory::kKirchhoff;
+    if (SameFingerprint(FingerprintOf(p, &kirchhoff), metadata.fingerprint)) {
+      Problem old;
+      old.config = std::move(kirchhoff);
+      old.data_positions = p.data_positions;
+      old.data_values = p.data_values;
+      BuildModel(old, history_path);
+      p = std::move(old);
+      now = FingerprintOf(p);
+    }
   }
   // The rebuilt problem must be the one the run started with, or the continuation would not
   // equal an uninterrupted run. Checked before BeginResume rewrites anything, and over the config
   // as written: the stop limits below are not part of the run's identity.
   CheckResumeFingerprint(metadata.fingerprint,
-                         FingerprintOf(p),
+                         now,
                          history_path,
                          p.config.data.csv,
                          metadata.combabc_version,
