@@ -104,18 +104,47 @@ inline void SubScaled4Split(double* __restrict cr,
   }
 }
 
+// Largest |a|^2 over the lower triangle of the leading n x n block (split storage). Two running
+// maxima per vector lane pair, in the form `m < v ? v : m` that compiles to maxpd (a single
+// chained maximum would wait on every compare's latency; NaN entries are skipped, the solves'
+// residual checks catch them).
+inline double LowerMaxNorm2Split(const double* __restrict re,
+                                 const double* __restrict im,
+                                 std::ptrdiff_t ld,
+                                 std::ptrdiff_t n) {
+  double m0 = 0.0;
+  double m1 = 0.0;
+  double m2 = 0.0;
+  double m3 = 0.0;
+  for (std::ptrdiff_t j = 0; j < n; ++j) {
+    const double* cr = re + j * ld;
+    const double* ci = im + j * ld;
+    std::ptrdiff_t t = j;
+    for (; t + 3 < n; t += 4) {
+      const double v0 = cr[t] * cr[t] + ci[t] * ci[t];
+      const double v1 = cr[t + 1] * cr[t + 1] + ci[t + 1] * ci[t + 1];
+      const double v2 = cr[t + 2] * cr[t + 2] + ci[t + 2] * ci[t + 2];
+      const double v3 = cr[t + 3] * cr[t + 3] + ci[t + 3] * ci[t + 3];
+      m0 = m0 < v0 ? v0 : m0;
+      m1 = m1 < v1 ? v1 : m1;
+      m2 = m2 < v2 ? v2 : m2;
+      m3 = m3 < v3 ? v3 : m3;
+    }
+    for (; t < n; ++t) {
+      const double v = cr[t] * cr[t] + ci[t] * ci[t];
+      m0 = m0 < v ? v : m0;
+    }
+  }
+  return std::max(std::max(m0, m1), std::max(m2, m3));
+}
+
 // FactorLdlt in split storage: the leading n x n block of the rows x n matrix (re, im, ld) becomes
 // L D L^T in place (reads only its lower triangle), the rows below it become B L^{-T} D^{-1}.
 // Right-looking: each pivot's column updates the later columns by complex axpys, so the
 // inner loops are long, contiguous and free of calls.
 inline bool FactorLdltSplit(
     double* re, double* im, std::ptrdiff_t ld, std::ptrdiff_t rows, std::ptrdiff_t n) {
-  double scale2 = 0.0;
-  for (std::ptrdiff_t j = 0; j < n; ++j) {
-    const double* cr = re + j * ld;
-    const double* ci = im + j * ld;
-    for (std::ptrdiff_t t = j; t < n; ++t) scale2 = std::max(scale2, cr[t] * cr[t] + ci[t] * ci[t]);
-  }
+  const double scale2 = LowerMaxNorm2Split(re, im, ld, n);
   // Pivots two at a time: column j + 1 takes pivot j's update first, then both update the later
   // columns in one pass (SubScaled2Split).
   const auto pivot = [&](std::ptrdiff_t j, double* ir, double* ii) {

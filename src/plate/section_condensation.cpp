@@ -1,6 +1,7 @@
 #include "section_condensation.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include <Eigen/SVD>
 #include <Eigen/SparseLU>
@@ -101,6 +102,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   const int group_states = 1 << (2 * group_size);
   group_piece_index_.assign(num_groups, std::vector<int>(group_states, -1));
   group_outputs_.resize(num_groups);
+  std::vector<Piece> composed;  // [group_piece_index_] -> the composed group pieces
   const auto same_group = [&](int g, int h) {
     // The first and last groups have the plate's end cross-sections folded in: never shared.
     const auto is_end = [&](int k) { return k == 0 || k == num_groups - 1; };
@@ -127,8 +129,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       if (twin >= 0) {
         group_piece_index_[g][state] = group_piece_index_[twin][state];
       } else {
-        group_piece_index_[g][state] = static_cast<int>(group_pieces_.size());
-        group_pieces_.push_back(ComposeGroup(g, state));
+        group_piece_index_[g][state] = static_cast<int>(composed.size());
+        composed.push_back(ComposeGroup(g, state));
       }
     }
   }
@@ -142,14 +144,6 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     const double a = std::abs(reference(d, d));
     scale(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
   }
-  for (Piece& piece : group_pieces_) {
-    Eigen::VectorXd s(piece.left_size + piece.right_size);
-    if (piece.left_size > 0) s.head(nc_) = scale;
-    if (piece.right_size > 0) s.tail(nc_) = scale;
-    piece.condensed = s.asDiagonal() * piece.condensed * s.asDiagonal();
-    piece.load = s.asDiagonal() * piece.load;
-    piece.output_map = piece.output_map * s.asDiagonal();
-  }
   for (Eigen::VectorXcd& b : boundary_load_) b = scale.asDiagonal() * b;
   // The coupling between a group's two end cross-sections passes through 15 cm of strip, where
   // all but a few cross-section shapes have decayed: its singular values fall from O(1) to about
@@ -157,22 +151,36 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   // the round-off of the condensation itself) makes the coupling a product of two nc x rank
   // factors (rank 5-8 at the default mesh), which the per-configuration solve exploits.
   constexpr double kRankTol = 1e-17;
-  for (Piece& piece : group_pieces_) {
-    if (piece.left_size == 0 || piece.right_size == 0) continue;
-    const Eigen::MatrixXcd coupling = piece.condensed.topRightCorner(nc_, nc_);
-    const Eigen::BDCSVD<Eigen::MatrixXcd> svd(coupling, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    const double cutoff = kRankTol * piece.condensed.cwiseAbs().maxCoeff();
-    Eigen::Index rank = 0;
-    while (rank < nc_ && svd.singularValues()(rank) > cutoff) ++rank;
-    // coupling = U S V^H = (U S) (conj(V))^T.
-    piece.coupling_left =
-        svd.matrixU().leftCols(rank) * svd.singularValues().head(rank).asDiagonal();
-    piece.coupling_right = svd.matrixV().leftCols(rank).conjugate();
-  }
-  for (Piece& piece : group_pieces_) {
-    if (piece.left_size > 0) piece.left_block = piece.condensed.topLeftCorner(nc_, nc_);
-    if (piece.right_size > 0) piece.right_block = piece.condensed.bottomRightCorner(nc_, nc_);
-    piece.condensed.resize(0, 0);
+  group_pieces_.reserve(composed.size());
+  for (Piece& piece : composed) {
+    Eigen::VectorXd s(piece.left_size + piece.right_size);
+    if (piece.left_size > 0) s.head(nc_) = scale;
+    if (piece.right_size > 0) s.tail(nc_) = scale;
+    const Eigen::MatrixXcd condensed = s.asDiagonal() * piece.condensed * s.asDiagonal();
+    SolvePiece out;
+    out.left_size = piece.left_size;
+    out.right_size = piece.right_size;
+    out.load = s.asDiagonal() * piece.load;
+    out.output_map = SplitMatrix(piece.output_map * s.asDiagonal());
+    out.output_offset = piece.output_offset;
+    if (piece.left_size > 0) out.left_block = SplitMatrix(condensed.topLeftCorner(nc_, nc_));
+    if (piece.right_size > 0) {
+      out.right_block = SplitMatrix(condensed.bottomRightCorner(nc_, nc_));
+    }
+    if (piece.left_size > 0 && piece.right_size > 0) {
+      const Eigen::MatrixXcd coupling = condensed.topRightCorner(nc_, nc_);
+      const Eigen::BDCSVD<Eigen::MatrixXcd> svd(coupling,
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const double cutoff = kRankTol * condensed.cwiseAbs().maxCoeff();
+      Eigen::Index rank = 0;
+      while (rank < nc_ && svd.singularValues()(rank) > cutoff) ++rank;
+      // coupling = U S V^H = (U S) (conj(V))^T.
+      out.coupling_left =
+          SplitMatrix(svd.matrixU().leftCols(rank) * svd.singularValues().head(rank).asDiagonal());
+      out.coupling_right = SplitMatrix(svd.matrixV().leftCols(rank).conjugate());
+    }
+    group_pieces_.push_back(std::move(out));
+    piece = Piece{};  // the composed piece is not needed any more: keep the peak low
   }
 }
 
@@ -375,7 +383,7 @@ SectionCondensation::Piece SectionCondensation::Condense(const Plate& plate,
   return piece;
 }
 
-const SectionCondensation::Piece& SectionCondensation::GroupPieceOf(
+const SectionCondensation::SolvePiece& SectionCondensation::GroupPieceOf(
     int group, std::span<const std::uint8_t> clamps) const {
   int state = 0;
   for (int k = 0; k < group_size_; ++k) {
@@ -388,12 +396,11 @@ const SectionCondensation::Piece& SectionCondensation::GroupPieceOf(
 
 std::size_t SectionCondensation::MemoryBytes() const {
   std::size_t bytes = 0;
-  for (const Piece& p : group_pieces_) {
-    bytes += sizeof(std::complex<double>) *
-             static_cast<std::size_t>(p.condensed.size() + p.load.size() + p.output_map.size() +
-                                      p.output_offset.size() + p.coupling_left.size() +
-                                      p.coupling_right.size() + p.left_block.size() +
-                                      p.right_block.size());
+  for (const SolvePiece& p : group_pieces_) {
+    bytes += p.left_block.Bytes() + p.right_block.Bytes() + p.coupling_left.Bytes() +
+             p.coupling_right.Bytes() + p.output_map.Bytes() +
+             sizeof(std::complex<double>) *
+                 static_cast<std::size_t>(p.load.size() + p.output_offset.size());
   }
   for (const auto& b : boundary_load_) {
     bytes += sizeof(std::complex<double>) * static_cast<std::size_t>(b.size());

@@ -132,14 +132,29 @@ class SectionCondensation {
     Eigen::VectorXcd output_offset;  // outputs in the section
     int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
     int right_size = 0;  // likewise for the right end
+  };
+  // A complex matrix as two real ones (block_ldlt.hpp's split storage), column-major.
+  struct SplitMatrix {
+    Eigen::MatrixXd re;
+    Eigen::MatrixXd im;
+    SplitMatrix() = default;
+    explicit SplitMatrix(const Eigen::MatrixXcd& a) : re(a.real()), im(a.imag()) {}
+    std::size_t Bytes() const { return sizeof(double) * static_cast<std::size_t>(re.size() * 2); }
+  };
+  // What the per-configuration solve reads of a group piece, in split storage so that its loops
+  // need no shuffles and a contiguous run of free dofs is a contiguous run of memory.
+  struct SolvePiece {
+    SplitMatrix left_block;   // diagonal block of the kept left end (nc x nc); empty when folded in
+    SplitMatrix right_block;  // likewise for the right end
     // Pieces with both ends kept: the coupling block condensed(left, right) = coupling_left *
     // coupling_right^T (nc x rank each), from its SVD less the singular values at round-off level.
-    Eigen::MatrixXcd coupling_left;
-    Eigen::MatrixXcd coupling_right;
-    // Group pieces keep only what the solve reads, contiguous: the diagonal blocks of their kept
-    // ends (nc x nc each, empty when folded in; `condensed` is then released).
-    Eigen::MatrixXcd left_block;
-    Eigen::MatrixXcd right_block;
+    SplitMatrix coupling_left;
+    SplitMatrix coupling_right;
+    Eigen::VectorXcd load;           // [left; right] kept dofs
+    SplitMatrix output_map;          // outputs in the group x [left; right] kept dofs
+    Eigen::VectorXcd output_offset;  // outputs in the group
+    int left_size = 0;
+    int right_size = 0;
   };
   Piece Condense(const Plate& plate,
                  int section,
@@ -149,7 +164,7 @@ class SectionCondensation {
                  const std::vector<double>& output_x,
                  double output_y) const;
   Piece ComposeGroup(int group, int state) const;
-  const Piece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
+  const SolvePiece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
   // Free dofs (0..nc-1) of a cross-section between sections with edge-A / edge-B flags.
   void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {
     CrossSectionFreeDofs(nc_,
@@ -175,7 +190,7 @@ class SectionCondensation {
   std::vector<std::vector<int>> section_outputs_;
   int group_size_;
   bool always_pivot_;
-  std::vector<Piece> group_pieces_;
+  std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<std::vector<int>> group_outputs_;
   std::vector<Eigen::VectorXcd> boundary_load_;  // load vector on each cross-section

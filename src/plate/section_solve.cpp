@@ -97,14 +97,23 @@ inline void DotSplit(const double* xr,
                      Index len,
                      double* out_r,
                      double* out_i) {
-  double sr = 0.0;
-  double si = 0.0;
-  for (Index k = 0; k < len; ++k) {
-    sr += xr[k] * yr[k] - xi[k] * yi[k];
-    si += xr[k] * yi[k] + xi[k] * yr[k];
+  // Two partial sums per part (even and odd k): one would chain every add on the previous
+  // one's latency.
+  double sr[2] = {0.0, 0.0};
+  double si[2] = {0.0, 0.0};
+  Index k = 0;
+  for (; k + 1 < len; k += 2) {
+    for (int q = 0; q < 2; ++q) {
+      sr[q] += xr[k + q] * yr[k + q] - xi[k + q] * yi[k + q];
+      si[q] += xr[k + q] * yi[k + q] + xi[k + q] * yr[k + q];
+    }
   }
-  *out_r = sr;
-  *out_i = si;
+  if (k < len) {
+    sr[0] += xr[k] * yr[k] - xi[k] * yi[k];
+    si[0] += xr[k] * yi[k] + xi[k] * yr[k];
+  }
+  *out_r = sr[0] + sr[1];
+  *out_i = si[0] + si[1];
 }
 
 }  // namespace
@@ -128,27 +137,36 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
   const auto size = [&](int i) { return static_cast<Index>(ws.free[i].size()); };
   // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
   // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
-  // i + 1's, in its factored form.
+  // i + 1's, in its factored form. The free dofs are a contiguous run (a clamp fixes whole edge
+  // nodes, the first or last of a cross-section) unless a mask fixes only some of a node's dofs.
   for (int i = 0; i < rows; ++i) {
-    const Piece& left = GroupPieceOf(i, clamps);
-    const Piece& right = GroupPieceOf(i + 1, clamps);
+    const SolvePiece& left = GroupPieceOf(i, clamps);
+    const SolvePiece& right = GroupPieceOf(i + 1, clamps);
     const std::vector<int>& f = ws.free[i];
     const Index n = size(i);
+    const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
     double* ar = ws.diagonal[i].re.data();
     double* ai = ws.diagonal[i].im.data();
-    double max2 = 0.0;
     for (Index c = 0; c < n; ++c) {
-      const std::complex<double>* lc = left.right_block.data() + Index{f[c]} * nc;
-      const std::complex<double>* rc = right.left_block.data() + Index{f[c]} * nc;
-      for (Index r = c; r < n; ++r) {
-        const std::complex<double> v = lc[f[r]] + rc[f[r]];
-        ar[c * n + r] = v.real();
-        ai[c * n + r] = v.imag();
-        // Not std::norm: without -ffast-math libstdc++ computes it as |v|^2 through hypot.
-        max2 = std::max(max2, v.real() * v.real() + v.imag() * v.imag());
+      const Index column = Index{f[c]} * nc;
+      const double* lr = left.right_block.re.data() + column;
+      const double* li = left.right_block.im.data() + column;
+      const double* rr = right.left_block.re.data() + column;
+      const double* ri = right.left_block.im.data() + column;
+      if (run) {
+        const Index first = f[c];
+        for (Index r = c; r < n; ++r) {
+          ar[c * n + r] = lr[first + r - c] + rr[first + r - c];
+          ai[c * n + r] = li[first + r - c] + ri[first + r - c];
+        }
+      } else {
+        for (Index r = c; r < n; ++r) {
+          ar[c * n + r] = lr[f[r]] + rr[f[r]];
+          ai[c * n + r] = li[f[r]] + ri[f[r]];
+        }
       }
     }
-    ws.diagonal_max2[i] = max2;
+    ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
     for (Index k = 0; k < n; ++k) {
       const std::complex<double> v =
@@ -160,18 +178,20 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     if (i + 1 < rows) {
       const std::vector<int>& g = ws.free[i + 1];
       const Index m = size(i + 1);
-      const Index r = right.coupling_left.cols();
+      const Index r = right.coupling_left.re.cols();
       ws.rank[i] = r;
       for (Index l = 0; l < r; ++l) {
-        const std::complex<double>* pc = right.coupling_left.data() + l * nc;
-        const std::complex<double>* qc = right.coupling_right.data() + l * nc;
+        const double* pr = right.coupling_left.re.data() + l * nc;
+        const double* pi = right.coupling_left.im.data() + l * nc;
+        const double* qr = right.coupling_right.re.data() + l * nc;
+        const double* qi = right.coupling_right.im.data() + l * nc;
         for (Index k = 0; k < n; ++k) {
-          ws.p[i].re[l * n + k] = pc[f[k]].real();
-          ws.p[i].im[l * n + k] = pc[f[k]].imag();
+          ws.p[i].re[l * n + k] = pr[f[k]];
+          ws.p[i].im[l * n + k] = pi[f[k]];
         }
         for (Index k = 0; k < m; ++k) {
-          ws.q[i].re[l * m + k] = qc[g[k]].real();
-          ws.q[i].im[l * m + k] = qc[g[k]].imag();
+          ws.q[i].re[l * m + k] = qr[g[k]];
+          ws.q[i].im[l * m + k] = qi[g[k]];
         }
       }
     }
@@ -292,7 +312,21 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
                         qci + l,
                         m - c);
       }
-      for (; l < r; ++l) {
+      if (l + 1 < r) {
+        SubScaled2Split(nr + c * ldn + c,
+                        ni + c * ldn + c,
+                        tr + l * m + c,
+                        ti + l * m + c,
+                        qcr[l],
+                        qci[l],
+                        tr + (l + 1) * m + c,
+                        ti + (l + 1) * m + c,
+                        qcr[l + 1],
+                        qci[l + 1],
+                        m - c);
+        l += 2;
+      }
+      if (l < r) {
         SubScaledSplit(nr + c * ldn + c,
                        ni + c * ldn + c,
                        tr + l * m + c,
@@ -459,8 +493,8 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
   for (int g = 0; g < ng; ++g) {
     const std::vector<int>& outputs = group_outputs_[g];
     if (outputs.empty()) continue;
-    const Piece& piece = GroupPieceOf(g, clamps);
-    const Index n_out = piece.output_map.rows();
+    const SolvePiece& piece = GroupPieceOf(g, clamps);
+    const Index n_out = piece.output_map.re.rows();
     double* vr = ws.y.re.data();
     double* vi = ws.y.im.data();
     for (Index k = 0; k < n_out; ++k) {
@@ -470,14 +504,15 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     const auto add_end = [&](int i, Index offset) {
       const std::vector<int>& f = ws.free[i];
       for (Index k = 0; k < size(i); ++k) {
-        const double* column =
-            reinterpret_cast<const double*>(piece.output_map.data() + (offset + f[k]) * n_out);
-        const double ur = ws.u[i].re[k];
-        const double ui = ws.u[i].im[k];
-        for (Index t = 0; t < n_out; ++t) {
-          vr[t] += column[2 * t] * ur - column[2 * t + 1] * ui;
-          vi[t] += column[2 * t] * ui + column[2 * t + 1] * ur;
-        }
+        const Index column = (offset + f[k]) * n_out;
+        // SubScaledSplit subtracts: v += column u.
+        SubScaledSplit(vr,
+                       vi,
+                       piece.output_map.re.data() + column,
+                       piece.output_map.im.data() + column,
+                       -ws.u[i].re[k],
+                       -ws.u[i].im[k],
+                       n_out);
       }
     };
     if (piece.left_size > 0) add_end(g - 1, 0);
