@@ -1,44 +1,17 @@
 #pragma once
-// The dense kernel shared by the per-configuration block solves (section_solve.cpp for the
-// clamp-only fast path, continuous_solve.cpp for continuous unknowns): an unpivoted
-// complex-symmetric LDL^T that carries extra rows through the factorization. Inline so each solve
-// keeps it inlined in its hot loop as before.
+// The dense kernels shared by the per-configuration block solves (section_solve.cpp for the
+// clamp-only fast path, continuous_solve.cpp for continuous unknowns), all on split
+// real/imaginary storage: an unpivoted complex-symmetric LDL^T that carries extra rows through the
+// factorization (FactorLdltSplit), and the complex axpys the solves build their Schur updates,
+// back substitutions and residuals from (SubScaled*Split). Inline so each solve keeps them inlined
+// in its hot loops.
 #include <algorithm>
-#include <complex>
 #include <cstddef>
-
-#include <Eigen/Dense>
 
 namespace combabc::plate {
 
 inline constexpr double kPivotTol = 1e-13;     // |d_j| below this times max |a_ij| is breakdown
 inline constexpr double kResidualTol = 1e-10;  // relative residual accepted from the LDL^T path
-
-// In place A = L D L^T (unit lower L below the diagonal, D on it), no pivoting and no conjugation,
-// of the leading n x n block of the rows x n matrix `a` (rows >= n); reads only its lower
-// triangle. Rows below it, B (rows - n x n), are carried along and become B L^{-T} D^{-1}: with
-// B = [P^T; b^T] that is (D^{-1} L^{-1} P)^T and (D^{-1} L^{-1} b)^T, the triangular solves the
-// block elimination needs, done inside the factorization's matrix-vector products.
-inline bool FactorLdlt(Eigen::Ref<Eigen::MatrixXcd> a, Eigen::Ref<Eigen::VectorXcd> tmp) {
-  const Eigen::Index n = a.cols();
-  const Eigen::Index rows = a.rows();
-  // Squared moduli: no hypot calls on the hot path.
-  double scale2 = 0.0;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    scale2 = std::max(scale2, a.col(j).segment(j, n - j).cwiseAbs2().maxCoeff());
-  }
-  for (Eigen::Index j = 0; j < n; ++j) {
-    if (j > 0) {
-      tmp.head(j) = a.row(j).head(j).transpose().cwiseProduct(a.diagonal().head(j));
-      a.col(j).tail(rows - j).noalias() -= a.block(j, 0, rows - j, j) * tmp.head(j);
-    }
-    const std::complex<double> d = a(j, j);
-    if (!(std::norm(d) > kPivotTol * kPivotTol * scale2)) return false;
-    const std::complex<double> inverse = std::conj(d) / std::norm(d);
-    a.col(j).tail(rows - j - 1) *= inverse;
-  }
-  return true;
-}
 
 // Split storage: a complex matrix as two column-major arrays of doubles (real and imaginary parts,
 // leading dimension ld). Plain loops over them vectorize with SSE2 alone; interleaved
@@ -104,6 +77,33 @@ inline void SubScaled4Split(double* __restrict cr,
   }
 }
 
+// Complex dot product sum_k x_k y_k (no conjugation) of split vectors.
+inline void DotSplit(const double* xr,
+                     const double* xi,
+                     const double* yr,
+                     const double* yi,
+                     std::ptrdiff_t len,
+                     double* out_r,
+                     double* out_i) {
+  // Two partial sums per part (even and odd k): one would chain every add on the previous
+  // one's latency.
+  double sr[2] = {0.0, 0.0};
+  double si[2] = {0.0, 0.0};
+  std::ptrdiff_t k = 0;
+  for (; k + 1 < len; k += 2) {
+    for (int q = 0; q < 2; ++q) {
+      sr[q] += xr[k + q] * yr[k + q] - xi[k + q] * yi[k + q];
+      si[q] += xr[k + q] * yi[k + q] + xi[k + q] * yr[k + q];
+    }
+  }
+  if (k < len) {
+    sr[0] += xr[k] * yr[k] - xi[k] * yi[k];
+    si[0] += xr[k] * yi[k] + xi[k] * yr[k];
+  }
+  *out_r = sr[0] + sr[1];
+  *out_i = si[0] + si[1];
+}
+
 // Largest |a|^2 over the lower triangle of the leading n x n block (split storage). Two running
 // maxima per vector lane pair, in the form `m < v ? v : m` that compiles to maxpd (a single
 // chained maximum would wait on every compare's latency; NaN entries are skipped, the solves'
@@ -138,8 +138,11 @@ inline double LowerMaxNorm2Split(const double* __restrict re,
   return std::max(std::max(m0, m1), std::max(m2, m3));
 }
 
-// FactorLdlt in split storage: the leading n x n block of the rows x n matrix (re, im, ld) becomes
-// L D L^T in place (reads only its lower triangle), the rows below it become B L^{-T} D^{-1}.
+// In place A = L D L^T (unit lower L below the diagonal, D on it), no pivoting and no conjugation,
+// of the leading n x n block of the rows x n matrix (re, im, ld) (rows >= n); reads only its lower
+// triangle. Rows below it, B (rows - n x n), are carried along and become B L^{-T} D^{-1}: with
+// B = [P^T; b^T] that is (D^{-1} L^{-1} P)^T and (D^{-1} L^{-1} b)^T, the triangular solves the
+// block elimination needs, done inside the factorization's updates.
 // Right-looking: each pivot's column updates the later columns by complex axpys, so the
 // inner loops are long, contiguous and free of calls.
 inline bool FactorLdltSplit(

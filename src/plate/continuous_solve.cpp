@@ -5,9 +5,14 @@
 // at every mu would cost more than the chain they save) and the couplings are full blocks (a
 // section's end-to-end coupling has full numerical rank: 5 cm of strip damp its cross-section
 // shapes only to 1e-16). The block elimination is the same unpivoted complex-symmetric LDL^T with
-// a residual check (block_ldlt.hpp); the fallback is a sparse LU of the assembled system.
+// a residual check (block_ldlt.hpp); the fallback is a sparse LU of the assembled system. As in
+// section_solve.cpp, all the per-call algebra of the elimination runs on split real/imaginary
+// arrays in plain loops (the Schur update V^T D V four pivots per pass); the workspace is per
+// thread and reused.
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <cstddef>
 #include <vector>
 
 #include <Eigen/SparseLU>
@@ -34,31 +39,61 @@ namespace {
 
 using Complex = std::complex<double>;
 
+using Index = std::ptrdiff_t;
+
+// A complex matrix or vector in split storage (block_ldlt.hpp), column-major; the leading
+// dimension is chosen per use.
+struct Split {
+  std::vector<double> re;
+  std::vector<double> im;
+  void Resize(Index size) {
+    re.resize(static_cast<std::size_t>(size));
+    im.resize(static_cast<std::size_t>(size));
+  }
+};
+
 struct Workspace {
-  // Pivot blocks F_c, LDL^T in place, with U_c^T and the right-hand side carried below them.
-  std::vector<Eigen::MatrixXcd> factor;
-  std::vector<Eigen::MatrixXcd> diagonal;  // assembled diagonal blocks (lower triangles)
-  std::vector<Eigen::MatrixXcd> coupling;  // U_c between rows c and c + 1
-  std::vector<Eigen::VectorXcd> rhs;
-  std::vector<Eigen::VectorXcd> u;
+  int nc = -1;
+  int rows = -1;
+  // Pivot blocks F_c ((n + m + 1) x n, leading dimension n + m + 1, m the next row's size),
+  // LDL^T in place, with U_c^T and the right-hand side carried below them.
+  std::vector<Split> factor;
+  std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
+  std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
+  std::vector<Split> coupling;        // U_c between rows c and c + 1 (n_c x n_{c+1})
+  std::vector<Split> rhs;
+  std::vector<Split> u;
   std::vector<std::vector<int>> free;
   std::vector<int> state;
-  Eigen::MatrixXcd dv;
-  Eigen::VectorXcd tmp;
+  Split dv;  // D_c V_c (n x m, leading dimension n): column l holds d_j v_jl over the pivots j
+  Split w;   // w_c gathered from the factor's carried last row
+  Split z;   // one row's residual
   Eigen::VectorXcd ends;
   Eigen::VectorXcd values;
 
-  void Reserve(int nc, int rows) {
-    if (static_cast<int>(factor.size()) >= rows && dv.rows() == nc) return;
-    factor.assign(rows, Eigen::MatrixXcd(2 * nc + 1, nc));
-    diagonal.assign(rows, Eigen::MatrixXcd(nc, nc));
-    coupling.assign(rows, Eigen::MatrixXcd(nc, nc));
-    rhs.assign(rows, Eigen::VectorXcd(nc));
-    u.assign(rows, Eigen::VectorXcd(nc));
+  void Reserve(int nc_, int rows_) {
+    if (nc_ == nc && rows_ <= rows) return;
+    nc = nc_;
+    rows = std::max(rows_, rows);
+    const Index n = nc;
+    factor.assign(rows, Split{});
+    diagonal.assign(rows, Split{});
+    coupling.assign(rows, Split{});
+    rhs.assign(rows, Split{});
+    u.assign(rows, Split{});
+    for (int c = 0; c < rows; ++c) {
+      factor[c].Resize((2 * n + 1) * n);
+      diagonal[c].Resize(n * n);
+      coupling[c].Resize(n * n);
+      rhs[c].Resize(n);
+      u[c].Resize(n);
+    }
+    diagonal_max2.assign(rows, 0.0);
     free.assign(rows, {});
-    dv.resize(nc, nc);
-    tmp.resize(nc);
-    ends.resize(2 * static_cast<Eigen::Index>(nc));
+    dv.Resize(n * n);
+    w.Resize(n);
+    z.Resize(n);
+    ends.resize(2 * n);
   }
 };
 
@@ -212,105 +247,251 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     const auto map_size = static_cast<Eigen::Index>(section_outputs_[s].size()) * 2 * nc;
     return section_of(s).segment(map_size, 2 * nc);
   };
-  const Eigen::Index right_block = LowerStart(nc);  // = nc (nc + 1) / 2
-  const Eigen::Index coupling_block = 2 * right_block;
+  const auto size = [&](int c) { return static_cast<Index>(ws.free[c].size()); };
+  const auto next_size = [&](int c) { return c + 1 < rows ? size(c + 1) : Index{0}; };
+  const Index right_block = LowerStart(nc);  // = nc (nc + 1) / 2
+  const Index coupling_block = 2 * right_block;
   // Assemble: row c gets the right block of section c - 1 and the left block of section c (lower
   // triangles); section c couples rows c and c + 1.
   for (int c = 0; c < rows; ++c) {
     const std::vector<int>& f = ws.free[c];
-    const auto n = static_cast<Eigen::Index>(f.size());
-    auto a = ws.diagonal[c].topLeftCorner(n, n);
-    auto r = ws.rhs[c].head(n);
-    r = boundary_load_[c](f);
+    const Index n = size(c);
     const Complex* left = c > 0 ? piece_of(c - 1) + right_block : nullptr;
     const Complex* right = c < ns ? piece_of(c) : nullptr;
     const Complex* only = left != nullptr ? left : right;  // the plate's end cross-sections
     COMBABC_CHECK(only != nullptr);  // a cross-section has a section on at least one side
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const Eigen::Index start = LowerStart(f[j]) - f[j];
-      if (left != nullptr && right != nullptr) {
-        for (Eigen::Index i = j; i < n; ++i) a(i, j) = left[start + f[i]] + right[start + f[i]];
-      } else {
-        for (Eigen::Index i = j; i < n; ++i) a(i, j) = only[start + f[i]];
+    double* ar = ws.diagonal[c].re.data();
+    double* ai = ws.diagonal[c].im.data();
+    double max2 = 0.0;
+    for (Index j = 0; j < n; ++j) {
+      const Index start = LowerStart(f[j]) - f[j];
+      for (Index i = j; i < n; ++i) {
+        const Complex v = left != nullptr && right != nullptr
+                              ? left[start + f[i]] + right[start + f[i]]
+                              : only[start + f[i]];
+        ar[j * n + i] = v.real();
+        ai[j * n + i] = v.imag();
+        // Not std::norm: without -ffast-math libstdc++ computes it as |v|^2 through hypot.
+        max2 = std::max(max2, v.real() * v.real() + v.imag() * v.imag());
       }
     }
-    if (c > 0 && loaded(c - 1)) r += load_of(c - 1).tail(nc)(f);
+    ws.diagonal_max2[c] = max2;
+    const bool load_left = c > 0 && loaded(c - 1);
+    const bool load_right = c < ns && loaded(c);
+    for (Index k = 0; k < n; ++k) {
+      Complex v = boundary_load_[c](f[k]);
+      if (load_left) v += load_of(c - 1)(nc + f[k]);
+      if (load_right) v += load_of(c)(f[k]);
+      ws.rhs[c].re[k] = v.real();
+      ws.rhs[c].im[k] = v.imag();
+    }
     if (c < ns) {
-      if (loaded(c)) r += load_of(c).head(nc)(f);
       const std::vector<int>& g = ws.free[c + 1];
-      const Eigen::Map<const Eigen::MatrixXcd> coupling(right + coupling_block, nc, nc);
-      ws.coupling[c].topLeftCorner(n, static_cast<Eigen::Index>(g.size())) = coupling(f, g);
+      const Complex* coupling = right + coupling_block;  // nc x nc by columns
+      for (Index l = 0; l < size(c + 1); ++l) {
+        const Complex* column = coupling + Index{g[l]} * nc;
+        for (Index k = 0; k < n; ++k) {
+          ws.coupling[c].re[l * n + k] = column[f[k]].real();
+          ws.coupling[c].im[l * n + k] = column[f[k]].imag();
+        }
+      }
     }
   }
-  // Block LDL^T elimination: F_0 = A_0, F_{c+1} = A_{c+1} - U_c^T F_c^{-1} U_c. FactorLdlt turns
-  // the carried rows U_c^T and r'_c^T into V_c^T = (D^{-1} L^{-1} U_c)^T and w_c^T, so that
-  // U_c^T F_c^{-1} U_c = V_c^T D V_c and r'_{c+1} = r_{c+1} - V_c^T D w_c.
-  const auto size = [&](int c) { return static_cast<Eigen::Index>(ws.free[c].size()); };
-  const auto next_size = [&](int c) { return c + 1 < rows ? size(c + 1) : Eigen::Index{0}; };
+  // Block LDL^T elimination: F_0 = A_0, F_{c+1} = A_{c+1} - U_c^T F_c^{-1} U_c.
+  // FactorLdltSplit turns the carried rows U_c^T and r'_c^T into V_c^T = (D^{-1} L^{-1} U_c)^T
+  // and w_c^T, so that U_c^T F_c^{-1} U_c = V_c^T D V_c and r'_{c+1} = r_{c+1} - V_c^T D w_c.
   bool ok = !always_pivot_;
   for (int c = 0; c < rows && ok; ++c) {
-    const Eigen::Index n = size(c);
-    const Eigen::Index m = next_size(c);
-    auto ext = ws.factor[c].topLeftCorner(n + m + 1, n);
+    const Index n = size(c);
+    const Index m = next_size(c);
+    const Index ld = n + m + 1;
+    double* fr = ws.factor[c].re.data();
+    double* fi = ws.factor[c].im.data();
     if (c == 0) {
-      ext.topRows(n).triangularView<Eigen::Lower>() = ws.diagonal[0].topLeftCorner(n, n);
-      ext.row(n + m) = ws.rhs[0].head(n).transpose();
+      const double* ar = ws.diagonal[0].re.data();
+      const double* ai = ws.diagonal[0].im.data();
+      for (Index j = 0; j < n; ++j) {
+        std::copy(ar + j * n + j, ar + (j + 1) * n, fr + j * ld + j);
+        std::copy(ai + j * n + j, ai + (j + 1) * n, fi + j * ld + j);
+        fr[j * ld + n + m] = ws.rhs[0].re[j];
+        fi[j * ld + n + m] = ws.rhs[0].im[j];
+      }
     }
-    if (m > 0) ext.middleRows(n, m) = ws.coupling[c].topLeftCorner(n, m).transpose();
-    ok = FactorLdlt(ext, ws.tmp.head(n));
+    for (Index l = 0; l < m; ++l) {
+      for (Index k = 0; k < n; ++k) {
+        fr[k * ld + n + l] = ws.coupling[c].re[l * n + k];
+        fi[k * ld + n + l] = ws.coupling[c].im[l * n + k];
+      }
+    }
+    ok = FactorLdltSplit(fr, fi, ld, ld, n);
     if (!ok || m == 0) break;
-    const Eigen::Index m2 = next_size(c + 1);
-    const auto vt = ext.middleRows(n, m);  // V_c^T
-    auto dv = ws.dv.topLeftCorner(n, m);   // D_c V_c
-    dv.noalias() = ext.diagonal().asDiagonal() * vt.transpose();
-    auto next = ws.factor[c + 1].topLeftCorner(m + m2 + 1, m);
-    next.topRows(m).triangularView<Eigen::Lower>() = ws.diagonal[c + 1].topLeftCorner(m, m);
-    next.topRows(m).triangularView<Eigen::Lower>() -= vt * dv;
-    auto b = ws.tmp.head(m);
-    b = ws.rhs[c + 1].head(m);
-    b.noalias() -= dv.transpose() * ext.row(n + m).transpose();
-    next.row(m + m2) = b.transpose();
+    // D V (by columns of V, so that each Schur column's scalars are contiguous) and w.
+    double* dvr = ws.dv.re.data();
+    double* dvi = ws.dv.im.data();
+    double* wr = ws.w.re.data();
+    double* wi = ws.w.im.data();
+    for (Index j = 0; j < n; ++j) {
+      const double dr = fr[j * ld + j];
+      const double di = fi[j * ld + j];
+      const double* xr = fr + j * ld + n;
+      const double* xi = fi + j * ld + n;
+      for (Index l = 0; l < m; ++l) {
+        dvr[l * n + j] = dr * xr[l] - di * xi[l];
+        dvi[l * n + j] = dr * xi[l] + di * xr[l];
+      }
+      wr[j] = xr[m];
+      wi[j] = xi[m];
+    }
+    // F_{c+1} = A_{c+1} - V^T D V, column l of its lower triangle at a time (FactorLdltSplit
+    // reads only that): v_j (rows l..m-1) times d_j v_jl, four pivots per pass; and its carried
+    // right-hand side r_{c+1} - V^T D w.
+    const Index m2 = next_size(c + 1);
+    const Index ldn = m + m2 + 1;
+    double* nr = ws.factor[c + 1].re.data();
+    double* ni = ws.factor[c + 1].im.data();
+    const double* ar = ws.diagonal[c + 1].re.data();
+    const double* ai = ws.diagonal[c + 1].im.data();
+    for (Index l = 0; l < m; ++l) {
+      double* cr = nr + l * ldn + l;
+      double* ci = ni + l * ldn + l;
+      std::copy(ar + l * m + l, ar + (l + 1) * m, cr);
+      std::copy(ai + l * m + l, ai + (l + 1) * m, ci);
+      Index j = 0;
+      for (; j + 3 < n; j += 4) {
+        SubScaled4Split(cr,
+                        ci,
+                        fr + j * ld + n + l,
+                        fi + j * ld + n + l,
+                        ld,
+                        dvr + l * n + j,
+                        dvi + l * n + j,
+                        m - l);
+      }
+      for (; j < n; ++j) {
+        SubScaledSplit(cr,
+                       ci,
+                       fr + j * ld + n + l,
+                       fi + j * ld + n + l,
+                       dvr[l * n + j],
+                       dvi[l * n + j],
+                       m - l);
+      }
+      double br = 0.0;
+      double bi = 0.0;
+      DotSplit(dvr + l * n, dvi + l * n, wr, wi, n, &br, &bi);
+      nr[l * ldn + m + m2] = ws.rhs[c + 1].re[l] - br;
+      ni[l * ldn + m + m2] = ws.rhs[c + 1].im[l] - bi;
+    }
   }
   // Back substitution: u_c = L_c^{-T} (w_c - V_c u_{c+1}).
   for (int c = rows - 1; c >= 0 && ok; --c) {
-    const Eigen::Index n = size(c);
-    const Eigen::Index m = next_size(c);
-    const auto ext = ws.factor[c].topLeftCorner(n + m + 1, n);
-    auto y = ws.tmp.head(n);
-    y = ext.row(n + m).transpose();
-    if (m > 0) y.noalias() -= ext.middleRows(n, m).transpose() * ws.u[c + 1].head(m);
-    ext.topRows(n).transpose().triangularView<Eigen::UnitUpper>().solveInPlace(y);
-    ws.u[c].head(n) = y;
+    const Index n = size(c);
+    const Index m = next_size(c);
+    const Index ld = n + m + 1;
+    const double* fr = ws.factor[c].re.data();
+    const double* fi = ws.factor[c].im.data();
+    double* yr = ws.u[c].re.data();
+    double* yi = ws.u[c].im.data();
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T u_{c+1}, both carried in column j below the pivot block.
+      double vr = 0.0;
+      double vi = 0.0;
+      if (m > 0) {
+        DotSplit(fr + j * ld + n,
+                 fi + j * ld + n,
+                 ws.u[c + 1].re.data(),
+                 ws.u[c + 1].im.data(),
+                 m,
+                 &vr,
+                 &vi);
+      }
+      yr[j] = fr[j * ld + n + m] - vr;
+      yi[j] = fi[j * ld + n + m] - vi;
+    }
+    for (Index j = n - 1; j >= 0; --j) {
+      double vr = 0.0;
+      double vi = 0.0;
+      DotSplit(
+          fr + j * ld + j + 1, fi + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
+      yr[j] -= vr;
+      yi[j] -= vi;
+    }
   }
   // Residual of the assembled system; the unpivoted path must earn its result.
   if (ok) {
     double residual = 0.0;
     double scale = 0.0;
+    bool finite = true;
+    double* zr = ws.z.re.data();
+    double* zi = ws.z.im.data();
     for (int c = 0; c < rows; ++c) {
-      const Eigen::Index n = size(c);
+      const Index n = size(c);
       if (n == 0) continue;  // a cross-section with every dof fixed has no equation
-      auto r = ws.tmp.head(n);
-      const auto a = ws.diagonal[c].topLeftCorner(n, n);
-      r.noalias() = a.triangularView<Eigen::Lower>() * ws.u[c].head(n);
-      r.noalias() += a.triangularView<Eigen::StrictlyLower>().transpose() * ws.u[c].head(n);
-      r -= ws.rhs[c].head(n);
+      const double* ar = ws.diagonal[c].re.data();
+      const double* ai = ws.diagonal[c].im.data();
+      const double* ur = ws.u[c].re.data();
+      const double* ui = ws.u[c].im.data();
+      // z = A u - rhs, A symmetric from its lower triangle.
+      for (Index k = 0; k < n; ++k) {
+        zr[k] = -ws.rhs[c].re[k];
+        zi[k] = -ws.rhs[c].im[k];
+      }
+      for (Index j = 0; j < n; ++j) {
+        SubScaledSplit(zr + j, zi + j, ar + j * n + j, ai + j * n + j, -ur[j], -ui[j], n - j);
+        double vr = 0.0;
+        double vi = 0.0;
+        DotSplit(
+            ar + j * n + j + 1, ai + j * n + j + 1, ur + j + 1, ui + j + 1, n - j - 1, &vr, &vi);
+        zr[j] += vr;
+        zi[j] += vi;
+      }
+      // + U_c u_{c+1} + U_{c-1}^T u_{c-1}.
       if (c + 1 < rows) {
-        r.noalias() += ws.coupling[c].topLeftCorner(n, size(c + 1)) * ws.u[c + 1].head(size(c + 1));
+        const Split& a = ws.coupling[c];
+        for (Index l = 0; l < size(c + 1); ++l) {
+          SubScaledSplit(zr,
+                         zi,
+                         a.re.data() + l * n,
+                         a.im.data() + l * n,
+                         -ws.u[c + 1].re[l],
+                         -ws.u[c + 1].im[l],
+                         n);
+        }
       }
       if (c > 0) {
-        r.noalias() += ws.coupling[c - 1].topLeftCorner(size(c - 1), n).transpose() *
-                       ws.u[c - 1].head(size(c - 1));
+        const Split& a = ws.coupling[c - 1];
+        const Index p = size(c - 1);
+        for (Index k = 0; k < n; ++k) {
+          double vr = 0.0;
+          double vi = 0.0;
+          DotSplit(a.re.data() + k * p,
+                   a.im.data() + k * p,
+                   ws.u[c - 1].re.data(),
+                   ws.u[c - 1].im.data(),
+                   p,
+                   &vr,
+                   &vi);
+          zr[k] += vr;
+          zi[k] += vi;
+        }
       }
-      residual = std::max(residual, r.cwiseAbs2().maxCoeff());
-      double a2 = 0.0;
-      for (Eigen::Index j = 0; j < n; ++j) {
-        a2 = std::max(a2, a.col(j).tail(n - j).cwiseAbs2().maxCoeff());
+      // Squared moduli (max |.|^2) to keep hypot off the hot path.
+      double z2 = 0.0;
+      double z2_sum = 0.0;  // NaN-propagating, unlike std::max
+      double b2 = 0.0;
+      double u2 = 0.0;
+      for (Index k = 0; k < n; ++k) {
+        const double v = zr[k] * zr[k] + zi[k] * zi[k];
+        z2 = std::max(z2, v);
+        z2_sum += v;
+        b2 = std::max(b2, ws.rhs[c].re[k] * ws.rhs[c].re[k] + ws.rhs[c].im[k] * ws.rhs[c].im[k]);
+        u2 = std::max(u2, ur[k] * ur[k] + ui[k] * ui[k]);
       }
-      scale = std::max(scale,
-                       std::sqrt(ws.rhs[c].head(n).cwiseAbs2().maxCoeff()) +
-                           std::sqrt(a2 * ws.u[c].head(n).cwiseAbs2().maxCoeff()));
+      residual = std::max(residual, z2);
+      finite = finite && std::isfinite(z2_sum);
+      scale = std::max(scale, std::sqrt(b2) + std::sqrt(ws.diagonal_max2[c] * u2));
     }
-    ok = std::sqrt(residual) <= kResidualTol * scale;
+    ok = finite && std::sqrt(residual) <= kResidualTol * scale;
   }
   if (!ok) {
     // Fallback: sparse partial-pivoting LU of the assembled block-tridiagonal system.
@@ -319,20 +500,22 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     std::vector<Eigen::Triplet<Complex>> triplets;
     Eigen::VectorXcd big_rhs(offset[rows]);
     for (int c = 0; c < rows; ++c) {
-      const Eigen::Index n = size(c);
-      const auto a = ws.diagonal[c].topLeftCorner(n, n);
-      for (Eigen::Index j = 0; j < n; ++j) {
-        for (Eigen::Index i = j; i < n; ++i) {
-          triplets.emplace_back(offset[c] + i, offset[c] + j, a(i, j));
-          if (i != j) triplets.emplace_back(offset[c] + j, offset[c] + i, a(i, j));
+      const Index n = size(c);
+      const Split& a = ws.diagonal[c];
+      for (Index j = 0; j < n; ++j) {
+        for (Index i = j; i < n; ++i) {
+          const Complex v(a.re[j * n + i], a.im[j * n + i]);
+          triplets.emplace_back(offset[c] + i, offset[c] + j, v);
+          if (i != j) triplets.emplace_back(offset[c] + j, offset[c] + i, v);
         }
+        big_rhs(offset[c] + j) = {ws.rhs[c].re[j], ws.rhs[c].im[j]};
       }
-      big_rhs.segment(offset[c], n) = ws.rhs[c].head(n);
       if (c + 1 < rows) {
-        const Eigen::Index m = size(c + 1);
-        for (Eigen::Index j = 0; j < m; ++j) {
-          for (Eigen::Index i = 0; i < n; ++i) {
-            const Complex v = ws.coupling[c](i, j);
+        const Split& u = ws.coupling[c];
+        const Index m = size(c + 1);
+        for (Index j = 0; j < m; ++j) {
+          for (Index i = 0; i < n; ++i) {
+            const Complex v(u.re[j * n + i], u.im[j * n + i]);
             triplets.emplace_back(offset[c] + i, offset[c + 1] + j, v);
             triplets.emplace_back(offset[c + 1] + j, offset[c] + i, v);
           }
@@ -348,7 +531,12 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
       throw Error(ErrorKind::kSoftware, "continuous condensation: singular condensed system");
     }
     const Eigen::VectorXcd solution = lu.solve(big_rhs);
-    for (int c = 0; c < rows; ++c) ws.u[c].head(size(c)) = solution.segment(offset[c], size(c));
+    for (int c = 0; c < rows; ++c) {
+      for (Index k = 0; k < size(c); ++k) {
+        ws.u[c].re[k] = solution(offset[c] + k).real();
+        ws.u[c].im[k] = solution(offset[c] + k).imag();
+      }
+    }
   }
   // Outputs of section s from its two end cross-sections.
   for (int s = 0; s < ns; ++s) {
@@ -358,8 +546,12 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
     const Eigen::VectorXcd& section = section_of(s);
     auto ends = ws.ends.head(2 * nc);
     ends.setZero();
-    ends.head(nc)(ws.free[s]) = ws.u[s].head(size(s));
-    ends.tail(nc)(ws.free[s + 1]) = ws.u[s + 1].head(size(s + 1));
+    for (int side = 0; side < 2; ++side) {
+      const std::vector<int>& f = ws.free[s + side];
+      for (Index k = 0; k < size(s + side); ++k) {
+        ends(Index{side} * nc + f[k]) = {ws.u[s + side].re[k], ws.u[s + side].im[k]};
+      }
+    }
     if (ws.values.size() < n_out) ws.values.resize(n_out);
     auto values = ws.values.head(n_out);
     if (loaded(s)) {

@@ -89,33 +89,6 @@ struct Workspace {
   }
 };
 
-// Complex dot product sum_k x_k y_k (no conjugation) of split vectors.
-inline void DotSplit(const double* xr,
-                     const double* xi,
-                     const double* yr,
-                     const double* yi,
-                     Index len,
-                     double* out_r,
-                     double* out_i) {
-  // Two partial sums per part (even and odd k): one would chain every add on the previous
-  // one's latency.
-  double sr[2] = {0.0, 0.0};
-  double si[2] = {0.0, 0.0};
-  Index k = 0;
-  for (; k + 1 < len; k += 2) {
-    for (int q = 0; q < 2; ++q) {
-      sr[q] += xr[k + q] * yr[k + q] - xi[k + q] * yi[k + q];
-      si[q] += xr[k + q] * yi[k + q] + xi[k + q] * yr[k + q];
-    }
-  }
-  if (k < len) {
-    sr[0] += xr[k] * yr[k] - xi[k] * yi[k];
-    si[0] += xr[k] * yi[k] + xi[k] * yr[k];
-  }
-  *out_r = sr[0] + sr[1];
-  *out_i = si[0] + si[1];
-}
-
 }  // namespace
 
 void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
