@@ -145,9 +145,16 @@ inline double LowerMaxNorm2Split(const double* __restrict re,
 // block elimination needs, done inside the factorization's updates.
 // Right-looking: each pivot's column updates the later columns by complex axpys, so the
 // inner loops are long, contiguous and free of calls.
-inline bool FactorLdltSplit(
-    double* re, double* im, std::ptrdiff_t ld, std::ptrdiff_t rows, std::ptrdiff_t n) {
-  const double scale2 = LowerMaxNorm2Split(re, im, ld, n);
+// `higham`: the caller knows the matrix is a Higham matrix (section_solve.cpp), whose pivots
+// cannot break down; only a zero or non-finite pivot is refused then, without the scan for the
+// largest entry that the relative breakdown test needs.
+inline bool FactorLdltSplit(double* re,
+                            double* im,
+                            std::ptrdiff_t ld,
+                            std::ptrdiff_t rows,
+                            std::ptrdiff_t n,
+                            bool higham = false) {
+  const double scale2 = higham ? 0.0 : LowerMaxNorm2Split(re, im, ld, n);
   // Pivots two at a time: column j + 1 takes pivot j's update first, then both update the later
   // columns in one pass (SubScaled2Split).
   const auto pivot = [&](std::ptrdiff_t j, double* ir, double* ii) {

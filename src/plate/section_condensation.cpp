@@ -23,7 +23,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
                                          double frequency_hz,
                                          const std::vector<double>& output_x,
                                          double output_y,
-                                         bool always_pivot)
+                                         bool always_pivot,
+                                         bool higham)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
@@ -33,7 +34,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       start_mask_(start_mask),
       end_mask_(end_mask),
       group_size_(group_size),
-      always_pivot_(always_pivot) {
+      always_pivot_(always_pivot),
+      higham_(higham) {
   const Grid& grid = plate.grid();
   // Node arithmetic below counts grid intervals: 2 per element at element order 2, whose
   // mid-side node lines are interior to their section like any other.

@@ -103,7 +103,10 @@ class SectionCondensation {
   // Masks: dofs fixed on
   // an edge-A / edge-B node by a fixed section, and on every node of the first / last
   // cross-section by the short edges.
-  // group_size must divide num_sections (1 disables grouping).
+  // group_size must divide num_sections (1 disables grouping). `higham`: the caller has certified
+  // that the all-free system is a Higham matrix (real and imaginary parts symmetric positive
+  // definite; SensorModel checks it), which makes the unpivoted LDL^T provably stable for every
+  // configuration, so Solve skips its residual check (section_solve.cpp).
   SectionCondensation(const Plate& plate,
                       int num_sections,
                       int elements_per_section,
@@ -116,7 +119,8 @@ class SectionCondensation {
                       double frequency_hz,
                       const std::vector<double>& output_x,
                       double output_y,
-                      bool always_pivot = false);
+                      bool always_pivot = false,
+                      bool higham = false);
 
   // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at the outputs.
   void Solve(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
@@ -190,6 +194,7 @@ class SectionCondensation {
   std::vector<std::vector<int>> section_outputs_;
   int group_size_;
   bool always_pivot_;
+  bool higham_;  // the caller certified a Higham system: no residual check needed (Solve)
   std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<std::vector<int>> group_outputs_;

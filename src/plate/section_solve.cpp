@@ -5,10 +5,19 @@
 // The unknowns are the free dofs of the inner group boundaries; the matrix is block tridiagonal
 // and complex symmetric (K(1 + i eta) - omega^2 M is symmetric, not Hermitian). It is solved by
 // block elimination with an unpivoted complex-symmetric LDL^T of each pivot block (about half the
-// work of LU, and symmetric Schur complements). Unpivoted LDL^T is stable when the real part is
-// positive definite (the default: 5 Hz is below every resonance), but not in general, so every
-// solve is followed by a residual check, and a dense partial-pivoting LU of the whole condensed
-// system is the fallback.
+// work of LU, and symmetric Schur complements). A dense partial-pivoting LU of the whole condensed
+// system is the fallback when a pivot breaks down.
+//
+// When is the unpivoted path safe? For a Higham matrix A = B + iC, B and C real symmetric
+// positive definite, Gaussian elimination without pivoting has growth factor below 3 (Higham,
+// Math. Comp. 67, 1998; below 2 by Drury 2013) and so is backward stable; principal submatrices
+// (fixed dofs), Schur complements (condensation, block elimination) and real diagonal scalings
+// (Jacobi) of a Higham matrix are Higham matrices. SensorModel certifies it once for the all-free
+// system (the default: the real part is positive definite at 5 Hz, below every resonance, and
+// the loss makes the imaginary part positive definite); every configuration's condensed system is
+// then one too, and only the pivots and the finiteness of the result are checked. Without the
+// certificate (above a resonance, no loss on some stiffness) every solve is followed by a
+// residual check of the assembled system, which must pass or the fallback runs.
 //
 // Performance (docs/benchmarks.md, docs/model.md "Performance"): the coupling between
 // neighbouring rows is a group's end-to-end block, numerically of low rank (SectionCondensation's
@@ -139,7 +148,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
         }
       }
     }
-    ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);
+    if (!higham_) ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);  // residual scale
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
     for (Index k = 0; k < n; ++k) {
       const std::complex<double> v =
@@ -197,7 +206,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
         fi[k * ld + n + l] = ws.p[i].im[l * n + k];
       }
     }
-    ok = FactorLdltSplit(fr, fi, ld, ld, n);
+    ok = FactorLdltSplit(fr, fi, ld, ld, n, higham_);
     if (!ok || i + 1 == rows) break;
     // [S; c^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T the carried rows of column j; S is
     // symmetric: the lower triangle, then mirrored.
@@ -360,8 +369,16 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       yi[j] -= vi;
     }
   }
-  // Residual of the assembled system; the unpivoted path must earn its result.
-  if (ok) {
+  // A certified (Higham) system: the elimination is backward stable; only a non-finite result
+  // (non-finite input) sends it to the fallback.
+  if (ok && higham_) {
+    double sum = 0.0;
+    for (int i = 0; i < rows; ++i) {
+      for (Index k = 0; k < size(i); ++k) sum += ws.u[i].re[k] + ws.u[i].im[k];
+    }
+    ok = std::isfinite(sum);
+  } else if (ok) {
+    // Residual of the assembled system; the unpivoted path must earn its result.
     double residual = 0.0;
     double scale = 0.0;
     bool finite = true;

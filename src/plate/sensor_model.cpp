@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/SparseCholesky>
+
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
@@ -59,6 +61,17 @@ Load SensorLoad(const SensorOptions& o) {
   return load;
 }
 
+// A = B + iC with B and C (real, symmetric) positive definite, by a sparse Cholesky of each: the
+// class for which elimination without pivoting is provably stable (section_solve.cpp). Fixing
+// dofs keeps a matrix in it, so the all-free system decides for every configuration.
+bool IsHighamMatrix(const Eigen::SparseMatrix<std::complex<double>>& a) {
+  const auto positive_definite = [](const Eigen::SparseMatrix<double>& part) {
+    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(part);
+    return llt.info() == Eigen::Success;
+  };
+  return positive_definite(a.real()) && positive_definite(a.imag());
+}
+
 }  // namespace
 
 SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
@@ -73,6 +86,11 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    options_.foundation_loss_factor,
                                    options_.theory,
                                    options_.ElementOrder());
+  std::vector<int> free_dofs;
+  fast_path_certified_ = IsHighamMatrix(plate_->DynamicStiffness(
+      ConfigurationConstraints(std::vector<std::uint8_t>(2 * options_.clamps_per_edge, 0)),
+      options_.frequency_hz,
+      &free_dofs));
   condensation_ = std::make_unique<SectionCondensation>(
       *plate_,
       options_.clamps_per_edge,
@@ -88,7 +106,8 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
       options_.frequency_hz,
       options_.output_positions,
       options_.output_y_fraction * options_.width,
-      options_.always_pivot);
+      options_.always_pivot,
+      fast_path_certified_);
   continuous_ = std::make_unique<ContinuousCache>();
   // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
   // precompute of their own. It holds when every layer has one loss factor, and also when every

@@ -108,14 +108,27 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveOtherSupports) {
 }
 
 // Above the foundation resonance (16.7 Hz) the real part is indefinite: the unpivoted LDL^T may
-// break down or lose accuracy, and the residual check must hand over to the pivoting LU.
+// break down or lose accuracy, and the residual check must hand over to the pivoting LU. Such
+// systems are not Higham matrices, so the fast path must not be certified (the residual check
+// runs); the default physics is (section_solve.cpp: the other fast-path tests run certified), and
+// these cases exercise the uncertified path.
 TEST(PlateSensorModel, FastPathEqualsFullSolveAboveResonance) {
   SensorOptions o = CoarseOptions();
+  EXPECT_TRUE(SensorModel(o).fast_path_certified());
   o.frequency_hz = 120.0;
+  EXPECT_FALSE(SensorModel(o).fast_path_certified());
   ExpectFastEqualsFull(o, 20, 4);
   o.foundation_stiffness = 0.0;  // a floating strip when every clamp is free
   o.frequency_hz = 5.0;
+  EXPECT_FALSE(SensorModel(o).fast_path_certified());
   ExpectFastEqualsFull(o, 20, 5);
+  // No loss on the foundation and none on the strip: the imaginary part is zero, not positive
+  // definite (the system is real symmetric positive definite, but outside the certified class).
+  o = CoarseOptions();
+  o.foundation_loss_factor = 0.0;
+  for (auto& layer : o.layers) layer.loss_factor = 0.0;
+  EXPECT_FALSE(SensorModel(o).fast_path_certified());
+  ExpectFastEqualsFull(o, 20, 6);
 }
 
 // The tests above run the default theory (RZT, quadratic elements); Kirchhoff (BFS, 4 dofs per

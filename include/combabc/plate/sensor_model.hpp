@@ -220,6 +220,11 @@ class SensorModel {
   const Plate& plate() const { return *plate_; }
   // Bytes held by the precomputed section pieces (the per-configuration state is on the stack).
   std::size_t PrecomputedBytes() const;
+  // Whether the clamp-only fast path runs without its per-configuration residual check: the
+  // dynamic stiffness with every clamp free is a Higham matrix (real and imaginary parts positive
+  // definite), so every configuration's unpivoted LDL^T is provably stable (section_solve.cpp).
+  // True for the default sensor; false e.g. above the first resonance.
+  bool fast_path_certified() const { return fast_path_certified_; }
 
   // clamps[k] = 1: clamp k + 1 fixed; 0: free (paper section 5). Writes |w| (m, or normalised to
   // a maximum of 1) at the output positions. Thread-safe.
@@ -277,6 +282,7 @@ class SensorModel {
   SensorOptions options_;
   std::unique_ptr<Plate> plate_;
   std::unique_ptr<SectionCondensation> condensation_;
+  bool fast_path_certified_ = false;
   std::unique_ptr<ContinuousCache> continuous_;
 };
 
