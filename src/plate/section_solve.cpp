@@ -493,7 +493,29 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     }
     const auto add_end = [&](int i, Index offset) {
       const std::vector<int>& f = ws.free[i];
-      for (Index k = 0; k < size(i); ++k) {
+      const Index n = size(i);
+      Index k = 0;
+      // A contiguous run of free dofs is a run of adjacent columns: four per pass over v.
+      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
+        for (; k + 3 < n; k += 4) {
+          double sr[4];
+          double si[4];
+          for (int q = 0; q < 4; ++q) {
+            sr[q] = -ws.u[i].re[k + q];
+            si[q] = -ws.u[i].im[k + q];
+          }
+          const Index column = (offset + f[k]) * n_out;
+          SubScaled4Split(vr,
+                          vi,
+                          piece.output_map.re.data() + column,
+                          piece.output_map.im.data() + column,
+                          n_out,
+                          sr,
+                          si,
+                          n_out);
+        }
+      }
+      for (; k < n; ++k) {
         const Index column = (offset + f[k]) * n_out;
         // SubScaledSplit subtracts: v += column u.
         SubScaledSplit(vr,
