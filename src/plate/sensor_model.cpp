@@ -87,10 +87,11 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    options_.theory,
                                    options_.ElementOrder());
   std::vector<int> free_dofs;
-  fast_path_certified_ = IsHighamMatrix(plate_->DynamicStiffness(
-      ConfigurationConstraints(std::vector<std::uint8_t>(2 * options_.clamps_per_edge, 0)),
-      options_.frequency_hz,
-      &free_dofs));
+  fast_path_certified_ = IsHighamMatrix(
+      plate_->DynamicStiffness(ConfigurationConstraints(std::vector<std::uint8_t>(
+                                   2 * static_cast<std::size_t>(options_.clamps_per_edge), 0)),
+                               options_.frequency_hz,
+                               &free_dofs));
   condensation_ = std::make_unique<SectionCondensation>(
       *plate_,
       options_.clamps_per_edge,

@@ -128,9 +128,9 @@ struct SensorOptions {
   double WidthGrading() const {
     return width_grading.value_or(theory == PlateTheory::kKirchhoff ? 3.0 : 1.0);
   }
-  // Per-configuration solver: false = unpivoted complex-symmetric block LDL^T with a residual
-  // check and a pivoting-LU fallback (fast); true = always the dense partial-pivoting LU of the
-  // condensed system (slower; a cross-check).
+  // Per-configuration solver: false = unpivoted complex-symmetric block LDL^T with a pivoting-LU
+  // fallback (fast; each solve's residual is checked unless fast_path_certified()); true =
+  // always the dense partial-pivoting LU of the condensed system (slower; a cross-check).
   bool always_pivot = false;
 
   // The precompute may use at most this much memory (bytes): options whose EstimatedMemoryBytes()
