@@ -77,6 +77,38 @@ inline void SubScaled4Split(double* __restrict cr,
   }
 }
 
+// c -= sum_{k < count} x_k s_k (x_k at x + k ldx, s_k = (sr[k], si[k])): four terms per pass
+// over c, then two, then one.
+inline void SubScaledManySplit(double* cr,
+                               double* ci,
+                               const double* xr,
+                               const double* xi,
+                               std::ptrdiff_t ldx,
+                               const double* sr,
+                               const double* si,
+                               std::ptrdiff_t count,
+                               std::ptrdiff_t len) {
+  std::ptrdiff_t k = 0;
+  for (; k + 3 < count; k += 4) {
+    SubScaled4Split(cr, ci, xr + k * ldx, xi + k * ldx, ldx, sr + k, si + k, len);
+  }
+  if (k + 1 < count) {
+    SubScaled2Split(cr,
+                    ci,
+                    xr + k * ldx,
+                    xi + k * ldx,
+                    sr[k],
+                    si[k],
+                    xr + (k + 1) * ldx,
+                    xi + (k + 1) * ldx,
+                    sr[k + 1],
+                    si[k + 1],
+                    len);
+    k += 2;
+  }
+  if (k < count) SubScaledSplit(cr, ci, xr + k * ldx, xi + k * ldx, sr[k], si[k], len);
+}
+
 // Complex dot product sum_k x_k y_k (no conjugation) of split vectors.
 inline void DotSplit(const double* xr,
                      const double* xi,
@@ -102,6 +134,48 @@ inline void DotSplit(const double* xr,
   }
   *out_r = sr[0] + sr[1];
   *out_i = si[0] + si[1];
+}
+
+// y := L^{-T} y for the unit lower L that FactorLdltSplit leaves below the diagonal of the
+// n x n block (re, im, ld): the back substitution of both block solves.
+inline void SolveUnitUpperSplit(const double* re,
+                                const double* im,
+                                std::ptrdiff_t ld,
+                                std::ptrdiff_t n,
+                                double* yr,
+                                double* yi) {
+  for (std::ptrdiff_t j = n - 1; j >= 0; --j) {
+    double vr = 0.0;
+    double vi = 0.0;
+    DotSplit(re + j * ld + j + 1, im + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
+    yr[j] -= vr;
+    yi[j] -= vi;
+  }
+}
+
+// z = A u - b for the symmetric n x n A given by its lower triangle (ar, ai, leading dimension
+// n): the diagonal-block part of both solves' residual checks.
+inline void SymmetricResidualSplit(const double* ar,
+                                   const double* ai,
+                                   std::ptrdiff_t n,
+                                   const double* ur,
+                                   const double* ui,
+                                   const double* br,
+                                   const double* bi,
+                                   double* zr,
+                                   double* zi) {
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    zr[k] = -br[k];
+    zi[k] = -bi[k];
+  }
+  for (std::ptrdiff_t c = 0; c < n; ++c) {
+    SubScaledSplit(zr + c, zi + c, ar + c * n + c, ai + c * n + c, -ur[c], -ui[c], n - c);
+    double vr = 0.0;
+    double vi = 0.0;
+    DotSplit(ar + c * n + c + 1, ai + c * n + c + 1, ur + c + 1, ui + c + 1, n - c - 1, &vr, &vi);
+    zr[c] += vr;
+    zi[c] += vi;
+  }
 }
 
 // Largest |a|^2 over the lower triangle of the leading n x n block (split storage). Two running

@@ -356,26 +356,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
       double* ci = ni + l * ldn + l;
       std::copy(ar + l * m + l, ar + (l + 1) * m, cr);
       std::copy(ai + l * m + l, ai + (l + 1) * m, ci);
-      Index j = 0;
-      for (; j + 3 < n; j += 4) {
-        SubScaled4Split(cr,
-                        ci,
-                        fr + j * ld + n + l,
-                        fi + j * ld + n + l,
-                        ld,
-                        dvr + l * n + j,
-                        dvi + l * n + j,
-                        m - l);
-      }
-      for (; j < n; ++j) {
-        SubScaledSplit(cr,
-                       ci,
-                       fr + j * ld + n + l,
-                       fi + j * ld + n + l,
-                       dvr[l * n + j],
-                       dvi[l * n + j],
-                       m - l);
-      }
+      SubScaledManySplit(cr, ci, fr + n + l, fi + n + l, ld, dvr + l * n, dvi + l * n, n, m - l);
       double br = 0.0;
       double bi = 0.0;
       DotSplit(dvr + l * n, dvi + l * n, wr, wi, n, &br, &bi);
@@ -408,14 +389,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
       yr[j] = fr[j * ld + n + m] - vr;
       yi[j] = fi[j * ld + n + m] - vi;
     }
-    for (Index j = n - 1; j >= 0; --j) {
-      double vr = 0.0;
-      double vi = 0.0;
-      DotSplit(
-          fr + j * ld + j + 1, fi + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
-      yr[j] -= vr;
-      yi[j] -= vi;
-    }
+    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
   }
   // Residual of the assembled system; the unpivoted path must earn its result.
   if (ok) {
@@ -432,19 +406,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
       const double* ur = ws.u[c].re.data();
       const double* ui = ws.u[c].im.data();
       // z = A u - rhs, A symmetric from its lower triangle.
-      for (Index k = 0; k < n; ++k) {
-        zr[k] = -ws.rhs[c].re[k];
-        zi[k] = -ws.rhs[c].im[k];
-      }
-      for (Index j = 0; j < n; ++j) {
-        SubScaledSplit(zr + j, zi + j, ar + j * n + j, ai + j * n + j, -ur[j], -ui[j], n - j);
-        double vr = 0.0;
-        double vi = 0.0;
-        DotSplit(
-            ar + j * n + j + 1, ai + j * n + j + 1, ur + j + 1, ui + j + 1, n - j - 1, &vr, &vi);
-        zr[j] += vr;
-        zi[j] += vi;
-      }
+      SymmetricResidualSplit(ar, ai, n, ur, ui, ws.rhs[c].re.data(), ws.rhs[c].im.data(), zr, zi);
       // + U_c u_{c+1} + U_{c-1}^T u_{c-1}.
       if (c + 1 < rows) {
         const Split& a = ws.coupling[c];

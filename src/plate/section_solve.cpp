@@ -276,47 +276,14 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     for (Index c = 0; c < m; ++c) {
       std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
       std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
-      // Q(c, l) for this column, contiguous for SubScaled4Split.
+      // Q(c, l) for this column, contiguous for SubScaledManySplit.
       double* qcr = ws.small.re.data();
       double* qci = ws.small.im.data();
       for (Index l = 0; l < r; ++l) {
         qcr[l] = qr[l * m + c];
         qci[l] = qi[l * m + c];
       }
-      Index l = 0;
-      for (; l + 3 < r; l += 4) {
-        SubScaled4Split(nr + c * ldn + c,
-                        ni + c * ldn + c,
-                        tr + l * m + c,
-                        ti + l * m + c,
-                        m,
-                        qcr + l,
-                        qci + l,
-                        m - c);
-      }
-      if (l + 1 < r) {
-        SubScaled2Split(nr + c * ldn + c,
-                        ni + c * ldn + c,
-                        tr + l * m + c,
-                        ti + l * m + c,
-                        qcr[l],
-                        qci[l],
-                        tr + (l + 1) * m + c,
-                        ti + (l + 1) * m + c,
-                        qcr[l + 1],
-                        qci[l + 1],
-                        m - c);
-        l += 2;
-      }
-      if (l < r) {
-        SubScaledSplit(nr + c * ldn + c,
-                       ni + c * ldn + c,
-                       tr + l * m + c,
-                       ti + l * m + c,
-                       qcr[l],
-                       qci[l],
-                       m - c);
-      }
+      SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
       double br = ws.rhs[i + 1].re[c];
       double bi = ws.rhs[i + 1].im[c];
       for (Index k = 0; k < r; ++k) {
@@ -360,14 +327,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       yr[j] = fr[j * ld + n + r] - vr;
       yi[j] = fi[j * ld + n + r] - vi;
     }
-    for (Index j = n - 1; j >= 0; --j) {
-      double vr = 0.0;
-      double vi = 0.0;
-      DotSplit(
-          fr + j * ld + j + 1, fi + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
-      yr[j] -= vr;
-      yi[j] -= vi;
-    }
+    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
   }
   // A certified (Higham) system: the elimination is backward stable; only a non-finite result
   // (non-finite input) sends it to the fallback.
@@ -393,19 +353,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       const double* ur = ws.u[i].re.data();
       const double* ui = ws.u[i].im.data();
       // z = A u - rhs, A symmetric from its lower triangle.
-      for (Index k = 0; k < n; ++k) {
-        zr[k] = -ws.rhs[i].re[k];
-        zi[k] = -ws.rhs[i].im[k];
-      }
-      for (Index c = 0; c < n; ++c) {
-        SubScaledSplit(zr + c, zi + c, ar + c * n + c, ai + c * n + c, -ur[c], -ui[c], n - c);
-        double vr = 0.0;
-        double vi = 0.0;
-        DotSplit(
-            ar + c * n + c + 1, ai + c * n + c + 1, ur + c + 1, ui + c + 1, n - c - 1, &vr, &vi);
-        zr[c] += vr;
-        zi[c] += vi;
-      }
+      SymmetricResidualSplit(ar, ai, n, ur, ui, ws.rhs[i].re.data(), ws.rhs[i].im.data(), zr, zi);
       // + P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
       const auto couple = [&](const Split& a, const Split& b, Index k, Index na, Index nb, int j) {
         for (Index l = 0; l < k; ++l) {
@@ -491,40 +439,28 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       vr[k] = piece.output_offset(k).real();
       vi[k] = piece.output_offset(k).imag();
     }
+    // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
+    // subtracts, so the multipliers are -u.
     const auto add_end = [&](int i, Index offset) {
       const std::vector<int>& f = ws.free[i];
       const Index n = size(i);
-      Index k = 0;
-      // A contiguous run of free dofs is a run of adjacent columns: four per pass over v.
-      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
-        for (; k + 3 < n; k += 4) {
-          double sr[4];
-          double si[4];
-          for (int q = 0; q < 4; ++q) {
-            sr[q] = -ws.u[i].re[k + q];
-            si[q] = -ws.u[i].im[k + q];
-          }
-          const Index column = (offset + f[k]) * n_out;
-          SubScaled4Split(vr,
-                          vi,
-                          piece.output_map.re.data() + column,
-                          piece.output_map.im.data() + column,
-                          n_out,
-                          sr,
-                          si,
-                          n_out);
-        }
+      const double* mr = piece.output_map.re.data();
+      const double* mi = piece.output_map.im.data();
+      double* sr = ws.small.re.data();
+      double* si = ws.small.im.data();
+      for (Index k = 0; k < n; ++k) {
+        sr[k] = -ws.u[i].re[k];
+        si[k] = -ws.u[i].im[k];
       }
-      for (; k < n; ++k) {
-        const Index column = (offset + f[k]) * n_out;
-        // SubScaledSplit subtracts: v += column u.
-        SubScaledSplit(vr,
-                       vi,
-                       piece.output_map.re.data() + column,
-                       piece.output_map.im.data() + column,
-                       -ws.u[i].re[k],
-                       -ws.u[i].im[k],
-                       n_out);
+      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
+        // A contiguous run of free dofs is a run of adjacent columns: several per pass over v.
+        const Index column = (offset + f[0]) * n_out;
+        SubScaledManySplit(vr, vi, mr + column, mi + column, n_out, sr, si, n, n_out);
+      } else {
+        for (Index k = 0; k < n; ++k) {
+          const Index column = (offset + f[k]) * n_out;
+          SubScaledSplit(vr, vi, mr + column, mi + column, sr[k], si[k], n_out);
+        }
       }
     };
     if (piece.left_size > 0) add_end(g - 1, 0);
