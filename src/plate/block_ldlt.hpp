@@ -6,6 +6,7 @@
 // back substitutions and residuals from (SubScaled*Split). Inline so each solve keeps them inlined
 // in its hot loops.
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 namespace combabc::plate {
@@ -177,6 +178,39 @@ inline void SymmetricResidualSplit(const double* ar,
     zi[c] += vi;
   }
 }
+
+// The residual test of both block solves, one block row at a time: max |z| <= kResidualTol
+// (max |b| + sqrt(max |A|^2 max |u|^2)) over the rows, with z = A u - b that row's residual.
+// Squared moduli keep hypot off the hot path; a NaN anywhere fails the test.
+struct ResidualCheck {
+  double residual2 = 0.0;
+  double scale = 0.0;
+  bool finite = true;
+  void AddRow(const double* zr,
+              const double* zi,
+              const double* br,
+              const double* bi,
+              const double* ur,
+              const double* ui,
+              std::ptrdiff_t n,
+              double a_max2) {
+    double z2 = 0.0;
+    double z2_sum = 0.0;  // NaN-propagating, unlike std::max
+    double b2 = 0.0;
+    double u2 = 0.0;
+    for (std::ptrdiff_t k = 0; k < n; ++k) {
+      const double v = zr[k] * zr[k] + zi[k] * zi[k];
+      z2 = std::max(z2, v);
+      z2_sum += v;
+      b2 = std::max(b2, br[k] * br[k] + bi[k] * bi[k]);
+      u2 = std::max(u2, ur[k] * ur[k] + ui[k] * ui[k]);
+    }
+    residual2 = std::max(residual2, z2);
+    finite = finite && std::isfinite(z2_sum);
+    scale = std::max(scale, std::sqrt(b2) + std::sqrt(a_max2 * u2));
+  }
+  bool Passes() const { return finite && std::sqrt(residual2) <= kResidualTol * scale; }
+};
 
 // Largest |a|^2 over the lower triangle of the leading n x n block (split storage). Two running
 // maxima per vector lane pair, in the form `m < v ? v : m` that compiles to maxpd (a single

@@ -393,9 +393,7 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
   }
   // Residual of the assembled system; the unpivoted path must earn its result.
   if (ok) {
-    double residual = 0.0;
-    double scale = 0.0;
-    bool finite = true;
+    ResidualCheck check;
     double* zr = ws.z.re.data();
     double* zi = ws.z.im.data();
     for (int c = 0; c < rows; ++c) {
@@ -437,23 +435,10 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
           zi[k] += vi;
         }
       }
-      // Squared moduli (max |.|^2) to keep hypot off the hot path.
-      double z2 = 0.0;
-      double z2_sum = 0.0;  // NaN-propagating, unlike std::max
-      double b2 = 0.0;
-      double u2 = 0.0;
-      for (Index k = 0; k < n; ++k) {
-        const double v = zr[k] * zr[k] + zi[k] * zi[k];
-        z2 = std::max(z2, v);
-        z2_sum += v;
-        b2 = std::max(b2, ws.rhs[c].re[k] * ws.rhs[c].re[k] + ws.rhs[c].im[k] * ws.rhs[c].im[k]);
-        u2 = std::max(u2, ur[k] * ur[k] + ui[k] * ui[k]);
-      }
-      residual = std::max(residual, z2);
-      finite = finite && std::isfinite(z2_sum);
-      scale = std::max(scale, std::sqrt(b2) + std::sqrt(ws.diagonal_max2[c] * u2));
+      check.AddRow(
+          zr, zi, ws.rhs[c].re.data(), ws.rhs[c].im.data(), ur, ui, n, ws.diagonal_max2[c]);
     }
-    ok = finite && std::sqrt(residual) <= kResidualTol * scale;
+    ok = check.Passes();
   }
   if (!ok) {
     // Fallback: sparse partial-pivoting LU of the assembled block-tridiagonal system.

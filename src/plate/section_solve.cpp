@@ -339,9 +339,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     ok = std::isfinite(sum);
   } else if (ok) {
     // Residual of the assembled system; the unpivoted path must earn its result.
-    double residual = 0.0;
-    double scale = 0.0;
-    bool finite = true;
+    ResidualCheck check;
     double* zr = ws.y.re.data();
     double* zi = ws.y.im.data();
     double* cr = ws.small.re.data();
@@ -369,23 +367,10 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
       };
       if (i + 1 < rows) couple(ws.p[i], ws.q[i], ws.rank[i], n, size(i + 1), i + 1);
       if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, size(i - 1), i - 1);
-      // Squared moduli (max |.|^2) to keep hypot off the hot path.
-      double z2 = 0.0;
-      double z2_sum = 0.0;  // NaN-propagating, unlike std::max
-      double b2 = 0.0;
-      double u2 = 0.0;
-      for (Index k = 0; k < n; ++k) {
-        const double v = zr[k] * zr[k] + zi[k] * zi[k];
-        z2 = std::max(z2, v);
-        z2_sum += v;
-        b2 = std::max(b2, ws.rhs[i].re[k] * ws.rhs[i].re[k] + ws.rhs[i].im[k] * ws.rhs[i].im[k]);
-        u2 = std::max(u2, ur[k] * ur[k] + ui[k] * ui[k]);
-      }
-      residual = std::max(residual, z2);
-      finite = finite && std::isfinite(z2_sum);
-      scale = std::max(scale, std::sqrt(b2) + std::sqrt(ws.diagonal_max2[i] * u2));
+      check.AddRow(
+          zr, zi, ws.rhs[i].re.data(), ws.rhs[i].im.data(), ur, ui, n, ws.diagonal_max2[i]);
     }
-    ok = finite && std::sqrt(residual) <= kResidualTol * scale;
+    ok = check.Passes();
   }
   if (!ok) {
     // Fallback: dense partial-pivoting LU of the whole condensed system.
