@@ -51,6 +51,26 @@ void BM_SensorProfileFast(benchmark::State& state) {
 }
 BENCHMARK(BM_SensorProfileFast)->Unit(benchmark::kMicrosecond);
 
+// The same fast path on each instruction set (SensorOptions::vector_kernels: 1 the build's own,
+// 2 AVX2, 3 AVX-512; the default takes the widest the CPU has, all with bit-identical results).
+void BM_SensorProfileFastKernels(benchmark::State& state) {
+  SensorOptions options;
+  options.vector_kernels = static_cast<SensorOptions::VectorKernels>(state.range(0));
+  if (!options.IsValid(nullptr)) {
+    state.SkipWithError("this CPU lacks the instruction set");
+    return;
+  }
+  const SensorModel model{options};
+  const auto configs = Configurations(256, model.num_clamps());
+  std::vector<double> out(model.num_outputs());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    model.Profile(configs[i++ % configs.size()], out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(BM_SensorProfileFastKernels)->DenseRange(1, 3)->Unit(benchmark::kMicrosecond);
+
 // The same fast path with the pivoting-LU block solve forced (SensorOptions::always_pivot).
 void BM_SensorProfileFastPivotingLu(benchmark::State& state) {
   SensorOptions options;

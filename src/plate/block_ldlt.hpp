@@ -4,10 +4,13 @@
 // real/imaginary storage: an unpivoted complex-symmetric LDL^T that carries extra rows through the
 // factorization (FactorLdltSplit), and the complex axpys the solves build their Schur updates,
 // back substitutions and residuals from (SubScaled*Split). Inline so each solve keeps them inlined
-// in its hot loops.
+// in its hot loops; forced inline (COMBABC_KERNEL) so that each instruction-set copy of a solve
+// (vector_kernels.hpp) runs them with its own instructions.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+
+#include "vector_kernels.hpp"
 
 namespace combabc::plate {
 
@@ -19,13 +22,13 @@ inline constexpr double kResidualTol = 1e-10;  // relative residual accepted fro
 // std::complex needs shuffles, and its operator* calls __muldc3 unless -ffast-math.
 
 // c -= x s over `len` entries (complex axpy in split storage).
-inline void SubScaledSplit(double* __restrict cr,
-                           double* __restrict ci,
-                           const double* __restrict xr,
-                           const double* __restrict xi,
-                           double sr,
-                           double si,
-                           std::ptrdiff_t len) {
+COMBABC_KERNEL void SubScaledSplit(double* __restrict cr,
+                                   double* __restrict ci,
+                                   const double* __restrict xr,
+                                   const double* __restrict xi,
+                                   double sr,
+                                   double si,
+                                   std::ptrdiff_t len) {
   for (std::ptrdiff_t t = 0; t < len; ++t) {
     cr[t] -= xr[t] * sr - xi[t] * si;
     ci[t] -= xr[t] * si + xi[t] * sr;
@@ -33,17 +36,17 @@ inline void SubScaledSplit(double* __restrict cr,
 }
 
 // c -= x s + y t: two axpys in one pass over c (half the loads and stores of c).
-inline void SubScaled2Split(double* __restrict cr,
-                            double* __restrict ci,
-                            const double* __restrict xr,
-                            const double* __restrict xi,
-                            double sr,
-                            double si,
-                            const double* __restrict yr,
-                            const double* __restrict yi,
-                            double tr,
-                            double ti,
-                            std::ptrdiff_t len) {
+COMBABC_KERNEL void SubScaled2Split(double* __restrict cr,
+                                    double* __restrict ci,
+                                    const double* __restrict xr,
+                                    const double* __restrict xi,
+                                    double sr,
+                                    double si,
+                                    const double* __restrict yr,
+                                    const double* __restrict yi,
+                                    double tr,
+                                    double ti,
+                                    std::ptrdiff_t len) {
   for (std::ptrdiff_t k = 0; k < len; ++k) {
     cr[k] -= (xr[k] * sr - xi[k] * si) + (yr[k] * tr - yi[k] * ti);
     ci[k] -= (xr[k] * si + xi[k] * sr) + (yr[k] * ti + yi[k] * tr);
@@ -52,14 +55,14 @@ inline void SubScaled2Split(double* __restrict cr,
 
 // c -= x0 s0 + x1 s1 + x2 s2 + x3 s3 (x_k at x + k ldx, s_k = (sr[k], si[k])): four axpys in one
 // pass.
-inline void SubScaled4Split(double* __restrict cr,
-                            double* __restrict ci,
-                            const double* __restrict xr,
-                            const double* __restrict xi,
-                            std::ptrdiff_t ldx,
-                            const double* sr,
-                            const double* si,
-                            std::ptrdiff_t len) {
+COMBABC_KERNEL void SubScaled4Split(double* __restrict cr,
+                                    double* __restrict ci,
+                                    const double* __restrict xr,
+                                    const double* __restrict xi,
+                                    std::ptrdiff_t ldx,
+                                    const double* sr,
+                                    const double* si,
+                                    std::ptrdiff_t len) {
   const double s0r = sr[0], s0i = si[0], s1r = sr[1], s1i = si[1];
   const double s2r = sr[2], s2i = si[2], s3r = sr[3], s3i = si[3];
   const double* __restrict x0r = xr;
@@ -80,15 +83,15 @@ inline void SubScaled4Split(double* __restrict cr,
 
 // c -= sum_{k < count} x_k s_k (x_k at x + k ldx, s_k = (sr[k], si[k])): four terms per pass
 // over c, then two, then one.
-inline void SubScaledManySplit(double* cr,
-                               double* ci,
-                               const double* xr,
-                               const double* xi,
-                               std::ptrdiff_t ldx,
-                               const double* sr,
-                               const double* si,
-                               std::ptrdiff_t count,
-                               std::ptrdiff_t len) {
+COMBABC_KERNEL void SubScaledManySplit(double* cr,
+                                       double* ci,
+                                       const double* xr,
+                                       const double* xi,
+                                       std::ptrdiff_t ldx,
+                                       const double* sr,
+                                       const double* si,
+                                       std::ptrdiff_t count,
+                                       std::ptrdiff_t len) {
   std::ptrdiff_t k = 0;
   for (; k + 3 < count; k += 4) {
     SubScaled4Split(cr, ci, xr + k * ldx, xi + k * ldx, ldx, sr + k, si + k, len);
@@ -111,13 +114,13 @@ inline void SubScaledManySplit(double* cr,
 }
 
 // Complex dot product sum_k x_k y_k (no conjugation) of split vectors.
-inline void DotSplit(const double* xr,
-                     const double* xi,
-                     const double* yr,
-                     const double* yi,
-                     std::ptrdiff_t len,
-                     double* out_r,
-                     double* out_i) {
+COMBABC_KERNEL void DotSplit(const double* xr,
+                             const double* xi,
+                             const double* yr,
+                             const double* yi,
+                             std::ptrdiff_t len,
+                             double* out_r,
+                             double* out_i) {
   // Two partial sums per part (even and odd k): one would chain every add on the previous
   // one's latency.
   double sr[2] = {0.0, 0.0};
@@ -139,12 +142,12 @@ inline void DotSplit(const double* xr,
 
 // y := L^{-T} y for the unit lower L that FactorLdltSplit leaves below the diagonal of the
 // n x n block (re, im, ld): the back substitution of both block solves.
-inline void SolveUnitUpperSplit(const double* re,
-                                const double* im,
-                                std::ptrdiff_t ld,
-                                std::ptrdiff_t n,
-                                double* yr,
-                                double* yi) {
+COMBABC_KERNEL void SolveUnitUpperSplit(const double* re,
+                                        const double* im,
+                                        std::ptrdiff_t ld,
+                                        std::ptrdiff_t n,
+                                        double* yr,
+                                        double* yi) {
   for (std::ptrdiff_t j = n - 1; j >= 0; --j) {
     double vr = 0.0;
     double vi = 0.0;
@@ -156,15 +159,15 @@ inline void SolveUnitUpperSplit(const double* re,
 
 // z = A u - b for the symmetric n x n A given by its lower triangle (ar, ai, leading dimension
 // n): the diagonal-block part of both solves' residual checks.
-inline void SymmetricResidualSplit(const double* ar,
-                                   const double* ai,
-                                   std::ptrdiff_t n,
-                                   const double* ur,
-                                   const double* ui,
-                                   const double* br,
-                                   const double* bi,
-                                   double* zr,
-                                   double* zi) {
+COMBABC_KERNEL void SymmetricResidualSplit(const double* ar,
+                                           const double* ai,
+                                           std::ptrdiff_t n,
+                                           const double* ur,
+                                           const double* ui,
+                                           const double* br,
+                                           const double* bi,
+                                           double* zr,
+                                           double* zi) {
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     zr[k] = -br[k];
     zi[k] = -bi[k];
@@ -186,14 +189,14 @@ struct ResidualCheck {
   double residual2 = 0.0;
   double scale = 0.0;
   bool finite = true;
-  void AddRow(const double* zr,
-              const double* zi,
-              const double* br,
-              const double* bi,
-              const double* ur,
-              const double* ui,
-              std::ptrdiff_t n,
-              double a_max2) {
+  COMBABC_KERNEL void AddRow(const double* zr,
+                             const double* zi,
+                             const double* br,
+                             const double* bi,
+                             const double* ur,
+                             const double* ui,
+                             std::ptrdiff_t n,
+                             double a_max2) {
     double z2 = 0.0;
     double z2_sum = 0.0;  // NaN-propagating, unlike std::max
     double b2 = 0.0;
@@ -216,10 +219,10 @@ struct ResidualCheck {
 // maxima per vector lane pair, in the form `m < v ? v : m` that compiles to maxpd (a single
 // chained maximum would wait on every compare's latency; NaN entries are skipped, the solves'
 // residual checks catch them).
-inline double LowerMaxNorm2Split(const double* __restrict re,
-                                 const double* __restrict im,
-                                 std::ptrdiff_t ld,
-                                 std::ptrdiff_t n) {
+COMBABC_KERNEL double LowerMaxNorm2Split(const double* __restrict re,
+                                         const double* __restrict im,
+                                         std::ptrdiff_t ld,
+                                         std::ptrdiff_t n) {
   double m0 = 0.0;
   double m1 = 0.0;
   double m2 = 0.0;
@@ -256,16 +259,16 @@ inline double LowerMaxNorm2Split(const double* __restrict re,
 // `higham`: the caller knows the matrix is a Higham matrix (section_solve.cpp), whose pivots
 // cannot break down; only a zero or non-finite pivot is refused then, without the scan for the
 // largest entry that the relative breakdown test needs.
-inline bool FactorLdltSplit(double* re,
-                            double* im,
-                            std::ptrdiff_t ld,
-                            std::ptrdiff_t rows,
-                            std::ptrdiff_t n,
-                            bool higham = false) {
+COMBABC_KERNEL bool FactorLdltSplit(double* re,
+                                    double* im,
+                                    std::ptrdiff_t ld,
+                                    std::ptrdiff_t rows,
+                                    std::ptrdiff_t n,
+                                    bool higham = false) {
   const double scale2 = higham ? 0.0 : LowerMaxNorm2Split(re, im, ld, n);
   // Pivots two at a time: column j + 1 takes pivot j's update first, then both update the later
   // columns in one pass (SubScaled2Split).
-  const auto pivot = [&](std::ptrdiff_t j, double* ir, double* ii) {
+  const auto pivot = [&](std::ptrdiff_t j, double* ir, double* ii) COMBABC_KERNEL_LAMBDA {
     const double dr = re[j * ld + j];
     const double di = im[j * ld + j];
     const double d2 = dr * dr + di * di;
@@ -274,7 +277,7 @@ inline bool FactorLdltSplit(double* re,
     return d2 > kPivotTol * kPivotTol * scale2;
   };
   // Column j scaled by 1 / d_j below its pivot, once no later column needs it unscaled.
-  const auto scale_column = [&](std::ptrdiff_t j, double ir, double ii) {
+  const auto scale_column = [&](std::ptrdiff_t j, double ir, double ii) COMBABC_KERNEL_LAMBDA {
     double* xr = re + j * ld;
     double* xi = im + j * ld;
     for (std::ptrdiff_t t = j + 1; t < rows; ++t) {

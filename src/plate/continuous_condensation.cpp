@@ -75,7 +75,8 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
                                                const Eigen::VectorXd& load_vector,
                                                const std::vector<double>& output_x,
                                                double output_y,
-                                               bool always_pivot)
+                                               bool always_pivot,
+                                               SensorOptions::VectorKernels kernels)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
@@ -85,7 +86,8 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
       fixed_mask_b_(fixed_mask_b),
       start_mask_(start_mask),
       end_mask_(end_mask),
-      always_pivot_(always_pivot) {
+      always_pivot_(always_pivot),
+      kernels_(kernels) {
   const Grid& grid = plate.grid();
   // Grid intervals per section (2 per element at element order 2), as SectionCondensation.
   const int m = intervals_per_section_;

@@ -56,18 +56,20 @@ class ContinuousCondensation {
 
   // As SectionCondensation's constructor; own_loss_factors picks K_base = K_real + i K_imag
   // (else K_real).
-  ContinuousCondensation(const Plate& plate,
-                         int num_sections,
-                         int elements_per_section,
-                         bool own_loss_factors,
-                         std::uint8_t fixed_mask_a,
-                         std::uint8_t fixed_mask_b,
-                         std::uint8_t start_mask,
-                         std::uint8_t end_mask,
-                         const Eigen::VectorXd& load_vector,
-                         const std::vector<double>& output_x,
-                         double output_y,
-                         bool always_pivot = false);
+  ContinuousCondensation(
+      const Plate& plate,
+      int num_sections,
+      int elements_per_section,
+      bool own_loss_factors,
+      std::uint8_t fixed_mask_a,
+      std::uint8_t fixed_mask_b,
+      std::uint8_t start_mask,
+      std::uint8_t end_mask,
+      const Eigen::VectorXd& load_vector,
+      const std::vector<double>& output_x,
+      double output_y,
+      bool always_pivot = false,
+      SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
 
   // Solves (K_base + mu M_1) u = f for the configuration; w: complex w at the outputs (the caller
   // divides by the stiffness factor).
@@ -128,6 +130,19 @@ class ContinuousCondensation {
     std::vector<Eigen::VectorXcd> offset_terms;  // o_0 .. o_K (one more than the others)
   };
   struct Evaluated;  // one call's pieces (continuous_solve.cpp)
+  // Solve's body, compiled once per instruction set (vector_kernels.hpp).
+  void SolveBody(std::span<const std::uint8_t> clamps,
+                 std::complex<double> mu,
+                 std::span<std::complex<double>> w) const;
+  void SolvePortable(std::span<const std::uint8_t> clamps,
+                     std::complex<double> mu,
+                     std::span<std::complex<double>> w) const;
+  void SolveAvx2(std::span<const std::uint8_t> clamps,
+                 std::complex<double> mu,
+                 std::span<std::complex<double>> w) const;
+  void SolveAvx512(std::span<const std::uint8_t> clamps,
+                   std::complex<double> mu,
+                   std::span<std::complex<double>> w) const;
 
   void Precompute(const Plate& plate,
                   int mesh_kind,
@@ -170,10 +185,11 @@ class ContinuousCondensation {
   std::uint8_t start_mask_;
   std::uint8_t end_mask_;
   bool always_pivot_;
-  std::vector<int> mesh_kind_;     // section -> distinct mesh
-  std::vector<int> mesh_section_;  // distinct mesh -> a section that has it
-  std::vector<int> kind_;          // section -> distinct section
-  std::vector<int> kind_section_;  // distinct section -> a section that has it
+  SensorOptions::VectorKernels kernels_;  // which copy Solve runs
+  std::vector<int> mesh_kind_;            // section -> distinct mesh
+  std::vector<int> mesh_section_;         // distinct mesh -> a section that has it
+  std::vector<int> kind_;                 // section -> distinct section
+  std::vector<int> kind_section_;         // distinct section -> a section that has it
   std::vector<std::vector<int>> section_outputs_;
   std::vector<StateData> states_;                // [mesh kind * 4 + state]
   std::vector<SectionData> sections_;            // [kind * 4 + state]

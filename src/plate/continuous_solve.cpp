@@ -197,6 +197,39 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
 void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
                                    Complex mu,
                                    std::span<std::complex<double>> w) const {
+  switch (kernels_) {
+    case SensorOptions::VectorKernels::kAvx512:
+      SolveAvx512(clamps, mu, w);
+      return;
+    case SensorOptions::VectorKernels::kAvx2:
+      SolveAvx2(clamps, mu, w);
+      return;
+    case SensorOptions::VectorKernels::kAuto:
+    case SensorOptions::VectorKernels::kPortable:
+      SolvePortable(clamps, mu, w);
+      return;
+  }
+}
+
+void ContinuousCondensation::SolvePortable(std::span<const std::uint8_t> clamps,
+                                           Complex mu,
+                                           std::span<std::complex<double>> w) const {
+  SolveBody(clamps, mu, w);
+}
+
+COMBABC_TARGET_AVX2 void ContinuousCondensation::SolveAvx2(
+    std::span<const std::uint8_t> clamps, Complex mu, std::span<std::complex<double>> w) const {
+  SolveBody(clamps, mu, w);
+}
+
+COMBABC_TARGET_AVX512 void ContinuousCondensation::SolveAvx512(
+    std::span<const std::uint8_t> clamps, Complex mu, std::span<std::complex<double>> w) const {
+  SolveBody(clamps, mu, w);
+}
+
+COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8_t> clamps,
+                                                      Complex mu,
+                                                      std::span<std::complex<double>> w) const {
   const int ns = num_sections_;
   const int nc = nc_;
   const int rows = ns + 1;  // every cross-section c = 0..ns is a row

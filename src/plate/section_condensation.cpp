@@ -24,7 +24,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
                                          const std::vector<double>& output_x,
                                          double output_y,
                                          bool always_pivot,
-                                         bool higham)
+                                         bool higham,
+                                         SensorOptions::VectorKernels kernels)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
@@ -35,7 +36,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       end_mask_(end_mask),
       group_size_(group_size),
       always_pivot_(always_pivot),
-      higham_(higham) {
+      higham_(higham),
+      kernels_(kernels) {
   const Grid& grid = plate.grid();
   // Node arithmetic below counts grid intervals: 2 per element at element order 2, whose
   // mid-side node lines are interior to their section like any other.

@@ -28,6 +28,7 @@
 #include <Eigen/Dense>
 
 #include "combabc/plate/plate.hpp"
+#include "combabc/plate/sensor_model.hpp"
 
 namespace combabc::plate {
 
@@ -106,21 +107,24 @@ class SectionCondensation {
   // group_size must divide num_sections (1 disables grouping). `higham`: the caller has certified
   // that the all-free system is a Higham matrix (real and imaginary parts symmetric positive
   // definite; SensorModel checks it), which makes the unpivoted LDL^T provably stable for every
-  // configuration, so Solve skips its residual check (section_solve.cpp).
-  SectionCondensation(const Plate& plate,
-                      int num_sections,
-                      int elements_per_section,
-                      int group_size,
-                      std::uint8_t fixed_mask_a,
-                      std::uint8_t fixed_mask_b,
-                      std::uint8_t start_mask,
-                      std::uint8_t end_mask,
-                      const Eigen::VectorXd& load_vector,
-                      double frequency_hz,
-                      const std::vector<double>& output_x,
-                      double output_y,
-                      bool always_pivot = false,
-                      bool higham = false);
+  // configuration, so Solve skips its residual check (section_solve.cpp). `kernels`: the
+  // instruction set of Solve's kernels (vector_kernels.hpp; resolved, and supported by the CPU).
+  SectionCondensation(
+      const Plate& plate,
+      int num_sections,
+      int elements_per_section,
+      int group_size,
+      std::uint8_t fixed_mask_a,
+      std::uint8_t fixed_mask_b,
+      std::uint8_t start_mask,
+      std::uint8_t end_mask,
+      const Eigen::VectorXd& load_vector,
+      double frequency_hz,
+      const std::vector<double>& output_x,
+      double output_y,
+      bool always_pivot = false,
+      bool higham = false,
+      SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
 
   // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at the outputs.
   void Solve(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
@@ -168,6 +172,11 @@ class SectionCondensation {
                  const std::vector<double>& output_x,
                  double output_y) const;
   Piece ComposeGroup(int group, int state) const;
+  // Solve's body, compiled once per instruction set (SolvePortable, SolveAvx2, SolveAvx512).
+  void SolveBody(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
+  void SolvePortable(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
+  void SolveAvx2(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
+  void SolveAvx512(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
   const SolvePiece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
   // Free dofs (0..nc-1) of a cross-section between sections with edge-A / edge-B flags.
   void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {
@@ -195,6 +204,7 @@ class SectionCondensation {
   int group_size_;
   bool always_pivot_;
   bool higham_;  // the caller certified a Higham system: no residual check needed (Solve)
+  SensorOptions::VectorKernels kernels_;  // which copy Solve runs
   std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<std::vector<int>> group_outputs_;

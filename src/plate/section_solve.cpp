@@ -102,6 +102,37 @@ struct Workspace {
 
 void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
                                 std::span<std::complex<double>> w) const {
+  switch (kernels_) {
+    case SensorOptions::VectorKernels::kAvx512:
+      SolveAvx512(clamps, w);
+      return;
+    case SensorOptions::VectorKernels::kAvx2:
+      SolveAvx2(clamps, w);
+      return;
+    case SensorOptions::VectorKernels::kAuto:
+    case SensorOptions::VectorKernels::kPortable:
+      SolvePortable(clamps, w);
+      return;
+  }
+}
+
+void SectionCondensation::SolvePortable(std::span<const std::uint8_t> clamps,
+                                        std::span<std::complex<double>> w) const {
+  SolveBody(clamps, w);
+}
+
+COMBABC_TARGET_AVX2 void SectionCondensation::SolveAvx2(std::span<const std::uint8_t> clamps,
+                                                        std::span<std::complex<double>> w) const {
+  SolveBody(clamps, w);
+}
+
+COMBABC_TARGET_AVX512 void SectionCondensation::SolveAvx512(
+    std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const {
+  SolveBody(clamps, w);
+}
+
+COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t> clamps,
+                                                   std::span<std::complex<double>> w) const {
   const int ns = num_sections_;
   const int ng = ns / group_size_;
   const int nc = nc_;
@@ -426,7 +457,7 @@ void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
     }
     // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
     // subtracts, so the multipliers are -u.
-    const auto add_end = [&](int i, Index offset) {
+    const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
       const std::vector<int>& f = ws.free[i];
       const Index n = size(i);
       const double* mr = piece.output_map.re.data();

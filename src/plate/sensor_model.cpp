@@ -10,6 +10,7 @@
 #include "combabc/core/thread_pool.hpp"
 #include "continuous_condensation.hpp"
 #include "section_condensation.hpp"
+#include "vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -108,7 +109,8 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
       options_.output_positions,
       options_.output_y_fraction * options_.width,
       options_.always_pivot,
-      fast_path_certified_);
+      fast_path_certified_,
+      ResolveKernels(options_.vector_kernels));
   continuous_ = std::make_unique<ContinuousCache>();
   // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
   // precompute of their own. It holds when every layer has one loss factor, and also when every
@@ -174,7 +176,8 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
         plate_->LoadVector(SensorLoad(options_)),
         options_.output_positions,
         options_.output_y_fraction * options_.width,
-        options_.always_pivot);
+        options_.always_pivot,
+        ResolveKernels(options_.vector_kernels));
     continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
   });
   return *continuous_->base[index];

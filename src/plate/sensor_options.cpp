@@ -2,6 +2,7 @@
 #include <sstream>
 
 #include "combabc/plate/sensor_model.hpp"
+#include "vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -154,6 +155,12 @@ bool SensorOptions::IsValid(std::string* why) const {
   }
   if (!InRange(WidthGrading(), 1.0, 3.0)) {
     return Fail(why, "width_grading", WidthGrading(), "must be in [1, 3]");
+  }
+  if (!CpuSupports(vector_kernels)) {
+    return Fail(why,
+                "vector_kernels",
+                vector_kernels == VectorKernels::kAvx2 ? "avx2" : "avx512",
+                "this CPU does not support that instruction set (kAuto picks the widest it has)");
   }
   if (!(memory_limit_bytes > 0.0) || !std::isfinite(memory_limit_bytes)) {
     return Fail(why, "memory_limit_bytes", memory_limit_bytes, "must be finite and > 0");

@@ -1,7 +1,9 @@
 // The sensor simulator: the condensed fast path against the full sparse solve of the same mesh,
 // option validation, batch determinism, and the paper's qualitative observations (issue, item 6).
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <complex>
 #include <cstdint>
 #include <random>
 #include <span>
@@ -13,6 +15,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/plate/sensor_model.hpp"
+#include "plate/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -223,6 +226,91 @@ TEST(PlateSensorModel, ElementOrderIsCheckedAndNamed) {
 }
 
 // The pivoting-LU path (the LDL^T fallback) on its own.
+// Each vector copy of the solves (vector_kernels.hpp: AVX2, AVX-512, chosen at run time) gives
+// exactly the bits of the build's own: a history must not depend on the CPU that computed it. Both
+// paths of the solve (certified without the residual check; uncertified with it) and every
+// theory; the clamp-only fast path and the continuous unknowns' solve (SensorVariation). Checked
+// to fail when a copy may fuse multiply-adds (target "avx2,fma": thousands of outputs differ).
+void ExpectKernelsBitIdentical(SensorOptions o,
+                               SensorOptions::VectorKernels kernels,
+                               int configurations,
+                               std::uint64_t seed,
+                               bool variation_too = false) {
+  o.vector_kernels = kernels;
+  const SensorModel vectorised(o);
+  o.vector_kernels = SensorOptions::VectorKernels::kPortable;
+  const SensorModel portable(o);
+  SensorVariation variation;
+  variation.foundation_stiffness = 3.0e4;
+  variation.stiffness_scale = 0.8;
+  std::mt19937_64 rng(seed);
+  std::vector<std::complex<double>> a(vectorised.num_outputs());
+  std::vector<std::complex<double>> b(portable.num_outputs());
+  int differing = 0;
+  const auto compare = [&] {
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      if (std::bit_cast<std::uint64_t>(a[k].real()) != std::bit_cast<std::uint64_t>(b[k].real()) ||
+          std::bit_cast<std::uint64_t>(a[k].imag()) != std::bit_cast<std::uint64_t>(b[k].imag())) {
+        ++differing;
+      }
+    }
+  };
+  for (int i = 0; i < configurations; ++i) {
+    const std::vector<std::uint8_t> clamps = RandomClamps(rng, vectorised.num_clamps());
+    vectorised.ComplexProfile(clamps, a);
+    portable.ComplexProfile(clamps, b);
+    compare();
+    if (variation_too && i % 4 == 0) {
+      vectorised.ComplexProfile(clamps, variation, a);
+      portable.ComplexProfile(clamps, variation, b);
+      compare();
+    }
+  }
+  EXPECT_EQ(differing, 0) << "outputs whose bits differ from the portable kernels'";
+}
+
+void ExpectKernelsBitIdentical(SensorOptions::VectorKernels kernels) {
+  SensorOptions o = CoarseOptions();
+  EXPECT_TRUE(SensorModel(o).fast_path_certified());
+  ExpectKernelsBitIdentical(o, kernels, 40, 21, true);
+  o.frequency_hz = 120.0;  // above a resonance: not certified, the residual check runs
+  EXPECT_FALSE(SensorModel(o).fast_path_certified());
+  ExpectKernelsBitIdentical(o, kernels, 20, 22);
+  for (const PlateTheory theory : {PlateTheory::kFsdt, PlateTheory::kKirchhoff}) {
+    o = CoarseOptions();
+    o.theory = theory;
+    ExpectKernelsBitIdentical(o, kernels, 20, 23);
+  }
+}
+
+TEST(PlateSensorModel, VectorKernelsAvx2GiveBitIdenticalProfiles) {
+  if (!CpuSupports(SensorOptions::VectorKernels::kAvx2)) GTEST_SKIP() << "this CPU has no AVX2";
+  ExpectKernelsBitIdentical(SensorOptions::VectorKernels::kAvx2);
+}
+
+TEST(PlateSensorModel, VectorKernelsAvx512GiveBitIdenticalProfiles) {
+  if (!CpuSupports(SensorOptions::VectorKernels::kAvx512)) {
+    GTEST_SKIP() << "this CPU has no AVX-512";
+  }
+  ExpectKernelsBitIdentical(SensorOptions::VectorKernels::kAvx512);
+}
+
+// kAuto takes the widest the CPU has; asking for one it lacks is an invalid option, named.
+TEST(PlateSensorModel, VectorKernelsTheCpuLacksAreRefused) {
+  EXPECT_NE(ResolveKernels(SensorOptions::VectorKernels::kAuto),
+            SensorOptions::VectorKernels::kAuto);
+  for (const auto k :
+       {SensorOptions::VectorKernels::kAvx2, SensorOptions::VectorKernels::kAvx512}) {
+    SensorOptions o = CoarseOptions();
+    o.vector_kernels = k;
+    std::string why;
+    EXPECT_EQ(o.IsValid(&why), CpuSupports(k));
+    if (!CpuSupports(k)) {
+      EXPECT_NE(why.find("SensorOptions::vector_kernels"), std::string::npos);
+    }
+  }
+}
+
 TEST(PlateSensorModel, FastPathWithPivotingLuEqualsFullSolve) {
   SensorOptions o = CoarseOptions();
   o.always_pivot = true;
