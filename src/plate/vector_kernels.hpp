@@ -6,10 +6,11 @@
 // is compiled twice more, with AVX2 (four doubles per vector) and with AVX-512 (eight), and the
 // widest the CPU supports is chosen at run time. No copy fuses a multiply and an add (the solves'
 // files are compiled with -ffp-contract=off, src/CMakeLists.txt: AVX-512 implies FMA): a fused
-// multiply-add rounds once where the baseline rounds twice. The kernels' arithmetic is element-wise in a fixed order
-// (no reassociation, no reductions across vector lanes), so every version gives bit-identical
-// results (tested: tests/plate/sensor_model_test.cpp, VectorKernels*). A run's history therefore
-// does not depend on the CPU it ran on, only on the build (COMBABC_ARCH, part of the version).
+// multiply-add rounds once where the baseline rounds twice. The kernels' arithmetic is element-wise
+// in a fixed order (no reassociation, no reductions across vector lanes), so every version gives
+// bit-identical results (tested: tests/plate/sensor_model_test.cpp, VectorKernels*). A run's
+// history therefore does not depend on the CPU it ran on, only on the build (COMBABC_ARCH, part of
+// the version).
 //
 // COMBABC_KERNEL: the kernels are forced inline, so that each copy of a solve's body runs them
 // with its own instruction set (a kernel left out of line would run the baseline's).
