@@ -63,6 +63,12 @@ SectionCondensation::SectionCondensation(const Plate& plate,
         load_vector.segment(static_cast<Eigen::Index>(c) * intervals * nc_, nc_)
             .cast<std::complex<double>>());
   }
+  free_dofs_.resize(num_sections + 1);
+  for (int c = 0; c <= num_sections; ++c) {
+    for (int edges = 0; edges < 4; ++edges) {
+      FreeDofs(c, (edges & 1) != 0, (edges & 2) != 0, &free_dofs_[c][edges]);
+    }
+  }
   // Sections with the same element sizes, no interior load and outputs at the same relative
   // positions have identical pieces: compute those once.
   const double tol = 1e-12 * grid.x.back();

@@ -209,6 +209,8 @@ class SectionCondensation {
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<std::vector<int>> group_outputs_;
   std::vector<Eigen::VectorXcd> boundary_load_;  // load vector on each cross-section
+  // [cross-section][edge A fixed | edge B fixed << 1] -> its free dofs (FreeDofs), for Solve.
+  std::vector<std::array<std::vector<int>, 4>> free_dofs_;
 };
 
 }  // namespace combabc::plate

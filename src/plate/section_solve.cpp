@@ -63,9 +63,9 @@ struct Workspace {
   std::vector<Index> rank;
   std::vector<Split> rhs;
   std::vector<Split> u;
-  std::vector<std::vector<int>> free;
-  Split s;  // [S; c^T], (r + 1) x r: S = V^T D V, c = V^T D w
-  Split t;  // Q S, m x r
+  std::vector<const std::vector<int>*> free;  // each row's free dofs (free_dofs_)
+  Split s;                                    // [S; c^T], (r + 1) x r: S = V^T D V, c = V^T D w
+  Split t;                                    // Q S, m x r
   Split y;
   Split small;
 
@@ -90,13 +90,49 @@ struct Workspace {
     }
     diagonal_max2.assign(rows, 0.0);
     rank.assign(rows, 0);
-    free.assign(rows, {});
+    free.assign(rows, nullptr);
     s.Resize((n + 1) * n);
     t.Resize(n * n);
     y.Resize(n);
     small.Resize(n);
   }
 };
+
+// The lower triangle of a row's diagonal block, A = right block of the group on its left + left
+// block of the group on its right, at the free dofs f, into (ar, ai) with leading dimension ld.
+// The free dofs are a contiguous run (a clamp fixes whole edge nodes, the first or last of a
+// cross-section) unless a mask fixes only some of a node's dofs. A template only so that it can
+// take SectionCondensation's private piece type.
+template <class Piece>
+COMBABC_KERNEL void AssembleDiagonal(const Piece& left,
+                                     const Piece& right,
+                                     const std::vector<int>& f,
+                                     Index nc,
+                                     double* ar,
+                                     double* ai,
+                                     Index ld) {
+  const auto n = static_cast<Index>(f.size());
+  const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
+  for (Index c = 0; c < n; ++c) {
+    const Index column = Index{f[c]} * nc;
+    const double* lr = left.right_block.re.data() + column;
+    const double* li = left.right_block.im.data() + column;
+    const double* rr = right.left_block.re.data() + column;
+    const double* ri = right.left_block.im.data() + column;
+    if (run) {
+      const Index first = f[c];
+      for (Index r = c; r < n; ++r) {
+        ar[c * ld + r] = lr[first + r - c] + rr[first + r - c];
+        ai[c * ld + r] = li[first + r - c] + ri[first + r - c];
+      }
+    } else {
+      for (Index r = c; r < n; ++r) {
+        ar[c * ld + r] = lr[f[r]] + rr[f[r]];
+        ai[c * ld + r] = li[f[r]] + ri[f[r]];
+      }
+    }
+  }
+}
 
 }  // namespace
 
@@ -145,41 +181,33 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     const int x = (i + 1) * group_size_;
     const bool a = clamps[x - 1] != 0 || clamps[x] != 0;
     const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
-    FreeDofs(x, a, b, &ws.free[i]);
+    ws.free[i] = &free_dofs_[x][(a ? 1 : 0) | (b ? 2 : 0)];
   }
-  const auto size = [&](int i) { return static_cast<Index>(ws.free[i].size()); };
+  const auto size = [&](int i) { return static_cast<Index>(ws.free[i]->size()); };
   // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
   // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
-  // i + 1's, in its factored form. The free dofs are a contiguous run (a clamp fixes whole edge
-  // nodes, the first or last of a cross-section) unless a mask fixes only some of a node's dofs.
+  // i + 1's, in its factored form.
+  const auto assemble_diagonal = [&](int i, double* ar, double* ai, Index ld) {
+    AssembleDiagonal(
+        GroupPieceOf(i, clamps), GroupPieceOf(i + 1, clamps), *ws.free[i], nc, ar, ai, ld);
+  };
+  // A certified system is assembled straight into the factorization's storage; otherwise into
+  // its own, which the residual check reads, and copied.
+  const bool in_place = higham_ && !always_pivot_;
   for (int i = 0; i < rows; ++i) {
     const SolvePiece& left = GroupPieceOf(i, clamps);
     const SolvePiece& right = GroupPieceOf(i + 1, clamps);
-    const std::vector<int>& f = ws.free[i];
+    const std::vector<int>& f = *ws.free[i];
     const Index n = size(i);
-    const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
-    double* ar = ws.diagonal[i].re.data();
-    double* ai = ws.diagonal[i].im.data();
-    for (Index c = 0; c < n; ++c) {
-      const Index column = Index{f[c]} * nc;
-      const double* lr = left.right_block.re.data() + column;
-      const double* li = left.right_block.im.data() + column;
-      const double* rr = right.left_block.re.data() + column;
-      const double* ri = right.left_block.im.data() + column;
-      if (run) {
-        const Index first = f[c];
-        for (Index r = c; r < n; ++r) {
-          ar[c * n + r] = lr[first + r - c] + rr[first + r - c];
-          ai[c * n + r] = li[first + r - c] + ri[first + r - c];
-        }
-      } else {
-        for (Index r = c; r < n; ++r) {
-          ar[c * n + r] = lr[f[r]] + rr[f[r]];
-          ai[c * n + r] = li[f[r]] + ri[f[r]];
-        }
-      }
+    ws.rank[i] = i + 1 < rows ? right.coupling_left.re.cols() : 0;
+    if (in_place) {
+      assemble_diagonal(i, ws.factor[i].re.data(), ws.factor[i].im.data(), n + ws.rank[i] + 1);
+    } else {
+      double* ar = ws.diagonal[i].re.data();
+      double* ai = ws.diagonal[i].im.data();
+      assemble_diagonal(i, ar, ai, n);
+      ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);  // residual scale
     }
-    if (!higham_) ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);  // residual scale
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
     for (Index k = 0; k < n; ++k) {
       const std::complex<double> v =
@@ -187,12 +215,10 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       ws.rhs[i].re[k] = v.real();
       ws.rhs[i].im[k] = v.imag();
     }
-    ws.rank[i] = 0;
     if (i + 1 < rows) {
-      const std::vector<int>& g = ws.free[i + 1];
+      const std::vector<int>& g = *ws.free[i + 1];
       const Index m = size(i + 1);
-      const Index r = right.coupling_left.re.cols();
-      ws.rank[i] = r;
+      const Index r = ws.rank[i];
       for (Index l = 0; l < r; ++l) {
         const double* pr = right.coupling_left.re.data() + l * nc;
         const double* pi = right.coupling_left.im.data() + l * nc;
@@ -225,8 +251,10 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       const double* ar = ws.diagonal[0].re.data();
       const double* ai = ws.diagonal[0].im.data();
       for (Index c = 0; c < n; ++c) {
-        std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
-        std::copy(ai + c * n + c, ai + (c + 1) * n, fi + c * ld + c);
+        if (!in_place) {
+          std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
+          std::copy(ai + c * n + c, ai + (c + 1) * n, fi + c * ld + c);
+        }
         fr[c * ld + n + r] = ws.rhs[0].re[c];
         fi[c * ld + n + r] = ws.rhs[0].im[c];
       }
@@ -305,8 +333,10 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     const double* ar = ws.diagonal[i + 1].re.data();
     const double* ai = ws.diagonal[i + 1].im.data();
     for (Index c = 0; c < m; ++c) {
-      std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
-      std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
+      if (!in_place) {
+        std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
+        std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
+      }
       // Q(c, l) for this column, contiguous for SubScaledManySplit.
       double* qcr = ws.small.re.data();
       double* qci = ws.small.im.data();
@@ -405,6 +435,11 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
   }
   if (!ok) {
     // Fallback: dense partial-pivoting LU of the whole condensed system.
+    if (in_place) {  // the diagonal blocks went into the factorization, which overwrote them
+      for (int i = 0; i < rows; ++i) {
+        assemble_diagonal(i, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), size(i));
+      }
+    }
     const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a) {
       Eigen::MatrixXcd out(rows_a, cols_a);
       for (Index c = 0; c < cols_a; ++c) {
@@ -458,7 +493,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
     // subtracts, so the multipliers are -u.
     const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
-      const std::vector<int>& f = ws.free[i];
+      const std::vector<int>& f = *ws.free[i];
       const Index n = size(i);
       const double* mr = piece.output_map.re.data();
       const double* mi = piece.output_map.im.data();
