@@ -34,13 +34,13 @@ stage "== clang-tidy on the Release build's sources (.clang-tidy; any warning fa
 bash scripts/check-tidy.sh build-ci
 
 stage "== Debug build with AddressSanitizer + UndefinedBehaviorSanitizer (unit tests)"
-# -O1, as the sanitizers' own documentation advises: Eigen at -O0 made these tests several times
-# slower; assertions stay on (no NDEBUG) and every sanitizer check is the same. GCC's
+# -O1, as AddressSanitizer's documentation advises for reasonable speed (Eigen's templates are
+# slow at -O0); assertions stay on (no NDEBUG) and every sanitizer check is the same. GCC's
 # -Wmaybe-uninitialized misfires on libstdc++'s <regex> at -O1 with the sanitizers; the Release
-# build above keeps that warning as an error.
+# build above keeps that warning as an error. No Python module: its tests are not labelled unit.
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG="-g -O1 -Wno-maybe-uninitialized" \
-  -DCOMBABC_WERROR=ON -DCOMBABC_SANITIZE=ON -DCOMBABC_BUILD_BENCH=OFF
+  -DCOMBABC_WERROR=ON -DCOMBABC_SANITIZE=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_PYTHON=OFF
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
