@@ -191,8 +191,8 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     AssembleDiagonal(
         GroupPieceOf(i, clamps), GroupPieceOf(i + 1, clamps), *ws.free[i], nc, ar, ai, ld);
   };
-  // A certified system is assembled straight into the factorization's storage; otherwise into
-  // its own, which the residual check reads, and copied.
+  // Each A_i goes into the lower triangle of its factorization's storage: straight there for a
+  // certified system; otherwise first into storage of its own, which the residual check reads.
   const bool in_place = higham_ && !always_pivot_;
   for (int i = 0; i < rows; ++i) {
     const SolvePiece& left = GroupPieceOf(i, clamps);
@@ -200,13 +200,20 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     const std::vector<int>& f = *ws.free[i];
     const Index n = size(i);
     ws.rank[i] = i + 1 < rows ? right.coupling_left.re.cols() : 0;
+    const Index ld = n + ws.rank[i] + 1;
+    double* fr = ws.factor[i].re.data();
+    double* fi = ws.factor[i].im.data();
     if (in_place) {
-      assemble_diagonal(i, ws.factor[i].re.data(), ws.factor[i].im.data(), n + ws.rank[i] + 1);
+      assemble_diagonal(i, fr, fi, ld);
     } else {
       double* ar = ws.diagonal[i].re.data();
       double* ai = ws.diagonal[i].im.data();
       assemble_diagonal(i, ar, ai, n);
       ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);  // residual scale
+      for (Index c = 0; c < n; ++c) {
+        std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
+        std::copy(ai + c * n + c, ai + (c + 1) * n, fi + c * ld + c);
+      }
     }
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
     for (Index k = 0; k < n; ++k) {
@@ -248,13 +255,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     double* fr = ws.factor[i].re.data();
     double* fi = ws.factor[i].im.data();
     if (i == 0) {
-      const double* ar = ws.diagonal[0].re.data();
-      const double* ai = ws.diagonal[0].im.data();
       for (Index c = 0; c < n; ++c) {
-        if (!in_place) {
-          std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
-          std::copy(ai + c * n + c, ai + (c + 1) * n, fi + c * ld + c);
-        }
         fr[c * ld + n + r] = ws.rhs[0].re[c];
         fi[c * ld + n + r] = ws.rhs[0].im[c];
       }
@@ -330,13 +331,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     // carried right-hand side r_{i+1} - Q c.
     double* nr = ws.factor[i + 1].re.data();
     double* ni = ws.factor[i + 1].im.data();
-    const double* ar = ws.diagonal[i + 1].re.data();
-    const double* ai = ws.diagonal[i + 1].im.data();
     for (Index c = 0; c < m; ++c) {
-      if (!in_place) {
-        std::copy(ar + c * m + c, ar + (c + 1) * m, nr + c * ldn + c);
-        std::copy(ai + c * m + c, ai + (c + 1) * m, ni + c * ldn + c);
-      }
       // Q(c, l) for this column, contiguous for SubScaledManySplit.
       double* qcr = ws.small.re.data();
       double* qci = ws.small.im.data();
