@@ -3,11 +3,18 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
+#include <string>
 
 #include "combabc/core/error.hpp"
 #include "combabc/services/calibration.hpp"
@@ -27,6 +34,49 @@ constexpr int kExitSoftware = 70;
 constexpr int kExitTooManyFailures = 69;
 // The same bound as [sampler] threads (SmcOptions::IsValid).
 constexpr int kMaxThreads = 4096;
+
+// A whole number in [0, INT64_MAX], read strictly: CLI11's own conversion turns an out-of-range
+// value into INT64_MAX without a word, and its range check prints DBL_MAX's 309 digits.
+CLI::Validator NonNegativeInteger() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::int64_t value = 0;
+        const char* end = text.data() + text.size();
+        const auto [at, error] = std::from_chars(text.data(), end, value);
+        if (text.empty() || error != std::errc() || at != end || value < 0) {
+          return "must be a whole number from 0 to " +
+                 std::to_string(std::numeric_limits<std::int64_t>::max()) + ", not '" + text + "'";
+        }
+        return {};
+      },
+      "INT >= 0");
+}
+
+// A number in [low, high] (high may be infinity), never NaN: CLI11's NonNegativeNumber and Range
+// let nan through, and NonNegativeNumber prints DBL_MAX's 309 digits for a negative value.
+CLI::Validator RealIn(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool parsed = !text.empty() && end == text.c_str() + text.size();
+        if (!parsed || std::isnan(value) || value < low || value > high) {
+          std::ostringstream message;
+          message << "must be a number ";
+          if (std::isinf(high)) {
+            message << ">= " << low;
+          } else if (high == std::numeric_limits<double>::max()) {
+            message << ">= " << low << ", finite";
+          } else {
+            message << "in [" << low << ", " << high << "]";
+          }
+          message << ", not '" << text << "'";
+          return message.str();
+        }
+        return {};
+      },
+      "NUMBER");
+}
 
 void PrintOutcome(const combabc::services::RunOutcome& outcome) {
   const combabc::RunSummary& summary = outcome.history.summary;
@@ -107,24 +157,24 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(0, kMaxThreads));
   auto* max_simulations_option =
       resume->add_option("--max-simulations", max_simulations, "Simulation budget, 0 = no limit")
-          ->check(CLI::NonNegativeNumber);
+          ->check(NonNegativeInteger());
   auto* max_wall_time_option =
       resume
           ->add_option("--max-wall-time",
                        max_wall_time,
                        "Seconds this resume may run (each resume has its own), 0 = no limit")
-          ->check(CLI::NonNegativeNumber);
+          ->check(RealIn(0.0, std::numeric_limits<double>::max()));
   auto* min_acceptance_rate_option =
       resume
           ->add_option(
               "--min-acceptance-rate", min_acceptance_rate, "Acceptance-rate floor, 0 = none")
-          ->check(CLI::Range(0.0, 1.0));
+          ->check(RealIn(0.0, 1.0));
   auto* max_failure_fraction_option =
       resume
           ->add_option("--max-failure-fraction",
                        max_failure_fraction,
                        "Failed simulations tolerated, as a fraction; 1 = never stop")
-          ->check(CLI::Range(0.0, 1.0));
+          ->check(RealIn(0.0, 1.0));
   resume->add_flag("--no-report", no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", quiet, "No progress display");
 
@@ -136,7 +186,7 @@ int main(int argc, char** argv) try {
       ->add_option("--threshold",
                    enumerate_request.thresholds,
                    "One per threshold component (default: the config's final thresholds)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(RealIn(0.0, std::numeric_limits<double>::infinity()));
   enumerate->add_option("-o,--output", enumerate_request.output_directory, "Output directory");
   enumerate
       ->add_option(

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <thread>
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
@@ -161,13 +162,21 @@ struct SamplerMemory {
   double particles = 0.0;
 };
 
+// The largest batch the automatic batch size can choose (CombinatorialSmc's BatchSize): 4096
+// candidates, or 32 per worker on more than 128 threads; threads = 0 is all of this machine's
+// cores.
+double AutomaticBatchBound(const CalibrationConfig& c) {
+  const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
+  const double threads = c.smc.threads > 0 ? c.smc.threads : cores;
+  return std::max(4096.0, 32.0 * threads);
+}
+
 SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const auto d = static_cast<double>(c.space.dimension);
   const auto m = static_cast<double>(c.simulator.outputs.size());
   const auto components = static_cast<double>(c.metric.components.size());
   constexpr double kOverheadBytes = 160.0;  // vector headers, allocator slack, RNG state
-  const int threads = c.smc.threads > 0 ? c.smc.threads : 4096;
-  const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : std::max(4096.0, 32.0 * threads);
+  const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : AutomaticBatchBound(c);
   SamplerMemory memory;
   memory.batch = batch * (2.0 * d + 8.0 * (m + components) + kOverheadBytes);
   memory.particles = static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
@@ -207,13 +216,21 @@ void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
   const double value = field == "batch_size"  ? c.smc.batch_size
                        : field == "num_waves" ? c.smc.num_waves
                                               : c.smc.accepted_per_wave;
+  // batch_size = 0 is the automatic size: "lower it" would mean nothing there.
+  const bool automatic = field == "batch_size" && c.smc.batch_size == 0;
+  const std::string advice =
+      automatic ? "; set a smaller batch_size or fewer threads, or raise memory_limit_gb"
+                : "; lower it or raise memory_limit_gb";
   throw Error(ErrorKind::kConfig,
               "is " + std::to_string(static_cast<long long>(value)) +
+                  (automatic ? " (automatic: up to " +
+                                   std::to_string(static_cast<long long>(AutomaticBatchBound(c))) +
+                                   " candidates a batch)"
+                             : "") +
                   "; the run would need about " + Gigabytes(total) + " of memory (limit " +
                   Gigabytes(c.model.memory_limit_bytes) + "): model " + Gigabytes(model) +
                   ", candidate batch " + Gigabytes(sampler.batch) + ", accepted particles " +
-                  Gigabytes(sampler.particles) +
-                  "; lower it or raise memory_limit_gb (docs/config.md, \"Limits\")",
+                  Gigabytes(sampler.particles) + advice + " (docs/config.md, \"Limits\")",
               c.path,
               source.line,
               it != sources.smc.end() ? source.key : SamplerKeyOf(field));

@@ -112,7 +112,10 @@ std::string ModelKeyOf(const std::string& field) {
              detail.substr(semicolon);
   }
   if (detail.find("of memory") != std::string::npos) {
-    detail += "; lower it or raise memory_limit_gb (docs/config.md, \"Limits\")";
+    // "Lower it" would tell a user to lower the very limit that is too low.
+    detail += field == "memory_limit_bytes"
+                  ? "; raise it, or coarsen [model.mesh] (docs/config.md, \"Limits\")"
+                  : "; lower it or raise memory_limit_gb (docs/config.md, \"Limits\")";
   }
   throw Error(ErrorKind::kConfig, detail, path, line, key);
 }

@@ -129,16 +129,50 @@ void RefuseForeign(const DirectoryState& state,
 
 // ------------------------------------------------------------------------------------ AtomicFile
 
+OutputPathKind ClassifyOutputPath(const std::string& path) {
+  struct stat st {};
+  if (!Lstat(path, &st)) return OutputPathKind::kMissing;
+  if (S_ISLNK(st.st_mode)) {
+    struct stat target {};
+    // A dangling link, or one to a regular file, is a name that a rename replaces.
+    if (::stat(path.c_str(), &target) != 0 || S_ISREG(target.st_mode)) {
+      return OutputPathKind::kRegularFile;
+    }
+    st = target;
+  }
+  if (S_ISREG(st.st_mode)) return OutputPathKind::kRegularFile;
+  if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return OutputPathKind::kStream;
+  if (S_ISDIR(st.st_mode)) ThrowIsADirectory(path);
+  const char* what = S_ISBLK(st.st_mode)    ? "a block device"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a regular file";
+  throw Error(ErrorKind::kCantCreate,
+              std::string("is ") + what + " (refusing to write to it; choose a file path)",
+              path);
+}
+
 AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)), replace_(replace) {
   const fs::path target(path_);
   if (target.filename().empty() || target.filename() == "." || target.filename() == "..") {
     throw Error(ErrorKind::kCantCreate, "not a file name", path_);
   }
-  struct stat st {};
-  if (Lstat(target, &st)) {
-    if (S_ISDIR(st.st_mode)) ThrowIsADirectory(path_);
-    if (!replace_) ThrowExists(path_);
+  const OutputPathKind kind = ClassifyOutputPath(path_);
+  if (kind == OutputPathKind::kStream) {
+    // Written into, never replaced (as cp and tee do): renaming a file over /dev/null would
+    // replace the device for every program. A FIFO without a reader is refused, not waited for.
+    fd_ = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd_ < 0) {
+      throw Error(ErrorKind::kCantCreate,
+                  errno == ENXIO ? std::string("is a FIFO with no reader (refusing to wait)")
+                                 : "cannot open for writing: " + SystemError(),
+                  path_);
+    }
+    const int flags = ::fcntl(fd_, F_GETFL);
+    if (flags >= 0) ::fcntl(fd_, F_SETFL, flags & ~O_NONBLOCK);
+    stream_ = true;
+    return;
   }
+  if (kind == OutputPathKind::kRegularFile && !replace_) ThrowExists(path_);
   const fs::path dir = target.parent_path();
   for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
     const std::string temp = (dir / (OutputDirectory::kTemporaryPrefix + RandomSuffix() + "-" +
@@ -172,6 +206,12 @@ void AtomicFile::Flush() {
 
 void AtomicFile::Commit() {
   Flush();
+  if (stream_) {
+    const int closed = ::close(fd_);
+    fd_ = -1;
+    if (closed != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
+    return;
+  }
   if (::fsync(fd_) != 0) throw Error(ErrorKind::kIo, "write failed: " + SystemError(), path_);
   const int closed = ::close(fd_);
   fd_ = -1;
@@ -179,6 +219,12 @@ void AtomicFile::Commit() {
 
   int renamed = 0;
   if (replace_) {
+    // Again at the last moment: a device or FIFO put there since the constructor is not replaced.
+    if (ClassifyOutputPath(path_) == OutputPathKind::kStream) {
+      throw Error(ErrorKind::kCantCreate,
+                  "is now a device or FIFO (refusing to replace it; choose a file path)",
+                  path_);
+    }
     renamed = ::rename(temp_path_.c_str(), path_.c_str());
   } else {
     // Atomic "create, never replace"; file systems without RENAME_NOREPLACE get link + unlink,
@@ -236,6 +282,13 @@ std::ostream& OutputDirectory::Add(const std::string& name) {
   for (const auto& [staged, file] : staged_) {
     if (staged == name) throw Error(ErrorKind::kSoftware, "written twice: " + name, path_);
   }
+  // A report or export file is a file: a device or FIFO of that name is refused, never written.
+  const std::string entry = (WithoutTrailingSlash(path_) / name).string();
+  if (ClassifyOutputPath(entry) == OutputPathKind::kStream) {
+    throw Error(ErrorKind::kCantCreate,
+                "is a device or FIFO (refusing to write combabc's " + name + " into it)",
+                entry);
+  }
   // combabc's own files (listed in the manifest) may be replaced; others only with overwrite.
   const bool replace = overwrite_ || previous_.count(name) != 0;
   staged_.emplace_back(
@@ -266,6 +319,10 @@ void OutputDirectory::Commit() {
     struct stat st {};
     if (Lstat(dir / name, &st)) {
       if (S_ISDIR(st.st_mode)) ThrowIsADirectory(file->path());
+      if (ClassifyOutputPath(file->path()) != OutputPathKind::kRegularFile) {
+        throw Error(
+            ErrorKind::kCantCreate, "is not a regular file (refusing to replace it)", file->path());
+      }
       if (!overwrite_ && !(previous_.count(name) != 0 && S_ISREG(st.st_mode))) {
         throw Error(ErrorKind::kCantCreate,
                     "file exists and was not written by combabc (refusing to replace it; use "

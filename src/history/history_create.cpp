@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/output_files.hpp"
 #include "history/history_impl.hpp"
 
 #ifndef COMBABC_VERSION
@@ -290,6 +291,13 @@ HistoryStore HistoryStore::Create(const std::string& path,
   if (!fs::is_directory(dir, ec)) {
     throw Error(ErrorKind::kCantCreate,
                 "cannot create run history: directory " + dir.string() + " does not exist",
+                path);
+  }
+  // --overwrite replaces a regular file only; a device or FIFO at the path is never replaced.
+  if (ClassifyOutputPath(path) == OutputPathKind::kStream) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot create run history: the path is a device or FIFO (refusing to replace "
+                "it; choose a file path)",
                 path);
   }
   if (fs::exists(target, ec) && !overwrite) {

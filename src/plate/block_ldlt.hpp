@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
+#include "combabc/plate/plate.hpp"
 #include "vector_kernels.hpp"
 
 namespace combabc::plate {
@@ -213,6 +215,26 @@ struct ResidualCheck {
     scale = std::max(scale, std::sqrt(b2) + std::sqrt(a_max2 * u2));
   }
   bool Passes() const { return finite && std::sqrt(residual2) <= kResidualTol * scale; }
+};
+
+// The singularity test of both block solves (plate.hpp, kMaxAmplification), one block row at a
+// time: the largest |u| against the largest |b|. A NaN in u fails it.
+struct AmplificationCheck {
+  double u2 = 0.0;
+  double b2 = 0.0;
+  COMBABC_KERNEL void AddRow(
+      const double* ur, const double* ui, const double* br, const double* bi, std::ptrdiff_t n) {
+    double u2_sum = 0.0;  // NaN-propagating, unlike std::max
+    for (std::ptrdiff_t k = 0; k < n; ++k) {
+      const double v = ur[k] * ur[k] + ui[k] * ui[k];
+      u2 = std::max(u2, v);
+      u2_sum += v;
+      b2 = std::max(b2, br[k] * br[k] + bi[k] * bi[k]);
+    }
+    if (!std::isfinite(u2_sum)) u2 = std::numeric_limits<double>::infinity();
+  }
+  bool Passes() const { return u2 <= kMaxAmplification * kMaxAmplification * b2; }
+  double amplification() const { return std::sqrt(u2 / b2); }
 };
 
 // Largest |a|^2 over the lower triangle of the leading n x n block (split storage). Two running

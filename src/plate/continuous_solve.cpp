@@ -518,6 +518,13 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
   }
+  // Singular or nearly so (plate.hpp), whichever path solved it.
+  AmplificationCheck amplification;
+  for (int c = 0; c < rows; ++c) {
+    amplification.AddRow(
+        ws.u[c].re.data(), ws.u[c].im.data(), ws.rhs[c].re.data(), ws.rhs[c].im.data(), size(c));
+  }
+  if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
   // Outputs of section s from its two end cross-sections.
   for (int s = 0; s < ns; ++s) {
     const std::vector<int>& outputs = section_outputs_[s];

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <sstream>
 #include <utility>
 
 #include <Eigen/SparseCholesky>
@@ -188,6 +189,20 @@ int Constraints::num_fixed() const {
   for (std::uint8_t m : masks_) n += std::popcount(m);
   return n;
 }
+
+SingularSystem::SingularSystem(double amplification)
+    : Error(ErrorKind::kConfig,
+            [&] {
+              std::ostringstream text;
+              text.precision(2);
+              text << "the plate's system is singular or nearly so for this clamp configuration "
+                      "(the solution is "
+                   << amplification
+                   << " times its load in scaled units): a rigid-body motion left free (no "
+                      "foundation, no fixed edge, frequency 0) or an undamped resonance";
+              return text.str();
+            }()),
+      amplification_(amplification) {}
 
 Plate::Plate(Grid grid,
              PlateSection section,
@@ -395,6 +410,10 @@ Eigen::VectorXcd Plate::SolveHarmonic(const Constraints& constraints,
     const Eigen::VectorXcd residual = scaled_f - a * y;
     y += solver.solve(residual);
   }
+  // Singular or nearly so (plate.hpp): the scaled solution far larger than the scaled load.
+  const double load = scaled_f.cwiseAbs().maxCoeff();
+  const double response = y.cwiseAbs().maxCoeff();
+  if (!(response <= kMaxAmplification * load)) throw SingularSystem(response / load);
   const Eigen::VectorXcd x = scale.asDiagonal() * y;
   Eigen::VectorXcd u = Eigen::VectorXcd::Zero(num_dofs());
   for (std::size_t k = 0; k < free_dofs.size(); ++k) {

@@ -173,6 +173,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     out.load = s.asDiagonal() * piece.load;
     out.output_map = SplitMatrix(piece.output_map * s.asDiagonal());
     out.output_offset = piece.output_offset;
+    out.singular = piece.singular;
     if (piece.left_size > 0) out.left_block = SplitMatrix(condensed.topLeftCorner(nc_, nc_));
     if (piece.right_size > 0) {
       out.right_block = SplitMatrix(condensed.bottomRightCorner(nc_, nc_));
@@ -262,17 +263,28 @@ SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int stat
   }
   Eigen::MatrixXcd x_b = Eigen::MatrixXcd::Zero(n_interior, nb);
   Eigen::VectorXcd x_f = Eigen::VectorXcd::Zero(n_interior);
+  double singular = 0.0;
   if (n_interior > 0) {
     // Jacobi-scaled (see Plate::SolveHarmonic).
     const Eigen::VectorXd scale = k_ii.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
     const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(scale.asDiagonal() * k_ii * scale.asDiagonal());
     // Empty products are skipped: Eigen binds references to their (null) data in Debug.
     if (nb > 0) x_b = scale.asDiagonal() * lu.solve(scale.asDiagonal() * k_ib);
-    x_f = scale.asDiagonal() * lu.solve(scale.asDiagonal() * g_i);
+    const Eigen::VectorXcd scaled_load = scale.asDiagonal() * g_i;
+    const Eigen::VectorXcd y = lu.solve(scaled_load);
+    x_f = scale.asDiagonal() * y;
+    // With a kept end the interior is held by it; without one (the whole plate in one group) this
+    // is the configuration's whole solve, and may be singular (plate.hpp).
+    const double load = scaled_load.cwiseAbs().maxCoeff();
+    if (nb == 0 && load > 0.0) {
+      const double amplification = y.cwiseAbs().maxCoeff() / load;
+      if (!(amplification <= kMaxAmplification)) singular = amplification;
+    }
   }
   Piece result;
   result.left_size = left_size;
   result.right_size = right_size;
+  result.singular = singular;
   result.condensed = k_bb - k_bi * x_b;
   result.load = g_b - k_bi * x_f;
   int n_out = 0;

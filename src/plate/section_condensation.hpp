@@ -140,6 +140,9 @@ class SectionCondensation {
     Eigen::VectorXcd output_offset;  // outputs in the section
     int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
     int right_size = 0;  // likewise for the right end
+    // A group with no kept end (the whole plate in one group) is solved here, not in Solve: the
+    // amplification of that solve when above kMaxAmplification (singular), else 0.
+    double singular = 0.0;
   };
   // A complex matrix as two real ones (block_ldlt.hpp's split storage), column-major.
   struct SplitMatrix {
@@ -163,6 +166,7 @@ class SectionCondensation {
     Eigen::VectorXcd output_offset;  // outputs in the group
     int left_size = 0;
     int right_size = 0;
+    double singular = 0.0;  // as Piece::singular: Solve throws SingularSystem for it
   };
   Piece Condense(const Plate& plate,
                  int section,

@@ -173,6 +173,11 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
   const int ng = ns / group_size_;
   const int nc = nc_;
   const int rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
+  // The whole plate in one group was solved in the precompute; singular there is singular here.
+  for (int g = 0; g < ng; ++g) {
+    const double singular = GroupPieceOf(g, clamps).singular;
+    if (singular > 0.0) throw SingularSystem(singular);
+  }
   thread_local Workspace ws;
   ws.Reserve(nc, std::max(rows, 1));
   if (ws.y.re.size() < w.size()) ws.y.Resize(static_cast<Index>(w.size()));
@@ -472,6 +477,14 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       }
     }
   }
+  // Singular or nearly so (plate.hpp): every path, the certified one too, since a certificate
+  // by Cholesky can pass a matrix that is singular to working precision.
+  AmplificationCheck amplification;
+  for (int i = 0; i < rows; ++i) {
+    amplification.AddRow(
+        ws.u[i].re.data(), ws.u[i].im.data(), ws.rhs[i].re.data(), ws.rhs[i].im.data(), size(i));
+  }
+  if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
   // Outputs of group g from its kept end cross-sections (rows g - 1 and g): the offset plus the
   // output map's columns of the free end dofs (fixed ones are zero) times their values.
   for (int g = 0; g < ng; ++g) {

@@ -31,10 +31,15 @@ plate::SensorVariation SensorSimulator::Variation(std::span<const double> reals)
 void SensorSimulator::Simulate(const ParameterView& theta,
                                RandomStream& /*rng*/,
                                std::span<double> out) const {
-  if (real_names_.empty()) {
-    model_.Profile(theta.bits, out);
-  } else {
-    model_.Profile(theta.bits, Variation(theta.reals), out);
+  // A configuration the plate cannot be solved in is that candidate's failure, with its reason.
+  try {
+    if (real_names_.empty()) {
+      model_.Profile(theta.bits, out);
+    } else {
+      model_.Profile(theta.bits, Variation(theta.reals), out);
+    }
+  } catch (const plate::SingularSystem& singular) {
+    throw SimulationFailed(singular.message(), ErrorKind::kConfig);
   }
 }
 
@@ -47,7 +52,14 @@ void SensorSimulator::SimulateBatch(const ParameterBatch& batch,
     return;
   }
   // One thread here: the engine already runs one batch per worker thread.
-  model_.ProfileBatch(batch.bits, batch.count, out, 1);
+  const std::size_t no = static_cast<std::size_t>(model_.num_outputs());
+  for (std::size_t i = 0; i < batch.count; ++i) {
+    try {
+      model_.Profile(batch[i].bits, out.subspan(i * no, no));
+    } catch (const plate::SingularSystem& singular) {
+      failures.Fail(i, singular.message());
+    }
+  }
 }
 
 }  // namespace combabc::services

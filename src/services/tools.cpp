@@ -143,8 +143,7 @@ std::vector<double> NominalSimulator::Simulate(std::span<const std::uint8_t> bit
   try {
     simulator_->Simulate({bits, no_reals}, rng, out);
   } catch (const SimulationFailed& e) {
-    throw Error(
-        ErrorKind::kSoftware, std::string("the simulation failed: ") + e.what(), config_.path);
+    throw Error(e.kind(), std::string("the simulation failed: ") + e.what(), config_.path);
   }
   return out;
 }

@@ -2,7 +2,11 @@
 // directory it did not create, unless asked to with overwrite, and then only that path.
 #include "combabc/core/output_files.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -247,6 +251,69 @@ TEST_F(OutputFilesTest, ManifestCannotNameAnythingOutsideTheDirectory) {
   EXPECT_EQ(Read(dir_ / "outside.txt"), "keep");
   EXPECT_EQ(Read(out / "sub" / "inside.txt"), "keep");
   EXPECT_TRUE(fs::exists(out / "a.png"));
+}
+
+// --overwrite replaces regular files only (issue D1): renaming a file over /dev/null as root
+// replaced the device. A character device is written into, as cp and tee do; the device here is
+// reached through a symlink in the test's own folder, so that a regression renames over the link
+// and never over /dev/null itself.
+TEST_F(OutputFilesTest, OverwriteWritesIntoACharacterDeviceAndNeverReplacesIt) {
+  const fs::path link = dir_ / "null.csv";
+  fs::create_symlink("/dev/null", link);
+  for (const bool replace : {false, true}) {
+    AtomicFile file(link.string(), replace);
+    file.out() << "position_m,w_m\n";
+    file.Commit();
+    EXPECT_TRUE(fs::is_symlink(link)) << "replace = " << replace;
+    EXPECT_TRUE(fs::is_character_file(link)) << "replace = " << replace;
+  }
+  EXPECT_EQ(Listing(dir_), std::set<std::string>{"null.csv"}) << "a temporary was left behind";
+}
+
+TEST_F(OutputFilesTest, AFifoIsWrittenIntoWhenReadAndRefusedWithoutAReader) {
+  const fs::path fifo = dir_ / "profile.csv";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(KindOf([&] { AtomicFile file(fifo.string(), true); }), ErrorKind::kCantCreate);
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  {
+    AtomicFile file(fifo.string(), true);
+    file.out() << "abc";
+    file.Commit();
+  }
+  char text[8] = {};
+  EXPECT_EQ(::read(reader, text, sizeof text), 3);
+  EXPECT_EQ(std::string(text), "abc");
+  ::close(reader);
+  EXPECT_TRUE(fs::is_fifo(fifo)) << "the FIFO was replaced";
+  EXPECT_EQ(Listing(dir_), std::set<std::string>{"profile.csv"});
+}
+
+TEST_F(OutputFilesTest, ASocketIsRefusedEvenWithOverwrite) {
+  const fs::path path = dir_ / "s.csv";
+  const int sock = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  ASSERT_GE(sock, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(path.string().size(), sizeof address.sun_path);
+  std::snprintf(address.sun_path, sizeof address.sun_path, "%s", path.c_str());
+  ASSERT_EQ(::bind(sock, reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+  EXPECT_EQ(KindOf([&] { AtomicFile file(path.string(), true); }), ErrorKind::kCantCreate);
+  EXPECT_TRUE(fs::is_socket(path));
+  ::close(sock);
+}
+
+TEST_F(OutputFilesTest, AnOutputDirectoryNeverWritesIntoADeviceOrFifo) {
+  const fs::path out = dir_ / "export";
+  fs::create_directories(out);
+  ASSERT_EQ(::mkfifo((out / "particles.csv").c_str(), 0600), 0);
+  fs::create_symlink("/dev/null", out / "waves.csv");
+  OutputDirectory directory(out.string(), /*overwrite=*/true);
+  EXPECT_EQ(KindOf([&] { directory.Add("particles.csv"); }), ErrorKind::kCantCreate);
+  EXPECT_EQ(KindOf([&] { directory.Add("waves.csv"); }), ErrorKind::kCantCreate);
+  EXPECT_TRUE(fs::is_fifo(out / "particles.csv"));
+  EXPECT_TRUE(fs::is_symlink(out / "waves.csv"));
 }
 
 }  // namespace

@@ -162,5 +162,27 @@ TEST_F(BadInput, ResumeOfAMissingHistory) {
   EXPECT_NE(err.find("none.sqlite"), std::string::npos) << err;
 }
 
+// Out-of-range numbers on the command line (issue D16): refused in one short line naming the
+// option, never clamped (a 20-digit budget became INT64_MAX) nor waved through (nan).
+TEST_F(BadInput, OutOfRangeOptionValues) {
+  const std::string history = dir_ / "none.sqlite";
+  for (const std::vector<std::string>& option :
+       std::vector<std::vector<std::string>>{{"--max-simulations", "-5"},
+                                             {"--max-simulations", "99999999999999999999"},
+                                             {"--max-simulations", "12abc"},
+                                             {"--max-wall-time", "nan"},
+                                             {"--max-wall-time", "-1"},
+                                             {"--max-wall-time", "inf"},
+                                             {"--min-acceptance-rate", "nan"},
+                                             {"--max-failure-fraction", "1.5"}}) {
+    const auto err = Expect({"resume", history, option[0], option[1]}, kUsage);
+    EXPECT_NE(err.find(option[0]), std::string::npos) << err;
+    EXPECT_NE(err.find("'" + option[1] + "'"), std::string::npos) << err;
+    EXPECT_LT(err.size(), 200u) << err;
+  }
+  const auto err = Expect({"enumerate", config(), "--threshold", "nan"}, kUsage);
+  EXPECT_NE(err.find("--threshold"), std::string::npos) << err;
+}
+
 }  // namespace
 }  // namespace combabc::testing

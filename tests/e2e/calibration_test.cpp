@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -190,6 +192,45 @@ TEST(Calibration, ResumeAfterSigkillEqualsTheUninterruptedRun) {
   EXPECT_NE(verified.out.find("OK"), std::string::npos) << verified.out;
   // Resuming a finished run is a usage error, not a silent re-run.
   EXPECT_EQ(RunCli({"resume", killed_db}, dir.path()).exit_code, 64);
+}
+
+// A plate left free to move (no foundation, frequency 0, free short edges): the configuration
+// with every clamp free is singular. `simulate` refuses it (78, no CSV); in a run it is a failed
+// simulation with the reason, never accepted, while the run goes on (issue 20, D10: it was
+// "solved" to |w| = 1.3e7 m).
+TEST(Calibration, SingularConfigurationsFailTheirCandidateWithTheReason) {
+  ScratchDir dir("e2e-singular");
+  WriteTinySensorData(dir.path());
+  std::ofstream(dir / "config.toml")
+      << "[model]\nfoundation_stiffness = 0.0\n[model.load]\nfrequency = 0.0\n" +
+             TinySensorConfig("seed = 3\nwaves = 2\naccepted_per_wave = 40\nthreads = 2\n"
+                              "max_failure_fraction = 0.5\n");
+  const auto s = RunCli(
+      {"simulate", dir / "config.toml", "--clamps", "000000", "-o", dir / "p.csv"}, dir.path());
+  EXPECT_EQ(s.exit_code, 78) << s.err;
+  EXPECT_NE(s.err.find("singular"), std::string::npos) << s.err;
+  EXPECT_FALSE(fs::exists(dir / "p.csv"));
+  EXPECT_EQ(
+      RunCli({"simulate", dir / "config.toml", "--clamps", "100000", "-o", dir / "p.csv"},
+             dir.path())
+          .exit_code,
+      0);
+
+  const auto r = RunCli({"run", dir / "config.toml", "-o", dir / "out", "--no-report"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const RunHistory history = HistoryStore::Open(dir / "out/history.sqlite", true).LoadHistory();
+  std::int64_t singular = 0;
+  for (const WaveRecord& wave : history.waves) {
+    for (const SimulationFailure& failure : wave.failures) {
+      singular += failure.reason.find("singular") != std::string::npos;
+    }
+    for (const Particle& p : wave.particles) {
+      EXPECT_NE(std::count(p.theta.bits.begin(), p.theta.bits.end(), 1), 0)
+          << "the singular configuration was accepted";
+    }
+  }
+  EXPECT_GT(singular, 0) << "the prior proposes all-free (1 in 64) among 80+ candidates";
+  EXPECT_EQ(history.summary.failures, singular);
 }
 
 }  // namespace

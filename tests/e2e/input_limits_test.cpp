@@ -219,6 +219,9 @@ TEST_F(InputLimits, SizesThatWouldExhaustMemoryAreRefusedWithTheEstimate) {
   EXPECT_NE(err.find("tight.toml:1: memory_limit_gb: is 0.01; the model would need about"),
             std::string::npos)
       << err;
+  // Regression (D18): the advice was "lower it", the limit that is too low.
+  EXPECT_NE(err.find("raise it, or coarsen [model.mesh]"), std::string::npos) << err;
+  EXPECT_EQ(err.find("lower it"), std::string::npos) << err;
 
   Write("fine.toml", "[model.output]\nspacing = 1e-7\n" + csv);
   err = Expect({"simulate", dir_ / "fine.toml", "--clamps", clamps}, kConfig);
@@ -232,6 +235,17 @@ TEST_F(InputLimits, SizesThatWouldExhaustMemoryAreRefusedWithTheEstimate) {
   EXPECT_NE(err.find("config.toml:12: sampler.batch_size: is 1000000000; the run would need about"),
             std::string::npos)
       << err;
+
+  // Regression (D18): the automatic batch (batch_size = 0) was blamed as "is 0 ... lower it", and
+  // so blamed on a key the user never set.
+  Write("config.toml",
+        "memory_limit_gb = 0.1\n" + Replace(kConfigText, "waves = 2", "waves = 2\nthreads = 4096"));
+  err = Expect({"run", config()}, kConfig);
+  EXPECT_NE(err.find("sampler.batch_size: is 0 (automatic: up to 131072 candidates a batch)"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("set a smaller batch_size or fewer threads"), std::string::npos) << err;
+  EXPECT_EQ(err.find("lower it"), std::string::npos) << err;
 }
 
 // Regression: errors named C++ fields (SensorOptions::load_x) instead of the config key.

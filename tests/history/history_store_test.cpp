@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -303,6 +304,25 @@ TEST_F(HistoryStoreTest, OverwritingAKilledRunIgnoresItsWal) {
     EXPECT_EQ(entry.path().filename().string().find(".creating"), std::string::npos)
         << "temporary file left behind";
   }
+}
+
+// --overwrite replaces a regular file only (issue D1): a FIFO or a device at the history's path is
+// refused and left as it was (a symlink to /dev/null in the test's folder stands for the device).
+TEST_F(HistoryStoreTest, OverwriteNeverReplacesADeviceOrFifo) {
+  ASSERT_EQ(::mkfifo(Path("RUN.db").c_str(), 0600), 0);
+  fs::create_symlink("/dev/null", Path("NULL.db"));
+  for (const char* name : {"RUN.db", "NULL.db"}) {
+    try {
+      HistoryStore::Create(Path(name), MakeFakeMetadata(SmallRun()), /*overwrite=*/true);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.kind(), ErrorKind::kCantCreate) << name;
+    }
+  }
+  EXPECT_TRUE(fs::is_fifo(Path("RUN.db")));
+  EXPECT_TRUE(fs::is_symlink(Path("NULL.db")));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2)
+      << "a temporary was left behind";
 }
 
 // The resume contract, played by hand: continue from the resume point exactly where the engine

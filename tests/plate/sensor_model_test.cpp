@@ -317,6 +317,42 @@ TEST(PlateSensorModel, FastPathWithPivotingLuEqualsFullSolve) {
   ExpectFastEqualsFull(o, 20, 6);
 }
 
+// A plate free to move as a rigid body (no foundation, free short edges, frequency 0) has a
+// singular system when every clamp is free: each solve refuses it (SingularSystem) instead of
+// returning round-off amplified to metres (issue 20, D10: |w| = 1.3e7 m for a 0.042 N load).
+// One fixed clamp holds it; that cantilever is solved, fast path equal to the full solve. With 3
+// clamps a side the whole plate is one group, solved in the precompute (section_condensation.cpp).
+TEST(PlateSensorModel, SingularConfigurationsAreRefusedNotSolved) {
+  for (const auto& [theory, per_edge] : {std::pair{PlateTheory::kRzt, 18},
+                                         std::pair{PlateTheory::kKirchhoff, 18},
+                                         std::pair{PlateTheory::kRzt, 3}}) {
+    SensorOptions o = CoarseOptions();
+    o.theory = theory;
+    o.clamps_per_edge = per_edge;
+    o.foundation_stiffness = 0.0;
+    o.frequency_hz = 0.0;
+    for (const bool always_pivot : {false, true}) {
+      o.always_pivot = always_pivot;
+      const SensorModel model(o);
+      std::vector<std::uint8_t> clamps(model.num_clamps(), 0);
+      std::vector<double> out(model.num_outputs());
+      EXPECT_THROW(model.Profile(clamps, out), SingularSystem) << ToString(theory);
+      EXPECT_THROW(model.ProfileFullSolve(clamps, out), SingularSystem) << ToString(theory);
+      try {
+        model.Profile(clamps, out);
+      } catch (const SingularSystem& error) {
+        EXPECT_GT(error.amplification(), kMaxAmplification);
+        EXPECT_EQ(error.kind(), ErrorKind::kConfig);
+      }
+      clamps[0] = 1;
+      std::vector<double> full(model.num_outputs());
+      model.Profile(clamps, out);
+      model.ProfileFullSolve(clamps, full);
+      EXPECT_LT(MaxRelativeDifference(out, full), kFastPathTol) << ToString(theory);
+    }
+  }
+}
+
 TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   SensorOptions o;
   o.length = -1.0;

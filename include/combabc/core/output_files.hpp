@@ -15,11 +15,22 @@
 
 namespace combabc {
 
+// What an output path names now. `--overwrite` replaces regular files only: a character device or
+// a FIFO (/dev/null, /dev/stdout into a pipe) is written into, never replaced, as cp and tee do; a
+// directory, a block device or a socket is refused (docs/history.md, "Output files"). A symlink
+// counts as what it points to, except that a link to a regular file (or a dangling one) is itself
+// the path that is replaced.
+enum class OutputPathKind { kMissing, kRegularFile, kStream };
+// Throws combabc::Error (kCantCreate, naming `path`) for what can never be an output file.
+OutputPathKind ClassifyOutputPath(const std::string& path);
+
 // A file written under a unique temporary name in its target's directory, then fsync'd and renamed
 // onto the target. The temporary is created with O_CREAT | O_EXCL | O_NOFOLLOW, so nothing that
 // already exists (a file, or a symlink planted at a guessable name) is ever opened or truncated;
-// the rename replaces a path, never what a symlink there points to. Errors are combabc::Error
-// (kCantCreate, kIo) naming the target.
+// the rename replaces a path, never what a symlink there points to. A target that is a stream
+// (OutputPathKind::kStream) is instead written into directly at Commit(), with or without
+// `replace`: nothing is replaced there. Errors are combabc::Error (kCantCreate, kIo) naming the
+// target.
 class AtomicFile {
  public:
   // Creates the temporary. An existing `path` is replaced only when `replace`; without it, a file
@@ -45,6 +56,7 @@ class AtomicFile {
   std::string path_;
   std::string temp_path_;
   bool replace_;
+  bool stream_ = false;  // the target is a character device or FIFO, written into at Commit()
   int fd_ = -1;
   std::ostringstream buffer_;
 };

@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "combabc/core/error.hpp"
 #include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
 
@@ -17,7 +18,14 @@ namespace combabc {
 // a defect or a fatal condition and ends the run.
 class SimulationFailed : public std::runtime_error {
  public:
-  explicit SimulationFailed(const std::string& reason) : std::runtime_error(reason) {}
+  // `kind`: what a single simulation outside a run (`combabc simulate`) reports it as: a crash
+  // by default, a config error for a configuration the model cannot solve.
+  explicit SimulationFailed(const std::string& reason, ErrorKind kind = ErrorKind::kSoftware)
+      : std::runtime_error(reason), kind_(kind) {}
+  ErrorKind kind() const { return kind_; }
+
+ private:
+  ErrorKind kind_;
 };
 
 // Longest failure reason kept, in bytes: a batch holds each candidate's reason in a fixed-size row
