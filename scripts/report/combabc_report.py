@@ -61,9 +61,10 @@ except ImportError as missing:
 
 # v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
 # parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
-# the fingerprint; v4 the failed simulations (table failure, wave.failures). Older files read as
-# runs without reals and without failures.
-SCHEMA_VERSION = 4
+# the fingerprint; v4 the failed simulations (table failure, wave.failures); v5 the meta row
+# wave_count (nothing the report reads). Older files read as runs without reals and without
+# failures.
+SCHEMA_VERSION = 5
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150

@@ -1,0 +1,92 @@
+// What commands check before they work, and what they guarantee of what they write (issue 20).
+// Synthetic histories and tiny runs: each test well under a second.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <regex>
+
+#include "cli_runner.hpp"
+#include "combabc/history/history_store.hpp"
+#include "output_test_support.hpp"
+#include "tiny_sensor.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kData = 65;
+
+void Sql(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* message = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  const std::string text = message ? message : "";
+  sqlite3_free(message);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
+}
+
+std::int64_t Count(const std::string& path, const std::string& table) {
+  sqlite3* db = nullptr;
+  sqlite3_open(path.c_str(), &db);
+  sqlite3_stmt* statement = nullptr;
+  sqlite3_prepare_v2(db, ("SELECT count(*) FROM " + table).c_str(), -1, &statement, nullptr);
+  const std::int64_t n =
+      sqlite3_step(statement) == SQLITE_ROW ? sqlite3_column_int64(statement, 0) : -1;
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return n;
+}
+
+class CliChecks : public ::testing::Test {
+ protected:
+  CliChecks()
+      : dir_("cli-checks-" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())) {}
+  // Runs the CLI expecting one line on stderr naming `names` and exit `code`.
+  CliResult ExpectFailure(const std::vector<std::string>& args,
+                          int code,
+                          const std::string& names) {
+    auto r = RunCli(args, dir_.path());
+    EXPECT_EQ(r.exit_code, code) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
+    return r;
+  }
+  ScratchDir dir_;
+};
+
+// D2, D3: the last waves of a finished run deleted by hand, or a trigger of someone else's:
+// verify says so, and resume, export and report refuse the file (65, one line naming it), before
+// anything is written -- resume fires no trigger.
+TEST_F(CliChecks, HistoriesChangedOutsideCombabcAreRefusedByEveryCommand) {
+  const std::string deleted = MakeHistory(dir_.path() / "deleted.sqlite", {}, 3);
+  Sql(deleted, "DELETE FROM particle WHERE wave >= 1; DELETE FROM wave WHERE wave >= 1; VACUUM");
+  const std::string trigger = MakeHistory(dir_.path() / "trigger.sqlite", {}, 3);
+  Sql(trigger, "CREATE TRIGGER boom AFTER INSERT ON particle BEGIN DELETE FROM wave; END");
+  for (const auto& [path, says] : {std::pair{deleted, "recorded 3 waves, the file holds 1"},
+                                   std::pair{trigger, "trigger boom"}}) {
+    SCOPED_TRACE(path);
+    auto r = RunCli({"verify", path}, dir_.path());
+    EXPECT_EQ(r.exit_code, kData) << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+    ExpectFailure({"export", path, "-o", dir_ / "export"}, kData, path + ": ");
+    ExpectFailure({"report", path, "-o", dir_ / "report"}, kData, path + ": ");
+    ExpectFailure({"resume", path, "--no-report"}, kData, path + ": ");
+    EXPECT_FALSE(fs::exists(dir_.path() / "export"));
+    EXPECT_FALSE(fs::exists(dir_.path() / "report"));
+  }
+  EXPECT_EQ(Count(trigger, "wave"), 3) << "the trigger fired";
+}
+
+}  // namespace
+}  // namespace combabc::testing
