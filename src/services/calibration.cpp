@@ -344,6 +344,16 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   // The measured data as the run first used them, not as the CSV reads today.
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
+  MakeExecutor(p, request.executor);
+  // Whatever would refuse the resume without looking at the model is checked before the model is
+  // built (seconds): the report folder, and the writer's lock (another process resuming the run)
+  // with the history's checks, taken now and held. Nothing is written before BeginResume.
+  const bool report = request.report;
+  std::optional<HistoryStore> store;
+  OnPrimary(*p.executor, [&] {
+    if (report) CheckReportPossible(ReportDirectory(history_path));
+    store.emplace(HistoryStore::Open(history_path));
+  });
   BuildModel(p, history_path);
   // A sensor run written before RZT became the default (combabc before 2026-11-23) has no
   // [model] theory in its config because it was Kirchhoff then: its stored
@@ -360,6 +370,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
       old.config = std::move(kirchhoff);
       old.data_positions = p.data_positions;
       old.data_values = p.data_values;
+      old.executor = std::move(p.executor);
       BuildModel(old, history_path);
       p = std::move(old);
       now = FingerprintOf(p);
@@ -387,16 +398,8 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
                   history_path);
     }
   }
-  const auto& executor = request.executor;
-  const bool report = request.report;
-  MakeExecutor(p, executor);
-  std::optional<HistoryStore> store;
   ResumePoint resume;
-  OnPrimary(*p.executor, [&] {
-    if (report) CheckReportPossible(ReportDirectory(history_path));
-    store.emplace(HistoryStore::Open(history_path));
-    resume = store->BeginResume(limits);
-  });
+  OnPrimary(*p.executor, [&] { resume = store->BeginResume(limits); });
   // The other workers read the resume point as the primary's BeginResume left it, before the
   // primary writes anything more (the second join).
   std::exception_ptr error;

@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kData = 65;
+constexpr int kData = 65, kCantCreate = 73;
 
 void Sql(const std::string& path, const std::string& sql) {
   sqlite3* db = nullptr;
@@ -61,6 +61,13 @@ class CliChecks : public ::testing::Test {
     EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
     return r;
   }
+  // The custom-simulator example's worker config in the scratch folder, with `edit` applied.
+  std::string WorkerConfig(const std::function<std::string(std::string)>& edit) const {
+    const fs::path example = fs::path(COMBABC_SOURCE_DIR) / "examples/custom-simulator";
+    fs::copy_file(example / "data.csv", dir_.path() / "data.csv");
+    std::ofstream(dir_ / "worker.toml") << edit(ReadFile(example / "worker.toml"));
+    return dir_ / "worker.toml";
+  }
   ScratchDir dir_;
 };
 
@@ -86,6 +93,28 @@ TEST_F(CliChecks, HistoriesChangedOutsideCombabcAreRefusedByEveryCommand) {
     EXPECT_FALSE(fs::exists(dir_.path() / "report"));
   }
   EXPECT_EQ(Count(trigger, "wave"), 3) << "the trigger fired";
+}
+
+// D25: a second resume is refused on the run's lock before the model is built (a model that cannot
+// be built here: the worker program is `false`, so a late check would fail on the model instead).
+TEST_F(CliChecks, ResumeChecksTheLockBeforeBuildingTheModel) {
+  const std::string config = WorkerConfig([](const std::string& text) {
+    return std::regex_replace(text, std::regex("argv = \\[[^\\]]*\\]"), "argv = [\"false\"]");
+  });
+  FakeRunOptions options;
+  options.dimension = 6;
+  options.points = 21;
+  RunMetadata metadata = MakeFakeMetadata(options);
+  metadata.config_text = ReadFile(config);
+  metadata.config_path = config;
+  const std::string path = dir_ / "RUN.sqlite";
+  HistoryStore::Create(path, metadata);
+  const auto unlocked = RunCli({"resume", path, "--no-report"}, dir_.path());
+  EXPECT_NE(unlocked.exit_code, 0) << "the model was built: the test cannot tell the order";
+  EXPECT_NE(unlocked.exit_code, kCantCreate) << unlocked.err;
+
+  HistoryStore holder = HistoryStore::Open(path);  // this process resumes the run
+  ExpectFailure({"resume", path, "--no-report"}, kCantCreate, "another process");
 }
 
 }  // namespace
