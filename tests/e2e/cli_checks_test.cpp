@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kData = 65, kCantCreate = 73;
+constexpr int kData = 65, kCantCreate = 73, kConfig = 78;
 
 void Sql(const std::string& path, const std::string& sql) {
   sqlite3* db = nullptr;
@@ -115,6 +115,29 @@ TEST_F(CliChecks, ResumeChecksTheLockBeforeBuildingTheModel) {
 
   HistoryStore holder = HistoryStore::Open(path);  // this process resumes the run
   ExpectFailure({"resume", path, "--no-report"}, kCantCreate, "another process");
+}
+
+// D13: `database` named like a folder the run writes beside it, found when the config is read
+// (78, file, line and key), before anything is built or created.
+TEST_F(CliChecks, AHistoryNamedLikeAnOutputFolderIsAConfigError) {
+  WriteTinySensorData(dir_.path());
+  for (const char* name : {"report", "export", "run.work", "run.enumeration"}) {
+    SCOPED_TRACE(name);
+    std::ofstream(dir_ / "run.toml") << TinySensorConfig(
+        "seed = 3\nwaves = 1\naccepted_per_wave = 5\n",
+        std::string("[output]\ndirectory = \"out\"\ndatabase = \"") + name + "\"\n");
+    const std::string text = ReadFile(dir_ / "run.toml");
+    const auto at = text.find("\ndatabase");
+    ASSERT_NE(at, std::string::npos);
+    const auto line =
+        std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 2;
+    const auto r = ExpectFailure({"run", dir_ / "run.toml", "-q", "--no-report"},
+                                 kConfig,
+                                 dir_ / "run.toml:" + std::to_string(line) + ": output.database: ");
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    ExpectFailure({"enumerate", dir_ / "run.toml", "-q", "--no-report"}, kConfig, "database");
+    EXPECT_FALSE(fs::exists(dir_.path() / "out"));
+  }
 }
 
 }  // namespace
