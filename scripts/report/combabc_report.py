@@ -108,6 +108,10 @@ def doubles(blob):
 def connect(path):
     if not os.path.isfile(path):
         raise ReportError(f"{path}: no such run history", EX_NOINPUT)
+    # SQLite refuses a `..` that climbs above `/` ("/../RUN.sqlite"), which the kernel reads as `/`
+    # (history_sqlite.cpp does the same).
+    if ".." in path.split(os.sep):
+        path = os.path.realpath(path)
     # mode=ro: a report never writes. A WAL-mode history (run in progress or killed) needs its
     # -shm file, which a read-only connection cannot create; then fall back to a normal one.
     try:

@@ -140,5 +140,38 @@ TEST_F(CliChecks, AHistoryNamedLikeAnOutputFolderIsAConfigError) {
   }
 }
 
+// D14: `..` above `/` is `/` (the kernel's reading), for SQLite too: a history under such a path
+// is made, verified and read like any other.
+TEST_F(CliChecks, DotDotAboveTheRootIsTheRoot) {
+  WriteTinySensorData(dir_.path());
+  std::ofstream(dir_ / "run.toml")
+      << TinySensorConfig("seed = 3\nwaves = 1\naccepted_per_wave = 5\n");
+  const std::string climbing = "/../.." + (dir_.path() / "new" / "out").string();
+  auto r = RunCli({"run", dir_ / "run.toml", "-q", "--no-report", "-o", climbing}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path history = dir_.path() / "new" / "out" / "history.sqlite";
+  EXPECT_TRUE(fs::is_regular_file(history));
+  r = RunCli({"verify", "/../.." + history.string()}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // And relative: more `..` than the working directory is deep.
+  std::string up;
+  for (const auto& element : dir_.path()) up += element == "/" ? "" : "../";
+  r = RunCli({"verify", up + "../../" + history.relative_path().string()}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// D14: a run that fails before its history exists leaves none of the folders it created (here
+// three, the model failing to build).
+TEST_F(CliChecks, AFailedRunLeavesNoFolderBehind) {
+  const std::string config = WorkerConfig([](std::string text) {
+    text = std::regex_replace(text, std::regex("argv = \\[[^\\]]*\\]"), "argv = [\"false\"]");
+    return std::regex_replace(text, std::regex("results-worker"), "a/b/c");
+  });
+  const auto r = RunCli({"run", config, "-q", "--no-report"}, dir_.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "a")) << r.err;
+}
+
 }  // namespace
 }  // namespace combabc::testing
