@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kData = 65, kCantCreate = 73, kConfig = 78;
+constexpr int kData = 65, kIo = 74, kCantCreate = 73, kConfig = 78;
 
 void Sql(const std::string& path, const std::string& sql) {
   sqlite3* db = nullptr;
@@ -44,6 +44,33 @@ std::int64_t Count(const std::string& path, const std::string& table) {
   sqlite3_finalize(statement);
   sqlite3_close(db);
   return n;
+}
+
+// The CLI with its stdout on `stdout_path` (e.g. /dev/full); stderr in dir/cli.stderr.
+CliResult RunCliWithStdout(const std::vector<std::string>& args,
+                           const fs::path& dir,
+                           const std::string& stdout_path) {
+  std::vector<std::string> all = {COMBABC_CLI};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  argv.reserve(all.size() + 1);
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string err = (dir / "cli.stderr").string();
+  posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  CliResult r;
+  int status = 0;
+  if (pid > 0 && waitpid(pid, &status, 0) == pid) {
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  r.err = ReadFile(dir / "cli.stderr");
+  return r;
 }
 
 class CliChecks : public ::testing::Test {
@@ -171,6 +198,24 @@ TEST_F(CliChecks, AFailedRunLeavesNoFolderBehind) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir_.path() / "a")) << r.err;
+}
+
+// D17: stdout on a full disk is an I/O error (74, one line), whatever the command printed.
+TEST_F(CliChecks, AFailedWriteToStdoutIsExit74) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string history = MakeHistory(dir_.path() / "RUN.sqlite");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"verify", history},
+        std::vector<std::string>{"export", history, "-o", dir_ / "export", "--no-netcdf"},
+        std::vector<std::string>{"--version"},
+        std::vector<std::string>{"verify", "--help"}}) {
+    SCOPED_TRACE(args.front());
+    const auto r = RunCliWithStdout(args, dir_.path(), "/dev/full");
+    EXPECT_EQ(r.exit_code, kIo) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("standard output"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(RunCliWithStdout({"verify", history}, dir_.path(), "/dev/null").exit_code, 0);
 }
 
 }  // namespace
