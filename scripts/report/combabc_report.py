@@ -729,9 +729,19 @@ def open_output_directory(out, overwrite):
     return False, previous or set()
 
 
+def umask():
+    """The process's umask (os.umask can only be read by setting it: set back at once)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_manifest(out, names):
     fd, temp = tempfile.mkstemp(prefix=TEMPORARY_PREFIX, suffix=MANIFEST, dir=out)
     try:
+        # mkstemp makes the file 0600; the manifest gets the mode of any other file written here
+        # (0666 less the umask), as the C++ side's (core/output_files.cpp) does.
+        os.fchmod(fd, 0o666 & ~umask())
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write("# Files combabc wrote in this directory; combabc replaces only these here.\n")
             f.writelines(n + "\n" for n in sorted(names))

@@ -73,6 +73,21 @@ CliResult RunCliWithStdout(const std::vector<std::string>& args,
   return r;
 }
 
+// The process's umask for the CLI children, restored on exit.
+class ScopedUmask {
+ public:
+  explicit ScopedUmask(mode_t mask) : saved_(::umask(mask)) {}
+  ~ScopedUmask() { ::umask(saved_); }
+
+ private:
+  mode_t saved_;
+};
+
+mode_t ModeOf(const fs::path& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 ? (st.st_mode & 07777) : 0;
+}
+
 class CliChecks : public ::testing::Test {
  protected:
   CliChecks()
@@ -216,6 +231,22 @@ TEST_F(CliChecks, AFailedWriteToStdoutIsExit74) {
     EXPECT_NE(r.err.find("standard output"), std::string::npos) << r.err;
   }
   EXPECT_EQ(RunCliWithStdout({"verify", history}, dir_.path(), "/dev/null").exit_code, 0);
+}
+
+// D19: the files export writes, its manifest included, get 0666 less the umask.
+TEST_F(CliChecks, ExportedFilesGetTheUmasksMode) {
+  const std::string history = MakeHistory(dir_.path() / "RUN.sqlite");
+  for (const mode_t mask : {mode_t{022}, mode_t{027}}) {
+    SCOPED_TRACE(mask);
+    const fs::path out = dir_.path() / ("export-" + std::to_string(mask));
+    {
+      ScopedUmask umask(mask);
+      const auto r = RunCli({"export", history, "-o", out.string(), "--no-netcdf"}, dir_.path());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+    EXPECT_EQ(ModeOf(out / ".combabc-manifest"), 0666 & ~mask);
+    EXPECT_EQ(ModeOf(out / "waves.csv"), 0666 & ~mask);
+  }
 }
 
 }  // namespace
