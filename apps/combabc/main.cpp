@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -119,6 +120,21 @@ bool CpuRunsThisBuild() {
   std::cerr << "combabc: this build (" COMBABC_VERSION ") needs a CPU with " << missing
             << "; rebuild with another COMBABC_ARCH (empty: portable)\n";
   return false;
+}
+
+// What was printed reached standard output, or (a full disk, /dev/full, a closed pipe's reader
+// gone) exit 74 saying so: `combabc verify RUN > report.txt` on a full disk must not exit 0.
+// `code` is the command's own exit code; an earlier failure keeps its code and its message.
+int CheckStandardOutput(int code) {
+  std::cout.flush();
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int error = errno;
+  if (flushed && std::ferror(stdout) == 0 && !std::cout.fail()) return code;
+  if (code != 0) return code;
+  std::cerr << "combabc: I/O error: cannot write to standard output"
+            << (error != 0 ? std::string(": ") + std::strerror(error) : std::string()) << "\n";
+  return combabc::ExitCode(combabc::ErrorKind::kIo);
 }
 
 }  // namespace
@@ -235,11 +251,11 @@ int main(int argc, char** argv) try {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return CheckStandardOutput(app.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return CheckStandardOutput(app.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return CheckStandardOutput(app.exit(e));
   } catch (const CLI::ParseError& e) {
     // One line, like every other error; the full usage is one --help away.
     std::cerr << "combabc: usage error: " << combabc::Printable(e.what(), 400)
@@ -362,7 +378,8 @@ int main(int argc, char** argv) try {
     }
     return interrupted ? 130 : 0;
   };
-  const int code = run_command();
+  // The other ranks print nothing (their std::cout is failed on purpose).
+  const int code = primary ? CheckStandardOutput(run_command()) : run_command();
 #ifdef COMBABC_HAVE_MPI
   if (mpi) return combabc::mpi::ExitCodeOfPrimary(code);
 #endif

@@ -61,9 +61,10 @@ except ImportError as missing:
 
 # v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
 # parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
-# the fingerprint; v4 the failed simulations (table failure, wave.failures). Older files read as
-# runs without reals and without failures.
-SCHEMA_VERSION = 4
+# the fingerprint; v4 the failed simulations (table failure, wave.failures); v5 the meta row
+# wave_count (nothing the report reads). Older files read as runs without reals and without
+# failures.
+SCHEMA_VERSION = 5
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150
@@ -107,6 +108,10 @@ def doubles(blob):
 def connect(path):
     if not os.path.isfile(path):
         raise ReportError(f"{path}: no such run history", EX_NOINPUT)
+    # SQLite refuses a `..` that climbs above `/` ("/../RUN.sqlite"), which the kernel reads as `/`
+    # (history_sqlite.cpp does the same).
+    if ".." in path.split(os.sep):
+        path = os.path.realpath(path)
     # mode=ro: a report never writes. A WAL-mode history (run in progress or killed) needs its
     # -shm file, which a read-only connection cannot create; then fall back to a normal one.
     try:
@@ -724,9 +729,19 @@ def open_output_directory(out, overwrite):
     return False, previous or set()
 
 
+def umask():
+    """The process's umask (os.umask can only be read by setting it: set back at once)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_manifest(out, names):
     fd, temp = tempfile.mkstemp(prefix=TEMPORARY_PREFIX, suffix=MANIFEST, dir=out)
     try:
+        # mkstemp makes the file 0600; the manifest gets the mode of any other file written here
+        # (0666 less the umask), as the C++ side's (core/output_files.cpp) does.
+        os.fchmod(fd, 0o666 & ~umask())
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write("# Files combabc wrote in this directory; combabc replaces only these here.\n")
             f.writelines(n + "\n" for n in sorted(names))

@@ -83,8 +83,21 @@ void ParseOutput(TableReader& root, CalibrationConfig* c) {
   o.directory = t->String("directory").value_or(o.directory);
   if (o.directory.empty()) t->Fail("directory", "must not be empty");
   o.database = t->String("database").value_or(o.database);
-  if (o.database.empty() || o.database.find('/') != std::string::npos) {
+  if (o.database.empty() || o.database.find('/') != std::string::npos || o.database == "." ||
+      o.database == "..") {
     t->Fail("database", "must be a file name (it is created inside output.directory)");
+  }
+  // The folders a run writes beside its history (services: report/, export/, and from the
+  // history's stem <stem>.work/ for an external simulator, <stem>.enumeration/ for enumerate): a
+  // history of one of their names would be found to collide only after sampling.
+  const std::string stem = std::filesystem::path(o.database).stem().string();
+  for (const std::string& folder :
+       {std::string("report"), std::string("export"), stem + ".work", stem + ".enumeration"}) {
+    if (o.database == folder) {
+      t->Fail("database",
+              Excerpt(o.database) + " is the name of the folder the run writes beside its " +
+                  "history (" + folder + "/); choose another file name, e.g. history.sqlite");
+    }
   }
   if (const auto formats = t->Strings("figures")) {
     for (const std::string& f : *formats) {

@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 4).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 5).
 #include <unistd.h>
 
 #include <cerrno>
@@ -21,9 +21,11 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 4 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// Version 5 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
 // meta; version 2 the tables real and proposal, the reals columns and the fingerprint; version 3
-// the table failure and wave.failures, created apart as kSchemaV4Tables). Vectors of
+// the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
+// wave_count, which adds no table). Every table and index here is listed in ExpectedObjects
+// (history_verify.cpp), which refuses any other schema object in a history. Vectors of
 // doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
 // and JSON would not guarantee); bits are packed.
 constexpr const char* kSchema = R"sql(
@@ -230,14 +232,25 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
   }
 }
 
+// v5: the number of wave rows (meta row wave_count), then the run state's checksum over it.
+void WriteRunStateHash(history::Database& db, int schema_version) {
+  if (schema_version >= 5) {
+    db.Exec(
+        "INSERT OR REPLACE INTO meta (key, value) "
+        "VALUES ('wave_count', CAST((SELECT count(*) FROM wave) AS TEXT))");
+  }
+  Statement store(db, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)");
+  store.Bind(1, std::string("run_state_hash"))
+      .Bind(2, history::HexDigest(history::RunStateHash(db, schema_version)))
+      .Run();
+}
+
 void WriteRunHashes(history::Database& db, int schema_version) {
   Statement store(db, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)");
   store.Bind(1, std::string("metadata_hash"))
       .Bind(2, history::HexDigest(history::MetadataHash(db, schema_version)))
       .Run();
-  store.Bind(1, std::string("run_state_hash"))
-      .Bind(2, history::HexDigest(history::RunStateHash(db)))
-      .Run();
+  WriteRunStateHash(db, schema_version);
 }
 
 // WAL: a commit appends to the -wal file, so a process killed at any moment leaves every committed
@@ -367,6 +380,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
   }
   auto impl = std::make_unique<Impl>(path, /*read_only=*/false, std::move(lock));
   SetWriteMode(impl->db);
+  impl->write_ready = true;
   impl->CheckMetadata();
   return HistoryStore(std::move(impl));
 }
@@ -406,17 +420,26 @@ HistoryStore HistoryStore::OpenFile(const std::string& path, bool read_only, boo
   }
   {
     history::ReadSnapshot snapshot(db);
+    impl->CheckSchemaObjects();
     impl->CheckMetadata();
     impl->CheckRunState();
+    impl->CheckWaveSet(/*full=*/false);
   }
-  if (!read_only) {
-    SetWriteMode(db);
-    if (impl->schema_version < kHistorySchemaVersion) impl->MigrateToCurrent();
-  }
+  // A writer changes nothing yet (journal mode, upgrade): not before its first write, so that a
+  // resume refused after opening (its fingerprint) leaves the file as it was.
   return HistoryStore(std::move(impl));
 }
 
+void HistoryStore::Impl::PrepareWrite() {
+  if (write_ready) return;
+  SetWriteMode(db);
+  if (schema_version < kHistorySchemaVersion) MigrateToCurrent();
+  write_ready = true;
+}
+
 void HistoryStore::Impl::StoreRunHashes() { WriteRunHashes(db, schema_version); }
+
+void HistoryStore::Impl::StoreRunStateHash() { WriteRunStateHash(db, schema_version); }
 
 void HistoryStore::Impl::MigrateToCurrent() {
   // Only what an older file can be trusted with: its structure and (v2) its checksums were checked
@@ -425,6 +448,7 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
   // nor (before v4) any failed simulation.
   Transaction transaction(db);
+  const int from = schema_version;
   if (schema_version < 2) {
     db.Exec(R"sql(
       ALTER TABLE wave ADD COLUMN discarded INTEGER NOT NULL DEFAULT 0;
@@ -438,19 +462,25 @@ void HistoryStore::Impl::MigrateToCurrent() {
     db.Exec(kSchemaV3Tables);
     WriteProposal(db, ProposalOptions{}, "");
   }
-  // An older run recorded no failures: its simulators could not fail without ending the run.
-  db.Exec("ALTER TABLE wave ADD COLUMN failures INTEGER NOT NULL DEFAULT 0");
-  db.Exec(kSchemaV4Tables);
+  if (schema_version < 4) {
+    // An older run recorded no failures: its simulators could not fail without ending the run.
+    db.Exec("ALTER TABLE wave ADD COLUMN failures INTEGER NOT NULL DEFAULT 0");
+    db.Exec(kSchemaV4Tables);
+  }
+  // v5 adds the meta row wave_count, written with the run state's checksum below.
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))
               .c_str());
   schema_version = kHistorySchemaVersion;
-  std::vector<int> waves;
-  Statement rows(db, "SELECT wave FROM wave ORDER BY wave");
-  while (rows.Step()) waves.push_back(static_cast<int>(rows.Int(0)));
-  chain.wave = -1;
-  for (int wave : waves) StoreWaveHash(wave);
+  // A wave's checksum changed form up to v4; a v4 wave's stands (it is checked when read).
+  if (from < 4) {
+    std::vector<int> waves;
+    Statement rows(db, "SELECT wave FROM wave ORDER BY wave");
+    while (rows.Step()) waves.push_back(static_cast<int>(rows.Int(0)));
+    chain.wave = -1;
+    for (int wave : waves) StoreWaveHash(wave);
+  }
   StoreRunHashes();
   transaction.Commit();
 }

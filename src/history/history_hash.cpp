@@ -123,7 +123,7 @@ std::uint64_t MetadataHash(Database& db, int schema_version) {
   return hash.value();
 }
 
-std::uint64_t RunStateHash(Database& db) {
+std::uint64_t RunStateHash(Database& db, int schema_version) {
   Fnv1a64 hash;
   AddRows(hash,
           db,
@@ -137,6 +137,11 @@ std::uint64_t RunStateHash(Database& db) {
             db,
             "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key",
             2);
+  }
+  // v5: the wave rows the writer recorded (meta row wave_count), so that waves deleted by hand are
+  // told from waves never written.
+  if (schema_version >= 5) {
+    AddRows(hash, db, "SELECT key, value FROM meta WHERE key = 'wave_count'", 2);
   }
   return hash.value();
 }

@@ -34,8 +34,9 @@ std::optional<std::uint64_t> ParseHexDigest(const std::string& text);
 // and from schema v3 the reals, the proposal options and the fingerprint. `schema_version` says
 // which tables the file has.
 std::uint64_t MetadataHash(Database& db, int schema_version);
-// The run row's mutable part: status, end time, termination, message, resume count, summary.
-std::uint64_t RunStateHash(Database& db);
+// The run row's mutable part: status, end time, termination, message, resume count, summary; then
+// the stop limits a resume set, and (schema v5) the number of wave rows the writer recorded.
+std::uint64_t RunStateHash(Database& db, int schema_version);
 
 // The particle rows of one wave, fed in candidate order (the state a wave's checksum starts from).
 // Schema v3 added `reals`, last, so that a v2 checksum is the same hash over the first six.

@@ -38,6 +38,8 @@ struct HistoryStore::Impl {
   history::RunLock lock;
   history::Database db;
   bool read_only = false;
+  // Set by the first write (PrepareWrite): WAL mode on, an older file upgraded.
+  bool write_ready = false;
   int schema_version = kHistorySchemaVersion;
   HistoryShape shape;
   std::optional<history::Statement> upsert_particle;
@@ -56,13 +58,24 @@ struct HistoryStore::Impl {
   bool checksummed() const { return schema_version >= 2; }
   bool has_reals() const { return schema_version >= 3; }
   bool has_failures() const { return schema_version >= 4; }
-  void RequireWritable(const char* what) const;
+  bool has_wave_count() const { return schema_version >= 5; }
+  // Refuses a read-only store; otherwise PrepareWrite. Every writer calls it first.
+  void RequireWritable(const char* what);
+  // WAL mode and, for an older file, MigrateToCurrent: once, before the first write.
+  void PrepareWrite();
 
   // Open's checks (they throw the first problem, kData): PRAGMA quick_check (or the slower full
-  // integrity_check), then the metadata's checksum and shape. Verify runs them one by one.
+  // integrity_check), then the schema objects, the metadata's checksum and shape, the run state's
+  // checksum and the set of waves. Verify runs them one by one.
   std::vector<std::string> StorageProblems(bool full);
+  // Every table, index, trigger and view is one the schema (of the file's version) creates.
+  void CheckSchemaObjects();
   void CheckMetadata();
   void CheckRunState();
+  // The wave rows are numbered 0 .. n-1; n is the wave_count the writer recorded (v5); a finished
+  // run holds at least the complete waves it recorded (waves_completed); no particle or failure row
+  // belongs to a wave without a row. `full` (verify) also finds orphans that are not whole numbers.
+  void CheckWaveSet(bool full);
 
   // The wave row's SELECT (kWaveColumns, or their v1 equivalent) without WHERE / ORDER BY.
   std::string WaveSelect() const;
@@ -87,6 +100,8 @@ struct HistoryStore::Impl {
   // Writes failure rows (replacing any of the same candidate).
   void InsertFailures(int wave, std::span<const SimulationFailure> rows);
   void StoreRunHashes();
+  // The run state's part only (v5: with the wave count), when a wave row is added.
+  void StoreRunStateHash();
   // An older file opened for writing becomes the current version: new columns and tables,
   // checksums of what it holds.
   void MigrateToCurrent();

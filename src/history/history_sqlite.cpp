@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <limits>
 
 #include "combabc/core/error.hpp"
@@ -25,12 +26,26 @@ std::string OneLine(std::string text) {
   return text;
 }
 
+// The path SQLite is given. SQLite resolves `..` itself and refuses one that climbs above `/`
+// ("/../x.sqlite", or a relative chain longer than the working directory is deep), which the
+// kernel, and so every other part of combabc, reads as `/`: such a path is resolved here as the
+// kernel would (symbolic links of its existing part followed), so that both name the same file.
+std::string SqlitePath(const std::string& path) {
+  const std::filesystem::path given(path);
+  bool climbs = false;
+  for (const auto& element : given) climbs = climbs || element == "..";
+  if (!climbs) return path;
+  std::error_code ec;
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(given, ec);
+  return ec || resolved.empty() ? path : resolved.string();
+}
+
 }  // namespace
 
 Database::Database(const std::string& path, bool create, bool read_only) : path_(path) {
   int flags = read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (create) flags |= SQLITE_OPEN_CREATE;
-  const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
+  const int rc = sqlite3_open_v2(SqlitePath(path).c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     const std::string message = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
     sqlite3_close(db_);

@@ -127,12 +127,13 @@ void HistoryStore::Impl::StoreWaveHash(int wave) {
   store.Bind(1, wave).Bind(2, digest).Run();
 }
 
-void HistoryStore::Impl::RequireWritable(const char* what) const {
+void HistoryStore::Impl::RequireWritable(const char* what) {
   if (read_only) {
     throw Error(ErrorKind::kSoftware,
                 std::string("run history opened read-only; cannot ") + what,
                 db.path());
   }
+  PrepareWrite();
 }
 
 void HistoryStore::OnWaveStart(const WaveRecord& wave) {
@@ -140,6 +141,8 @@ void HistoryStore::OnWaveStart(const WaveRecord& wave) {
   Transaction transaction(impl_->db);
   UpsertWave(impl_->db, wave);
   impl_->StoreWaveHash(wave.wave);
+  // The wave count goes with the new row: waves deleted by hand are then told from unwritten ones.
+  impl_->StoreRunStateHash();
   transaction.Commit();
 }
 

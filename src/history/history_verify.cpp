@@ -2,6 +2,9 @@
 // every open), and `combabc verify`'s full pass over every wave.
 #include <sqlite3.h>
 
+#include <set>
+#include <tuple>
+
 #include "combabc/core/error.hpp"
 #include "history/history_impl.hpp"
 
@@ -50,7 +53,160 @@ std::size_t CountNumberedRows(history::Database& db, const char* sql, const char
   return static_cast<std::size_t>(expected);
 }
 
+// A schema object as sqlite_master lists it: type, name, and the table it belongs to.
+using SchemaObject = std::tuple<std::string, std::string, std::string>;
+
+// What the schema of `version` creates (history_create.cpp): its tables and the indexes SQLite
+// makes for their non-integer primary keys. No trigger and no view, ever.
+std::set<SchemaObject> ExpectedObjects(int version) {
+  std::set<SchemaObject> objects;
+  auto table = [&](const char* name) { objects.emplace("table", name, name); };
+  auto key_index = [&](const char* table_name) {
+    objects.emplace(
+        "index", std::string("sqlite_autoindex_") + table_name + "_1", std::string(table_name));
+  };
+  for (const char* name :
+       {"meta", "run", "bit", "component", "output_position", "measured", "wave", "particle"}) {
+    table(name);
+  }
+  key_index("meta");
+  key_index("particle");
+  if (version >= 3) {
+    table("real");
+    table("proposal");
+  }
+  if (version >= 4) {
+    table("failure");
+    key_index("failure");
+  }
+  return objects;
+}
+
+// The statistics tables ANALYZE (or PRAGMA optimize) makes: SQLite's own, harmless to combabc.
+bool IsSqliteStatistics(const SchemaObject& object) {
+  const std::string& name = std::get<1>(object);
+  return std::get<0>(object) == "table" && name.rfind("sqlite_stat", 0) == 0;
+}
+
+// Whether `table` has a row of a wave not in 0 .. waves-1. Walks the distinct values of its
+// leading (wave, candidate) key through the index, one seek each: at most waves + 1 seeks.
+// Returns the first such value as text, or nullopt.
+std::optional<std::string> OrphanWave(history::Database& db,
+                                      const char* table,
+                                      std::int64_t waves) {
+  Statement first(db,
+                  (std::string("SELECT wave FROM ") + table + " ORDER BY wave LIMIT 1").c_str());
+  Statement next(
+      db,
+      (std::string("SELECT wave FROM ") + table + " WHERE wave > ?1 ORDER BY wave LIMIT 1")
+          .c_str());
+  Statement* row = &first;
+  while (row->Step()) {
+    if (row->Type(0) != SQLITE_INTEGER || row->Int(0) < 0 || row->Int(0) >= waves) {
+      std::string value = row->Text(0);
+      row->Reset();
+      return value;
+    }
+    const std::int64_t wave = row->Int(0);
+    row->Reset();
+    next.Bind(1, wave);
+    row = &next;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
+
+void HistoryStore::Impl::CheckSchemaObjects() {
+  std::set<SchemaObject> expected = ExpectedObjects(schema_version);
+  Statement objects(db, "SELECT type, name, tbl_name FROM sqlite_master ORDER BY type, name");
+  while (objects.Step()) {
+    SchemaObject object{objects.Text(0), objects.Text(1), objects.Text(2)};
+    if (expected.erase(object) != 0 || IsSqliteStatistics(object)) continue;
+    objects.Reset();
+    const auto& [type, name, table] = object;
+    std::string what = "has a " + type + " that combabc did not create";
+    if (!table.empty() && table != name) what.append(" (on table ").append(table).append(")");
+    what += "; combabc does not read or write a history that SQL outside it could change";
+    std::string field = type;
+    field.append(" ").append(name);
+    Corrupt(db.path(), field, what);
+  }
+  if (!expected.empty()) {
+    const auto& [type, name, table] = *expected.begin();
+    Corrupt(db.path(), type + " " + name, "the " + type + " is missing");
+  }
+}
+
+void HistoryStore::Impl::CheckWaveSet(bool full) {
+  const std::string& path = db.path();
+  Statement rows(db, "SELECT count(*), min(wave), max(wave) FROM wave");
+  rows.Step();
+  const std::int64_t waves = rows.Int(0);
+  const std::int64_t first = rows.Int(1);
+  const std::int64_t last = rows.Int(2);
+  rows.Reset();
+  if (waves > 0 && (first != 0 || last != waves - 1)) {
+    Corrupt(path,
+            "wave",
+            "waves are not numbered 1, 2, 3, ... (" + std::to_string(waves) + " rows, from wave " +
+                std::to_string(first + 1) + " to " + std::to_string(last + 1) + ")");
+  }
+  if (has_wave_count()) {
+    Statement count(db, "SELECT value FROM meta WHERE key = 'wave_count'");
+    std::optional<std::int64_t> recorded;
+    if (count.Step()) {
+      const std::string text = count.Text(0);
+      count.Reset();
+      if (!text.empty() && text.size() < 12 &&
+          text.find_first_not_of("0123456789") == std::string::npos) {
+        recorded = std::stoll(text);
+      }
+    }
+    if (!recorded) Corrupt(path, "meta.wave_count", "the wave count is missing or malformed");
+    if (*recorded != waves) {
+      Corrupt(path,
+              "meta.wave_count",
+              "the run recorded " + std::to_string(*recorded) + " waves, the file holds " +
+                  std::to_string(waves) + " (waves deleted or added outside combabc)");
+    }
+  }
+  Statement summary(db, "SELECT waves_completed FROM run WHERE id = 1");
+  if (summary.Step() && !summary.IsNull(0)) {
+    const std::int64_t completed = summary.Int(0);
+    summary.Reset();
+    const std::int64_t complete =
+        db.QueryInt("SELECT count(*) FROM wave WHERE ended != 0 AND complete != 0");
+    // Fewer: waves deleted. (More is no loss: Finish records the summary it is given, which a
+    // caller of the library may have left at 0.)
+    if (complete < completed) {
+      Corrupt(path,
+              "run.waves_completed",
+              "the run ended with " + std::to_string(completed) +
+                  " complete waves, the file holds only " + std::to_string(complete) +
+                  " (waves deleted outside combabc)");
+    }
+  }
+  std::vector<const char*> tables = {"particle"};
+  if (has_failures()) tables.push_back("failure");
+  for (const char* table : tables) {
+    std::optional<std::string> orphan = OrphanWave(db, table, waves);
+    if (!orphan && full) {
+      // Values between two whole numbers (1.5) sort between them: the walk above passes them.
+      Statement odd(db,
+                    (std::string("SELECT wave FROM ") + table +
+                     " WHERE wave NOT IN (SELECT wave FROM wave) LIMIT 1")
+                        .c_str());
+      if (odd.Step()) orphan = odd.Text(0);
+    }
+    if (orphan) {
+      Corrupt(path,
+              table,
+              std::string("has rows of wave '") + *orphan +
+                  "', which has no wave row (orphans: waves deleted outside combabc)");
+    }
+  }
+}
 
 std::vector<std::string> HistoryStore::Impl::StorageProblems(bool full) {
   std::vector<std::string> problems;
@@ -139,7 +295,10 @@ void HistoryStore::Impl::CheckMetadata() {
 
 void HistoryStore::Impl::CheckRunState() {
   if (checksummed()) {
-    CheckDigest(db, "run_state_hash", history::RunStateHash(db), "the run's status and summary");
+    CheckDigest(db,
+                "run_state_hash",
+                history::RunStateHash(db, schema_version),
+                "the run's status and summary");
   }
 }
 
@@ -163,12 +322,14 @@ HistoryCheck HistoryStore::Verify(const std::string& path) {
     result.problems.back() += line;
   }
   history::ReadSnapshot snapshot(impl.db);
+  collect([&] { impl.CheckSchemaObjects(); });
   bool metadata_ok = false;
   collect([&] {
     impl.CheckMetadata();
     metadata_ok = true;
   });
   collect([&] { impl.CheckRunState(); });
+  collect([&] { impl.CheckWaveSet(/*full=*/true); });
   collect([&] { store.LoadMetadata(); });
   if (!metadata_ok) return result;  // the waves cannot be checked without the run's shape
   collect([&] {

@@ -112,29 +112,42 @@ void BuildModel(Problem& p, const std::string& history_path) {
   p.space.emplace(BinarySpace(p.config.space), p.config.reals);
 }
 
-// Creates the run's output folder (on the primary); true when it did not exist before.
-bool CreateOutputDirectory(const std::string& directory) {
-  std::error_code ec;
-  const bool existed = fs::exists(directory, ec);
-  fs::create_directories(directory, ec);
-  if (ec) {
-    throw Error(
-        ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+// The run's output folder and whichever of its parents were missing, created on the primary and
+// removed again (those still empty, deepest first) unless Keep() is called once the history
+// exists: a run that fails before it has written anything leaves no folder behind.
+class OutputFolders {
+ public:
+  OutputFolders() = default;
+  OutputFolders(const OutputFolders&) = delete;
+  OutputFolders& operator=(const OutputFolders&) = delete;
+  ~OutputFolders() {
+    std::error_code ec;
+    for (const fs::path& folder : created_) fs::remove(folder, ec);  // only if empty
   }
-  return !existed;
-}
+
+  void Create(const std::string& directory) {
+    std::error_code ec;
+    for (fs::path folder = directory; !folder.empty() && !fs::exists(folder, ec);
+         folder = folder.parent_path()) {
+      created_.push_back(folder);
+      if (folder == folder.parent_path()) break;
+    }
+    fs::create_directories(directory, ec);
+    if (ec) {
+      throw Error(
+          ErrorKind::kCantCreate, "cannot create output directory: " + ec.message(), directory);
+    }
+  }
+  void Keep() { created_.clear(); }
+
+ private:
+  std::vector<fs::path> created_;  // deepest first
+};
 
 // Builds the model on every worker once the output folder exists (an external simulator works
-// inside it); a folder this run created (`created`) is removed again, if still empty, when the
-// model cannot be built.
-void BuildModelIn(Problem& p, const std::string& history_path, const std::string& created) {
-  try {
-    OnEvery(*p.executor, [&] { BuildModel(p, history_path); });
-  } catch (...) {
-    std::error_code ec;
-    if (!created.empty()) fs::remove(created, ec);  // only if empty
-    throw;
-  }
+// inside it).
+void BuildModelIn(Problem& p, const std::string& history_path) {
+  OnEvery(*p.executor, [&] { BuildModel(p, history_path); });
 }
 
 // `config` defaults to the problem's own; resume also asks what another reading of it would give.
@@ -291,6 +304,7 @@ std::vector<std::pair<std::string, std::string>> ApplyStopLimits(
 }  // namespace
 
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
+  OutputFolders folders;  // outlives the problem: its simulator may work inside them
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
   MakeExecutor(p, request.executor);
@@ -300,15 +314,15 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
                               : request.output_directory;
   const std::string history_path = (fs::path(directory) / p.config.output.database).string();
   if (request.on_history_path) request.on_history_path(history_path);
-  std::string created;
   OnPrimary(*p.executor, [&] {
     if (request.report) CheckReportPossible(ReportDirectory(history_path));
-    if (CreateOutputDirectory(directory)) created = directory;
+    folders.Create(directory);
   });
-  BuildModelIn(p, history_path, created);
+  BuildModelIn(p, history_path);
   std::optional<HistoryStore> store;
   OnPrimary(*p.executor, [&] {
     store.emplace(HistoryStore::Create(history_path, Describe(p), request.overwrite));
+    folders.Keep();
   });
   return Execute(p, store ? &*store : nullptr, history_path, nullptr, request.report, progress);
 }
@@ -344,6 +358,16 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   // The measured data as the run first used them, not as the CSV reads today.
   p.data_positions = metadata.measured.positions;
   p.data_values = metadata.measured.values;
+  MakeExecutor(p, request.executor);
+  // Whatever would refuse the resume without looking at the model is checked before the model is
+  // built (seconds): the report folder, and the writer's lock (another process resuming the run)
+  // with the history's checks, taken now and held. Nothing is written before BeginResume.
+  const bool report = request.report;
+  std::optional<HistoryStore> store;
+  OnPrimary(*p.executor, [&] {
+    if (report) CheckReportPossible(ReportDirectory(history_path));
+    store.emplace(HistoryStore::Open(history_path));
+  });
   BuildModel(p, history_path);
   // A sensor run written before RZT became the default (combabc before 2026-11-23) has no
   // [model] theory in its config because it was Kirchhoff then: its stored
@@ -360,6 +384,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
       old.config = std::move(kirchhoff);
       old.data_positions = p.data_positions;
       old.data_values = p.data_values;
+      old.executor = std::move(p.executor);
       BuildModel(old, history_path);
       p = std::move(old);
       now = FingerprintOf(p);
@@ -387,16 +412,8 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
                   history_path);
     }
   }
-  const auto& executor = request.executor;
-  const bool report = request.report;
-  MakeExecutor(p, executor);
-  std::optional<HistoryStore> store;
   ResumePoint resume;
-  OnPrimary(*p.executor, [&] {
-    if (report) CheckReportPossible(ReportDirectory(history_path));
-    store.emplace(HistoryStore::Open(history_path));
-    resume = store->BeginResume(limits);
-  });
+  OnPrimary(*p.executor, [&] { resume = store->BeginResume(limits); });
   // The other workers read the resume point as the primary's BeginResume left it, before the
   // primary writes anything more (the second join).
   std::exception_ptr error;
@@ -496,6 +513,7 @@ void WriteEnumeration(const EnumerateRequest& request,
 }  // namespace
 
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress) {
+  OutputFolders folders;  // kept once the enumeration's results are written
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
   MakeExecutor(p, request.executor);
@@ -524,10 +542,10 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
                   history.string());
     }
     if (request.report) CheckReportPossible(ReportDirectory(history.string()));
-    CreateOutputDirectory(directory);
+    folders.Create(directory);
     OutputDirectory::Check(files_directory, request.overwrite);
   });
-  BuildModelIn(p, history.string(), "");
+  BuildModelIn(p, history.string());
 
   EnumerateOutcome outcome;
   const EnumerationResult result = Enumerate(p.view(), options, progress);
@@ -539,7 +557,10 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   outcome.interrupted = result.interrupted;
   if (result.interrupted) return outcome;
   // The files, on the primary only.
-  OnPrimary(executor, [&] { WriteEnumeration(request, p, options, result, outcome); });
+  OnPrimary(executor, [&] {
+    WriteEnumeration(request, p, options, result, outcome);
+    folders.Keep();
+  });
   return outcome;
 }
 

@@ -1,6 +1,7 @@
 // `combabc report` through the CLI: its directory rules (never replace what the user wrote),
 // names drawn literally, the configured figure formats, and every failure as one line.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -85,6 +86,21 @@ TEST_F(Report, RewritesItsOwnReportAndOverwriteKeepsTheUsersFiles) {
   EXPECT_EQ(ReadFile(dir_.path() / "figures" / "summary.png").rfind("\x89PNG", 0), 0u);
   for (const auto& name : Listing(dir_.path() / "figures")) {
     EXPECT_EQ(name.find(".combabc-tmp"), std::string::npos) << "staging left behind: " << name;
+  }
+}
+
+// The manifest, like every other file of the report, gets 0666 less the umask (mkstemp made it
+// 0600 whatever the umask).
+TEST_F(Report, FilesGetTheUmasksMode) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  const mode_t saved = ::umask(022);
+  const auto r = RunCli({"report", db}, dir_.path());
+  ::umask(saved);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* name : {".combabc-manifest", "index.html"}) {
+    struct stat st {};
+    ASSERT_EQ(::stat((dir_.path() / "report" / name).c_str(), &st), 0) << name;
+    EXPECT_EQ(st.st_mode & 07777, 0644u) << name;
   }
 }
 

@@ -84,8 +84,28 @@ void Sql(const std::string& path, const std::string& sql) {
   ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
 }
 
+// What a v4 file (before the wave count was recorded) looks like, made from a v5 one: no meta row
+// wave_count, and its checksums as combabc computed them for v4.
+void DowngradeToV4(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  db.Exec(R"sql(
+    DELETE FROM meta WHERE key = 'wave_count';
+    UPDATE meta SET value = '4' WHERE key = 'schema_version';
+    PRAGMA user_version = 4;)sql");
+  history::Statement meta(db, "UPDATE meta SET value = ?2 WHERE key = ?1");
+  meta.Bind(1, std::string("metadata_hash"))
+      .Bind(2, history::HexDigest(history::MetadataHash(db, 4)))
+      .Run();
+  meta.Bind(1, std::string("run_state_hash"))
+      .Bind(2, history::HexDigest(history::RunStateHash(db, 4)))
+      .Run();
+  transaction.Commit();
+}
+
 // The v3 additions dropped: what a v2 run (without reals) holds, still with v3 checksums.
 void DropV3(const std::string& path) {
+  DowngradeToV4(path);
   Sql(path, R"sql(
     ALTER TABLE wave DROP COLUMN failures;
     DROP TABLE failure;
@@ -127,6 +147,7 @@ void DowngradeToV2(const std::string& path) {
 // What a v3 file (before failed simulations were recorded) looks like, made from a v4 one without
 // failures: its tables, and its checksums as combabc computed them for v3.
 void DowngradeToV3(const std::string& path) {
+  DowngradeToV4(path);
   Sql(path, R"sql(
     ALTER TABLE wave DROP COLUMN failures;
     DROP TABLE failure;)sql");
@@ -587,6 +608,139 @@ TEST_F(HistoryIntegrityTest, AV3RunReadsAndIsUpgradedToV4OnResume) {
   Sql(path, "INSERT INTO failure (wave, candidate, reason) VALUES (0, 0, 'forged')");
   ExpectDataError(
       Catch([&] { HistoryStore::Open(path, true).LoadHistory(); }), path, "wave 1, failures");
+}
+
+// Waves deleted by hand after the run (issue 20, D2): the run recorded how many wave rows it wrote
+// (v5: meta wave_count, under run_state_hash), and a finished run how many complete waves it had
+// (waves_completed): an earlier wave never reads as the posterior.
+TEST_F(HistoryIntegrityTest, WavesDeletedByHandAreRefused) {
+  const std::string path = WriteFinished("finished.db");
+  Sql(path, "DELETE FROM particle WHERE wave >= 2; DELETE FROM wave WHERE wave >= 2; VACUUM");
+  ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "meta.wave_count");
+  ExpectDataError(Catch([&] { HistoryStore::Open(path); }), path, "meta.wave_count");
+  HistoryCheck check = HistoryStore::Verify(path);
+  ASSERT_FALSE(check.problems.empty());
+  EXPECT_NE(check.problems.front().find("recorded 3 waves, the file holds 2"), std::string::npos)
+      << check.problems.front();
+
+  // A v4 file has no wave count: its finished run's waves_completed tells.
+  const std::string v4 = WriteFinished("v4.db");
+  DowngradeToV4(v4);
+  EXPECT_TRUE(HistoryStore::Verify(v4).problems.empty());
+  Sql(v4, "DELETE FROM particle WHERE wave >= 2; DELETE FROM wave WHERE wave >= 2");
+  ExpectDataError(Catch([&] { HistoryStore::Open(v4, true); }), v4, "run.waves_completed");
+  check = HistoryStore::Verify(v4);
+  ASSERT_FALSE(check.problems.empty());
+  EXPECT_NE(check.problems.front().find("ended with 3 complete waves, the file holds only 2"),
+            std::string::npos)
+      << check.problems.front();
+
+  // A killed run's wave in progress, deleted, is missed as well: resume would redo it silently.
+  const std::string killed = WriteKilled("killed.db");
+  Sql(killed, "DELETE FROM particle WHERE wave = 1; DELETE FROM wave WHERE wave = 1");
+  ExpectDataError(Catch([&] { HistoryStore::Open(killed); }), killed, "meta.wave_count");
+}
+
+TEST_F(HistoryIntegrityTest, OrphanParticlesAndFailuresAreRefused) {
+  const std::string path = WriteFinished("finished.db");
+  // Copies of wave 1's particles under a wave that has no row: no checksum covers them.
+  Sql(path,
+      "INSERT INTO particle (wave, candidate, bits) SELECT 7, candidate, bits FROM particle WHERE "
+      "wave = 0");
+  ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "particle");
+  const HistoryCheck check = HistoryStore::Verify(path);
+  ASSERT_EQ(check.problems.size(), 1u) << check.problems.front();
+  EXPECT_NE(check.problems.front().find("wave '7', which has no wave row"), std::string::npos)
+      << check.problems.front();
+
+  const std::string failures = WriteFinished("failures.db");
+  Sql(failures, "INSERT INTO failure (wave, candidate, reason) VALUES (3, 0, 'forged')");
+  ExpectDataError(Catch([&] { HistoryStore::Open(failures, true); }), failures, "failure");
+
+  // A wave number between two waves (1.5) is no wave either; verify's full pass finds it.
+  const std::string odd = WriteFinished("odd.db");
+  Sql(odd,
+      "INSERT INTO particle (wave, candidate, bits) SELECT 1.5, candidate, bits FROM particle "
+      "WHERE wave = 0");
+  const HistoryCheck odd_check = HistoryStore::Verify(odd);
+  ASSERT_FALSE(odd_check.problems.empty());
+  EXPECT_NE(odd_check.problems.front().find("wave '1.5'"), std::string::npos)
+      << odd_check.problems.front();
+}
+
+// A trigger, view or index that combabc did not create (D3) could change the history behind its
+// back (a trigger deleting every wave at the resume's first insert): refused on open, before any
+// write, and reported by verify.
+TEST_F(HistoryIntegrityTest, SchemaObjectsCombabcDidNotCreateAreRefused) {
+  struct Case {
+    const char* sql;
+    const char* field;
+  };
+  for (const Case& c : {
+           Case{"CREATE TRIGGER boom AFTER INSERT ON particle BEGIN DELETE FROM wave; END",
+                "trigger boom"},
+           Case{"CREATE VIEW posterior AS SELECT * FROM particle", "view posterior"},
+           Case{"CREATE INDEX by_weight ON particle (weight)", "index by_weight"},
+           Case{"CREATE TABLE notes (text TEXT)", "table notes"},
+       }) {
+    SCOPED_TRACE(c.sql);
+    const std::string path = WriteKilled("killed.db");
+    Sql(path, c.sql);
+    ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, c.field);
+    ExpectDataError(Catch([&] { HistoryStore::Open(path); }), path, c.field);
+    const HistoryCheck check = HistoryStore::Verify(path);
+    ASSERT_EQ(check.problems.size(), 1u) << check.problems.front();
+    EXPECT_NE(check.problems.front().find("combabc did not create"), std::string::npos)
+        << check.problems.front();
+    fs::remove(path);
+  }
+}
+
+// SQLite's own statistics (ANALYZE, PRAGMA optimize) change no row: such a file is still read,
+// and older versions' schemas (no failure table before v4) are what they were.
+TEST_F(HistoryIntegrityTest, SqliteStatisticsAndOlderSchemasAreNotForeign) {
+  const std::string path = WriteFinished("finished.db");
+  Sql(path, "ANALYZE");
+  EXPECT_TRUE(HistoryStore::Verify(path).problems.empty());
+  EXPECT_EQ(HistoryStore::Open(path, true).LoadHistory().waves.size(), 3u);
+  const std::string v3 = WriteFinished("v3.db");
+  DowngradeToV3(v3);
+  const HistoryCheck check = HistoryStore::Verify(v3);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 3);
+}
+
+// The wave count follows every change a writer makes: a resume that drops a wave started without
+// any batch, and the waves it adds, verify clean; a v4 file resumed is upgraded and counted.
+TEST_F(HistoryIntegrityTest, TheWaveCountFollowsResumeAndUpgrade) {
+  const std::string path = Path("started.db");
+  const RunHistory history = MakeFakeHistory(SmallRun());
+  {
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(SmallRun()));
+    RecordWave(store, history.waves[0], 5);
+    store.OnWaveStart(history.waves[1]);  // killed before its first batch
+  }
+  EXPECT_TRUE(HistoryStore::Verify(path).problems.empty());
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    EXPECT_FALSE(store.BeginResume().has_partial);
+    RecordWave(store, history.waves[1], 5);
+    RunSummary summary = history.summary;
+    summary.waves_completed = 2;
+    store.Finish(summary);
+  }
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.waves, 2);
+
+  const std::string v4 = WriteKilled("v4.db");
+  DowngradeToV4(v4);
+  { HistoryStore::Open(v4).BeginResume(); }
+  check = HistoryStore::Verify(v4);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  Sql(v4, "DELETE FROM particle WHERE wave = 1; DELETE FROM wave WHERE wave = 1");
+  ExpectDataError(Catch([&] { HistoryStore::Open(v4, true); }), v4, "meta.wave_count");
 }
 
 }  // namespace

@@ -23,9 +23,10 @@ namespace combabc {
 // Version of the on-disk schema this build writes; it reads this version and older ones.
 // Version 2 added checksums and each wave's overshoot; version 3 the continuous parameters (their
 // priors, each particle's values, each wave's means and sds), the proposal options and the run's
-// fingerprint; version 4 the failed simulations (table failure, each wave's failure count). An
-// older file opened for writing (resume) is upgraded to this version.
-inline constexpr int kHistorySchemaVersion = 4;
+// fingerprint; version 4 the failed simulations (table failure, each wave's failure count);
+// version 5 the number of wave rows (meta row wave_count, under the run state's checksum). An
+// older file written to (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 5;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise
@@ -115,9 +116,10 @@ class HistoryStore final : public SmcObserver {
   static HistoryStore Create(const std::string& path,
                              const RunMetadata& metadata,
                              bool overwrite = false);
-  // Opens an existing history after SQLite's quick_check and the metadata's checks. read_only
-  // suits report/export: no write is attempted, no lock taken. Otherwise (resume) the file is
-  // locked for this process until the store is destroyed, and an older file is upgraded to v3.
+  // Opens an existing history after SQLite's quick_check, the schema objects' check, the
+  // metadata's checks and the set of waves'. read_only suits report/export: no write is
+  // attempted, no lock taken. Otherwise (resume) the file is locked for this process until the
+  // store is destroyed; the first write (BeginResume) upgrades an older file to this version.
   static HistoryStore Open(const std::string& path, bool read_only = false);
   // Checks everything, without stopping at the first problem: SQLite's integrity_check, the
   // metadata, every wave's vectors, particles and checksum. Throws only when the file cannot be

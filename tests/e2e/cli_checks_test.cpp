@@ -1,0 +1,253 @@
+// What commands check before they work, and what they guarantee of what they write (issue 20).
+// Synthetic histories and tiny runs: each test well under a second.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <regex>
+
+#include "cli_runner.hpp"
+#include "combabc/history/history_store.hpp"
+#include "output_test_support.hpp"
+#include "tiny_sensor.hpp"
+
+namespace combabc::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kData = 65, kIo = 74, kCantCreate = 73, kConfig = 78;
+
+void Sql(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* message = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+  const std::string text = message ? message : "";
+  sqlite3_free(message);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
+}
+
+std::int64_t Count(const std::string& path, const std::string& table) {
+  sqlite3* db = nullptr;
+  sqlite3_open(path.c_str(), &db);
+  sqlite3_stmt* statement = nullptr;
+  sqlite3_prepare_v2(db, ("SELECT count(*) FROM " + table).c_str(), -1, &statement, nullptr);
+  const std::int64_t n =
+      sqlite3_step(statement) == SQLITE_ROW ? sqlite3_column_int64(statement, 0) : -1;
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return n;
+}
+
+// The CLI with its stdout on `stdout_path` (e.g. /dev/full); stderr in dir/cli.stderr.
+CliResult RunCliWithStdout(const std::vector<std::string>& args,
+                           const fs::path& dir,
+                           const std::string& stdout_path) {
+  std::vector<std::string> all = {COMBABC_CLI};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  argv.reserve(all.size() + 1);
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string err = (dir / "cli.stderr").string();
+  posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  CliResult r;
+  int status = 0;
+  if (pid > 0 && waitpid(pid, &status, 0) == pid) {
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  r.err = ReadFile(dir / "cli.stderr");
+  return r;
+}
+
+// The process's umask for the CLI children, restored on exit.
+class ScopedUmask {
+ public:
+  explicit ScopedUmask(mode_t mask) : saved_(::umask(mask)) {}
+  ~ScopedUmask() { ::umask(saved_); }
+
+ private:
+  mode_t saved_;
+};
+
+mode_t ModeOf(const fs::path& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 ? (st.st_mode & 07777) : 0;
+}
+
+class CliChecks : public ::testing::Test {
+ protected:
+  CliChecks()
+      : dir_("cli-checks-" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())) {}
+  // Runs the CLI expecting one line on stderr naming `names` and exit `code`.
+  CliResult ExpectFailure(const std::vector<std::string>& args,
+                          int code,
+                          const std::string& names) {
+    auto r = RunCli(args, dir_.path());
+    EXPECT_EQ(r.exit_code, code) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
+    return r;
+  }
+  // The custom-simulator example's worker config in the scratch folder, with `edit` applied.
+  std::string WorkerConfig(const std::function<std::string(std::string)>& edit) const {
+    const fs::path example = fs::path(COMBABC_SOURCE_DIR) / "examples/custom-simulator";
+    fs::copy_file(example / "data.csv", dir_.path() / "data.csv");
+    std::ofstream(dir_ / "worker.toml") << edit(ReadFile(example / "worker.toml"));
+    return dir_ / "worker.toml";
+  }
+  ScratchDir dir_;
+};
+
+// D2, D3: the last waves of a finished run deleted by hand, or a trigger of someone else's:
+// verify says so, and resume, export and report refuse the file (65, one line naming it), before
+// anything is written -- resume fires no trigger.
+TEST_F(CliChecks, HistoriesChangedOutsideCombabcAreRefusedByEveryCommand) {
+  const std::string deleted = MakeHistory(dir_.path() / "deleted.sqlite", {}, 3);
+  Sql(deleted, "DELETE FROM particle WHERE wave >= 1; DELETE FROM wave WHERE wave >= 1; VACUUM");
+  const std::string trigger = MakeHistory(dir_.path() / "trigger.sqlite", {}, 3);
+  Sql(trigger, "CREATE TRIGGER boom AFTER INSERT ON particle BEGIN DELETE FROM wave; END");
+  for (const auto& [path, says] : {std::pair{deleted, "recorded 3 waves, the file holds 1"},
+                                   std::pair{trigger, "trigger boom"}}) {
+    SCOPED_TRACE(path);
+    auto r = RunCli({"verify", path}, dir_.path());
+    EXPECT_EQ(r.exit_code, kData) << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+    ExpectFailure({"export", path, "-o", dir_ / "export"}, kData, path + ": ");
+    ExpectFailure({"report", path, "-o", dir_ / "report"}, kData, path + ": ");
+    ExpectFailure({"resume", path, "--no-report"}, kData, path + ": ");
+    EXPECT_FALSE(fs::exists(dir_.path() / "export"));
+    EXPECT_FALSE(fs::exists(dir_.path() / "report"));
+  }
+  EXPECT_EQ(Count(trigger, "wave"), 3) << "the trigger fired";
+}
+
+// D25: a second resume is refused on the run's lock before the model is built (a model that cannot
+// be built here: the worker program is `false`, so a late check would fail on the model instead).
+TEST_F(CliChecks, ResumeChecksTheLockBeforeBuildingTheModel) {
+  const std::string config = WorkerConfig([](const std::string& text) {
+    return std::regex_replace(text, std::regex("argv = \\[[^\\]]*\\]"), "argv = [\"false\"]");
+  });
+  FakeRunOptions options;
+  options.dimension = 6;
+  options.points = 21;
+  RunMetadata metadata = MakeFakeMetadata(options);
+  metadata.config_text = ReadFile(config);
+  metadata.config_path = config;
+  const std::string path = dir_ / "RUN.sqlite";
+  HistoryStore::Create(path, metadata);
+  const auto unlocked = RunCli({"resume", path, "--no-report"}, dir_.path());
+  EXPECT_NE(unlocked.exit_code, 0) << "the model was built: the test cannot tell the order";
+  EXPECT_NE(unlocked.exit_code, kCantCreate) << unlocked.err;
+
+  HistoryStore holder = HistoryStore::Open(path);  // this process resumes the run
+  ExpectFailure({"resume", path, "--no-report"}, kCantCreate, "another process");
+}
+
+// D13: `database` named like a folder the run writes beside it, found when the config is read
+// (78, file, line and key), before anything is built or created.
+TEST_F(CliChecks, AHistoryNamedLikeAnOutputFolderIsAConfigError) {
+  WriteTinySensorData(dir_.path());
+  for (const char* name : {"report", "export", "run.work", "run.enumeration"}) {
+    SCOPED_TRACE(name);
+    std::ofstream(dir_ / "run.toml") << TinySensorConfig(
+        "seed = 3\nwaves = 1\naccepted_per_wave = 5\n",
+        std::string("[output]\ndirectory = \"out\"\ndatabase = \"") + name + "\"\n");
+    const std::string text = ReadFile(dir_ / "run.toml");
+    const auto at = text.find("\ndatabase");
+    ASSERT_NE(at, std::string::npos);
+    const auto line =
+        std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 2;
+    const auto r = ExpectFailure({"run", dir_ / "run.toml", "-q", "--no-report"},
+                                 kConfig,
+                                 dir_ / "run.toml:" + std::to_string(line) + ": output.database: ");
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    ExpectFailure({"enumerate", dir_ / "run.toml", "-q", "--no-report"}, kConfig, "database");
+    EXPECT_FALSE(fs::exists(dir_.path() / "out"));
+  }
+}
+
+// D14: `..` above `/` is `/` (the kernel's reading), for SQLite too: a history under such a path
+// is made, verified and read like any other.
+TEST_F(CliChecks, DotDotAboveTheRootIsTheRoot) {
+  WriteTinySensorData(dir_.path());
+  std::ofstream(dir_ / "run.toml")
+      << TinySensorConfig("seed = 3\nwaves = 1\naccepted_per_wave = 5\n");
+  const std::string climbing = "/../.." + (dir_.path() / "new" / "out").string();
+  auto r = RunCli({"run", dir_ / "run.toml", "-q", "--no-report", "-o", climbing}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path history = dir_.path() / "new" / "out" / "history.sqlite";
+  EXPECT_TRUE(fs::is_regular_file(history));
+  r = RunCli({"verify", "/../.." + history.string()}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // And relative: more `..` than the working directory is deep.
+  std::string up;
+  for (const auto& element : dir_.path()) up += element == "/" ? "" : "../";
+  r = RunCli({"verify", up + "../../" + history.relative_path().string()}, dir_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// D14: a run that fails before its history exists leaves none of the folders it created (here
+// three, the model failing to build).
+TEST_F(CliChecks, AFailedRunLeavesNoFolderBehind) {
+  const std::string config = WorkerConfig([](std::string text) {
+    text = std::regex_replace(text, std::regex("argv = \\[[^\\]]*\\]"), "argv = [\"false\"]");
+    return std::regex_replace(text, std::regex("results-worker"), "a/b/c");
+  });
+  const auto r = RunCli({"run", config, "-q", "--no-report"}, dir_.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "a")) << r.err;
+}
+
+// D17: stdout on a full disk is an I/O error (74, one line), whatever the command printed.
+TEST_F(CliChecks, AFailedWriteToStdoutIsExit74) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string history = MakeHistory(dir_.path() / "RUN.sqlite");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"verify", history},
+        std::vector<std::string>{"export", history, "-o", dir_ / "export", "--no-netcdf"},
+        std::vector<std::string>{"--version"},
+        std::vector<std::string>{"verify", "--help"}}) {
+    SCOPED_TRACE(args.front());
+    const auto r = RunCliWithStdout(args, dir_.path(), "/dev/full");
+    EXPECT_EQ(r.exit_code, kIo) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("standard output"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(RunCliWithStdout({"verify", history}, dir_.path(), "/dev/null").exit_code, 0);
+}
+
+// D19: the files export writes, its manifest included, get 0666 less the umask.
+TEST_F(CliChecks, ExportedFilesGetTheUmasksMode) {
+  const std::string history = MakeHistory(dir_.path() / "RUN.sqlite");
+  for (const mode_t mask : {mode_t{022}, mode_t{027}}) {
+    SCOPED_TRACE(mask);
+    const fs::path out = dir_.path() / ("export-" + std::to_string(mask));
+    {
+      ScopedUmask umask(mask);
+      const auto r = RunCli({"export", history, "-o", out.string(), "--no-netcdf"}, dir_.path());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+    EXPECT_EQ(ModeOf(out / ".combabc-manifest"), 0666 & ~mask);
+    EXPECT_EQ(ModeOf(out / "waves.csv"), 0666 & ~mask);
+  }
+}
+
+}  // namespace
+}  // namespace combabc::testing
