@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -153,6 +154,26 @@ TEST_F(ExternalSimulatorCli, AProgramThatDoesNotExistIsAConfigErrorAtItsArgvLine
     EXPECT_NE(r.err.find("'no-such-simulator-program'"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing ran, nothing written";
   }
+}
+
+// Regression (issue 20, D11): a COMBABC_PYTHON without numpy was found out only after sampling
+// (exit 73). The run now refuses to start, naming the variable and the module. (python3 -S has
+// no site-packages: no numpy.)
+TEST_F(ExternalSimulatorCli, APythonWithoutNumpyForTheReportIsRefusedBeforeSampling) {
+  const std::string config = Config("worker.toml", 10);
+  const std::string python = dir_ / "python-without-numpy";
+  std::ofstream(python) << "#!/bin/sh\nexec /usr/bin/python3 -S \"$@\"\n";
+  fs::permissions(python, fs::perms::owner_all);
+  ASSERT_EQ(::setenv("COMBABC_PYTHON", python.c_str(), 1), 0);
+  const auto r = RunCli({"run", config}, dir_.path());
+  ::unsetenv("COMBABC_PYTHON");
+  EXPECT_EQ(r.exit_code, 73) << r.err;
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("report: COMBABC_PYTHON=" + python + " has no module numpy"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "refused before anything was written";
 }
 
 TEST_F(ExternalSimulatorCli, SimulateRunsOneConfigurationThroughTheDeclaredSimulator) {
