@@ -203,11 +203,13 @@ with open(os.path.join(out, "index.html"), "w") as f:
   const pid_t cli = SpawnCli({"report", db, "-o", out}, dir.path());
   ASSERT_GT(cli, 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (!fs::exists(out + ".pid") && std::chrono::steady_clock::now() < deadline) {
+  std::string pid_text;
+  while (pid_text.empty() && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    pid_text = ReadFile(out + ".pid");  // empty until the script has written it
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the pid written and closed
-  const pid_t script_pid = std::stoi(ReadFile(out + ".pid"));
+  ASSERT_FALSE(pid_text.empty()) << "the report script did not start";
+  const pid_t script_pid = std::stoi(pid_text);
   ::kill(cli, SIGINT);
   const auto r = WaitCli(cli, dir.path());
   EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.err;
