@@ -40,11 +40,13 @@ bool PinTo(int cpu) {
 // With a CPU number, the worker pins itself there (the cross-core benchmark below).
 int RunAsWorker(const char* cpu) {
   if (cpu != nullptr) PinTo(std::atoi(cpu));
-  std::printf("combabc-worker 1 %d bench-trivial\n", kOutputs);
+  std::printf("combabc-worker 2 %d bench-trivial\n", kOutputs);
   std::fflush(stdout);
   char line[4096];
   while (std::fgets(static_cast<char*>(line), sizeof line, stdin) != nullptr) {
-    std::fputs("ok 1 2 3\n", stdout);
+    // The answer starts with the request's id, the request's first word.
+    line[std::strcspn(static_cast<const char*>(line), " \n")] = '\0';
+    std::printf("%s ok 1 2 3\n", static_cast<const char*>(line));
     std::fflush(stdout);
   }
   return 0;

@@ -5,14 +5,14 @@
 # fuzz-findings/TARGET/, ignored by git). Fails if any target finds a crash, a sanitizer report,
 # an uncaught non-combabc exception, a leak, a timeout (> 10 s) or an out-of-memory (> 2 GB).
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      e.g. scripts/fuzz.sh 600 history_patch
-# Targets: config measured_data history history_patch. Needs clang-14 and libclang-rt-14-dev
+# Targets: config measured_data history history_patch worker_answer. Needs clang-14 and libclang-rt-14-dev
 # (scripts/setup.sh installs them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
 shift || true
 targets=("$@")
-((${#targets[@]})) || targets=(config measured_data history history_patch)
+((${#targets[@]})) || targets=(config measured_data history history_patch worker_answer)
 findings=${COMBABC_FUZZ_FINDINGS:-$PWD/fuzz-findings}
 
 echo "== fuzz: building the targets (build-fuzz, clang-14, ASan + UBSan + libFuzzer)"

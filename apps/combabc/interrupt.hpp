@@ -5,7 +5,8 @@
 // wave is being sampled: that is the only stage with resumable work in flight. Before (reading the
 // config, possibly from a FIFO; building the model) and after (the report) a signal keeps its
 // default action and ends the process at once, and so does a second signal during a wave, so the
-// program is killable at every stage.
+// program is killable at every stage. (While the report's Python script runs, services'
+// RunProcess holds the signal until it has interrupted and reaped the script, then re-raises it.)
 #include <signal.h>
 #include <unistd.h>
 

@@ -1,6 +1,6 @@
-// The example worker of worker.py in C++ (protocol combabc-worker 1, docs/simulators.md): a
-// handshake line, then one response line per request line. Standard library only; nothing but
-// protocol lines may go to stdout (diagnostics go to stderr).
+// The example worker of worker.py in C++ (protocol combabc-worker 2, docs/simulators.md): a
+// handshake line, then one answer line per request line, starting with the request's id. Standard
+// library only; nothing but protocol lines may go to stdout (diagnostics go to stderr).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -28,17 +28,19 @@ std::vector<double> Simulate(const std::string& bits) {
 }  // namespace
 
 int main() {
-  std::cout << "combabc-worker 1 " << kOutputs << " example-supports-cpp 1.0" << std::endl;
+  std::cout << "combabc-worker 2 " << kOutputs << " example-supports-cpp 1.0" << std::endl;
   std::string line;
   while (std::getline(std::cin, line)) {
     std::istringstream request(line);
+    std::string id;
     std::string bits;
-    request >> bits;  // the reals follow; this model has none
+    request >> id >> bits;  // the reals follow; this model has none
     if (bits.size() != static_cast<std::size_t>(kSupports)) {
-      std::cout << "error expected " << kSupports << " bits, got " << bits.size() << std::endl;
+      std::cout << id << " error expected " << kSupports << " bits, got " << bits.size()
+                << std::endl;
       continue;
     }
-    std::cout << "ok";
+    std::cout << id << " ok";
     for (double v : Simulate(bits)) {
       char text[32];
       std::snprintf(text, sizeof text, " %.17g", v);  // exact round trip

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A combabc worker (protocol combabc-worker 1, docs/simulators.md): copy it, replace simulate()."""
+"""A combabc worker (protocol combabc-worker 2, docs/simulators.md): copy it, replace simulate()."""
 import math
 import sys
 
@@ -12,11 +12,11 @@ def simulate(bits, reals):
                        for b, c in zip(bits, CENTRES) if b == 0) for x in COORDINATES]
 
 
-print("combabc-worker 1", len(COORDINATES), "example-supports 1.0", flush=True)
-for line in sys.stdin:  # one request per line: "<bits as 0/1> <real> ..."
-    bits, *reals = line.split()
+print("combabc-worker 2", len(COORDINATES), "example-supports 1.0", flush=True)
+for line in sys.stdin:  # one request per line: "<id> <bits as 0/1> <real> ..."
+    request_id, bits, *reals = line.split()  # every answer starts with the request's id
     try:
         values = simulate([int(b) for b in bits], [float(r) for r in reals])
-        print("ok", *(repr(v) for v in values), flush=True)
+        print(request_id, "ok", *(repr(v) for v in values), flush=True)
     except Exception as error:  # this candidate failed; the worker goes on
-        print("error", str(error).replace("\n", " "), flush=True)
+        print(request_id, "error", str(error).replace("\n", " "), flush=True)

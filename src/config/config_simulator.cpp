@@ -154,6 +154,7 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
             "[\"python3\", \"{config_dir}/model.py\", \"{params}\"]");
   }
   e.argv = *argv;
+  sim.argv_line = s->Line("argv");
   e.timeout_s = Seconds(*s, "timeout", e.timeout_s);
   e.retries = s->IntegerIn("retries", e.retries, 0, 100);
   if (sim.kind == SimulatorKind::kCommand) {

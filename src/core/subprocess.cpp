@@ -6,12 +6,16 @@
 #include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 extern "C" char** environ;  // NOLINT(readability-redundant-declaration): POSIX declares it nowhere
@@ -62,6 +66,43 @@ Deadline DeadlineAfter(double seconds) {
          std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
+std::string ProgramProblem(const std::string& program, const std::string& working_directory) {
+  if (program.empty()) return "no program named";
+  auto problem = [&](const std::string& given) -> std::string {
+    const std::filesystem::path path =
+        given.front() == '/' || working_directory.empty()
+            ? std::filesystem::path(given)
+            : (std::filesystem::path(working_directory) / given).lexically_normal();
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return std::strerror(errno);
+    if (!S_ISREG(st.st_mode)) return "not a regular file";
+    if (::access(path.c_str(), X_OK) != 0) return "not executable";
+    return {};
+  };
+  if (program.find('/') != std::string::npos) {
+    std::string why = problem(program);
+    if (why.empty()) return why;
+    return program + ": " + why +
+           (program.front() == '/' ? ""
+                                   : " (relative to the folder the program starts in; use an "
+                                     "absolute path or {config_dir}/...)");
+  }
+  const char* env = std::getenv("PATH");
+  const std::string path = env != nullptr ? env : "/bin:/usr/bin";
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t end = std::min(path.find(':', begin), path.size());
+    // An empty entry is the current directory, as for execvp.
+    std::string candidate = end > begin ? path.substr(begin, end - begin) : ".";
+    candidate += '/';
+    candidate += program;
+    if (problem(candidate).empty()) return {};
+    if (end == path.size()) break;
+    begin = end + 1;
+  }
+  return "'" + program + "' is not an executable file in any directory of PATH";
+}
+
 std::string Describe(const ExitStatus& status) {
   if (status.signal != 0) {
     return "killed by signal " + std::to_string(status.signal) + " (" + SignalName(status.signal) +
@@ -79,15 +120,26 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   // so a child spawned by another thread at the same time never inherits this child's ends.
   int in[2] = {-1, -1};
   int out[2] = {-1, -1};
+  int err[2] = {-1, -1};
+  auto fail = [&](const std::string& what, int error) {
+    for (int* fd : {&in[0], &in[1], &out[0], &out[1], &err[0], &err[1], &stderr_file_}) {
+      CloseFd(*fd);
+    }
+    throw std::runtime_error(what + ": " + std::strerror(error));
+  };
   if (options.pipe_stdin &&
       ::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, static_cast<int*>(in)) != 0) {
-    throw std::runtime_error(std::string("cannot create a pipe: ") + std::strerror(errno));
+    fail("cannot create a pipe", errno);
   }
-  if (::pipe2(static_cast<int*>(out), O_CLOEXEC) != 0) {
-    const int e = errno;
-    CloseFd(in[0]);
-    CloseFd(in[1]);
-    throw std::runtime_error(std::string("cannot create a pipe: ") + std::strerror(e));
+  if (::pipe2(static_cast<int*>(out), O_CLOEXEC) != 0) fail("cannot create a pipe", errno);
+  if (!options.stderr_path.empty()) {
+    // stderr: a pipe that combabc drains into the file, keeping its tail (kMaxStderrBytes), so
+    // that a program writing without end fills neither the disk nor combabc's memory.
+    if (::pipe2(static_cast<int*>(err), O_CLOEXEC) != 0) fail("cannot create a pipe", errno);
+    if (::fcntl(err[0], F_SETFL, O_NONBLOCK) != 0) fail("cannot create a pipe", errno);
+    stderr_file_ =
+        ::open(options.stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (stderr_file_ < 0) fail("cannot create " + options.stderr_path, errno);
   }
   SpawnSetup s;
   // A new process group (pgid = the child's pid), default signal dispositions (combabc's
@@ -108,9 +160,11 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
     posix_spawn_file_actions_addopen(&s.actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   }
   posix_spawn_file_actions_adddup2(&s.actions, out[1], STDOUT_FILENO);
-  const std::string err = options.stderr_path.empty() ? "/dev/null" : options.stderr_path;
-  posix_spawn_file_actions_addopen(
-      &s.actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (err[1] >= 0) {
+    posix_spawn_file_actions_adddup2(&s.actions, err[1], STDERR_FILENO);
+  } else {
+    posix_spawn_file_actions_addopen(&s.actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  }
   if (!options.working_directory.empty()) {
     posix_spawn_file_actions_addchdir_np(&s.actions, options.working_directory.c_str());
   }
@@ -119,21 +173,22 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   for (const std::string& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   const int rc = ::posix_spawnp(&pid_, argv[0], &s.actions, &s.attr, argv.data(), environ);
-  CloseFd(in[1]);
-  CloseFd(out[1]);
   if (rc != 0) {
-    CloseFd(in[0]);
-    CloseFd(out[0]);
     pid_ = -1;
     reaped_ = true;
-    throw std::runtime_error("cannot start " + options.argv.front() + ": " + std::strerror(rc));
+    fail("cannot start " + options.argv.front(), rc);
   }
+  CloseFd(in[1]);
+  CloseFd(out[1]);
+  CloseFd(err[1]);
   stdin_fd_ = in[0];
   stdout_fd_ = out[0];
+  stderr_fd_ = err[0];
   pidfd_ = static_cast<int>(::syscall(SYS_pidfd_open, pid_, 0));
   if (pidfd_ < 0) {
     const int e = errno;
     Kill();
+    for (int* fd : {&stdin_fd_, &stdout_fd_, &stderr_fd_, &stderr_file_}) CloseFd(*fd);
     throw std::runtime_error(std::string("cannot watch the child process: ") + std::strerror(e));
   }
 }
@@ -143,6 +198,8 @@ Subprocess::~Subprocess() {
   CloseFd(stdin_fd_);
   CloseFd(stdout_fd_);
   CloseFd(pidfd_);
+  CloseFd(stderr_fd_);
+  CloseFd(stderr_file_);
 }
 
 bool Subprocess::Write(std::string_view data, Deadline deadline) {
@@ -155,12 +212,11 @@ bool Subprocess::Write(std::string_view data, Deadline deadline) {
     }
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
-      pollfd p{stdin_fd_, POLLOUT, 0};
-      const int r = ::poll(&p, 1, RemainingMs(deadline));
-      if (r == 0) {
-        timed_out_ = true;
-        return false;
-      }
+      bool exited = false;
+      bool ready = false;
+      if (!WaitFor(stdin_fd_, POLLOUT, deadline, &exited, &ready)) return false;
+      // A child that exited cannot read what is left (a grandchild holding its stdin might).
+      if (!ready) return false;
       continue;
     }
     return false;  // EPIPE, ECONNRESET: the child closed its stdin or died
@@ -170,22 +226,99 @@ bool Subprocess::Write(std::string_view data, Deadline deadline) {
 
 void Subprocess::CloseInput() { CloseFd(stdin_fd_); }
 
-bool Subprocess::WaitReadable(int fd, Deadline deadline, bool* exited, bool* readable) {
-  pollfd p[2] = {{fd, POLLIN, 0}, {pidfd_, POLLIN, 0}};
-  // Once the exit was seen and the group killed, only the pipe is worth waiting for.
-  const nfds_t n = group_killed_ ? 1 : 2;
+bool Subprocess::WaitFor(int fd, short events, Deadline deadline, bool* exited, bool* ready) {
+  *ready = false;
   if (group_killed_) *exited = true;
+  if (fd < 0 && *exited) return true;
   for (;;) {
+    pollfd p[3];
+    nfds_t n = 0;
+    const nfds_t fd_slot = n;
+    if (fd >= 0) p[n++] = {fd, events, 0};
+    // Once the exit was seen and the group killed, the child's exit is no longer waited for.
+    const nfds_t exit_slot = n;
+    if (!group_killed_) p[n++] = {pidfd_, POLLIN, 0};
+    const nfds_t stderr_slot = n;
+    if (stderr_fd_ >= 0) p[n++] = {stderr_fd_, POLLIN, 0};
     const int r = ::poll(static_cast<pollfd*>(p), n, RemainingMs(deadline));
     if (r < 0 && errno == EINTR) continue;
     if (r == 0) {
       timed_out_ = true;
       return false;
     }
-    if ((p[1].revents & POLLIN) != 0) *exited = true;
-    *readable = p[0].revents != 0;  // data, end of file or an error: read() will not block
-    return true;
+    if (stderr_fd_ >= 0 && p[stderr_slot].revents != 0) DrainStderr();
+    if (!group_killed_ && (p[exit_slot].revents & POLLIN) != 0) *exited = true;
+    // Data, end of file or an error: the read or write will not block.
+    if (fd >= 0) *ready = p[fd_slot].revents != 0;
+    if (*ready || *exited) return true;
   }
+}
+
+void Subprocess::DrainStderr() {
+  char chunk[16384];
+  while (stderr_fd_ >= 0) {
+    const ssize_t n = ::read(stderr_fd_, static_cast<char*>(chunk), sizeof chunk);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
+    if (n <= 0) {
+      CloseFd(stderr_fd_);  // end of file (every writer gone) or an error: nothing more comes
+      return;
+    }
+    KeepStderr(static_cast<const char*>(chunk), static_cast<std::size_t>(n));
+  }
+}
+
+void Subprocess::KeepStderr(const char* data, std::size_t size) {
+  stderr_tail_.append(data, size);
+  if (stderr_tail_.size() > kMaxStderrBytes) {
+    stderr_tail_.erase(0, stderr_tail_.size() - kMaxStderrBytes);
+  }
+  if (stderr_file_ < 0) return;
+  // The file is diagnostics only: a failed write (disk full) loses some of it, nothing else.
+  auto write_at = [&](const char* bytes, std::size_t count, std::size_t offset) {
+    while (count > 0) {
+      const ssize_t w = ::pwrite(stderr_file_, bytes, count, static_cast<off_t>(offset));
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) return false;
+      bytes += w;
+      count -= static_cast<std::size_t>(w);
+      offset += static_cast<std::size_t>(w);
+    }
+    return true;
+  };
+  if (stderr_file_size_ + size <= kMaxStderrBytes) {
+    if (write_at(data, size, stderr_file_size_)) stderr_file_size_ += size;
+    return;
+  }
+  // Full: the file is rewritten with the tail kept in memory.
+  if (write_at(stderr_tail_.data(), stderr_tail_.size(), 0) &&
+      ::ftruncate(stderr_file_, static_cast<off_t>(stderr_tail_.size())) == 0) {
+    stderr_file_size_ = stderr_tail_.size();
+  }
+}
+
+std::string Subprocess::LastStderrLine() {
+  DrainStderr();
+  std::size_t end = stderr_tail_.find_last_not_of("\r\n");
+  if (end == std::string::npos) return {};
+  const std::size_t begin = stderr_tail_.find_last_of("\r\n", end);
+  const std::size_t first = begin == std::string::npos ? 0 : begin + 1;
+  return stderr_tail_.substr(first, end + 1 - first);
+}
+
+bool Subprocess::OutputPending() {
+  if (!buffer_.empty()) return true;
+  if (stdout_fd_ < 0) return false;
+  pollfd p{stdout_fd_, POLLIN, 0};
+  if (::poll(&p, 1, 0) <= 0 || (p.revents & POLLIN) == 0) return false;
+  char chunk[4096];
+  ssize_t n = 0;
+  do {
+    n = ::read(stdout_fd_, static_cast<char*>(chunk), sizeof chunk);
+  } while (n < 0 && errno == EINTR);
+  if (n <= 0) return false;  // end of file: nothing pending (the next read sees it too)
+  buffer_.append(static_cast<const char*>(chunk), static_cast<std::size_t>(n));
+  return true;
 }
 
 bool Subprocess::SpinUntilReadable(std::chrono::nanoseconds budget) {
@@ -212,7 +345,7 @@ ReadStatus Subprocess::ReadLine(std::string* line, std::size_t max_bytes, Deadli
     if (buffer_.size() > max_bytes) return ReadStatus::kTooLong;
     bool exited = false;
     bool readable = false;
-    if (!WaitReadable(stdout_fd_, deadline, &exited, &readable)) return ReadStatus::kTimeout;
+    if (!WaitFor(stdout_fd_, POLLIN, deadline, &exited, &readable)) return ReadStatus::kTimeout;
     // A child that exited with nothing more to read has said all it will, even if a grandchild
     // still holds its stdout open (a blocking read would wait for that grandchild).
     const ssize_t n = readable ? ::read(stdout_fd_, static_cast<char*>(chunk), sizeof chunk) : 0;
@@ -234,7 +367,7 @@ ReadStatus Subprocess::ReadToEnd(std::string* out, std::size_t max_bytes, Deadli
     if (out->size() > max_bytes) return ReadStatus::kTooLong;
     bool exited = false;
     bool readable = false;
-    if (!WaitReadable(stdout_fd_, deadline, &exited, &readable)) return ReadStatus::kTimeout;
+    if (!WaitFor(stdout_fd_, POLLIN, deadline, &exited, &readable)) return ReadStatus::kTimeout;
     if (exited && !group_killed_) {
       // The child is a zombie until reaped, so its pid (= the group id) cannot have been reused:
       // killing the group now reaches exactly the grandchildren it left behind, and with them
@@ -253,16 +386,10 @@ ReadStatus Subprocess::ReadToEnd(std::string* out, std::size_t max_bytes, Deadli
 
 std::optional<ExitStatus> Subprocess::Wait(Deadline deadline) {
   if (reaped_) return status_;
-  pollfd p{pidfd_, POLLIN, 0};
-  for (;;) {
-    const int r = ::poll(&p, 1, RemainingMs(deadline));
-    if (r < 0 && errno == EINTR) continue;
-    if (r == 0) {
-      timed_out_ = true;
-      return std::nullopt;
-    }
-    break;
-  }
+  // Its stderr is drained meanwhile: a child blocked writing to a full pipe would never exit.
+  bool exited = false;
+  bool ready = false;
+  if (!WaitFor(-1, 0, deadline, &exited, &ready)) return std::nullopt;
   if (!group_killed_) {
     ::kill(-pid_, SIGKILL);  // the leader is a zombie: see ReadToEnd
     group_killed_ = true;
@@ -284,6 +411,9 @@ ExitStatus Subprocess::Reap() {
     r = ::waitpid(pid_, &raw, 0);
   } while (r < 0 && errno == EINTR);
   reaped_ = true;
+  // The group is dead: what its stderr pipe still holds is the end of what it wrote.
+  DrainStderr();
+  CloseFd(stderr_fd_);
   if (r == pid_) {
     if (WIFSIGNALED(raw)) {
       status_.signal = WTERMSIG(raw);

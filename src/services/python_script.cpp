@@ -2,14 +2,19 @@
 #include "services/python_script.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include "combabc/core/install_paths.hpp"
 
@@ -17,6 +22,51 @@ extern char** environ;
 
 namespace combabc::services {
 namespace fs = std::filesystem;
+namespace {
+
+// The most of a script's stderr kept: its message is the last line.
+constexpr std::size_t kMaxScriptStderrBytes = std::size_t{64} << 10;
+// How long a script interrupted by SIGINT gets to clean up (the report removes its staging
+// directory) before its process group is killed.
+constexpr std::chrono::seconds kInterruptGrace{5};
+
+std::atomic<int> interrupt_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void RecordInterrupt(int signal_number) { interrupt_signal.store(signal_number); }
+
+// While a script runs, SIGINT and SIGTERM (unless ignored) are recorded instead of taking their
+// course at once: the script is interrupted and waited for first, so that it never publishes
+// after combabc is gone. The previous handlers come back when the guard goes.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    interrupt_signal.store(0);
+    struct sigaction action = {};
+    action.sa_handler = RecordInterrupt;
+    sigemptyset(&action.sa_mask);
+    for (std::size_t k = 0; k < 2; ++k) {
+      ::sigaction(kSignals[k], nullptr, &old_[k]);
+      installed_[k] = old_[k].sa_handler != SIG_IGN;
+      if (installed_[k]) ::sigaction(kSignals[k], &action, nullptr);
+    }
+  }
+  ~InterruptGuard() {
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (installed_[k]) ::sigaction(kSignals[k], &old_[k], nullptr);
+    }
+  }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  static int signal() { return interrupt_signal.load(); }
+
+ private:
+  static constexpr int kSignals[2] = {SIGINT, SIGTERM};
+  struct sigaction old_[2] = {};
+  bool installed_[2] = {false, false};
+};
+
+}  // namespace
 
 PythonScript FindPythonScript(const std::string& file_name,
                               const char* override_variable,
@@ -46,6 +96,29 @@ PythonScript FindPythonScript(const std::string& file_name,
                     "; set " + override_variable + " to its path");
   }
   return tools;
+}
+
+std::vector<std::string> MissingModules(const std::string& python,
+                                        const std::vector<std::string>& modules) {
+  // find_spec locates a module without importing it: one interpreter start, a few ms.
+  std::vector<std::string> args = {
+      python,
+      "-c",
+      "import importlib.util, sys\n"
+      "missing = [m for m in sys.argv[1:] if importlib.util.find_spec(m) is None]\n"
+      "sys.stderr.write(' '.join(missing))\n"
+      "sys.exit(3 if missing else 0)\n"};
+  args.insert(args.end(), modules.begin(), modules.end());
+  const ProcessResult result = RunProcess(args, "");
+  std::vector<std::string> missing;
+  if (result.status != 3) return missing;
+  std::size_t begin = 0;
+  while (begin < result.err.size()) {
+    const std::size_t end = std::min(result.err.find(' ', begin), result.err.size());
+    if (end > begin) missing.push_back(result.err.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  return missing;
 }
 
 ErrorKind KindOfScriptStatus(int status) {
@@ -90,9 +163,26 @@ ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
   posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 2);
+  // A process group of its own: Ctrl-C at the terminal reaches combabc alone, which interrupts the
+  // script and waits for it (below); default signal dispositions.
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  sigset_t defaults;
+  sigset_t empty;
+  sigfillset(&defaults);
+  sigemptyset(&empty);
+  posix_spawnattr_setsigdefault(&attr, &defaults);
+  posix_spawnattr_setsigmask(&attr, &empty);
+  posix_spawnattr_setpgroup(&attr, 0);
+  posix_spawnattr_setflags(
+      &attr,
+      static_cast<short>(POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK));
+  // Before the spawn: no signal may end combabc while the script is alive.
+  std::optional<InterruptGuard> guard(std::in_place);
   pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int spawned = posix_spawn(&pid, argv[0], &actions, &attr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attr);
   ::close(pipe_fds[1]);
   if (spawned != 0) {
     ::close(pipe_fds[0]);
@@ -100,19 +190,54 @@ ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs
                 "cannot start " + args[0] + " (" + std::strerror(spawned) + "); " + needs);
   }
   ProcessResult result;
+  // Interrupted: SIGINT to the script's group (Python cleans up on KeyboardInterrupt), SIGKILL
+  // after kInterruptGrace.
+  bool interrupted = false;
+  bool killed = false;
+  std::chrono::steady_clock::time_point kill_at;
+  auto forward_interrupt = [&] {
+    if (InterruptGuard::signal() == 0 || killed) return;
+    if (!interrupted) {
+      interrupted = true;
+      ::kill(-pid, SIGINT);
+      kill_at = std::chrono::steady_clock::now() + kInterruptGrace;
+    } else if (std::chrono::steady_clock::now() >= kill_at) {
+      killed = true;
+      ::kill(-pid, SIGKILL);
+    }
+  };
   char buffer[4096];
   for (;;) {
+    forward_interrupt();
+    pollfd p{pipe_fds[0], POLLIN, 0};
+    const int ready = ::poll(&p, 1, 100);  // ms: how soon an interrupt is forwarded
+    if (ready <= 0) continue;              // timeout or EINTR: check for an interrupt again
     const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
+    // Only the end is kept: the script's message is its last line.
     result.err.append(buffer, static_cast<std::size_t>(n));
+    if (result.err.size() > 2 * kMaxScriptStderrBytes) {
+      result.err.erase(0, result.err.size() - kMaxScriptStderrBytes);
+    }
   }
   ::close(pipe_fds[0]);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw Error(ErrorKind::kSoftware, "waitpid failed");
+  for (;;) {
+    const pid_t r = ::waitpid(pid, &status, interrupted && !killed ? WNOHANG : 0);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) throw Error(ErrorKind::kSoftware, "waitpid failed");
+    forward_interrupt();
+    if (r == 0) ::usleep(20000);
   }
   result.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  if (const int signal_number = InterruptGuard::signal(); signal_number != 0) {
+    // The script is gone; the signal now takes the course it would have taken (for the CLI:
+    // ending combabc by it, exit status 130 for SIGINT). A handler that returns gets an error.
+    guard.reset();
+    ::raise(signal_number);
+    throw Error(ErrorKind::kSoftware, "interrupted (the script was stopped)");
+  }
   return result;
 }
 

@@ -27,9 +27,18 @@ struct ProcessResult {
   std::string err;  // everything the process wrote on stderr
 };
 
-// Runs args[0] with stdout discarded and stderr captured; kCantCreate (with `needs`) when it
-// cannot start.
+// Runs args[0] in a process group of its own with stdout discarded and stderr captured (its last
+// 64 KiB or more); kCantCreate (with `needs`) when it cannot start. A SIGINT or SIGTERM that
+// arrives meanwhile (not ignored) interrupts the script (SIGINT to its group, SIGKILL 5 s later)
+// and is waited for; then the signal takes its course with combabc's own handlers (for the CLI:
+// combabc ends by it), and if that handler returns, Error(kSoftware) "interrupted".
 ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs);
+
+// The names among `modules` that `python` cannot import, found without importing them (one
+// interpreter start). Empty when all are there, or when the check itself could not run (the
+// script's own error says why later).
+std::vector<std::string> MissingModules(const std::string& python,
+                                        const std::vector<std::string>& modules);
 
 // The scripts exit with the sysexits code of what went wrong.
 ErrorKind KindOfScriptStatus(int status);

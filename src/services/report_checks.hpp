@@ -8,8 +8,9 @@ namespace combabc::services {
 std::string ReportDirectory(const std::string& history_path);
 
 // Throws the error the report would end with, if it can already be known: no Python or no
-// script, or a `directory` that exists with files combabc did not write. Changes nothing, so a
-// run learns before it starts (not after hours) that its report would be refused.
+// script, a Python without numpy or matplotlib, or a `directory` that exists with files combabc
+// did not write. Changes nothing, so a run learns before it starts (not after hours) that its
+// report would be refused.
 void CheckReportPossible(const std::string& directory);
 
 }  // namespace combabc::services

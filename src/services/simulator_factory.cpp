@@ -53,7 +53,9 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string&
     }
   } catch (const Error& e) {
     if (!e.file().empty()) throw;
-    throw Error(e.kind(), e.message(), config.path, 0, e.field());
+    // The program itself (missing, or a worker that does not start) is the argv key's problem.
+    const int line = e.field() == "simulator.argv" ? config.simulator.argv_line : 0;
+    throw Error(e.kind(), e.message(), config.path, line, e.field());
   }
   return built;
 }

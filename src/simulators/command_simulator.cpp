@@ -13,13 +13,8 @@ namespace si = simulators_internal;
 namespace {
 
 // The last line the program wrote to stderr, for the failure reason (one line, printable).
-std::string StderrTail(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::string last;
-  while (std::getline(in, line)) {
-    if (!line.empty()) last = line;
-  }
+std::string StderrTail(Subprocess& child) {
+  const std::string last = child.LastStderrLine();
   return last.empty() ? "" : "; stderr: " + Printable(last, 160);
 }
 
@@ -53,7 +48,20 @@ CommandSimulator::CommandSimulator(ExternalSimulatorOptions options)
           throw Error(ErrorKind::kConfig, why, "", 0, "simulator");
         }
         return options_.work_directory;
-      }()) {}
+      }()) {
+  // A program that is not there would fail every simulation of the run, one by one: said once,
+  // before anything runs, as the program would be looked up in a call's folder. (One named by a
+  // per-call placeholder cannot be checked before the call.)
+  const std::string& named = options_.argv.front();
+  if (named.find("{workdir}") == std::string::npos && named.find("{params}") == std::string::npos &&
+      named.find("{output}") == std::string::npos) {
+    const std::string program = ExpandArgv({named}, "", "", "", options_.config_directory).front();
+    const std::string why = ProgramProblem(program, options_.work_directory + "/call");
+    if (!why.empty()) {
+      throw Error(ErrorKind::kConfig, "the command cannot be run: " + why, "", 0, "simulator.argv");
+    }
+  }
+}
 
 void CommandSimulator::Simulate(const ParameterView& theta,
                                 RandomStream& /*rng*/,
@@ -118,7 +126,7 @@ std::string CommandSimulator::Attempt(const ParameterView& theta, std::span<doub
     child->Kill();
     return TimeoutText(options_.timeout_s);
   }
-  if (!status->ok()) return Describe(*status) + StderrTail(stderr_path);
+  if (!status->ok()) return Describe(*status) + StderrTail(*child);
   std::string text;
   std::string source = "stdout";
   if (options_.results == Transport::kFile) {
@@ -127,7 +135,7 @@ std::string CommandSimulator::Attempt(const ParameterView& theta, std::span<doub
       text =
           ReadBoundedFile(output_path, kMaxSimulatorOutputBytes, "output file", ErrorKind::kData);
     } catch (const Error&) {
-      return "exited with status 0 but wrote no readable output file" + StderrTail(stderr_path);
+      return "exited with status 0 but wrote no readable output file" + StderrTail(*child);
     }
   } else {
     text = std::move(stdout_text);

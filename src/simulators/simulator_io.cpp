@@ -178,9 +178,10 @@ std::string ParamsCsv(const ParameterView& theta,
   return s;
 }
 
-std::string RequestLine(const ParameterView& theta) {
-  std::string s;
-  s.reserve(theta.bits.size() + 24 * theta.reals.size() + 2);
+std::string RequestLine(std::uint64_t id, const ParameterView& theta) {
+  std::string s = std::to_string(id);
+  s.reserve(s.size() + theta.bits.size() + 24 * theta.reals.size() + 3);
+  s += ' ';
   for (std::uint8_t b : theta.bits) s += b ? '1' : '0';
   if (theta.bits.empty()) s += '-';
   for (double x : theta.reals) s += ' ' + Number(x);
@@ -191,15 +192,38 @@ std::string ReadValues(std::string_view text, DataFormat format, std::span<doubl
   return format == DataFormat::kJson ? ReadJson(text, out) : ReadCsv(text, out);
 }
 
-std::string ReadResponse(std::string_view line, std::span<double> out) {
+std::string ReadResponse(std::string_view line,
+                         std::uint64_t id,
+                         std::span<double> out,
+                         bool* in_step) {
+  *in_step = false;
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  const std::string expected = std::to_string(id);
+  const std::string_view whole = line;
+  auto unexpected = [&] {
+    return "expected an answer \"" + expected + " ok ...\" or \"" + expected +
+           " error ...\", got " + Excerpt(whole);
+  };
+  const std::size_t space = std::min(line.find(' '), line.size());
+  const std::string_view answered = line.substr(0, space);
+  if (answered != expected) {
+    std::uint64_t other = 0;
+    const char* last = answered.data() + answered.size();
+    const auto [end, ec] = std::from_chars(answered.data(), last, other);
+    if (ec == std::errc() && end == last && other != id) {
+      return "the worker answered request " + std::to_string(other) + " when request " + expected +
+             " was asked (an answer repeated, skipped or out of order)";
+    }
+    return unexpected();
+  }
+  line.remove_prefix(std::min(space + 1, line.size()));
   if (line.rfind("error", 0) == 0 && (line.size() == 5 || line[5] == ' ')) {
+    *in_step = true;
     return "the worker reported an error: " +
            Printable(line.substr(std::min<std::size_t>(6, line.size())), 200);
   }
-  if (line.rfind("ok", 0) != 0 || (line.size() > 2 && line[2] != ' ')) {
-    return "expected a response \"ok ...\" or \"error ...\", got " + Excerpt(line);
-  }
+  if (line.rfind("ok", 0) != 0 || (line.size() > 2 && line[2] != ' ')) return unexpected();
+  *in_step = true;
   Collector values(out);
   std::size_t i = 2;
   while (i < line.size()) {

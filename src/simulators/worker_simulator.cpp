@@ -1,7 +1,6 @@
 #include "combabc/simulators/worker_simulator.hpp"
 
 #include <chrono>
-#include <fstream>
 #include <optional>
 #include <sstream>
 
@@ -21,13 +20,19 @@ namespace {
 // (under kQuickAnswer even without the spin) is spun for again on its next request.
 constexpr std::chrono::microseconds kSpin{50};
 constexpr std::chrono::microseconds kQuickAnswer{200};
+// A worker whose stdout or stdin closed is usually exiting: it is given this long to do so, so
+// that the failure reason is its own exit status rather than the kill that follows.
+constexpr double kExitGraceSeconds = 0.25;
+
+std::string Requests(std::uint64_t n) {
+  return std::to_string(n) + (n == 1 ? " request" : " requests");
+}
 }  // namespace
 
 // One running worker: its process and its own working folder (removed with it).
 class WorkerSimulator::Worker {
  public:
-  Worker(std::string folder, const SubprocessOptions& spawn)
-      : folder_(std::move(folder)), stderr_path_(spawn.stderr_path) {
+  Worker(std::string folder, const SubprocessOptions& spawn) : folder_(std::move(folder)) {
     try {
       process_.emplace(spawn);
     } catch (...) {
@@ -49,24 +54,31 @@ class WorkerSimulator::Worker {
   Subprocess& process() { return *process_; }
   bool answers_quickly() const { return answers_quickly_; }
   void set_answers_quickly(bool quick) { answers_quickly_ = quick; }
-  // Why the worker stopped, for the failure reason: its exit status and last stderr line.
-  std::string Death() {
-    const ExitStatus status = process_->Kill();
-    std::ifstream in(stderr_path_);
-    std::string line;
-    std::string last;
-    while (std::getline(in, line)) {
-      if (!line.empty()) last = line;
+  // The id of the next request (1, 2, ...), counting it as sent.
+  std::uint64_t NextRequest() { return ++requests_; }
+  // Why the worker stopped answering, for the failure reason, once its `stream` ("stdin",
+  // "stdout") closed: its exit status when it exits within a moment, else that it closed the
+  // stream (it is then killed); with the last line of its stderr either way.
+  std::string Death(const char* stream) {
+    const std::optional<ExitStatus> status = process_->Wait(DeadlineAfter(kExitGraceSeconds));
+    std::string reason;
+    if (status) {
+      reason = "the worker " + Describe(*status);
+    } else {
+      process_->Kill();
+      const std::uint64_t answered = requests_ > 0 ? requests_ - 1 : 0;
+      reason = std::string("the worker closed its ") + stream + " after answering " +
+               Requests(answered) + " (then killed)";
     }
-    return "the worker " + Describe(status) +
-           (last.empty() ? "" : "; stderr: " + Printable(last, 160));
+    const std::string last = process_->LastStderrLine();
+    return reason + (last.empty() ? "" : "; stderr: " + Printable(last, 160));
   }
 
  private:
   std::string folder_;
-  std::string stderr_path_;
   std::optional<Subprocess> process_;
   bool answers_quickly_ = true;
+  std::uint64_t requests_ = 0;
 };
 
 namespace {
@@ -151,7 +163,7 @@ std::unique_ptr<WorkerSimulator::Worker> WorkerSimulator::Start(
     return nullptr;
   }
   if (read != ReadStatus::kOk) {
-    *reason = read == ReadStatus::kEof ? worker->Death() : "handshake line too long";
+    *reason = read == ReadStatus::kEof ? worker->Death("stdout") : "handshake line too long";
     return nullptr;
   }
   if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -173,9 +185,10 @@ std::string WorkerSimulator::Attempt(Worker& worker,
   *in_step = false;
   Subprocess& p = worker.process();
   const Deadline deadline = DeadlineAfter(options_.timeout_s);
-  if (!p.Write(si::RequestLine(theta), deadline)) {
+  const std::uint64_t id = worker.NextRequest();
+  if (!p.Write(si::RequestLine(id, theta), deadline)) {
     return p.timed_out() ? "timed out after " + Seconds(options_.timeout_s) + " (worker killed)"
-                         : worker.Death();
+                         : worker.Death("stdin");
   }
   std::string line;
   const auto sent = std::chrono::steady_clock::now();
@@ -188,11 +201,17 @@ std::string WorkerSimulator::Attempt(Worker& worker,
   if (read == ReadStatus::kTooLong) {
     return "response longer than " + std::to_string(kMaxSimulatorOutputBytes) + " bytes";
   }
-  if (read == ReadStatus::kEof) return worker.Death();
-  // One response line per request: after any "ok"/"error" line the worker is in step again,
-  // even when its values were refused (wrong count, NaN).
-  *in_step = line.rfind("ok", 0) == 0 || line.rfind("error", 0) == 0;
-  return si::ReadResponse(line, out);
+  if (read == ReadStatus::kEof) return worker.Death("stdout");
+  // One answer line per request, carrying the request's id: after an "ok"/"error" answer to this
+  // request the worker is in step again, even when its values were refused (wrong count, NaN).
+  // Anything more on its stdout already (an answer repeated) puts it out of step; one that comes
+  // later is caught by the next request's id.
+  std::string reason = si::ReadResponse(line, id, out, in_step);
+  if (*in_step && p.OutputPending()) {
+    *in_step = false;
+    return "the worker wrote more than one line in answer to request " + std::to_string(id);
+  }
+  return reason;
 }
 
 void WorkerSimulator::Simulate(const ParameterView& theta,

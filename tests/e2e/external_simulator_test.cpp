@@ -5,6 +5,8 @@
 // changed. Also keeps the README's worker the shipped one.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -100,7 +102,7 @@ TEST_F(ExternalSimulatorCli, ThePythonWorkerRunsResumesAndAChangedWorkerIsRefuse
                                "worker.py",
                                "example-supports 1.0",
                                "example-supports 2.0",
-                               "the worker's handshake is now 'combabc-worker 1 21 "
+                               "the worker's handshake is now 'combabc-worker 2 21 "
                                "example-supports 2.0'");
 }
 
@@ -115,12 +117,63 @@ TEST_F(ExternalSimulatorCli, ThePythonCommandRunsResumesAndAChangedCommandIsRefu
 
 TEST_F(ExternalSimulatorCli, AWorkerThatFailsItsHandshakeIsAConfigErrorAndLeavesNothing) {
   const std::string config = Config("worker.toml", 10);
-  std::ofstream(dir_ / "worker.py") << "print('combabc-worker 1 20 wrong size')\n";
+  std::ofstream(dir_ / "worker.py") << "print('combabc-worker 2 20 wrong size')\n";
   const auto r = RunCli({"run", config, "--no-report"}, dir_.path());
   EXPECT_EQ(r.exit_code, 78) << r.err;
   EXPECT_NE(r.err.find("it declares '20' outputs; the config declares 21"), std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out")) << "no output folder left";
+}
+
+// Regression (issue 20, D12): a command whose program does not exist ran 100 failing
+// simulations and stopped on the failure fraction (exit 69); a worker's is refused up front (78).
+// Both now say so before anything runs, at the config's argv line.
+TEST_F(ExternalSimulatorCli, AProgramThatDoesNotExistIsAConfigErrorAtItsArgvLine) {
+  for (const char* name : {"command.toml", "worker.toml"}) {
+    SCOPED_TRACE(name);
+    const std::string config = Config(name, 6);
+    std::string text = ReadFile(config);
+    const std::smatch argv = [&] {
+      std::smatch m;
+      std::regex_search(text, m, std::regex("argv = \\[\"python3\""));
+      return m;
+    }();
+    ASSERT_FALSE(argv.empty());
+    const int line =
+        1 + static_cast<int>(std::count(text.begin(), text.begin() + argv.position(0), '\n'));
+    text.replace(static_cast<std::size_t>(argv.position(0)),
+                 static_cast<std::size_t>(argv.length(0)),
+                 "argv = [\"no-such-simulator-program\"");
+    std::ofstream(config) << text;
+    const auto r = RunCli({"run", config, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 78) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(config + ":" + std::to_string(line) + ": simulator.argv: "),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("'no-such-simulator-program'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing ran, nothing written";
+  }
+}
+
+// Regression (issue 20, D11): a COMBABC_PYTHON without numpy was found out only after sampling
+// (exit 73). The run now refuses to start, naming the variable and the module. (python3 -S has
+// no site-packages: no numpy.)
+TEST_F(ExternalSimulatorCli, APythonWithoutNumpyForTheReportIsRefusedBeforeSampling) {
+  const std::string config = Config("worker.toml", 10);
+  const std::string python = dir_ / "python-without-numpy";
+  std::ofstream(python) << "#!/bin/sh\nexec /usr/bin/python3 -S \"$@\"\n";
+  fs::permissions(python, fs::perms::owner_all);
+  ASSERT_EQ(::setenv("COMBABC_PYTHON", python.c_str(), 1), 0);
+  const auto r = RunCli({"run", config}, dir_.path());
+  ::unsetenv("COMBABC_PYTHON");
+  EXPECT_EQ(r.exit_code, 73) << r.err;
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("report: COMBABC_PYTHON=" + python + " has no module numpy"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "refused before anything was written";
 }
 
 TEST_F(ExternalSimulatorCli, SimulateRunsOneConfigurationThroughTheDeclaredSimulator) {

@@ -1,11 +1,14 @@
 // `combabc report` through the CLI: its directory rules (never replace what the user wrote),
 // names drawn literally, the configured figure formats, and every failure as one line.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/stat.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "cli_runner.hpp"
 #include "output_test_support.hpp"
@@ -187,6 +190,49 @@ TEST_F(Report, FailuresAreOneLineAndLeaveNothingBehind) {
     const auto err = ExpectFailure({"report", db, "-o", dir_ / "r4"}, kSoftware);
     EXPECT_NE(err.find("the script broke"), std::string::npos) << err;
   }
+}
+
+// Regression (issue 20, D20): SIGINT to combabc during the report ended combabc alone; the report
+// script went on and published later. Now the script (a stand-in that would publish after 30 s,
+// and cleans up on KeyboardInterrupt) is interrupted and waited for, nothing is published, and
+// combabc ends by the signal (exit status 130). Needs no plotting packages.
+TEST(ReportInterrupt, SigintStopsTheScriptAndNothingIsPublished) {
+  ScratchDir dir("report-interrupt");
+  const std::string db = MakeHistory(dir.path() / "RUN.db");
+  const std::string script = dir / "slow_report.py";
+  std::ofstream(script) << R"(import os, sys, time
+out = sys.argv[sys.argv.index("--out") + 1]
+with open(out + ".pid", "w") as f:
+    f.write(str(os.getpid()))
+try:
+    time.sleep(30)
+except KeyboardInterrupt:
+    with open(out + ".interrupted", "w") as f:
+        f.write("cleaned up")
+    sys.exit(130)
+os.makedirs(out)
+with open(os.path.join(out, "index.html"), "w") as f:
+    f.write("published")
+)";
+  ScopedEnv use("COMBABC_REPORT_SCRIPT", script);
+  const std::string out = dir / "report";
+  const pid_t cli = SpawnCli({"report", db, "-o", out}, dir.path());
+  ASSERT_GT(cli, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  std::string pid_text;
+  while (pid_text.empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    pid_text = ReadFile(out + ".pid");  // empty until the script has written it
+  }
+  ASSERT_FALSE(pid_text.empty()) << "the report script did not start";
+  const pid_t script_pid = std::stoi(pid_text);
+  ::kill(cli, SIGINT);
+  const auto r = WaitCli(cli, dir.path());
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.err;
+  // The script was interrupted (it cleaned up) and reaped before combabc ended.
+  EXPECT_TRUE(fs::exists(out + ".interrupted"));
+  EXPECT_NE(::kill(script_pid, 0), 0) << "the report script outlived combabc";
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -1,11 +1,13 @@
 // CommandSimulator with fault injection: each failure is a SimulationFailed naming the reason, the
 // next call works, nothing is left running and every call's folder is removed.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <thread>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/subprocess.hpp"
 #include "combabc/simulators/command_simulator.hpp"
 #include "simulators/simulator_test_support.hpp"
 
@@ -180,14 +182,70 @@ TEST_F(CommandSimulatorTest, RetriesRunAFailedCallAgain) {
   EXPECT_EQ(Reason(never, Bits("000"), &out), "exited with status 9 (2 attempts)");
 }
 
-TEST_F(CommandSimulatorTest, AProgramThatCannotStartFailsTheCandidateSayingWhy) {
+// Regression (issue 20, D12): a program that does not exist ran 100 failing simulations and
+// stopped the run on its failure fraction (exit 69), where a worker is refused up front (78).
+TEST_F(CommandSimulatorTest, AProgramThatCannotRunIsAConfigErrorBeforeAnySimulation) {
+  std::ofstream(run_ / "not-executable.sh") << "echo 1 2 3\n";
+  struct Case {
+    std::string program;
+    std::string says;
+  };
+  for (const Case& c : {
+           Case{"/nonexistent/simulator", "/nonexistent/simulator: No such file or directory"},
+           Case{"no-such-simulator-program",
+                "'no-such-simulator-program' is not an executable file in any directory of PATH"},
+           Case{"{config_dir}/not-executable.sh", "not-executable.sh: not executable"},
+           Case{"{config_dir}", ": not a regular file"},
+           Case{"./model.sh",
+                "./model.sh: No such file or directory (relative to the folder the program starts "
+                "in; use an absolute path or {config_dir}/...)"},
+       }) {
+    SCOPED_TRACE(c.program);
+    ExternalSimulatorOptions o = ShOptions(run_, "");
+    o.params = Transport::kStdin;
+    o.argv = {c.program};
+    try {
+      CommandSimulator s(o);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+      EXPECT_EQ(e.field(), "simulator.argv");
+      EXPECT_NE(e.message().find("the command cannot be run: "), std::string::npos) << e.message();
+      EXPECT_NE(e.message().find(c.says), std::string::npos) << e.message();
+    }
+  }
+  EXPECT_TRUE(Entries(run_ / "history.work").empty()) << "nothing ran";
+  // Found in PATH, or by a path relative to the call's folder: accepted.
   ExternalSimulatorOptions o = ShOptions(run_, "");
   o.params = Transport::kStdin;
-  o.argv = {"/nonexistent/simulator"};
+  o.argv = {"true"};
+  EXPECT_NO_THROW(CommandSimulator{o});
+}
+
+// Regression (issue 20, D4 and D5): the stderr file grew without bound and the failure reason was
+// read by getline over all of it. The file keeps the last kMaxStderrBytes (the program measures
+// its own stderr file after writing 3 MiB to it); the reason is the last line of that tail.
+TEST_F(CommandSimulatorTest, StderrIsCappedToItsLast64KiBAndTheReasonIsItsLastLine) {
+  ExternalSimulatorOptions o = ShOptions(run_,
+                                         R"(head -c 3145728 /dev/zero | tr '\0' x >&2
+echo >&2; echo "last words" >&2
+wc -c < stderr.txt; echo 0; echo 0
+if [ -n "$1" ]; then head -c 33554432 /dev/zero | tr '\0' y >&2; echo >&2; echo "the end" >&2; exit 3; fi)",
+                                         {""});
+  o.params = Transport::kStdin;
   CommandSimulator s(o);
   std::vector<double> out;
-  EXPECT_EQ(Reason(s, Bits("000"), &out),
-            "cannot start /nonexistent/simulator: No such file or directory");
+  ASSERT_EQ(Reason(s, Bits("000"), &out), "");
+  EXPECT_LE(out[0], static_cast<double>(kMaxStderrBytes));
+  EXPECT_GT(out[0], 0.0);
+  o.argv.back() = "fail";
+  CommandSimulator failing(o);
+  rusage before{};
+  ::getrusage(RUSAGE_SELF, &before);
+  EXPECT_EQ(Reason(failing, Bits("000"), &out), "exited with status 3; stderr: the end");
+  rusage after{};
+  ::getrusage(RUSAGE_SELF, &after);
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 8 * 1024);  // KiB: the 32 MiB line never held
 }
 
 TEST_F(CommandSimulatorTest, InvalidOptionsAreAConfigError) {

@@ -19,8 +19,8 @@ TEST(ReferenceWorkers, PythonAndCppAgreeOnEveryConfiguration) {
   const WorkerSimulator python(o);
   o.argv = {COMBABC_CPP_WORKER};
   const WorkerSimulator cpp(o);
-  EXPECT_EQ(python.handshake(), "combabc-worker 1 21 example-supports 1.0");
-  EXPECT_EQ(cpp.handshake(), "combabc-worker 1 21 example-supports-cpp 1.0");
+  EXPECT_EQ(python.handshake(), "combabc-worker 2 21 example-supports 1.0");
+  EXPECT_EQ(cpp.handshake(), "combabc-worker 2 21 example-supports-cpp 1.0");
   RandomStream rng(1, 0, 0);
   std::vector<double> a(21);
   std::vector<double> b(21);

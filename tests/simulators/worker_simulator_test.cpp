@@ -2,11 +2,13 @@
 // breaks the protocol is killed (with its group) and replaced, the candidate failing with the
 // reason; a worker that answers is kept.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <thread>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/subprocess.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
 #include "simulators/simulator_test_support.hpp"
 
@@ -16,17 +18,33 @@ namespace {
 // The mode is the request's bits; $1 is where a hanging request writes its grandchild's pid.
 // Every started worker appends its pid to $1.workers.
 constexpr const char* kFaulty = R"(echo $$ >> "$1.workers"
-echo "combabc-worker 1 3 sh-faulty 1.0"
-while read bits a b; do
+echo "combabc-worker 2 3 sh-faulty 1.0"
+while read id bits a b; do
   case $bits in
-    000) echo "ok 1 2 3" ;;
+    000) echo "$id ok 1 2 3" ;;
     001) echo boom >&2; exit 3 ;;
     010) sleep 30 & echo $! > "$1"; wait ;;
     011) echo "hello" ;;
-    100) echo "ok 1 2" ;;
-    101) echo "ok 1 nan 3" ;;
-    110) echo "error mesh did not converge" ;;
-    111) echo "ok $a $b 0" ;;
+    100) echo "$id ok 1 2" ;;
+    101) echo "$id ok 1 nan 3" ;;
+    110) echo "$id error mesh did not converge" ;;
+    111) echo "$id ok $a $b 0" ;;
+  esac
+done)";
+
+// Answers each request with its own bits as outputs ("101" -> 1 0 1), so that an answer given to
+// the wrong candidate shows. Request "011" is answered twice, the second time a moment later
+// (after combabc has taken the first); "110" twice at once; "111" with the id 7.
+constexpr const char* kRepeating = R"(echo "combabc-worker 2 3 sh-repeating"
+while read id bits; do
+  rest=${bits#?}
+  answer="$id ok ${bits%??} ${rest%?} ${bits#??}"
+  case $bits in
+    011) echo "$answer"; sleep 0.2; echo "$answer" ;;
+    110) echo "$answer
+$answer" ;;
+    111) echo "7 ok 1 1 1" ;;
+    *) echo "$answer" ;;
   esac
 done)";
 
@@ -65,18 +83,19 @@ class WorkerSimulatorTest : public ::testing::Test {
 };
 
 TEST_F(WorkerSimulatorTest, TheHandshakeIsChecked) {
-  EXPECT_EQ(RefusedBecause("echo combabc-worker 2 3"),
-            "the worker 'sh' did not start: it speaks protocol version '2'; this combabc speaks 1");
-  EXPECT_EQ(RefusedBecause("echo combabc-worker 1 4"),
+  // Version 1 had no request ids.
+  EXPECT_EQ(RefusedBecause("echo combabc-worker 1 3"),
+            "the worker 'sh' did not start: it speaks protocol version '1'; this combabc speaks 2");
+  EXPECT_EQ(RefusedBecause("echo combabc-worker 2 4"),
             "the worker 'sh' did not start: it declares '4' outputs; the config declares 3 "
             "([simulator.outputs])");
   EXPECT_EQ(RefusedBecause("echo hello"),
             "the worker 'sh' did not start: its first line is 'hello', not a handshake "
-            "\"combabc-worker 1 3 ...\"");
+            "\"combabc-worker 2 3 ...\"");
   EXPECT_EQ(RefusedBecause("echo nope >&2; exit 5"),
             "the worker 'sh' did not start: the worker exited with status 5; stderr: nope");
-  WorkerSimulator s(ShOptions(run_, "echo 'combabc-worker 1 3 my model v2'; cat > /dev/null"));
-  EXPECT_EQ(s.handshake(), "combabc-worker 1 3 my model v2");
+  WorkerSimulator s(ShOptions(run_, "echo 'combabc-worker 2 3 my model v2'; cat > /dev/null"));
+  EXPECT_EQ(s.handshake(), "combabc-worker 2 3 my model v2");
 }
 
 TEST_F(WorkerSimulatorTest, EachFaultIsASimulationFailedAndABrokenWorkerIsReplaced) {
@@ -90,7 +109,7 @@ TEST_F(WorkerSimulatorTest, EachFaultIsASimulationFailedAndABrokenWorkerIsReplac
   int started = 1;
   for (const Case& c : {
            Case{"001", "the worker exited with status 3; stderr: boom", true},
-           Case{"011", "expected a response \"ok ...\" or \"error ...\", got 'hello'", true},
+           Case{"011", "expected an answer \"2 ok ...\" or \"2 error ...\", got 'hello'", true},
            Case{"100", "returned 2 values; expected 3", false},
            Case{"101", "output value 2 is NaN", false},
            Case{"110", "the worker reported an error: mesh did not converge", false},
@@ -125,7 +144,7 @@ TEST_F(WorkerSimulatorTest, AHangingWorkerIsKilledWithItsGroupAndReplaced) {
 TEST_F(WorkerSimulatorTest, AWorkerThatDiesLeavingAGrandchildOnItsStdoutFailsAtOnce) {
   ExternalSimulatorOptions o =
       ShOptions(run_,
-                "echo 'combabc-worker 1 3 x'; read line; sleep 30 & echo $! > \"$1\"; exit 4",
+                "echo 'combabc-worker 2 3 x'; read line; sleep 30 & echo $! > \"$1\"; exit 4",
                 {run_ / "grandchild.pid"});
   WorkerSimulator s(o);
   std::vector<double> out;
@@ -172,6 +191,91 @@ TEST_F(WorkerSimulatorTest, ThreadsEachUseTheirOwnWorker) {
   for (auto& t : threads) t.join();
   EXPECT_EQ(ok.load(), 100);
   EXPECT_LE(WorkersStarted(), 4);  // never more workers than callers at once
+}
+
+// Regression (issue 20, D7): a worker that answered one request twice shifted every later answer
+// onto the wrong candidate. Each answer carries its request's id: no candidate gets outputs
+// computed from other bits, and the worker out of step is replaced.
+TEST_F(WorkerSimulatorTest, ARepeatedOrMisnumberedAnswerFailsTheCandidateAndReplacesTheWorker) {
+  WorkerSimulator s(ShOptions(run_, kRepeating));
+  std::vector<double> out;
+  struct Case {
+    const char* bits;
+    const char* reason;
+  };
+  for (const Case& c : {
+           Case{"000", ""},
+           Case{"011", ""},  // its repeated answer is still on its way
+           Case{"100",
+                "the worker answered request 2 when request 3 was asked (an answer repeated, "
+                "skipped or out of order)"},
+           Case{"101", ""},  // a new worker
+           Case{"110", "the worker wrote more than one line in answer to request 2"},
+           Case{"001", ""},
+           Case{"111",
+                "the worker answered request 7 when request 2 was asked (an answer repeated, "
+                "skipped or out of order)"},
+           Case{"010", ""},
+       }) {
+    SCOPED_TRACE(c.bits);
+    EXPECT_EQ(Reason(s, Bits(c.bits), &out), c.reason);
+    if (*c.reason == '\0') {
+      const Candidate expected = Bits(c.bits);
+      EXPECT_EQ(out, std::vector<double>(expected.bits.begin(), expected.bits.end()));
+    }
+  }
+}
+
+// Regression (issue 20, D21): a worker that closed its stdout was reported as "killed by signal
+// 9 (SIGKILL)", combabc's own kill.
+TEST_F(WorkerSimulatorTest, AWorkerThatClosesItsStdoutIsReportedAsSuch) {
+  WorkerSimulator s(ShOptions(run_,
+                              "echo 'combabc-worker 2 3 x'; read id bits; echo \"$id ok 1 2 3\"; "
+                              "read id bits; echo closing >&2; exec >&-; sleep 30 & echo $! > "
+                              "\"$1\"; wait",
+                              {run_ / "grandchild.pid"}));
+  std::vector<double> out;
+  EXPECT_EQ(Reason(s, Bits("000"), &out), "");
+  EXPECT_EQ(Reason(s, Bits("000"), &out),
+            "the worker closed its stdout after answering 1 request (then killed); stderr: "
+            "closing");
+  EXPECT_TRUE(Gone(std::stoi(ReadText(run_ / "grandchild.pid"))));
+}
+
+// Regression (issue 20, D4 and D5): a worker's stderr file grew without bound (1 MiB per request
+// filled a small disk), and the failure reason was read with getline over the whole file (400 MiB
+// without a newline: 828 MB of memory). The file keeps the last kMaxStderrBytes; the reason is the
+// last line of that tail.
+TEST_F(WorkerSimulatorTest, StderrIsCappedToItsLast64KiBAndTheReasonIsItsLastLine) {
+  // 2 MiB of stderr per request, then its number; request "001" ends with 32 MiB on one line
+  // (no newline) before its last words and exit 3.
+  const char* script = R"(echo "combabc-worker 2 3 chatty"
+while read id bits; do
+  head -c 2097152 /dev/zero | tr '\0' x >&2
+  echo " request $id" >&2
+  if [ "$bits" = 001 ]; then
+    head -c 33554432 /dev/zero | tr '\0' y >&2
+    echo >&2; echo "last words" >&2; exit 3
+  fi
+  echo "$id ok 1 2 3"
+done)";
+  WorkerSimulator s(ShOptions(run_, script));
+  std::vector<double> out;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(Reason(s, Bits("000"), &out), "");
+  const std::vector<std::string> workers = Entries(run_ / "history.work");
+  ASSERT_EQ(workers.size(), 1u);
+  const std::string file = run_ / ("history.work/" + workers[0] + "/stderr.txt");
+  ASSERT_TRUE(fs::exists(file));
+  EXPECT_LE(fs::file_size(file), kMaxStderrBytes);
+  const std::string text = ReadText(file);
+  EXPECT_EQ(text.substr(text.size() - 11), " request 3\n");
+  rusage before{};
+  ::getrusage(RUSAGE_SELF, &before);
+  EXPECT_EQ(Reason(s, Bits("001"), &out), "the worker exited with status 3; stderr: last words");
+  rusage after{};
+  ::getrusage(RUSAGE_SELF, &after);
+  // ru_maxrss is in KiB: the 32 MiB line was never held in memory.
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 8 * 1024);
 }
 
 }  // namespace

@@ -46,6 +46,7 @@ struct SimulatorConfig {
   SimulatorOutputs outputs;
   // Command / worker only. work_directory is the run's (set when the run starts: "." here).
   ExternalSimulatorOptions external;
+  int argv_line = 0;  // the line of simulator.argv, for errors found when the program is started
 };
 
 struct CalibrationConfig {

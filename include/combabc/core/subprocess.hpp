@@ -1,9 +1,10 @@
 #pragma once
 // One child process for the external simulators (docs/simulators.md): started without a shell
 // (posix_spawn, argv as given) in a process group of its own, with its stdin and stdout as pipes,
-// its stderr to a file; every read and write bounded in bytes and in time; ended by killing the
-// whole group, so that grandchildren an external program started (an FE solver under a Python
-// script) never outlive the call. Used by one thread at a time.
+// its stderr drained through a pipe into a file that keeps only the last kMaxStderrBytes; every
+// read and write bounded in bytes and in time; ended by killing the whole group, so that
+// grandchildren an external program started (an FE solver under a Python script) never outlive
+// the call. Used by one thread at a time.
 #include <sys/types.h>
 
 #include <chrono>
@@ -19,11 +20,19 @@ using Deadline = std::chrono::steady_clock::time_point;
 // now + seconds; seconds <= 0 means no deadline.
 Deadline DeadlineAfter(double seconds);
 
+// The most of a child's stderr that is kept, in memory and in its stderr file: the last 64 KiB.
+// A program that writes without end can neither fill the disk nor combabc's memory, and its
+// failure reason is the last line of what is kept.
+inline constexpr std::size_t kMaxStderrBytes = std::size_t{64} << 10;
+
 struct SubprocessOptions {
   std::vector<std::string> argv;  // argv[0] is looked up in PATH when it has no '/'
   std::string working_directory;  // empty: combabc's own
   bool pipe_stdin = false;        // false: /dev/null
-  std::string stderr_path;        // empty: /dev/null; else created (truncated) there
+  // Empty: /dev/null. Else the child's stderr is a pipe that combabc drains (while it waits on the
+  // child in any way, and when the child ends) into this file, created (truncated) here and
+  // holding at most the last kMaxStderrBytes.
+  std::string stderr_path;
 };
 
 // How a child ended, from waitpid.
@@ -35,12 +44,18 @@ struct ExitStatus {
 // "exited with status 3", "killed by signal 9 (SIGKILL)".
 std::string Describe(const ExitStatus& status);
 
+// Why `program` (an argv[0]) cannot be started, looked up as posix_spawnp and execvp do: a name
+// without '/' in the directories of PATH (default "/bin:/usr/bin"), a path as it is; empty when it
+// names an executable regular file. Relative paths (and PATH entries) are taken relative to
+// `working_directory`, the one the child starts in, lexically (it need not exist yet).
+std::string ProgramProblem(const std::string& program, const std::string& working_directory);
+
 enum class ReadStatus { kOk, kEof, kTimeout, kTooLong };
 
 class Subprocess {
  public:
   // Throws std::runtime_error naming argv[0] when the program cannot be started (not found, not
-  // executable, bad working directory).
+  // executable, bad working directory) or its stderr file cannot be created.
   explicit Subprocess(const SubprocessOptions& options);
   ~Subprocess();  // Kill() when still running
   Subprocess(const Subprocess&) = delete;
@@ -70,11 +85,22 @@ class Subprocess {
   std::optional<ExitStatus> Wait(Deadline deadline);
   // SIGKILL to the whole group, then reaps the child. Idempotent.
   ExitStatus Kill();
+  // True when stdout holds more than the lines returned so far: bytes already read, or bytes
+  // waiting in the pipe (read now, without blocking). A protocol of one line per request uses it
+  // to notice a child that wrote more than its answer.
+  bool OutputPending();
+  // The last non-empty line of the child's stderr (of its last kMaxStderrBytes), drained up to
+  // now; empty when none.
+  std::string LastStderrLine();
 
  private:
-  // Polls fd and the child's exit until the deadline (false: timed out); *exited when the child
-  // has exited, *readable when a read of fd will not block.
-  bool WaitReadable(int fd, Deadline deadline, bool* exited, bool* readable);
+  // Polls fd for `events` (fd < 0: none), the child's exit and its stderr (drained as it comes)
+  // until fd is ready or the child has exited; false at the deadline. *exited when the child has
+  // exited, *ready when fd is ready (a read or write will not block).
+  bool WaitFor(int fd, short events, Deadline deadline, bool* exited, bool* ready);
+  // Reads what the stderr pipe holds now (never blocks) into stderr_tail_ and the stderr file.
+  void DrainStderr();
+  void KeepStderr(const char* data, std::size_t size);
   ExitStatus Reap();
 
   pid_t pid_ = -1;
@@ -86,6 +112,10 @@ class Subprocess {
   bool timed_out_ = false;
   ExitStatus status_;
   std::string buffer_;  // stdout read past the last line returned
+  int stderr_fd_ = -1;  // the stderr pipe, non-blocking; -1 when none or at its end
+  int stderr_file_ = -1;
+  std::size_t stderr_file_size_ = 0;
+  std::string stderr_tail_;  // the last kMaxStderrBytes of stderr, what the file holds
 };
 
 }  // namespace combabc

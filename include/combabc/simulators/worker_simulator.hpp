@@ -1,10 +1,11 @@
 #pragma once
-// Long-lived worker processes speaking the line protocol "combabc-worker 1" on stdin/stdout
+// Long-lived worker processes speaking the line protocol "combabc-worker 2" on stdin/stdout
 // (docs/simulators.md, "Worker protocol"): a handshake line, then one request line and one
-// response line per candidate. One worker per executor slot: a call takes an idle worker (or
-// starts one), so no more run than threads call Simulate at once. A worker that crashes, times
-// out or breaks the protocol is killed with its process group; the candidate is retried on a new
-// worker `retries` times, then throws SimulationFailed. Thread-safe.
+// answer line per candidate, both carrying the request's id. One worker per executor slot: a call
+// takes an idle worker (or starts one), so no more run than threads call Simulate at once. A
+// worker that crashes, times out or breaks the protocol (an answer with another id, more than one
+// line per request) is killed with its process group; the candidate is retried on a new worker
+// `retries` times, then throws SimulationFailed. Thread-safe.
 #include <memory>
 #include <mutex>
 #include <span>
@@ -18,7 +19,7 @@
 namespace combabc {
 
 inline constexpr const char* kWorkerProtocol = "combabc-worker";
-inline constexpr int kWorkerProtocolVersion = 1;
+inline constexpr int kWorkerProtocolVersion = 2;
 
 class WorkerSimulator : public Simulator {
  public:
