@@ -111,6 +111,9 @@ void ParseBits(TableReader& s, CalibrationConfig* c) {
     if (!seen.insert(n).second) b->Fail("names", Excerpt(n) + " appears twice");
   }
   c->space.names = names;
+  const std::string_view bits_key = count ? "count" : "names";
+  c->bits_key = b->Key(bits_key);
+  c->bits_line = b->Line(bits_key);
   b->Finish();
 }
 

@@ -49,6 +49,9 @@ TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
   EXPECT_EQ(c.space.dimension, 6);
   EXPECT_EQ(c.space.names.front(), "clamp 1");
+  // Where the bits are set, for refusals of the space's size (enumerate's 2^24).
+  EXPECT_EQ(c.bits_key, "model.clamps.per_edge");
+  EXPECT_EQ(c.bits_line, 2);
   EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest)
                 .find("dir/run.toml:3: simulator.argv: unknown key"),
             0u);
@@ -63,6 +66,8 @@ TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
   EXPECT_EQ(c.simulator.kind, SimulatorKind::kWorker);
   EXPECT_EQ(c.space.dimension, 3);
   EXPECT_EQ(c.space.names, (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(c.bits_key, "simulator.bits.names");
+  EXPECT_EQ(c.bits_line, 6);
   EXPECT_EQ(c.simulator.outputs.name, "strain");
   EXPECT_EQ(c.simulator.outputs.coordinates, (std::vector<double>{0.0, 0.1, 0.2}));
   const ExternalSimulatorOptions& e = c.simulator.external;
