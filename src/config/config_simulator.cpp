@@ -11,6 +11,7 @@
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/data/csv_reader.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -18,7 +19,6 @@ namespace {
 
 // Largest output vector an external simulator may declare (as the sensor's kMaxOutputPositions).
 constexpr int kMaxOutputs = 1000000;
-constexpr int kMaxBits = 4096;
 
 bool ParseNumber(std::string_view text, double* value) {
   while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
