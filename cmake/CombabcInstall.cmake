@@ -18,6 +18,7 @@ configure_package_config_file(cmake/combabcConfig.cmake.in
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/combabcConfigVersion.cmake
   COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/combabcConfig.cmake ${PROJECT_BINARY_DIR}/combabcConfigVersion.cmake
+  cmake/FindLibCsv.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/combabc)
 
 # pkg-config: a static library needs its private dependencies on the link line too.
@@ -26,7 +27,7 @@ if(COMBABC_SHARED)
   set(COMBABC_PC_STATIC_LIBS "")
 else()
   set(COMBABC_PC_RPATH "")
-  set(COMBABC_PC_STATIC_LIBS "-lsqlite3 -ltomlplusplus")
+  set(COMBABC_PC_STATIC_LIBS "-lsqlite3 -ltomlplusplus -lcsv")
   foreach(lib ${CMAKE_DL_LIBS})
     string(APPEND COMBABC_PC_STATIC_LIBS " -l${lib}")
   endforeach()
@@ -63,7 +64,7 @@ if(COMBABC_HAVE_PYTHON)  # the module is built for one Python minor version
     ", python3 (>= ${py}~), python3 (<< ${Python3_VERSION_MAJOR}.${next})")
 endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
-  "python3-pandas, python3-xarray, python3-netcdf4, libeigen3-dev, libsqlite3-dev, libtomlplusplus-dev, pkg-config, bash-completion")
+  "python3-pandas, python3-xarray, python3-netcdf4, libeigen3-dev, libsqlite3-dev, libtomlplusplus-dev, libcsv-dev, pkg-config, bash-completion")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "openmpi-bin")
 set(CPACK_GENERATOR DEB)
 include(CPack)

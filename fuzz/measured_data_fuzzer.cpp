@@ -5,12 +5,15 @@
 // (finite, strictly increasing positions, |y| <= 1 when normalised); CheckProfile aborts if not.
 //
 // Input layout: the first byte XOR '0' picks the DataConfig variant (bits below), the rest is the
-// CSV. So a seed starts with one printable byte: "0" nothing set, "1" normalise, "3" normalise +
-// extension, "7" + offset, "9" normalise + window, "q" normalise + columns x/y.
+// CSV. So a seed starts with one byte (printable below bit 7): "0" nothing set, "1" normalise, "3"
+// normalise + extension, "7" + offset, "9" normalise + window, "q" normalise + columns x/y, "\xb1"
+// normalise + quoted columns.
 //   bit 0: normalise                    bit 1: Gaussian extension toward x0 = 0 m
 //   bit 2: the extension fits an offset  bit 3: window [0.05 m, 0.40 m]
 //   bits 4-5: position unit cm, mm, m, um (the displacement unit is um, m, nm, cm alike)
 //   bit 6: columns "x"/"y" instead of "position"/"displacement"
+//   bit 7: columns whose header cells must be quoted, `x, cm` and `y "u"` (written "x, cm" and
+//          "y ""u"""), so that the reader's RFC 4180 quoting is exercised past the header
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -51,6 +54,10 @@ combabc::DataConfig Variant(std::uint8_t v) {
   if ((v & 0x40) != 0) {
     config.position_column = "x";
     config.displacement_column = "y";
+  }
+  if ((v & 0x80) != 0) {
+    config.position_column = "x, cm";
+    config.displacement_column = "y \"u\"";
   }
   return config;
 }

@@ -8,6 +8,7 @@ packages=(
   libtomlplusplus-dev    # TOML config parsing with line numbers
   libcli11-dev           # command-line parsing
   libsqlite3-dev sqlite3 # run history
+  libcsv-dev             # RFC 4180 CSV parsing of the data files (runtime: libcsv3)
   libopenmpi-dev openmpi-bin  # the MPI executor (mpirun -np N combabc run; COMBABC_MPI)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy

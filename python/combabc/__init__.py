@@ -20,14 +20,14 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._core import (BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
+from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
                     ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
 from .history import History, Wave
 
 __version__ = _core.__version__
-__all__ = ["BinarySpace", "ContinuousParameter", "Error", "History", "LogisticKernelOptions",
-           "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
+__all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "History",
+           "LogisticKernelOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
            "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
            "load_history", "make_options", "resume", "run"]
 

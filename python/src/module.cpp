@@ -12,12 +12,15 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/calibration.hpp"
@@ -358,6 +361,20 @@ BinarySpace MakeBinarySpace(int dimension,
                             double default_prior_one,
                             const std::vector<std::vector<int>>& tied,
                             const std::vector<std::string>& names) {
+  // The config's bounds on declared bits ([simulator.bits]): at most kMaxBits, distinct names. A
+  // ValueError like Python's own, before anything is sized by `dimension`.
+  if (dimension > kMaxBits) {
+    throw py::value_error("BinarySpace: dimension = " + std::to_string(dimension) + "; at most " +
+                          std::to_string(kMaxBits) + " bits");
+  }
+  std::unordered_map<std::string_view, std::size_t> seen;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const auto [it, inserted] = seen.emplace(names[k], k);
+    if (!inserted) {
+      throw py::value_error("BinarySpace: names[" + std::to_string(k) + "] " + Excerpt(names[k]) +
+                            " repeats names[" + std::to_string(it->second) + "]");
+    }
+  }
   BinarySpaceOptions options;
   options.dimension = dimension;
   options.prior_one = prior_one;
@@ -601,6 +618,8 @@ PYBIND11_MODULE(_core, m) {
   using namespace combabc::python;
   m.doc() = "combabc's compiled core; use the combabc package (docs/python.md)";
   m.attr("__version__") = COMBABC_PYTHON_VERSION;
+  // The most bits a BinarySpace (or a config's [simulator.bits]) may declare.
+  m.attr("MAX_BITS") = kMaxBits;
 
   // combabc::Error as combabc.Error, its message as the CLI prints it after "combabc: ".
   static py::exception<Error> error_type(m, "Error", PyExc_RuntimeError);

@@ -217,6 +217,10 @@ void ParseModelSection(TableReader& root, CalibrationConfig* config) {
         m.clamps_per_edge = static_cast<int>(rounded);
         Note(sources, "clamps_per_edge", *c, "section_length");
       }
+      const std::string_view bits_key =
+          c->Has("per_edge") || !c->Has("section_length") ? "per_edge" : "section_length";
+      config->bits_key = c->Key(bits_key);
+      config->bits_line = c->Line(bits_key);
       m.fixed_support = SupportKey(*c, "fixed_support", m.fixed_support);
       if (m.fixed_support == plate::Support::kFree) {
         c->Fail("fixed_support", "must be \"clamped\" or \"simply_supported\"");

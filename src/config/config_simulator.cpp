@@ -10,6 +10,8 @@
 #include "combabc/config/config.hpp"
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/data/csv_reader.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -17,7 +19,6 @@ namespace {
 
 // Largest output vector an external simulator may declare (as the sensor's kMaxOutputPositions).
 constexpr int kMaxOutputs = 1000000;
-constexpr int kMaxBits = 4096;
 
 bool ParseNumber(std::string_view text, double* value) {
   while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
@@ -28,29 +29,24 @@ bool ParseNumber(std::string_view text, double* value) {
   return ec == std::errc() && end == text.data() + text.size() && !text.empty();
 }
 
-// coordinates_csv: one coordinate per line in its first column; a first line that is not a
-// number is a header. Errors name the file and line.
+// coordinates_csv: one coordinate per row in its first column, in the dialect of the data CSV
+// (data/csv_reader.hpp); a first row that is not a number is a header. Errors name the file and
+// line.
 std::vector<double> ReadCoordinatesCsv(const std::string& path) {
   const std::string text =
       ReadBoundedFile(path, std::size_t{64} << 20, "coordinates file", ErrorKind::kData);
+  CsvReader csv(text, path);
   std::vector<double> values;
-  std::size_t begin = 0;
-  int line = 0;
-  while (begin < text.size()) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string::npos) end = text.size();
-    ++line;
-    std::string_view row(text.data() + begin, end - begin);
-    begin = end + 1;
-    const std::string_view cell = row.substr(0, row.find(','));
-    if (cell.find_first_not_of(" \t\r") == std::string_view::npos) continue;
+  for (bool first = true; csv.Next(); first = false) {
+    const std::string& cell = csv.cells().front();
     double v = 0.0;
     if (!ParseNumber(cell, &v)) {
-      if (line == 1) continue;  // header
-      throw Error(ErrorKind::kData, Excerpt(cell) + " is not a number", path, line, "coordinate");
+      if (first) continue;  // header
+      throw Error(
+          ErrorKind::kData, Excerpt(cell) + " is not a number", path, csv.line(), "coordinate", 1);
     }
     if (!std::isfinite(v)) {
-      throw Error(ErrorKind::kData, "must be finite", path, line, "coordinate");
+      throw Error(ErrorKind::kData, "must be finite", path, csv.line(), "coordinate", 1);
     }
     values.push_back(v);
   }
@@ -115,6 +111,9 @@ void ParseBits(TableReader& s, CalibrationConfig* c) {
     if (!seen.insert(n).second) b->Fail("names", Excerpt(n) + " appears twice");
   }
   c->space.names = names;
+  const std::string_view bits_key = count ? "count" : "names";
+  c->bits_key = b->Key(bits_key);
+  c->bits_line = b->Line(bits_key);
   b->Finish();
 }
 

@@ -10,6 +10,7 @@
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/data/csv_reader.hpp"
 
 namespace combabc {
 namespace {
@@ -18,59 +19,15 @@ namespace {
 // unit (48 cm) matches the converted positions despite rounding in the unit conversion.
 constexpr double kPositionTolerance = 1e-9;
 
-std::string_view Trim(std::string_view s) {
+std::string_view TrimBlanks(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
-    s.remove_suffix(1);
-  }
-  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
   return s;
 }
 
-std::vector<std::string_view> SplitCells(std::string_view line) {
-  std::vector<std::string_view> cells;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    cells.push_back(Trim(line.substr(start, comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return cells;
-}
-
-// Blank lines and lines starting with '#' (provenance notes above the header) are skipped.
-bool IsBlank(std::string_view line) {
-  const std::string_view t = Trim(line);
-  return t.empty() || t.front() == '#';
-}
-
-// Splits text into lines at LF, CRLF or a lone CR (old Mac exports), so every convention gives the
-// same rows and line numbers.
-class LineReader {
- public:
-  explicit LineReader(std::string_view text) : text_(text) {}
-  bool Next(std::string_view* line) {
-    if (at_ >= text_.size()) return false;
-    const std::size_t end = std::min(text_.find_first_of("\r\n", at_), text_.size());
-    *line = text_.substr(at_, end - at_);
-    at_ = end;
-    if (at_ < text_.size() && text_[at_] == '\r') ++at_;  // CR, or the CR of CRLF
-    if (at_ < text_.size() && text_[at_] == '\n') ++at_;  // LF, or the LF of CRLF
-    ++number_;
-    return true;
-  }
-  int number() const { return number_; }
-
- private:
-  std::string_view text_;
-  std::size_t at_ = 0;
-  int number_ = 0;
-};
-
 // A whole (trimmed) cell as a finite number: "12", "-1.5e-6", "+3". Anything else, "12abc",
 // "1 2", "0x10", text, is refused rather than read as a prefix or as 0. `column` is 1-based.
-double ParseCell(std::string_view cell,
+double ParseCell(std::string_view raw,
                  const std::string& path,
                  int line,
                  int column,
@@ -78,6 +35,8 @@ double ParseCell(std::string_view cell,
   auto fail = [&](const std::string& message) {
     throw Error(ErrorKind::kData, message, path, line, column_name, column);
   };
+  // libcsv drops the blanks around an unquoted cell; those inside quotes ("  12 ") go here.
+  const std::string_view cell = TrimBlanks(raw);
   if (cell.empty()) fail("empty cell");
   std::string_view digits = cell;
   if (digits.front() == '+') digits.remove_prefix(1);
@@ -127,22 +86,12 @@ std::string ResolvePath(const std::string& base_dir, const std::string& path) {
 MeasuredData ParseMeasuredData(const std::string& text,
                                const std::string& path,
                                const DataConfig& config) {
-  LineReader in(text);
-  std::string_view raw;
-  // Header: the first non-blank line.
-  std::vector<std::string_view> header;
-  int header_number = 0;
-  while (in.Next(&raw)) {
-    if (in.number() == 1 && raw.starts_with("\xEF\xBB\xBF")) raw.remove_prefix(3);  // UTF-8 BOM
-    if (IsBlank(raw)) continue;
-    header_number = in.number();
-    header = SplitCells(raw);
-    break;
-  }
-  if (header.empty()) throw Error(ErrorKind::kData, "empty file (no header row)", path, 1);
+  CsvReader csv(text, path);
+  const std::vector<std::string>& header = csv.ReadHeader();
+  const int header_number = csv.line();
 
   auto find_column = [&](const std::string& name) {
-    const auto it = std::find(header.begin(), header.end(), std::string_view(name));
+    const auto it = std::find(header.begin(), header.end(), name);
     if (it == header.end()) {
       // A few names only: the file may not be the one intended, and is echoed in excerpts.
       constexpr std::size_t kNamesShown = 6;
@@ -161,25 +110,14 @@ MeasuredData ParseMeasuredData(const std::string& text,
   };
   const std::size_t x_col = find_column(config.position_column);
   const std::size_t y_col = find_column(config.displacement_column);
-  const std::size_t needed = std::max(x_col, y_col) + 1;
 
   const double x_scale = MetresPer(config.position_unit);
   const double y_scale = MetresPer(config.displacement_unit);
   std::vector<double> xs, ys;
   std::vector<int> lines;
-  while (in.Next(&raw)) {
-    const int line = in.number();
-    if (IsBlank(raw)) continue;
-    const auto cells = SplitCells(raw);
-    if (cells.size() < needed) {
-      const std::string& column =
-          cells.size() <= x_col ? config.position_column : config.displacement_column;
-      throw Error(ErrorKind::kData,
-                  "row has " + std::to_string(cells.size()) + " cells; the column is missing",
-                  path,
-                  line,
-                  column);
-    }
+  while (csv.Next()) {
+    const int line = csv.line();
+    const std::vector<std::string>& cells = csv.cells();
     const double x =
         ParseCell(cells[x_col], path, line, ColumnNumber(x_col), config.position_column) * x_scale;
     const double y =

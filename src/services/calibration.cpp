@@ -510,12 +510,31 @@ void WriteEnumeration(const EnumerateRequest& request,
                       const EnumerationResult& result,
                       EnumerateOutcome& outcome);
 
+// Enumeration visits 2^(free bits) configurations; beyond kMaxEnumerationBits that is refused
+// at the config key that sets the bits, before the model is built (Enumerate checks it again for
+// library callers, without a file to name).
+void CheckEnumerable(const CalibrationConfig& c) {
+  const int free = BinarySpace(c.space).num_free();
+  if (free <= kMaxEnumerationBits) return;
+  const std::string bits = std::to_string(c.space.dimension);
+  throw Error(ErrorKind::kConfig,
+              "gives " + bits + " bits, " + std::to_string(free) + " free after ties (2^" +
+                  std::to_string(free) + " configurations); enumerate takes at most 2^" +
+                  std::to_string(kMaxEnumerationBits) +
+                  ": tie bits ([sampler] tie, e.g. left/right clamp pairs) to reduce them, or run "
+                  "combinatorial ABC-SMC (combabc run)",
+              c.path,
+              c.bits_line,
+              c.bits_key);
+}
+
 }  // namespace
 
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress) {
   OutputFolders folders;  // kept once the enumeration's results are written
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
+  CheckEnumerable(p.config);
   MakeExecutor(p, request.executor);
   Executor& executor = *p.executor;
 

@@ -49,6 +49,9 @@ TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
   EXPECT_EQ(c.space.dimension, 6);
   EXPECT_EQ(c.space.names.front(), "clamp 1");
+  // Where the bits are set, for refusals of the space's size (enumerate's 2^24).
+  EXPECT_EQ(c.bits_key, "model.clamps.per_edge");
+  EXPECT_EQ(c.bits_line, 2);
   EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest)
                 .find("dir/run.toml:3: simulator.argv: unknown key"),
             0u);
@@ -63,6 +66,8 @@ TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
   EXPECT_EQ(c.simulator.kind, SimulatorKind::kWorker);
   EXPECT_EQ(c.space.dimension, 3);
   EXPECT_EQ(c.space.names, (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(c.bits_key, "simulator.bits.names");
+  EXPECT_EQ(c.bits_line, 6);
   EXPECT_EQ(c.simulator.outputs.name, "strain");
   EXPECT_EQ(c.simulator.outputs.coordinates, (std::vector<double>{0.0, 0.1, 0.2}));
   const ExternalSimulatorOptions& e = c.simulator.external;
@@ -77,7 +82,8 @@ TEST(SimulatorConfig, CoordinatesFromACsvFile) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("combabc-coords-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  std::ofstream(dir / "c.csv") << "x_m,comment\n0.0,a\n0.05\n\n0.2,b\n";
+  // The data CSV's dialect (issue 20, D8): a quoted coordinate and a comment holding commas.
+  std::ofstream(dir / "c.csv") << "x_m,comment\r\n0.0,a\r\n\"0.05\",\"c, d\"\r\n\r\n0.2,b\r\n";
   std::string text = kWorker;
   text.replace(text.find("coordinates = [0.0, 0.1, 0.2]"),
                std::string("coordinates = [0.0, 0.1, 0.2]").size(),
@@ -92,6 +98,16 @@ TEST(SimulatorConfig, CoordinatesFromACsvFile) {
     EXPECT_EQ(e.kind(), ErrorKind::kData);
     EXPECT_EQ(e.line(), 3);
     EXPECT_NE(std::string(e.what()).find("'zero' is not a number"), std::string::npos);
+  }
+  std::ofstream(dir / "c.csv") << "x,note\n0.0,a\n0.1,b, c\n";
+  try {
+    ParseConfig(text + kRest, (dir / "run.toml").string());
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kData);
+    EXPECT_NE(std::string(e.what()).find("c.csv:3:3: row has 3 cells; the first row has 2"),
+              std::string::npos)
+        << e.what();
   }
   std::filesystem::remove_all(dir);
 }

@@ -93,7 +93,8 @@ TEST(MeasuredData, NonNumericNanAndInfiniteCells) {
   EXPECT_NE(std::string(e.what()).find("profile.csv:2:2: u: empty cell"), std::string::npos)
       << e.what();
   e = ParseError("x_cm,u\n1\n");
-  EXPECT_NE(std::string(e.what()).find("profile.csv:2: u:"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2:2: u: row has 1 cell"), std::string::npos)
+      << e.what();
 }
 
 // Regression: a number followed by text, text in a numeric column, hex and inner blanks are each
@@ -152,6 +153,65 @@ TEST(MeasuredData, MissingColumnQuotesOnlyShortExcerptsOfTheHeader) {
   EXPECT_EQ(what.find('\x1b'), std::string::npos) << what;
   EXPECT_NE(what.find("\\x1b[31mred"), std::string::npos) << what;
   EXPECT_NE(what.find(", ..."), std::string::npos) << what;
+}
+
+// Regression (issue 20, D8): commas inside a quoted comment cell split it, so every row's "48"
+// and "3" were read as position and displacement: the profile came out as all 1.0 (normalised)
+// and the run went on. RFC 4180 quoting keeps the comment one cell.
+TEST(MeasuredData, QuotedCellsMayHoldCommasQuotesAndLineBreaks) {
+  const MeasuredData d = ParseMeasuredData(
+      "comment,x_cm,u\n"
+      "\"scan 7, 48, 3,\",48,72.89\n"
+      "\"scan 8, 49, 3,\",49,145.78\n"
+      "\"scan 9, 50, 3,\",50,36.445\n",
+      "profile.csv",
+      CentimetreConfig());
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_NEAR(d.positions[0], 0.48, kTol);
+  EXPECT_NEAR(d.positions[2], 0.50, kTol);
+  EXPECT_NEAR(d.scale, 145.78e-6, 1e-18);
+  EXPECT_NEAR(d.displacements[0], 0.5, kTol);
+  EXPECT_NEAR(d.displacements[1], 1.0, kTol);
+  EXPECT_NEAR(d.displacements[2], 0.25, kTol);
+  // Doubled quotes, a line break inside quotes, CRLF: the rows after it keep their line numbers.
+  const MeasuredData n = ParseMeasuredData(
+      "comment,x_cm,u\r\n"
+      "\"a \"\"quoted\"\" note\r\nover two lines\",48,1\r\n"
+      "\"\",49,2\r\n",
+      "profile.csv",
+      CentimetreConfig());
+  ASSERT_EQ(n.size(), 2u);
+  EXPECT_NEAR(n.displacements[0], 0.5, kTol);
+  EXPECT_NE(std::string(ParseError("comment,x_cm,u\r\n\"a\r\nb\",48,1\r\n\"\",48,2\r\n").what())
+                .find("profile.csv:4:2: x_cm: duplicate position '48' after line 2"),
+            std::string::npos);
+  // A quoted number is a number; blanks inside the quotes are trimmed like those outside.
+  const MeasuredData q =
+      ParseMeasuredData("\"x_cm\",\"u\"\n\"1\",\" 2 \"\n", "p.csv", CentimetreConfig());
+  ASSERT_EQ(q.size(), 1u);
+  EXPECT_NEAR(q.positions[0], 0.01, kTol);
+}
+
+// Regression (issue 20, D8): rows wider than the header were read (the reproducer above without
+// quotes still ran), and a comma in an unquoted cell blamed the next column.
+TEST(MeasuredData, EveryRowHasTheHeadersCellsAndHeaderNamesAreDistinct) {
+  Error e = ParseError("comment,x_cm,u\nscan 7, 48, 3,,48,72.89\n");
+  EXPECT_EQ(e.kind(), ErrorKind::kData);
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2:4: row has 6 cells; the header has 3"),
+            std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u\n1,2,3\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:2:3: row has 3 cells; the header has 2"),
+            std::string::npos)
+      << e.what();
+  e = ParseError("x_cm,u,u\n1,2,3\n");
+  EXPECT_STREQ(e.what(), "profile.csv:1:3: u: duplicate column name (also column 2)");
+  e = ParseError("x_cm,u\n1,2\n2,\"3\n");
+  EXPECT_STREQ(e.what(), "profile.csv:3:2: u: quoted cell not closed: the file ends inside it");
+  e = ParseError("x_cm,u\n1,2\n2,3\"\n");
+  EXPECT_NE(std::string(e.what()).find("profile.csv:3:2: u: a quote inside an unquoted cell"),
+            std::string::npos)
+      << e.what();
 }
 
 TEST(MeasuredData, UnsortedAndDuplicatePositions) {

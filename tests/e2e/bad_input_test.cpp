@@ -122,6 +122,23 @@ TEST_F(BadInput, CsvUnsortedOrDuplicatePositions) {
   EXPECT_NE(err.find("data.csv:4"), std::string::npos) << err;
 }
 
+// Regression (issue 20, D8): a comment cell with unquoted commas shifted the row and the run went
+// on (exit 0) with wrong data; a repeated header name was used silently.
+TEST_F(BadInput, CsvRowWiderThanTheHeaderOrRepeatedColumn) {
+  std::string csv = "x_cm,w_m,note\n";
+  for (int x = 48; x <= 80; ++x) {
+    csv += std::to_string(x) + "," + std::to_string(1e-6 / (1.0 + (x - 48) * 0.2)) +
+           (x == 50 ? ",scan 7, 48, 3,\n" : ",ok\n");
+  }
+  Write("data.csv", csv);
+  auto err = Expect({"run", config()}, kData);
+  EXPECT_NE(err.find("data.csv:4:4: row has 6 cells; the header has 3"), std::string::npos) << err;
+  Write("data.csv", Replace(GoodCsv(), "x_cm,w_m", "x_cm,w_m,w_m"));
+  err = Expect({"run", config()}, kData);
+  EXPECT_NE(err.find("data.csv:1:3: w_m: duplicate column name (also column 2)"), std::string::npos)
+      << err;
+}
+
 TEST_F(BadInput, WindowOutsideTheData) {
   Write("config.toml", Replace(kConfigText, "window = [48, 80]", "window = [30, 80]"));
   const auto err = Expect({"run", config()}, kData);

@@ -14,7 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kUsage = 64, kCantCreate = 73;
+constexpr int kUsage = 64, kCantCreate = 73, kConfig = 78;
 
 void Replace(std::string& text, const std::string& line_start, const std::string& with) {
   const auto at = text.find("\n" + line_start);
@@ -92,6 +92,26 @@ TEST(Enumerate, WithoutAFinalThresholdAsksForOne) {
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("--threshold"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir.path() / "out/history.sqlite"));
+}
+
+// Regression (issue 20, D15): more than 2^24 configurations were refused naming an internal
+// struct ("SmcProblem::space"); the refusal names the config file, line and key that set the bits.
+TEST(Enumerate, TooManyFreeBitsAreRefusedAtTheKeyThatSetsThem) {
+  ScratchDir dir("enumerate-too-many");
+  fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
+  std::string text = Config("threshold = [0.5, 0.3]");
+  Replace(text, "per_edge =", "per_edge = 13");  // 26 clamps, 26 free bits
+  std::ofstream(dir / "big.toml") << text;
+  const int line = Lines(text.substr(0, text.find("per_edge = 13"))) + 1;
+  const auto r = RunCli({"enumerate", dir / "big.toml", "--no-report", "-q"}, dir.path());
+  EXPECT_EQ(r.exit_code, kConfig) << r.err;
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  const std::string where = dir / "big.toml" + ":" + std::to_string(line) +
+                            ": model.clamps.per_edge: gives 26 bits, 26 free after ties (2^26 ";
+  EXPECT_NE(r.err.find(where), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("at most 2^24: tie bits ([sampler] tie"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("SmcProblem"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }
 
 }  // namespace

@@ -68,6 +68,11 @@ struct CalibrationConfig {
   // Filled from [sampler] (prior, tie) and the simulator's bits: the sensor's clamps (dimension
   // = 2 x model.clamps_per_edge, names "clamp 1", ...) or [simulator.bits].
   BinarySpaceOptions space;
+  // The key that sets the number of bits (model.clamps.per_edge or section_length;
+  // simulator.bits.count or names) and its line (its table's when left at its default, 0 without
+  // the table), so that a later refusal of the space's size (enumerate's 2^24) names it.
+  std::string bits_key = "model.clamps.per_edge";
+  int bits_line = 0;
   // [parameters.<name>]: the simulator's continuous unknowns with their priors, by name in
   // alphabetical order (docs/config.md lists the names the sensor model has; an external
   // simulator takes any name).

@@ -64,8 +64,9 @@ inline constexpr std::size_t kMaxCsvBytes = std::size_t{64} << 20;  // 64 MiB
 // Reads, converts, windows, extends and normalises the profile described by `config`. Throws
 // combabc::Error(kNoInput) if the file cannot be read; kData for a file over kMaxCsvBytes
 // (checked while reading, so FIFOs and devices too) and, naming file:line and the column, for a
-// missing column, a non-numeric / NaN / infinite cell, an empty file, unsorted or duplicate
-// positions, a window outside the data or a failed Gaussian extension.
+// missing column, a non-numeric / NaN / infinite cell, an empty file, malformed CSV (quoting, a row
+// wider or narrower than the header, a repeated header name: data/csv_reader.hpp), unsorted or
+// duplicate positions, a window outside the data or a failed Gaussian extension.
 MeasuredData LoadMeasuredData(const DataConfig& config, const std::string& config_dir);
 
 // Same, from CSV text already in memory; `path` is used in messages only.

@@ -9,6 +9,10 @@
 
 namespace combabc {
 
+// Most bits a space may have where a user declares them: the config's [simulator.bits] count /
+// names (the sensor's 2 x 1000 clamps stay below it) and the Python module's BinarySpace.
+inline constexpr int kMaxBits = 4096;
+
 struct BinarySpaceOptions {
   int dimension = 0;                   // d, number of bits; must be >= 1
   std::vector<double> prior_one;       // P(bit = 1) per bit; empty = default_prior_one for all
