@@ -12,7 +12,7 @@ if(COMBABC_FUZZ)
       "CXX=clang++-14 (Debian packages clang-14 and libclang-rt-14-dev)")
   endif()
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
-    -fno-sanitize-recover=all -g)
+    -fno-sanitize-recover=all)
   add_link_options(-fsanitize=address,undefined)
 endif()
 if(COMBABC_TSAN)

@@ -1,10 +1,15 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
 # unit, statistical, slow, packaging, browser), its .deb installed and run (scripts/check-deb.sh,
-# as root), and clang-tidy on it, the unit tests again under
-# ASan+UBSan, the tests labelled threads under ThreadSanitizer, the layering and formatting checks,
-# and a bounded fuzzing run of the input readers (COMBABC_FUZZ_SECONDS per target, default 30; 0
-# skips it; docs/fuzzing.md). Run scripts/setup.sh first (the README's test command does both).
+# as root), clang-tidy on it, the unit tests again under ASan+UBSan, the fuzzing of the input
+# readers (COMBABC_FUZZ_SECONDS per target, default 30; 0 skips it; docs/fuzzing.md) from the same
+# sanitizer build, the tests labelled threads under ThreadSanitizer, and the layering and
+# formatting checks. Run scripts/setup.sh first (the README's test command does both).
+#
+# CI's time (docs/ci.md): each stage prints its wall time. clang-tidy needs only the Release
+# build's compile database, so it runs beside the later stages at the lowest priority, on the CPU
+# they leave idle, and the script waits for it at the end; one clang build serves both the
+# ASan+UBSan unit tests and the fuzz targets; sanitizer builds compile only what their label runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -25,36 +30,50 @@ cmake -S . -B build-noapps -G Ninja -DCOMBABC_BUILD_APPS=OFF -DCOMBABC_BUILD_BEN
 stage "== Release build, warnings as errors"
 cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
 cmake --build build-ci -j "$jobs"
+
+# In a session of its own, so that the trap can stop the whole run-clang-tidy tree on a failure.
+echo "== clang-tidy on the Release build's sources: started, beside the stages below"
+tidy_log=$(mktemp)
+setsid nice -n 19 bash scripts/check-tidy.sh build-ci > "$tidy_log" 2>&1 &
+tidy_pid=$!
+trap 'kill -- "-$tidy_pid" 2> /dev/null || true; rm -f "$tidy_log"' EXIT
+
 ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
 
 stage "== the .deb (cpack): installed, runs the demo with /usr/bin/combabc, man page, Python (root only)"
 bash scripts/check-deb.sh build-ci
 
-stage "== clang-tidy on the Release build's sources (.clang-tidy; any warning fails)"
-bash scripts/check-tidy.sh build-ci
-
-stage "== Debug build with AddressSanitizer + UndefinedBehaviorSanitizer (unit tests)"
-# -O1, as AddressSanitizer's documentation advises for reasonable speed (Eigen's templates are
-# slow at -O0); assertions stay on (no NDEBUG) and every sanitizer check is the same. GCC's
-# -Wmaybe-uninitialized misfires on libstdc++'s <regex> at -O1 with the sanitizers; the Release
-# build above keeps that warning as an error. No Python module: its tests are not labelled unit.
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-  -DCMAKE_CXX_FLAGS_DEBUG="-g -O1 -Wno-maybe-uninitialized" \
-  -DCOMBABC_WERROR=ON -DCOMBABC_SANITIZE=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_PYTHON=OFF
-cmake --build build-asan -j "$jobs"
+stage "== clang build with AddressSanitizer + UndefinedBehaviorSanitizer: the unit tests and the fuzz targets"
+# One build for both (libFuzzer's coverage instrumentation is inert outside a fuzz target): the
+# library is compiled with sanitizers once, not twice. -O1, as AddressSanitizer's documentation
+# advises for reasonable speed (Eigen's templates are slow at -O0); line tables are all that a
+# sanitizer's report needs; assertions stay on (no NDEBUG). Warnings are the Release build's job
+# (GCC, -Werror above). Only the executables with tests labelled unit, and the fuzz targets.
+CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" \
+  -DCOMBABC_SANITIZE=ON -DCOMBABC_FUZZ=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_PYTHON=OFF \
+  > /dev/null
+cmake --build build-asan -j "$jobs" --target combabc_unit_tests combabc_fuzzers
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
 
+fuzz_seconds=${COMBABC_FUZZ_SECONDS:-30}
+if [ "$fuzz_seconds" -gt 0 ]; then
+  stage "== Fuzzing the config, CSV, history and worker-answer readers (${fuzz_seconds} s per target)"
+  COMBABC_FUZZ_BUILD=build-asan bash scripts/fuzz.sh "$fuzz_seconds"
+fi
+
 stage "== ThreadSanitizer build (tests labelled threads)"
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOMBABC_WERROR=ON \
-  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
+  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF -DCOMBABC_PYTHON=OFF
 cmake --build build-tsan -j "$jobs" --target combabc_threads_tests
 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
   ctest --test-dir build-tsan -j "$jobs" -L threads --no-tests=error --output-on-failure --timeout 900
 
-fuzz_seconds=${COMBABC_FUZZ_SECONDS:-30}
-if [ "$fuzz_seconds" -gt 0 ]; then
-  stage "== Fuzzing the config, CSV and history readers (${fuzz_seconds} s per target)"
-  bash scripts/fuzz.sh "$fuzz_seconds"
-fi
+stage "== clang-tidy (waiting for it to finish)"
+tidy_status=0
+wait "$tidy_pid" || tidy_status=$?
+cat "$tidy_log"
+[ "$tidy_status" -eq 0 ] || exit "$tidy_status"
 stage "== done"

@@ -2,7 +2,9 @@
 // every open), and `combabc verify`'s full pass over every wave.
 #include <sqlite3.h>
 
+#include <limits>
 #include <set>
+#include <string>
 #include <tuple>
 
 #include "combabc/core/error.hpp"
@@ -147,10 +149,15 @@ void HistoryStore::Impl::CheckWaveSet(bool full) {
   const std::int64_t last = rows.Int(2);
   rows.Reset();
   if (waves > 0 && (first != 0 || last != waves - 1)) {
+    // 1-based as the user counts waves; a number written by hand may be INT64_MAX.
+    const auto one_based = [](std::int64_t wave) {
+      return wave < std::numeric_limits<std::int64_t>::max() ? std::to_string(wave + 1)
+                                                             : std::to_string(wave) + " + 1";
+    };
     Corrupt(path,
             "wave",
             "waves are not numbered 1, 2, 3, ... (" + std::to_string(waves) + " rows, from wave " +
-                std::to_string(first + 1) + " to " + std::to_string(last + 1) + ")");
+                one_based(first) + " to " + one_based(last) + ")");
   }
   if (has_wave_count()) {
     Statement count(db, "SELECT value FROM meta WHERE key = 'wave_count'");

@@ -302,7 +302,8 @@ SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int stat
         if (boundary_index[zc] >= 0) {
           result.output_map(row, boundary_index[zc]) += v;
         } else if (interior_index[zc] >= 0) {
-          result.output_map.row(row) -= v * x_b.row(interior_index[zc]);
+          // No kept end, no columns: a row of an empty matrix is null data plus an offset (UB).
+          if (nb > 0) result.output_map.row(row) -= v * x_b.row(interior_index[zc]);
           result.output_offset(row) += v * x_f(interior_index[zc]);
         }
       }

@@ -203,18 +203,18 @@ TEST(Calibration, SingularConfigurationsFailTheirCandidateWithTheReason) {
   WriteTinySensorData(dir.path());
   std::ofstream(dir / "config.toml")
       << "[model]\nfoundation_stiffness = 0.0\n[model.load]\nfrequency = 0.0\n" +
-             TinySensorConfig("seed = 3\nwaves = 2\naccepted_per_wave = 40\nthreads = 2\n"
-                              "max_failure_fraction = 0.5\n");
+             TinySensorConfig(
+                 "seed = 3\nwaves = 2\naccepted_per_wave = 40\nthreads = 2\n"
+                 "max_failure_fraction = 0.5\n");
   const auto s = RunCli(
       {"simulate", dir / "config.toml", "--clamps", "000000", "-o", dir / "p.csv"}, dir.path());
   EXPECT_EQ(s.exit_code, 78) << s.err;
   EXPECT_NE(s.err.find("singular"), std::string::npos) << s.err;
   EXPECT_FALSE(fs::exists(dir / "p.csv"));
-  EXPECT_EQ(
-      RunCli({"simulate", dir / "config.toml", "--clamps", "100000", "-o", dir / "p.csv"},
-             dir.path())
-          .exit_code,
-      0);
+  EXPECT_EQ(RunCli({"simulate", dir / "config.toml", "--clamps", "100000", "-o", dir / "p.csv"},
+                   dir.path())
+                .exit_code,
+            0);
 
   const auto r = RunCli({"run", dir / "config.toml", "-o", dir / "out", "--no-report"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;

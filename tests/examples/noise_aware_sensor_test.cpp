@@ -1,8 +1,7 @@
 // Noise-aware acceptance on the sensor (Wilkinson 2013) against the failure it exists for: data
 // from a different, finer model (mesh x 2, foundation stiffness +20 %) plus 1 % Gaussian noise.
 // With the gaussian noise model (sigma estimated from the data) no clamp may end confidently
-// wrong (|P - 0.5| > 0.4 on the wrong side of the truth); the plain least-squares threshold run
-// on the same data is printed for comparison.
+// wrong (|P - 0.5| > 0.4 on the wrong side of the truth).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -102,11 +101,8 @@ TEST(NoiseAwareSensor, GaussianNoiseModelIsNotConfidentlyWrong) {
                                       "type = \"least_squares\"\nwindow = [30, 89]\n",
                                       30);
   EXPECT_TRUE(wrong.empty()) << wrong.size() << " clamps confidently wrong";
-  std::cout << "plain least-squares threshold on the same data:\n";
-  ConfidentlyWrong(scratch / "threshold",
-                   "[metric]\nquantile = 0.3\n\n[[metric.component]]\n"
-                   "type = \"least_squares\"\nwindow = [30, 89]\n",
-                   10);
+  // The plain least-squares threshold on the same data (10 waves) left clamps confidently wrong
+  // (docs/algorithm.md); it asserted nothing here, so it is no longer run (CI time).
   fs::remove_all(scratch);
 }
 
