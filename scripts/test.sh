@@ -6,10 +6,11 @@
 # sanitizer build, the tests labelled threads under ThreadSanitizer, and the layering and
 # formatting checks. Run scripts/setup.sh first (the README's test command does both).
 #
-# CI's time (docs/ci.md): each stage prints its wall time. clang-tidy needs only the Release
-# build's compile database, so it runs beside the later stages at the lowest priority, on the CPU
-# they leave idle, and the script waits for it at the end; one clang build serves both the
-# ASan+UBSan unit tests and the fuzz targets; sanitizer builds compile only what their label runs.
+# CI's time (docs/ci.md): each stage prints its wall time. clang-tidy needs only a compile
+# database, so it runs beside the other stages at the lowest priority, on the CPU they leave idle,
+# and the script waits for it at the end; one clang build serves both the ASan+UBSan unit tests and
+# the fuzz targets; sanitizer builds compile only what their label runs; the library's components
+# are unity builds.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -27,17 +28,21 @@ bash scripts/check-format.sh
 stage "== configure with the CLI off (the library and its tests stand without it)"
 cmake -S . -B build-noapps -G Ninja -DCOMBABC_BUILD_APPS=OFF -DCOMBABC_BUILD_BENCH=OFF > /dev/null
 
-stage "== Release build, warnings as errors"
-cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON
-cmake --build build-ci -j "$jobs"
-
-# In a session of its own, so that the trap can stop the whole run-clang-tidy tree on a failure.
-echo "== clang-tidy on the Release build's sources: started, beside the stages below"
+# clang-tidy needs only a compile database of the individual sources (the unity builds below
+# name their batches instead): a configure-only tree. It starts now and runs beside every stage
+# below at the lowest priority, on the CPU they leave idle; the script waits for it at the end. In
+# a session of its own, so that the trap can stop the whole run-clang-tidy tree on a failure.
+stage "== clang-tidy on every source: started, beside the stages below"
+cmake -S . -B build-tidy -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
 tidy_log=$(mktemp)
-setsid nice -n 19 bash scripts/check-tidy.sh build-ci > "$tidy_log" 2>&1 &
+setsid nice -n 19 bash scripts/check-tidy.sh build-tidy > "$tidy_log" 2>&1 &
 tidy_pid=$!
 trap 'kill -- "-$tidy_pid" 2> /dev/null || true; rm -f "$tidy_log"' EXIT
 
+# COMBABC_UNITY: the library's components as unity builds (docs/ci.md), here and below.
+stage "== Release build, warnings as errors"
+cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON -DCOMBABC_UNITY=ON
+cmake --build build-ci -j "$jobs"
 ctest --test-dir build-ci -j "$jobs" --output-on-failure --timeout 900
 
 stage "== the .deb (cpack): installed, runs the demo with /usr/bin/combabc, man page, Python (root only)"
@@ -52,7 +57,7 @@ stage "== clang build with AddressSanitizer + UndefinedBehaviorSanitizer: the un
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" \
   -DCOMBABC_SANITIZE=ON -DCOMBABC_FUZZ=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_PYTHON=OFF \
-  > /dev/null
+  -DCOMBABC_UNITY=ON > /dev/null
 cmake --build build-asan -j "$jobs" --target combabc_unit_tests combabc_fuzzers
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan -j "$jobs" -L unit --output-on-failure --timeout 900
@@ -66,7 +71,8 @@ fi
 stage "== ThreadSanitizer build (tests labelled threads)"
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOMBABC_WERROR=ON \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
-  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF -DCOMBABC_PYTHON=OFF
+  -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF -DCOMBABC_PYTHON=OFF \
+  -DCOMBABC_UNITY=ON
 cmake --build build-tsan -j "$jobs" --target combabc_threads_tests
 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
   ctest --test-dir build-tsan -j "$jobs" -L threads --no-tests=error --output-on-failure --timeout 900

@@ -33,12 +33,12 @@ Hermite HermiteAt(double h, double x) {
 
 // 4-point Gauss-Legendre on [0, 1]: exact for degree 7, enough for every product used here
 // (N^T N is degree 6 in each direction).
-constexpr std::array<double, 4> kGaussPoint = {
+constexpr std::array<double, 4> kBfsGaussPoint = {
     0.0694318442029737, 0.3300094782075719, 0.6699905217924281, 0.9305681557970263};
-constexpr std::array<double, 4> kGaussWeight = {
+constexpr std::array<double, 4> kBfsGaussWeight = {
     0.1739274225813185, 0.3260725774186815, 0.3260725774186815, 0.1739274225813185};
 
-int LocalDof(int a, int b, int k) { return kBfsDofsPerNode * (a + 2 * b) + k; }
+int BfsLocalDof(int a, int b, int k) { return kBfsDofsPerNode * (a + 2 * b) + k; }
 
 }  // namespace
 
@@ -51,7 +51,7 @@ ElementVector ShapeValues(double hx, double hy, double x, double y) {
       for (int k = 0; k < kBfsDofsPerNode; ++k) {
         const int p = k & 1;
         const int q = k >> 1;
-        n(LocalDof(a, b, k)) = hx_basis.value[2 * a + p] * hy_basis.value[2 * b + q];
+        n(BfsLocalDof(a, b, k)) = hx_basis.value[2 * a + p] * hy_basis.value[2 * b + q];
       }
     }
   }
@@ -62,9 +62,9 @@ ElementVector ShapeIntegral(double hx, double hy, double x0, double x1, double y
   ElementVector f = ElementVector::Zero(kBfsElementDofs);
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 4; ++j) {
-      const double x = x0 + (x1 - x0) * kGaussPoint[i];
-      const double y = y0 + (y1 - y0) * kGaussPoint[j];
-      f += kGaussWeight[i] * kGaussWeight[j] * (x1 - x0) * (y1 - y0) * ShapeValues(hx, hy, x, y);
+      const double x = x0 + (x1 - x0) * kBfsGaussPoint[i];
+      const double y = y0 + (y1 - y0) * kBfsGaussPoint[j];
+      f += kBfsGaussWeight[i] * kBfsGaussWeight[j] * (x1 - x0) * (y1 - y0) * ShapeValues(hx, hy, x, y);
     }
   }
   return f;
@@ -81,10 +81,10 @@ ElementMatrices ComputeElementMatrices(double hx,
   // Kirchhoff theory here neglects rotary inertia (thin plates: h^2 / 12 against wavelength^2).
   m.rotary_inertia.setZero(kBfsElementDofs, kBfsElementDofs);
   for (int i = 0; i < 4; ++i) {
-    const Hermite bx = HermiteAt(hx, hx * kGaussPoint[i]);
+    const Hermite bx = HermiteAt(hx, hx * kBfsGaussPoint[i]);
     for (int j = 0; j < 4; ++j) {
-      const Hermite by = HermiteAt(hy, hy * kGaussPoint[j]);
-      const double weight = kGaussWeight[i] * kGaussWeight[j] * hx * hy;
+      const Hermite by = HermiteAt(hy, hy * kBfsGaussPoint[j]);
+      const double weight = kBfsGaussWeight[i] * kBfsGaussWeight[j] * hx * hy;
       Eigen::Matrix<double, 3, kBfsElementDofs> b_matrix;
       ElementVector n(kBfsElementDofs);
       for (int b = 0; b < 2; ++b) {
@@ -92,7 +92,7 @@ ElementMatrices ComputeElementMatrices(double hx,
           for (int k = 0; k < kBfsDofsPerNode; ++k) {
             const int ix = 2 * a + (k & 1);
             const int iy = 2 * b + (k >> 1);
-            const int d = LocalDof(a, b, k);
+            const int d = BfsLocalDof(a, b, k);
             n(d) = bx.value[ix] * by.value[iy];
             b_matrix(0, d) = bx.d2[ix] * by.value[iy];
             b_matrix(1, d) = bx.value[ix] * by.d2[iy];

@@ -7,10 +7,10 @@ namespace {
 
 // 2-point Gauss-Legendre on [0, 1]: exact for degree 3, enough for every product of bilinear
 // functions and for the assumed shear strains (linear in one direction, constant in the other).
-constexpr std::array<double, 2> kGaussPoint = {0.2113248654051871, 0.7886751345948129};
-constexpr double kGaussWeight = 0.5;
+constexpr std::array<double, 2> kMitc4GaussPoint = {0.2113248654051871, 0.7886751345948129};
+constexpr double kMitc4GaussWeight = 0.5;
 
-int LocalDof(int a, int b, int k) { return kMitc4DofsPerNode * (a + 2 * b) + k; }
+int Mitc4LocalDof(int a, int b, int k) { return kMitc4DofsPerNode * (a + 2 * b) + k; }
 
 // Linear basis on [0, 1]: value of end a at s.
 double Linear(int a, double s) { return a == 0 ? 1.0 - s : s; }
@@ -24,10 +24,10 @@ Eigen::Matrix<double, 2, kMitc4ElementDofs> ShearRows(double hx, double hy, doub
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
       const double n = Linear(a, s) * Linear(b, t);
-      rows(0, LocalDof(a, b, 0)) = LinearSlope(a) / hx * Linear(b, t);
-      rows(0, LocalDof(a, b, 1)) = -n;
-      rows(1, LocalDof(a, b, 0)) = Linear(a, s) * LinearSlope(b) / hy;
-      rows(1, LocalDof(a, b, 2)) = -n;
+      rows(0, Mitc4LocalDof(a, b, 0)) = LinearSlope(a) / hx * Linear(b, t);
+      rows(0, Mitc4LocalDof(a, b, 1)) = -n;
+      rows(1, Mitc4LocalDof(a, b, 0)) = Linear(a, s) * LinearSlope(b) / hy;
+      rows(1, Mitc4LocalDof(a, b, 2)) = -n;
     }
   }
   return rows;
@@ -38,18 +38,18 @@ Eigen::Matrix<double, 2, kMitc4ElementDofs> ShearRows(double hx, double hy, doub
 ElementVector Mitc4ShapeValues(double hx, double hy, double x, double y) {
   ElementVector n = ElementVector::Zero(kMitc4ElementDofs);
   for (int b = 0; b < 2; ++b) {
-    for (int a = 0; a < 2; ++a) n(LocalDof(a, b, 0)) = Linear(a, x / hx) * Linear(b, y / hy);
+    for (int a = 0; a < 2; ++a) n(Mitc4LocalDof(a, b, 0)) = Linear(a, x / hx) * Linear(b, y / hy);
   }
   return n;
 }
 
 ElementVector Mitc4ShapeIntegral(double hx, double hy, double x0, double x1, double y0, double y1) {
   ElementVector f = ElementVector::Zero(kMitc4ElementDofs);
-  for (double gx : kGaussPoint) {
-    for (double gy : kGaussPoint) {
+  for (double gx : kMitc4GaussPoint) {
+    for (double gy : kMitc4GaussPoint) {
       const double x = x0 + (x1 - x0) * gx;
       const double y = y0 + (y1 - y0) * gy;
-      f += kGaussWeight * kGaussWeight * (x1 - x0) * (y1 - y0) * Mitc4ShapeValues(hx, hy, x, y);
+      f += kMitc4GaussWeight * kMitc4GaussWeight * (x1 - x0) * (y1 - y0) * Mitc4ShapeValues(hx, hy, x, y);
     }
   }
   return f;
@@ -69,9 +69,9 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
   m.stiffness_imag.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
   m.mass_unit.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
   m.rotary_inertia.setZero(kMitc4ElementDofs, kMitc4ElementDofs);
-  for (double s : kGaussPoint) {
-    for (double t : kGaussPoint) {
-      const double weight = kGaussWeight * kGaussWeight * hx * hy;
+  for (double s : kMitc4GaussPoint) {
+    for (double t : kMitc4GaussPoint) {
+      const double weight = kMitc4GaussWeight * kMitc4GaussWeight * hx * hy;
       Eigen::Matrix<double, 3, kMitc4ElementDofs> bending =
           Eigen::Matrix<double, 3, kMitc4ElementDofs>::Zero();
       Eigen::Matrix<double, kMitc4ElementDofs, 1> n =
@@ -84,13 +84,13 @@ ElementMatrices Mitc4ElementMatrices(double hx, double hy, const PlateSection& s
         for (int a = 0; a < 2; ++a) {
           const double dx = LinearSlope(a) / hx * Linear(b, t);
           const double dy = Linear(a, s) * LinearSlope(b) / hy;
-          bending(0, LocalDof(a, b, 1)) = dx;  // phi_x,x
-          bending(1, LocalDof(a, b, 2)) = dy;  // phi_y,y
-          bending(2, LocalDof(a, b, 1)) = dy;  // phi_x,y + phi_y,x
-          bending(2, LocalDof(a, b, 2)) = dx;
-          n(LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
-          n_phi_x(LocalDof(a, b, 1)) = Linear(a, s) * Linear(b, t);
-          n_phi_y(LocalDof(a, b, 2)) = Linear(a, s) * Linear(b, t);
+          bending(0, Mitc4LocalDof(a, b, 1)) = dx;  // phi_x,x
+          bending(1, Mitc4LocalDof(a, b, 2)) = dy;  // phi_y,y
+          bending(2, Mitc4LocalDof(a, b, 1)) = dy;  // phi_x,y + phi_y,x
+          bending(2, Mitc4LocalDof(a, b, 2)) = dx;
+          n(Mitc4LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
+          n_phi_x(Mitc4LocalDof(a, b, 1)) = Linear(a, s) * Linear(b, t);
+          n_phi_y(Mitc4LocalDof(a, b, 2)) = Linear(a, s) * Linear(b, t);
         }
       }
       Eigen::Matrix<double, 2, kMitc4ElementDofs> shear;

@@ -9,8 +9,8 @@ namespace {
 // 3-point Gauss-Legendre on [-1, 1]: exact for degree 5, so for every product of biquadratic
 // functions and their derivatives on a rectangle (at most quartic in one variable) and for the
 // assumed shear strains (linear in one direction, quadratic in the other).
-constexpr std::array<double, 3> kGaussPoint = {-0.7745966692414834, 0.0, 0.7745966692414834};
-constexpr std::array<double, 3> kGaussWeight = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+constexpr std::array<double, 3> kMitc9GaussPoint = {-0.7745966692414834, 0.0, 0.7745966692414834};
+constexpr std::array<double, 3> kMitc9GaussWeight = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
 
 // Tying coordinates (Bucalem & Bathe 1993): the 2-point Gauss abscissa for the direction of the
 // strain, the 3-point ones across it.
@@ -114,9 +114,9 @@ struct Quad9 {
     m.rotary_inertia.setZero(kDofs, kDofs);
     for (int p = 0; p < 3; ++p) {
       for (int q = 0; q < 3; ++q) {
-        const double r = kGaussPoint[p];
-        const double s = kGaussPoint[q];
-        const double weight = kGaussWeight[p] * kGaussWeight[q] * 0.25 * hx * hy;
+        const double r = kMitc9GaussPoint[p];
+        const double s = kMitc9GaussPoint[q];
+        const double weight = kMitc9GaussWeight[p] * kMitc9GaussWeight[q] * 0.25 * hx * hy;
         Bending bending = Bending::Zero();
         Row n = Row::Zero();
         // The slope-like fields of each direction d at the point (for the rotary inertia).
@@ -194,9 +194,9 @@ ElementVector Quad9ShapeIntegral(
   ElementVector f = ElementVector::Zero(static_cast<Eigen::Index>(kQuad9Nodes) * dofs_per_node);
   for (int p = 0; p < 3; ++p) {
     for (int q = 0; q < 3; ++q) {
-      const double x = x0 + 0.5 * (x1 - x0) * (1.0 + kGaussPoint[p]);
-      const double y = y0 + 0.5 * (y1 - y0) * (1.0 + kGaussPoint[q]);
-      f += kGaussWeight[p] * kGaussWeight[q] * 0.25 * (x1 - x0) * (y1 - y0) *
+      const double x = x0 + 0.5 * (x1 - x0) * (1.0 + kMitc9GaussPoint[p]);
+      const double y = y0 + 0.5 * (y1 - y0) * (1.0 + kMitc9GaussPoint[q]);
+      f += kMitc9GaussWeight[p] * kMitc9GaussWeight[q] * 0.25 * (x1 - x0) * (y1 - y0) *
            Quad9ShapeValues(dofs_per_node, hx, hy, x, y);
     }
   }

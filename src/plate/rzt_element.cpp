@@ -9,12 +9,12 @@ namespace {
 
 // 2-point Gauss-Legendre on [0, 1]: exact for every product of bilinear functions and for the
 // assumed shear strains (linear in one direction, constant in the other).
-constexpr std::array<double, 2> kGaussPoint = {0.2113248654051871, 0.7886751345948129};
-constexpr double kGaussWeight = 0.5;
+constexpr std::array<double, 2> kRztGaussPoint = {0.2113248654051871, 0.7886751345948129};
+constexpr double kRztGaussWeight = 0.5;
 
 using ShearRows = Eigen::Matrix<double, 2, kRztElementDofs>;
 
-int LocalDof(int a, int b, int k) { return kRztDofsPerNode * (a + 2 * b) + k; }
+int RztLocalDof(int a, int b, int k) { return kRztDofsPerNode * (a + 2 * b) + k; }
 
 double Linear(int a, double s) { return a == 0 ? 1.0 - s : s; }
 double LinearSlope(int a) { return a == 0 ? -1.0 : 1.0; }
@@ -26,10 +26,10 @@ ShearRows Shear(int dir, double hx, double hy, double s, double t) {
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
       const double n = Linear(a, s) * Linear(b, t);
-      rows(0, LocalDof(a, b, 0)) =
+      rows(0, RztLocalDof(a, b, 0)) =
           dir == 0 ? LinearSlope(a) / hx * Linear(b, t) : Linear(a, s) * LinearSlope(b) / hy;
-      rows(0, LocalDof(a, b, 1 + dir)) = -n;
-      rows(1, LocalDof(a, b, 3 + dir)) = n;
+      rows(0, RztLocalDof(a, b, 1 + dir)) = -n;
+      rows(1, RztLocalDof(a, b, 3 + dir)) = n;
     }
   }
   return rows;
@@ -68,9 +68,9 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
   m.stiffness_imag.setZero(kRztElementDofs, kRztElementDofs);
   m.mass_unit.setZero(kRztElementDofs, kRztElementDofs);
   m.rotary_inertia.setZero(kRztElementDofs, kRztElementDofs);
-  for (double s : kGaussPoint) {
-    for (double t : kGaussPoint) {
-      const double weight = kGaussWeight * kGaussWeight * hx * hy;
+  for (double s : kRztGaussPoint) {
+    for (double t : kRztGaussPoint) {
+      const double weight = kRztGaussWeight * kRztGaussWeight * hx * hy;
       // Curvatures of theta (rows 0-2) and psi (rows 3-5).
       Eigen::Matrix<double, 6, kRztElementDofs> bending =
           Eigen::Matrix<double, 6, kRztElementDofs>::Zero();
@@ -86,16 +86,16 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
           for (int field = 0; field < 2; ++field) {  // theta, psi
             const int row = 3 * field;
             const int dof = 1 + 2 * field;
-            bending(row + 0, LocalDof(a, b, dof)) = dx;
-            bending(row + 1, LocalDof(a, b, dof + 1)) = dy;
-            bending(row + 2, LocalDof(a, b, dof)) = dy;
-            bending(row + 2, LocalDof(a, b, dof + 1)) = dx;
+            bending(row + 0, RztLocalDof(a, b, dof)) = dx;
+            bending(row + 1, RztLocalDof(a, b, dof + 1)) = dy;
+            bending(row + 2, RztLocalDof(a, b, dof)) = dy;
+            bending(row + 2, RztLocalDof(a, b, dof + 1)) = dx;
           }
-          n(LocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
+          n(RztLocalDof(a, b, 0)) = Linear(a, s) * Linear(b, t);
           for (int dir = 0; dir < 2; ++dir) {
             const Eigen::Index row = 2 * static_cast<Eigen::Index>(dir);
-            rotation(row, LocalDof(a, b, 1 + dir)) = Linear(a, s) * Linear(b, t);
-            rotation(row + 1, LocalDof(a, b, 3 + dir)) = Linear(a, s) * Linear(b, t);
+            rotation(row, RztLocalDof(a, b, 1 + dir)) = Linear(a, s) * Linear(b, t);
+            rotation(row + 1, RztLocalDof(a, b, 3 + dir)) = Linear(a, s) * Linear(b, t);
           }
         }
       }

@@ -20,7 +20,7 @@ bool Fail(std::string* why, const char* field, double value, const char* constra
   return false;
 }
 
-bool InRange(double value, double lo, double hi) { return value >= lo && value <= hi; }
+bool Within(double value, double lo, double hi) { return value >= lo && value <= hi; }
 
 }  // namespace
 
@@ -29,7 +29,7 @@ bool SensorVariation::IsValid(std::string* why) const {
   // NaN fails every comparison.
   for (const SensorVariationField& field : kSensorVariationFields) {
     const std::optional<double>& value = this->*field.member;
-    if (value && !InRange(*value, field.low, field.high)) {
+    if (value && !Within(*value, field.low, field.high)) {
       return Fail(why, field.name, *value, (std::string("must be in ") + field.range_text).c_str());
     }
   }

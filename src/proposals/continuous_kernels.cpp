@@ -18,8 +18,8 @@
 namespace combabc {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kLogSqrt2Pi = 0.91893853320467274178;  // log sqrt(2 pi)
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kLogRootTwoPi = 0.91893853320467274178;  // log sqrt(2 pi)
 // Sample gives up after this many draws in a row outside the support (proposal.hpp).
 constexpr int kMaxSupportTries = 10000;
 
@@ -39,7 +39,7 @@ constexpr int kMaxSupportTries = 10000;
 constexpr double kCollapsedSd = 1e-6;
 constexpr double kFallbackSd = 0.1;
 
-std::string Num(double x) {
+std::string Formatted(double x) {
   std::array<char, 32> buf{};
   const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), x);
   return {buf.data(), result.ptr};
@@ -119,7 +119,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
     COMBABC_CHECK(!cumulative_.empty() && std::isfinite(total));
     // log of w_j / ((2 pi)^{d/2} det L_j), the Gaussian's normalising constant and the weight.
     for (std::size_t j = 0; j < log_weight_.size(); ++j) {
-      log_weight_[j] += -std::log(total) - static_cast<double>(d_) * kLogSqrt2Pi -
+      log_weight_[j] += -std::log(total) - static_cast<double>(d_) * kLogRootTwoPi -
                         factors_[factor_of_[j]].log_det;
     }
     shared_ = factors_.size() == 1 && d_ <= kStackDims;
@@ -168,7 +168,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
     throw Error(ErrorKind::kSoftware,
                 "continuous proposal: " + std::to_string(kMaxSupportTries) +
                     " draws in a row fell outside the prior support of the reals (the last at " +
-                    names_[bad] + " = " + Num(reals[bad]) +
+                    names_[bad] + " = " + Formatted(reals[bad]) +
                     "); the kernel has almost no mass inside the support");
   }
 
@@ -176,8 +176,8 @@ class GaussianMixtureProposal final : public ContinuousProposal {
   // The mass of the support under q (the truncation constant) is common to the wave and omitted.
   double LogDensity(std::span<const double> reals) const override {
     COMBABC_CHECK(reals.size() == d_);
-    if (!InSupport(reals)) return -kInf;
-    double max = -kInf, sum = 0.0;
+    if (!InSupport(reals)) return -kInfinity;
+    double max = -kInfinity, sum = 0.0;
     auto add = [&](double term) {
       if (term <= max) {
         sum += std::exp(term - max);
@@ -395,7 +395,7 @@ std::unique_ptr<ContinuousProposal> ContinuousKernel::Prior(const ParameterSpace
 std::unique_ptr<ContinuousKernel> MakeNormalKernel(double scale) {
   if (!(scale > 0.0) || !std::isfinite(scale)) {
     throw Error(ErrorKind::kConfig,
-                "ProposalOptions::scale = " + Num(scale) + "; must be finite and > 0");
+                "ProposalOptions::scale = " + Formatted(scale) + "; must be finite and > 0");
   }
   return std::make_unique<NormalKernel>(scale);
 }

@@ -16,7 +16,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double Seconds(Clock::time_point since) {
+double SecondsSince(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
@@ -344,7 +344,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     next += n;
     result.enumerated = next;
     if (observer) {
-      const BatchProgress progress{0, next, result.accepted, 0, 0, next, Seconds(start), 0, {}};
+      const BatchProgress progress{0, next, result.accepted, 0, 0, next, SecondsSince(start), 0, {}};
       observer->OnBatch(progress, {});
     }
     // The primary's signals decide, so that every worker of a distributed executor stops alike.
@@ -392,7 +392,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     return a.index < b.index;
   });
   result.particles = std::move(sorted);
-  result.wall_seconds = Seconds(start);
+  result.wall_seconds = SecondsSince(start);
   if (observer) observer->OnWaveEnd(result.Wave(options.thresholds, start_record.proposal));
   return result;
 }
