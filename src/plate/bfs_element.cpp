@@ -64,7 +64,8 @@ ElementVector ShapeIntegral(double hx, double hy, double x0, double x1, double y
     for (int j = 0; j < 4; ++j) {
       const double x = x0 + (x1 - x0) * kBfsGaussPoint[i];
       const double y = y0 + (y1 - y0) * kBfsGaussPoint[j];
-      f += kBfsGaussWeight[i] * kBfsGaussWeight[j] * (x1 - x0) * (y1 - y0) * ShapeValues(hx, hy, x, y);
+      f += kBfsGaussWeight[i] * kBfsGaussWeight[j] * (x1 - x0) * (y1 - y0) *
+           ShapeValues(hx, hy, x, y);
     }
   }
   return f;

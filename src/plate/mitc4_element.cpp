@@ -49,7 +49,8 @@ ElementVector Mitc4ShapeIntegral(double hx, double hy, double x0, double x1, dou
     for (double gy : kMitc4GaussPoint) {
       const double x = x0 + (x1 - x0) * gx;
       const double y = y0 + (y1 - y0) * gy;
-      f += kMitc4GaussWeight * kMitc4GaussWeight * (x1 - x0) * (y1 - y0) * Mitc4ShapeValues(hx, hy, x, y);
+      f += kMitc4GaussWeight * kMitc4GaussWeight * (x1 - x0) * (y1 - y0) *
+           Mitc4ShapeValues(hx, hy, x, y);
     }
   }
   return f;

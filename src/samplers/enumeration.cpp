@@ -344,7 +344,8 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     next += n;
     result.enumerated = next;
     if (observer) {
-      const BatchProgress progress{0, next, result.accepted, 0, 0, next, SecondsSince(start), 0, {}};
+      const BatchProgress progress{
+          0, next, result.accepted, 0, 0, next, SecondsSince(start), 0, {}};
       observer->OnBatch(progress, {});
     }
     // The primary's signals decide, so that every worker of a distributed executor stops alike.
