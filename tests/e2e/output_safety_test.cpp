@@ -8,6 +8,7 @@
 
 #include "cli_runner.hpp"
 #include "output_test_support.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -20,8 +21,6 @@ std::string PaperConfig() {
   return std::string(COMBABC_SOURCE_DIR) + "/tests/config/testdata/paper_45cm_least_squares.toml";
 }
 
-const std::string kAllFree(36, '0');
-
 class OutputSafety : public ::testing::Test {
  protected:
   OutputSafety()
@@ -30,38 +29,53 @@ class OutputSafety : public ::testing::Test {
   void Write(const std::string& name, const std::string& text) {
     std::ofstream(dir_ / name) << text;
   }
+  // The tiny sensor (3 + 3 clamps), tiny.toml and its data.csv in the test's folder: what simulate
+  // writes does not depend on the mesh, and the paper's mesh costs 20 s under ASan.
+  std::string TinyConfig() {
+    WriteTinySensorData(dir_.path());
+    Write("tiny.toml", TinySensorConfig("waves = 1\naccepted_per_wave = 5\n"));
+    return dir_ / "tiny.toml";
+  }
   ScratchDir dir_;
 };
 
+const std::string kAllFree = "000000";
+
 TEST_F(OutputSafety, SimulateRefusesAnExistingFileUnlessOverwrite) {
+  const std::string config = TinyConfig();
   Write("profile.csv", "the user's measurements\n");
-  auto r = RunCli({"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv"},
-                  dir_.path());
+  auto r =
+      RunCli({"simulate", config, "--clamps", kAllFree, "-o", dir_ / "profile.csv"}, dir_.path());
   EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("profile.csv"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--overwrite"), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(dir_ / "profile.csv"), "the user's measurements\n");
 
-  r = RunCli(
-      {"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv", "--overwrite"},
-      dir_.path());
+  r = RunCli({"simulate", config, "--clamps", kAllFree, "-o", dir_ / "profile.csv", "--overwrite"},
+             dir_.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadFile(dir_ / "profile.csv").rfind("position_m,", 0), 0u);
 }
 
 TEST_F(OutputSafety, SimulateNeverFollowsASymlinkPlantedAtTheTemporaryName) {
+  const std::string config = TinyConfig();
   Write("victim.txt", "precious\n");
   fs::create_symlink(dir_.path() / "victim.txt", dir_.path() / "profile.csv.tmp");
-  const auto r = RunCli(
-      {"simulate", PaperConfig(), "--clamps", kAllFree, "-o", dir_ / "profile.csv"}, dir_.path());
+  const auto r =
+      RunCli({"simulate", config, "--clamps", kAllFree, "-o", dir_ / "profile.csv"}, dir_.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadFile(dir_ / "victim.txt"), "precious\n") << "the symlink's target was clobbered";
   EXPECT_TRUE(fs::is_symlink(dir_.path() / "profile.csv.tmp"));
   EXPECT_EQ(ReadFile(dir_ / "profile.csv").rfind("position_m,", 0), 0u);
   EXPECT_EQ(Listing(dir_.path()),
-            (std::set<std::string>{
-                "victim.txt", "profile.csv.tmp", "profile.csv", "cli.stdout", "cli.stderr"}));
+            (std::set<std::string>{"victim.txt",
+                                   "profile.csv.tmp",
+                                   "profile.csv",
+                                   "cli.stdout",
+                                   "cli.stderr",
+                                   "tiny.toml",
+                                   "data.csv"}));
 }
 
 TEST_F(OutputSafety, ExportOverwriteKeepsEverythingElseInTheDirectory) {
