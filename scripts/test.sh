@@ -35,11 +35,12 @@ cmake -S . -B build-noapps -G Ninja -DCOMBABC_BUILD_APPS=OFF -DCOMBABC_BUILD_BEN
 stage "== clang-tidy on every source: started, beside the stages below"
 cmake -S . -B build-tidy -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
 tidy_log=$(mktemp)
-setsid nice -n 19 bash scripts/check-tidy.sh build-tidy > "$tidy_log" 2>&1 &
-tidy_pid=$!
 # A new session is a new scheduling group where the kernel groups by session (autogroup), and a
-# group's own nice level is what ranks it against the others: 19 there too.
-echo 19 > "/proc/$tidy_pid/autogroup" 2> /dev/null || true
+# group's own nice level is what ranks it against the others: 19 there too, set from inside the
+# new session (from here it could still be this script's group, before setsid has run).
+setsid bash -c 'echo 19 > /proc/self/autogroup 2> /dev/null || true
+  exec nice -n 19 bash scripts/check-tidy.sh build-tidy' > "$tidy_log" 2>&1 &
+tidy_pid=$!
 trap 'kill -- "-$tidy_pid" 2> /dev/null || true; rm -f "$tidy_log"' EXIT
 
 # COMBABC_UNITY: the library's components as unity builds (docs/ci.md), here and below.
