@@ -13,6 +13,7 @@
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
+#include "history/sql_test_support.hpp"
 #include "output_test_support.hpp"
 #include "tiny_sensor.hpp"
 
@@ -22,17 +23,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kData = 65, kIo = 74, kCantCreate = 73, kConfig = 78;
-
-void Sql(const std::string& path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  char* message = nullptr;
-  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
-  const std::string text = message ? message : "";
-  sqlite3_free(message);
-  sqlite3_close(db);
-  ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
-}
 
 std::int64_t Count(const std::string& path, const std::string& table) {
   sqlite3* db = nullptr;
@@ -52,25 +42,7 @@ CliResult RunCliWithStdout(const std::vector<std::string>& args,
                            const std::string& stdout_path) {
   std::vector<std::string> all = {COMBABC_CLI};
   all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  argv.reserve(all.size() + 1);
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  const std::string err = (dir / "cli.stderr").string();
-  posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&actions);
-  CliResult r;
-  int status = 0;
-  if (pid > 0 && waitpid(pid, &status, 0) == pid) {
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  r.err = ReadFile(dir / "cli.stderr");
-  return r;
+  return WaitCli(SpawnWithOutputIn(std::move(all), dir, stdout_path), dir);
 }
 
 // The process's umask for the CLI children, restored on exit.

@@ -48,8 +48,11 @@ class ScratchDir {
 };
 
 // Starts `argv` (looked up in PATH) with stdout/stderr redirected to cli.stdout / cli.stderr in
-// `dir`; returns the child's pid, or -1.
-inline pid_t SpawnWithOutputIn(std::vector<std::string> all, const std::filesystem::path& dir) {
+// `dir` (stdout to `stdout_path` instead when given: an existing file such as /dev/full);
+// returns the child's pid, or -1.
+inline pid_t SpawnWithOutputIn(std::vector<std::string> all,
+                               const std::filesystem::path& dir,
+                               const std::string& stdout_path = "") {
   std::vector<char*> argv;
   argv.reserve(all.size() + 1);
   for (auto& a : all) argv.push_back(a.data());
@@ -57,7 +60,11 @@ inline pid_t SpawnWithOutputIn(std::vector<std::string> all, const std::filesyst
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   const std::string out = (dir / "cli.stdout").string(), err = (dir / "cli.stderr").string();
-  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (stdout_path.empty()) {
+    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  } else {
+    posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), O_WRONLY, 0);
+  }
   posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   pid_t pid = -1;
   if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;

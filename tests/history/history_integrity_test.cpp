@@ -20,6 +20,7 @@
 #include "history/fake_run.hpp"
 #include "history/history_hash.hpp"
 #include "history/history_sqlite.hpp"
+#include "history/sql_test_support.hpp"
 
 namespace combabc {
 namespace {
@@ -29,6 +30,7 @@ using testing::FakeRunOptions;
 using testing::MakeFakeHistory;
 using testing::MakeFakeMetadata;
 using testing::RecordWave;
+using testing::Sql;
 
 FakeRunOptions SmallRun() {
   FakeRunOptions options;
@@ -72,17 +74,6 @@ class HistoryIntegrityTest : public ::testing::Test {
 
   fs::path dir_;
 };
-
-void Sql(const std::string& path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  char* message = nullptr;
-  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
-  const std::string text = message ? message : "";
-  sqlite3_free(message);
-  sqlite3_close(db);
-  ASSERT_EQ(rc, SQLITE_OK) << sql << ": " << text;
-}
 
 // What a v4 file (before the wave count was recorded) looks like, made from a v5 one: no meta row
 // wave_count, and its checksums as combabc computed them for v4.
