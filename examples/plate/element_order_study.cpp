@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
   }
   for (const Mesh& mesh : meshes) {
     SensorOptions o;
-    o.load_force = 0.042;
+    o.load_cases[0].load_force = 0.042;
     o.theory = mesh.theory;
     o.element_order = mesh.order;
     o.elements_per_section = mesh.along;

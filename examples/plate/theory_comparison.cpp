@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   one_side[8] = one_side[9] = 1;  // edge A only
   cases.push_back({"one side fixed at the load", one_side});
   SensorOptions base;
-  base.load_force = 0.042;
+  base.load_cases[0].load_force = 0.042;
   for (int factor = 1; factor <= max_factor; factor *= 2) {
     std::vector<std::vector<std::vector<double>>> profiles;  // theory, case
     for (PlateTheory theory : {PlateTheory::kKirchhoff, PlateTheory::kFsdt, PlateTheory::kRzt}) {

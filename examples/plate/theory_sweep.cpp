@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   SensorOptions base;
-  base.load_force = 0.042;
+  base.load_cases[0].load_force = 0.042;
   base.elements_per_section *= factor;
   // Bilinear shear elements (element order 1), the meshes docs/model.md's figure was drawn with.
   base.element_order = 1;

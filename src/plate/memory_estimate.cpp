@@ -26,9 +26,10 @@ constexpr double kBytesPerElementKind = 81920.0;
 // Whether section s is touched by the load (a point load or a patch; clipping does not matter).
 bool Loaded(const SensorOptions& o, int s) {
   const double h = o.length / o.clamps_per_edge;
+  const LoadCase& c = o.load_cases.front();
   const double patch =
-      o.load_patch_length > 0.0 && o.load_patch_width > 0.0 ? o.load_patch_length : 0.0;
-  return o.load_x + 0.5 * patch >= s * h && o.load_x - 0.5 * patch <= (s + 1) * h;
+      c.load_patch_length > 0.0 && c.load_patch_width > 0.0 ? c.load_patch_length : 0.0;
+  return c.load_x + 0.5 * patch >= s * h && c.load_x - 0.5 * patch <= (s + 1) * h;
 }
 
 // The distinct sections, as both condensations share their pieces: the same outputs at the same
@@ -38,7 +39,7 @@ std::vector<int> SectionKinds(const SensorOptions& o, std::vector<int>* outputs,
   const int sections = o.clamps_per_edge;
   const double h = o.length / sections;
   std::vector<std::vector<long long>> relative(static_cast<std::size_t>(sections));
-  for (double x : o.output_positions) {
+  for (double x : o.load_cases.front().output_positions) {
     const int s = std::clamp(static_cast<int>(x / h), 0, sections - 1);
     relative[s].push_back(std::llround((x - s * h) / h * 1e9));
   }
@@ -59,6 +60,16 @@ std::vector<int> SectionKinds(const SensorOptions& o, std::vector<int>* outputs,
 }  // namespace
 
 double SensorOptions::EstimatedMemoryBytes() const {
+  if (load_cases.size() > 1) {
+    // Each load case is condensed on its own.
+    double bytes = 0.0;
+    for (const LoadCase& c : load_cases) {
+      SensorOptions one = *this;
+      one.load_cases = {c};
+      bytes += one.EstimatedMemoryBytes();
+    }
+    return bytes;
+  }
   const int sections = clamps_per_edge;
   // The same group size as SensorModel's constructor chooses.
   const int group_size = sections % 3 == 0 ? 3 : (sections % 2 == 0 ? 2 : 1);

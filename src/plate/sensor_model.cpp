@@ -50,14 +50,14 @@ Grid SensorGrid(const SensorOptions& o) {
   return grid;
 }
 
-Load SensorLoad(const SensorOptions& o) {
+Load SensorLoad(const SensorOptions& o, const LoadCase& c) {
   Load load;
-  load.x = o.load_x;
-  load.y = o.load_y_fraction * o.width;
-  load.force = o.load_force;
-  if (o.load_patch_length > 0.0 && o.load_patch_width > 0.0) {
-    load.patch_length = o.load_patch_length;
-    load.patch_width = o.load_patch_width;
+  load.x = c.load_x;
+  load.y = c.load_y_fraction * o.width;
+  load.force = c.load_force;
+  if (c.load_patch_length > 0.0 && c.load_patch_width > 0.0) {
+    load.patch_length = c.load_patch_length;
+    load.patch_width = c.load_patch_width;
   }
   return load;
 }
@@ -93,24 +93,28 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    2 * static_cast<std::size_t>(options_.clamps_per_edge), 0)),
                                options_.frequency_hz,
                                &free_dofs));
-  condensation_ = std::make_unique<SectionCondensation>(
-      *plate_,
-      options_.clamps_per_edge,
-      options_.elements_per_section,
-      // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
-      // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
-      options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
-      SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
-      SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
-      SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
-      SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-      plate_->LoadVector(SensorLoad(options_)),
-      options_.frequency_hz,
-      options_.output_positions,
-      options_.output_y_fraction * options_.width,
-      options_.always_pivot,
-      fast_path_certified_,
-      ResolveKernels(options_.vector_kernels));
+  for (const LoadCase& c : options_.load_cases) {
+    output_positions_.insert(
+        output_positions_.end(), c.output_positions.begin(), c.output_positions.end());
+    condensations_.push_back(std::make_unique<SectionCondensation>(
+        *plate_,
+        options_.clamps_per_edge,
+        options_.elements_per_section,
+        // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
+        // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
+        options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
+        SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
+        SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
+        SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
+        SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
+        plate_->LoadVector(SensorLoad(options_, c)),
+        options_.frequency_hz,
+        c.output_positions,
+        c.output_y_fraction * options_.width,
+        options_.always_pivot,
+        fast_path_certified_,
+        ResolveKernels(options_.vector_kernels)));
+  }
   continuous_ = std::make_unique<ContinuousCache>();
   // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
   // precompute of their own. It holds when every layer has one loss factor, and also when every
@@ -144,7 +148,11 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
 
 SensorModel::~SensorModel() = default;
 
-std::size_t SensorModel::PrecomputedBytes() const { return condensation_->MemoryBytes(); }
+std::size_t SensorModel::PrecomputedBytes() const {
+  std::size_t bytes = 0;
+  for (const auto& c : condensations_) bytes += c->MemoryBytes();
+  return bytes;
+}
 
 const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& variation,
                                                       std::complex<double>* factor,
@@ -163,6 +171,13 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
                                k_f * options_.foundation_loss_factor);
   *mu = b / *factor;
   const int index = own ? 1 : 0;
+  if (options_.load_cases.size() != 1) {
+    throw Error(ErrorKind::kConfig,
+                "continuous unknowns need a single load case",
+                "",
+                0,
+                "load_cases.size()");
+  }
   std::call_once(continuous_->once[index], [&] {
     continuous_->base[index] = std::make_unique<ContinuousCondensation>(
         *plate_,
@@ -173,9 +188,9 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
         SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
         SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
         SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-        plate_->LoadVector(SensorLoad(options_)),
-        options_.output_positions,
-        options_.output_y_fraction * options_.width,
+        plate_->LoadVector(SensorLoad(options_, options_.load_cases[0])),
+        options_.load_cases[0].output_positions,
+        options_.load_cases[0].output_y_fraction * options_.width,
         options_.always_pivot,
         ResolveKernels(options_.vector_kernels));
     continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
@@ -201,20 +216,28 @@ void SensorModel::CheckSpans(std::span<const std::uint8_t> clamps, std::size_t o
 }
 
 void SensorModel::Finish(std::span<const std::complex<double>> w, std::span<double> out) const {
-  double peak = 0.0;
-  for (std::size_t k = 0; k < w.size(); ++k) {
-    out[k] = std::abs(w[k]);
-    peak = std::max(peak, out[k]);
-  }
-  if (options_.normalise && peak > 0.0) {
-    for (double& v : out) v /= peak;
+  for (std::size_t c = 0; c < options_.load_cases.size(); ++c) {
+    const std::size_t begin = options_.OutputOffset(c);
+    const std::size_t end = options_.OutputOffset(c + 1);
+    double peak = 0.0;
+    for (std::size_t k = begin; k < end; ++k) {
+      out[k] = std::abs(w[k]);
+      peak = std::max(peak, out[k]);
+    }
+    if (options_.normalise && peak > 0.0) {
+      for (std::size_t k = begin; k < end; ++k) out[k] /= peak;
+    }
   }
 }
 
 void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
                                  std::span<std::complex<double>> out) const {
   CheckSpans(clamps, out.size());
-  condensation_->Solve(clamps, out);
+  for (std::size_t c = 0; c < condensations_.size(); ++c) {
+    condensations_[c]->Solve(clamps,
+                             out.subspan(options_.OutputOffset(c),
+                                         options_.load_cases[c].output_positions.size()));
+  }
 }
 
 void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const {
@@ -222,7 +245,7 @@ void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double
   // Reused per thread: no allocation per configuration.
   thread_local std::vector<std::complex<double>> w;
   w.resize(out.size());
-  condensation_->Solve(clamps, w);
+  ComplexProfile(clamps, w);
   Finish(w, out);
 }
 
@@ -246,20 +269,31 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
   return c;
 }
 
-Eigen::VectorXcd SensorModel::Field(std::span<const std::uint8_t> clamps) const {
+Eigen::VectorXcd SensorModel::Field(std::span<const std::uint8_t> clamps, int load_case) const {
   CheckSpans(clamps, static_cast<std::size_t>(num_outputs()));
-  return plate_->SolveHarmonic(
-      ConfigurationConstraints(clamps), SensorLoad(options_), options_.frequency_hz);
+  if (load_case < 0 || load_case >= num_load_cases()) {
+    throw Error(ErrorKind::kConfig,
+                "load_case must be in [0, " + std::to_string(num_load_cases()) + ")",
+                "",
+                0,
+                "load_case");
+  }
+  return plate_->SolveHarmonic(ConfigurationConstraints(clamps),
+                               SensorLoad(options_, options_.load_cases[load_case]),
+                               options_.frequency_hz);
 }
 
 void SensorModel::ProfileFullSolve(std::span<const std::uint8_t> clamps,
                                    std::span<double> out) const {
   CheckSpans(clamps, out.size());
-  const Eigen::VectorXcd u = Field(clamps);
   std::vector<std::complex<double>> w(out.size());
-  const double y = options_.output_y_fraction * options_.width;
-  for (std::size_t k = 0; k < w.size(); ++k) {
-    w[k] = plate_->Deflection(u, options_.output_positions[k], y);
+  for (int c = 0; c < num_load_cases(); ++c) {
+    const Eigen::VectorXcd u = Field(clamps, c);
+    const LoadCase& lc = options_.load_cases[c];
+    const double y = lc.output_y_fraction * options_.width;
+    for (std::size_t k = 0; k < lc.output_positions.size(); ++k) {
+      w[options_.OutputOffset(c) + k] = plate_->Deflection(u, lc.output_positions[k], y);
+    }
   }
   Finish(w, out);
 }
@@ -293,11 +327,15 @@ SensorModes SensorModel::Modes(std::span<const std::uint8_t> clamps, int count) 
   SensorModes result;
   result.frequencies_hz = modes.frequencies_hz;
   result.shapes.resize(num_outputs(), count);
-  const double y = options_.output_y_fraction * options_.width;
   for (int c = 0; c < count; ++c) {
     const Eigen::VectorXd shape = modes.shapes.col(c);
-    for (int k = 0; k < num_outputs(); ++k) {
-      result.shapes(k, c) = plate_->Deflection(shape, options_.output_positions[k], y);
+    for (const LoadCase& lc : options_.load_cases) {
+      const double y = lc.output_y_fraction * options_.width;
+      const auto offset = static_cast<int>(options_.OutputOffset(&lc - options_.load_cases.data()));
+      for (std::size_t k = 0; k < lc.output_positions.size(); ++k) {
+        result.shapes(offset + static_cast<int>(k), c) =
+            plate_->Deflection(shape, lc.output_positions[k], y);
+      }
     }
   }
   return result;

@@ -8,7 +8,7 @@ namespace combabc::plate {
 namespace {
 
 template <typename T>
-bool Fail(std::string* why, const char* field, T value, const char* constraint) {
+bool Fail(std::string* why, const std::string& field, T value, const char* constraint) {
   if (why != nullptr) {
     std::ostringstream os;
     os << "SensorOptions::" << field << " = " << value << "; " << constraint;
@@ -58,6 +58,61 @@ bool InRange(double value, double lo, double hi) { return value >= lo && value <
 
 }  // namespace
 
+bool LoadCase::IsValid(const SensorOptions& o,
+                       const std::string& prefix,
+                       std::string* why) const {
+  const double length = o.length;
+  const double width = o.width;
+  auto field = [&prefix](const std::string& name) { return prefix + name; };
+  if (!InRange(load_force, -1e6, 1e6)) {
+    return Fail(why, field("load_force"), load_force, "must be in [-1e6, 1e6] N");
+  }
+  std::ostringstream plate_range;
+  plate_range << "must lie on the plate, in [0, " << length << "] m";
+  const std::string on_plate = plate_range.str();
+  if (!InRange(load_x, 0.0, length)) return Fail(why, field("load_x"), load_x, on_plate.c_str());
+  if (!InRange(load_y_fraction, 0.0, 1.0)) {
+    return Fail(why, field("load_y_fraction"), load_y_fraction, "must be in [0, 1]");
+  }
+  // A patch is 0 (a point load) or at least a nanometre: thinner patches round to zero width at
+  // the load position and the patch integral breaks down.
+  auto patch_ok = [](double size, double most) { return size == 0.0 || InRange(size, 1e-9, most); };
+  if (!patch_ok(load_patch_length, length)) {
+    return Fail(why,
+                field("load_patch_length"),
+                load_patch_length,
+                "must be 0 or in [1e-9, the plate's length] m");
+  }
+  if (!patch_ok(load_patch_width, width)) {
+    return Fail(
+        why, field("load_patch_width"), load_patch_width, "must be 0 or in [1e-9, the plate's width] m");
+  }
+  if (output_positions.empty() || output_positions.size() > kMaxOutputPositions) {
+    return Fail(why,
+                field("output_positions.size()"),
+                output_positions.size(),
+                ("must be in [1, " + std::to_string(kMaxOutputPositions) + "]").c_str());
+  }
+  for (std::size_t k = 0; k < output_positions.size(); ++k) {
+    if (!InRange(output_positions[k], 0.0, length)) {
+      const std::string name = field("output_positions[" + std::to_string(k) + "]");
+      return Fail(why, name, output_positions[k], on_plate.c_str());
+    }
+  }
+  if (!InRange(output_y_fraction, 0.0, 1.0)) {
+    return Fail(why, field("output_y_fraction"), output_y_fraction, "must be in [0, 1]");
+  }
+  return true;
+}
+
+std::size_t SensorOptions::OutputOffset(std::size_t c) const {
+  std::size_t offset = 0;
+  for (std::size_t k = 0; k < c && k < load_cases.size(); ++k) {
+    offset += load_cases[k].output_positions.size();
+  }
+  return offset;
+}
+
 bool SensorOptions::IsValid(std::string* why) const {
   // Physical ranges (docs/config.md, "[model]"): generous for any strip sensor, tight enough that
   // every derived quantity (stiffness, mass, omega^2, element sizes) stays a finite double.
@@ -87,46 +142,28 @@ bool SensorOptions::IsValid(std::string* why) const {
   if (std::string_view(ToString(theory)) == "?") {
     return Fail(why, "theory", static_cast<int>(theory), "must be kirchhoff, fsdt or rzt");
   }
-  if (!InRange(load_force, -1e6, 1e6)) {
-    return Fail(why, "load_force", load_force, "must be in [-1e6, 1e6] N");
-  }
-  std::ostringstream plate_range;
-  plate_range << "must lie on the plate, in [0, " << length << "] m";
-  const std::string on_plate = plate_range.str();
-  if (!InRange(load_x, 0.0, length)) return Fail(why, "load_x", load_x, on_plate.c_str());
-  if (!InRange(load_y_fraction, 0.0, 1.0)) {
-    return Fail(why, "load_y_fraction", load_y_fraction, "must be in [0, 1]");
-  }
-  // A patch is 0 (a point load) or at least a nanometre: thinner patches round to zero width at
-  // the load position and the patch integral breaks down.
-  auto patch_ok = [](double size, double most) { return size == 0.0 || InRange(size, 1e-9, most); };
-  if (!patch_ok(load_patch_length, length)) {
-    return Fail(why,
-                "load_patch_length",
-                load_patch_length,
-                "must be 0 or in [1e-9, the plate's length] m");
-  }
-  if (!patch_ok(load_patch_width, width)) {
-    return Fail(
-        why, "load_patch_width", load_patch_width, "must be 0 or in [1e-9, the plate's width] m");
-  }
   if (!InRange(frequency_hz, 0.0, 1e6)) {
     return Fail(why, "frequency_hz", frequency_hz, "must be in [0, 1e6] Hz");
   }
-  if (output_positions.empty() || output_positions.size() > kMaxOutputPositions) {
+  if (load_cases.empty() || load_cases.size() > kMaxLoadCases) {
     return Fail(why,
-                "output_positions.size()",
-                output_positions.size(),
-                ("must be in [1, " + std::to_string(kMaxOutputPositions) + "]").c_str());
+                "load_cases.size()",
+                load_cases.size(),
+                ("must be in [1, " + std::to_string(kMaxLoadCases) + "]").c_str());
   }
-  for (std::size_t k = 0; k < output_positions.size(); ++k) {
-    if (!InRange(output_positions[k], 0.0, length)) {
-      const std::string field = "output_positions[" + std::to_string(k) + "]";
-      return Fail(why, field.c_str(), output_positions[k], on_plate.c_str());
-    }
+  for (std::size_t c = 0; c < load_cases.size(); ++c) {
+    // One case keeps the field names it had before there were several ("load_x").
+    const std::string prefix =
+        load_cases.size() == 1 ? "" : "load_cases[" + std::to_string(c) + "].";
+    if (!load_cases[c].IsValid(*this, prefix, why)) return false;
   }
-  if (!InRange(output_y_fraction, 0.0, 1.0)) {
-    return Fail(why, "output_y_fraction", output_y_fraction, "must be in [0, 1]");
+  std::size_t outputs = 0;
+  for (const LoadCase& c : load_cases) outputs += c.output_positions.size();
+  if (outputs > kMaxOutputPositions) {
+    return Fail(why,
+                "load_cases[*].output_positions.size()",
+                outputs,
+                ("must add up to at most " + std::to_string(kMaxOutputPositions)).c_str());
   }
   if (elements_per_section < 1 || elements_per_section > kMaxElementsPerSection) {
     return Fail(why,
@@ -190,10 +227,12 @@ bool SensorOptions::IsValid(std::string* why) const {
     o.clamps_per_edge = std::min(clamps_per_edge, defaults.clamps_per_edge);
     consider("clamps_per_edge", o);
     o = *this;
-    o.output_positions.resize(std::min<std::size_t>(output_positions.size(), 101));
+    for (LoadCase& c : o.load_cases) {
+      c.output_positions.resize(std::min<std::size_t>(c.output_positions.size(), 101));
+    }
     consider("output_positions.size()", o);
     const std::string field = culprit;
-    double value = static_cast<double>(output_positions.size());
+    double value = static_cast<double>(NumOutputs());
     if (field == "elements_across_width") value = ElementsAcrossWidth();
     if (field == "elements_per_section") value = elements_per_section;
     if (field == "clamps_per_edge") value = clamps_per_edge;

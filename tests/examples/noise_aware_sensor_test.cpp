@@ -52,12 +52,12 @@ void WriteData(const CalibrationConfig& base, const fs::path& csv) {
   o.elements_across_width = 2 * o.ElementsAcrossWidth();
   o.foundation_stiffness *= 1.2;
   o.normalise = true;
-  o.output_positions.clear();
-  for (int cm = 30; cm <= 89; ++cm) o.output_positions.push_back(cm * 0.01);
+  o.load_cases[0].output_positions.clear();
+  for (int cm = 30; cm <= 89; ++cm) o.load_cases[0].output_positions.push_back(cm * 0.01);
   const plate::SensorModel model(o);
   std::vector<std::uint8_t> clamps;
   for (char c : kTruth) clamps.push_back(c == '1');
-  std::vector<double> w(o.output_positions.size());
+  std::vector<double> w(o.load_cases[0].output_positions.size());
   model.Profile(clamps, w);
   RandomStream rng(7, 0, 0);
   std::ofstream out(csv);

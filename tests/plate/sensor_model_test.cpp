@@ -102,8 +102,8 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveOtherSupports) {
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
   o.short_edge_end = Support::kSimplySupported;
-  o.load_x = 0.3712;          // inside a section, off the section boundaries
-  o.load_patch_length = 0.0;  // point load
+  o.load_cases[0].load_x = 0.3712;          // inside a section, off the section boundaries
+  o.load_cases[0].load_patch_length = 0.0;  // point load
   o.length_grading = 1.0;
   o.width_grading = 2.0;
   o.normalise = false;
@@ -142,8 +142,8 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveKirchhoff) {
   ExpectFastEqualsFull(o, 40, 15);
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
-  o.load_x = 0.3712;
-  o.load_patch_length = 0.0;
+  o.load_cases[0].load_x = 0.3712;
+  o.load_cases[0].load_patch_length = 0.0;
   ExpectFastEqualsFull(o, 20, 16);
 }
 
@@ -156,8 +156,8 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveFsdt) {
   ExpectFastEqualsFull(o, 40, 11);
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
-  o.load_x = 0.3712;
-  o.load_patch_length = 0.0;
+  o.load_cases[0].load_x = 0.3712;
+  o.load_cases[0].load_patch_length = 0.0;
   ExpectFastEqualsFull(o, 20, 12);
 }
 
@@ -171,8 +171,8 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveRzt) {
   ExpectFastEqualsFull(o, 40, 13);
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
-  o.load_x = 0.3712;
-  o.load_patch_length = 0.0;
+  o.load_cases[0].load_x = 0.3712;
+  o.load_cases[0].load_patch_length = 0.0;
   ExpectFastEqualsFull(o, 20, 14);
 }
 
@@ -191,8 +191,8 @@ TEST(PlateSensorModel, FastPathEqualsFullSolveQuadratic) {
     ExpectFastEqualsFull(o, 30, 21, 1e-9);
     o.fixed_support = Support::kSimplySupported;
     o.short_edge_start = Support::kClamped;
-    o.load_x = 0.3712;
-    o.load_patch_length = 0.0;
+    o.load_cases[0].load_x = 0.3712;
+    o.load_cases[0].load_patch_length = 0.0;
     o.length_grading = 1.0;
     o.elements_across_width = 1;
     ExpectFastEqualsFull(o, 20, 22, 1e-9);
@@ -377,7 +377,7 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "SensorOptions::layers[1]::poisson_ratio = 0.5; must be in (-1, 0.5)");
   o = SensorOptions{};
-  o.output_positions.push_back(1.0);
+  o.load_cases[0].output_positions.push_back(1.0);
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "SensorOptions::output_positions[91] = 1; must lie on the plate, in [0, 0.9] m");
   EXPECT_TRUE(SensorOptions{}.IsValid(&why));

@@ -308,10 +308,10 @@ double RotaryInertiaEffect(const SensorOptions& options, const std::vector<std::
             plate.SolveHarmonic(constraints, Eigen::VectorXd(rhs.imag()), options.frequency_hz);
     with = u + correction;
   }
-  const double y = options.output_y_fraction * options.width;
+  const double y = options.load_cases[0].output_y_fraction * options.width;
   double peak = 0.0;
   double change = 0.0;
-  for (double x : options.output_positions) {
+  for (double x : options.load_cases[0].output_positions) {
     const double before = std::abs(plate.Deflection(u, x, y));
     peak = std::max(peak, before);
     change = std::max(change, std::abs(std::abs(plate.Deflection(with, x, y)) - before));

@@ -55,6 +55,29 @@ inline constexpr std::size_t kMaxOutputPositions = 100000;
 // Default memory budget of a model: 4 GB (10^9 bytes each, as messages print them).
 inline constexpr double kDefaultMemoryLimitBytes = 4e9;
 
+// Most load cases in one model (docs/config.md, "Limits"): a design grid is tens of candidates.
+inline constexpr std::size_t kMaxLoadCases = 1000;
+
+struct SensorOptions;
+
+// One experiment's load and scan line on the sensor.
+struct LoadCase {
+  // Harmonic load: amplitude `load_force` at (load_x, load_y_fraction * width), as a uniform
+  // pressure on a load_patch_length x load_patch_width patch (a point load when either is 0).
+  double load_force = 0.04;  // N (paper: 0.041-0.044 N)
+  double load_x = 0.45;      // m (paper)
+  double load_y_fraction = 0.5;
+  double load_patch_length = 0.01;  // m (assumption: a shaker contact pad about 1 cm across)
+  double load_patch_width = 0.01;   // m
+  // Output: |w| along y = output_y_fraction * width at these x positions (m, within [0, length]).
+  std::vector<double> output_positions = DefaultOutputPositions();
+  double output_y_fraction = 0.5;  // the top centreline
+
+  // Checks each field against the plate of `options`; on failure `why` reads
+  // "SensorOptions::<prefix>field = value; constraint".
+  bool IsValid(const SensorOptions& options, const std::string& prefix, std::string* why) const;
+};
+
 struct SensorOptions {
   // Geometry (m).
   double length = 0.90;  // paper section 4
@@ -81,19 +104,17 @@ struct SensorOptions {
   Support short_edge_start = Support::kFree;  // edge x = 0
   Support short_edge_end = Support::kFree;    // edge x = length
 
-  // Harmonic load: amplitude `load_force` at (load_x, load_y_fraction * width), as a uniform
-  // pressure on a load_patch_length x load_patch_width patch (a point load when either is 0).
-  double load_force = 0.04;  // N (paper: 0.041-0.044 N)
-  double load_x = 0.45;      // m (paper)
-  double load_y_fraction = 0.5;
-  double load_patch_length = 0.01;  // m (assumption: a shaker contact pad about 1 cm across)
-  double load_patch_width = 0.01;   // m
-  double frequency_hz = 5.0;        // paper
+  // The loads and scan lines the model answers for (one experiment each; docs/model.md, "Several
+  // load cases"): at least one. Every case shares the clamps, the mesh and the frequency below,
+  // so a configuration's system is factorized once and solved for every case's load; the model's
+  // outputs are the cases' outputs one after the other.
+  std::vector<LoadCase> load_cases = {LoadCase{}};
+  double frequency_hz = 5.0;  // paper
+  // The first output of case c in the concatenated outputs, and the total after the last case.
+  std::size_t OutputOffset(std::size_t c) const;
+  std::size_t NumOutputs() const { return OutputOffset(load_cases.size()); }
 
-  // Output: |w| along y = output_y_fraction * width at these x positions (m, within [0, length]).
-  std::vector<double> output_positions = DefaultOutputPositions();
-  double output_y_fraction = 0.5;  // the top centreline
-  bool normalise = true;           // divide by the maximum, as in the paper's figures
+  bool normalise = true;  // divide each case's profile by its maximum, as in the paper's figures
 
   // Mesh: elements per clamp section along x and across the width (docs/model.md, "Convergence
   // study" and "Mesh convergence of the shear theories": with the gradings below, the default
@@ -221,8 +242,10 @@ class SensorModel {
   SensorModel& operator=(const SensorModel&) = delete;
 
   int num_clamps() const { return 2 * options_.clamps_per_edge; }
-  int num_outputs() const { return static_cast<int>(options_.output_positions.size()); }
-  const std::vector<double>& output_positions() const { return options_.output_positions; }
+  // All load cases' outputs, case after case (SensorOptions::OutputOffset).
+  int num_outputs() const { return static_cast<int>(output_positions_.size()); }
+  const std::vector<double>& output_positions() const { return output_positions_; }
+  int num_load_cases() const { return static_cast<int>(options_.load_cases.size()); }
   const SensorOptions& options() const { return options_; }
   const Plate& plate() const { return *plate_; }
   // Bytes held by the precomputed section pieces (the per-configuration state is on the stack).
@@ -233,8 +256,8 @@ class SensorModel {
   // True for the default sensor; false e.g. above the first resonance.
   bool fast_path_certified() const { return fast_path_certified_; }
 
-  // clamps[k] = 1: clamp k + 1 fixed; 0: free (paper section 5). Writes |w| (m, or normalised to
-  // a maximum of 1) at the output positions. Thread-safe.
+  // clamps[k] = 1: clamp k + 1 fixed; 0: free (paper section 5). Writes |w| (m, or each case's
+  // profile normalised to a maximum of 1) at the output positions of every load case. Thread-safe.
   void Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const;
   // The same from a sparse LU of the whole plate (reference path).
   void ProfileFullSolve(std::span<const std::uint8_t> clamps, std::span<double> out) const;
@@ -270,8 +293,9 @@ class SensorModel {
   std::array<int, 4> VariationSeriesTerms(const SensorVariation& variation) const;
   // Bytes held by the continuous-unknowns precompute built so far (0 before the first call).
   std::size_t VariationPrecomputedBytes() const;
-  // The full complex field (all dofs of plate()) of a configuration, by the full solve.
-  Eigen::VectorXcd Field(std::span<const std::uint8_t> clamps) const;
+  // The full complex field (all dofs of plate()) of a configuration under load case `load_case`,
+  // by the full solve.
+  Eigen::VectorXcd Field(std::span<const std::uint8_t> clamps, int load_case = 0) const;
   // Constraints of the whole plate for a configuration (used by the full solve and modes).
   Constraints ConfigurationConstraints(std::span<const std::uint8_t> clamps) const;
   // First `count` natural frequencies (real part of the stiffness, real foundation) and shapes.
@@ -287,8 +311,9 @@ class SensorModel {
                                            std::complex<double>* mu) const;
 
   SensorOptions options_;
+  std::vector<double> output_positions_;  // every case's, concatenated
   std::unique_ptr<Plate> plate_;
-  std::unique_ptr<SectionCondensation> condensation_;
+  std::vector<std::unique_ptr<SectionCondensation>> condensations_;  // one per load case
   bool fast_path_certified_ = false;
   std::unique_ptr<ContinuousCache> continuous_;
 };
