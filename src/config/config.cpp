@@ -21,60 +21,6 @@ using config_internal::Sources;
 using config_internal::TableReader;
 using config_internal::WindowKey;
 
-LengthUnit UnitKey(TableReader& t, std::string_view key, LengthUnit fallback) {
-  return t.Choice<LengthUnit>(key, "unit").value_or(fallback);
-}
-
-// ---------------------------------------------------------------------------------------- data
-void ParseData(TableReader& root, CalibrationConfig* c) {
-  auto t = root.Table("data");
-  if (!t) throw Error(ErrorKind::kConfig, "missing required table [data]", c->path, 1, "data");
-  DataConfig& d = c->data;
-  const auto csv = t->String("csv");
-  if (!csv || csv->empty()) t->Fail("csv", "missing required key (path of the measured CSV)");
-  d.csv = *csv;
-  d.position_column = t->String("position_column").value_or(d.position_column);
-  d.displacement_column = t->String("displacement_column").value_or(d.displacement_column);
-  if (d.position_column == d.displacement_column) {
-    t->Fail("displacement_column", "must differ from position_column");
-  }
-  d.position_unit = UnitKey(*t, "position_unit", d.position_unit);
-  d.displacement_unit = UnitKey(*t, "displacement_unit", d.displacement_unit);
-  const double unit = MetresPer(d.position_unit);
-  if (t->Has("window")) {
-    const auto [lo, hi] = WindowKey(*t, "window", unit);
-    d.window_min = lo;
-    d.window_max = hi;
-  }
-  d.normalise = t->Bool("normalise").value_or(d.normalise);
-
-  if (auto g = t->Table("gaussian_extension")) {
-    GaussianExtensionOptions& e = d.gaussian_extension;
-    e.enabled = g->Bool("enabled").value_or(true);  // the table's presence asks for it
-    // Default: the model's load position (the paper fits "centred at the shaker location").
-    e.impact_position = c->model.load_x;
-    if (const auto impact = g->Number("impact_position")) {
-      if (!std::isfinite(*impact)) g->Fail("impact_position", "must be finite");
-      e.impact_position = *impact * unit;
-    }
-    if (e.enabled && !g->Has("impact_position") && c->simulator.kind != SimulatorKind::kSensor) {
-      g->Fail("impact_position",
-              "missing required key: the default is the sensor's load position, and this run's "
-              "simulator is not the sensor");
-    }
-    e.fit_offset = g->Bool("fit_offset").value_or(e.fit_offset);
-    e.fit_points = g->IntegerIn("fit_points", e.fit_points, e.fit_offset ? 3 : 2, 100000);
-    if (const auto spacing = g->Number("spacing")) {
-      if (!(*spacing > 0.0) || !std::isfinite(*spacing)) {
-        g->Fail("spacing", "must be > 0 (in position_unit)");
-      }
-      e.spacing = *spacing * unit;
-    }
-    g->Finish();
-  }
-  t->Finish();
-}
-
 // --------------------------------------------------------------------------------------- output
 void ParseOutput(TableReader& root, CalibrationConfig* c) {
   auto t = root.Table("output");
@@ -187,7 +133,8 @@ double AutomaticBatchBound(const CalibrationConfig& c) {
 SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const auto d = static_cast<double>(c.space.dimension);
   const auto m = static_cast<double>(c.simulator.outputs.size());
-  const auto components = static_cast<double>(c.metric.components.size());
+  double components = 0.0;
+  for (const ExperimentConfig& x : c.experiments) components += x.metric.components.size();
   constexpr double kOverheadBytes = 160.0;  // vector headers, allocator slack, RNG state
   const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : AutomaticBatchBound(c);
   SamplerMemory memory;
@@ -209,12 +156,17 @@ std::string Gigabytes(double bytes) {
 void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
   // An external simulator's memory is its own processes', not combabc's.
   const bool sensor = c.simulator.kind == SimulatorKind::kSensor;
-  double model = sensor ? c.model.EstimatedMemoryBytes() : 0.0;
-  // A mixed run also builds the continuous-unknowns precompute (on its first simulation).
-  if (sensor && !c.reals.empty()) {
+  double model = 0.0;
+  if (sensor) {
     bool loss_factor_unknown = false;
     for (const ContinuousParameter& r : c.reals) loss_factor_unknown |= r.name == "loss_factor";
-    model += c.model.EstimatedContinuousMemoryBytes(loss_factor_unknown);
+    for (const SensorModelPlan& plan : SensorModels(c)) {
+      model += plan.options.EstimatedMemoryBytes();
+      // A mixed run also builds the continuous-unknowns precompute (on its first simulation).
+      if (!c.reals.empty()) {
+        model += plan.options.EstimatedContinuousMemoryBytes(loss_factor_unknown);
+      }
+    }
   }
   const SamplerMemory sampler = EstimateSamplerMemory(c);
   const double total = model + sampler.batch + sampler.particles;
@@ -270,26 +222,19 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   Sources sources;
   sources.sampler = {"sampler", 1};
   c.description = root.String("description").value_or("");
-  config_internal::ParseModelSection(root, &c);
+  std::map<std::string, Source> model_sources;
+  config_internal::ParseModelSection(root, &c, &model_sources);
   config_internal::ParseSimulatorSection(root, &c);
-  ParseData(root, &c);
   config_internal::ParseSamplerSection(root, &c, &sources);
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
-  config_internal::ParseMetricSection(root, &c);
+  // Sets the thresholds (one schedule per threshold or likelihood component, experiment by
+  // experiment), the simulator's outputs and model.normalise.
+  config_internal::ParseExperiments(root, &c, model_sources);
   ParseOutput(root, &c);
   root.Finish();
-
-  // One schedule per threshold or likelihood component, in order (SmcOptions::thresholds).
-  c.smc.thresholds.clear();
-  for (const MetricComponentConfig& component : c.metric.components) {
-    if (KindOf(component) != ComponentKind::kIndicator) {
-      c.smc.thresholds.push_back(component.threshold);
-    }
-  }
   c.smc.keep_outputs = c.output.keep_simulated_curves;
-  c.model.normalise = c.data.normalise;
 
   std::string why;
   if (!c.smc.IsValid(&why)) {

@@ -140,26 +140,28 @@ void ValidateSchedule(const ScheduleSpec& spec,
 
 }  // namespace
 
-void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
-  auto t = root.Table("metric");
-  if (!t) throw Error(ErrorKind::kConfig, "missing required table [metric]", c->path, 1, "metric");
+void ParseMetricTable(TableReader& table,
+                      LengthUnit position_unit,
+                      int num_waves,
+                      MetricConfig* metric) {
+  TableReader* t = &table;
+  const std::string& path = table.path();
   const ScheduleSpec base = ParseSchedule(*t, ScheduleSpec{});
   const NoiseSpec base_noise = ParseNoise(*t, NoiseSpec{});
   bool noise_used = false;
   const auto preset_text = t->String("preset");
   auto components = t->Tables("component");
   if (preset_text && !components.empty()) {
-    t->Fail("preset", "give either preset or [[metric.component]] tables, not both");
+    t->Fail("preset", "give either preset or [[" + t->prefix() + ".component]] tables, not both");
   }
   if (!preset_text && components.empty()) {
     throw Error(ErrorKind::kConfig,
                 "give preset = \"area\" | \"least_squares\" | \"split_least_squares\" or one or "
-                "more [[metric.component]] tables",
-                c->path,
+                "more [[" + t->prefix() + ".component]] tables",
+                path,
                 t->line(),
-                "metric");
+                t->prefix());
   }
-  const int num_waves = c->smc.num_waves;
   if (preset_text) {
     const auto preset = ParseEnum<MetricPreset>(*preset_text);
     if (!preset) {
@@ -167,9 +169,9 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
               "unknown preset " + Excerpt(*preset_text) + "; expected one of " +
                   EnumChoices<MetricPreset>());
     }
-    c->metric.preset = *preset;
-    c->metric.components = PresetComponents(*preset);
-    for (auto& component : c->metric.components) {
+    metric->preset = *preset;
+    metric->components = PresetComponents(*preset);
+    for (auto& component : metric->components) {
       component.config_line = t->Line("preset");
       if (KindOf(component.type) != ComponentKind::kThreshold) continue;
       ScheduleSpec spec = base;
@@ -180,11 +182,11 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
           TemperatureSchedule(&spec, *t, t->Has("target"));
         }
       }
-      ValidateSchedule(spec, num_waves, c->path, t->Key("preset"), t->Line("preset"));
+      ValidateSchedule(spec, num_waves, path, t->Key("preset"), t->Line("preset"));
       component.threshold = spec.schedule;
     }
   }
-  const double unit = MetresPer(c->data.position_unit);
+  const double unit = MetresPer(position_unit);
   for (TableReader& ct : components) {
     MetricComponentConfig component;
     component.config_line = ct.line();
@@ -217,11 +219,11 @@ void ParseMetricSection(TableReader& root, CalibrationConfig* c) {
         const bool own = ct.Has("target") || ct.Has("threshold");
         TemperatureSchedule(&spec, own ? ct : *t, own ? ct.Has("target") : t->Has("target"));
       }
-      ValidateSchedule(spec, num_waves, c->path, ct.prefix(), ct.line());
+      ValidateSchedule(spec, num_waves, path, ct.prefix(), ct.line());
       component.threshold = spec.schedule;
     }
     ct.Finish();
-    c->metric.components.push_back(std::move(component));
+    metric->components.push_back(std::move(component));
   }
   if (base_noise.given && base_noise.noise.model == NoiseModel::kGaussian && !noise_used) {
     t->Fail("noise", "no least_squares component to apply it to");

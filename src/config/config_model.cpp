@@ -82,6 +82,8 @@ std::string ModelKeyOf(const std::string& field) {
 // Reports a failed SensorOptions::IsValid ("SensorOptions::field = value; constraint") at the
 // config key the user wrote (or would write), in the config's words: "file:line: model.load.x: is
 // 1.2; must lie on the plate, in [0, 0.9] m". C++ field names never reach the user.
+}  // namespace
+
 [[noreturn]] void ThrowModelError(const std::string& why,
                                   const std::map<std::string, Source>& sources,
                                   int model_line,
@@ -120,6 +122,8 @@ std::string ModelKeyOf(const std::string& field) {
   throw Error(ErrorKind::kConfig, detail, path, line, key);
 }
 
+namespace {
+
 plate::Support SupportKey(TableReader& t, std::string_view key, plate::Support fallback) {
   return t.Choice<plate::Support>(key, "support").value_or(fallback);
 }
@@ -151,9 +155,86 @@ plate::Layer ParseLayer(TableReader& t, int index, std::map<std::string, Source>
 
 }  // namespace
 
-void ParseModelSection(TableReader& root, CalibrationConfig* config) {
+void ParseLoadTable(TableReader& l,
+                    plate::LoadCase* c,
+                    double* frequency_hz,
+                    std::map<std::string, Source>* sources) {
+  if (l.Has("x")) (*sources)["load_x"] = {l.Key("x"), l.Line("x")};
+  c->load_x = l.NumberIn("x", c->load_x, 0.0, kHuge);
+  InRange(l, "y_fraction", 0.0, 1.0, &c->load_y_fraction, sources, "load_y_fraction");
+  Note(*sources, "load_force", l, "amplitude");
+  if (const auto force = l.Number("amplitude")) {
+    if (!std::isfinite(*force)) l.Fail("amplitude", "must be finite");
+    c->load_force = *force;
+  }
+  InRange(l, "frequency", 0.0, kHuge, frequency_hz, sources, "frequency_hz");
+  const auto type = l.String("type");
+  if (type && *type != "point" && *type != "patch") {
+    l.Fail("type",
+            "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
+  }
+  InRange(l, "patch_length", 0.0, kHuge, &c->load_patch_length, sources, "load_patch_length");
+  InRange(l, "patch_width", 0.0, kHuge, &c->load_patch_width, sources, "load_patch_width");
+  if (type && *type == "point") {
+    if (l.Has("patch_length") || l.Has("patch_width")) {
+      l.Fail("type", "a point load takes no patch_length / patch_width");
+    }
+    c->load_patch_length = 0.0;
+    c->load_patch_width = 0.0;
+  } else if (type && (c->load_patch_length <= 0.0 || c->load_patch_width <= 0.0)) {
+    l.Fail("type", "a patch load needs patch_length and patch_width > 0");
+  }
+  l.Finish();
+}
+
+void ParseOutputTable(TableReader& o,
+                      double length,
+                      plate::LoadCase* c,
+                      std::map<std::string, Source>* sources) {
+  if (o.Has("positions") && o.Has("spacing")) {
+    o.Fail("spacing", "give either positions or spacing, not both");
+  }
+  if (const auto positions = o.Numbers("positions")) {
+    if (positions->empty()) o.Fail("positions", "must not be empty");
+    if (positions->size() > plate::kMaxOutputPositions) {
+      o.Fail("positions",
+              "has " + std::to_string(positions->size()) + " entries; at most " +
+                  std::to_string(plate::kMaxOutputPositions));
+    }
+    for (std::size_t k = 1; k < positions->size(); ++k) {
+      if (!((*positions)[k] > (*positions)[k - 1])) {
+        o.Fail("positions", "must be strictly increasing (entry " + std::to_string(k) + ")");
+      }
+    }
+    c->output_positions = *positions;
+    (*sources)["output_positions"] = {o.Key("positions"), o.Line("positions")};
+  }
+  if (const auto spacing = o.Number("spacing")) {
+    if (!(*spacing > 0.0) || *spacing > length) {
+      o.Fail("spacing", "must be in (0, model.length]");
+    }
+    // 0, h, 2h, ... up to the length (inclusive within rounding). The count is checked as a
+    // double before the conversion (a tiny spacing would overflow an int, or exhaust memory).
+    const double intervals = std::floor(length / *spacing + 1e-9);
+    if (!(intervals + 1 <= static_cast<double>(plate::kMaxOutputPositions))) {
+      o.Fail("spacing",
+              "gives " + Number(intervals + 1) + " output positions; at most " +
+                  std::to_string(plate::kMaxOutputPositions) + " (use a larger spacing)");
+    }
+    const auto n = static_cast<int>(intervals);
+    c->output_positions.clear();
+    for (int k = 0; k <= n; ++k) c->output_positions.push_back(k * *spacing);
+    (*sources)["output_positions"] = {o.Key("spacing"), o.Line("spacing")};
+  }
+  InRange(o, "y_fraction", 0.0, 1.0, &c->output_y_fraction, sources, "output_y_fraction");
+  o.Finish();
+}
+
+void ParseModelSection(TableReader& root,
+                       CalibrationConfig* config,
+                       std::map<std::string, Source>* model_sources) {
   plate::SensorOptions& m = config->model;
-  std::map<std::string, Source> sources;  // SensorOptions field -> config key
+  std::map<std::string, Source>& sources = *model_sources;  // SensorOptions field -> config key
   // The memory budget is a top-level key: it bounds the whole run, the sampler's buffers too.
   if (root.Has("memory_limit_gb")) {
     Note(sources, "memory_limit_bytes", root, "memory_limit_gb");
@@ -235,73 +316,9 @@ void ParseModelSection(TableReader& root, CalibrationConfig* config) {
     }
 
     if (auto l = t->Table("load")) {
-      if (l->Has("x")) sources["load_x"] = {l->Key("x"), l->Line("x")};
-      m.load_x = l->NumberIn("x", m.load_x, 0.0, kHuge);
-      InRange(*l, "y_fraction", 0.0, 1.0, &m.load_y_fraction, &sources, "load_y_fraction");
-      Note(sources, "load_force", *l, "amplitude");
-      if (const auto force = l->Number("amplitude")) {
-        if (!std::isfinite(*force)) l->Fail("amplitude", "must be finite");
-        m.load_force = *force;
-      }
-      InRange(*l, "frequency", 0.0, kHuge, &m.frequency_hz, &sources, "frequency_hz");
-      const auto type = l->String("type");
-      if (type && *type != "point" && *type != "patch") {
-        l->Fail("type",
-                "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
-      }
-      InRange(*l, "patch_length", 0.0, kHuge, &m.load_patch_length, &sources, "load_patch_length");
-      InRange(*l, "patch_width", 0.0, kHuge, &m.load_patch_width, &sources, "load_patch_width");
-      if (type && *type == "point") {
-        if (l->Has("patch_length") || l->Has("patch_width")) {
-          l->Fail("type", "a point load takes no patch_length / patch_width");
-        }
-        m.load_patch_length = 0.0;
-        m.load_patch_width = 0.0;
-      } else if (type && (m.load_patch_length <= 0.0 || m.load_patch_width <= 0.0)) {
-        l->Fail("type", "a patch load needs patch_length and patch_width > 0");
-      }
-      l->Finish();
+      ParseLoadTable(*l, &m.load_cases[0], &m.frequency_hz, &sources);
     }
-
-    if (auto o = t->Table("output")) {
-      if (o->Has("positions") && o->Has("spacing")) {
-        o->Fail("spacing", "give either positions or spacing, not both");
-      }
-      if (const auto positions = o->Numbers("positions")) {
-        if (positions->empty()) o->Fail("positions", "must not be empty");
-        if (positions->size() > plate::kMaxOutputPositions) {
-          o->Fail("positions",
-                  "has " + std::to_string(positions->size()) + " entries; at most " +
-                      std::to_string(plate::kMaxOutputPositions));
-        }
-        for (std::size_t k = 1; k < positions->size(); ++k) {
-          if (!((*positions)[k] > (*positions)[k - 1])) {
-            o->Fail("positions", "must be strictly increasing (entry " + std::to_string(k) + ")");
-          }
-        }
-        m.output_positions = *positions;
-        sources["output_positions"] = {o->Key("positions"), o->Line("positions")};
-      }
-      if (const auto spacing = o->Number("spacing")) {
-        if (!(*spacing > 0.0) || *spacing > m.length) {
-          o->Fail("spacing", "must be in (0, model.length]");
-        }
-        // 0, h, 2h, ... up to the length (inclusive within rounding). The count is checked as a
-        // double before the conversion (a tiny spacing would overflow an int, or exhaust memory).
-        const double intervals = std::floor(m.length / *spacing + 1e-9);
-        if (!(intervals + 1 <= static_cast<double>(plate::kMaxOutputPositions))) {
-          o->Fail("spacing",
-                  "gives " + Number(intervals + 1) + " output positions; at most " +
-                      std::to_string(plate::kMaxOutputPositions) + " (use a larger spacing)");
-        }
-        const auto n = static_cast<int>(intervals);
-        m.output_positions.clear();
-        for (int k = 0; k <= n; ++k) m.output_positions.push_back(k * *spacing);
-        sources["output_positions"] = {o->Key("spacing"), o->Line("spacing")};
-      }
-      InRange(*o, "y_fraction", 0.0, 1.0, &m.output_y_fraction, &sources, "output_y_fraction");
-      o->Finish();
-    }
+    if (auto o = t->Table("output")) ParseOutputTable(*o, m.length, &m.load_cases[0], &sources);
 
     if (auto mesh = t->Table("mesh")) {
       Note(sources, "elements_per_section", *mesh, "elements_per_section");

@@ -93,8 +93,12 @@ int LineOf(const toml::node& node);
 
 }  // namespace combabc::config_internal
 
+#include "combabc/data/measured_data.hpp"
+#include "combabc/plate/sensor_model.hpp"
+
 namespace combabc {
 struct CalibrationConfig;
+struct MetricConfig;
 }
 
 namespace combabc::config_internal {
@@ -121,8 +125,33 @@ void Note(std::map<std::string, Source>& map,
 std::pair<double, double> WindowKey(TableReader& t, std::string_view key, double metres_per_unit);
 
 // Section parsers, each reading its table of `root` into `config` (and calling Finish on it).
-// [model] (config_model.cpp): the sensor's options (defaults when the table is absent).
-void ParseModelSection(TableReader& root, CalibrationConfig* config);
+// [model] (config_model.cpp): the sensor's options (defaults when the table is absent);
+// model_sources: where each SensorOptions field was set.
+void ParseModelSection(TableReader& root,
+                       CalibrationConfig* config,
+                       std::map<std::string, Source>* model_sources);
+// A load table ([model.load], [experiment.load]) and an output table ([model.output],
+// [experiment.output]) over a load case that holds the defaults (config_model.cpp).
+void ParseLoadTable(TableReader& l,
+                    plate::LoadCase* load_case,
+                    double* frequency_hz,
+                    std::map<std::string, Source>* sources);
+void ParseOutputTable(TableReader& o,
+                      double length,
+                      plate::LoadCase* load_case,
+                      std::map<std::string, Source>* sources);
+// Reports a failed SensorOptions::IsValid at the config key that set the field (sources), or
+// the key that would set it, at `fallback_line` (config_model.cpp).
+[[noreturn]] void ThrowModelError(const std::string& why,
+                                  const std::map<std::string, Source>& sources,
+                                  int fallback_line,
+                                  const std::string& path);
+// [[experiment]] tables, or the shorthand [data] and [metric] (config_experiment.cpp): after
+// [model], [simulator] and [sampler]; sets config->experiments, the simulator's concatenated
+// outputs and the sampler's threshold schedules.
+void ParseExperiments(TableReader& root,
+                      CalibrationConfig* config,
+                      const std::map<std::string, Source>& model_sources);
 // [simulator] (config_simulator.cpp): after [model]; sets the simulator's outputs and the bit
 // names (config->space.names).
 void ParseSimulatorSection(TableReader& root, CalibrationConfig* config);
@@ -132,7 +161,14 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* config, Sources* 
 // [proposal] and [parameters.<name>] (config_proposal.cpp).
 void ParseProposalSection(TableReader& root, CalibrationConfig* config);
 void ParseParametersSection(TableReader& root, CalibrationConfig* config);
-// [metric] (config_metric.cpp): after [data] (position unit) and [sampler] (number of waves).
-void ParseMetricSection(TableReader& root, CalibrationConfig* config);
+// A [data] table (config_experiment.cpp); impact_default: the Gaussian extension's default
+// centre (the experiment's load position), nullopt where there is none (external simulators).
+void ParseDataTable(TableReader& t, std::optional<double> impact_default, DataConfig* data);
+// A [metric] table (config_metric.cpp), with windows in `position_unit` and schedules of
+// `num_waves` waves.
+void ParseMetricTable(TableReader& t,
+                      LengthUnit position_unit,
+                      int num_waves,
+                      MetricConfig* metric);
 
 }  // namespace combabc::config_internal

@@ -131,7 +131,7 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
   if (sim.kind == SimulatorKind::kSensor) {
     // The built-in plate declares itself: one bit per clamp, its laser positions as outputs.
     sim.outputs.name = "displacement";
-    sim.outputs.coordinates = c->model.output_positions;
+    // The coordinates: every experiment's output positions (ParseExperiments).
     c->space.names.clear();
     for (int k = 1; k <= 2 * c->model.clamps_per_edge; ++k) {
       c->space.names.push_back("clamp " + std::to_string(k));

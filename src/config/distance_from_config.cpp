@@ -4,32 +4,58 @@
 
 namespace combabc {
 
-std::unique_ptr<CompositeDistance> MakeDistance(const CalibrationConfig& config,
-                                                const MeasuredData& data) {
-  return MakeDistance(config, data.positions, data.displacements);
+std::vector<MeasuredData> LoadExperimentData(const CalibrationConfig& config) {
+  std::vector<MeasuredData> data;
+  for (const ExperimentConfig& x : config.experiments) {
+    data.push_back(LoadMeasuredData(x.data, config.directory));
+  }
+  return data;
 }
 
-std::unique_ptr<CompositeDistance> MakeDistance(const CalibrationConfig& config,
-                                                std::span<const double> data_positions,
-                                                std::span<const double> data_values) {
-  CompositeDistanceOptions options;
-  options.normalise_simulated = config.data.normalise;
-  try {
-    return std::make_unique<CompositeDistance>(config.metric.components,
-                                               data_positions,
-                                               data_values,
-                                               config.simulator.outputs.coordinates,
-                                               options);
-  } catch (const Error& e) {
-    if (!e.file().empty()) throw;
-    std::string message = e.message();
-    // A preset's windows are the paper's and cannot be edited: say what can be.
-    if (config.metric.preset && e.field().rfind("metric.component[", 0) == 0) {
-      message += " (the windows of preset \"" + std::string(ToString(*config.metric.preset)) +
-                 "\"; write [[metric.component]] tables to choose others)";
-    }
-    throw Error(e.kind(), message, config.path, e.line(), e.field());
+std::vector<MeasuredProfile> ProfilesOf(const std::vector<MeasuredData>& data) {
+  std::vector<MeasuredProfile> profiles;
+  for (const MeasuredData& d : data) profiles.push_back({d.positions, d.displacements});
+  return profiles;
+}
+
+std::unique_ptr<JointDistance> MakeDistance(const CalibrationConfig& config,
+                                            std::span<const MeasuredProfile> profiles) {
+  if (profiles.size() != config.experiments.size()) {
+    throw Error(ErrorKind::kSoftware,
+                "MakeDistance: " + std::to_string(profiles.size()) + " profiles for " +
+                    std::to_string(config.experiments.size()) + " experiments");
   }
+  std::vector<JointDistance::Part> parts;
+  std::size_t offset = 0;
+  for (std::size_t e = 0; e < config.experiments.size(); ++e) {
+    const ExperimentConfig& x = config.experiments[e];
+    CompositeDistanceOptions options;
+    options.normalise_simulated = x.data.normalise;
+    JointDistance::Part part;
+    part.name = x.name;
+    part.output_offset = offset;
+    try {
+      part.distance = std::make_unique<CompositeDistance>(x.metric.components,
+                                                          profiles[e].positions,
+                                                          profiles[e].values,
+                                                          x.output_coordinates,
+                                                          options);
+    } catch (const Error& error) {
+      if (!error.file().empty()) throw;
+      std::string message = error.message();
+      // A preset's windows are the paper's and cannot be edited: say what can be.
+      if (x.metric.preset && error.field().rfind("metric.component[", 0) == 0) {
+        message += " (the windows of preset \"" + std::string(ToString(*x.metric.preset)) +
+                   "\"; write [[" + x.Key(e, "metric") + ".component]] tables to choose others)";
+      }
+      const std::string field =
+          x.line == 0 || error.field().empty() ? error.field() : x.Key(e, "") + "." + error.field();
+      throw Error(error.kind(), message, config.path, error.line(), field);
+    }
+    offset += part.distance->output_size();
+    parts.push_back(std::move(part));
+  }
+  return std::make_unique<JointDistance>(std::move(parts));
 }
 
 }  // namespace combabc

@@ -6,6 +6,7 @@
 #include "combabc/services/sensor_simulator.hpp"
 #include "combabc/simulators/command_simulator.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
+#include "services/experiments_simulator.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -20,8 +21,8 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string&
   if (config.simulator.kind == SimulatorKind::kSensor) {
     std::vector<std::string> real_names;
     for (const auto& r : config.reals) real_names.push_back(r.name);
-    auto sensor = std::make_unique<SensorSimulator>(config.model, std::move(real_names));
-    const int clamps = sensor->model().num_clamps();
+    auto sensor = std::make_unique<SensorSimulator>(SensorModels(config), std::move(real_names));
+    const int clamps = sensor->num_clamps();
     if (config.space.dimension != clamps) {
       throw Error(ErrorKind::kConfig,
                   "the sampler has " + std::to_string(config.space.dimension) +
@@ -44,12 +45,27 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string&
     options.config_directory.pop_back();
   }
   try {
-    if (config.simulator.kind == SimulatorKind::kCommand) {
-      built.simulator = std::make_unique<CommandSimulator>(std::move(options));
+    // With [[experiment]] tables, one simulator per experiment, each told which it simulates.
+    std::vector<std::unique_ptr<Simulator>> parts;
+    for (const ExperimentConfig& x : config.experiments) {
+      ExternalSimulatorOptions one = options;
+      if (x.line != 0) {
+        one.experiment = SimulatorExperiment{
+            x.name, x.load.load_x, x.load.load_y_fraction, x.load.load_force, x.frequency_hz};
+      }
+      if (config.simulator.kind == SimulatorKind::kCommand) {
+        parts.push_back(std::make_unique<CommandSimulator>(std::move(one)));
+      } else {
+        auto worker = std::make_unique<WorkerSimulator>(std::move(one));
+        // The same program for every experiment: its first handshake identifies it.
+        if (built.handshake.empty()) built.handshake = worker->handshake();
+        parts.push_back(std::move(worker));
+      }
+    }
+    if (parts.size() == 1) {
+      built.simulator = std::move(parts.front());
     } else {
-      auto worker = std::make_unique<WorkerSimulator>(std::move(options));
-      built.handshake = worker->handshake();
-      built.simulator = std::move(worker);
+      built.simulator = std::make_unique<ExperimentsSimulator>(std::move(parts));
     }
   } catch (const Error& e) {
     if (!e.file().empty()) throw;

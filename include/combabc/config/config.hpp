@@ -49,6 +49,30 @@ struct SimulatorConfig {
   int argv_line = 0;  // the line of simulator.argv, for errors found when the program is started
 };
 
+// One experiment (docs/config.md, "Experiments"): a load and scan of the sensor, its measured data
+// and its metric. A config's [[experiment]] tables list several; the single-experiment keys
+// ([model.load], [model.output], [data], [metric]) are the shorthand for one, named "". The bits
+// and reals are shared: one candidate is simulated for every experiment, and its distance vector
+// is the experiments' components one after the other.
+struct ExperimentConfig {
+  std::string name;  // "" for the shorthand's one experiment; else unique, [A-Za-z0-9_.-]+
+  int line = 0;      // its [[experiment]] header (0 for the shorthand)
+  // The sensor's load and scan line (its outputs), and the drive frequency (Hz). An external
+  // simulator receives them with each request (docs/simulators.md).
+  plate::LoadCase load;
+  double frequency_hz = 5.0;
+  // The coordinates of this experiment's outputs: the sensor's load.output_positions, or an
+  // external simulator's [simulator.outputs].
+  std::vector<double> output_coordinates;
+  DataConfig data;
+  MetricConfig metric;
+
+  // "name/" before each component's name in the distance vector ("" for the shorthand).
+  std::string ComponentPrefix() const { return name.empty() ? "" : name + "/"; }
+  // The config key of one of its tables: "data" for the shorthand, "experiment[2].data" else.
+  std::string Key(std::size_t index, const std::string& table) const;
+};
+
 struct CalibrationConfig {
   std::string path;         // the config file as given ("<string>" for ParseConfig without a file)
   std::string directory;    // its directory: data.csv and output.directory are relative to it
@@ -58,12 +82,14 @@ struct CalibrationConfig {
   SimulatorConfig simulator;
   // The sensor simulator, from [model] (kind = "sensor" only); every key not given keeps
   // SensorOptions' default, and model.normalise mirrors data.normalise so Y and Y* are scaled
-  // alike.
+  // alike. Its one load case and frequency are [model.load] and [model.output]: the shorthand
+  // experiment's, and every [[experiment]]'s defaults (SensorModels() gives the models a run
+  // builds).
   plate::SensorOptions model;
-  DataConfig data;
-  MetricConfig metric;
+  // The experiments, in the order of their outputs and distance components (at least one).
+  std::vector<ExperimentConfig> experiments;
   // Filled from [sampler]; smc.thresholds holds one schedule per threshold component of the
-  // metric, in order, and smc.keep_outputs mirrors output.keep_simulated_curves.
+  // experiments' metrics, in order, and smc.keep_outputs mirrors output.keep_simulated_curves.
   SmcOptions smc;
   // Filled from [sampler] (prior, tie) and the simulator's bits: the sensor's clamps (dimension
   // = 2 x model.clamps_per_edge, names "clamp 1", ...) or [simulator.bits].
@@ -79,6 +105,14 @@ struct CalibrationConfig {
   std::vector<ContinuousParameter> reals;
   OutputConfig output;
 };
+
+// The sensor models a run builds (kind = "sensor"): one per distinct frequency among the
+// experiments, in order of first use, each with those experiments' load cases in experiment order.
+struct SensorModelPlan {
+  plate::SensorOptions options;
+  std::vector<std::size_t> experiments;  // the experiment of each load case
+};
+std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config);
 
 // Largest config file accepted (docs/config.md, "Limits"): a real config is a few KiB.
 inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;  // 1 MiB

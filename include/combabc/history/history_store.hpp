@@ -24,9 +24,10 @@ namespace combabc {
 // Version 2 added checksums and each wave's overshoot; version 3 the continuous parameters (their
 // priors, each particle's values, each wave's means and sds), the proposal options and the run's
 // fingerprint; version 4 the failed simulations (table failure, each wave's failure count);
-// version 5 the number of wave rows (meta row wave_count, under the run state's checksum). An
-// older file written to (resume) is upgraded to this version.
-inline constexpr int kHistorySchemaVersion = 5;
+// version 5 the number of wave rows (meta row wave_count, under the run state's checksum);
+// version 6 the experiments (table experiment). An older file written to (resume) is upgraded to
+// this version.
+inline constexpr int kHistorySchemaVersion = 6;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise
@@ -48,6 +49,17 @@ struct EnumNames<RunStatus> {
 struct StoredMeasuredData {
   std::vector<double> positions;  // same unit as RunMetadata::position_unit
   std::vector<double> values;
+};
+
+// One experiment of the run (docs/config.md, "Experiments"), as slices of RunMetadata's
+// concatenated output_positions, measured data and distance_components, in experiment order.
+// Schema v6; an older file reads as one unnamed experiment holding everything.
+struct StoredExperiment {
+  std::string name;         // "" for the single experiment of a config without [[experiment]]
+  std::string description;  // its load and scan, for reports ("load at 0.45 m, ...")
+  int outputs = 0;          // output_positions of this experiment
+  int measured = 0;         // measured points of this experiment
+  int components = 0;       // distance components of this experiment
 };
 
 // Everything about a run except its waves: provenance, problem description, status and summary.
@@ -76,7 +88,10 @@ struct RunMetadata {
   std::vector<DistanceComponent> distance_components;  // in component order
   std::vector<double> output_positions;                // x of each simulated output value
   std::string position_unit = "m";                     // unit of output and measured positions
-  StoredMeasuredData measured;
+  StoredMeasuredData measured;  // every experiment's points, experiment after experiment
+  // Schema v6; empty before Create fills it (one experiment holding everything) and for older
+  // files, which read as that one experiment.
+  std::vector<StoredExperiment> experiments;
   // Schema v3; older files read as no reals, the default (independent) kernels and an empty
   // tempering form (not recorded).
   std::vector<ContinuousParameter> reals;  // the continuous parameters, in ParameterValue order

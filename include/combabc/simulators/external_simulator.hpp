@@ -2,6 +2,7 @@
 // What every simulator declares to the workflow (its outputs), and the options of the external
 // simulators: a program run once per candidate (CommandSimulator) or long-lived worker processes
 // speaking a line protocol (WorkerSimulator). docs/simulators.md specifies both contracts.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,16 @@ struct EnumNames<DataFormat> {
 // Largest output (stdout, results file, one protocol line) read from an external simulator.
 inline constexpr std::size_t kMaxSimulatorOutputBytes = std::size_t{16} << 20;  // 16 MiB
 
+// The experiment a call simulates (docs/simulators.md, "Experiments"): sent with each request
+// and available as argv placeholders, so that one program can simulate every experiment.
+struct SimulatorExperiment {
+  std::string name;
+  double load_x = 0.0;           // m
+  double load_y_fraction = 0.5;  // of the width
+  double load_force = 0.0;       // N
+  double frequency_hz = 0.0;
+};
+
 struct ExternalSimulatorOptions {
   // The program and its arguments, run without a shell. Placeholders replaced inside each
   // argument: {params} (the parameters file), {output} (the results file), {workdir} (the call's
@@ -69,6 +80,8 @@ struct ExternalSimulatorOptions {
   DataFormat params_format = DataFormat::kJson;
   Transport results = Transport::kStdout;  // kStdout or kFile ({output} in argv)
   DataFormat results_format = DataFormat::kCsv;
+  // Set for a run with [[experiment]] tables: the experiment this simulator's calls are for.
+  std::optional<SimulatorExperiment> experiment;
   // Worker simulator only: time for a new worker to print its handshake.
   double startup_timeout_s = 60.0;
 
