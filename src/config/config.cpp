@@ -134,7 +134,9 @@ SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const auto d = static_cast<double>(c.space.dimension);
   const auto m = static_cast<double>(c.simulator.outputs.size());
   double components = 0.0;
-  for (const ExperimentConfig& x : c.experiments) components += x.metric.components.size();
+  for (const ExperimentConfig& x : c.experiments) {
+    components += static_cast<double>(x.metric.components.size());
+  }
   constexpr double kOverheadBytes = 160.0;  // vector headers, allocator slack, RNG state
   const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : AutomaticBatchBound(c);
   SamplerMemory memory;

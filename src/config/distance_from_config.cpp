@@ -46,7 +46,8 @@ std::unique_ptr<JointDistance> MakeDistance(const CalibrationConfig& config,
       // A preset's windows are the paper's and cannot be edited: say what can be.
       if (x.metric.preset && error.field().rfind("metric.component[", 0) == 0) {
         message += " (the windows of preset \"" + std::string(ToString(*x.metric.preset)) +
-                   "\"; write [[" + x.Key(e, "metric") + ".component]] tables to choose others)";
+                   "\"; write [[" + std::string(x.line == 0 ? "metric" : "experiment.metric") +
+                   ".component]] tables to choose others)";
       }
       const std::string field =
           x.line == 0 || error.field().empty() ? error.field() : x.Key(e, "") + "." + error.field();

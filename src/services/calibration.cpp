@@ -12,7 +12,7 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/data/measured_data.hpp"
 #include "combabc/history/history_store.hpp"
-#include "combabc/metrics/composite_distance.hpp"
+#include "combabc/metrics/joint_distance.hpp"
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/samplers/enumeration.hpp"
@@ -36,9 +36,8 @@ namespace {
 // which is what makes a resumed history equal to an uninterrupted one.
 struct Problem {
   CalibrationConfig config;
-  std::vector<double> data_positions;  // metres
-  std::vector<double> data_values;
-  std::unique_ptr<CompositeDistance> distance;
+  std::vector<MeasuredProfile> data;  // one per experiment, as the metric compares them
+  std::unique_ptr<JointDistance> distance;
   std::optional<ParameterSpace> space;
   std::unique_ptr<Executor> executor;
   BuiltSimulator simulator;  // last: external processes end before anything else goes
@@ -49,6 +48,64 @@ struct Problem {
     return v;
   }
 };
+
+// "load at 0.45 m (y 0.5 of the width), 0.04 N, 5 Hz; scan 0-0.9 m at y 0.5": what a report
+// titles the experiment's panels with.
+std::string ExperimentDescription(const CalibrationConfig& c, const ExperimentConfig& x) {
+  char text[200];
+  if (c.simulator.kind != SimulatorKind::kSensor) {
+    if (x.line == 0) return "";
+    std::snprintf(text,
+                  sizeof text,
+                  "load at %g m (y %g of the width), %g N, %g Hz",
+                  x.load.load_x,
+                  x.load.load_y_fraction,
+                  x.load.load_force,
+                  x.frequency_hz);
+    return text;
+  }
+  const std::vector<double>& out = x.load.output_positions;
+  std::snprintf(text,
+                sizeof text,
+                "load at %g m (y %g of the width), %g N, %g Hz; scan %g-%g m at y %g",
+                x.load.load_x,
+                x.load.load_y_fraction,
+                x.load.load_force,
+                x.frequency_hz,
+                out.front(),
+                out.back(),
+                x.load.output_y_fraction);
+  return text;
+}
+
+// The experiments' data files, for messages.
+std::string DataSources(const CalibrationConfig& c) {
+  std::string text;
+  for (const ExperimentConfig& x : c.experiments) {
+    text += (text.empty() ? "" : ", ") + x.data.csv;
+  }
+  return text;
+}
+
+// The measured profiles a history recorded, one per experiment.
+std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::string& path) {
+  std::vector<MeasuredProfile> profiles;
+  std::size_t begin = 0;
+  for (const StoredExperiment& x : m.experiments) {
+    const auto end = begin + static_cast<std::size_t>(x.measured);
+    if (end > m.measured.positions.size()) {
+      throw Error(ErrorKind::kData, "the experiments' measured points exceed the stored ones", path);
+    }
+    MeasuredProfile profile;
+    profile.positions.assign(m.measured.positions.begin() + static_cast<std::ptrdiff_t>(begin),
+                             m.measured.positions.begin() + static_cast<std::ptrdiff_t>(end));
+    profile.values.assign(m.measured.values.begin() + static_cast<std::ptrdiff_t>(begin),
+                          m.measured.values.begin() + static_cast<std::ptrdiff_t>(end));
+    profiles.push_back(std::move(profile));
+    begin = end;
+  }
+  return profiles;
+}
 
 // The executor for the problem's threads (after LoadProblem or the resume's config).
 void MakeExecutor(Problem& p, const ExecutorFactory& factory) {
@@ -107,7 +164,7 @@ class PrimaryStore : public SmcObserver {
 void BuildModel(Problem& p, const std::string& history_path) {
   // First, as it is cheap: checks the metric's windows and indicators against the simulator's
   // output coordinates and the data before the model is built or anything simulated or stored.
-  if (!p.distance) p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
+  if (!p.distance) p.distance = MakeDistance(p.config, p.data);
   p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path));
   p.space.emplace(BinarySpace(p.config.space), p.config.reals);
 }
@@ -155,8 +212,7 @@ Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config = nu
   FingerprintInputs inputs;
   inputs.config = config != nullptr ? config : &p.config;
   inputs.space = &*p.space;
-  inputs.data_positions = p.data_positions;
-  inputs.data_values = p.data_values;
+  inputs.data = p.data;
   inputs.components = p.distance->components();
   inputs.version = COMBABC_VERSION;
   inputs.handshake = p.simulator.handshake;
@@ -176,10 +232,8 @@ bool SameFingerprint(Fingerprint a, Fingerprint b) {
 void LoadProblem(const std::string& config_path, int threads, Problem& p) {
   p.config = LoadConfig(config_path);
   if (threads >= 0) p.config.smc.threads = threads;
-  const auto data = LoadMeasuredData(p.config.data, p.config.directory);
-  p.data_positions = data.positions;
-  p.data_values = data.displacements;
-  p.distance = MakeDistance(p.config, p.data_positions, p.data_values);
+  p.data = ProfilesOf(LoadExperimentData(p.config));
+  p.distance = MakeDistance(p.config, p.data);
 }
 
 RunMetadata Describe(const Problem& p) {
@@ -204,8 +258,19 @@ RunMetadata Describe(const Problem& p) {
   m.distance_components = p.distance->components();
   m.output_positions = p.config.simulator.outputs.coordinates;
   m.position_unit = "m";
-  m.measured.positions = p.data_positions;
-  m.measured.values = p.data_values;
+  for (std::size_t e = 0; e < p.config.experiments.size(); ++e) {
+    const ExperimentConfig& x = p.config.experiments[e];
+    const MeasuredProfile& data = p.data[e];
+    m.measured.positions.insert(
+        m.measured.positions.end(), data.positions.begin(), data.positions.end());
+    m.measured.values.insert(m.measured.values.end(), data.values.begin(), data.values.end());
+    const JointDistance::Part& part = p.distance->parts()[e];
+    m.experiments.push_back({x.name,
+                             ExperimentDescription(p.config, x),
+                             static_cast<int>(part.distance->output_size()),
+                             static_cast<int>(data.positions.size()),
+                             static_cast<int>(part.distance->configs().size())});
+  }
   m.reals = p.space->reals();
   m.proposal = p.config.smc.proposal;
   m.tempering_form = ToString(p.config.smc.tempering.form);
@@ -356,8 +421,14 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   p.config = ParseConfig(metadata.config_text, metadata.config_path);
   if (request.threads >= 0) p.config.smc.threads = request.threads;
   // The measured data as the run first used them, not as the CSV reads today.
-  p.data_positions = metadata.measured.positions;
-  p.data_values = metadata.measured.values;
+  p.data = StoredProfiles(metadata, history_path);
+  if (p.data.size() != p.config.experiments.size()) {
+    throw Error(ErrorKind::kConfig,
+                "resume: the run has " + std::to_string(p.data.size()) +
+                    " experiments and its configuration now reads as " +
+                    std::to_string(p.config.experiments.size()) + "; start a new run",
+                history_path);
+  }
   MakeExecutor(p, request.executor);
   // Whatever would refuse the resume without looking at the model is checked before the model is
   // built (seconds): the report folder, and the writer's lock (another process resuming the run)
@@ -382,8 +453,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
     if (SameFingerprint(FingerprintOf(p, &kirchhoff), metadata.fingerprint)) {
       Problem old;
       old.config = std::move(kirchhoff);
-      old.data_positions = p.data_positions;
-      old.data_values = p.data_values;
+      old.data = p.data;
       old.executor = std::move(p.executor);
       BuildModel(old, history_path);
       p = std::move(old);
@@ -396,7 +466,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
   CheckResumeFingerprint(metadata.fingerprint,
                          now,
                          history_path,
-                         p.config.data.csv,
+                         DataSources(p.config),
                          metadata.combabc_version,
                          COMBABC_VERSION,
                          p.simulator.handshake);

@@ -114,9 +114,15 @@ std::string SpacePart(const ParameterSpace& space) {
   return c.Digest();
 }
 
-std::string DataPart(std::span<const double> positions, std::span<const double> values) {
+// A config without [[experiment]] tables hashes as it did before experiments existed, so that its
+// runs still resume; named experiments add their names.
+std::string DataPart(const CalibrationConfig& config, std::span<const MeasuredProfile> data) {
   Canonical c;
-  c.Add("positions", positions).Add("values", values);
+  for (std::size_t e = 0; e < data.size(); ++e) {
+    const ExperimentConfig& x = config.experiments.at(e);
+    if (x.line != 0) c.Add("experiment", x.name);
+    c.Add("positions", data[e].positions).Add("values", data[e].values);
+  }
   return c.Digest();
 }
 
@@ -125,9 +131,12 @@ std::string DataPart(std::span<const double> positions, std::span<const double> 
 std::string MetricPart(const CalibrationConfig& config,
                        const std::vector<DistanceComponent>& components) {
   Canonical c;
-  c.Add("normalise", config.data.normalise);
-  for (const MetricComponentConfig& m : config.metric.components) {
-    c.Add("type", ToString(m.type)).Add("from", m.from).Add("to", m.to).Add("name", m.name);
+  c.Add("normalise", config.experiments.front().data.normalise);
+  for (const ExperimentConfig& x : config.experiments) {
+    if (x.line != 0) c.Add("experiment", x.name);
+    for (const MetricComponentConfig& m : x.metric.components) {
+      c.Add("type", ToString(m.type)).Add("from", m.from).Add("to", m.to).Add("name", m.name);
+    }
   }
   for (const DistanceComponent& d : components) {
     c.Add("component", d.name).Add("kind", static_cast<int>(d.kind)).Add("required", d.required);
@@ -137,7 +146,8 @@ std::string MetricPart(const CalibrationConfig& config,
 
 // The built-in sensor simulator: every SensorOptions key that changes its output.
 // memory_limit_bytes only decides whether the model may be built.
-std::string SimulatorPart(const plate::SensorOptions& s) {
+std::string SimulatorPart(const CalibrationConfig& config) {
+  const plate::SensorOptions& s = config.model;
   Canonical c;
   c.Add("simulator", "combabc sensor plate");
   c.Add("length", s.length).Add("width", s.width);
@@ -153,16 +163,21 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
       .Add("clamps_per_edge", s.clamps_per_edge)
       .Add("fixed_support", static_cast<int>(s.fixed_support))
       .Add("short_edge_start", static_cast<int>(s.short_edge_start))
-      .Add("short_edge_end", static_cast<int>(s.short_edge_end))
-      .Add("load_force", s.load_force)
-      .Add("load_x", s.load_x)
-      .Add("load_y_fraction", s.load_y_fraction)
-      .Add("load_patch_length", s.load_patch_length)
-      .Add("load_patch_width", s.load_patch_width)
-      .Add("frequency_hz", s.frequency_hz)
-      .Add("output_positions", s.output_positions)
-      .Add("output_y_fraction", s.output_y_fraction)
-      .Add("normalise", s.normalise)
+      .Add("short_edge_end", static_cast<int>(s.short_edge_end));
+  // Each experiment's load and scan, in the order one experiment always had them.
+  for (const ExperimentConfig& x : config.experiments) {
+    if (x.line != 0) c.Add("experiment", x.name);
+    const plate::LoadCase& l = x.load;
+    c.Add("load_force", l.load_force)
+        .Add("load_x", l.load_x)
+        .Add("load_y_fraction", l.load_y_fraction)
+        .Add("load_patch_length", l.load_patch_length)
+        .Add("load_patch_width", l.load_patch_width)
+        .Add("frequency_hz", x.frequency_hz)
+        .Add("output_positions", l.output_positions)
+        .Add("output_y_fraction", l.output_y_fraction);
+  }
+  c.Add("normalise", s.normalise)
       .Add("elements_per_section", s.elements_per_section)
       .Add("elements_across_width", s.ElementsAcrossWidth())
       .Add("length_grading", s.length_grading)
@@ -178,9 +193,19 @@ std::string SimulatorPart(const plate::SensorOptions& s) {
 
 // An external simulator: what the config says about the program and how it is called (the
 // timeout and retries decide which candidates fail, so they decide the history too).
-std::string ExternalPart(const SimulatorConfig& s) {
+std::string ExternalPart(const CalibrationConfig& config) {
+  const SimulatorConfig& s = config.simulator;
   const ExternalSimulatorOptions& e = s.external;
   Canonical c;
+  // Named experiments tell the program their loads: those decide its outputs too.
+  for (const ExperimentConfig& x : config.experiments) {
+    if (x.line == 0) continue;
+    c.Add("experiment", x.name)
+        .Add("load_x", x.load.load_x)
+        .Add("load_y_fraction", x.load.load_y_fraction)
+        .Add("load_force", x.load.load_force)
+        .Add("frequency_hz", x.frequency_hz);
+  }
   c.Add("simulator", ToString(s.kind));
   c.Add("argv", static_cast<int>(e.argv.size()));
   for (const std::string& a : e.argv) c.Add("arg", a);
@@ -210,9 +235,9 @@ Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
   Fingerprint parts = {
       {"sampler", SamplerPart(in.config->smc)},
       {"space", SpacePart(*in.space)},
-      {"data", DataPart(in.data_positions, in.data_values)},
+      {"data", DataPart(*in.config, in.data)},
       {"metric", MetricPart(*in.config, in.components)},
-      {"simulator", sensor ? SimulatorPart(in.config->model) : ExternalPart(simulator)},
+      {"simulator", sensor ? SimulatorPart(*in.config) : ExternalPart(*in.config)},
   };
   if (!sensor) parts.emplace_back("simulator_outputs", OutputsPart(simulator.outputs));
   if (simulator.kind == SimulatorKind::kWorker) {

@@ -169,15 +169,24 @@ void SimulateConfiguration(const std::string& config_path,
   const NominalSimulator simulator(
       std::move(config), (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string());
   const std::vector<double> w = simulator.Simulate(bits);
-  double peak = 0.0;
-  for (double v : w) peak = std::max(peak, std::abs(v));
-
+  const std::vector<double>& x = simulator.positions();
+  const std::vector<ExperimentConfig>& experiments = simulator.config().experiments;
+  // Named experiments get a column of their own, and each is normalised by its own peak.
+  const bool named = experiments.front().line != 0;
   out.out().precision(10);
   // The sensor's values are metres; an external simulator's are in its own unit.
-  out.out() << "position_m," << simulator.output_name() << (sensor ? "_m" : "") << ",normalised\n";
-  const std::vector<double>& x = simulator.positions();
-  for (std::size_t i = 0; i < w.size(); ++i) {
-    out.out() << x[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0) << '\n';
+  out.out() << (named ? "experiment," : "") << "position_m," << simulator.output_name()
+            << (sensor ? "_m" : "") << ",normalised\n";
+  std::size_t begin = 0;
+  for (const ExperimentConfig& e : experiments) {
+    const std::size_t end = begin + e.output_coordinates.size();
+    double peak = 0.0;
+    for (std::size_t i = begin; i < end; ++i) peak = std::max(peak, std::abs(w[i]));
+    for (std::size_t i = begin; i < end; ++i) {
+      if (named) out.out() << e.name << ',';
+      out.out() << x[i] << ',' << w[i] << ',' << (peak > 0 ? w[i] / peak : 0.0) << '\n';
+    }
+    begin = end;
   }
   out.Commit();
 }

@@ -65,21 +65,21 @@ TEST(Config, PaperLeastSquaresFixtureFillsEveryOption) {
   EXPECT_EQ(c.directory, std::string(COMBABC_SOURCE_DIR) + "/tests/config/testdata");
   EXPECT_NE(c.text.find("[sampler.tempering]"), std::string::npos);
   // data
-  EXPECT_EQ(c.data.csv, "profile_45cm.csv");
-  EXPECT_EQ(c.data.position_column, "position_cm");
-  EXPECT_EQ(c.data.position_unit, LengthUnit::kCentimetre);
-  EXPECT_EQ(c.data.displacement_unit, LengthUnit::kMicrometre);
-  ASSERT_TRUE(c.data.window_min && c.data.window_max);
-  EXPECT_NEAR(*c.data.window_min, 0.48, kTol);
-  EXPECT_NEAR(*c.data.window_max, 0.80, kTol);
-  EXPECT_TRUE(c.data.normalise);
-  EXPECT_FALSE(c.data.gaussian_extension.enabled);
+  EXPECT_EQ(c.experiments[0].data.csv, "profile_45cm.csv");
+  EXPECT_EQ(c.experiments[0].data.position_column, "position_cm");
+  EXPECT_EQ(c.experiments[0].data.position_unit, LengthUnit::kCentimetre);
+  EXPECT_EQ(c.experiments[0].data.displacement_unit, LengthUnit::kMicrometre);
+  ASSERT_TRUE(c.experiments[0].data.window_min && c.experiments[0].data.window_max);
+  EXPECT_NEAR(*c.experiments[0].data.window_min, 0.48, kTol);
+  EXPECT_NEAR(*c.experiments[0].data.window_max, 0.80, kTol);
+  EXPECT_TRUE(c.experiments[0].data.normalise);
+  EXPECT_FALSE(c.experiments[0].data.gaussian_extension.enabled);
   // metric
-  ASSERT_TRUE(c.metric.preset.has_value());
-  EXPECT_EQ(*c.metric.preset, MetricPreset::kLeastSquares);
-  ASSERT_EQ(c.metric.components.size(), 1u);
-  EXPECT_EQ(c.metric.components[0].type, MetricType::kLeastSquares);
-  EXPECT_NEAR(c.metric.components[0].to, 0.80, kTol);
+  ASSERT_TRUE(c.experiments[0].metric.preset.has_value());
+  EXPECT_EQ(*c.experiments[0].metric.preset, MetricPreset::kLeastSquares);
+  ASSERT_EQ(c.experiments[0].metric.components.size(), 1u);
+  EXPECT_EQ(c.experiments[0].metric.components[0].type, MetricType::kLeastSquares);
+  EXPECT_NEAR(c.experiments[0].metric.components[0].to, 0.80, kTol);
   // sampler -> SmcOptions
   EXPECT_EQ(c.smc.num_waves, 5);
   EXPECT_EQ(c.smc.accepted_per_wave, 500);
@@ -110,15 +110,15 @@ TEST(Config, PaperLeastSquaresFixtureFillsEveryOption) {
 
 TEST(Config, PaperLeastSquaresEndToEndDistance) {
   const CalibrationConfig c = LoadConfig(Fixture("paper_45cm_least_squares.toml"));
-  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
+  const MeasuredData data = LoadMeasuredData(c.experiments[0].data, c.directory);
   ASSERT_EQ(data.size(), 33u);  // 48..80 cm
   std::vector<double> out_x;
   for (int cm = 0; cm <= 90; ++cm) out_x.push_back(cm * 0.01);
-  CompositeDistance distance(c.metric.components,
+  CompositeDistance distance(c.experiments[0].metric.components,
                              data.positions,
                              data.displacements,
                              out_x,
-                             {.normalise_simulated = c.data.normalise});
+                             {.normalise_simulated = c.experiments[0].data.normalise});
   EXPECT_EQ(distance.threshold_schedules().size(), c.smc.thresholds.size());
   // Feeding the data back (zero elsewhere) reproduces them exactly: D = 0.
   std::vector<double> simulated(out_x.size(), 0.0);
@@ -133,10 +133,10 @@ TEST(Config, PaperLeastSquaresEndToEndDistance) {
 
 TEST(Config, SplitPresetWithGaussianExtension) {
   const CalibrationConfig c = LoadConfig(Fixture("paper_70cm_split.toml"));
-  EXPECT_TRUE(c.data.gaussian_extension.enabled);  // the table's presence enables it
-  EXPECT_NEAR(c.data.gaussian_extension.impact_position, 0.70, kTol);
-  EXPECT_NEAR(c.data.gaussian_extension.spacing, 0.01, kTol);
-  ASSERT_EQ(c.metric.components.size(), 5u);
+  EXPECT_TRUE(c.experiments[0].data.gaussian_extension.enabled);  // the table's presence enables it
+  EXPECT_NEAR(c.experiments[0].data.gaussian_extension.impact_position, 0.70, kTol);
+  EXPECT_NEAR(c.experiments[0].data.gaussian_extension.spacing, 0.01, kTol);
+  ASSERT_EQ(c.experiments[0].metric.components.size(), 5u);
   ASSERT_EQ(c.smc.thresholds.size(), 3u);  // indicators take no schedule
   for (const auto& s : c.smc.thresholds) {
     EXPECT_EQ(s.kind, ThresholdKind::kQuantile);
@@ -144,12 +144,12 @@ TEST(Config, SplitPresetWithGaussianExtension) {
     EXPECT_EQ(s.target, 0.01);
     EXPECT_TRUE(std::isinf(s.initial));
   }
-  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
+  const MeasuredData data = LoadMeasuredData(c.experiments[0].data, c.directory);
   EXPECT_EQ(data.size(), 20u);  // 70..73 synthetic + 74..89 measured
   EXPECT_NEAR(data.positions.front(), 0.70, kTol);
   // The measured profile itself satisfies Eq. 7: a secondary peak in 76-80 cm.
   std::vector<double> out_x(data.positions.begin(), data.positions.end());
-  CompositeDistance distance(c.metric.components, data.positions, data.displacements, out_x);
+  CompositeDistance distance(c.experiments[0].metric.components, data.positions, data.displacements, out_x);
   std::vector<double> d(5);
   distance.Evaluate(data.displacements, d);
   EXPECT_EQ(d, (std::vector<double>{0, 0, 0, 1, 1}));
@@ -159,16 +159,17 @@ TEST(Config, MakeDistanceUsesTheSimulatorsDeclaredOutputs) {
   const CalibrationConfig c = LoadConfig(Fixture("paper_70cm_split.toml"));
   // The sensor declares its [model.output] positions as its outputs.
   EXPECT_EQ(c.simulator.kind, SimulatorKind::kSensor);
-  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
-  const MeasuredData data = LoadMeasuredData(c.data, c.directory);
-  const auto distance = MakeDistance(c, data);
-  EXPECT_EQ(distance->output_size(), c.model.output_positions.size());
+  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.load_cases[0].output_positions);
+  const MeasuredData data = LoadMeasuredData(c.experiments[0].data, c.directory);
+  const std::vector<MeasuredProfile> profiles = ProfilesOf({data});
+  const auto distance = MakeDistance(c, profiles);
+  EXPECT_EQ(distance->output_size(), c.model.load_cases[0].output_positions.size());
   EXPECT_EQ(distance->components().size(), 5u);
   // A simulator whose output stops short of the data is a config error naming the file.
   CalibrationConfig short_model = c;
-  short_model.simulator.outputs.coordinates = {0.0, 0.1, 0.2};
+  short_model.experiments[0].output_coordinates = {0.0, 0.1, 0.2};
   try {
-    MakeDistance(short_model, data);
+    MakeDistance(short_model, profiles);
     ADD_FAILURE();
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kConfig);
@@ -180,11 +181,11 @@ TEST(Config, MakeDistanceUsesTheSimulatorsDeclaredOutputs) {
 
 TEST(Config, ComponentsWithOwnAndInheritedSchedules) {
   const CalibrationConfig c = LoadConfig(Fixture("custom_components.toml"));
-  ASSERT_EQ(c.metric.components.size(), 5u);
-  EXPECT_FALSE(c.metric.preset.has_value());
-  EXPECT_EQ(c.metric.components[1].name, "secondary peak");
-  EXPECT_EQ(c.metric.components[3].type, MetricType::kRise);
-  EXPECT_NEAR(c.metric.components[4].from, 0.78, kTol);
+  ASSERT_EQ(c.experiments[0].metric.components.size(), 5u);
+  EXPECT_FALSE(c.experiments[0].metric.preset.has_value());
+  EXPECT_EQ(c.experiments[0].metric.components[1].name, "secondary peak");
+  EXPECT_EQ(c.experiments[0].metric.components[3].type, MetricType::kRise);
+  EXPECT_NEAR(c.experiments[0].metric.components[4].from, 0.78, kTol);
   ASSERT_EQ(c.smc.thresholds.size(), 3u);
   EXPECT_EQ(c.smc.thresholds[0].kind, ThresholdKind::kList);
   EXPECT_EQ(c.smc.thresholds[1].quantile, 0.4);  // inherited from [metric]
@@ -194,7 +195,7 @@ TEST(Config, ComponentsWithOwnAndInheritedSchedules) {
   EXPECT_EQ(c.space.prior_one[35], 0.9);
   EXPECT_EQ(c.smc.tempering.kind, TemperingKind::kList);
   EXPECT_EQ(c.smc.tempering.form, TemperingForm::kMixture);
-  EXPECT_TRUE(c.data.gaussian_extension.enabled);
+  EXPECT_TRUE(c.experiments[0].data.gaussian_extension.enabled);
 }
 
 TEST(Config, DefaultsComeFromTheOptionStructs) {
@@ -210,8 +211,8 @@ TEST(Config, DefaultsComeFromTheOptionStructs) {
   EXPECT_EQ(c.smc.acceptance_floor_after, defaults.acceptance_floor_after);
   EXPECT_EQ(c.smc.max_failure_fraction, defaults.max_failure_fraction);
   EXPECT_EQ(c.smc.failure_fraction_after, defaults.failure_fraction_after);
-  EXPECT_EQ(c.data.position_column, "position");
-  EXPECT_EQ(c.data.position_unit, LengthUnit::kCentimetre);
+  EXPECT_EQ(c.experiments[0].data.position_column, "position");
+  EXPECT_EQ(c.experiments[0].data.position_unit, LengthUnit::kCentimetre);
   EXPECT_EQ(c.output.figure_formats, (std::vector<std::string>{"png"}));
   EXPECT_EQ(c.space.dimension, 36);
   EXPECT_TRUE(c.space.tied.empty());
@@ -228,11 +229,11 @@ TEST(Config, ModelSectionFillsSensorOptions) {
   EXPECT_EQ(m.clamps_per_edge, 18);
   EXPECT_EQ(m.fixed_support, plate::Support::kClamped);
   EXPECT_EQ(m.short_edge_end, plate::Support::kFree);
-  EXPECT_EQ(m.load_x, 0.45);
-  EXPECT_EQ(m.load_force, 0.042);
+  EXPECT_EQ(m.load_cases[0].load_x, 0.45);
+  EXPECT_EQ(m.load_cases[0].load_force, 0.042);
   EXPECT_EQ(m.frequency_hz, 5.0);
-  ASSERT_EQ(m.output_positions.size(), 91u);
-  EXPECT_NEAR(m.output_positions.back(), 0.90, kTol);
+  ASSERT_EQ(m.load_cases[0].output_positions.size(), 91u);
+  EXPECT_NEAR(m.load_cases[0].output_positions.back(), 0.90, kTol);
   EXPECT_TRUE(m.normalise);
   std::string why;
   EXPECT_TRUE(m.IsValid(&why)) << why;
@@ -247,13 +248,13 @@ TEST(Config, ModelKeysAreOptionalAndDefaultsComeFromSensorOptions) {
   const plate::SensorOptions defaults;
   EXPECT_EQ(c.model.length, defaults.length);
   EXPECT_EQ(c.model.layers.size(), defaults.layers.size());
-  EXPECT_EQ(c.model.output_positions, defaults.output_positions);
+  EXPECT_EQ(c.model.load_cases[0].output_positions, defaults.load_cases[0].output_positions);
   EXPECT_EQ(c.model.clamps_per_edge, 9);
   EXPECT_EQ(c.space.dimension, 18);           // 2 x 9 clamps
-  EXPECT_EQ(c.model.load_patch_length, 0.0);  // point load
-  EXPECT_EQ(c.model.load_x, 0.3);
+  EXPECT_EQ(c.model.load_cases[0].load_patch_length, 0.0);  // point load
+  EXPECT_EQ(c.model.load_cases[0].load_x, 0.3);
   // The Gaussian extension is centred at the model's load unless told otherwise.
-  EXPECT_EQ(c.data.gaussian_extension.impact_position, 0.3);
+  EXPECT_EQ(c.experiments[0].data.gaussian_extension.impact_position, 0.3);
 }
 
 TEST(Config, ModelTheorySelectsThePlateTheory) {
@@ -628,22 +629,22 @@ const std::string kGaussianBase =
 
 TEST(Config, GaussianNoiseModelKeys) {
   const auto c = ParseConfig(kGaussianBase + "sigma_noise = 0.02\nsigma_model = 0.01\n", "x.toml");
-  ASSERT_EQ(c.metric.components.size(), 1u);
-  const auto& m = c.metric.components[0];
+  ASSERT_EQ(c.experiments[0].metric.components.size(), 1u);
+  const auto& m = c.experiments[0].metric.components[0];
   EXPECT_EQ(m.noise.model, NoiseModel::kGaussian);
   EXPECT_EQ(m.noise.sigma_noise, 0.02);
   EXPECT_EQ(m.noise.sigma_model, 0.01);
   EXPECT_EQ(KindOf(m), ComponentKind::kNegLogLikelihood);
   EXPECT_EQ(c.smc.thresholds.at(0).target, 1.0);  // temperatures end at 1
   const auto estimated = ParseConfig(kGaussianBase + "sigma_noise = \"estimate\"\n", "x.toml");
-  EXPECT_FALSE(estimated.metric.components[0].noise.sigma_noise.has_value());
+  EXPECT_FALSE(estimated.experiments[0].metric.components[0].noise.sigma_noise.has_value());
   // [metric]-level noise applies to a preset's least_squares components.
   const auto preset = ParseConfig(
       "[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"split_least_squares\"\nnoise = "
       "\"gaussian\"\nsigma_noise = 0.01\n",
       "x.toml");
   int likelihoods = 0;
-  for (const auto& m2 : preset.metric.components) {
+  for (const auto& m2 : preset.experiments[0].metric.components) {
     likelihoods += KindOf(m2) == ComponentKind::kNegLogLikelihood;
   }
   EXPECT_EQ(likelihoods, 3);

@@ -46,7 +46,7 @@ std::string ErrorOf(const std::string& text) {
 TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   const CalibrationConfig c = ParseConfig("[model.clamps]\nper_edge = 3\n" + kRest, "run.toml");
   EXPECT_EQ(c.simulator.kind, SimulatorKind::kSensor);
-  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.output_positions);
+  EXPECT_EQ(c.simulator.outputs.coordinates, c.model.load_cases[0].output_positions);
   EXPECT_EQ(c.space.dimension, 6);
   EXPECT_EQ(c.space.names.front(), "clamp 1");
   // Where the bits are set, for refusals of the space's size (enumerate's 2^24).

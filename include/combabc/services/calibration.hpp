@@ -122,6 +122,7 @@ class NominalSimulator {
   const std::vector<double>& positions() const;  // the outputs' coordinates (the sensor: metres)
   const std::string& output_name() const;        // the sensor: "displacement"
   bool is_sensor() const;
+  const CalibrationConfig& config() const { return config_; }
   // One configuration's raw output (the sensor: |w| in metres along the centreline). A failed
   // simulation is Error kSoftware.
   std::vector<double> Simulate(std::span<const std::uint8_t> bits) const;
@@ -141,7 +142,8 @@ class NominalSimulator {
 // One bit configuration ("0110..." with one character per bit; for the sensor one per clamp,
 // 1 = fixed) through the config's simulator at its nominal continuous values, written as CSV:
 // position_m (the output coordinates), the output (the sensor's: displacement_m, raw metres) and
-// the profile normalised by its largest magnitude. An external simulator works in
+// the profile normalised by its largest magnitude; with [[experiment]] tables, every
+// experiment's profile, each normalised by its own peak, after a column naming the experiment. An external simulator works in
 // "<csv stem>.simulate.work" beside the CSV. An existing output_csv is refused (kCantCreate)
 // unless `overwrite`.
 void SimulateConfiguration(const std::string& config_path,
