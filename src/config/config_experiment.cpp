@@ -177,7 +177,20 @@ void ParseExperiments(TableReader& root,
   defaults.load = c->model.load_cases.front();
   defaults.frequency_hz = c->model.frequency_hz;
   if (tables.empty()) {
-    // The shorthand: one experiment, unnamed, from the top-level tables.
+    // The shorthand: one experiment, unnamed, from the top-level tables. An external program
+    // told about experiments it does not have would read the placeholders literally.
+    for (const std::string& arg : c->simulator.external.argv) {
+      for (const char* placeholder : kExperimentPlaceholders) {
+        if (arg.find(placeholder) != std::string::npos) {
+          throw Error(ErrorKind::kConfig,
+                      std::string("uses ") + placeholder +
+                          ", which only [[experiment]] tables fill in (docs/simulators.md)",
+                      c->path,
+                      c->simulator.argv_line,
+                      "simulator.argv");
+        }
+      }
+    }
     ExperimentConfig x = defaults;
     ParseOne(root, 0, c, &x, model_sources);
     c->experiments.push_back(std::move(x));

@@ -1,5 +1,7 @@
 #include "combabc/simulators/external_simulator.hpp"
 
+#include <cstdio>
+
 #include <cmath>
 #include <utility>
 
@@ -50,13 +52,27 @@ std::vector<std::string> ExpandArgv(const std::vector<std::string>& argv,
                                     const std::string& params,
                                     const std::string& output,
                                     const std::string& workdir,
-                                    const std::string& config_dir) {
-  const std::pair<std::string, std::string> values[] = {
+                                    const std::string& config_dir,
+                                    const SimulatorExperiment* experiment) {
+  std::vector<std::pair<std::string, std::string>> values = {
       {"{config_dir}", config_dir.empty() ? "." : config_dir},
       {"{workdir}", workdir},
       {"{params}", params},
       {"{output}", output},
   };
+  if (experiment != nullptr) {
+    const auto number = [](double x) {
+      char b[40];
+      std::snprintf(b, sizeof b, "%.17g", x);
+      return std::string(b);
+    };
+    values.insert(values.end(),
+                  {{"{experiment}", experiment->name},
+                   {"{load_x}", number(experiment->load_x)},
+                   {"{load_y_fraction}", number(experiment->load_y_fraction)},
+                   {"{load_amplitude}", number(experiment->load_force)},
+                   {"{frequency}", number(experiment->frequency_hz)}});
+  }
   std::vector<std::string> out;
   out.reserve(argv.size());
   for (const std::string& a : argv) {

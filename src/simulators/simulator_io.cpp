@@ -151,7 +151,9 @@ std::string Number(double x) {
   return b;
 }
 
-std::string ParamsJson(const ParameterView& theta, const std::vector<std::string>& real_names) {
+std::string ParamsJson(const ParameterView& theta,
+                       const std::vector<std::string>& real_names,
+                       const SimulatorExperiment* experiment) {
   std::string s = "{\"bits\": [";
   for (std::size_t k = 0; k < theta.bits.size(); ++k) {
     if (k > 0) s += ", ";
@@ -162,18 +164,34 @@ std::string ParamsJson(const ParameterView& theta, const std::vector<std::string
     if (k > 0) s += ", ";
     s += JsonString(real_names[k]) + ": " + Number(theta.reals[k]);
   }
-  return s + "}}\n";
+  s += "}";
+  if (experiment != nullptr) {
+    s += ", \"experiment\": {\"name\": " + JsonString(experiment->name) +
+         ", \"load_x\": " + Number(experiment->load_x) +
+         ", \"load_y_fraction\": " + Number(experiment->load_y_fraction) +
+         ", \"load_amplitude\": " + Number(experiment->load_force) +
+         ", \"frequency\": " + Number(experiment->frequency_hz) + "}";
+  }
+  return s + "}\n";
 }
 
 std::string ParamsCsv(const ParameterView& theta,
                       const std::vector<std::string>& bit_names,
-                      const std::vector<std::string>& real_names) {
+                      const std::vector<std::string>& real_names,
+                      const SimulatorExperiment* experiment) {
   std::string s = "name,value\n";
   for (std::size_t k = 0; k < theta.bits.size(); ++k) {
     s += CsvField(bit_names[k]) + ',' + (theta.bits[k] ? '1' : '0') + '\n';
   }
   for (std::size_t k = 0; k < theta.reals.size(); ++k) {
     s += CsvField(real_names[k]) + ',' + Number(theta.reals[k]) + '\n';
+  }
+  if (experiment != nullptr) {
+    s += "experiment," + CsvField(experiment->name) + '\n';
+    s += "load_x," + Number(experiment->load_x) + '\n';
+    s += "load_y_fraction," + Number(experiment->load_y_fraction) + '\n';
+    s += "load_amplitude," + Number(experiment->load_force) + '\n';
+    s += "frequency," + Number(experiment->frequency_hz) + '\n';
   }
   return s;
 }

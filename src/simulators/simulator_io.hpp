@@ -14,12 +14,18 @@
 
 namespace combabc::simulators_internal {
 
-// {"bits": [0, 1, ...], "reals": {"name": value, ...}}
-std::string ParamsJson(const ParameterView& theta, const std::vector<std::string>& real_names);
-// "name,value" then one row per bit (by bit name) and per real.
+// {"bits": [0, 1, ...], "reals": {"name": value, ...}}, and with an experiment
+// "experiment": {"name": ..., "load_x": ..., "load_y_fraction": ..., "load_amplitude": ...,
+// "frequency": ...}.
+std::string ParamsJson(const ParameterView& theta,
+                       const std::vector<std::string>& real_names,
+                       const SimulatorExperiment* experiment = nullptr);
+// "name,value" then one row per bit (by bit name) and per real, and with an experiment the rows
+// experiment, load_x, load_y_fraction, load_amplitude and frequency.
 std::string ParamsCsv(const ParameterView& theta,
                       const std::vector<std::string>& bit_names,
-                      const std::vector<std::string>& real_names);
+                      const std::vector<std::string>& real_names,
+                      const SimulatorExperiment* experiment = nullptr);
 // "<id> <bits as 0/1 characters> <real> ...\n" (protocol combabc-worker 2): id numbers the
 // worker's requests 1, 2, ...
 std::string RequestLine(std::uint64_t id, const ParameterView& theta);

@@ -146,7 +146,13 @@ std::unique_ptr<WorkerSimulator::Worker> WorkerSimulator::Start(
   try {
     const std::string folder = work_.MakeSubfolder("worker");
     SubprocessOptions spawn;
-    spawn.argv = ExpandArgv(options_.argv, "", "", folder, options_.config_directory);
+    // A worker serves one experiment: it is told which on its command line.
+    spawn.argv = ExpandArgv(options_.argv,
+                            "",
+                            "",
+                            folder,
+                            options_.config_directory,
+                            options_.experiment ? &*options_.experiment : nullptr);
     spawn.working_directory = folder;
     spawn.pipe_stdin = true;
     spawn.stderr_path = folder + "/stderr.txt";

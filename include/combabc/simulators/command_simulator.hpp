@@ -23,6 +23,9 @@ class CommandSimulator : public Simulator {
                 std::span<double> out) const override;
 
  private:
+  const SimulatorExperiment* Experiment() const {
+    return options_.experiment ? &*options_.experiment : nullptr;
+  }
   // One attempt; returns the failure reason, empty on success.
   std::string Attempt(const ParameterView& theta, std::span<double> out) const;
 

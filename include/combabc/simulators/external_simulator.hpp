@@ -90,10 +90,17 @@ struct ExternalSimulatorOptions {
 };
 
 // argv with the placeholders replaced, literally (no quoting, no expansion: there is no shell).
+// With an experiment also {experiment} (its name), {load_x} (m), {load_y_fraction},
+// {load_amplitude} (N) and {frequency} (Hz); without one those stay as written (the config
+// refuses them without [[experiment]] tables).
 std::vector<std::string> ExpandArgv(const std::vector<std::string>& argv,
                                     const std::string& params,
                                     const std::string& output,
                                     const std::string& workdir,
-                                    const std::string& config_dir);
+                                    const std::string& config_dir,
+                                    const SimulatorExperiment* experiment = nullptr);
+// The placeholders an experiment fills in, for the config's check.
+inline constexpr const char* kExperimentPlaceholders[] = {
+    "{experiment}", "{load_x}", "{load_y_fraction}", "{load_amplitude}", "{frequency}"};
 
 }  // namespace combabc
