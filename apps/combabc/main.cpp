@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -19,6 +20,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/services/calibration.hpp"
+#include "combabc/services/design.hpp"
 #include "interrupt.hpp"
 #include "progress_display.hpp"
 #ifdef COMBABC_HAVE_MPI
@@ -137,6 +139,58 @@ int CheckStandardOutput(int code) {
   return combabc::ExitCode(combabc::ErrorKind::kIo);
 }
 
+// The ranking (best ten), the greedy selection and where the files are.
+void PrintDesign(const combabc::services::DesignOutcome& o) {
+  const auto& r = o.result;
+  std::printf("design from %s; %zu candidates, noise sigma on the normalised profile\n",
+              o.population.c_str(),
+              o.candidates.size());
+  std::printf("prior: %.2f bits of marginal entropy, %.0f clamps identified\n",
+              r.prior_entropy,
+              r.prior_identified);
+  std::vector<std::size_t> order(o.candidates.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return r.scores[a].information_gain > r.scores[b].information_gain;
+  });
+  std::printf("rank  load x cm  load y  scan cm     line   gain bits (se)   identified  wrong\n");
+  for (std::size_t rank = 0; rank < std::min<std::size_t>(10, order.size()); ++rank) {
+    const auto& c = o.candidates[order[rank]];
+    const auto& s = r.scores[order[rank]];
+    std::printf("%4zu  %9.1f  %6.2f  %5.1f-%-5.1f %5.2f  %6.2f (%.2f)    %10.1f  %5.1f\n",
+                rank + 1,
+                c.load_x * 100,
+                c.load_y_fraction,
+                c.scan_from * 100,
+                c.scan_to * 100,
+                c.scan_y_fraction,
+                s.information_gain,
+                s.information_gain_se,
+                s.identified,
+                s.wrong);
+  }
+  std::printf("greedy selection:\n");
+  for (std::size_t step = 0; step < r.selected.size(); ++step) {
+    const auto& c = o.candidates[static_cast<std::size_t>(r.selected[step])];
+    const auto& s = r.cumulative[step];
+    std::printf("  %zu. load %.1f cm (y %.2f), scan %.1f-%.1f cm (y %.2f): %.2f bits in all, "
+                "%.1f clamps identified, %.1f wrong\n",
+                step + 1,
+                c.load_x * 100,
+                c.load_y_fraction,
+                c.scan_from * 100,
+                c.scan_to * 100,
+                c.scan_y_fraction,
+                s.information_gain,
+                s.identified,
+                s.wrong);
+  }
+  std::printf("design: %s (%.2f s; next experiment: %s/next_experiment.toml)\n",
+              o.directory.c_str(),
+              o.wall_seconds,
+              o.directory.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -225,6 +279,22 @@ int main(int argc, char** argv) try {
       ->required();
   simulate->add_option("-o,--output", sim_out, "CSV to write (default profile.csv)");
   simulate->add_flag("--overwrite", overwrite_profile, "Replace an existing CSV at that path");
+
+  combabc::services::DesignRequest design_request;
+  bool no_figure = false;
+  auto* design = app.add_subcommand(
+      "design", "Rank candidate experiments ([design]) by the information they would add");
+  design->add_option("CONFIG", design_request.config_path, "Config file with a [design] table")
+      ->required();
+  design->add_option("--posterior",
+                     design_request.posterior_path,
+                     "A finished run's history: start from its posterior (default: the prior)");
+  design->add_option(
+      "-o,--output", design_request.output_directory, "Directory (default: design/ in [output])");
+  design->add_option("-j,--threads", design_request.threads, "Threads, 0 = all cores")
+      ->check(CLI::Range(0, kMaxThreads));
+  design->add_flag("--overwrite", design_request.overwrite, "Write into an existing directory");
+  design->add_flag("--no-figure", no_figure, "Skip identifiability.<fmt> (needs matplotlib)");
 
   std::string out_dir;
   bool overwrite_dir = false;
@@ -350,6 +420,9 @@ int main(int argc, char** argv) try {
       } else if (*simulate) {
         combabc::services::SimulateConfiguration(sim_config, clamps, sim_out, overwrite_profile);
         std::cout << "wrote " << sim_out << "\n";
+      } else if (*design) {
+        design_request.figure = !no_figure;
+        PrintDesign(combabc::services::RunDesign(design_request));
       } else if (*report) {
         // Written first, printed after: a failure prints no half line on stdout.
         const auto directory = combabc::services::WriteReport(history, out_dir, overwrite_dir);

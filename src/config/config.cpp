@@ -235,6 +235,7 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   // experiment), the simulator's outputs and model.normalise.
   config_internal::ParseExperiments(root, &c, model_sources);
   ParseOutput(root, &c);
+  config_internal::ParseDesignSection(root, &c);
   root.Finish();
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 

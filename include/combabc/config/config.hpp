@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "combabc/data/measured_data.hpp"
@@ -73,6 +74,22 @@ struct ExperimentConfig {
   std::string Key(std::size_t index, const std::string& table) const;
 };
 
+// [design] (docs/config.md, "Design"): the candidate experiments `combabc design` ranks, the
+// product of the grids below (positions in metres here).
+struct DesignConfig {
+  std::vector<double> load_x;                   // along the sensor
+  std::vector<double> load_y_fraction = {0.5};  // across the width
+  std::vector<std::pair<double, double>> scans;  // scan windows [from, to]
+  std::vector<double> scan_y_fraction = {0.5};  // scan lines across the width
+  double scan_spacing = 0.01;                   // between scan points
+  double noise = 0.01;                          // measurement noise sigma, of the peak
+  int truths = 200;                             // plausible truths per candidate
+  int particles = 2000;                         // prior draws (when no posterior is given)
+  int select = 3;                               // experiments chosen greedily
+  double identified_margin = 0.4;               // |P(fixed) - 0.5| above it: identified
+  int line = 0;                                 // the [design] table's line
+};
+
 struct CalibrationConfig {
   std::string path;         // the config file as given ("<string>" for ParseConfig without a file)
   std::string directory;    // its directory: data.csv and output.directory are relative to it
@@ -104,6 +121,7 @@ struct CalibrationConfig {
   // simulator takes any name).
   std::vector<ContinuousParameter> reals;
   OutputConfig output;
+  std::optional<DesignConfig> design;  // [design], for `combabc design` only
 };
 
 // The sensor models a run builds (kind = "sensor"): one per distinct frequency among the

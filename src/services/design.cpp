@@ -1,0 +1,339 @@
+#include "combabc/services/design.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/core/output_files.hpp"
+#include "combabc/core/thread_pool.hpp"
+#include "combabc/history/history_store.hpp"
+#include "combabc/params/binary_space.hpp"
+#include "combabc/plate/sensor_model.hpp"
+#include "combabc/rng/random_stream.hpp"
+#include "services/python_script.hpp"
+
+namespace combabc::services {
+namespace fs = std::filesystem;
+namespace {
+
+// Free-bit spaces up to this size are designed over every configuration (exact prior).
+constexpr int kExactBits = 12;
+constexpr std::uint64_t kPriorStream = 0xD4'0000'0000ULL;
+
+std::string Num(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
+// Adds `bits` with weight w, merging repeats: a posterior holds many copies of a configuration,
+// and each distinct one is simulated once.
+void AddParticle(std::map<std::vector<std::uint8_t>, double>& merged,
+                 std::vector<std::uint8_t> bits,
+                 double w) {
+  merged[std::move(bits)] += w;
+}
+
+design::Population ToPopulation(const std::map<std::vector<std::uint8_t>, double>& merged,
+                                int dimension) {
+  design::Population p;
+  p.dimension = dimension;
+  double total = 0.0;
+  for (const auto& [bits, w] : merged) total += w;
+  for (const auto& [bits, w] : merged) {
+    p.bits.insert(p.bits.end(), bits.begin(), bits.end());
+    p.weights.push_back(w / total);
+  }
+  return p;
+}
+
+design::Population FromPosterior(const std::string& path,
+                                 const CalibrationConfig& c,
+                                 std::string* what) {
+  const HistoryStore store = HistoryStore::Open(path, true);
+  const RunMetadata m = store.LoadMetadata();
+  if (m.dimension != c.space.dimension) {
+    throw Error(ErrorKind::kUsage,
+                "the run has " + std::to_string(m.dimension) + " bits; the config's model has " +
+                    std::to_string(c.space.dimension),
+                path,
+                0,
+                "--posterior");
+  }
+  const RunHistory h = store.LoadHistory();
+  const WaveRecord* last = nullptr;
+  for (const WaveRecord& w : h.waves) {
+    if (w.complete) last = &w;
+  }
+  if (last == nullptr || last->particles.empty()) {
+    throw Error(ErrorKind::kUsage, "the run has no complete wave to start from", path, 0,
+                "--posterior");
+  }
+  std::map<std::vector<std::uint8_t>, double> merged;
+  double total = 0.0;
+  for (const Particle& p : last->particles) total += p.weight;
+  for (const Particle& p : last->particles) {
+    // The paper's estimator counts accepted particles; importance weights otherwise.
+    const double w = m.estimator == "paper" || !(total > 0.0) ? 1.0 : p.weight;
+    AddParticle(merged, p.theta.bits, w);
+  }
+  *what = "the posterior of " + path + " (wave " + std::to_string(last->wave + 1) + ", " +
+          std::to_string(last->particles.size()) + " particles, " +
+          std::to_string(merged.size()) + " distinct)";
+  return ToPopulation(merged, m.dimension);
+}
+
+design::Population FromPrior(const CalibrationConfig& c, std::string* what) {
+  const BinarySpace space(c.space);
+  const int free = space.num_free();
+  const std::vector<double>& prior = space.free_prior_one();
+  std::map<std::vector<std::uint8_t>, double> merged;
+  std::vector<std::uint8_t> f(static_cast<std::size_t>(free));
+  std::vector<std::uint8_t> bits(static_cast<std::size_t>(space.dimension()));
+  if (free <= kExactBits) {
+    for (std::uint64_t code = 0; code < (std::uint64_t{1} << free); ++code) {
+      double mass = 1.0;
+      for (int k = 0; k < free; ++k) {
+        f[static_cast<std::size_t>(k)] = (code >> k) & 1U;
+        mass *= f[static_cast<std::size_t>(k)] ? prior[k] : 1.0 - prior[k];
+      }
+      space.Expand(f, bits);
+      AddParticle(merged, bits, mass);
+    }
+    *what = "the prior (every one of " + std::to_string(merged.size()) + " configurations)";
+    return ToPopulation(merged, space.dimension());
+  }
+  const int n = c.design->particles;
+  for (int i = 0; i < n; ++i) {
+    RandomStream rng(c.smc.seed, kPriorStream, static_cast<std::uint64_t>(i));
+    for (int k = 0; k < free; ++k) f[static_cast<std::size_t>(k)] = rng.Uniform() < prior[k];
+    space.Expand(f, bits);
+    AddParticle(merged, bits, 1.0);
+  }
+  *what = "the prior (" + std::to_string(n) + " draws, " + std::to_string(merged.size()) +
+          " distinct)";
+  return ToPopulation(merged, space.dimension());
+}
+
+std::vector<DesignCandidate> Candidates(const DesignConfig& d) {
+  std::vector<DesignCandidate> out;
+  for (double x : d.load_x) {
+    for (double y : d.load_y_fraction) {
+      for (const auto& [from, to] : d.scans) {
+        for (double line : d.scan_y_fraction) out.push_back({x, y, from, to, line});
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<double> ScanPositions(const DesignCandidate& c, double spacing) {
+  std::vector<double> x;
+  const auto n = static_cast<int>(std::floor((c.scan_to - c.scan_from) / spacing + 1e-9));
+  for (int k = 0; k <= n; ++k) x.push_back(c.scan_from + k * spacing);
+  return x;
+}
+
+// Each candidate's normalised profile for every particle: one plate model whose load cases are
+// the candidates, solved once per particle (one factorization for all of them).
+std::vector<design::CandidateProfiles> Simulate(const CalibrationConfig& c,
+                                                const std::vector<DesignCandidate>& candidates,
+                                                const design::Population& population,
+                                                int threads) {
+  plate::SensorOptions options = c.model;
+  options.normalise = true;  // as the measured data are normalised
+  options.load_cases.clear();
+  const plate::LoadCase base = c.model.load_cases.front();
+  for (const DesignCandidate& k : candidates) {
+    plate::LoadCase lc = base;
+    lc.load_x = k.load_x;
+    lc.load_y_fraction = k.load_y_fraction;
+    lc.output_positions = ScanPositions(k, c.design->scan_spacing);
+    lc.output_y_fraction = k.scan_y_fraction;
+    options.load_cases.push_back(std::move(lc));
+  }
+  const plate::SensorModel model(options);
+  const std::size_t n = population.size();
+  const auto d = static_cast<std::size_t>(population.dimension);
+  const auto outputs = static_cast<std::size_t>(model.num_outputs());
+  std::vector<double> all(n * outputs);
+  model.ProfileBatch(population.bits, n, all, threads);
+  std::vector<design::CandidateProfiles> profiles(candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const std::size_t begin = options.OutputOffset(k);
+    const std::size_t points = options.load_cases[k].output_positions.size();
+    profiles[k].points = static_cast<int>(points);
+    profiles[k].values.resize(n * points);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(i * outputs + begin),
+                  points,
+                  profiles[k].values.begin() + static_cast<std::ptrdiff_t>(i * points));
+    }
+  }
+  (void)d;
+  return profiles;
+}
+
+std::string ExperimentBlock(const DesignCandidate& k, const CalibrationConfig& c, int rank) {
+  std::ostringstream out;
+  out << "# The best next experiment by `combabc design` (rank " << rank
+      << "): add it to the config's [[experiment]] tables once measured.\n"
+      << "[[experiment]]\nname = \"x" << Num(k.load_x * 100) << "cm"
+      << (k.load_y_fraction != 0.5 ? "_y" + Num(k.load_y_fraction) : "") << "\"\n"
+      << "[experiment.load]\nx = " << Num(k.load_x) << "                # m\n"
+      << "y_fraction = " << Num(k.load_y_fraction) << "\n"
+      << "amplitude = " << Num(c.model.load_cases.front().load_force) << "          # N\n"
+      << "frequency = " << Num(c.model.frequency_hz) << "            # Hz\n"
+      << "[experiment.output]\npositions = [";
+  const std::vector<double> x = ScanPositions(k, c.design->scan_spacing);
+  for (std::size_t i = 0; i < x.size(); ++i) out << (i ? ", " : "") << Num(x[i]);
+  out << "]  # m\ny_fraction = " << Num(k.scan_y_fraction) << "\n"
+      << "[experiment.data]\ncsv = \"FILL IN: the measured profile\"\n"
+      << "position_unit = \"cm\"\nwindow = [" << Num(k.scan_from * 100) << ", "
+      << Num(k.scan_to * 100) << "]  # cm\n"
+      << "[experiment.metric]\n[[experiment.metric.component]]\ntype = \"least_squares\"\n"
+      << "window = [" << Num(k.scan_from * 100) << ", " << Num(k.scan_to * 100) << "]  # cm\n"
+      << "noise = \"gaussian\"\nsigma_noise = " << Num(c.design->noise) << "\n";
+  return out.str();
+}
+
+void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationConfig& c) {
+  const design::DesignResult& r = o.result;
+  std::vector<std::size_t> order(o.candidates.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return r.scores[a].information_gain > r.scores[b].information_gain;
+  });
+  std::ostream& table = dir.Add("design.csv");
+  table << "rank,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
+           "information_gain_bits,information_gain_se,expected_identified,expected_wrong\n";
+  for (std::size_t rank = 0; rank < order.size(); ++rank) {
+    const std::size_t k = order[rank];
+    const DesignCandidate& d = o.candidates[k];
+    const design::Score& s = r.scores[k];
+    table << rank + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
+          << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
+          << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
+          << Num(s.identified) << ',' << Num(s.wrong) << '\n';
+  }
+  std::ostream& selection = dir.Add("selection.csv");
+  selection << "step,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
+               "information_gain_bits,information_gain_se,expected_identified,expected_wrong\n";
+  for (std::size_t step = 0; step < r.selected.size(); ++step) {
+    const auto k = static_cast<std::size_t>(r.selected[step]);
+    const DesignCandidate& d = o.candidates[k];
+    const design::Score& s = r.cumulative[step];
+    selection << step + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ','
+              << Num(d.load_y_fraction) << ',' << Num(d.scan_from) << ',' << Num(d.scan_to)
+              << ',' << Num(d.scan_y_fraction) << ',' << Num(s.information_gain) << ','
+              << Num(s.information_gain_se) << ',' << Num(s.identified) << ','
+              << Num(s.wrong) << '\n';
+  }
+  std::ostream& ident = dir.Add("identifiability.csv");
+  ident << "candidate,label";
+  for (const std::string& name : c.space.names) ident << ',' << '"' << name << '"';
+  ident << '\n';
+  for (std::size_t k = 0; k < o.candidates.size(); ++k) {
+    const DesignCandidate& d = o.candidates[k];
+    ident << k + 1 << ",\"load " << Num(d.load_x * 100) << " cm, y " << Num(d.load_y_fraction)
+          << "; scan " << Num(d.scan_from * 100) << "-" << Num(d.scan_to * 100) << " cm, y "
+          << Num(d.scan_y_fraction) << "\"";
+    for (double v : r.scores[k].identifiability) ident << ',' << Num(v);
+    ident << '\n';
+  }
+  dir.Add("next_experiment.toml") << o.next_experiment;
+}
+
+}  // namespace
+
+DesignOutcome RunDesign(const DesignRequest& request) {
+  const auto start = std::chrono::steady_clock::now();
+  CalibrationConfig c = LoadConfig(request.config_path);
+  if (!c.design) {
+    throw Error(ErrorKind::kConfig,
+                "missing required table [design] (the candidate experiments to rank; "
+                "docs/config.md, \"Design\")",
+                c.path, 1, "design");
+  }
+  if (c.simulator.kind != SimulatorKind::kSensor) {
+    throw Error(ErrorKind::kUsage,
+                "design simulates the built-in sensor's candidate loads and scans; this config's "
+                "simulator is " + std::string(ToString(c.simulator.kind)),
+                c.path);
+  }
+  if (!c.reals.empty()) {
+    throw Error(ErrorKind::kUsage,
+                "design ranks experiments by what they tell about the bits; remove [parameters] "
+                "(the continuous unknowns) or fix them at nominal values",
+                c.path);
+  }
+  const int threads = request.threads >= 0 ? request.threads : c.smc.threads;
+  const std::string directory =
+      request.output_directory.empty()
+          ? (fs::path(ResolvePath(c.directory, c.output.directory)) / "design").string()
+          : request.output_directory;
+  // Refused now rather than after the simulations; the parent folder is made only at the end.
+  const fs::path parent = fs::path(directory).parent_path();
+  std::error_code ec;
+  if (parent.empty() || fs::exists(parent, ec)) {
+    OutputDirectory::Check(directory, request.overwrite);
+  }
+
+  DesignOutcome o;
+  const design::Population population = request.posterior_path.empty()
+                                            ? FromPrior(c, &o.population)
+                                            : FromPosterior(request.posterior_path, c,
+                                                            &o.population);
+  o.particles = population.size();
+  o.candidates = Candidates(*c.design);
+  const std::vector<design::CandidateProfiles> profiles =
+      Simulate(c, o.candidates, population, threads);
+  design::DesignOptions options;
+  options.noise_sigma = c.design->noise;
+  options.truths = c.design->truths;
+  options.select = c.design->select;
+  options.identified_margin = c.design->identified_margin;
+  options.seed = c.smc.seed;
+  options.threads = threads;
+  o.result = design::ScoreCandidates(population, profiles, options);
+  o.next_experiment = ExperimentBlock(
+      o.candidates[static_cast<std::size_t>(o.result.selected.front())], c, 1);
+
+  if (!parent.empty() && !fs::exists(parent, ec)) {
+    fs::create_directories(parent, ec);
+    if (ec) {
+      throw Error(ErrorKind::kCantCreate, "cannot create directory: " + ec.message(),
+                  parent.string());
+    }
+  }
+  OutputDirectory dir(directory, request.overwrite);
+  WriteFiles(dir, o, c);
+  if (request.figure) {
+    const PythonScript script = FindPythonScript(
+        "combabc_design.py", "COMBABC_DESIGN_SCRIPT", "python3-numpy and python3-matplotlib");
+    for (const std::string& format : c.output.figure_formats) {
+      const std::string name = "identifiability." + format;
+      dir.Add(name);
+      const ProcessResult result = RunProcess(
+          {script.python, script.script, dir.StagedPath("identifiability.csv"),
+           dir.StagedPath(name), format},
+          "python3-numpy and python3-matplotlib");
+      if (result.status != 0) {
+        throw Error(KindOfScriptStatus(result.status),
+                    name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
+      }
+    }
+  }
+  dir.Commit();
+  o.directory = directory;
+  o.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return o;
+}
+
+}  // namespace combabc::services
