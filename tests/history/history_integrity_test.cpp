@@ -75,22 +75,41 @@ class HistoryIntegrityTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// What a v4 file (before the wave count was recorded) looks like, made from a v5 one: no meta row
+// Stores the run's checksums as combabc computed them for `version`.
+void RehashMetadataAndRunState(history::Database& db, int version) {
+  history::Statement meta(db, "UPDATE meta SET value = ?2 WHERE key = ?1");
+  meta.Bind(1, std::string("metadata_hash"))
+      .Bind(2, history::HexDigest(history::MetadataHash(db, version)))
+      .Run();
+  meta.Bind(1, std::string("run_state_hash"))
+      .Bind(2, history::HexDigest(history::RunStateHash(db, version)))
+      .Run();
+}
+
+// What a v5 file (before the experiments were recorded) looks like, made from a v6 one: no table
+// experiment, and its checksums as combabc computed them for v5.
+void DowngradeToV5(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  db.Exec(R"sql(
+    DROP TABLE experiment;
+    UPDATE meta SET value = '5' WHERE key = 'schema_version';
+    PRAGMA user_version = 5;)sql");
+  RehashMetadataAndRunState(db, 5);
+  transaction.Commit();
+}
+
+// What a v4 file (before the wave count was recorded) looks like, made from a v6 one: no meta row
 // wave_count, and its checksums as combabc computed them for v4.
 void DowngradeToV4(const std::string& path) {
+  DowngradeToV5(path);
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
   db.Exec(R"sql(
     DELETE FROM meta WHERE key = 'wave_count';
     UPDATE meta SET value = '4' WHERE key = 'schema_version';
     PRAGMA user_version = 4;)sql");
-  history::Statement meta(db, "UPDATE meta SET value = ?2 WHERE key = ?1");
-  meta.Bind(1, std::string("metadata_hash"))
-      .Bind(2, history::HexDigest(history::MetadataHash(db, 4)))
-      .Run();
-  meta.Bind(1, std::string("run_state_hash"))
-      .Bind(2, history::HexDigest(history::RunStateHash(db, 4)))
-      .Run();
+  RehashMetadataAndRunState(db, 4);
   transaction.Commit();
 }
 
