@@ -5,8 +5,8 @@
 # test-math-dependencies: a cheap grep that fails CI. There is no exception list.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-order=(core mpi rng params schedules proposals distances samplers simulators plate data metrics config history
-  export services)
+order=(core mpi rng params schedules proposals distances samplers design simulators plate data metrics
+  config history export services)
 declare -A deps=(
   [core]=""
   [mpi]="core"
@@ -16,6 +16,7 @@ declare -A deps=(
   [distances]="core rng"
   [schedules]="core"
   [samplers]="core rng params proposals distances schedules"
+  [design]="core rng"
   [simulators]="core rng params samplers"
   [plate]="core"
   [data]="core"
@@ -23,7 +24,7 @@ declare -A deps=(
   [config]="core rng params proposals distances schedules samplers simulators plate data metrics"
   [history]="core rng params proposals distances schedules samplers"
   [export]="core history"
-  [services]="core rng params proposals distances schedules samplers simulators plate data metrics config history export"
+  [services]="core rng params proposals distances schedules samplers design simulators plate data metrics config history export"
 )
 status=0
 declare -A rank=()

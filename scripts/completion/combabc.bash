@@ -6,7 +6,7 @@ _combabc() {
   local cur prev cmd i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="run resume enumerate simulate report export verify"
+  local commands="run resume enumerate design simulate report export verify"
   cmd=""
   for ((i = 1; i < COMP_CWORD; i++)); do
     case " $commands " in *" ${COMP_WORDS[i]} "*) cmd=${COMP_WORDS[i]}; break ;; esac
@@ -20,6 +20,9 @@ _combabc() {
       files=sqlite ;;
     enumerate)
       opts="-h --help --threshold -o --output -j --threads --overwrite --top --no-report -q --quiet"
+      files=toml ;;
+    design)
+      opts="-h --help --posterior -o --output -j --threads --overwrite --no-figure"
       files=toml ;;
     simulate) opts="-h --help --clamps -o --output --overwrite"; files=toml ;;
     report) opts="-h --help -o --output --overwrite"; files=sqlite ;;
