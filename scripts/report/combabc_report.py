@@ -64,7 +64,7 @@ except ImportError as missing:
 # the fingerprint; v4 the failed simulations (table failure, wave.failures); v5 the meta row
 # wave_count (nothing the report reads). Older files read as runs without reals and without
 # failures.
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
 DPI = 150
@@ -174,6 +174,13 @@ def load_run(con):
     run["measured_x_cm"] = measured[:, 0] * scale
     run["measured_y"] = measured[:, 1]
     run["schema_version"] = con.execute("PRAGMA user_version").fetchone()[0]
+    # Schema v6: the run's experiments (slices of the outputs, measured points and components);
+    # older files are one experiment.
+    run["experiments"] = con.execute(
+        "SELECT name, description, outputs, measured, components FROM experiment ORDER BY e"
+    ).fetchall() if run["schema_version"] >= 6 else [("", "", len(run["x_cm"]),
+                                                      len(run["measured_x_cm"]),
+                                                      len(run["components"]))]
     # Stop limits a resume set over the config's (meta rows stop_limit_<key>; docs/history.md).
     run["stop_limits"] = [(key[len("stop_limit_"):], value) for key, value in con.execute(
         "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key")]
@@ -806,7 +813,13 @@ def make_report(db_path, out, estimator=None, overwrite=False, formats=None):
     try:
         run = load_run(con)
         waves = load_waves(con, run["dimension"], len(run["reals"]))
-        scale_like_the_metric(run, waves)
+        if len(run["experiments"]) > 1:
+            # The curve panels draw one experiment's scan; a run of several experiments gets its
+            # marginals and summary only (its curves: `combabc export`, experiments.csv).
+            for w in waves:
+                w.curves = None
+        else:
+            scale_like_the_metric(run, waves)
     finally:
         con.close()
     if not waves:
