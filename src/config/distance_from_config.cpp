@@ -6,6 +6,7 @@ namespace combabc {
 
 std::vector<MeasuredData> LoadExperimentData(const CalibrationConfig& config) {
   std::vector<MeasuredData> data;
+  data.reserve(config.experiments.size());
   for (const ExperimentConfig& x : config.experiments) {
     data.push_back(LoadMeasuredData(x.data, config.directory));
   }
@@ -14,6 +15,7 @@ std::vector<MeasuredData> LoadExperimentData(const CalibrationConfig& config) {
 
 std::vector<MeasuredProfile> ProfilesOf(const std::vector<MeasuredData>& data) {
   std::vector<MeasuredProfile> profiles;
+  profiles.reserve(data.size());
   for (const MeasuredData& d : data) profiles.push_back({d.positions, d.displacements});
   return profiles;
 }
