@@ -19,7 +19,6 @@ using config_internal::OneOf;
 using config_internal::Source;
 using config_internal::Sources;
 using config_internal::TableReader;
-using config_internal::WindowKey;
 
 // --------------------------------------------------------------------------------------- output
 void ParseOutput(TableReader& root, CalibrationConfig* c) {

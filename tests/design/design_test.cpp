@@ -54,8 +54,10 @@ TinyDesign MakeSetup() {
     design::CandidateProfiles p;
     p.points = static_cast<int>(o.load_cases[c].output_positions.size());
     for (int i = 0; i < 64; ++i) {
-      const auto row = all.begin() + static_cast<std::ptrdiff_t>(i * model.num_outputs() +
-                                                                  o.OutputOffset(c));
+      const std::size_t begin =
+          static_cast<std::size_t>(i) * static_cast<std::size_t>(model.num_outputs()) +
+          o.OutputOffset(c);
+      const auto row = all.begin() + static_cast<std::ptrdiff_t>(begin);
       p.values.insert(p.values.end(), row, row + p.points);
     }
     s.candidates.push_back(std::move(p));
