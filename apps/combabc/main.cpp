@@ -153,11 +153,12 @@ void PrintDesign(const combabc::services::DesignOutcome& o) {
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return r.scores[a].information_gain > r.scores[b].information_gain;
   });
-  std::printf("rank  load x cm  load y  scan cm     line   gain bits (se)   identified  wrong\n");
+  std::printf(
+      "rank  load x cm  load y  scan cm     line   gain bits (se)   identified  wrong    ess\n");
   for (std::size_t rank = 0; rank < std::min<std::size_t>(10, order.size()); ++rank) {
     const auto& c = o.candidates[order[rank]];
     const auto& s = r.scores[order[rank]];
-    std::printf("%4zu  %9.1f  %6.2f  %5.1f-%-5.1f %5.2f  %6.2f (%.2f)    %10.1f  %5.1f\n",
+    std::printf("%4zu  %9.1f  %6.2f  %5.1f-%-5.1f %5.2f  %6.2f (%.2f)    %10.1f  %5.1f  %5.0f\n",
                 rank + 1,
                 c.load_x * 100,
                 c.load_y_fraction,
@@ -167,7 +168,8 @@ void PrintDesign(const combabc::services::DesignOutcome& o) {
                 s.information_gain,
                 s.information_gain_se,
                 s.identified,
-                s.wrong);
+                s.wrong,
+                s.effective_particles);
   }
   std::printf("greedy selection:\n");
   for (std::size_t step = 0; step < r.selected.size(); ++step) {
@@ -184,6 +186,14 @@ void PrintDesign(const combabc::services::DesignOutcome& o) {
                 s.information_gain,
                 s.identified,
                 s.wrong);
+  }
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& s : r.cumulative) least = std::min(least, s.effective_particles);
+  if (!o.exhaustive && least < 20) {
+    std::printf("note: the reweighted population falls to %.0f effective particles: the gains and "
+                "identified counts are upper bounds (a larger population: more accepted "
+                "particles, or [design] particles)\n",
+                least);
   }
   std::printf("design: %s (%.2f s; next experiment: %s/next_experiment.toml)\n",
               o.directory.c_str(),

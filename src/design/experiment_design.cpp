@@ -25,6 +25,7 @@ double BinaryEntropy(double p) {
 // What one truth's posterior says.
 struct TruthOutcome {
   double entropy = 0.0;
+  double effective = 0.0;
   int identified = 0;
   int wrong = 0;
   std::vector<double> decided;  // |2 p_k - 1|
@@ -82,15 +83,17 @@ class Scorer {
     double top = -std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < n; ++i) top = std::max(top, log_weight_[i] + ll[i]);
     std::vector<double> p(d, 0.0);
-    double total = 0.0;
+    double total = 0.0, squares = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const double w = std::exp(log_weight_[i] + ll[i] - top);
       if (w == 0.0) continue;
       total += w;
+      squares += w * w;
       const std::uint8_t* b = pop_.bits.data() + i * d;
       for (std::size_t k = 0; k < d; ++k) p[k] += b[k] ? w : 0.0;
     }
     TruthOutcome o;
+    o.effective = total * total / squares;
     o.decided.resize(d);
     const std::uint8_t* truth = pop_.bits.data() + truth_[static_cast<std::size_t>(j)] * d;
     for (std::size_t k = 0; k < d; ++k) {
@@ -135,6 +138,7 @@ class Scorer {
       sum2 += gain * gain;
       s.identified += o.identified;
       s.wrong += o.wrong;
+      s.effective_particles += o.effective;
       for (std::size_t k = 0; k < o.decided.size(); ++k) s.identifiability[k] += o.decided[k];
     }
     const auto m = static_cast<double>(truths);
@@ -143,6 +147,7 @@ class Scorer {
     s.information_gain_se = truths > 1 ? std::sqrt(variance / (m - 1.0)) : 0.0;
     s.identified /= m;
     s.wrong /= m;
+    s.effective_particles /= m;
     for (double& v : s.identifiability) v /= m;
     return s;
   }

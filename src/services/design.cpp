@@ -211,7 +211,8 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
   });
   std::ostream& table = dir.Add("design.csv");
   table << "rank,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
-           "information_gain_bits,information_gain_se,expected_identified,expected_wrong\n";
+           "information_gain_bits,information_gain_se,expected_identified,expected_wrong,"
+           "effective_particles\n";
   for (std::size_t rank = 0; rank < order.size(); ++rank) {
     const std::size_t k = order[rank];
     const DesignCandidate& d = o.candidates[k];
@@ -219,11 +220,13 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     table << rank + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
           << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
           << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
-          << Num(s.identified) << ',' << Num(s.wrong) << '\n';
+          << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles)
+          << '\n';
   }
   std::ostream& selection = dir.Add("selection.csv");
   selection << "step,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
-               "information_gain_bits,information_gain_se,expected_identified,expected_wrong\n";
+               "information_gain_bits,information_gain_se,expected_identified,expected_wrong,"
+               "effective_particles\n";
   for (std::size_t step = 0; step < r.selected.size(); ++step) {
     const auto k = static_cast<std::size_t>(r.selected[step]);
     const DesignCandidate& d = o.candidates[k];
@@ -232,7 +235,7 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
               << Num(d.load_y_fraction) << ',' << Num(d.scan_from) << ',' << Num(d.scan_to)
               << ',' << Num(d.scan_y_fraction) << ',' << Num(s.information_gain) << ','
               << Num(s.information_gain_se) << ',' << Num(s.identified) << ','
-              << Num(s.wrong) << '\n';
+              << Num(s.wrong) << ',' << Num(s.effective_particles) << '\n';
   }
   std::ostream& ident = dir.Add("identifiability.csv");
   ident << "candidate,label";
@@ -290,6 +293,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                                             : FromPosterior(request.posterior_path, c,
                                                             &o.population);
   o.particles = population.size();
+  o.exhaustive = request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kExactBits;
   o.candidates = Candidates(*c.design);
   const std::vector<design::CandidateProfiles> profiles =
       Simulate(c, o.candidates, population, threads);

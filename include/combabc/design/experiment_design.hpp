@@ -55,6 +55,10 @@ struct Score {
   double information_gain_se = 0.0;
   double identified = 0.0;  // expected count
   double wrong = 0.0;       // expected count
+  // Mean effective sample size (sum w)^2 / sum w^2 of the reweighted population: near 1 the
+  // posterior has collapsed onto a few particles, and the gain and the identified count are
+  // upper bounds (the population is too small for what the data would tell; docs/algorithm.md).
+  double effective_particles = 0.0;
   std::vector<double> identifiability;  // per bit
 };
 

@@ -32,6 +32,7 @@ struct DesignOutcome {
   std::string directory;
   std::string population;  // what was known: "the prior (every one of 64 configurations)", ...
   std::size_t particles = 0;
+  bool exhaustive = false;  // the population is every configuration (no sampling error in it)
   std::vector<DesignCandidate> candidates;
   design::DesignResult result;
   std::string next_experiment;  // the [[experiment]] block for the best candidate
