@@ -299,3 +299,38 @@ TEST_F(CommandSimulatorTest, ThreadsCallItConcurrently) {
 
 }  // namespace
 }  // namespace combabc::testing
+
+namespace combabc::testing {
+namespace {
+
+// A run with [[experiment]] tables tells the program which experiment it simulates: in argv
+// placeholders and in the params file (docs/simulators.md, "Experiments").
+TEST(CommandSimulatorExperiment, TheExperimentReachesArgvAndTheParamsFile) {
+  RunFolder run("command-experiment");
+  // Echoes the load position from argv, the experiment's name from params.json, and a constant.
+  ExternalSimulatorOptions o = ShOptions(
+      run,
+      R"sh(name=$(sed -n 's/.*"experiment": {"name": "\([^"]*\)".*/\1/p' "$1")
+[ "$name" = "70cm" ] || { echo "no experiment in params: $(cat "$1")" >&2; exit 2; }
+echo "$2,$3,7")sh",
+      {"{params}", "{load_x}", "{frequency}"});
+  o.experiment = SimulatorExperiment{"70cm", 0.7, 0.25, 0.042, 5.0};
+  CommandSimulator s(o);
+  std::vector<double> out(3);
+  RandomStream rng(1, 0, 0);
+  s.Simulate(Bits("010").view(), rng, out);
+  EXPECT_EQ(out, (std::vector<double>{0.7, 5.0, 7.0}));
+}
+
+TEST(CommandSimulatorExperiment, WithoutAnExperimentThePlaceholdersStayAsWritten) {
+  const std::vector<std::string> argv = {"prog", "{load_x}", "{params}"};
+  EXPECT_EQ(ExpandArgv(argv, "p.json", "", "", ""),
+            (std::vector<std::string>{"prog", "{load_x}", "p.json"}));
+  const SimulatorExperiment e{"a", 0.25, 0.5, 0.5, 12.5};
+  EXPECT_EQ(ExpandArgv({"--x={load_x}", "{experiment}", "{load_amplitude}{frequency}"}, "", "",
+                       "", "", &e),
+            (std::vector<std::string>{"--x=0.25", "a", "0.512.5"}));
+}
+
+}  // namespace
+}  // namespace combabc::testing

@@ -280,3 +280,24 @@ done)";
 
 }  // namespace
 }  // namespace combabc::testing
+
+namespace combabc::testing {
+namespace {
+
+// A worker serves one experiment: it gets it on its command line when it starts.
+TEST(WorkerSimulatorExperiment, TheWorkerIsToldItsExperimentOnItsCommandLine) {
+  RunFolder run("worker-experiment");
+  ExternalSimulatorOptions o = ShOptions(run,
+                                         R"sh(echo "combabc-worker 2 3 sh-experiment"
+while read id bits; do echo "$id ok $1 $2 $3"; done)sh",
+                                         {"{load_x}", "{load_y_fraction}", "{frequency}"});
+  o.experiment = SimulatorExperiment{"offcentre", 0.7, 0.25, 0.042, 5.0};
+  WorkerSimulator s(o);
+  std::vector<double> out(3);
+  RandomStream rng(1, 0, 0);
+  s.Simulate(Bits("101").view(), rng, out);
+  EXPECT_EQ(out, (std::vector<double>{0.7, 0.25, 5.0}));
+}
+
+}  // namespace
+}  // namespace combabc::testing
