@@ -352,30 +352,38 @@ class ExperimentsResume : public ::testing::Test {
  protected:
   ExperimentsResume() : dir_("e2e-experiments-resume") {}
 
-  // Runs the two-experiment config uninterrupted into whole/, recording `copy` alongside.
+  static std::string Config(const std::string& limits = "") {
+    return ExperimentsConfig(
+        {kRight, kLeft},
+        "seed = 7\nwaves = 3\naccepted_per_wave = 24\nbatch_size = 4\nthreads = 2\n"
+        "estimator = \"importance\"\n" + limits);
+  }
+
+  // Runs the two-experiment config uninterrupted into whole/, recording `copy` alongside (if
+  // given).
   void RunWhole(KilledCopy* copy) {
     WriteTentData(dir_.path(), kRight);
     WriteTentData(dir_.path(), kLeft);
-    std::ofstream(dir_ / "run.toml") << ExperimentsConfig(
-        {kRight, kLeft},
-        "seed = 7\nwaves = 3\naccepted_per_wave = 24\nbatch_size = 4\nthreads = 2\n"
-        "estimator = \"importance\"\n");
+    std::ofstream(dir_ / "run.toml") << Config();
     services::RunRequest request;
     request.config_path = dir_ / "run.toml";
     request.output_directory = dir_ / "whole";
     request.report = false;
-    request.on_history_path = [&](const std::string& path) { copy->SetRunHistory(path); };
+    request.on_history_path = [&](const std::string& path) {
+      if (copy != nullptr) copy->SetRunHistory(path);
+    };
     const services::RunOutcome outcome = services::RunCalibration(request, copy);
     whole_ = outcome.history_path;
     ASSERT_EQ(outcome.history.waves.size(), 3u);
   }
 
-  // Resumes `killed` through the CLI (one thread: the run had two) and compares it with the
-  // uninterrupted run.
-  void ExpectResumesToTheWholeRun(const std::string& killed) {
-    const RunMetadata before = HistoryStore::Open(killed, true).LoadMetadata();
-    EXPECT_EQ(before.status, RunStatus::kRunning);
-    const auto r = RunCli({"resume", killed, "--no-report", "-q", "-j", "1"}, dir_.path());
+  // Resumes `killed` through the CLI (one thread: the run had two; `options` added) and compares
+  // it with the uninterrupted run.
+  void ExpectResumesToTheWholeRun(const std::string& killed,
+                                  const std::vector<std::string>& options = {}) {
+    std::vector<std::string> args = {"resume", killed, "--no-report", "-q", "-j", "1"};
+    args.insert(args.end(), options.begin(), options.end());
+    const auto r = RunCli(args, dir_.path());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const RunHistory whole = HistoryStore::Open(whole_, true).LoadHistory();
     const RunHistory resumed = HistoryStore::Open(killed, true).LoadHistory();
@@ -425,6 +433,7 @@ TEST_F(ExperimentsResume, KilledMidWaveResumesToTheUninterruptedHistory) {
   ASSERT_EQ(m.distance_components.size(), 2u);
   EXPECT_EQ(m.distance_components[0].name, "right/least_squares[63-87cm]");
   EXPECT_EQ(m.distance_components[1].name, "left/least_squares[3-27cm]");
+  EXPECT_EQ(m.status, RunStatus::kRunning);
   ExpectResumesToTheWholeRun(dir_ / "killed.sqlite");
 }
 
@@ -436,6 +445,23 @@ TEST_F(ExperimentsResume, KilledBeforeTheFirstBatchResumesToTheUninterruptedHist
   EXPECT_TRUE(point.completed.empty());
   EXPECT_FALSE(point.has_partial);
   ExpectResumesToTheWholeRun(dir_ / "started.sqlite");
+}
+
+// Stopped by its budget inside the last wave (through the CLI), then resumed with a larger one.
+TEST_F(ExperimentsResume, ABudgetStopResumesWithALargerBudgetToTheUninterruptedHistory) {
+  RunWhole(nullptr);
+  const auto total = HistoryStore::Open(whole_, true).LoadHistory().summary.simulations;
+  std::ofstream(dir_ / "stopped.toml")
+      << Config("max_simulations = " + std::to_string(total - 5) + "\n");
+  const auto r =
+      RunCli({"run", dir_ / "stopped.toml", "--no-report", "-q", "-o", dir_ / "stopped"},
+             dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string stopped = dir_ / "stopped/history.sqlite";
+  const RunMetadata m = HistoryStore::Open(stopped, true).LoadMetadata();
+  ASSERT_EQ(m.termination, "budget_exhausted") << m.summary_message;
+  ASSERT_EQ(HistoryStore::Open(stopped, true).LoadResumePoint().partial_wave, 2);
+  ExpectResumesToTheWholeRun(stopped, {"--max-simulations", "100000"});
 }
 
 }  // namespace
