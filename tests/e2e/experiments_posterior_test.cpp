@@ -61,7 +61,8 @@ void WriteSimulatedData(const fs::path& dir, const std::vector<TinyExperiment>& 
     int k = 0;
     WriteExperimentData(dir, experiments[e], [&](double position) {
       for (std::size_t i = 0; i < at.size(); ++i) {
-        if (std::abs(at[i] - position) < 1e-9) return w[begin + i] * (1 + 0.05 * std::sin(1.7 * k++));
+        if (std::abs(at[i] - position) < 1e-9)
+          return w[begin + i] * (1 + 0.05 * std::sin(1.7 * k++));
       }
       ADD_FAILURE() << "no output at " << position;
       return 0.0;
@@ -129,8 +130,8 @@ TEST(ExperimentsPosterior, IsTheProductOfTheExperimentsAcceptanceAndSmcSamplesIt
   for (int k = 0; k < 6; ++k) EXPECT_NEAR(joint.marginals_importance[k], exact[k], 1e-12) << k;
 
   // Sampled.
-  const auto r = RunCli(
-      {"run", dir / "joint.toml", "--no-report", "-q", "-o", dir / "smc"}, dir.path());
+  const auto r =
+      RunCli({"run", dir / "joint.toml", "--no-report", "-q", "-o", dir / "smc"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string history = dir / "smc/history.sqlite";
   EXPECT_EQ(HistoryStore::Open(history, true).LoadMetadata().termination, "target_reached");

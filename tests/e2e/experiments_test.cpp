@@ -1,8 +1,8 @@
 // Several [[experiment]] tables end to end on the tiny sensor (3 + 3 clamps, a 2 x 2 mesh per
 // section): the joint simulator and distance are each experiment's own, one after the other,
 // exactly; the config's refusals through the CLI (exit 78, one "file:line: key: ..." line); and a
-// multi-experiment run killed mid-wave or before its first batch resumes to the uninterrupted
-// run's history.
+// run of three experiments (two plate models) killed mid-wave or before its first batch, or
+// stopped by its budget, resumes to the uninterrupted run's history.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -32,6 +32,11 @@ constexpr int kConfigError = 78;
 // Loads at either end: each experiment sees the clamps of its own end (and their opposites).
 const TinyExperiment kRight = Experiment("right", 0.75, 5.0, 0.63, 0.87);
 const TinyExperiment kLeft = Experiment("left", 0.15, 5.0, 0.03, 0.27);
+// Another frequency (its own plate model), and a scan line of its own (2 cm, off the centre) with
+// fewer data points.
+const TinyExperiment kLeft7Hz = Experiment("left.7Hz", 0.15, 7.0, 0.03, 0.27);
+const TinyExperiment kMid =
+    Experiment("mid_2cm", 0.45, 5.0, 0.33, 0.54, "spacing = 0.02\ny_fraction = 0.25\n");
 
 // Configuration i of `dimension` bits: bit k is bit k of i.
 std::vector<std::uint8_t> Bits(int i, int dimension) {
@@ -128,20 +133,17 @@ TEST_P(JointEqualsSingles, TheJointSimulatorAndDistanceAreTheSingleOnesOneAfterT
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Experiments,
-    JointEqualsSingles,
-    ::testing::Values(
-        // One plate model, its two load cases.
-        Setup{"one_model", {kRight, kLeft}},
-        // Two models (5 and 7 Hz), the 5 Hz one holding experiments 0 and 2 (its outputs
-        // scattered around the 7 Hz one's), one with its own scan line (2 cm, off the centre).
-        Setup{"two_models",
-              {kRight,
-               Experiment("left.7Hz", 0.15, 7.0, 0.03, 0.27),
-               Experiment(
-                   "mid_2cm", 0.45, 5.0, 0.33, 0.57, "spacing = 0.02\ny_fraction = 0.25\n")}}),
-    [](const ::testing::TestParamInfo<Setup>& p) { return std::string(p.param.name); });
+INSTANTIATE_TEST_SUITE_P(Experiments,
+                         JointEqualsSingles,
+                         ::testing::Values(
+                             // One plate model, its two load cases.
+                             Setup{"one_model", {kRight, kLeft}},
+                             // Two models (5 and 7 Hz), the 5 Hz one holding experiments 0 and 2
+                             // (its outputs scattered around the 7 Hz one's).
+                             Setup{"two_models", {kRight, kLeft7Hz, kMid}}),
+                         [](const ::testing::TestParamInfo<Setup>& p) {
+                           return std::string(p.param.name);
+                         });
 
 // `combabc simulate` on the joint config: each experiment's rows (named in the first column,
 // normalised by its own peak) are the single-experiment config's rows.
@@ -157,7 +159,11 @@ TEST(Experiments, SimulateWritesEachExperimentAsItsOwnConfigDoes) {
   std::string expected = joint.substr(0, joint.find('\n') + 1);
   for (const TinyExperiment& x : experiments) {
     std::ofstream(dir / (x.name + ".toml")) << SingleExperimentConfig(x, "seed = 1\n");
-    r = RunCli({"simulate", dir / (x.name + ".toml"), "--clamps", "101101", "-o",
+    r = RunCli({"simulate",
+                dir / (x.name + ".toml"),
+                "--clamps",
+                "101101",
+                "-o",
                 dir / (x.name + ".out.csv")},
                dir.path());
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -198,9 +204,9 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
   ScratchDir dir("e2e-experiments-refusals");
   WriteTentData(dir.path(), kRight);
   WriteTentData(dir.path(), kLeft);
-  const std::string base =
-      ExperimentsConfig({kRight, kLeft}, "seed = 1\nwaves = 2\naccepted_per_wave = 5\n",
-                        "[output]\ndirectory = \"out\"\n");
+  const std::string base = ExperimentsConfig({kRight, kLeft},
+                                             "seed = 1\nwaves = 2\naccepted_per_wave = 5\n",
+                                             "[output]\ndirectory = \"out\"\n");
   // The base config runs: every refusal below is the one change's.
   {
     std::ofstream(dir / "base.toml") << base;
@@ -240,8 +246,9 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
     Case* c = add("top_data", "[sampler]", "[data]\ncsv = \"right.csv\"\n\n[sampler]");
     c->line = LineOf(c->text, "[data]");
     c->key = "data";
-    c->says = "[data] is the shorthand for one experiment; with [[experiment]] tables give each "
-              "its own [experiment.data]";
+    c->says =
+        "[data] is the shorthand for one experiment; with [[experiment]] tables give each "
+        "its own [experiment.data]";
   }
   {
     Case* c = add("top_metric", "[sampler]", "[metric]\nquantile = 0.3\n\n[sampler]");
@@ -255,7 +262,8 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
     c->key = "experiment[1].name";
     c->says = "missing required key";
   }
-  for (const std::string& bad : std::vector<std::string>{"le/ft", "le ft", "", std::string(65, 'x')}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"le/ft", "le ft", "", std::string(65, 'x')}) {
     Case* c = add("bad_name", "name = \"left\"", "name = \"" + bad + "\"");
     c->line = LineOf(c->text, "name = \"" + bad + "\"");
     c->key = "experiment[1].name";
@@ -276,7 +284,9 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
     c->says = "must be the same in every experiment";
   }
   {
-    Case* c = add("no_data", "[experiment.data]\ncsv = \"left.csv\"", "[experiment.datum]\ncsv = \"left.csv\"");
+    Case* c = add("no_data",
+                  "[experiment.data]\ncsv = \"left.csv\"",
+                  "[experiment.datum]\ncsv = \"left.csv\"");
     c->line = LineOf(c->text, "[[experiment]]", 1);
     c->key = "experiment[1].data";
     c->says = "missing required table [experiment[1].data]";
@@ -290,8 +300,8 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
     EXPECT_EQ(r.exit_code, kConfigError) << r.err;
     EXPECT_EQ(CountLines(r.err), 1) << r.err;
     const std::string where = path + ":" + std::to_string(c.line) + ": " + c.key + ": ";
-    EXPECT_NE(r.err.find(where + c.says), std::string::npos) << "want " << where << c.says
-                                                              << "\ngot  " << r.err;
+    EXPECT_NE(r.err.find(where + c.says), std::string::npos)
+        << "want " << where << c.says << "\ngot  " << r.err;
     EXPECT_FALSE(fs::exists(dir.path() / "out")) << r.err;
   }
   // 64 characters, every kind allowed, is a name.
@@ -354,16 +364,16 @@ class ExperimentsResume : public ::testing::Test {
 
   static std::string Config(const std::string& limits = "") {
     return ExperimentsConfig(
-        {kRight, kLeft},
+        {kRight, kLeft7Hz, kMid},
         "seed = 7\nwaves = 3\naccepted_per_wave = 24\nbatch_size = 4\nthreads = 2\n"
-        "estimator = \"importance\"\n" + limits);
+        "estimator = \"importance\"\n" +
+            limits);
   }
 
-  // Runs the two-experiment config uninterrupted into whole/, recording `copy` alongside (if
-  // given).
+  // Runs the three-experiment config (two plate models) uninterrupted into whole/, recording `copy`
+  // alongside (if given).
   void RunWhole(KilledCopy* copy) {
-    WriteTentData(dir_.path(), kRight);
-    WriteTentData(dir_.path(), kLeft);
+    for (const TinyExperiment& x : {kRight, kLeft7Hz, kMid}) WriteTentData(dir_.path(), x);
     std::ofstream(dir_ / "run.toml") << Config();
     services::RunRequest request;
     request.config_path = dir_ / "run.toml";
@@ -394,7 +404,7 @@ class ExperimentsResume : public ::testing::Test {
     ASSERT_EQ(resumed.waves.size(), whole.waves.size());
     for (std::size_t w = 0; w < whole.waves.size(); ++w) {
       EXPECT_EQ(resumed.waves[w].thresholds, whole.waves[w].thresholds) << "wave " << w;
-      EXPECT_EQ(resumed.waves[w].thresholds.size(), 2u);
+      EXPECT_EQ(resumed.waves[w].thresholds.size(), 3u);
       ASSERT_EQ(resumed.waves[w].particles.size(), whole.waves[w].particles.size());
       for (std::size_t i = 0; i < whole.waves[w].particles.size(); ++i) {
         EXPECT_EQ(resumed.waves[w].particles[i].theta.bits, whole.waves[w].particles[i].theta.bits);
@@ -405,9 +415,10 @@ class ExperimentsResume : public ::testing::Test {
     const RunMetadata after = HistoryStore::Open(killed, true).LoadMetadata();
     EXPECT_EQ(after.status, RunStatus::kFinished);
     EXPECT_EQ(after.resume_count, 1);
-    ASSERT_EQ(after.experiments.size(), 2u);
+    ASSERT_EQ(after.experiments.size(), 3u);
     EXPECT_EQ(after.experiments[0].name, "right");
-    EXPECT_EQ(after.experiments[1].name, "left");
+    EXPECT_EQ(after.experiments[1].name, "left.7Hz");
+    EXPECT_EQ(after.experiments[2].name, "mid_2cm");
     const auto verified = RunCli({"verify", killed}, dir_.path());
     EXPECT_EQ(verified.exit_code, 0) << verified.out << verified.err;
   }
@@ -429,10 +440,15 @@ TEST_F(ExperimentsResume, KilledMidWaveResumesToTheUninterruptedHistory) {
   EXPECT_EQ(static_cast<std::int64_t>(point.partial_accepted.size()), at.accepted);
   // The stored experiments are what resume rebuilds the joint distance from.
   const RunMetadata m = HistoryStore::Open(dir_ / "killed.sqlite", true).LoadMetadata();
-  ASSERT_EQ(m.experiments.size(), 2u);
-  ASSERT_EQ(m.distance_components.size(), 2u);
+  ASSERT_EQ(m.experiments.size(), 3u);
+  EXPECT_EQ(m.experiments[1].outputs, 91);
+  EXPECT_EQ(m.experiments[2].outputs, 46);
+  EXPECT_EQ(m.experiments[1].measured, 9);
+  EXPECT_EQ(m.experiments[2].measured, 8);
+  ASSERT_EQ(m.distance_components.size(), 3u);
   EXPECT_EQ(m.distance_components[0].name, "right/least_squares[63-87cm]");
-  EXPECT_EQ(m.distance_components[1].name, "left/least_squares[3-27cm]");
+  EXPECT_EQ(m.distance_components[1].name, "left.7Hz/least_squares[3-27cm]");
+  EXPECT_EQ(m.distance_components[2].name, "mid_2cm/least_squares[33-54cm]");
   EXPECT_EQ(m.status, RunStatus::kRunning);
   ExpectResumesToTheWholeRun(dir_ / "killed.sqlite");
 }
@@ -453,9 +469,8 @@ TEST_F(ExperimentsResume, ABudgetStopResumesWithALargerBudgetToTheUninterruptedH
   const auto total = HistoryStore::Open(whole_, true).LoadHistory().summary.simulations;
   std::ofstream(dir_ / "stopped.toml")
       << Config("max_simulations = " + std::to_string(total - 5) + "\n");
-  const auto r =
-      RunCli({"run", dir_ / "stopped.toml", "--no-report", "-q", "-o", dir_ / "stopped"},
-             dir_.path());
+  const auto r = RunCli({"run", dir_ / "stopped.toml", "--no-report", "-q", "-o", dir_ / "stopped"},
+                        dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string stopped = dir_ / "stopped/history.sqlite";
   const RunMetadata m = HistoryStore::Open(stopped, true).LoadMetadata();

@@ -17,11 +17,11 @@ namespace combabc::testing {
 // schedule, the body of `threshold = ...`, empty for the [metric] default).
 struct TinyExperiment {
   std::string name;
-  double load_x = 0.45;          // m
-  double frequency = 5.0;        // Hz
+  double load_x = 0.45;           // m
+  double frequency = 5.0;         // Hz
   double from = 0.31, to = 0.58;  // the metric window and the data's extent, m (whole cm)
-  std::string output;            // the body of [experiment.output] / [model.output], if any
-  std::string threshold;         // e.g. "[1.0, 0.5]"; empty: the [metric] default schedule
+  std::string output;             // the body of [experiment.output] / [model.output], if any
+  std::string threshold;          // e.g. "[1.0, 0.5]"; empty: the [metric] default schedule
   std::string csv() const { return name + ".csv"; }
 };
 
@@ -79,8 +79,9 @@ inline std::string ExperimentsConfig(const std::vector<TinyExperiment>& experime
                                      const std::string& tables = "") {
   std::string text = TinyModel();
   for (const TinyExperiment& x : experiments) {
-    text += "\n[[experiment]]\nname = \"" + x.name + "\"\n[experiment.load]\nx = " +
-            Exact(x.load_x) + "\nfrequency = " + Exact(x.frequency) + "\n";
+    text += "\n[[experiment]]\nname = \"" + x.name +
+            "\"\n[experiment.load]\nx = " + Exact(x.load_x) +
+            "\nfrequency = " + Exact(x.frequency) + "\n";
     if (!x.output.empty()) text += "[experiment.output]\n" + x.output;
     text += "[experiment.data]\n" + DataBody(x) + "[experiment.metric]\n" +
             "[[experiment.metric.component]]\n" + ComponentBody(x);
