@@ -11,10 +11,11 @@ the data never come from the calibrating model itself. Every experiment scans th
   1. Experiment 1: the shaker at 45 cm on the centreline, scan along the centreline.
   2. Its joint calibration (noise-aware acceptance, until every temperature is 1): the 45 cm
      posterior.
-  3. `combabc design --posterior` on it over the [design] grid below chooses 3 more experiments
-     (greedy selection).
-  4. Joint calibrations with the first 1, 2, 3, 4 designed experiments, and with centreline
-     loads at 15, 75 and 30 cm (scanned along the centreline) for comparison.
+  3. Designed, greedy: `combabc design --posterior` on it over the [design] grid below chooses 3
+     more experiments at once (greedy selection); joint calibrations with the first 1, 2, 3.
+  4. Designed, sequential: after each joint calibration, `combabc design --posterior` on its
+     posterior chooses the next experiment (what a lab would do: measure, calibrate, design).
+  5. For comparison, centreline loads at 15, 75 and 30 cm, scanned along the centreline.
 
 A clamp is identified when |P(fixed) - 0.5| > 0.4 on the truth's side, confidently wrong when on
 the other side. Writes results.md and results.csv here; work files in work/ (safe to delete).
@@ -125,14 +126,19 @@ def joint_config(model, experiments, label, design=False):
 
 def calibrate(model, experiments, label, work):
     path = work / f"{label}.toml"
-    path.write_text(joint_config(model, experiments, label))
-    start = time.monotonic()
-    subprocess.run([cli(), "run", str(path), "-q", "--overwrite", "--no-report"], check=True,
-                   stdout=subprocess.DEVNULL)
-    seconds = time.monotonic() - start
+    text = joint_config(model, experiments, label)
     history = work / f"results-{label}" / "history.sqlite"
-    subprocess.run([cli(), "export", str(history), "--no-netcdf", "--overwrite"], check=True,
-                   stdout=subprocess.DEVNULL)
+    seconds_file = work / f"results-{label}" / "seconds.txt"
+    # A finished run of the same config is reused (the study can be rerun to extend it).
+    if not (path.exists() and path.read_text() == text and seconds_file.exists()):
+        path.write_text(text)
+        start = time.monotonic()
+        subprocess.run([cli(), "run", str(path), "-q", "--overwrite", "--no-report"], check=True,
+                       stdout=subprocess.DEVNULL)
+        seconds_file.write_text(f"{time.monotonic() - start}\n")
+        subprocess.run([cli(), "export", str(history), "--no-netcdf", "--overwrite"], check=True,
+                       stdout=subprocess.DEVNULL)
+    seconds = float(seconds_file.read_text())
     with open(work / f"results-{label}" / "export" / "marginals.csv") as f:
         rows = list(csv.DictReader(f))
     last = max(int(r["wave"]) for r in rows)
@@ -168,7 +174,7 @@ def main():
                    float(r["scan_y_fraction"])) for r in csv.DictReader(f)]
     generate(chosen, truth_model, work)
 
-    designed, centreline = [results[0]], [results[0]]
+    designed, sequential, centreline = [results[0]], [results[0]], [results[0]]
     for k in range(2, 5):
         designed.append(calibrate(model, [first] + chosen[:k - 1], f"designed-k{k}", work))
         centreline.append(calibrate(model, [first] + CENTRELINE[:k - 1], f"centreline-k{k}", work))
@@ -176,22 +182,49 @@ def main():
               f"({designed[-1]['wrong']} wrong), centreline {centreline[-1]['identified']} "
               f"({centreline[-1]['wrong']} wrong)")
 
+    # Sequential: design again from each joint posterior.
+    current = [first]
+    sequence = []
+    for k in range(2, 5):
+        label = f"sequential-k{k - 1}" if k > 2 else "k1"
+        (work / f"design-{k}.toml").write_text(joint_config(model, current, label, design=True))
+        previous = sequential[-1]["history"]
+        subprocess.run([cli(), "design", str(work / f"design-{k}.toml"), "--posterior",
+                        str(previous), "-o", str(work / f"design-{k}"), "--overwrite",
+                        "--no-figure"], check=True, stdout=subprocess.DEVNULL)
+        with open(work / f"design-{k}" / "selection.csv") as f:
+            r = next(csv.DictReader(f))
+        pick = (float(r["load_x_m"]) * 100, float(r["load_y_fraction"]),
+                float(r["scan_y_fraction"]))
+        sequence.append(pick)
+        generate([pick], truth_model, work)
+        current = current + [pick] if pick not in current else current
+        sequential.append(calibrate(model, current, f"sequential-k{k}", work))
+        print(f"{k} experiments, sequential: {sequential[-1]['identified']} identified "
+              f"({sequential[-1]['wrong']} wrong)")
+
     with open(HERE / "results.csv", "w") as f:
-        f.write("experiments,designed_identified,designed_wrong,centreline_identified,"
-                "centreline_wrong\n")
+        f.write("experiments,greedy_identified,greedy_wrong,sequential_identified,"
+                "sequential_wrong,centreline_identified,centreline_wrong\n")
         for k in range(4):
             f.write(f"{k + 1},{designed[k]['identified']},{designed[k]['wrong']},"
+                    f"{sequential[k]['identified']},{sequential[k]['wrong']},"
                     f"{centreline[k]['identified']},{centreline[k]['wrong']}\n")
-    lines = ["| experiments | designed: identified | wrong | centreline: identified | wrong |",
-             "|---|---|---|---|---|"]
+    lines = ["| experiments | designed, greedy: identified | wrong | designed, sequential: "
+             "identified | wrong | centreline: identified | wrong |",
+             "|---|---|---|---|---|---|---|"]
     for k in range(4):
         lines.append(f"| {k + 1} | {designed[k]['identified']} | {designed[k]['wrong']} | "
+                     f"{sequential[k]['identified']} | {sequential[k]['wrong']} | "
                      f"{centreline[k]['identified']} | {centreline[k]['wrong']} |")
-    picks = ", ".join(f"{x:g} cm (load y {y:g}, scan y {s:g})" for x, y, s in chosen)
-    text = ("Designed experiments (in order): " + picks + ".\n\n" + "\n".join(lines) +
-            f"\n\n`combabc design` took {design_seconds:.1f} s; the joint runs "
+    def listing(picks):
+        return ", ".join(f"{x:g} cm (load y {y:g}, scan y {s:g})" for x, y, s in picks)
+    text = ("Greedy picks from the 45 cm posterior (in order): " + listing(chosen) +
+            ".\nSequential picks: " + listing(sequence) + ".\n\n" + "\n".join(lines) +
+            f"\n\n`combabc design` (32 candidates, from the 45 cm posterior) took "
+            f"{design_seconds:.1f} s; the joint runs "
             + ", ".join(f"{r['label']} {r['seconds']:.0f} s ({r['waves']} waves, {r['stop']})"
-                        for r in designed + centreline[1:]) + ".\n")
+                        for r in designed + sequential[1:] + centreline[1:]) + ".\n")
     (HERE / "results.md").write_text(text)
     print(text)
 

@@ -1,6 +1,7 @@
 // [[experiment]] tables, or the single experiment of the shorthand keys ([model.load],
 // [model.output], [data], [metric]): each experiment's load and scan, measured data and metric.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <string>
@@ -45,10 +46,25 @@ LengthUnit UnitKey(TableReader& t, std::string_view key, LengthUnit fallback) {
 
 // Experiment names go into component names, export file names and CSV columns.
 bool GoodName(const std::string& name) {
-  if (name.empty() || name.size() > 64) return false;
+  if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
   return std::all_of(name.begin(), name.end(), [](char ch) {
     return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.';
   });
+}
+
+// The name as an export column sees it (export.cpp's Identifier: lower case, each run of other
+// characters one '_'): two experiments must differ there too, or their columns would collide.
+std::string ColumnKey(const std::string& name) {
+  std::string out;
+  for (char ch : name) {
+    if (std::isalnum(static_cast<unsigned char>(ch)) != 0) {
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    } else if (!out.empty() && out.back() != '_') {
+      out += '_';
+    }
+  }
+  while (!out.empty() && out.back() == '_') out.pop_back();
+  return out;
 }
 
 // The threshold schedules of every threshold or likelihood component, experiment by experiment.
@@ -214,11 +230,12 @@ void ParseExperiments(TableReader& root,
                Excerpt(*name) + " must be 1 to 64 letters, digits, '_', '-' or '.' (it names "
                                 "files and columns)");
       }
-      const auto [it, fresh] = lines.emplace(*name, t.Line("name"));
+      const auto [it, fresh] = lines.emplace(ColumnKey(*name), t.Line("name"));
       if (!fresh) {
         t.Fail("name",
                "experiment " + Excerpt(*name) + " is already defined at line " +
-                   std::to_string(it->second));
+                   std::to_string(it->second) +
+                   " (names that differ only in case or punctuation would share export columns)");
       }
       x.name = *name;
       ParseOne(t, e, c, &x, model_sources);

@@ -608,6 +608,24 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   MakeExecutor(p, request.executor);
   Executor& executor = *p.executor;
 
+  if (!request.thresholds.empty()) {
+    // One per threshold component, in the distance vector's order: name them.
+    std::string names;
+    std::size_t count = 0;
+    for (const DistanceComponent& c : p.distance->components()) {
+      if (c.kind != ComponentKind::kThreshold) continue;
+      names += (count++ ? ", " : "") + c.name;
+    }
+    if (request.thresholds.size() != count) {
+      throw Error(ErrorKind::kUsage,
+                  "gives " + std::to_string(request.thresholds.size()) + " thresholds; give " +
+                      std::to_string(count) + ", one per threshold component in this order: " +
+                      names,
+                  "",
+                  0,
+                  "--threshold");
+    }
+  }
   EnumerationOptions options;
   options.thresholds = request.thresholds.empty() ? FinalThresholds(p.config) : request.thresholds;
   options.threads = p.config.smc.threads;
