@@ -236,6 +236,15 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
               std::to_string(LineOf(c->text, "name = \"right\"", 0));
   }
   {
+    // Distinct names that export would turn into the same columns.
+    Case* c = add("same_columns", "name = \"left\"", "name = \"Right\"");
+    c->line = LineOf(c->text, "name = \"Right\"");
+    c->key = "experiment[1].name";
+    c->says = "experiment 'Right' is already defined at line " +
+              std::to_string(LineOf(c->text, "name = \"right\"")) +
+              " (names that differ only in case or punctuation would share export columns)";
+  }
+  {
     // Inside the simulator's outputs (the whole plate), past the left data's 27 cm.
     Case* c = add("window", "window = [0.03, 0.27]", "window = [0.03, 0.3]");
     c->line = LineOf(c->text, "[[experiment.metric.component]]", 1);
@@ -263,7 +272,7 @@ TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
     c->says = "missing required key";
   }
   for (const std::string& bad :
-       std::vector<std::string>{"le/ft", "le ft", "", std::string(65, 'x')}) {
+       std::vector<std::string>{"le/ft", "le ft", "", "..", std::string(65, 'x')}) {
     Case* c = add("bad_name", "name = \"left\"", "name = \"" + bad + "\"");
     c->line = LineOf(c->text, "name = \"" + bad + "\"");
     c->key = "experiment[1].name";
