@@ -26,12 +26,13 @@ Particle MakeParticle(std::int64_t index, std::vector<std::uint8_t> bits, double
   return p;
 }
 
+// `number` is 0-based, as the engine numbers waves (and Open requires rows 0 .. n-1).
 WaveRecord MakeWave(int number, double threshold) {
   WaveRecord wave;
   wave.wave = number;
   wave.thresholds = {threshold};
-  wave.phi = number == 1 ? 0.0 : 0.5;
-  wave.proposal = std::vector<double>(kDimension, number == 1 ? 0.5 : 0.7);
+  wave.phi = number == 0 ? 0.0 : 0.5;
+  wave.proposal = std::vector<double>(kDimension, number == 0 ? 0.5 : 0.7);
   return wave;
 }
 
@@ -61,19 +62,21 @@ void WriteSeedHistory(const std::string& path) {
   m.proposal.binary = BinaryKernelKind::kLogistic;
   m.tempering_form = "geometric";
   m.fingerprint = {{"combined", "0123456789abcdef"}, {"data", "fedcba9876543210"}};
+  // Schema v6: two experiments, each with its slice of the outputs, points and components.
+  m.experiments = {{"left", "load at 0.3 m", 2, 1, 1}, {"right", "load at 0.6 m", 2, 2, 1}};
 
   RemoveDatabase(path);
   {
     HistoryStore store = HistoryStore::Create(path, m, /*overwrite=*/true);
     // Wave 1: two batches, then ended and complete with final weights and statistics.
-    WaveRecord one = MakeWave(1, 0.5);
+    WaveRecord one = MakeWave(0, 0.5);
     store.OnWaveStart(one);
     std::vector<Particle> first = {MakeParticle(0, {1, 0, 1, 0, 1, 0}, 0.2),
                                    MakeParticle(2, {0, 1, 1, 0, 0, 1}, 0.4)};
     std::vector<Particle> second = {MakeParticle(3, {1, 1, 0, 0, 1, 1}, 0.1),
                                     MakeParticle(5, {0, 0, 0, 1, 1, 1}, 0.3)};
-    store.OnBatch({1, 4, 2, 0, 4, 4, 0.0, 0, {}}, first);
-    store.OnBatch({1, 6, 4, 0, 4, 6, 0.0, 0, {}}, second);
+    store.OnBatch({0, 4, 2, 0, 4, 4, 0.0, 0, {}}, first);
+    store.OnBatch({0, 6, 4, 0, 4, 6, 0.0, 0, {}}, second);
     one.particles = first;
     one.particles.insert(one.particles.end(), second.begin(), second.end());
     one.candidates = 6;
@@ -89,9 +92,9 @@ void WriteSeedHistory(const std::string& path) {
     one.wall_seconds = 0.01;
     store.OnWaveEnd(one);
     // Wave 2: one batch committed, then the "process was killed".
-    WaveRecord two = MakeWave(2, 0.3);
+    WaveRecord two = MakeWave(1, 0.3);
     store.OnWaveStart(two);
-    store.OnBatch({2, 3, 2, 0, 4, 9, 0.0, 0, {}},
+    store.OnBatch({1, 3, 2, 0, 4, 9, 0.0, 0, {}},
                   std::vector<Particle>{MakeParticle(0, {1, 0, 1, 1, 1, 0}, 0.1),
                                         MakeParticle(1, {1, 0, 0, 0, 1, 0}, 0.2)});
   }

@@ -1,10 +1,11 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 5).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 6).
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <set>
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
@@ -21,10 +22,11 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 5 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// Version 6 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
 // meta; version 2 the tables real and proposal, the reals columns and the fingerprint; version 3
 // the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
-// wave_count, which adds no table). Every table and index here is listed in ExpectedObjects
+// wave_count, which adds no table; version 5 the table experiment, created apart as
+// kSchemaV6Tables). Every table and index here is listed in ExpectedObjects
 // (history_verify.cpp), which refuses any other schema object in a history. Vectors of
 // doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
 // and JSON would not guarantee); bits are packed.
@@ -137,6 +139,29 @@ CREATE TABLE failure (
 );
 )sql";
 
+// Added by version 6 (also when an older file is upgraded): the run's experiments, in order, each
+// as the sizes of its slices of output_position, measured and component (which hold every
+// experiment's rows, experiment after experiment). Never empty: a run of one experiment has one
+// row, named "" when the configuration named none.
+constexpr const char* kSchemaV6Tables = R"sql(
+CREATE TABLE experiment (
+  e INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  description TEXT NOT NULL,
+  outputs INTEGER NOT NULL,
+  measured INTEGER NOT NULL,
+  components INTEGER NOT NULL
+);
+)sql";
+
+// What an older file upgraded to v6 (and a RunMetadata without experiments) holds: one unnamed
+// experiment covering every output, measured point and component.
+constexpr const char* kInsertSingleExperiment = R"sql(
+INSERT INTO experiment (e, name, description, outputs, measured, components)
+VALUES (0, '', '', (SELECT count(*) FROM output_position), (SELECT count(*) FROM measured),
+  (SELECT count(*) FROM component))
+)sql";
+
 void WriteProposal(history::Database& db, const ProposalOptions& p, const std::string& form) {
   Statement s(db, R"sql(
     INSERT OR REPLACE INTO proposal (id, binary_kernel, min_correlation, max_predecessors, ridge,
@@ -230,6 +255,58 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
   for (const auto& [part, digest] : m.fingerprint) {
     meta.Bind(1, "fingerprint_" + part).Bind(2, digest).Run();
   }
+  if (m.experiments.empty()) {
+    db.Exec(kInsertSingleExperiment);
+  } else {
+    Statement experiment(db, R"sql(
+      INSERT INTO experiment (e, name, description, outputs, measured, components)
+      VALUES (?1, ?2, ?3, ?4, ?5, ?6))sql");
+    for (std::size_t e = 0; e < m.experiments.size(); ++e) {
+      const StoredExperiment& x = m.experiments[e];
+      experiment.Bind(1, static_cast<std::int64_t>(e))
+          .Bind(2, x.name)
+          .Bind(3, x.description)
+          .Bind(4, x.outputs)
+          .Bind(5, x.measured)
+          .Bind(6, x.components)
+          .Run();
+    }
+  }
+}
+
+// The experiments must cut output_positions, measured and distance_components into consecutive
+// slices exactly (kSoftware otherwise: the caller built an inconsistent RunMetadata).
+void CheckExperiments(const RunMetadata& m, const std::string& path) {
+  if (m.experiments.empty()) return;  // one unnamed experiment holding everything
+  std::int64_t outputs = 0;
+  std::int64_t measured = 0;
+  std::int64_t components = 0;
+  std::set<std::string> names;
+  for (std::size_t e = 0; e < m.experiments.size(); ++e) {
+    const StoredExperiment& x = m.experiments[e];
+    const std::string which =
+        "RunMetadata::experiments[" + std::to_string(e) + "] '" + x.name + "'";
+    if (x.outputs < 0 || x.measured < 0 || x.components < 0) {
+      throw Error(ErrorKind::kSoftware, which + " has a negative count", path);
+    }
+    if (!names.insert(x.name).second) {
+      throw Error(ErrorKind::kSoftware, which + ": the name repeats an earlier experiment's", path);
+    }
+    outputs += x.outputs;
+    measured += x.measured;
+    components += x.components;
+  }
+  auto check = [&](std::int64_t sum, std::size_t size, const char* what) {
+    if (sum != static_cast<std::int64_t>(size)) {
+      throw Error(ErrorKind::kSoftware,
+                  std::string("RunMetadata::experiments: their ") + what + " add up to " +
+                      std::to_string(sum) + ", the run has " + std::to_string(size),
+                  path);
+    }
+  };
+  check(outputs, m.output_positions.size(), "outputs");
+  check(measured, m.measured.positions.size(), "measured points");
+  check(components, m.distance_components.size(), "distance components");
 }
 
 // v5: the number of wave rows (meta row wave_count), then the run state's checksum over it.
@@ -284,6 +361,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
   if (metadata.measured.positions.size() != metadata.measured.values.size()) {
     throw Error(ErrorKind::kSoftware, "measured positions and values differ in length", path);
   }
+  CheckExperiments(metadata, path);
   for (const auto& [part, digest] : metadata.fingerprint) {
     // A part names a meta key: lower-case words; a digest is what HexDigest writes.
     const bool named =
@@ -345,6 +423,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
       db.Exec(kSchema);
       db.Exec(kSchemaV3Tables);
       db.Exec(kSchemaV4Tables);
+      db.Exec(kSchemaV6Tables);
       WriteMetadata(db, metadata);
       WriteRunHashes(db, kHistorySchemaVersion);
       db.Exec(("PRAGMA application_id = " + std::to_string(kHistoryApplicationId)).c_str());
@@ -446,7 +525,7 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // on open; the new checksums protect it from here on. A v1 run's earlier waves did not record
   // their overshoot (0). An older run has no reals, ran the default (independent) kernels, and
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
-  // nor (before v4) any failed simulation.
+  // nor (before v4) any failed simulation; and (before v6) it had a single, unnamed experiment.
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {
@@ -468,6 +547,11 @@ void HistoryStore::Impl::MigrateToCurrent() {
     db.Exec(kSchemaV4Tables);
   }
   // v5 adds the meta row wave_count, written with the run state's checksum below.
+  if (schema_version < 6) {
+    // An older run had one experiment: every output, measured point and component is its.
+    db.Exec(kSchemaV6Tables);
+    db.Exec(kInsertSingleExperiment);
+  }
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))

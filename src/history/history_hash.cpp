@@ -120,6 +120,13 @@ std::uint64_t MetadataHash(Database& db, int schema_version) {
             "SELECT key, value FROM meta WHERE substr(key, 1, 12) = 'fingerprint_' ORDER BY key",
             2);
   }
+  // v6: the experiments, after everything an older file hashes, so that its digest is unchanged.
+  if (schema_version >= 6) {
+    AddRows(hash,
+            db,
+            "SELECT e, name, description, outputs, measured, components FROM experiment ORDER BY e",
+            6);
+  }
   return hash.value();
 }
 

@@ -31,8 +31,8 @@ std::string HexDigest(std::uint64_t hash);
 std::optional<std::uint64_t> ParseHexDigest(const std::string& text);
 
 // The immutable description of the run: provenance, problem, bits, components, positions, data,
-// and from schema v3 the reals, the proposal options and the fingerprint. `schema_version` says
-// which tables the file has.
+// from schema v3 the reals, the proposal options and the fingerprint, and from v6 the experiments.
+// `schema_version` says which tables the file has.
 std::uint64_t MetadataHash(Database& db, int schema_version);
 // The run row's mutable part: status, end time, termination, message, resume count, summary; then
 // the stop limits a resume set, and (schema v5) the number of wave rows the writer recorded.

@@ -59,6 +59,7 @@ struct HistoryStore::Impl {
   bool has_reals() const { return schema_version >= 3; }
   bool has_failures() const { return schema_version >= 4; }
   bool has_wave_count() const { return schema_version >= 5; }
+  bool has_experiments() const { return schema_version >= 6; }
   // Refuses a read-only store; otherwise PrepareWrite. Every writer calls it first.
   void RequireWritable(const char* what);
   // WAL mode and, for an older file, MigrateToCurrent: once, before the first write.
@@ -70,7 +71,12 @@ struct HistoryStore::Impl {
   std::vector<std::string> StorageProblems(bool full);
   // Every table, index, trigger and view is one the schema (of the file's version) creates.
   void CheckSchemaObjects();
+  // The metadata's checksum, then its shape: bits, components and positions numbered 0 .. n-1,
+  // known kinds, and (v6) experiments numbered 0 .. n-1, at least one, with distinct names, whose
+  // counts add up to the outputs, measured points and components.
   void CheckMetadata();
+  // CheckMetadata's part for the table experiment (v6), once the other counts are known.
+  void CheckExperiments(std::size_t measured);
   void CheckRunState();
   // The wave rows are numbered 0 .. n-1; n is the wave_count the writer recorded (v5); a finished
   // run holds at least the complete waves it recorded (waves_completed); no particle or failure row

@@ -342,6 +342,26 @@ RunMetadata HistoryStore::LoadMetadata() const {
     m.measured.values.push_back(measured.Real(1));
   }
   m.schema_version = static_cast<int>(db.QueryInt("PRAGMA user_version"));
+  if (m.schema_version >= 6) {
+    Statement experiments(db, R"sql(
+      SELECT name, description, outputs, measured, components FROM experiment ORDER BY e)sql");
+    while (experiments.Step()) {
+      StoredExperiment x;
+      x.name = experiments.Text(0);
+      x.description = experiments.Text(1);
+      x.outputs = static_cast<int>(experiments.Int(2));
+      x.measured = static_cast<int>(experiments.Int(3));
+      x.components = static_cast<int>(experiments.Int(4));
+      m.experiments.push_back(std::move(x));
+    }
+  } else {
+    // Before v6 a run had one experiment, unnamed, holding every output, point and component.
+    StoredExperiment x;
+    x.outputs = static_cast<int>(m.output_positions.size());
+    x.measured = static_cast<int>(m.measured.positions.size());
+    x.components = static_cast<int>(m.distance_components.size());
+    m.experiments.push_back(std::move(x));
+  }
   Statement limits(
       db, "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key");
   while (limits.Step()) m.stop_limits.emplace_back(limits.Text(0).substr(11), limits.Text(1));

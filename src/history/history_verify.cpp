@@ -81,6 +81,7 @@ std::set<SchemaObject> ExpectedObjects(int version) {
     table("failure");
     key_index("failure");
   }
+  if (version >= 6) table("experiment");  // INTEGER PRIMARY KEY: no index of its own
   return objects;
 }
 
@@ -274,7 +275,9 @@ void HistoryStore::Impl::CheckMetadata() {
   }
   shape.outputs =
       CountNumberedRows(db, "SELECT i FROM output_position ORDER BY i", "output_position");
-  CountNumberedRows(db, "SELECT i FROM measured ORDER BY i", "measured");
+  const std::size_t measured =
+      CountNumberedRows(db, "SELECT i FROM measured ORDER BY i", "measured");
+  if (has_experiments()) CheckExperiments(measured);
   shape.reals = 0;
   if (!has_reals()) return;
   shape.reals = CountNumberedRows(db, "SELECT i FROM real ORDER BY i", "real");
@@ -297,6 +300,49 @@ void HistoryStore::Impl::CheckMetadata() {
   }
   if (!ParseEnum<ContinuousKernelKind>(continuous)) {
     Corrupt(path, "proposal.continuous_kernel", "unknown kernel '" + continuous + "'");
+  }
+}
+
+void HistoryStore::Impl::CheckExperiments(std::size_t measured) {
+  const std::string& path = db.path();
+  const std::size_t count =
+      CountNumberedRows(db, "SELECT e FROM experiment ORDER BY e", "experiment");
+  if (count == 0) Corrupt(path, "experiment", "the table is empty (a run has an experiment)");
+  // Each count is an integer no larger than the run's total, so that the sums cannot overflow.
+  const std::size_t totals[] = {shape.outputs, measured, shape.components};
+  const char* const columns[] = {"outputs", "measured", "components"};
+  std::size_t sums[] = {0, 0, 0};
+  std::set<std::string> names;
+  Statement rows(db, "SELECT e, name, outputs, measured, components FROM experiment ORDER BY e");
+  while (rows.Step()) {
+    const std::string which = "experiment " + std::to_string(rows.Int(0) + 1);
+    if (rows.Type(1) != SQLITE_TEXT || !names.insert(rows.Text(1)).second) {
+      const std::string name = rows.Text(1);
+      rows.Reset();
+      Corrupt(path, which + ", name", "'" + name + "' is not text or repeats an earlier name");
+    }
+    for (int c = 0; c < 3; ++c) {
+      const int column = 2 + c;
+      const bool integer = rows.Type(column) == SQLITE_INTEGER;
+      const std::int64_t value = integer ? rows.Int(column) : -1;
+      if (value < 0 || static_cast<std::uint64_t>(value) > totals[c]) {
+        const std::string text = rows.Text(column);
+        rows.Reset();
+        Corrupt(path,
+                which + ", " + columns[c],
+                "is '" + text + "', not a count from 0 to " + std::to_string(totals[c]));
+      }
+      sums[c] += static_cast<std::size_t>(value);
+    }
+  }
+  const char* const what[] = {"output positions", "measured points", "distance components"};
+  for (int c = 0; c < 3; ++c) {
+    if (sums[c] != totals[c]) {
+      Corrupt(path,
+              std::string("experiment.") + columns[c],
+              "the experiments hold " + std::to_string(sums[c]) + " " + what[c] + ", the run has " +
+                  std::to_string(totals[c]));
+    }
   }
 }
 

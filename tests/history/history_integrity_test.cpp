@@ -75,22 +75,41 @@ class HistoryIntegrityTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// What a v4 file (before the wave count was recorded) looks like, made from a v5 one: no meta row
+// Stores the run's checksums as combabc computed them for `version`.
+void RehashMetadataAndRunState(history::Database& db, int version) {
+  history::Statement meta(db, "UPDATE meta SET value = ?2 WHERE key = ?1");
+  meta.Bind(1, std::string("metadata_hash"))
+      .Bind(2, history::HexDigest(history::MetadataHash(db, version)))
+      .Run();
+  meta.Bind(1, std::string("run_state_hash"))
+      .Bind(2, history::HexDigest(history::RunStateHash(db, version)))
+      .Run();
+}
+
+// What a v5 file (before the experiments were recorded) looks like, made from a v6 one: no table
+// experiment, and its checksums as combabc computed them for v5.
+void DowngradeToV5(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  db.Exec(R"sql(
+    DROP TABLE experiment;
+    UPDATE meta SET value = '5' WHERE key = 'schema_version';
+    PRAGMA user_version = 5;)sql");
+  RehashMetadataAndRunState(db, 5);
+  transaction.Commit();
+}
+
+// What a v4 file (before the wave count was recorded) looks like, made from a v6 one: no meta row
 // wave_count, and its checksums as combabc computed them for v4.
 void DowngradeToV4(const std::string& path) {
+  DowngradeToV5(path);
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
   db.Exec(R"sql(
     DELETE FROM meta WHERE key = 'wave_count';
     UPDATE meta SET value = '4' WHERE key = 'schema_version';
     PRAGMA user_version = 4;)sql");
-  history::Statement meta(db, "UPDATE meta SET value = ?2 WHERE key = ?1");
-  meta.Bind(1, std::string("metadata_hash"))
-      .Bind(2, history::HexDigest(history::MetadataHash(db, 4)))
-      .Run();
-  meta.Bind(1, std::string("run_state_hash"))
-      .Bind(2, history::HexDigest(history::RunStateHash(db, 4)))
-      .Run();
+  RehashMetadataAndRunState(db, 4);
   transaction.Commit();
 }
 
@@ -324,6 +343,10 @@ std::string Describe(const RunMetadata& m) {
   for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
     out << '|' << m.measured.positions[i] << ',' << m.measured.values[i];
   }
+  for (const StoredExperiment& x : m.experiments) {
+    out << '|' << x.name << ',' << x.description << ',' << x.outputs << ',' << x.measured << ','
+        << x.components;
+  }
   return out.str();
 }
 
@@ -521,6 +544,124 @@ TEST_F(HistoryIntegrityTest, RealsProposalAndFingerprintAreCoveredByTheMetadataC
   }
 }
 
+// A run of two experiments (schema v6), killed in its second wave: 8 output positions, 4 + 4,
+// the measured points split after the first, one distance component each.
+std::string WriteTwoExperiments(const std::string& path) {
+  RunMetadata metadata = MakeFakeMetadata(SmallRun());
+  const int measured = static_cast<int>(metadata.measured.positions.size());
+  metadata.experiments = {{"near", "load at 0.45 m", 4, 1, 1}, {"far", "", 4, measured - 1, 1}};
+  HistoryStore store = HistoryStore::Create(path, metadata);
+  const RunHistory history = MakeFakeHistory(SmallRun());
+  RecordWave(store, history.waves[0], 5);
+  RecordWave(store, history.waves[1], 5, /*stop_after_batches=*/1);
+  return path;
+}
+
+// The experiments are part of the problem's description: any change to their rows is a clean data
+// error on open (the metadata checksum), and verify says so.
+TEST_F(HistoryIntegrityTest, ExperimentsAreCoveredByTheMetadataChecksum) {
+  for (const char* damage :
+       {"UPDATE experiment SET name = 'forged' WHERE e = 0",
+        "UPDATE experiment SET description = 'load at 0.30 m' WHERE e = 1",
+        // Counts moved between experiments still add up: only the checksum tells.
+        "UPDATE experiment SET outputs = outputs + 1 WHERE e = 0; "
+        "UPDATE experiment SET outputs = outputs - 1 WHERE e = 1",
+        "UPDATE experiment SET measured = measured + 0.5 WHERE e = 1",  // a count made REAL
+        "DELETE FROM experiment WHERE e = 1",
+        "INSERT INTO experiment VALUES (2, 'extra', '', 0, 0, 0)"}) {
+    SCOPED_TRACE(damage);
+    const std::string path = Path("experiments.db");
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
+    WriteTwoExperiments(path);
+    Sql(path, damage);
+    ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "meta.metadata_hash");
+    ExpectDataError(Catch([&] { HistoryStore::Open(path); }), path, "meta.metadata_hash");
+    const HistoryCheck check = HistoryStore::Verify(path);
+    ASSERT_FALSE(check.problems.empty());
+    EXPECT_NE(check.problems.front().find("metadata_hash"), std::string::npos)
+        << check.problems.front();
+  }
+}
+
+// Without the checksum's help (rows changed and the checksum recomputed, as a writer with a bug
+// would leave them), the experiments' shape is still checked: rows numbered 0 .. n-1, at least
+// one, distinct names, counts that add up to the run's outputs, measured points and components.
+TEST_F(HistoryIntegrityTest, ExperimentsThatDoNotAddUpAreDataErrorsEvenUnderAValidChecksum) {
+  struct Case {
+    const char* sql;
+    const char* mentions;
+  };
+  for (const Case& c : {
+           Case{"UPDATE experiment SET outputs = 5 WHERE e = 1",
+                "the experiments hold 9 output positions, the run has 8"},
+           Case{"UPDATE experiment SET components = 0 WHERE e = 0",
+                "the experiments hold 1 distance components, the run has 2"},
+           Case{"UPDATE experiment SET measured = measured + 1 WHERE e = 0", "measured points"},
+           Case{"UPDATE experiment SET outputs = -1 WHERE e = 0", "experiment 1, outputs"},
+           Case{"UPDATE experiment SET outputs = 4.5 WHERE e = 0", "experiment 1, outputs"},
+           Case{"UPDATE experiment SET name = 'near' WHERE e = 1", "experiment 2, name"},
+           Case{"UPDATE experiment SET e = 5 WHERE e = 1", "rows are not numbered"},
+           Case{"DELETE FROM experiment", "the table is empty"},
+       }) {
+    SCOPED_TRACE(c.sql);
+    const std::string path = Path("experiments.db");
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
+    WriteTwoExperiments(path);
+    {
+      history::Database db(path, /*create=*/false, /*read_only=*/false);
+      history::Transaction transaction(db);
+      db.Exec(c.sql);
+      RehashMetadataAndRunState(db, kHistorySchemaVersion);
+      transaction.Commit();
+    }
+    ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, c.mentions);
+    const HistoryCheck check = HistoryStore::Verify(path);
+    ASSERT_FALSE(check.problems.empty());
+    EXPECT_NE(check.problems.front().find(c.mentions), std::string::npos) << check.problems.front();
+  }
+}
+
+// A v5 file (before experiments) reads as one unnamed experiment holding everything; resuming it
+// upgrades it to v6 with that experiment's row, under the metadata checksum from then on.
+TEST_F(HistoryIntegrityTest, AV5RunReadsAsOneExperimentAndIsUpgradedToV6OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  const RunMetadata written = MakeFakeMetadata(SmallRun());
+  DowngradeToV5(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 5);
+  const auto expect_one_experiment = [&](const RunMetadata& m) {
+    ASSERT_EQ(m.experiments.size(), 1u);
+    EXPECT_EQ(m.experiments[0].name, "");
+    EXPECT_EQ(m.experiments[0].description, "");
+    EXPECT_EQ(m.experiments[0].outputs, static_cast<int>(written.output_positions.size()));
+    EXPECT_EQ(m.experiments[0].measured, static_cast<int>(written.measured.positions.size()));
+    EXPECT_EQ(m.experiments[0].components, static_cast<int>(written.distance_components.size()));
+  };
+  RunMetadata metadata = HistoryStore::Open(path, true).LoadMetadata();
+  EXPECT_EQ(metadata.schema_version, 5);
+  expect_one_experiment(metadata);
+  const ResumePoint v5 = HistoryStore::Open(path, true).LoadResumePoint();
+  ASSERT_TRUE(v5.has_partial);
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    // Opened for writing, nothing changes before the first write (a refused resume leaves it).
+    EXPECT_EQ(HistoryStore::Verify(path).schema_version, 5);
+    const ResumePoint point = store.BeginResume();
+    EXPECT_EQ(point.partial_next_index, v5.partial_next_index);
+    EXPECT_EQ(point.partial_accepted.size(), v5.partial_accepted.size());
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  metadata = HistoryStore::Open(path, true).LoadMetadata();
+  EXPECT_EQ(metadata.schema_version, kHistorySchemaVersion);
+  EXPECT_EQ(metadata.resume_count, 1);
+  expect_one_experiment(metadata);
+  Sql(path, "UPDATE experiment SET name = 'forged'");
+  ExpectDataError(Catch([&] { HistoryStore::Open(path, true); }), path, "meta.metadata_hash");
+}
+
 TEST_F(HistoryIntegrityTest, ANonFiniteRealIsADataErrorNamingTheParticle) {
   for (const char* value : {"X'000000000000F87F0000000000000040'",     // NaN, 2
                             "X'0000000000000040000000000000F07F'"}) {  // 2, +inf
@@ -554,6 +695,8 @@ TEST_F(HistoryIntegrityTest, AV2RunReadsAndIsUpgradedToV3OnResume) {
   EXPECT_TRUE(v2.partial_accepted[0].theta.reals.empty());
   RunMetadata metadata = HistoryStore::Open(path, true).LoadMetadata();
   EXPECT_EQ(metadata.schema_version, 2);
+  ASSERT_EQ(metadata.experiments.size(), 1u) << "one unnamed experiment before v6";
+  EXPECT_EQ(metadata.experiments[0].components, 2);
   EXPECT_TRUE(metadata.reals.empty());
   EXPECT_TRUE(metadata.fingerprint.empty());
   EXPECT_EQ(metadata.proposal.binary, BinaryKernelKind::kIndependent);

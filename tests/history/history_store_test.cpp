@@ -166,6 +166,106 @@ TEST_F(HistoryStoreTest, RealsProposalOptionsAndFingerprintRoundTrip) {
   EXPECT_TRUE(HistoryStore::Verify(path).problems.empty());
 }
 
+// Two experiments (schema v6): RunMetadata's outputs, measured points and components are their
+// slices concatenated; each experiment's name, description and slice sizes come back as written.
+RunMetadata TwoExperiments() {
+  RunMetadata m = MakeFakeMetadata(SmallRun());
+  const int outputs = static_cast<int>(m.output_positions.size());
+  const int measured = static_cast<int>(m.measured.positions.size());
+  EXPECT_GE(measured, 2) << "the small run must measure a few points";
+  m.experiments = {{"near", "load at 0.45 m, scan 0 .. 0.4 m", 5, 1, 1},
+                   {"far", "load at 0.45 m, scan 0.45 .. 0.9 m", outputs - 5, measured - 1, 1}};
+  return m;
+}
+
+void ExpectSameExperiments(const std::vector<StoredExperiment>& expected,
+                           const std::vector<StoredExperiment>& actual) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (std::size_t e = 0; e < expected.size(); ++e) {
+    SCOPED_TRACE("experiment " + std::to_string(e));
+    EXPECT_EQ(actual[e].name, expected[e].name);
+    EXPECT_EQ(actual[e].description, expected[e].description);
+    EXPECT_EQ(actual[e].outputs, expected[e].outputs);
+    EXPECT_EQ(actual[e].measured, expected[e].measured);
+    EXPECT_EQ(actual[e].components, expected[e].components);
+  }
+}
+
+TEST_F(HistoryStoreTest, ExperimentsRoundTrip) {
+  const RunMetadata written = TwoExperiments();
+  const std::string path = Path("RUN.db");
+  {
+    HistoryStore store = HistoryStore::Create(path, written);
+    RecordWave(store, MakeFakeHistory(SmallRun()).waves[0], kBatch);
+  }
+  const RunMetadata read = HistoryStore::Open(path, /*read_only=*/true).LoadMetadata();
+  EXPECT_EQ(read.schema_version, 6);
+  ExpectSameExperiments(written.experiments, read.experiments);
+  EXPECT_EQ(read.output_positions, written.output_positions) << "still concatenated";
+  EXPECT_EQ(read.measured.positions, written.measured.positions);
+  const HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+}
+
+// A RunMetadata without experiments (a config without [[experiment]], or a caller of the library
+// that never heard of them) is stored as one unnamed experiment holding everything.
+TEST_F(HistoryStoreTest, NoExperimentsIsOneUnnamedExperimentHoldingEverything) {
+  const RunMetadata written = MakeFakeMetadata(SmallRun());
+  ASSERT_TRUE(written.experiments.empty());
+  const std::string path = Path("RUN.db");
+  HistoryStore::Create(path, written);
+  const RunMetadata read = HistoryStore::Open(path, /*read_only=*/true).LoadMetadata();
+  ExpectSameExperiments({{"",
+                          "",
+                          static_cast<int>(written.output_positions.size()),
+                          static_cast<int>(written.measured.positions.size()),
+                          static_cast<int>(written.distance_components.size())}},
+                        read.experiments);
+}
+
+TEST_F(HistoryStoreTest, CreateRefusesExperimentsThatDoNotCutTheRunIntoSlices) {
+  struct Case {
+    const char* what;
+    void (*change)(std::vector<StoredExperiment>&);
+    const char* mentions;
+  };
+  const Case cases[] = {
+      {"one output too many",
+       [](std::vector<StoredExperiment>& x) { ++x[1].outputs; },
+       "outputs add up to 13, the run has 12"},
+      {"one measured point too few",
+       [](std::vector<StoredExperiment>& x) { --x[0].measured; },
+       "measured points add up to"},
+      {"a component missing",
+       [](std::vector<StoredExperiment>& x) { x[1].components = 0; },
+       "distance components add up to 1, the run has 2"},
+      {"a repeated name",
+       [](std::vector<StoredExperiment>& x) { x[1].name = x[0].name; },
+       "the name repeats"},
+      {"a negative count balanced by another",
+       [](std::vector<StoredExperiment>& x) {
+         x[0].outputs = -1;
+         x[1].outputs += 6;
+       },
+       "negative count"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    RunMetadata m = TwoExperiments();
+    c.change(m.experiments);
+    const std::string path = Path("RUN.db");
+    try {
+      HistoryStore::Create(path, m);
+      ADD_FAILURE() << "created";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.kind(), ErrorKind::kSoftware);
+      EXPECT_NE(std::string(error.what()).find(c.mentions), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+    }
+    EXPECT_FALSE(fs::exists(path)) << "no file is left behind";
+  }
+}
+
 TEST_F(HistoryStoreTest, AParticleWithTheWrongNumberOfRealsIsRefusedWhenWritten) {
   FakeRunOptions options = SmallRun();
   options.reals = 2;
