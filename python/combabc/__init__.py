@@ -23,10 +23,10 @@ from . import _core
 from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
                     ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
-from .history import History, Wave
+from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
-__all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "History",
+__all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
            "LogisticKernelOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
            "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
            "load_history", "make_options", "resume", "run"]

@@ -35,6 +35,42 @@ class Wave:
                 f"thresholds {list(self.thresholds)})")
 
 
+class Experiment:
+    """One experiment of the run (a config's [[experiment]] table; docs/config.md): its slices of
+    the run's concatenated outputs, measured points and distance components.
+
+    Attributes: index (from 0), name ("" for the single experiment of a config without
+    [[experiment]]), description (its load and scan in words; may be empty); outputs, measured and
+    components: slices of Wave.output's columns, of History.measured_position / measured_value and
+    of Wave.distance's columns; output_position (its outputs' x, float64[m_e]), measured_position
+    and measured_value (float64[p_e]), component_names (list of str).
+    """
+
+    def __init__(self, index, record, history):
+        self.index = index
+        self.name = record.get("name", "")
+        self.description = record.get("description", "")
+        self.outputs = _slice(record, "first_output", "outputs")
+        self.measured = _slice(record, "first_measured", "measured")
+        self.components = _slice(record, "first_component", "components")
+        self.output_position = history.output_position[self.outputs]
+        self.measured_position = history.measured_position[self.measured]
+        self.measured_value = history.measured_value[self.measured]
+        self.component_names = history.components[self.components]
+
+    def __repr__(self):
+        text = f"Experiment({self.name!r}" if self.name else "Experiment(unnamed"
+        return (text + f": {len(self.output_position)} outputs, {len(self.measured_position)} "
+                f"measured points, components {self.component_names})")
+
+
+def _slice(record, first, count):
+    """A slice from a record's start and size; everything when the record does not say."""
+    if first not in record or count not in record:
+        return slice(0, None)
+    return slice(int(record[first]), int(record[first]) + int(record[count]))
+
+
 class History:
     """A run's waves and summary. `waves` is a list of Wave; the methods return DataFrames."""
 
@@ -60,6 +96,12 @@ class History:
         self.measured_position = np.asarray(data.get("measured_position", ()), dtype=np.float64)
         self.measured_value = np.asarray(data.get("measured_value", ()), dtype=np.float64)
         self.position_unit = data.get("position_unit") or "m"
+        # The x of each output value (a config run's history; empty for a Problem's run).
+        self.output_position = np.asarray(data.get("output_position", ()), dtype=np.float64)
+        # The run's experiments, in order; a Problem's run and a history older than schema v6
+        # have one, unnamed, holding everything.
+        self.experiments = [Experiment(e, record, self) for e, record in
+                            enumerate(data.get("experiments") or [{}])]
         self._provenance = {key: data.get(key) or "" for key in
                             ("combabc_version", "config_path", "config_text", "end_time")}
 
@@ -71,6 +113,28 @@ class History:
     def posterior(self):
         """The last wave's per-bit marginals under the run's estimator."""
         return self.waves[-1].marginals
+
+    def experiment(self, which):
+        """An experiment by name or index."""
+        if isinstance(which, Experiment):
+            return which
+        if isinstance(which, str):
+            for x in self.experiments:
+                if x.name == which:
+                    return x
+            names = ", ".join(repr(x.name) for x in self.experiments)
+            raise KeyError(f"no experiment named {which!r} (the run has {names})")
+        return self.experiments[which]
+
+    def curves(self, wave=-1, experiment=None):
+        """A wave's accepted simulated outputs, float64[n, m]: every output, or one experiment's
+        (its name, index or Experiment; columns at that experiment's output_position). wave: a
+        wave's index in `waves` (0-based; default the last). Empty (n x 0) when the run kept no
+        outputs."""
+        output = self.waves[wave].output
+        if experiment is None or not output.shape[1]:
+            return output
+        return output[:, self.experiment(experiment).outputs]
 
     def particles(self, wave=None):
         """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
@@ -128,7 +192,8 @@ class History:
         """The final wave in ArviZ's InferenceData layout: a dict of xarray Datasets, groups
         posterior (bits and the continuous parameters; dims chain = 1, draw = particle),
         sample_stats (weight, log_weight, distance per component, particle_index) and
-        observed_data (measured, by position), as `combabc export` writes in inference_data.nc
+        observed_data (measured, by position; with named experiments measured_<name> by
+        position_<name>, one per experiment), as `combabc export` writes in inference_data.nc
         (docs/history.md, "NetCDF"). Needs xarray (python3-xarray)."""
         from . import _netcdf
         w = self.waves[-1]
@@ -143,7 +208,12 @@ class History:
             distance=w.distance, index=w.index, bit_names=self.bit_names,
             real_names=self.real_names, components=self.components,
             measured_position=self.measured_position, measured_value=self.measured_value,
-            position_unit=self.position_unit, attrs=attrs)
+            position_unit=self.position_unit, attrs=attrs,
+            experiments=[{"name": x.name, "description": x.description,
+                          "first_measured": x.measured.start,
+                          "measured": len(x.measured_position),
+                          "first_component": x.components.start,
+                          "components": len(x.component_names)} for x in self.experiments])
 
     def to_netcdf(self, path):
         """to_inference_data() written to `path` (NetCDF-4, one group each; arviz.from_netcdf

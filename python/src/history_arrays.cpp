@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "combabc/export/export.hpp"
+
 namespace py = pybind11;
 
 namespace combabc::python {
@@ -119,6 +121,23 @@ py::dict HistoryToDict(const RunHistory& history, const HistoryNames& names) {
   for (const WaveRecord& wave : history.waves) waves.append(WaveToDict(wave, names));
   result["waves"] = waves;
   return result;
+}
+
+py::list ExperimentsToList(const RunMetadata& metadata) {
+  py::list experiments;
+  for (const ExperimentSlice& x : ExperimentSlices(metadata)) {
+    py::dict d;
+    d["name"] = x.name;
+    d["description"] = x.description;
+    d["first_output"] = x.first_output;
+    d["outputs"] = x.outputs;
+    d["first_measured"] = x.first_measured;
+    d["measured"] = x.measured;
+    d["first_component"] = x.first_component;
+    d["components"] = x.components;
+    experiments.append(d);
+  }
+  return experiments;
 }
 
 }  // namespace combabc::python

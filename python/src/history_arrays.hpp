@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "combabc/history/history_store.hpp"
 #include "combabc/samplers/run_history.hpp"
 
 namespace combabc::python {
@@ -28,5 +29,11 @@ struct HistoryNames {
 // float64[n, k], output float64[n, m] (m = 0 without kept outputs), and failure_index /
 // failure_reason.
 pybind11::dict HistoryToDict(const RunHistory& history, const HistoryNames& names);
+
+// The run's experiments (ExperimentSlices in export/export.hpp: one unnamed experiment holding
+// everything for a file older than schema v6), a dict each: name, description, and the start
+// and size of its slices of the outputs, measured points and distance components
+// (first_output, outputs, first_measured, measured, first_component, components).
+pybind11::list ExperimentsToList(const RunMetadata& metadata);
 
 }  // namespace combabc::python

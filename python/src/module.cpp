@@ -130,6 +130,8 @@ py::dict LoadHistory(const std::string& path) {
   result["measured_position"] = metadata.measured.positions;
   result["measured_value"] = metadata.measured.values;
   result["position_unit"] = metadata.position_unit;
+  result["output_position"] = metadata.output_positions;
+  result["experiments"] = ExperimentsToList(metadata);
   result["combabc_version"] = metadata.combabc_version;
   result["config_path"] = metadata.config_path;
   result["config_text"] = metadata.config_text;

@@ -14,7 +14,9 @@ layout:
   (chain, draw);
 - sample_stats: `weight` and `log_weight` (chain, draw), `distance` (chain, draw, component) and
   `particle_index`, the particle's candidate index in its wave;
-- observed_data: `measured` (position), its coordinate the measured positions;
+- observed_data: `measured` (position), its coordinate the measured positions; a run of named
+  experiments instead has one variable per experiment, `measured_<name>` (position_<name>), each
+  with its own positions, and sample_stats the coordinate `component_experiment` (component);
 - attributes of every group: inference_library = combabc, its version, the seed, the wave (from 1),
   the termination, the config file's path and text.
 
@@ -35,11 +37,22 @@ def variable_name(name):
     return name.replace("/", "_")
 
 
+def named_experiments(experiments):
+    """The experiments when they have names (a config with [[experiment]] tables), else None: a
+    single unnamed experiment is drawn as before experiments existed."""
+    experiments = list(experiments or ())
+    return experiments if any(x["name"] for x in experiments) else None
+
+
 def inference_data(*, bits, reals, log_weight, weight, distance, index, bit_names, real_names,
-                   components, measured_position, measured_value, position_unit, attrs):
+                   components, measured_position, measured_value, position_unit, attrs,
+                   experiments=None):
     """The groups posterior, sample_stats and observed_data as xarray Datasets (a dict by group
     name), from one wave's particles as NumPy arrays (n draws): bits uint8[n, d], reals
-    float64[n, r], log_weight, weight float64[n], distance float64[n, k], index int64[n]."""
+    float64[n, r], log_weight, weight float64[n], distance float64[n, k], index int64[n].
+    experiments: the run's experiments as dicts (name, description, first_measured, measured,
+    first_component, components: summary.json's "experiments"), or None for one holding
+    everything."""
     import numpy as np
     import xarray as xr
 
@@ -59,15 +72,37 @@ def inference_data(*, bits, reals, log_weight, weight, distance, index, bit_name
                      np.asarray(distance, dtype=np.float64).reshape(1, n, len(components))),
         "particle_index": (("chain", "draw"), np.asarray(index, dtype=np.int64)[None]),
     }
-    position = xr.Variable("position", np.asarray(measured_position, dtype=np.float64),
-                           attrs={"units": position_unit or "m"})
+    measured_position = np.asarray(measured_position, dtype=np.float64)
+    measured_value = np.asarray(measured_value, dtype=np.float64)
+    units = {"units": position_unit or "m"}
+    stats_coords = {**draws, "component": list(components)}
+    named = named_experiments(experiments)
+    if named is None:
+        position = xr.Variable("position", measured_position, attrs=units)
+        observed = {"measured": ("position", measured_value)}
+        observed_coords = {"position": position}
+    else:
+        # One observed variable per experiment, on its own positions (experiments may scan the
+        # same stretch, or lines of different lengths): what ArviZ gets from a model with one
+        # likelihood per data set.
+        observed, observed_coords = {}, {}
+        owner = [""] * len(components)
+        for x in named:
+            name = variable_name(x["name"])
+            rows = slice(x["first_measured"], x["first_measured"] + x["measured"])
+            dim = f"position_{name}"
+            observed_coords[dim] = xr.Variable(dim, measured_position[rows], attrs=units)
+            observed[f"measured_{name}"] = xr.Variable(
+                dim, measured_value[rows],
+                attrs={"experiment": x["name"], "description": x.get("description", "")})
+            first = x.get("first_component", 0)
+            for k in range(first, min(first + x.get("components", 0), len(owner))):
+                owner[k] = x["name"]
+        stats_coords["component_experiment"] = ("component", owner)
     return {
         "posterior": xr.Dataset(posterior, coords={**draws, "bit": list(bit_names)}, attrs=attrs),
-        "sample_stats": xr.Dataset(sample_stats, coords={**draws, "component": list(components)},
-                                   attrs=attrs),
-        "observed_data": xr.Dataset(
-            {"measured": ("position", np.asarray(measured_value, dtype=np.float64))},
-            coords={"position": position}, attrs=attrs),
+        "sample_stats": xr.Dataset(sample_stats, coords=stats_coords, attrs=attrs),
+        "observed_data": xr.Dataset(observed, coords=observed_coords, attrs=attrs),
     }
 
 
@@ -111,7 +146,8 @@ def from_export(particles_csv, measured_csv, summary_json):
         index=table["index"].to_numpy(dtype=np.int64), bit_names=bit_names,
         real_names=real_names, components=components,
         measured_position=measured.iloc[:, 0].to_numpy(),
-        measured_value=measured.iloc[:, 1].to_numpy(), position_unit=unit, attrs=attrs)
+        measured_value=measured.iloc[:, 1].to_numpy(), position_unit=unit, attrs=attrs,
+        experiments=summary.get("experiments"))
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -8,10 +8,12 @@ Reads the SQLite history directly (schema: docs/history.md; no export needed) an
 DIR (default: report/ beside RUN.sqlite), in each format of the run's [output] figures (default png):
 
   wave_<k>_curves.<fmt>         accepted simulated curves of wave k, measured data as circles
-                                (paper Figures 3, 5, 8, 10)
+                                (paper Figures 3, 5, 8, 10); one panel per experiment when the
+                                run has named experiments ([[experiment]] tables)
   wave_<k>_marginals.<fmt>      probability of each clamp being fixed, one panel per edge
                                 (paper Figures 4, 6, 9, 11)
-  overview.<fmt>                one row per wave: curves and marginals side by side
+  overview.<fmt>                one row per wave: curves (a column per named experiment) and
+                                marginals side by side
   summary.<fmt>                 thresholds, acceptance rate and simulations per wave
   reals.<fmt>                   runs with continuous parameters only: each parameter's accepted
                                 values per wave (weighted histograms under the estimator) over
@@ -37,6 +39,7 @@ import shutil
 import sqlite3
 import sys
 import tempfile
+import textwrap
 import tomllib
 
 # sysexits.h, as combabc uses them (combabc maps the script's status to its own error kinds).
@@ -62,8 +65,9 @@ except ImportError as missing:
 # v2 added wave.discarded, wave.content_hash and checksum rows in meta; v3 the continuous
 # parameters (table real, particle.reals, wave.reals_mean / reals_sd), the proposal options and
 # the fingerprint; v4 the failed simulations (table failure, wave.failures); v5 the meta row
-# wave_count (nothing the report reads). Older files read as runs without reals and without
-# failures.
+# wave_count (nothing the report reads); v6 the table experiment (the run's experiments, as slices
+# of output_position, measured and component). Older files read as runs without reals, without
+# failures and of one unnamed experiment holding everything.
 SCHEMA_VERSION = 6
 APPLICATION_ID = 0x43424142  # 'CBAB', written by HistoryStore::Create
 CM_PER_UNIT = {"m": 100.0, "cm": 1.0, "mm": 0.1, "um": 1e-4, "nm": 1e-7}
@@ -174,13 +178,6 @@ def load_run(con):
     run["measured_x_cm"] = measured[:, 0] * scale
     run["measured_y"] = measured[:, 1]
     run["schema_version"] = con.execute("PRAGMA user_version").fetchone()[0]
-    # Schema v6: the run's experiments (slices of the outputs, measured points and components);
-    # older files are one experiment.
-    run["experiments"] = con.execute(
-        "SELECT name, description, outputs, measured, components FROM experiment ORDER BY e"
-    ).fetchall() if run["schema_version"] >= 6 else [("", "", len(run["x_cm"]),
-                                                      len(run["measured_x_cm"]),
-                                                      len(run["components"]))]
     # Stop limits a resume set over the config's (meta rows stop_limit_<key>; docs/history.md).
     run["stop_limits"] = [(key[len("stop_limit_"):], value) for key, value in con.execute(
         "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key")]
@@ -188,7 +185,41 @@ def load_run(con):
     if run["schema_version"] >= 3:
         run["reals"] = con.execute(
             "SELECT name, kind, low, high, mean, sd FROM real ORDER BY i").fetchall()
+    run["experiments"] = load_experiments(con, run)
+    run["named"] = any(x["name"] for x in run["experiments"])
     return run
+
+
+def one_experiment(run):
+    """The experiments of a run of one unnamed experiment: it holds everything."""
+    return [{"name": "", "description": "", "outputs": slice(0, run["x_cm"].size),
+             "measured": slice(0, run["measured_x_cm"].size),
+             "components": slice(0, len(run["components"]))}]
+
+
+def load_experiments(con, run):
+    """The run's experiments (schema v6, table experiment), each a dict: name, description and
+    the slices `outputs` (of x_cm and the curves' columns), `measured` (of the measured points)
+    and `components` (of run["components"]). A file without the table (v5 and older), or whose
+    counts do not add up (a checked history's always do), is one unnamed experiment holding
+    everything."""
+    totals = (run["x_cm"].size, run["measured_x_cm"].size, len(run["components"]))
+    everything = one_experiment(run)
+    if not con.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = "
+                       "'experiment'").fetchone()[0]:
+        return everything
+    experiments, starts = [], [0, 0, 0]
+    for name, description, *counts in con.execute(
+            "SELECT name, description, outputs, measured, components FROM experiment ORDER BY e"):
+        if any(not isinstance(c, int) or c < 0 for c in counts):
+            return everything
+        slices = [slice(a, a + c) for a, c in zip(starts, counts)]
+        starts = [a + c for a, c in zip(starts, counts)]
+        experiments.append({"name": name or "", "description": description or "",
+                            "outputs": slices[0], "measured": slices[1], "components": slices[2]})
+    if not experiments or tuple(starts) != totals:
+        return everything
+    return experiments
 
 
 def load_waves(con, dimension, num_reals=0):
@@ -264,6 +295,16 @@ def run_config(run):
         return {}
 
 
+def normalised(run):
+    """Whether the run's data (and so its curves) are normalised: [data] normalise, or with
+    [[experiment]] tables their data.normalise (the same in every experiment)."""
+    config = run_config(run)
+    experiments = config.get("experiment")
+    if isinstance(experiments, list) and experiments and isinstance(experiments[0], dict):
+        return experiments[0].get("data", {}).get("normalise", True)
+    return config.get("data", {}).get("normalise", True)
+
+
 def figure_formats(run):
     """[output] figures of the run's config: the formats `combabc run` was asked for."""
     formats = run_config(run).get("output", {}).get("figures", ["png"])
@@ -273,17 +314,25 @@ def figure_formats(run):
 def scale_like_the_metric(run, waves):
     """Draws Y* as the metric compares it: when the data are normalised, each simulated curve is
     divided by its maximum over the measured positions (CompositeDistance's NormaliseOver::kData),
-    so curves and circles share one scale even if the peak lies outside the measured window."""
-    normalise = run_config(run).get("data", {}).get("normalise", True)
-    if not normalise or not run["measured_x_cm"].size:
+    so curves and circles share one scale even if the peak lies outside the measured window. Each
+    experiment's curve by its own maximum over its own measured positions, as its own metric
+    does."""
+    if not normalised(run) or not run["measured_x_cm"].size:
         return
     for w in waves:
         if w.curves is None or not len(w.curves):
             continue
-        at_data = np.array([np.interp(run["measured_x_cm"], run["x_cm"], c) for c in w.curves])
-        peak = np.max(np.abs(at_data), axis=1)
-        peak[peak <= 0] = 1.0
-        w.curves = w.curves / peak[:, None]
+        curves = np.array(w.curves, dtype=float)
+        for x in run["experiments"]:
+            mx, xs = run["measured_x_cm"][x["measured"]], run["x_cm"][x["outputs"]]
+            if not mx.size or not xs.size:
+                continue
+            part = curves[:, x["outputs"]]
+            at_data = np.array([np.interp(mx, xs, c) for c in part])
+            peak = np.max(np.abs(at_data), axis=1)
+            peak[peak <= 0] = 1.0
+            curves[:, x["outputs"]] = part / peak[:, None]
+        w.curves = curves
 
 
 # --- figures ------------------------------------------------------------------------------------
@@ -325,26 +374,34 @@ def output_labels(run):
     if simulator.get("kind", "sensor") == "sensor":
         return "Position along sensor (cm)", "Normalised |w|"
     name = str(simulator.get("outputs", {}).get("name", "output"))
-    normalise = run_config(run).get("data", {}).get("normalise", True)
-    return "Position (cm)", ("Normalised " if normalise else "") + name
+    return "Position (cm)", ("Normalised " if normalised(run) else "") + name
 
 
-def draw_curves(ax, w, run):
-    curves = w.curves
-    x = run["x_cm"]
+def draw_curves(ax, w, run, experiment=None):
+    """The wave's accepted curves and the measured circles: all of them, or one experiment's
+    (an entry of run["experiments"])."""
+    curves, x = w.curves, run["x_cm"]
+    measured_x, measured_y = run["measured_x_cm"], run["measured_y"]
+    if experiment is not None:
+        curves, x = curves[:, experiment["outputs"]], x[experiment["outputs"]]
+        measured_x = measured_x[experiment["measured"]]
+        measured_y = measured_y[experiment["measured"]]
     if curves.shape[1] != x.size:
         x = np.arange(curves.shape[1], dtype=float)
+    if not x.size:
+        ax.text(0.5, 0.5, "no outputs", ha="center", va="center", transform=ax.transAxes)
+        return
     n = curves.shape[0]
     # Dense sets need fainter lines to show where curves concentrate (Figures 3/5: 500 curves).
     alpha = float(np.clip(25.0 / max(n, 1), 0.04, 0.5))
     segments = np.stack([np.broadcast_to(x, curves.shape), curves], axis=-1)
     ax.add_collection(LineCollection(segments, colors=CURVE_COLOUR, linewidths=0.6, alpha=alpha,
                                      rasterized=n > 200))
-    if run["measured_x_cm"].size:
-        ax.plot(run["measured_x_cm"], run["measured_y"], **MEASURED_STYLE)
+    if measured_x.size:
+        ax.plot(measured_x, measured_y, **MEASURED_STYLE)
     ax.set_xlim(x.min(), x.max())
     top = max(1.0, float(np.nanmax(curves)) if n else 1.0,
-              float(run["measured_y"].max()) if run["measured_y"].size else 1.0)
+              float(measured_y.max()) if measured_y.size else 1.0)
     ax.set_ylim(0.0, 1.05 * top)
     xlabel, ylabel = output_labels(run)
     ax.set_xlabel(xlabel)
@@ -409,14 +466,55 @@ def save(fig, out, name):
     return name
 
 
+def experiment_title(experiment, width=60):
+    """A panel's title: the experiment's name, its description on a second line (wrapped)."""
+    lines = [experiment["name"] or "(unnamed)"]
+    if experiment["description"]:
+        lines += textwrap.wrap(experiment["description"], width) or []
+    return "\n".join(lines)
+
+
+def experiment_thresholds(w, run, experiment):
+    """The wave's thresholds of the experiment's own components ("ε = ..."), or ""."""
+    slots = [k for k, (_, kind) in enumerate(run["components"]) if kind != "indicator"]
+    if len(slots) != w.thresholds.size:
+        return ""
+    mine = [w.thresholds[i] for i, k in enumerate(slots)
+            if experiment["components"].start <= k < experiment["components"].stop]
+    if not mine:
+        return ""
+    if len(mine) == 1:
+        return f"ε = {mine[0]:.3g}"
+    return "ε = (" + ", ".join(f"{e:.3g}" for e in mine) + ")"
+
+
 def curves_figure(w, run, estimator, out):
-    fig, ax = plt.subplots(figsize=(6.4, 4.3))
-    draw_curves(ax, w, run)
-    ax.set_title(f"{wave_label(w)}: accepted curves{thresholds_text(w, run, compact=True)}")
-    # Below the axes: inside, it would hide curves or data wherever the peak happens to be.
-    ax.legend(handles=curve_handles(w.curves.shape[0], run), loc="upper center",
-              bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
-    fig.tight_layout()
+    if not run["named"]:
+        fig, ax = plt.subplots(figsize=(6.4, 4.3))
+        draw_curves(ax, w, run)
+        ax.set_title(f"{wave_label(w)}: accepted curves{thresholds_text(w, run, compact=True)}")
+        # Below the axes: inside, it would hide curves or data wherever the peak happens to be.
+        ax.legend(handles=curve_handles(w.curves.shape[0], run), loc="upper center",
+                  bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
+        fig.tight_layout()
+        return save(fig, out, f"wave_{w.number + 1}_curves")
+    # One panel per experiment: its own scan, its curves and its measured circles.
+    experiments = run["experiments"]
+    cols = min(len(experiments), 3)
+    rows = (len(experiments) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 4.0 * rows + 0.9), squeeze=False)
+    for j, experiment in enumerate(experiments):
+        ax = axes[j // cols][j % cols]
+        draw_curves(ax, w, run, experiment)
+        title = experiment_title(experiment, width=64)
+        eps = experiment_thresholds(w, run, experiment)
+        ax.set_title(title + (f"\n{eps}" if eps else ""), fontsize=10)
+    for j in range(len(experiments), rows * cols):
+        axes[j // cols][j % cols].axis("off")
+    fig.suptitle(f"{wave_label(w)}: accepted curves per experiment", fontsize=11)
+    fig.legend(handles=curve_handles(w.curves.shape[0], run), loc="lower center", ncol=2,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0.6 / fig.get_figheight(), 1, 1))
     return save(fig, out, f"wave_{w.number + 1}_curves")
 
 
@@ -496,23 +594,29 @@ def overview_figure(waves, run, estimator, out):
     """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side."""
     panels, _ = edges(run)
     has_curves = any(w.curves is not None and w.curves.size for w in waves)
-    columns = len(panels) + (1 if has_curves else 0)
-    widths = ([1.3] if has_curves else []) + [1.0] * len(panels)
+    # A curve column per experiment when they are named, else one holding every curve.
+    experiments = run["experiments"] if run["named"] else [None]
+    curve_columns = len(experiments) if has_curves else 0
+    columns = len(panels) + curve_columns
+    widths = [1.3] * curve_columns + [1.0] * len(panels)
     # Shared x per column: one set of tick labels at the bottom keeps the grid legible (and fast).
     fig, axes = plt.subplots(len(waves), columns, figsize=(4.2 * columns, 2.6 * len(waves) + 0.5),
                              squeeze=False, sharex="col", gridspec_kw={"width_ratios": widths})
     tick_step = 2 if max(len(bits) for _, bits in panels) > 12 else 1
     for row, w in enumerate(waves):
         label = f"({'abcdefghijklmnopqrstuvwxyz'[row % 26]}) {wave_label(w)}"
-        if has_curves:
-            ax = axes[row][0]
+        for column, experiment in enumerate(experiments[:curve_columns]):
+            ax = axes[row][column]
             if w.curves is not None and w.curves.size:
-                draw_curves(ax, w, run)
+                draw_curves(ax, w, run, experiment)
             else:
                 ax.text(0.5, 0.5, "no curves stored", ha="center", va="center",
                         transform=ax.transAxes)
-            ax.set_title(f"{label}{thresholds_text(w, run, compact=True)}", loc="left")
-        bar_axes = axes[row][1 if has_curves else 0:]
+            if column == 0:
+                ax.set_title(f"{label}{thresholds_text(w, run, compact=True)}", loc="left")
+            if experiment is not None:
+                ax.set_title(experiment["name"], loc="right", fontsize=9)
+        bar_axes = axes[row][curve_columns:]
         # Without a curve column the wave label takes the left of the first title line.
         draw_marginals(bar_axes, w, run, estimator, tick_step=tick_step, titles=row == 0,
                        title_loc="center" if has_curves else "right")
@@ -632,6 +736,17 @@ def write_index(waves, run, estimator, out, written, db_path, formats):
         f"<td>{fmt(w.wall_seconds, '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
         for w in waves)
     figures = "\n".join(figure_html(n, formats) for n in written)
+    experiments = ""
+    if run["named"]:  # a single unnamed experiment's page is as it was before experiments
+        listed = "\n".join(
+            f"<tr><td>{e(x['name'])}</td><td>{e(x['description'])}</td>"
+            f"<td>{x['outputs'].stop - x['outputs'].start}</td>"
+            f"<td>{x['measured'].stop - x['measured'].start}</td>"
+            f"<td>{e(', '.join(name for name, _ in run['components'][x['components']]))}</td></tr>"
+            for x in run["experiments"])
+        experiments = ("<h2>Experiments</h2><table><tr><th>Experiment</th><th>Description</th>"
+                       "<th>Outputs</th><th>Measured points</th><th>Distance components</th></tr>"
+                       f"\n{listed}</table>\n")
     note = ("" if any(w.curves is not None for w in waves)
             else "<p>This run did not keep simulated outputs: no curve figures.</p>")
     page = f"""<!DOCTYPE html>
@@ -646,7 +761,7 @@ pre {{ background: #f6f6f6; padding: 1em; overflow-x: auto; }}
 </style></head><body>
 <h1>combabc run report</h1>
 <h2>Run</h2><table>{rows}</table>
-<h2>Waves</h2><table>{head}{body}</table>
+{experiments}<h2>Waves</h2><table>{head}{body}</table>
 {note}
 <h2>Figures</h2>
 {figures}
@@ -813,13 +928,10 @@ def make_report(db_path, out, estimator=None, overwrite=False, formats=None):
     try:
         run = load_run(con)
         waves = load_waves(con, run["dimension"], len(run["reals"]))
-        if len(run["experiments"]) > 1:
-            # The curve panels draw one experiment's scan; a run of several experiments gets its
-            # marginals and summary only (its curves: `combabc export`, experiments.csv).
-            for w in waves:
-                w.curves = None
-        else:
-            scale_like_the_metric(run, waves)
+        if any(w.curves is not None and w.curves.shape[1] != run["x_cm"].size for w in waves):
+            # Curves that are not one value per output position cannot be cut by experiment.
+            run["experiments"], run["named"] = one_experiment(run), False
+        scale_like_the_metric(run, waves)
     finally:
         con.close()
     if not waves:

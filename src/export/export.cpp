@@ -118,7 +118,52 @@ std::vector<std::string> DistanceColumns(const RunMetadata& m, std::size_t count
   return names;
 }
 
+std::vector<ExperimentSlice> ExperimentSlices(const RunMetadata& m) {
+  std::vector<ExperimentSlice> slices;
+  ExperimentSlice next;
+  for (const StoredExperiment& x : m.experiments) {
+    if (x.outputs < 0 || x.measured < 0 || x.components < 0) break;
+    next.name = x.name;
+    next.description = x.description;
+    next.outputs = static_cast<std::size_t>(x.outputs);
+    next.measured = static_cast<std::size_t>(x.measured);
+    next.components = static_cast<std::size_t>(x.components);
+    slices.push_back(next);
+    next.first_output += next.outputs;
+    next.first_measured += next.measured;
+    next.first_component += next.components;
+  }
+  const bool adds_up = slices.size() == m.experiments.size() &&
+                       next.first_output == m.output_positions.size() &&
+                       next.first_measured == m.measured.positions.size() &&
+                       next.first_component == m.distance_components.size();
+  if (!slices.empty() && adds_up) return slices;
+  ExperimentSlice all;
+  all.outputs = m.output_positions.size();
+  all.measured = m.measured.positions.size();
+  all.components = m.distance_components.size();
+  return {all};
+}
+
+bool HasNamedExperiments(const RunMetadata& m) {
+  for (const ExperimentSlice& x : ExperimentSlices(m)) {
+    if (!x.name.empty()) return true;
+  }
+  return false;
+}
+
 namespace {
+
+// Each row's experiment name, for the experiment column of positions.csv (outputs) and
+// measured.csv (measured points) of a run with named experiments.
+std::vector<std::string> ExperimentOfEach(const std::vector<ExperimentSlice>& slices,
+                                          std::size_t ExperimentSlice::*count,
+                                          std::size_t rows) {
+  std::vector<std::string> names;
+  for (const ExperimentSlice& x : slices) names.insert(names.end(), x.*count, x.name);
+  names.resize(rows);
+  return names;
+}
 
 // Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
 // database keeps the engine's 0-based numbers).
@@ -203,10 +248,17 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
 void WriteCurves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
   const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
   {
+    // Named experiments add a last column, experiment (its name): a single experiment's file is
+    // as it was before experiments existed.
+    const bool named = HasNamedExperiments(m);
+    const std::vector<std::string> experiment =
+        ExperimentOfEach(ExperimentSlices(m), &ExperimentSlice::outputs, m.output_positions.size());
     std::ostream& out = dir.Add("positions.csv");
-    out << "column,position_" << unit << '\n';
+    out << "column,position_" << unit << (named ? ",experiment" : "") << '\n';
     for (std::size_t i = 0; i < m.output_positions.size(); ++i) {
-      out << "y_" << i << ',' << Number(m.output_positions[i]) << '\n';
+      out << "y_" << i << ',' << Number(m.output_positions[i]);
+      if (named) out << ',' << CsvField(experiment[i]);
+      out << '\n';
     }
   }
   bool any = false;
@@ -232,10 +284,29 @@ void WriteCurves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h
 
 void WriteMeasured(OutputDirectory& dir, const RunMetadata& m) {
   const std::string unit = m.position_unit.empty() ? "m" : Identifier(m.position_unit);
+  const bool named = HasNamedExperiments(m);
+  const std::vector<std::string> experiment = ExperimentOfEach(
+      ExperimentSlices(m), &ExperimentSlice::measured, m.measured.positions.size());
   std::ostream& out = dir.Add("measured.csv");
-  out << "position_" << unit << ",value\n";
+  out << "position_" << unit << ",value" << (named ? ",experiment" : "") << '\n';
   for (std::size_t i = 0; i < m.measured.positions.size(); ++i) {
-    out << Number(m.measured.positions[i]) << ',' << Number(m.measured.values[i]) << '\n';
+    out << Number(m.measured.positions[i]) << ',' << Number(m.measured.values[i]);
+    if (named) out << ',' << CsvField(experiment[i]);
+    out << '\n';
+  }
+}
+
+// One row per experiment: its index (from 0, as the database's e), name, description, the sizes of
+// its slices and where they start (the i of its first y_i column, its first row of measured.csv).
+void WriteExperiments(OutputDirectory& dir, const RunMetadata& m) {
+  std::ostream& out = dir.Add("experiments.csv");
+  out << "index,name,description,outputs,measured,components,first_output,first_measured\n";
+  const std::vector<ExperimentSlice> slices = ExperimentSlices(m);
+  for (std::size_t e = 0; e < slices.size(); ++e) {
+    const ExperimentSlice& x = slices[e];
+    out << e << ',' << CsvField(x.name) << ',' << CsvField(x.description) << ',' << x.outputs << ','
+        << x.measured << ',' << x.components << ',' << x.first_output << ',' << x.first_measured
+        << '\n';
   }
 }
 
@@ -304,7 +375,17 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
     out << (i ? ", " : "") << JsonString(m.stop_limits[i].first) << ": "
         << JsonString(m.stop_limits[i].second);
   }
-  out << "},\n  \"waves\": [";
+  out << "},\n  \"experiments\": [";
+  const std::vector<ExperimentSlice> experiments = ExperimentSlices(m);
+  for (std::size_t e = 0; e < experiments.size(); ++e) {
+    const ExperimentSlice& x = experiments[e];
+    out << (e ? "," : "") << "\n    {\"name\": " << JsonString(x.name)
+        << ", \"description\": " << JsonString(x.description) << ", \"outputs\": " << x.outputs
+        << ", \"measured\": " << x.measured << ", \"components\": " << x.components
+        << ", \"first_output\": " << x.first_output << ", \"first_measured\": " << x.first_measured
+        << ", \"first_component\": " << x.first_component << "}";
+  }
+  out << "\n  ],\n  \"waves\": [";
   for (std::size_t t = 0; t < h.waves.size(); ++t) {
     const WaveRecord& w = h.waves[t];
     out << (t ? "," : "") << "\n    {\"wave\": " << WaveNumber(w)
@@ -332,6 +413,7 @@ void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptio
     if (options.particles) WriteParticles(dir, m, h);
     if (options.curves) WriteCurves(dir, m, h);
     WriteMeasured(dir, m);
+    WriteExperiments(dir, m);
   }
   if (options.json) WriteSummary(dir, m, h);
 }

@@ -8,7 +8,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "output_test_support.hpp"
@@ -156,6 +158,69 @@ TEST_F(Report, FiguresFollowTheConfiguredFormats) {
   // The page shows the raster format.
   EXPECT_NE(ReadFile(dir_.path() / "both" / "index.html").find("<img src=\"overview.png\""),
             std::string::npos);
+}
+
+// The number of axes (panels) in a matplotlib SVG: one <g id="axes_N"> each.
+int SvgAxes(const std::string& svg) {
+  int count = 0;
+  for (std::size_t at = svg.find("<g id=\"axes_"); at != std::string::npos;
+       at = svg.find("<g id=\"axes_", at + 1)) {
+    ++count;
+  }
+  return count;
+}
+
+// A run of two named experiments ([[experiment]] tables) scanning the same line under two loads:
+// the curve figures get one panel per experiment, titled with its name and description, and
+// index.html lists them; the marginals are the run's, as for one experiment.
+TEST_F(Report, EveryExperimentGetsItsCurvePanel) {
+  const auto svg = [](RunMetadata& m, RunHistory&) {
+    m.config_text += "\n[output]\nfigures = [\"svg\"]\n";
+  };
+  const std::string one = MakeHistory(dir_.path() / "ONE.db", svg);
+  const std::string two = MakeHistory(dir_.path() / "TWO.db", [&](RunMetadata& m, RunHistory& h) {
+    svg(m, h);
+    const auto points = static_cast<int>(m.output_positions.size());
+    const auto measured = static_cast<int>(m.measured.positions.size());
+    auto twice = [](std::vector<double>& v) { v.insert(v.end(), v.begin(), v.end()); };
+    twice(m.output_positions);
+    twice(m.measured.positions);
+    twice(m.measured.values);
+    m.distance_components = {{"45cm/least squares", ComponentKind::kThreshold, 1.0},
+                             {"70cm/least squares", ComponentKind::kThreshold, 1.0}};
+    m.experiments = {{"45cm", "load at 0.45 m; scan 0-0.9 m", points, measured, 1},
+                     {"70cm", "load at 0.7 m; scan 0-0.9 m", points, measured, 1}};
+    for (WaveRecord& w : h.waves) {
+      w.thresholds.push_back(w.thresholds.front());
+      for (Particle& p : w.particles) twice(p.output);
+    }
+  });
+  auto r = RunCli({"report", one, "-o", dir_ / "one"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunCli({"report", two, "-o", dir_ / "two"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  // One experiment: one panel, no experiment table, as before experiments existed.
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "one" / "wave_1_curves.svg")), 1);
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "one" / "overview.svg")), 2 * (1 + 2));
+  EXPECT_EQ(ReadFile(dir_.path() / "one" / "index.html").find("Experiments"), std::string::npos);
+
+  for (const char* wave : {"wave_1_curves.svg", "wave_2_curves.svg"}) {
+    const std::string figure = ReadFile(dir_.path() / "two" / wave);
+    EXPECT_EQ(SvgAxes(figure), 2) << wave;
+    for (const char* title :
+         {"45cm", "load at 0.45 m; scan 0-0.9 m", "70cm", "load at 0.7 m; scan 0-0.9 m"}) {
+      EXPECT_NE(figure.find(title), std::string::npos) << title << " in " << wave;
+    }
+  }
+  // Per wave: a curve column per experiment, then the two edges' marginals.
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "two" / "overview.svg")), 2 * (2 + 2));
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "two" / "wave_1_marginals.svg")), 2);
+  const std::string page = ReadFile(dir_.path() / "two" / "index.html");
+  EXPECT_NE(page.find("<h2>Experiments</h2>"), std::string::npos);
+  EXPECT_NE(page.find("<td>70cm</td><td>load at 0.7 m; scan 0-0.9 m</td><td>91</td>"),
+            std::string::npos)
+      << page;
 }
 
 TEST_F(Report, FailuresAreOneLineAndLeaveNothingBehind) {

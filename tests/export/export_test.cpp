@@ -93,6 +93,12 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   EXPECT_EQ(positions.size(), 8u);
   const auto measured = Lines(out / "measured.csv");
   EXPECT_EQ(measured[0], "position_m,value");
+  // One unnamed experiment holding everything: listed, but no experiment column anywhere.
+  const auto experiments = Lines(out / "experiments.csv");
+  ASSERT_EQ(experiments.size(), 2u);
+  EXPECT_EQ(experiments[0],
+            "index,name,description,outputs,measured,components,first_output,first_measured");
+  EXPECT_EQ(experiments[1], "0,,,7," + std::to_string(measured.size() - 1) + ",2,0,0");
 
   std::ifstream json(out / "summary.json");
   std::stringstream text;
@@ -162,6 +168,62 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
                                "\"tempering_form\": \"geometric\"",
                                "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
                                "\"reals_mean\": ["}) {
+    EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
+  }
+}
+
+// Two named experiments ([[experiment]] tables): experiments.csv gives each one's slices, and
+// positions.csv and measured.csv name each row's experiment in a last column; summary.json lists
+// them.
+TEST_F(ExportTest, NamedExperimentsGetTheirTableAndAColumn) {
+  RunMetadata metadata = testing::MakeFakeMetadata(options_);
+  ASSERT_EQ(metadata.output_positions.size(), 7u);
+  ASSERT_EQ(metadata.measured.positions.size(), 2u);
+  metadata.distance_components[0].name = "45cm/least squares";
+  metadata.distance_components[1].name = "70cm/secondary peak";
+  metadata.experiments = {{"45cm", "load at 0.45 m, 5 Hz", 4, 1, 1},
+                          {"70cm", "load at 0.7 m, 5 Hz", 3, 1, 1}};
+  const std::string db = (dir_ / "RUN.db").string();
+  {
+    HistoryStore store = HistoryStore::Create(db, metadata);
+    const RunHistory history = testing::MakeFakeHistory(options_);
+    for (const WaveRecord& wave : history.waves) testing::RecordWave(store, wave, 4);
+    store.Finish(history.summary);
+  }
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+
+  const auto experiments = Lines(out / "experiments.csv");
+  ASSERT_EQ(experiments.size(), 3u);
+  EXPECT_EQ(experiments[1], "0,45cm,\"load at 0.45 m, 5 Hz\",4,1,1,0,0");
+  EXPECT_EQ(experiments[2], "1,70cm,\"load at 0.7 m, 5 Hz\",3,1,1,4,1");
+  const auto positions = Lines(out / "positions.csv");
+  ASSERT_EQ(positions.size(), 8u);
+  EXPECT_EQ(positions[0], "column,position_m,experiment");
+  EXPECT_EQ(positions[1], "y_0,0,45cm");
+  EXPECT_EQ(positions[4], "y_3,0.45,45cm");
+  EXPECT_EQ(positions[5], "y_4,0.6,70cm");
+  const auto measured = Lines(out / "measured.csv");
+  ASSERT_EQ(measured.size(), 3u);
+  EXPECT_EQ(measured[0], "position_m,value,experiment");
+  EXPECT_EQ(measured[1].substr(measured[1].rfind(',')), ",45cm");
+  EXPECT_EQ(measured[2].substr(measured[2].rfind(',')), ",70cm");
+  const auto particles = Lines(out / "particles.csv");
+  EXPECT_NE(particles[0].find(",d_45cm_least_squares,d_70cm_secondary_peak"), std::string::npos)
+      << particles[0];
+  const auto curves = Lines(out / "curves.csv");
+  EXPECT_EQ(curves[0], "wave,index,y_0,y_1,y_2,y_3,y_4,y_5,y_6") << "curves are not cut";
+
+  std::ifstream json(out / "summary.json");
+  std::stringstream text;
+  text << json.rdbuf();
+  for (const char* expected :
+       {"\"experiments\": [\n    {\"name\": \"45cm\", \"description\": \"load at 0.45 m, 5 Hz\", "
+        "\"outputs\": 4, \"measured\": 1, \"components\": 1, \"first_output\": 0, "
+        "\"first_measured\": 0, \"first_component\": 0},",
+        "{\"name\": \"70cm\", \"description\": \"load at 0.7 m, 5 Hz\", \"outputs\": 3, "
+        "\"measured\": 1, \"components\": 1, \"first_output\": 4, \"first_measured\": 1, "
+        "\"first_component\": 1}\n  ],"}) {
     EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
   }
 }

@@ -12,7 +12,7 @@
 namespace combabc {
 
 struct ExportOptions {
-  bool csv = true;        // waves, marginals, particles, curves, positions, measured (.csv)
+  bool csv = true;        // waves, marginals, particles, curves, positions, measured, experiments
   bool json = true;       // summary.json: metadata and per-wave statistics
   bool particles = true;  // particles.csv (one row per accepted particle, can be large)
   bool curves = true;     // curves.csv + positions.csv, when the run stored outputs
@@ -44,5 +44,28 @@ void ExportRun(const std::string& history_path,
 // (an older file), the names fall back to eps_<k> / d_<k>.
 std::vector<std::string> ThresholdColumns(const RunMetadata& metadata, std::size_t count);
 std::vector<std::string> DistanceColumns(const RunMetadata& metadata, std::size_t count);
+
+// One experiment of a run (RunMetadata::experiments) with where its slices start: its outputs are
+// the columns y_<first_output> ... of curves.csv (rows of positions.csv), its measured points the
+// rows first_measured ... of measured.csv, its distance components the d_ columns from
+// first_component on.
+struct ExperimentSlice {
+  std::string name;  // "" for the single experiment of a config without [[experiment]]
+  std::string description;
+  std::size_t first_output = 0;
+  std::size_t outputs = 0;
+  std::size_t first_measured = 0;
+  std::size_t measured = 0;
+  std::size_t first_component = 0;
+  std::size_t components = 0;
+};
+
+// The run's experiments in order. Metadata without experiments (built by hand, as the Python
+// module's in-memory runs do), or whose counts do not add up to its outputs, measured points and
+// components (a checked history never does), is one unnamed experiment holding everything.
+std::vector<ExperimentSlice> ExperimentSlices(const RunMetadata& metadata);
+// Whether the run's experiments have names (its config has [[experiment]] tables): then the
+// export's positions.csv and measured.csv get an `experiment` column.
+bool HasNamedExperiments(const RunMetadata& metadata);
 
 }  // namespace combabc
