@@ -175,25 +175,27 @@ void PrintDesign(const combabc::services::DesignOutcome& o) {
   for (std::size_t step = 0; step < r.selected.size(); ++step) {
     const auto& c = o.candidates[static_cast<std::size_t>(r.selected[step])];
     const auto& s = r.cumulative[step];
-    std::printf("  %zu. load %.1f cm (y %.2f), scan %.1f-%.1f cm (y %.2f): %.2f bits in all, "
-                "%.1f clamps identified, %.1f wrong\n",
-                step + 1,
-                c.load_x * 100,
-                c.load_y_fraction,
-                c.scan_from * 100,
-                c.scan_to * 100,
-                c.scan_y_fraction,
-                s.information_gain,
-                s.identified,
-                s.wrong);
+    std::printf(
+        "  %zu. load %.1f cm (y %.2f), scan %.1f-%.1f cm (y %.2f): %.2f bits in all, "
+        "%.1f clamps identified, %.1f wrong\n",
+        step + 1,
+        c.load_x * 100,
+        c.load_y_fraction,
+        c.scan_from * 100,
+        c.scan_to * 100,
+        c.scan_y_fraction,
+        s.information_gain,
+        s.identified,
+        s.wrong);
   }
   double least = std::numeric_limits<double>::infinity();
   for (const auto& s : r.cumulative) least = std::min(least, s.effective_particles);
   if (!o.exhaustive && least < 20) {
-    std::printf("note: the reweighted population falls to %.0f effective particles: the gains and "
-                "identified counts are upper bounds (a larger population: more accepted "
-                "particles, or [design] particles)\n",
-                least);
+    std::printf(
+        "note: the reweighted population falls to %.0f effective particles: the gains and "
+        "identified counts are upper bounds (a larger population: more accepted "
+        "particles, or [design] particles)\n",
+        least);
   }
   std::printf("design: %s (%.2f s; next experiment: %s/next_experiment.toml)\n",
               o.directory.c_str(),

@@ -24,8 +24,9 @@ void ParseDesignSection(TableReader& root, CalibrationConfig* c) {
     for (double v : *values) {
       const double x = v * scale;
       if (!(x >= 0.0 && x <= hi)) {
-        t->Fail(key, "entry " + std::to_string(v) + " lies outside [0, " +
-                         std::to_string(hi / scale) + "]");
+        t->Fail(
+            key,
+            "entry " + std::to_string(v) + " lies outside [0, " + std::to_string(hi / scale) + "]");
       }
       out->push_back(x);
     }
@@ -41,8 +42,10 @@ void ParseDesignSection(TableReader& root, CalibrationConfig* c) {
       const auto* pair = item.as_array();
       const auto from = pair && pair->size() == 2 ? (*pair)[0].value<double>() : std::nullopt;
       const auto to = pair && pair->size() == 2 ? (*pair)[1].value<double>() : std::nullopt;
-      if (!from || !to || !(*from < *to) || *from * unit < 0.0 || *to * unit > length * (1 + 1e-12)) {
-        t->FailAt(item, t->Key("scan"),
+      if (!from || !to || !(*from < *to) || *from * unit < 0.0 ||
+          *to * unit > length * (1 + 1e-12)) {
+        t->FailAt(item,
+                  t->Key("scan"),
                   "each window must be [from, to] with 0 <= from < to <= model.length");
       }
       d.scans.emplace_back(*from * unit, *to * unit);
@@ -64,8 +67,9 @@ void ParseDesignSection(TableReader& root, CalibrationConfig* c) {
   const std::size_t candidates =
       d.load_x.size() * d.load_y_fraction.size() * d.scans.size() * d.scan_y_fraction.size();
   if (candidates > plate::kMaxLoadCases) {
-    t->Fail("load_x", "the grid gives " + std::to_string(candidates) + " candidates; at most " +
-                          std::to_string(plate::kMaxLoadCases));
+    t->Fail("load_x",
+            "the grid gives " + std::to_string(candidates) + " candidates; at most " +
+                std::to_string(plate::kMaxLoadCases));
   }
   t->Finish();
   c->design = std::move(d);

@@ -91,7 +91,10 @@ void CheckSensorExperiment(const CalibrationConfig& c,
   if (!one.IsValid(&why)) ThrowModelError(why, sources, x.line, c.path);
 }
 
-void ParseOne(TableReader& t, std::size_t index, CalibrationConfig* c, ExperimentConfig* x,
+void ParseOne(TableReader& t,
+              std::size_t index,
+              CalibrationConfig* c,
+              ExperimentConfig* x,
               std::map<std::string, Source> sources) {
   const bool sensor = c->simulator.kind == SimulatorKind::kSensor;
   if (x->line != 0) {
@@ -122,8 +125,7 @@ void ParseOne(TableReader& t, std::size_t index, CalibrationConfig* c, Experimen
                 x->line != 0 ? x->line : 1,
                 x->Key(index, "data"));
   }
-  ParseDataTable(
-      *data, sensor ? std::optional<double>(x->load.load_x) : std::nullopt, &x->data);
+  ParseDataTable(*data, sensor ? std::optional<double>(x->load.load_x) : std::nullopt, &x->data);
   auto metric = t.Table("metric");
   if (!metric) {
     throw Error(ErrorKind::kConfig,
@@ -227,8 +229,9 @@ void ParseExperiments(TableReader& root,
       if (!name) t.Fail("name", "missing required key (a name for the experiment, e.g. \"45cm\")");
       if (!GoodName(*name)) {
         t.Fail("name",
-               Excerpt(*name) + " must be 1 to 64 letters, digits, '_', '-' or '.' (it names "
-                                "files and columns)");
+               Excerpt(*name) +
+                   " must be 1 to 64 letters, digits, '_', '-' or '.' (it names "
+                   "files and columns)");
       }
       const auto [it, fresh] = lines.emplace(ColumnKey(*name), t.Line("name"));
       if (!fresh) {

@@ -157,7 +157,8 @@ void ParseMetricTable(TableReader& table,
   if (!preset_text && components.empty()) {
     throw Error(ErrorKind::kConfig,
                 "give preset = \"area\" | \"least_squares\" | \"split_least_squares\" or one or "
-                "more [[" + t->prefix() + ".component]] tables",
+                "more [[" +
+                    t->prefix() + ".component]] tables",
                 path,
                 t->line(),
                 t->prefix());

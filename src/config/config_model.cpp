@@ -170,8 +170,7 @@ void ParseLoadTable(TableReader& l,
   InRange(l, "frequency", 0.0, kHuge, frequency_hz, sources, "frequency_hz");
   const auto type = l.String("type");
   if (type && *type != "point" && *type != "patch") {
-    l.Fail("type",
-            "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
+    l.Fail("type", "unknown load type " + Excerpt(*type) + "; expected \"point\" or \"patch\"");
   }
   InRange(l, "patch_length", 0.0, kHuge, &c->load_patch_length, sources, "load_patch_length");
   InRange(l, "patch_width", 0.0, kHuge, &c->load_patch_width, sources, "load_patch_width");
@@ -198,8 +197,8 @@ void ParseOutputTable(TableReader& o,
     if (positions->empty()) o.Fail("positions", "must not be empty");
     if (positions->size() > plate::kMaxOutputPositions) {
       o.Fail("positions",
-              "has " + std::to_string(positions->size()) + " entries; at most " +
-                  std::to_string(plate::kMaxOutputPositions));
+             "has " + std::to_string(positions->size()) + " entries; at most " +
+                 std::to_string(plate::kMaxOutputPositions));
     }
     for (std::size_t k = 1; k < positions->size(); ++k) {
       if (!((*positions)[k] > (*positions)[k - 1])) {
@@ -218,8 +217,8 @@ void ParseOutputTable(TableReader& o,
     const double intervals = std::floor(length / *spacing + 1e-9);
     if (!(intervals + 1 <= static_cast<double>(plate::kMaxOutputPositions))) {
       o.Fail("spacing",
-              "gives " + Number(intervals + 1) + " output positions; at most " +
-                  std::to_string(plate::kMaxOutputPositions) + " (use a larger spacing)");
+             "gives " + Number(intervals + 1) + " output positions; at most " +
+                 std::to_string(plate::kMaxOutputPositions) + " (use a larger spacing)");
     }
     const auto n = static_cast<int>(intervals);
     c->output_positions.clear();

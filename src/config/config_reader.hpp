@@ -99,7 +99,7 @@ int LineOf(const toml::node& node);
 namespace combabc {
 struct CalibrationConfig;
 struct MetricConfig;
-}
+}  // namespace combabc
 
 namespace combabc::config_internal {
 

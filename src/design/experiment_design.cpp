@@ -61,8 +61,8 @@ class Scorer {
     const auto m = static_cast<std::size_t>(profiles.points);
     std::vector<double> y(profiles.values.begin() + static_cast<std::ptrdiff_t>(truth_[j] * m),
                           profiles.values.begin() + static_cast<std::ptrdiff_t>(truth_[j] * m + m));
-    RandomStream rng(options_.seed, kNoiseStream + static_cast<std::uint64_t>(c),
-                     static_cast<std::uint64_t>(j));
+    RandomStream rng(
+        options_.seed, kNoiseStream + static_cast<std::uint64_t>(c), static_cast<std::uint64_t>(j));
     for (double& v : y) v += options_.noise_sigma * rng.Normal();
     const double scale = 1.0 / (2.0 * options_.noise_sigma * options_.noise_sigma);
     for (std::size_t i = 0; i < pop_.size(); ++i) {
@@ -110,7 +110,9 @@ class Scorer {
 
   // The score of experiments `chosen` plus `extra` (-1: none), given base[j] = the summed
   // log-likelihood of `chosen` for truth j (empty: none chosen).
-  Score Evaluate(const std::vector<std::vector<double>>& base, int extra, ThreadPool& pool,
+  Score Evaluate(const std::vector<std::vector<double>>& base,
+                 int extra,
+                 ThreadPool& pool,
                  double prior_entropy) const {
     const auto truths = static_cast<std::size_t>(options_.truths);
     std::vector<TruthOutcome> outcomes(truths);
@@ -165,7 +167,8 @@ void Check(const Population& population,
            const DesignOptions& options) {
   auto fail = [](const std::string& why) { throw std::invalid_argument("design: " + why); };
   if (population.dimension < 1 || population.size() == 0) fail("empty population");
-  if (population.bits.size() != population.size() * static_cast<std::size_t>(population.dimension)) {
+  if (population.bits.size() !=
+      population.size() * static_cast<std::size_t>(population.dimension)) {
     fail("population bits must be size() x dimension");
   }
   for (double w : population.weights) {
@@ -173,8 +176,7 @@ void Check(const Population& population,
   }
   if (candidates.empty()) fail("no candidates");
   for (const CandidateProfiles& c : candidates) {
-    if (c.points < 1 ||
-        c.values.size() != population.size() * static_cast<std::size_t>(c.points)) {
+    if (c.points < 1 || c.values.size() != population.size() * static_cast<std::size_t>(c.points)) {
       fail("candidate profiles must be size() x points");
     }
   }

@@ -94,7 +94,8 @@ std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::str
   for (const StoredExperiment& x : m.experiments) {
     const auto end = begin + static_cast<std::size_t>(x.measured);
     if (end > m.measured.positions.size()) {
-      throw Error(ErrorKind::kData, "the experiments' measured points exceed the stored ones", path);
+      throw Error(
+          ErrorKind::kData, "the experiments' measured points exceed the stored ones", path);
     }
     MeasuredProfile profile;
     profile.positions.assign(m.measured.positions.begin() + static_cast<std::ptrdiff_t>(begin),
@@ -619,8 +620,8 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
     if (request.thresholds.size() != count) {
       throw Error(ErrorKind::kUsage,
                   "gives " + std::to_string(request.thresholds.size()) + " thresholds; give " +
-                      std::to_string(count) + ", one per threshold component in this order: " +
-                      names,
+                      std::to_string(count) +
+                      ", one per threshold component in this order: " + names,
                   "",
                   0,
                   "--threshold");

@@ -71,8 +71,8 @@ design::Population FromPosterior(const std::string& path,
     if (w.complete) last = &w;
   }
   if (last == nullptr || last->particles.empty()) {
-    throw Error(ErrorKind::kUsage, "the run has no complete wave to start from", path, 0,
-                "--posterior");
+    throw Error(
+        ErrorKind::kUsage, "the run has no complete wave to start from", path, 0, "--posterior");
   }
   std::map<std::vector<std::uint8_t>, double> merged;
   double total = 0.0;
@@ -83,8 +83,8 @@ design::Population FromPosterior(const std::string& path,
     AddParticle(merged, p.theta.bits, w);
   }
   *what = "the posterior of " + path + " (wave " + std::to_string(last->wave + 1) + ", " +
-          std::to_string(last->particles.size()) + " particles, " +
-          std::to_string(merged.size()) + " distinct)";
+          std::to_string(last->particles.size()) + " particles, " + std::to_string(merged.size()) +
+          " distinct)";
   return ToPopulation(merged, m.dimension);
 }
 
@@ -115,8 +115,8 @@ design::Population FromPrior(const CalibrationConfig& c, std::string* what) {
     space.Expand(f, bits);
     AddParticle(merged, bits, 1.0);
   }
-  *what = "the prior (" + std::to_string(n) + " draws, " + std::to_string(merged.size()) +
-          " distinct)";
+  *what =
+      "the prior (" + std::to_string(n) + " draws, " + std::to_string(merged.size()) + " distinct)";
   return ToPopulation(merged, space.dimension());
 }
 
@@ -220,8 +220,7 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     table << rank + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
           << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
           << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
-          << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles)
-          << '\n';
+          << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles) << '\n';
   }
   std::ostream& selection = dir.Add("selection.csv");
   selection << "step,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
@@ -231,11 +230,11 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     const auto k = static_cast<std::size_t>(r.selected[step]);
     const DesignCandidate& d = o.candidates[k];
     const design::Score& s = r.cumulative[step];
-    selection << step + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ','
-              << Num(d.load_y_fraction) << ',' << Num(d.scan_from) << ',' << Num(d.scan_to)
-              << ',' << Num(d.scan_y_fraction) << ',' << Num(s.information_gain) << ','
-              << Num(s.information_gain_se) << ',' << Num(s.identified) << ','
-              << Num(s.wrong) << ',' << Num(s.effective_particles) << '\n';
+    selection << step + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
+              << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
+              << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
+              << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles)
+              << '\n';
   }
   std::ostream& ident = dir.Add("identifiability.csv");
   ident << "candidate,label";
@@ -261,12 +260,15 @@ DesignOutcome RunDesign(const DesignRequest& request) {
     throw Error(ErrorKind::kConfig,
                 "missing required table [design] (the candidate experiments to rank; "
                 "docs/config.md, \"Design\")",
-                c.path, 1, "design");
+                c.path,
+                1,
+                "design");
   }
   if (c.simulator.kind != SimulatorKind::kSensor) {
     throw Error(ErrorKind::kUsage,
                 "design simulates the built-in sensor's candidate loads and scans; this config's "
-                "simulator is " + std::string(ToString(c.simulator.kind)),
+                "simulator is " +
+                    std::string(ToString(c.simulator.kind)),
                 c.path);
   }
   if (!c.reals.empty()) {
@@ -288,10 +290,9 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   }
 
   DesignOutcome o;
-  const design::Population population = request.posterior_path.empty()
-                                            ? FromPrior(c, &o.population)
-                                            : FromPosterior(request.posterior_path, c,
-                                                            &o.population);
+  const design::Population population =
+      request.posterior_path.empty() ? FromPrior(c, &o.population)
+                                     : FromPosterior(request.posterior_path, c, &o.population);
   o.particles = population.size();
   o.exhaustive = request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kExactBits;
   o.candidates = Candidates(*c.design);
@@ -305,14 +306,14 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   options.seed = c.smc.seed;
   options.threads = threads;
   o.result = design::ScoreCandidates(population, profiles, options);
-  o.next_experiment = ExperimentBlock(
-      o.candidates[static_cast<std::size_t>(o.result.selected.front())], c, 1);
+  o.next_experiment =
+      ExperimentBlock(o.candidates[static_cast<std::size_t>(o.result.selected.front())], c, 1);
 
   if (!parent.empty() && !fs::exists(parent, ec)) {
     fs::create_directories(parent, ec);
     if (ec) {
-      throw Error(ErrorKind::kCantCreate, "cannot create directory: " + ec.message(),
-                  parent.string());
+      throw Error(
+          ErrorKind::kCantCreate, "cannot create directory: " + ec.message(), parent.string());
     }
   }
   OutputDirectory dir(directory, request.overwrite);
@@ -323,10 +324,12 @@ DesignOutcome RunDesign(const DesignRequest& request) {
     for (const std::string& format : c.output.figure_formats) {
       const std::string name = "identifiability." + format;
       dir.Add(name);
-      const ProcessResult result = RunProcess(
-          {script.python, script.script, dir.StagedPath("identifiability.csv"),
-           dir.StagedPath(name), format},
-          "python3-numpy and python3-matplotlib");
+      const ProcessResult result = RunProcess({script.python,
+                                               script.script,
+                                               dir.StagedPath("identifiability.csv"),
+                                               dir.StagedPath(name),
+                                               format},
+                                              "python3-numpy and python3-matplotlib");
       if (result.status != 0) {
         throw Error(KindOfScriptStatus(result.status),
                     name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
@@ -335,8 +338,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   }
   dir.Commit();
   o.directory = directory;
-  o.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  o.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return o;
 }
 

@@ -22,7 +22,7 @@ using Fingerprint = std::vector<std::pair<std::string, std::string>>;
 struct FingerprintInputs {
   const CalibrationConfig* config = nullptr;  // sampler options, metric, simulator options
   const ParameterSpace* space = nullptr;
-  std::span<const MeasuredProfile> data;  // one per experiment, as the metric sees them
+  std::span<const MeasuredProfile> data;      // one per experiment, as the metric sees them
   std::vector<DistanceComponent> components;  // the metric as built
   std::string version;                        // combabc version
   std::string handshake;                      // a worker simulator's handshake line, else empty

@@ -83,23 +83,19 @@ std::string CommandSimulator::Attempt(const ParameterView& theta, std::span<doub
   const bool json_out = options_.results_format == DataFormat::kJson;
   const std::string output_path = folder.path + (json_out ? "/output.json" : "/output.csv");
   const std::string stderr_path = folder.path + "/stderr.txt";
-  const std::string params = json_in
-                                 ? si::ParamsJson(theta, options_.real_names, Experiment())
-                                 : si::ParamsCsv(theta,
-                                                 options_.bit_names,
-                                                 options_.real_names,
-                                                 Experiment());
+  const std::string params =
+      json_in ? si::ParamsJson(theta, options_.real_names, Experiment())
+              : si::ParamsCsv(theta, options_.bit_names, options_.real_names, Experiment());
   if (options_.params == Transport::kFile && !WriteFile(params_path, params)) {
     return "cannot write " + params_path;
   }
   SubprocessOptions spawn;
-  spawn.argv =
-      ExpandArgv(options_.argv,
-                 params_path,
-                 output_path,
-                 folder.path,
-                 options_.config_directory,
-                 Experiment());
+  spawn.argv = ExpandArgv(options_.argv,
+                          params_path,
+                          output_path,
+                          folder.path,
+                          options_.config_directory,
+                          Experiment());
   spawn.working_directory = folder.path;
   spawn.pipe_stdin = options_.params == Transport::kStdin;
   spawn.stderr_path = stderr_path;

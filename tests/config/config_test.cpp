@@ -149,7 +149,8 @@ TEST(Config, SplitPresetWithGaussianExtension) {
   EXPECT_NEAR(data.positions.front(), 0.70, kTol);
   // The measured profile itself satisfies Eq. 7: a secondary peak in 76-80 cm.
   std::vector<double> out_x(data.positions.begin(), data.positions.end());
-  CompositeDistance distance(c.experiments[0].metric.components, data.positions, data.displacements, out_x);
+  CompositeDistance distance(
+      c.experiments[0].metric.components, data.positions, data.displacements, out_x);
   std::vector<double> d(5);
   distance.Evaluate(data.displacements, d);
   EXPECT_EQ(d, (std::vector<double>{0, 0, 0, 1, 1}));
@@ -250,7 +251,7 @@ TEST(Config, ModelKeysAreOptionalAndDefaultsComeFromSensorOptions) {
   EXPECT_EQ(c.model.layers.size(), defaults.layers.size());
   EXPECT_EQ(c.model.load_cases[0].output_positions, defaults.load_cases[0].output_positions);
   EXPECT_EQ(c.model.clamps_per_edge, 9);
-  EXPECT_EQ(c.space.dimension, 18);           // 2 x 9 clamps
+  EXPECT_EQ(c.space.dimension, 18);                         // 2 x 9 clamps
   EXPECT_EQ(c.model.load_cases[0].load_patch_length, 0.0);  // point load
   EXPECT_EQ(c.model.load_cases[0].load_x, 0.3);
   // The Gaussian extension is centred at the model's load unless told otherwise.

@@ -28,7 +28,8 @@ TinyDesign MakeSetup() {
   o.elements_across_width = 2;
   o.normalise = true;
   // A centreline load (mirror pairs indistinguishable), off-centre loads, a short scan.
-  const double loads[][3] = {{0.45, 0.5, 0.0}, {0.15, 0.5, 0.0}, {0.30, 0.25, 0.0}, {0.75, 0.5, 0.6}};
+  const double loads[][3] = {
+      {0.45, 0.5, 0.0}, {0.15, 0.5, 0.0}, {0.30, 0.25, 0.0}, {0.75, 0.5, 0.6}};
   o.load_cases.clear();
   for (const auto& l : loads) {
     plate::LoadCase c;
@@ -76,7 +77,8 @@ std::pair<double, double> Exhaustive(const TinyDesign& s, int c, int draws) {
   std::vector<double> y(m), logw(64);
   for (int t = 0; t < 64; ++t) {
     for (int r = 0; r < draws; ++r) {
-      RandomStream rng(99, static_cast<std::uint64_t>(c), static_cast<std::uint64_t>(t * draws + r));
+      RandomStream rng(
+          99, static_cast<std::uint64_t>(c), static_cast<std::uint64_t>(t * draws + r));
       for (std::size_t k = 0; k < m; ++k) y[k] = p.values[t * m + k] + kSigma * rng.Normal();
       double top = -1e300;
       for (int i = 0; i < 64; ++i) {

@@ -86,7 +86,8 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
       continue;
     }
     const CalibrationConfig config = LoadConfig(path.string());
-    const std::string truth = TruthOf(ResolvePath(config.directory, config.experiments[0].data.csv));
+    const std::string truth =
+        TruthOf(ResolvePath(config.directory, config.experiments[0].data.csv));
     ASSERT_EQ(static_cast<int>(truth.size()), config.space.dimension)
         << "no '# truth' header with one bit per clamp in " << config.experiments[0].data.csv;
 

@@ -308,12 +308,12 @@ namespace {
 TEST(CommandSimulatorExperiment, TheExperimentReachesArgvAndTheParamsFile) {
   RunFolder run("command-experiment");
   // Echoes the load position from argv, the experiment's name from params.json, and a constant.
-  ExternalSimulatorOptions o = ShOptions(
-      run,
-      R"sh(name=$(sed -n 's/.*"experiment": {"name": "\([^"]*\)".*/\1/p' "$1")
+  ExternalSimulatorOptions o =
+      ShOptions(run,
+                R"sh(name=$(sed -n 's/.*"experiment": {"name": "\([^"]*\)".*/\1/p' "$1")
 [ "$name" = "70cm" ] || { echo "no experiment in params: $(cat "$1")" >&2; exit 2; }
 echo "$2,$3,7")sh",
-      {"{params}", "{load_x}", "{frequency}"});
+                {"{params}", "{load_x}", "{frequency}"});
   o.experiment = SimulatorExperiment{"70cm", 0.7, 0.25, 0.042, 5.0};
   CommandSimulator s(o);
   std::vector<double> out(3);
@@ -327,9 +327,10 @@ TEST(CommandSimulatorExperiment, WithoutAnExperimentThePlaceholdersStayAsWritten
   EXPECT_EQ(ExpandArgv(argv, "p.json", "", "", ""),
             (std::vector<std::string>{"prog", "{load_x}", "p.json"}));
   const SimulatorExperiment e{"a", 0.25, 0.5, 0.5, 12.5};
-  EXPECT_EQ(ExpandArgv({"--x={load_x}", "{experiment}", "{load_amplitude}{frequency}"}, "", "",
-                       "", "", &e),
-            (std::vector<std::string>{"--x=0.25", "a", "0.512.5"}));
+  EXPECT_EQ(
+      ExpandArgv(
+          {"--x={load_x}", "{experiment}", "{load_amplitude}{frequency}"}, "", "", "", "", &e),
+      (std::vector<std::string>{"--x=0.25", "a", "0.512.5"}));
 }
 
 }  // namespace

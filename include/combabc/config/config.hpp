@@ -77,17 +77,17 @@ struct ExperimentConfig {
 // [design] (docs/config.md, "Design"): the candidate experiments `combabc design` ranks, the
 // product of the grids below (positions in metres here).
 struct DesignConfig {
-  std::vector<double> load_x;                   // along the sensor
-  std::vector<double> load_y_fraction = {0.5};  // across the width
+  std::vector<double> load_x;                    // along the sensor
+  std::vector<double> load_y_fraction = {0.5};   // across the width
   std::vector<std::pair<double, double>> scans;  // scan windows [from, to]
-  std::vector<double> scan_y_fraction = {0.5};  // scan lines across the width
-  double scan_spacing = 0.01;                   // between scan points
-  double noise = 0.01;                          // measurement noise sigma, of the peak
-  int truths = 200;                             // plausible truths per candidate
-  int particles = 2000;                         // prior draws (when no posterior is given)
-  int select = 3;                               // experiments chosen greedily
-  double identified_margin = 0.4;               // |P(fixed) - 0.5| above it: identified
-  int line = 0;                                 // the [design] table's line
+  std::vector<double> scan_y_fraction = {0.5};   // scan lines across the width
+  double scan_spacing = 0.01;                    // between scan points
+  double noise = 0.01;                           // measurement noise sigma, of the peak
+  int truths = 200;                              // plausible truths per candidate
+  int particles = 2000;                          // prior draws (when no posterior is given)
+  int select = 3;                                // experiments chosen greedily
+  double identified_margin = 0.4;                // |P(fixed) - 0.5| above it: identified
+  int line = 0;                                  // the [design] table's line
 };
 
 struct CalibrationConfig {

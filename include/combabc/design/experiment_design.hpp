@@ -65,9 +65,9 @@ struct Score {
 struct DesignResult {
   double prior_entropy = 0.0;  // bits: the population's marginal entropy
   double prior_identified = 0.0;
-  std::vector<Score> scores;       // each candidate alone, in candidate order
-  std::vector<int> selected;       // the greedy sequence of candidates
-  std::vector<Score> cumulative;   // the score of the first 1, 2, ... selected together
+  std::vector<Score> scores;      // each candidate alone, in candidate order
+  std::vector<int> selected;      // the greedy sequence of candidates
+  std::vector<Score> cumulative;  // the score of the first 1, 2, ... selected together
 };
 
 // The population's marginal P(bit k = 1).

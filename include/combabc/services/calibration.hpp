@@ -143,7 +143,8 @@ class NominalSimulator {
 // 1 = fixed) through the config's simulator at its nominal continuous values, written as CSV:
 // position_m (the output coordinates), the output (the sensor's: displacement_m, raw metres) and
 // the profile normalised by its largest magnitude; with [[experiment]] tables, every
-// experiment's profile, each normalised by its own peak, after a column naming the experiment. An external simulator works in
+// experiment's profile, each normalised by its own peak, after a column naming the experiment. An
+// external simulator works in
 // "<csv stem>.simulate.work" beside the CSV. An existing output_csv is refused (kCantCreate)
 // unless `overwrite`.
 void SimulateConfiguration(const std::string& config_path,
