@@ -12,7 +12,6 @@
 namespace combabc::config_internal {
 namespace {
 
-constexpr double kHuge = std::numeric_limits<double>::max();
 
 // Reads an optional strictly positive finite number.
 void Positive(TableReader& t,

@@ -4,6 +4,7 @@
 // ignored), and that formats errors as "file:line: dotted.key: message".
 #include <cstdint>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -17,6 +18,9 @@
 #include "combabc/core/error.hpp"
 
 namespace combabc::config_internal {
+
+// The widest range a key may take where only the sign or finiteness is checked.
+inline constexpr double kHuge = std::numeric_limits<double>::max();
 
 // "\"a\", \"b\"" for messages listing the allowed values.
 std::string OneOf(std::initializer_list<const char*> names);

@@ -10,7 +10,6 @@
 namespace combabc::config_internal {
 namespace {
 
-constexpr double kHuge = std::numeric_limits<double>::max();
 
 void ParseTempering(TableReader& s, SmcOptions* smc, Sources* sources) {
   auto t = s.Table("tempering");

@@ -25,7 +25,7 @@ namespace {
 constexpr int kExactBits = 12;
 constexpr std::uint64_t kPriorStream = 0xD4'0000'0000ULL;
 
-std::string Num(double x) {
+std::string DesignNumber(double x) {
   char b[40];
   std::snprintf(b, sizeof b, "%.6g", x);
   return b;
@@ -33,9 +33,9 @@ std::string Num(double x) {
 
 // Adds `bits` with weight w, merging repeats: a posterior holds many copies of a configuration,
 // and each distinct one is simulated once.
-void AddParticle(std::map<std::vector<std::uint8_t>, double>& merged,
-                 std::vector<std::uint8_t> bits,
-                 double w) {
+void AddDesignParticle(std::map<std::vector<std::uint8_t>, double>& merged,
+                       std::vector<std::uint8_t> bits,
+                       double w) {
   merged[std::move(bits)] += w;
 }
 
@@ -80,7 +80,7 @@ design::Population FromPosterior(const std::string& path,
   for (const Particle& p : last->particles) {
     // The paper's estimator counts accepted particles; importance weights otherwise.
     const double w = m.estimator == "paper" || !(total > 0.0) ? 1.0 : p.weight;
-    AddParticle(merged, p.theta.bits, w);
+    AddDesignParticle(merged, p.theta.bits, w);
   }
   *what = "the posterior of " + path + " (wave " + std::to_string(last->wave + 1) + ", " +
           std::to_string(last->particles.size()) + " particles, " + std::to_string(merged.size()) +
@@ -103,7 +103,7 @@ design::Population FromPrior(const CalibrationConfig& c, std::string* what) {
         mass *= f[static_cast<std::size_t>(k)] ? prior[k] : 1.0 - prior[k];
       }
       space.Expand(f, bits);
-      AddParticle(merged, bits, mass);
+      AddDesignParticle(merged, bits, mass);
     }
     *what = "the prior (every one of " + std::to_string(merged.size()) + " configurations)";
     return ToPopulation(merged, space.dimension());
@@ -113,7 +113,7 @@ design::Population FromPrior(const CalibrationConfig& c, std::string* what) {
     RandomStream rng(c.smc.seed, kPriorStream, static_cast<std::uint64_t>(i));
     for (int k = 0; k < free; ++k) f[static_cast<std::size_t>(k)] = rng.Uniform() < prior[k];
     space.Expand(f, bits);
-    AddParticle(merged, bits, 1.0);
+    AddDesignParticle(merged, bits, 1.0);
   }
   *what =
       "the prior (" + std::to_string(n) + " draws, " + std::to_string(merged.size()) + " distinct)";
@@ -141,10 +141,11 @@ std::vector<double> ScanPositions(const DesignCandidate& c, double spacing) {
 
 // Each candidate's normalised profile for every particle: one plate model whose load cases are
 // the candidates, solved once per particle (one factorization for all of them).
-std::vector<design::CandidateProfiles> Simulate(const CalibrationConfig& c,
-                                                const std::vector<DesignCandidate>& candidates,
-                                                const design::Population& population,
-                                                int threads) {
+std::vector<design::CandidateProfiles> SimulateCandidates(
+    const CalibrationConfig& c,
+    const std::vector<DesignCandidate>& candidates,
+    const design::Population& population,
+    int threads) {
   plate::SensorOptions options = c.model;
   options.normalise = true;  // as the measured data are normalised
   options.load_cases.clear();
@@ -183,22 +184,23 @@ std::string ExperimentBlock(const DesignCandidate& k, const CalibrationConfig& c
   std::ostringstream out;
   out << "# The best next experiment by `combabc design` (rank " << rank
       << "): add it to the config's [[experiment]] tables once measured.\n"
-      << "[[experiment]]\nname = \"x" << Num(k.load_x * 100) << "cm"
-      << (k.load_y_fraction != 0.5 ? "_y" + Num(k.load_y_fraction) : "") << "\"\n"
-      << "[experiment.load]\nx = " << Num(k.load_x) << "                # m\n"
-      << "y_fraction = " << Num(k.load_y_fraction) << "\n"
-      << "amplitude = " << Num(c.model.load_cases.front().load_force) << "          # N\n"
-      << "frequency = " << Num(c.model.frequency_hz) << "            # Hz\n"
+      << "[[experiment]]\nname = \"x" << DesignNumber(k.load_x * 100) << "cm"
+      << (k.load_y_fraction != 0.5 ? "_y" + DesignNumber(k.load_y_fraction) : "") << "\"\n"
+      << "[experiment.load]\nx = " << DesignNumber(k.load_x) << "                # m\n"
+      << "y_fraction = " << DesignNumber(k.load_y_fraction) << "\n"
+      << "amplitude = " << DesignNumber(c.model.load_cases.front().load_force) << "          # N\n"
+      << "frequency = " << DesignNumber(c.model.frequency_hz) << "            # Hz\n"
       << "[experiment.output]\npositions = [";
   const std::vector<double> x = ScanPositions(k, c.design->scan_spacing);
-  for (std::size_t i = 0; i < x.size(); ++i) out << (i ? ", " : "") << Num(x[i]);
-  out << "]  # m\ny_fraction = " << Num(k.scan_y_fraction) << "\n"
+  for (std::size_t i = 0; i < x.size(); ++i) out << (i ? ", " : "") << DesignNumber(x[i]);
+  out << "]  # m\ny_fraction = " << DesignNumber(k.scan_y_fraction) << "\n"
       << "[experiment.data]\ncsv = \"FILL IN: the measured profile\"\n"
-      << "position_unit = \"cm\"\nwindow = [" << Num(k.scan_from * 100) << ", "
-      << Num(k.scan_to * 100) << "]  # cm\n"
+      << "position_unit = \"cm\"\nwindow = [" << DesignNumber(k.scan_from * 100) << ", "
+      << DesignNumber(k.scan_to * 100) << "]  # cm\n"
       << "[experiment.metric]\n[[experiment.metric.component]]\ntype = \"least_squares\"\n"
-      << "window = [" << Num(k.scan_from * 100) << ", " << Num(k.scan_to * 100) << "]  # cm\n"
-      << "noise = \"gaussian\"\nsigma_noise = " << Num(c.design->noise) << "\n";
+      << "window = [" << DesignNumber(k.scan_from * 100) << ", " << DesignNumber(k.scan_to * 100)
+      << "]  # cm\n"
+      << "noise = \"gaussian\"\nsigma_noise = " << DesignNumber(c.design->noise) << "\n";
   return out.str();
 }
 
@@ -217,10 +219,12 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     const std::size_t k = order[rank];
     const DesignCandidate& d = o.candidates[k];
     const design::Score& s = r.scores[k];
-    table << rank + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
-          << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
-          << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
-          << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles) << '\n';
+    table << rank + 1 << ',' << k + 1 << ',' << DesignNumber(d.load_x) << ','
+          << DesignNumber(d.load_y_fraction) << ',' << DesignNumber(d.scan_from) << ','
+          << DesignNumber(d.scan_to) << ',' << DesignNumber(d.scan_y_fraction) << ','
+          << DesignNumber(s.information_gain) << ',' << DesignNumber(s.information_gain_se) << ','
+          << DesignNumber(s.identified) << ',' << DesignNumber(s.wrong) << ','
+          << DesignNumber(s.effective_particles) << '\n';
   }
   std::ostream& selection = dir.Add("selection.csv");
   selection << "step,candidate,load_x_m,load_y_fraction,scan_from_m,scan_to_m,scan_y_fraction,"
@@ -230,11 +234,12 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     const auto k = static_cast<std::size_t>(r.selected[step]);
     const DesignCandidate& d = o.candidates[k];
     const design::Score& s = r.cumulative[step];
-    selection << step + 1 << ',' << k + 1 << ',' << Num(d.load_x) << ',' << Num(d.load_y_fraction)
-              << ',' << Num(d.scan_from) << ',' << Num(d.scan_to) << ',' << Num(d.scan_y_fraction)
-              << ',' << Num(s.information_gain) << ',' << Num(s.information_gain_se) << ','
-              << Num(s.identified) << ',' << Num(s.wrong) << ',' << Num(s.effective_particles)
-              << '\n';
+    selection << step + 1 << ',' << k + 1 << ',' << DesignNumber(d.load_x) << ','
+              << DesignNumber(d.load_y_fraction) << ',' << DesignNumber(d.scan_from) << ','
+              << DesignNumber(d.scan_to) << ',' << DesignNumber(d.scan_y_fraction) << ','
+              << DesignNumber(s.information_gain) << ',' << DesignNumber(s.information_gain_se)
+              << ',' << DesignNumber(s.identified) << ',' << DesignNumber(s.wrong) << ','
+              << DesignNumber(s.effective_particles) << '\n';
   }
   std::ostream& ident = dir.Add("identifiability.csv");
   ident << "candidate,label";
@@ -242,10 +247,10 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
   ident << '\n';
   for (std::size_t k = 0; k < o.candidates.size(); ++k) {
     const DesignCandidate& d = o.candidates[k];
-    ident << k + 1 << ",\"load " << Num(d.load_x * 100) << " cm, y " << Num(d.load_y_fraction)
-          << "; scan " << Num(d.scan_from * 100) << "-" << Num(d.scan_to * 100) << " cm, y "
-          << Num(d.scan_y_fraction) << "\"";
-    for (double v : r.scores[k].identifiability) ident << ',' << Num(v);
+    ident << k + 1 << ",\"load " << DesignNumber(d.load_x * 100) << " cm, y "
+          << DesignNumber(d.load_y_fraction) << "; scan " << DesignNumber(d.scan_from * 100) << "-"
+          << DesignNumber(d.scan_to * 100) << " cm, y " << DesignNumber(d.scan_y_fraction) << "\"";
+    for (double v : r.scores[k].identifiability) ident << ',' << DesignNumber(v);
     ident << '\n';
   }
   dir.Add("next_experiment.toml") << o.next_experiment;
@@ -297,7 +302,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   o.exhaustive = request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kExactBits;
   o.candidates = Candidates(*c.design);
   const std::vector<design::CandidateProfiles> profiles =
-      Simulate(c, o.candidates, population, threads);
+      SimulateCandidates(c, o.candidates, population, threads);
   design::DesignOptions options;
   options.noise_sigma = c.design->noise;
   options.truths = c.design->truths;
