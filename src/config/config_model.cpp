@@ -12,7 +12,6 @@
 namespace combabc::config_internal {
 namespace {
 
-
 // Reads an optional strictly positive finite number.
 void Positive(TableReader& t,
               std::string_view key,

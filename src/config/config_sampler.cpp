@@ -10,7 +10,6 @@
 namespace combabc::config_internal {
 namespace {
 
-
 void ParseTempering(TableReader& s, SmcOptions* smc, Sources* sources) {
   auto t = s.Table("tempering");
   if (!t) return;
