@@ -234,9 +234,9 @@ void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
                                  std::span<std::complex<double>> out) const {
   CheckSpans(clamps, out.size());
   for (std::size_t c = 0; c < condensations_.size(); ++c) {
-    condensations_[c]->Solve(clamps,
-                             out.subspan(options_.OutputOffset(c),
-                                         options_.load_cases[c].output_positions.size()));
+    condensations_[c]->Solve(
+        clamps,
+        out.subspan(options_.OutputOffset(c), options_.load_cases[c].output_positions.size()));
   }
 }
 

@@ -58,9 +58,7 @@ bool InRange(double value, double lo, double hi) { return value >= lo && value <
 
 }  // namespace
 
-bool LoadCase::IsValid(const SensorOptions& o,
-                       const std::string& prefix,
-                       std::string* why) const {
+bool LoadCase::IsValid(const SensorOptions& o, const std::string& prefix, std::string* why) const {
   const double length = o.length;
   const double width = o.width;
   auto field = [&prefix](const std::string& name) { return prefix + name; };
@@ -84,8 +82,10 @@ bool LoadCase::IsValid(const SensorOptions& o,
                 "must be 0 or in [1e-9, the plate's length] m");
   }
   if (!patch_ok(load_patch_width, width)) {
-    return Fail(
-        why, field("load_patch_width"), load_patch_width, "must be 0 or in [1e-9, the plate's width] m");
+    return Fail(why,
+                field("load_patch_width"),
+                load_patch_width,
+                "must be 0 or in [1e-9, the plate's width] m");
   }
   if (output_positions.empty() || output_positions.size() > kMaxOutputPositions) {
     return Fail(why,

@@ -154,7 +154,7 @@ TEST(PlateSensorVariation, EqualsFullSolveOtherSupports) {
   o.fixed_support = Support::kSimplySupported;
   o.short_edge_start = Support::kClamped;
   o.short_edge_end = Support::kSimplySupported;
-  o.load_cases[0].load_x = 0.3712;          // inside a section: the interior load goes through the series
+  o.load_cases[0].load_x = 0.3712;  // inside a section: the interior load goes through the series
   o.load_cases[0].load_patch_length = 0.0;  // point load
   o.length_grading = 1.0;
   o.width_grading = 2.0;
