@@ -38,6 +38,7 @@ namespace combabc::plate {
 
 class SectionCondensation;     // src/plate/section_condensation.hpp
 class ContinuousCondensation;  // src/plate/continuous_condensation.hpp
+struct CaseOutputs;            // src/plate/section_condensation.hpp
 struct ContinuousCache;        // src/plate/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
@@ -304,6 +305,9 @@ class SensorModel {
  private:
   void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
   void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
+  // The condensations' inputs: every case's load vector (a column each) and outputs.
+  Eigen::MatrixXd LoadMatrix() const;
+  std::vector<CaseOutputs> CaseOutputList() const;
   // The precompute for `variation` (built on first use) and the factors mapping the variation's
   // dynamic stiffness onto it: K(theta) = factor (K_base + mu M_1).
   const ContinuousCondensation& Continuous(const SensorVariation& variation,
@@ -313,7 +317,7 @@ class SensorModel {
   SensorOptions options_;
   std::vector<double> output_positions_;  // every case's, concatenated
   std::unique_ptr<Plate> plate_;
-  std::vector<std::unique_ptr<SectionCondensation>> condensations_;  // one per load case
+  std::unique_ptr<SectionCondensation> condensation_;  // every load case
   bool fast_path_certified_ = false;
   std::unique_ptr<ContinuousCache> continuous_;
 };
