@@ -185,13 +185,6 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
                                k_f * options_.foundation_loss_factor);
   *mu = b / *factor;
   const int index = own ? 1 : 0;
-  if (options_.load_cases.size() != 1) {
-    throw Error(ErrorKind::kConfig,
-                "continuous unknowns need a single load case",
-                "",
-                0,
-                "load_cases.size()");
-  }
   std::call_once(continuous_->once[index], [&] {
     continuous_->base[index] = std::make_unique<ContinuousCondensation>(
         *plate_,
@@ -202,9 +195,8 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
         SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
         SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
         SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-        plate_->LoadVector(SensorLoad(options_, options_.load_cases[0])),
-        options_.load_cases[0].output_positions,
-        options_.load_cases[0].output_y_fraction * options_.width,
+        LoadMatrix(),
+        CaseOutputList(),
         options_.always_pivot,
         ResolveKernels(options_.vector_kernels));
     continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
