@@ -168,9 +168,13 @@ struct SensorOptions {
 
   // Peak memory (bytes) of building the model, from the mesh size (dofs per cross-section,
   // sections, elements), the distinct section and group pieces the precompute will condense, and
-  // the outputs. Measured: 0.95-1.6 x the peak RSS (less the program itself) for widths of 6 to
-  // 24 elements, about 2 x what the finished model keeps. Needs the sizes in range (IsValid
-  // checks them first).
+  // the load cases' outputs and loads (the cases share the pieces: docs/model.md, "Several load
+  // cases"). Measured for Kirchhoff at 6 to 24 elements across with 1 to 4 load cases (on one
+  // output line or each on its own): 1.2-1.5 x the peak RSS (less the program itself), about 2 x
+  // what the finished model keeps. Not counted: the transient of the constructor's Higham
+  // certificate (sparse Cholesky factorizations of the whole plate), which sets the peak of the
+  // shear theories' meshes: for RZT at its default mesh the estimate is 0.4-0.65 x the peak
+  // RSS (about 100 MB). Needs the sizes in range (IsValid checks them first).
   double EstimatedMemoryBytes() const;
   // Peak memory (bytes) of the continuous-unknowns precompute that a mixed run builds on its first
   // simulation (docs/model.md, "Continuous unknowns"), on top of EstimatedMemoryBytes():
