@@ -70,6 +70,12 @@ struct Workspace {
   // Right-hand sides and solutions of each row, case j at [j nc, j nc + n).
   std::vector<Split> rhs;
   std::vector<Split> u;
+  // With several cases, each row's solution with the cases side by side within each entry
+  // (BackSubstituteCases), and C the same way.
+  std::vector<Split> u_cases;
+  Split c_cases;
+  std::vector<double> scratch;                // SolveUnitUpperSplitCases' dot products
+  std::vector<char> fallback;                 // [case]: solved by the pivoting LU
   std::vector<const std::vector<int>*> free;  // each row's free dofs (free_dofs_)
   Split s;  // [S; C^T], (r + cases) x r: S = V^T D V, C = V^T D W (a column per case)
   Split t;  // Q S, m x r
@@ -89,6 +95,7 @@ struct Workspace {
     q.assign(rows, Split{});
     rhs.assign(rows, Split{});
     u.assign(rows, Split{});
+    u_cases.assign(rows, Split{});
     for (int i = 0; i < rows; ++i) {
       factor[i].Resize((2 * n + k) * n);
       diagonal[i].Resize(n * n);
@@ -96,7 +103,10 @@ struct Workspace {
       q[i].Resize(n * n);
       rhs[i].Resize(n * k);
       u[i].Resize(n * k);
+      if (k > 1) u_cases[i].Resize(n * k);
     }
+    c_cases.Resize(n * k);
+    scratch.assign(static_cast<std::size_t>(2 * k), 0.0);
     diagonal_max2.assign(rows, 0.0);
     rank.assign(rows, 0);
     free.assign(rows, nullptr);
@@ -252,65 +262,118 @@ COMBABC_KERNEL bool EliminateRows(Workspace& ws, int rows, Index cases, bool hig
         qci[l] = qi[l * m + c];
       }
       SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
-      for (Index j = 0; j < cases; ++j) {
-        double br = ws.rhs[i + 1].re[j * nc + c];
-        double bi = ws.rhs[i + 1].im[j * nc + c];
-        for (Index k = 0; k < r; ++k) {
-          const double cr = sr[k * ls + r + j];
-          const double ci = si[k * ls + r + j];
-          br -= qr[k * m + c] * cr - qi[k * m + c] * ci;
-          bi -= qr[k * m + c] * ci + qi[k * m + c] * cr;
-        }
-        nr[c * ldn + m + rn + j] = br;
-        ni[c * ldn + m + rn + j] = bi;
+    }
+    // Each case's R_{i+1} - Q C by columns of Q: an axpy per column, each entry taking the same
+    // operations in the same order as a dot product over the columns would, without a latency
+    // chain through them.
+    for (Index j = 0; j < cases; ++j) {
+      double* br = ws.small.re.data();
+      double* bi = ws.small.im.data();
+      std::copy_n(ws.rhs[i + 1].re.data() + j * nc, m, br);
+      std::copy_n(ws.rhs[i + 1].im.data() + j * nc, m, bi);
+      for (Index k = 0; k < r; ++k) {
+        SubScaledSplit(br, bi, qr + k * m, qi + k * m, sr[k * ls + r + j], si[k * ls + r + j], m);
+      }
+      for (Index c = 0; c < m; ++c) {
+        nr[c * ldn + m + rn + j] = br[c];
+        ni[c * ldn + m + rn + j] = bi[c];
       }
     }
   }
   return ok;
 }
 
-// Back substitution of every case: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
-COMBABC_KERNEL void BackSubstitute(Workspace& ws, int rows, Index cases) {
+// Back substitution of one case: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
+COMBABC_KERNEL void BackSubstituteOne(Workspace& ws, int rows) {
+  for (int i = rows - 1; i >= 0; --i) {
+    const Index n = RowSize(ws, i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + 1;
+    const double* fr = ws.factor[i].re.data();
+    const double* fi = ws.factor[i].im.data();
+    double* yr = ws.u[i].re.data();
+    double* yi = ws.u[i].im.data();
+    double* cr = ws.small.re.data();
+    double* ci = ws.small.im.data();
+    if (r > 0) {
+      const Index m = RowSize(ws, i + 1);
+      for (Index l = 0; l < r; ++l) {
+        DotSplit(ws.q[i].re.data() + l * m,
+                 ws.q[i].im.data() + l * m,
+                 ws.u[i + 1].re.data(),
+                 ws.u[i + 1].im.data(),
+                 m,
+                 cr + l,
+                 ci + l);
+      }
+    }
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T c, both carried in column j below the pivot block.
+      double vr = 0.0;
+      double vi = 0.0;
+      DotSplit(fr + j * ld + n, fi + j * ld + n, cr, ci, r, &vr, &vi);
+      yr[j] = fr[j * ld + n + r] - vr;
+      yi[j] = fi[j * ld + n + r] - vi;
+    }
+    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
+  }
+}
+
+// The same for several cases at once: the cases side by side within each entry (u_cases,
+// c_cases), so that every dot product runs the cases as independent lanes (DotSplitCases). Each
+// case gets BackSubstituteOne's bits; one case alone takes BackSubstituteOne, whose loops are not
+// spread over lanes of one.
+COMBABC_KERNEL void BackSubstituteCases(Workspace& ws, int rows, Index cases) {
   const Index nc = ws.nc;
+  double* dots = ws.scratch.data();
+  double* cr = ws.c_cases.re.data();
+  double* ci = ws.c_cases.im.data();
   for (int i = rows - 1; i >= 0; --i) {
     const Index n = RowSize(ws, i);
     const Index r = ws.rank[i];
     const Index ld = n + r + cases;
     const double* fr = ws.factor[i].re.data();
     const double* fi = ws.factor[i].im.data();
-    for (Index case_index = 0; case_index < cases; ++case_index) {
-      double* yr = ws.u[i].re.data() + case_index * nc;
-      double* yi = ws.u[i].im.data() + case_index * nc;
-      double* cr = ws.small.re.data();
-      double* ci = ws.small.im.data();
-      if (r > 0) {
-        const Index m = RowSize(ws, i + 1);
-        for (Index l = 0; l < r; ++l) {
-          DotSplit(ws.q[i].re.data() + l * m,
-                   ws.q[i].im.data() + l * m,
-                   ws.u[i + 1].re.data() + case_index * nc,
-                   ws.u[i + 1].im.data() + case_index * nc,
-                   m,
-                   cr + l,
-                   ci + l);
-        }
+    double* yr = ws.u_cases[i].re.data();
+    double* yi = ws.u_cases[i].im.data();
+    if (r > 0) {
+      const Index m = RowSize(ws, i + 1);
+      for (Index l = 0; l < r; ++l) {
+        DotSplitCases(ws.q[i].re.data() + l * m,
+                      ws.q[i].im.data() + l * m,
+                      ws.u_cases[i + 1].re.data(),
+                      ws.u_cases[i + 1].im.data(),
+                      m,
+                      cases,
+                      cr + l * cases,
+                      ci + l * cases);
       }
+    }
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T c, both carried in column j below the pivot block (w_j of every case
+      // side by side).
+      double* vr = yr + j * cases;
+      double* vi = yi + j * cases;
+      DotSplitCases(fr + j * ld + n, fi + j * ld + n, cr, ci, r, cases, vr, vi);
+      for (Index c = 0; c < cases; ++c) {
+        vr[c] = fr[j * ld + n + r + c] - vr[c];
+        vi[c] = fi[j * ld + n + r + c] - vi[c];
+      }
+    }
+    SolveUnitUpperSplitCases(fr, fi, ld, n, yr, yi, cases, dots);
+    for (Index c = 0; c < cases; ++c) {
       for (Index j = 0; j < n; ++j) {
-        // w_j - v_j^T c, both carried in column j below the pivot block.
-        double vr = 0.0;
-        double vi = 0.0;
-        DotSplit(fr + j * ld + n, fi + j * ld + n, cr, ci, r, &vr, &vi);
-        yr[j] = fr[j * ld + n + r + case_index] - vr;
-        yi[j] = fi[j * ld + n + r + case_index] - vi;
+        ws.u[i].re[c * nc + j] = yr[j * cases + c];
+        ws.u[i].im[c * nc + j] = yi[j * cases + c];
       }
-      SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
     }
   }
 }
 
-// Whether every case's solution has a small residual in the assembled system (ResidualCheck,
-// case by case: each has its own scale); the unpivoted path must earn its result.
-COMBABC_KERNEL bool ResidualsPass(Workspace& ws, int rows, Index cases) {
+// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
+// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
+// result.
+COMBABC_KERNEL void FlagLargeResiduals(Workspace& ws, int rows, Index cases) {
   const Index nc = ws.nc;
   double* zr = ws.y.re.data();
   double* zi = ws.y.im.data();
@@ -349,13 +412,12 @@ COMBABC_KERNEL bool ResidualsPass(Workspace& ws, int rows, Index cases) {
       if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, RowSize(ws, i - 1), i - 1);
       check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[i]);
     }
-    if (!check.Passes()) return false;
+    ws.fallback[case_index] = check.Passes() ? 0 : 1;
   }
-  return true;
 }
 
 // Fallback: one dense partial-pivoting LU of the whole condensed system (ws.diagonal holds the
-// assembled diagonal blocks), solved for each case.
+// assembled diagonal blocks), solved for each case flagged in ws.fallback.
 inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
   const Index nc = ws.nc;
   const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a, Index ld) {
@@ -387,6 +449,7 @@ inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
   }
   const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(big);
   for (Index j = 0; j < cases; ++j) {
+    if (ws.fallback[j] == 0) continue;
     const Eigen::VectorXcd b = big_rhs.col(j);
     const Eigen::VectorXcd solution = lu.solve(b);
     for (int i = 0; i < rows; ++i) {
@@ -571,24 +634,29 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     }
   }
   // One factorization for every load case (EliminateRows), then each case's back substitution.
-  bool ok = !always_pivot_ && EliminateRows(ws, rows, cases, higham_);
-  if (ok) BackSubstitute(ws, rows, cases);
-  // A certified (Higham) system: the elimination is backward stable; only a non-finite result
-  // (non-finite input) sends it to the fallback.
-  if (ok && higham_) {
-    double sum = 0.0;
-    for (Index j = 0; j < cases; ++j) {
-      for (int i = 0; i < rows; ++i) {
-        for (Index k = 0; k < size(i); ++k) {
-          sum += ws.u[i].re[j * nc + k] + ws.u[i].im[j * nc + k];
+  // A pivot that breaks down sends every case to the fallback; a case whose own result fails
+  // goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateRows(ws, rows, cases, higham_)) {
+    if (cases == 1) BackSubstituteOne(ws, rows);
+    if (cases > 1) BackSubstituteCases(ws, rows, cases);
+    if (higham_) {
+      // A certified (Higham) system: the elimination is backward stable; only a non-finite
+      // result (non-finite input) sends a case to the fallback.
+      for (Index j = 0; j < cases; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < rows; ++i) {
+          for (Index k = 0; k < size(i); ++k) {
+            sum += ws.u[i].re[j * nc + k] + ws.u[i].im[j * nc + k];
+          }
         }
+        ws.fallback[j] = std::isfinite(sum) ? 0 : 1;
       }
+    } else {
+      FlagLargeResiduals(ws, rows, cases);
     }
-    ok = std::isfinite(sum);
-  } else if (ok) {
-    ok = ResidualsPass(ws, rows, cases);
   }
-  if (!ok) {
+  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
     if (in_place) {  // the diagonal blocks went into the factorization, which overwrote them
       for (int i = 0; i < rows; ++i) {
         assemble_diagonal(i, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), size(i));
