@@ -300,8 +300,15 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     sec.f_i.resize(n_interior, static_cast<Eigen::Index>(f.size()));
     for (std::size_t l = 0; l < f.size(); ++l) sec.f_i.col(static_cast<Eigen::Index>(l)) = f[l];
     sec.map_rows = static_cast<int>(n_out);
-    for (int i = 0; i < n_interior; ++i) {
-      if (n_out > 0 && sec.r_i.col(i).cwiseAbs().maxCoeff() != 0.0) sec.read.push_back(i);
+    sec.read.assign(static_cast<std::size_t>(sets_.num_sets()), {});
+    for (int set = 0; set < sets_.num_sets(); ++set) {
+      const int first = layout.map_begin[set];
+      const int rows = layout.map_begin[set + 1] - first;
+      for (int i = 0; i < n_interior; ++i) {
+        if (rows > 0 && sec.r_i.col(i).segment(first, rows).cwiseAbs().maxCoeff() != 0.0) {
+          sec.read[set].push_back(i);
+        }
+      }
     }
     sec.out_static = sec.r_b;
   }

@@ -126,10 +126,12 @@ class ContinuousCondensation {
     Eigen::MatrixXd table_re;
     Eigen::MatrixXd table_im;
     // For the direct condensation.
-    Eigen::MatrixXcd r_i;   // n_out x n_I
-    Eigen::MatrixXcd r_b;   // n_out x 2 nc
-    Eigen::MatrixXcd f_i;   // n_I x loaded cases
-    std::vector<int> read;  // the interior dofs the outputs read (the non-zero columns of r_i)
+    Eigen::MatrixXcd r_i;  // n_out x n_I
+    Eigen::MatrixXcd r_b;  // n_out x 2 nc
+    Eigen::MatrixXcd f_i;  // n_I x loaded cases
+    // [set] -> the interior dofs its outputs read (the non-zero columns of its rows of r_i): per
+    // set, so that a set's products have the shape they have in a model of that set alone.
+    std::vector<std::vector<int>> read;
     // Construction only, per loaded case where not the maps.
     Eigen::MatrixXcd out_static;
     std::vector<Eigen::MatrixXcd> out_terms;

@@ -68,6 +68,7 @@ struct Workspace {
   std::vector<Split> u;
   std::vector<std::vector<int>> free;
   std::vector<int> state;
+  std::vector<char> fallback;  // [case]: solved by the sparse LU
   Split dv;  // D_c V_c (n x m, leading dimension n): column l holds d_j v_jl over the pivots j
   Split w;   // W_c gathered from the factor's carried last rows (n x cases)
   Split z;   // one row's residual
@@ -245,10 +246,14 @@ COMBABC_KERNEL void BackSubstituteChain(Workspace& ws, int rows, Index cases, co
   }
 }
 
-// Whether every case's solution has a small residual in the assembled system (ResidualCheck,
-// case by case: each has its own scale); the unpivoted path must earn its result.
+// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
+// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
+// result.
 template <class Size>
-COMBABC_KERNEL bool ChainResidualsPass(Workspace& ws, int rows, Index cases, const Size& size) {
+COMBABC_KERNEL void FlagLargeChainResiduals(Workspace& ws,
+                                            int rows,
+                                            Index cases,
+                                            const Size& size) {
   const Index nc = ws.nc;
   double* zr = ws.z.re.data();
   double* zi = ws.z.im.data();
@@ -298,13 +303,12 @@ COMBABC_KERNEL bool ChainResidualsPass(Workspace& ws, int rows, Index cases, con
       }
       check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[c]);
     }
-    if (!check.Passes()) return false;
+    ws.fallback[k] = check.Passes() ? 0 : 1;
   }
-  return true;
 }
 
 // Fallback: one sparse partial-pivoting LU of the assembled block-tridiagonal system, solved for
-// each case.
+// each case flagged in ws.fallback.
 template <class Size>
 void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) {
   const Index nc = ws.nc;
@@ -346,6 +350,7 @@ void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) 
     throw Error(ErrorKind::kSoftware, "continuous condensation: singular condensed system");
   }
   for (Index k = 0; k < cases; ++k) {
+    if (ws.fallback[k] == 0) continue;
     const Eigen::VectorXcd b = big_rhs.col(k);
     const Eigen::VectorXcd solution = lu.solve(b);
     for (int c = 0; c < rows; ++c) {
@@ -414,11 +419,19 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     if (!e->kind_needed[k] || mesh_kind_[kind_section_[kind]] != mesh_kind) continue;
     const SectionData& sec = sections_[k];
     const OutputLayout& layout = section_layout_[kind_section_[kind]];
-    const Eigen::Index map_size = sec.r_b.size();
     Eigen::VectorXcd& out = e->section[k];
     out.resize(sec.table_re.rows());
-    out.head(map_size) =
-        (sec.r_b - sec.r_i(Eigen::all, sec.read) * x(sec.read, Eigen::all)).reshaped();
+    // The output maps set by set, each by a product of the shape a model of that set alone would
+    // use (a product's blocking, hence its rounding, depends on its shape).
+    for (int set = 0; set < sets_.num_sets(); ++set) {
+      const int first = layout.map_begin[set];
+      const int rows = layout.map_begin[set + 1] - first;
+      if (rows == 0) continue;
+      Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(
+          out.data() + first, rows, 2 * nc_, Eigen::OuterStride<>(sec.map_rows));
+      map = sec.r_b.middleRows(first, rows) -
+            sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * x(sec.read[set], Eigen::all);
+    }
     for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
       const Eigen::VectorXcd f = sec.f_i.col(static_cast<Eigen::Index>(l));
       const Eigen::VectorXcd y = solve(f);
@@ -428,7 +441,7 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
       out.segment(sec.loaded_start[l], 2 * nc_) =
           -s_ib(coupled, Eigen::all).transpose() * y(coupled);
       out.segment(sec.loaded_start[l] + 2 * nc_, rows) =
-          sec.r_i(Eigen::seqN(first, rows), sec.read) * y(sec.read);
+          sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * y(sec.read[set]);
     }
   }
 }
@@ -576,13 +589,16 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
     }
   }
   // One factorization for every load case, each case's back substitution, and a residual check
-  // of each; the sparse LU where any of them fails.
-  bool ok = !always_pivot_ && EliminateChain(ws, rows, cases, size);
-  if (ok) {
+  // of each. A pivot that breaks down sends every case to the sparse LU; a case whose residual
+  // fails goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateChain(ws, rows, cases, size)) {
     BackSubstituteChain(ws, rows, cases, size);
-    ok = ChainResidualsPass(ws, rows, cases, size);
+    FlagLargeChainResiduals(ws, rows, cases, size);
   }
-  if (!ok) SolveChainPivoting(ws, rows, cases, size);
+  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
+    SolveChainPivoting(ws, rows, cases, size);
+  }
   // Singular or nearly so (plate.hpp), whichever path solved it; case by case.
   for (Index k = 0; k < cases; ++k) {
     AmplificationCheck amplification;
