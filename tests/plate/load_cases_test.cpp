@@ -159,10 +159,8 @@ TEST(PlateLoadCases, EachCaseEqualsItsOwnModel) {
   o.frequency_hz = 120.0;
   ASSERT_FALSE(SensorModel(o).fast_path_certified());
   ExpectCasesEqualTheirOwnModels(o, none, 4, "kirchhoff at 120 Hz, residual-checked");
-  // The pivoting LU of the condensed system (the fallback) for every case.
-  o = CoarseRzt();
-  o.always_pivot = true;
-  ExpectCasesEqualTheirOwnModels(o, none, 4, "rzt, pivoting LU");
+  // The pivoting LU of the condensed system (the fallback) for every case: in
+  // CasesOnTheSameSectionsGiveTheirOwnModelsBits.
   // Groups of 2 sections (8 per edge), other supports.
   o = CoarseKirchhoff();
   o.clamps_per_edge = 8;
@@ -190,6 +188,49 @@ TEST(PlateLoadCases, EachCaseEqualsItsOwnModelWithContinuousUnknowns) {
   SensorOptions resonant = o;
   resonant.frequency_hz = 120.0;
   ExpectCasesEqualTheirOwnModels(resonant, series, 3, "kirchhoff at 120 Hz, continuous unknowns");
+}
+
+// Cases whose loads touch the same sections make no section or group unique that their own
+// models share, so the pieces agree bit for bit, and so must the outputs: the shared
+// factorization, the back substitution of several cases side by side and the output recovery
+// run each case's column through exactly the operations of a single case. Three cases: the
+// default, a weaker load scanned along its own line, the load moved across the width.
+TEST(PlateLoadCases, CasesOnTheSameSectionsGiveTheirOwnModelsBits) {
+  SensorVariation series;
+  series.foundation_stiffness = 3.0e4;
+  series.stiffness_scale = 0.8;
+  const auto expect_bits = [&](SensorOptions o, const char* what) {
+    o.load_cases = {LoadCase{}, LoadCase{}, LoadCase{}};
+    o.load_cases[1].load_force = 0.02;
+    o.load_cases[1].output_y_fraction = 0.25;
+    o.load_cases[2].load_y_fraction = 0.3;
+    const SensorModel shared(o);
+    std::vector<std::unique_ptr<SensorModel>> alone;
+    for (std::size_t c = 0; c < o.load_cases.size(); ++c) {
+      alone.push_back(std::make_unique<SensorModel>(CaseAlone(o, c)));
+    }
+    std::vector<std::complex<double>> w(shared.num_outputs());
+    std::vector<std::complex<double>> own(alone[0]->num_outputs());
+    Agreement agreement;
+    for (const auto& clamps : Configurations(3, shared.num_clamps(), 5)) {
+      for (const SensorVariation& v : {SensorVariation{}, series}) {
+        shared.ComplexProfile(clamps, v, w);
+        for (std::size_t c = 0; c < alone.size(); ++c) {
+          alone[c]->ComplexProfile(clamps, v, own);
+          agreement.Add(std::span(w).subspan(o.OutputOffset(c), own.size()), own);
+        }
+      }
+    }
+    agreement.Expect(what);
+    EXPECT_EQ(agreement.identical, agreement.total) << what;
+  };
+  expect_bits(CoarseRzt(), "rzt, certified");
+  SensorOptions o = CoarseKirchhoff();
+  o.frequency_hz = 120.0;
+  expect_bits(o, "kirchhoff at 120 Hz, residual-checked");
+  o = CoarseRzt();
+  o.always_pivot = true;
+  expect_bits(o, "rzt, pivoting LU");
 }
 
 // Each case of the shared model against the full sparse solve of that case (the reference path:
