@@ -281,6 +281,14 @@ void ExpectKernelsBitIdentical(SensorOptions::VectorKernels kernels) {
   o.frequency_hz = 120.0;  // above a resonance: not certified, the residual check runs
   EXPECT_FALSE(SensorModel(o).fast_path_certified());
   ExpectKernelsBitIdentical(o, kernels, 20, 23);
+  // Five load cases (docs/model.md, "Several load cases"), one on a line of its own: their back
+  // substitutions run side by side, four cases and then one per vector pass.
+  o = CoarseOptions();
+  o.elements_per_section = 2;
+  o.load_cases.resize(5);
+  for (std::size_t c = 1; c < 5; ++c) o.load_cases[c].load_x = 0.1 + 0.17 * static_cast<double>(c);
+  o.load_cases[2].output_y_fraction = 0.25;
+  ExpectKernelsBitIdentical(o, kernels, 20, 24, true);
 }
 
 TEST(PlateSensorModel, VectorKernelsAvx2GiveBitIdenticalProfiles) {
