@@ -57,6 +57,40 @@ void BM_SensorProfileFast(benchmark::State& state) {
 }
 BENCHMARK(BM_SensorProfileFast)->Unit(benchmark::kMicrosecond);
 
+// Several load cases (SensorOptions::load_cases; docs/model.md, "Several load cases"): the first
+// k of loads at 0.45, 0.70, 0.20 and 0.60 m, each with the default outputs. One factorization per
+// configuration serves every case, so k cases should cost far less than k times one (target:
+// 1 + 0.25 (k - 1) times k = 1; docs/benchmarks.md).
+SensorOptions LoadCaseOptions(int k) {
+  SensorOptions options;
+  options.load_cases.clear();
+  for (const double x : {0.45, 0.70, 0.20, 0.60}) {
+    if (static_cast<int>(options.load_cases.size()) == k) break;
+    combabc::plate::LoadCase c;
+    c.load_x = x;
+    options.load_cases.push_back(c);
+  }
+  return options;
+}
+
+void BM_SensorProfileLoadCases(benchmark::State& state) {
+  const SensorModel model{LoadCaseOptions(static_cast<int>(state.range(0)))};
+  ProfileLoop(state, model);
+}
+BENCHMARK(BM_SensorProfileLoadCases)->DenseRange(1, 4)->Unit(benchmark::kMicrosecond);
+
+void BM_SensorPrecomputeLoadCases(benchmark::State& state) {
+  const SensorOptions options = LoadCaseOptions(static_cast<int>(state.range(0)));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    SensorModel model{options};
+    bytes = model.PrecomputedBytes();
+    benchmark::DoNotOptimize(&model);
+  }
+  state.counters["precomputed_MiB"] = static_cast<double>(bytes) / (1024.0 * 1024.0);
+}
+BENCHMARK(BM_SensorPrecomputeLoadCases)->DenseRange(1, 4)->Unit(benchmark::kMillisecond);
+
 // The same fast path on each instruction set (SensorOptions::vector_kernels: 1 the build's own,
 // 2 AVX2, 3 AVX-512; the default takes the widest the CPU has, all with bit-identical results).
 void BM_SensorProfileFastKernels(benchmark::State& state) {

@@ -142,6 +142,77 @@ COMBABC_KERNEL void DotSplit(const double* xr,
   *out_i = si[0] + si[1];
 }
 
+// DotSplit of x with W vectors at once, stored side by side within each entry (vector c of entry
+// k at y + k ldy + c): out[c] = sum_k x_k y_kc. Each vector takes exactly DotSplit's operations
+// (even and odd k summed apart, then added), so it gets DotSplit's bits; the W vectors are
+// independent lanes (W doubles: one AVX2 register), where one vector alone is a latency chain.
+template <int W>
+COMBABC_KERNEL void DotSplitLanes(const double* __restrict xr,
+                                  const double* __restrict xi,
+                                  const double* __restrict yr,
+                                  const double* __restrict yi,
+                                  std::ptrdiff_t ldy,
+                                  std::ptrdiff_t len,
+                                  double* __restrict out_r,
+                                  double* __restrict out_i) {
+  double sr0[W] = {};
+  double sr1[W] = {};
+  double si0[W] = {};
+  double si1[W] = {};
+  std::ptrdiff_t k = 0;
+  for (; k + 1 < len; k += 2) {
+    const double ar = xr[k];
+    const double ai = xi[k];
+    const double br = xr[k + 1];
+    const double bi = xi[k + 1];
+    const double* __restrict y0r = yr + k * ldy;
+    const double* __restrict y0i = yi + k * ldy;
+    const double* __restrict y1r = yr + (k + 1) * ldy;
+    const double* __restrict y1i = yi + (k + 1) * ldy;
+    for (int c = 0; c < W; ++c) {
+      sr0[c] += ar * y0r[c] - ai * y0i[c];
+      si0[c] += ar * y0i[c] + ai * y0r[c];
+      sr1[c] += br * y1r[c] - bi * y1i[c];
+      si1[c] += br * y1i[c] + bi * y1r[c];
+    }
+  }
+  if (k < len) {
+    const double ar = xr[k];
+    const double ai = xi[k];
+    const double* __restrict y0r = yr + k * ldy;
+    const double* __restrict y0i = yi + k * ldy;
+    for (int c = 0; c < W; ++c) {
+      sr0[c] += ar * y0r[c] - ai * y0i[c];
+      si0[c] += ar * y0i[c] + ai * y0r[c];
+    }
+  }
+  for (int c = 0; c < W; ++c) {
+    out_r[c] = sr0[c] + sr1[c];
+    out_i[c] = si0[c] + si1[c];
+  }
+}
+
+// DotSplitLanes for any number of vectors (`cases`, stored side by side: ldy = cases): four
+// lanes at a time, then two, then one.
+COMBABC_KERNEL void DotSplitCases(const double* xr,
+                                  const double* xi,
+                                  const double* yr,
+                                  const double* yi,
+                                  std::ptrdiff_t len,
+                                  std::ptrdiff_t cases,
+                                  double* out_r,
+                                  double* out_i) {
+  std::ptrdiff_t c = 0;
+  for (; c + 3 < cases; c += 4) {
+    DotSplitLanes<4>(xr, xi, yr + c, yi + c, cases, len, out_r + c, out_i + c);
+  }
+  if (c + 1 < cases) {
+    DotSplitLanes<2>(xr, xi, yr + c, yi + c, cases, len, out_r + c, out_i + c);
+    c += 2;
+  }
+  if (c < cases) DotSplitLanes<1>(xr, xi, yr + c, yi + c, cases, len, out_r + c, out_i + c);
+}
+
 // y := L^{-T} y for the unit lower L that FactorLdltSplit leaves below the diagonal of the
 // n x n block (re, im, ld): the back substitution of both block solves.
 COMBABC_KERNEL void SolveUnitUpperSplit(const double* re,
@@ -156,6 +227,34 @@ COMBABC_KERNEL void SolveUnitUpperSplit(const double* re,
     DotSplit(re + j * ld + j + 1, im + j * ld + j + 1, yr + j + 1, yi + j + 1, n - j - 1, &vr, &vi);
     yr[j] -= vr;
     yi[j] -= vi;
+  }
+}
+
+// SolveUnitUpperSplit for `cases` vectors at once, stored side by side within each entry (as
+// DotSplitCases): each gets SolveUnitUpperSplit's bits. `v`: 2 cases doubles of scratch.
+COMBABC_KERNEL void SolveUnitUpperSplitCases(const double* re,
+                                             const double* im,
+                                             std::ptrdiff_t ld,
+                                             std::ptrdiff_t n,
+                                             double* yr,
+                                             double* yi,
+                                             std::ptrdiff_t cases,
+                                             double* v) {
+  double* vr = v;
+  double* vi = v + cases;
+  for (std::ptrdiff_t j = n - 1; j >= 0; --j) {
+    DotSplitCases(re + j * ld + j + 1,
+                  im + j * ld + j + 1,
+                  yr + (j + 1) * cases,
+                  yi + (j + 1) * cases,
+                  n - j - 1,
+                  cases,
+                  vr,
+                  vi);
+    for (std::ptrdiff_t c = 0; c < cases; ++c) {
+      yr[j * cases + c] -= vr[c];
+      yi[j * cases + c] -= vi[c];
+    }
   }
 }
 

@@ -72,9 +72,8 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
                                                std::uint8_t fixed_mask_b,
                                                std::uint8_t start_mask,
                                                std::uint8_t end_mask,
-                                               const Eigen::VectorXd& load_vector,
-                                               const std::vector<double>& output_x,
-                                               double output_y,
+                                               const Eigen::MatrixXd& loads,
+                                               const std::vector<CaseOutputs>& outputs,
                                                bool always_pivot,
                                                SensorOptions::VectorKernels kernels)
     : num_sections_(num_sections),
@@ -87,28 +86,24 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
       start_mask_(start_mask),
       end_mask_(end_mask),
       always_pivot_(always_pivot),
-      kernels_(kernels) {
+      kernels_(kernels),
+      num_cases_(static_cast<int>(loads.cols())),
+      sets_(outputs) {
   const Grid& grid = plate.grid();
   // Grid intervals per section (2 per element at element order 2), as SectionCondensation.
   const int m = intervals_per_section_;
   COMBABC_CHECK(grid.nx() == num_sections * m);
+  COMBABC_CHECK(num_cases_ >= 1 && outputs.size() == static_cast<std::size_t>(num_cases_));
   // Outputs by section, as SectionCondensation assigns them.
-  section_outputs_.resize(num_sections);
-  std::vector<std::vector<double>> relative_x(num_sections);
-  for (std::size_t o = 0; o < output_x.size(); ++o) {
-    int dofs[kMaxElementDofs];
-    ElementVector row;
-    plate.InterpolationRow(output_x[o], output_y, dofs, &row);
-    const int section = dofs[0] / nc_ / m;
-    section_outputs_[section].push_back(static_cast<int>(o));
-    relative_x[section].push_back(output_x[o] - grid.x[static_cast<std::size_t>(section) * m]);
-  }
+  std::vector<std::vector<std::vector<double>>> relative_x;
+  AssignOutputs(plate, num_sections, m, outputs, sets_, &section_layout_, &relative_x);
   for (int c = 0; c <= num_sections; ++c) {
     boundary_load_.push_back(
-        load_vector.segment(static_cast<Eigen::Index>(c) * m * nc_, nc_).cast<Complex>());
+        loads.middleRows(static_cast<Eigen::Index>(c) * m * nc_, nc_).cast<Complex>());
   }
   // Distinct meshes: the same element lengths. Distinct sections: the same mesh, no interior
-  // load and outputs at the same relative positions (as SectionCondensation shares pieces).
+  // load in any case and outputs at the same relative positions in every output set (as
+  // SectionCondensation shares pieces).
   const double tol = 1e-12 * grid.x.back();
   const auto same_mesh = [&](int s, int t) {
     for (int e = 0; e < m; ++e) {
@@ -119,8 +114,7 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
     return true;
   };
   const auto loaded = [&](int s) {
-    return m > 1 && load_vector
-                            .segment((static_cast<Eigen::Index>(s) * m + 1) * nc_,
+    return m > 1 && loads.middleRows((static_cast<Eigen::Index>(s) * m + 1) * nc_,
                                      static_cast<Eigen::Index>(m - 1) * nc_)
                             .cwiseAbs()
                             .maxCoeff() != 0.0;
@@ -139,10 +133,14 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
     for (std::size_t k = 0; k < kind_section_.size() && kind < 0 && !loaded(s); ++k) {
       const int t = kind_section_[k];
       if (mesh_kind_[t] != mesh || loaded(t)) continue;
-      if (relative_x[s].size() != relative_x[t].size()) continue;
       bool same = true;
-      for (std::size_t o = 0; o < relative_x[s].size(); ++o) {
-        same = same && std::abs(relative_x[s][o] - relative_x[t][o]) <= tol;
+      for (std::size_t set = 0; set < relative_x[s].size() && same; ++set) {
+        const std::vector<double>& a = relative_x[s][set];
+        const std::vector<double>& b = relative_x[t][set];
+        same = a.size() == b.size();
+        for (std::size_t o = 0; o < a.size() && same; ++o) {
+          same = std::abs(a[o] - b[o]) <= tol;
+        }
       }
       if (same) kind = static_cast<int>(k);
     }
@@ -156,7 +154,7 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
   sections_.resize(kind_section_.size() * 4);
   for (int mesh = 0; mesh < static_cast<int>(mesh_section_.size()); ++mesh) {
     for (int state = 0; state < 4; ++state) {
-      Precompute(plate, mesh, state, load_vector, output_x, output_y);
+      Precompute(plate, mesh, state, loads, outputs);
     }
   }
   // Jacobi scaling of the cross-section dofs, as in SectionCondensation: one scale vector for all
@@ -184,21 +182,20 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
     sec.out_static = sec.out_static * s2.asDiagonal();
     for (Eigen::MatrixXcd& t : sec.out_terms) t = t * s2.asDiagonal();
     sec.r_b = sec.r_b * s2.asDiagonal();
-    if (sec.loaded) {
-      sec.load_static = s2.asDiagonal() * sec.load_static;
-      for (Eigen::VectorXcd& t : sec.load_terms) t = s2.asDiagonal() * t;
+    for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
+      sec.load_static[l] = s2.asDiagonal() * sec.load_static[l];
+      for (Eigen::VectorXcd& t : sec.load_terms[l]) t = s2.asDiagonal() * t;
     }
   }
-  for (Eigen::VectorXcd& b : boundary_load_) b = boundary_scale_.asDiagonal() * b;
+  for (Eigen::MatrixXcd& b : boundary_load_) b = boundary_scale_.asDiagonal() * b;
   BuildTables();
 }
 
 void ContinuousCondensation::Precompute(const Plate& plate,
                                         int mesh_kind,
                                         int state,
-                                        const Eigen::VectorXd& load_vector,
-                                        const std::vector<double>& output_x,
-                                        double output_y) {
+                                        const Eigen::MatrixXd& loads,
+                                        const std::vector<CaseOutputs>& outputs) {
   const int m = intervals_per_section_;
   const int elements = m / plate.element_order();
   const int n_local = (m + 1) * nc_;
@@ -264,29 +261,54 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     SectionData& sec = sections_[static_cast<std::size_t>(kind) * 4 + state];
     const int s = kind_section_[kind];
     const int s_offset = s * m * nc_;
-    const std::vector<int>& outputs = section_outputs_[s];
-    const auto n_out = static_cast<Eigen::Index>(outputs.size());
+    const OutputLayout& layout = section_layout_[s];
+    const auto n_out = static_cast<Eigen::Index>(layout.map_rows());
     sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
     sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
-    for (Eigen::Index k = 0; k < n_out; ++k) {
-      int dofs[kMaxElementDofs];
-      ElementVector row;
-      plate.InterpolationRow(output_x[outputs[k]], output_y, dofs, &row);
-      for (int q = 0; q < plate.element_dofs(); ++q) {
-        const int d = dofs[q] - s_offset;
-        COMBABC_CHECK(d >= 0 && d < n_local);
-        if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);
-        if (interior_index[d] >= 0) sec.r_i(k, interior_index[d]) += row(q);
+    for (int set = 0; set < sets_.num_sets(); ++set) {
+      const CaseOutputs& o = outputs[static_cast<std::size_t>(sets_.case_of_set[set])];
+      const std::vector<int>& positions = layout.positions[set];
+      for (std::size_t t = 0; t < positions.size(); ++t) {
+        const Eigen::Index k = layout.map_begin[set] + static_cast<Eigen::Index>(t);
+        int dofs[kMaxElementDofs];
+        ElementVector row;
+        plate.InterpolationRow(o.x[positions[t]], o.y, dofs, &row);
+        for (int q = 0; q < plate.element_dofs(); ++q) {
+          const int d = dofs[q] - s_offset;
+          COMBABC_CHECK(d >= 0 && d < n_local);
+          if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);
+          if (interior_index[d] >= 0) sec.r_i(k, interior_index[d]) += row(q);
+        }
       }
     }
-    sec.f_i = Eigen::VectorXcd::Zero(n_interior);
-    for (int d = 0; d < n_local; ++d) {
-      if (interior_index[d] >= 0) sec.f_i(interior_index[d]) = load_vector(s_offset + d);
+    // The cases whose load reaches the interior, and their rows in the table (BuildTables).
+    sec.loaded_cases.clear();
+    sec.loaded_start.clear();
+    std::vector<Eigen::VectorXcd> f;
+    Eigen::Index next_row = n_out * nb;
+    for (int c = 0; c < num_cases_; ++c) {
+      Eigen::VectorXcd f_c = Eigen::VectorXcd::Zero(n_interior);
+      for (int d = 0; d < n_local; ++d) {
+        if (interior_index[d] >= 0) f_c(interior_index[d]) = loads(s_offset + d, c);
+      }
+      if (n_interior == 0 || f_c.cwiseAbs().maxCoeff() == 0.0) continue;
+      sec.loaded_cases.push_back(c);
+      sec.loaded_start.push_back(next_row);
+      next_row += nb + layout.rows_of_case(sets_, c);
+      f.push_back(std::move(f_c));
     }
-    sec.loaded = n_interior > 0 && sec.f_i.cwiseAbs().maxCoeff() != 0.0;
-    sec.num_outputs = static_cast<int>(n_out);
-    for (int i = 0; i < n_interior; ++i) {
-      if (n_out > 0 && sec.r_i.col(i).cwiseAbs().maxCoeff() != 0.0) sec.read.push_back(i);
+    sec.f_i.resize(n_interior, static_cast<Eigen::Index>(f.size()));
+    for (std::size_t l = 0; l < f.size(); ++l) sec.f_i.col(static_cast<Eigen::Index>(l)) = f[l];
+    sec.map_rows = static_cast<int>(n_out);
+    sec.read.assign(static_cast<std::size_t>(sets_.num_sets()), {});
+    for (int set = 0; set < sets_.num_sets(); ++set) {
+      const int first = layout.map_begin[set];
+      const int rows = layout.map_begin[set + 1] - first;
+      for (int i = 0; i < n_interior; ++i) {
+        if (rows > 0 && sec.r_i.col(i).segment(first, rows).cwiseAbs().maxCoeff() != 0.0) {
+          sec.read[set].push_back(i);
+        }
+      }
     }
     sec.out_static = sec.r_b;
   }
@@ -330,26 +352,40 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   sd.m_static = Symmetric(sd.m_bb + sd.m_ib.transpose() * x0 + x0.transpose() * n);
   // Moments by the recursion Z_0 = K^{-1} N, Z_{k+1} = K^{-1} M Z_k; T_k = N^T Z_k.
   const int terms = TermsFor(kMaxRatio);
-  std::vector<Eigen::MatrixXcd> z_load(kinds.size());
+  // z_load[kind][loaded case]: each case's load as the vector it was with a single case.
+  std::vector<std::vector<Eigen::MatrixXcd>> z_load(kinds.size());
   for (std::size_t i = 0; i < kinds.size(); ++i) {
     SectionData& sec = sections_[static_cast<std::size_t>(kinds[i]) * 4 + state];
     sec.out_static = sec.r_b + sec.r_i * x0;
-    if (sec.loaded) {
-      sec.load_static = x0.transpose() * sec.f_i;
-      z_load[i] = solve(sec.f_i);
+    const std::size_t loaded = sec.loaded_cases.size();
+    sec.load_static.resize(loaded);
+    sec.load_terms.assign(loaded, {});
+    sec.offset_terms.assign(loaded, {});
+    for (std::size_t l = 0; l < loaded; ++l) {
+      const Eigen::VectorXcd f = sec.f_i.col(static_cast<Eigen::Index>(l));
+      sec.load_static[l] = x0.transpose() * f;
+      z_load[i].push_back(solve(f));
     }
   }
+  // The output rows of loaded case l of a section: its set's rows.
+  const auto case_rows = [&](const SectionData& sec, int kind, std::size_t l) {
+    const OutputLayout& layout = section_layout_[kind_section_[kind]];
+    const int set = sets_.set_of_case[sec.loaded_cases[l]];
+    return sec.r_i.middleRows(layout.map_begin[set],
+                              layout.map_begin[set + 1] - layout.map_begin[set]);
+  };
   Eigen::MatrixXcd z = solve(n);
   for (int k = 0; k < terms; ++k) {
     sd.moments.push_back(Symmetric(n.transpose() * z));
     for (std::size_t i = 0; i < kinds.size(); ++i) {
       SectionData& sec = sections_[static_cast<std::size_t>(kinds[i]) * 4 + state];
       sec.out_terms.push_back(sec.r_i * z);
-      if (sec.loaded) {
-        sec.offset_terms.push_back(sec.r_i * z_load[i]);
-        sec.load_terms.push_back(n.transpose() * z_load[i]);
-        z_load[i] = solve(sd.m_ii * z_load[i]);
-        if (k + 1 == terms) sec.offset_terms.push_back(sec.r_i * z_load[i]);
+      for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
+        Eigen::MatrixXcd& zl = z_load[i][l];
+        sec.offset_terms[l].push_back(case_rows(sec, kinds[i], l) * zl);
+        sec.load_terms[l].push_back(n.transpose() * zl);
+        zl = solve(sd.m_ii * zl);
+        if (k + 1 == terms) sec.offset_terms[l].push_back(case_rows(sec, kinds[i], l) * zl);
       }
     }
     if (k + 1 < terms) z = solve(sd.m_ii * z);
@@ -393,22 +429,24 @@ void ContinuousCondensation::BuildTables() {
   }
   for (SectionData& sec : sections_) {
     const Eigen::Index map_rows = sec.out_static.size();
-    const Eigen::Index rows = map_rows + (sec.loaded ? 2 * nc_ + sec.num_outputs : 0);
+    Eigen::Index rows = map_rows;
+    for (const auto& offsets : sec.offset_terms) rows += 2 * nc_ + offsets.front().size();
     const Eigen::Index count = sec.out_terms.empty() ? 1 : columns + 1;
     Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(rows, count);
     for (Eigen::Index j = 0; j < count; ++j) {
       const Eigen::MatrixXcd& map = j == 0 ? sec.out_static : sec.out_terms[j - 1];
       table.col(j).head(map_rows) = map.reshaped();
-      if (sec.loaded) {
-        const Eigen::VectorXcd& load = j == 0 ? sec.load_static : sec.load_terms[j - 1];
-        table.col(j).segment(map_rows, 2 * nc_) = load;
-        table.col(j).tail(sec.num_outputs) = sec.offset_terms[j];
+      for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
+        const Eigen::VectorXcd& load = j == 0 ? sec.load_static[l] : sec.load_terms[l][j - 1];
+        const Eigen::VectorXcd& offsets = sec.offset_terms[l][j];
+        table.col(j).segment(sec.loaded_start[l], 2 * nc_) = load;
+        table.col(j).segment(sec.loaded_start[l] + 2 * nc_, offsets.size()) = offsets;
       }
     }
     split(table, own_loss_factors_, nullptr, &sec);
     sec.out_static.resize(0, 0);
     sec.out_terms.clear();
-    sec.load_static.resize(0);
+    sec.load_static.clear();
     sec.load_terms.clear();
     sec.offset_terms.clear();
   }

@@ -24,6 +24,12 @@
 // stored terms, and that state is condensed directly (a sparse LU of K_II + mu M_II per call):
 // exact and slower. Loads and output maps inside a section expand the same way.
 //
+// Several load cases (docs/model.md, "Several load cases"): the section pieces do not depend on
+// the loads, so every case shares them and the call's factorization; each distinct section
+// carries the output maps of its output sets (OutputSets) and, for each case whose load reaches
+// its interior, that case's load and output offsets, and the right-hand sides are one column per
+// case.
+//
 // Per call: evaluate the pieces of the (at most 4 per section mesh) states the configuration
 // uses, assemble the block-tridiagonal system on all num_sections + 1 cross-sections, solve it by
 // block LDL^T with a residual check (sparse LU fallback) and recover the outputs.
@@ -65,14 +71,14 @@ class ContinuousCondensation {
       std::uint8_t fixed_mask_b,
       std::uint8_t start_mask,
       std::uint8_t end_mask,
-      const Eigen::VectorXd& load_vector,
-      const std::vector<double>& output_x,
-      double output_y,
+      const Eigen::MatrixXd& loads,
+      const std::vector<CaseOutputs>& outputs,
       bool always_pivot = false,
       SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
 
-  // Solves (K_base + mu M_1) u = f for the configuration; w: complex w at the outputs (the caller
-  // divides by the stiffness factor).
+  // Solves (K_base + mu M_1) u = f for the configuration and every load case's f (one
+  // factorization); w: complex w at every case's outputs, case after case (the caller divides by
+  // the stiffness factor).
   void Solve(std::span<const std::uint8_t> clamps,
              std::complex<double> mu,
              std::span<std::complex<double>> w) const;
@@ -108,26 +114,37 @@ class ContinuousCondensation {
     Eigen::MatrixXcd m_static;
     std::vector<Eigen::MatrixXcd> moments;
   };
-  // One distinct section (mesh, outputs, interior load) in one clamp state: rows [output map
-  // (n_out x 2 nc by columns); load (2 nc); output offset (n_out)], the last two only when
-  // loaded; V_0 = [r_B + r_I X0; X0^T f_I; o_0], V_{k+1} = [O_k; g_k; o_{k+1}] with
+  // One distinct section (mesh, outputs, interior loads) in one clamp state: rows [output map
+  // (n_out x 2 nc by columns, n_out its output sets' rows, OutputLayout); then for each case
+  // whose load reaches its interior: load (2 nc), output offsets (its set's rows)];
+  // V_0 = [r_B + r_I X0; X0^T f_I; o_0], V_{k+1} = [O_k; g_k; o_{k+1}] with
   // O_k = r_I (K^{-1} M)^k K^{-1} N, g_k = N^T (K^{-1} M)^k K^{-1} f_I, o_k = r_I (...) f_I.
   struct SectionData {
-    int num_outputs = 0;
-    bool loaded = false;  // interior load
+    int map_rows = 0;
+    std::vector<int> loaded_cases;           // the cases with an interior load here, ascending
+    std::vector<Eigen::Index> loaded_start;  // [loaded case] -> its first row (its load)
     Eigen::MatrixXd table_re;
     Eigen::MatrixXd table_im;
     // For the direct condensation.
     Eigen::MatrixXcd r_i;  // n_out x n_I
     Eigen::MatrixXcd r_b;  // n_out x 2 nc
-    Eigen::VectorXcd f_i;
-    std::vector<int> read;  // the interior dofs the outputs read (the non-zero columns of r_i)
-    // Construction only.
+    Eigen::MatrixXcd f_i;  // n_I x loaded cases
+    // [set] -> the interior dofs its outputs read (the non-zero columns of its rows of r_i): per
+    // set, so that a set's products have the shape they have in a model of that set alone.
+    std::vector<std::vector<int>> read;
+    // Construction only, per loaded case where not the maps.
     Eigen::MatrixXcd out_static;
     std::vector<Eigen::MatrixXcd> out_terms;
-    Eigen::VectorXcd load_static;
-    std::vector<Eigen::VectorXcd> load_terms;
-    std::vector<Eigen::VectorXcd> offset_terms;  // o_0 .. o_K (one more than the others)
+    std::vector<Eigen::VectorXcd> load_static;
+    std::vector<std::vector<Eigen::VectorXcd>> load_terms;
+    std::vector<std::vector<Eigen::VectorXcd>> offset_terms;  // o_0 .. o_K (one more)
+    // The index of case c in loaded_cases, or -1.
+    int LoadedIndex(int c) const {
+      for (std::size_t l = 0; l < loaded_cases.size(); ++l) {
+        if (loaded_cases[l] == c) return static_cast<int>(l);
+      }
+      return -1;
+    }
   };
   struct Evaluated;  // one call's pieces (continuous_solve.cpp)
   // Solve's body, compiled once per instruction set (vector_kernels.hpp).
@@ -147,9 +164,8 @@ class ContinuousCondensation {
   void Precompute(const Plate& plate,
                   int mesh_kind,
                   int state,
-                  const Eigen::VectorXd& load_vector,
-                  const std::vector<double>& output_x,
-                  double output_y);
+                  const Eigen::MatrixXd& loads,
+                  const std::vector<CaseOutputs>& outputs);
   void EvaluateSeries(
       int mesh_kind, int state, int terms, std::complex<double> mu, Evaluated* e) const;
   void EvaluateDirect(int mesh_kind, int state, std::complex<double> mu, Evaluated* e) const;
@@ -190,11 +206,13 @@ class ContinuousCondensation {
   std::vector<int> mesh_section_;         // distinct mesh -> a section that has it
   std::vector<int> kind_;                 // section -> distinct section
   std::vector<int> kind_section_;         // distinct section -> a section that has it
-  std::vector<std::vector<int>> section_outputs_;
+  int num_cases_;
+  OutputSets sets_;
+  std::vector<OutputLayout> section_layout_;     // [section] -> its outputs
   std::vector<StateData> states_;                // [mesh kind * 4 + state]
   std::vector<SectionData> sections_;            // [kind * 4 + state]
   Eigen::VectorXd boundary_scale_;               // nc: Jacobi scale of every cross-section's dofs
-  std::vector<Eigen::VectorXcd> boundary_load_;  // scaled load vector on each cross-section
+  std::vector<Eigen::MatrixXcd> boundary_load_;  // scaled loads on each cross-section (nc x cases)
 };
 
 // SensorModel's continuous precomputes, each built on its first use: [0] K_base = K_real (a loss

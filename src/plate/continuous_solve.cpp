@@ -5,7 +5,8 @@
 // at every mu would cost more than the chain they save) and the couplings are full blocks (a
 // section's end-to-end coupling has full numerical rank: 5 cm of strip damp its cross-section
 // shapes only to 1e-16). The block elimination is the same unpivoted complex-symmetric LDL^T with
-// a residual check (block_ldlt.hpp); the fallback is a sparse LU of the assembled system. As in
+// a residual check (block_ldlt.hpp); the fallback is a sparse LU of the assembled system. Every
+// load case's right-hand side rides through the one factorization (a column each). As in
 // section_solve.cpp, all the per-call algebra of the elimination runs on split real/imaginary
 // arrays in plain loops (the Schur update V^T D V four pivots per pass); the workspace is per
 // thread and reused.
@@ -25,8 +26,8 @@
 namespace combabc::plate {
 
 // One call's section pieces: per (mesh, state) the packed piece (PackPiece); per (distinct
-// section, state) the output map (n_out x 2 nc by columns), then, when loaded, the load (2 nc) and
-// the output offset (n_out).
+// section, state) its table's rows (SectionData): the output map (n_out x 2 nc by columns), then
+// for each case with an interior load there, its load (2 nc) and its output offsets.
 struct ContinuousCondensation::Evaluated {
   std::vector<char> state_needed;
   std::vector<char> kind_needed;
@@ -55,43 +56,48 @@ struct Split {
 struct Workspace {
   int nc = -1;
   int rows = -1;
-  // Pivot blocks F_c ((n + m + 1) x n, leading dimension n + m + 1, m the next row's size),
-  // LDL^T in place, with U_c^T and the right-hand side carried below them.
+  int cases = -1;
+  // Pivot blocks F_c ((n + m + cases) x n, leading dimension n + m + cases, m the next row's
+  // size), LDL^T in place, with U_c^T and the right-hand sides (a column per case) carried below.
   std::vector<Split> factor;
   std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
   std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
   std::vector<Split> coupling;        // U_c between rows c and c + 1 (n_c x n_{c+1})
+  // Right-hand sides and solutions of each row, case j at [j nc, j nc + n).
   std::vector<Split> rhs;
   std::vector<Split> u;
   std::vector<std::vector<int>> free;
   std::vector<int> state;
+  std::vector<char> fallback;  // [case]: solved by the sparse LU
   Split dv;  // D_c V_c (n x m, leading dimension n): column l holds d_j v_jl over the pivots j
-  Split w;   // w_c gathered from the factor's carried last row
+  Split w;   // W_c gathered from the factor's carried last rows (n x cases)
   Split z;   // one row's residual
   Eigen::VectorXcd ends;
   Eigen::VectorXcd values;
 
-  void Reserve(int nc_, int rows_) {
-    if (nc_ == nc && rows_ <= rows) return;
+  void Reserve(int nc_, int rows_, int cases_) {
+    if (nc_ == nc && rows_ <= rows && cases_ <= cases) return;
     nc = nc_;
     rows = std::max(rows_, rows);
+    cases = std::max(cases_, cases);
     const Index n = nc;
+    const Index k = cases;
     factor.assign(rows, Split{});
     diagonal.assign(rows, Split{});
     coupling.assign(rows, Split{});
     rhs.assign(rows, Split{});
     u.assign(rows, Split{});
     for (int c = 0; c < rows; ++c) {
-      factor[c].Resize((2 * n + 1) * n);
+      factor[c].Resize((2 * n + k) * n);
       diagonal[c].Resize(n * n);
       coupling[c].Resize(n * n);
-      rhs[c].Resize(n);
-      u[c].Resize(n);
+      rhs[c].Resize(n * k);
+      u[c].Resize(n * k);
     }
     diagonal_max2.assign(rows, 0.0);
     free.assign(rows, {});
     dv.Resize(n * n);
-    w.Resize(n);
+    w.Resize(n * k);
     z.Resize(n);
     ends.resize(2 * n);
   }
@@ -123,6 +129,237 @@ void EvaluateTable(const Eigen::MatrixXd& re,
   out->resize(rows);
   out->real() = acc->col(0);
   out->imag() = acc->col(1);
+}
+
+// Block LDL^T elimination of the chain: F_0 = A_0, F_{c+1} = A_{c+1} - U_c^T F_c^{-1} U_c.
+// FactorLdltSplit turns the carried rows U_c^T and R'_c^T into V_c^T = (D^{-1} L^{-1} U_c)^T
+// and W_c^T (a column per load case), so that U_c^T F_c^{-1} U_c = V_c^T D V_c and
+// R'_{c+1} = R_{c+1} - V_c^T D W_c. `size(c)` is row c's free dofs (0 past the last row).
+// False where a pivot breaks down.
+template <class Size>
+COMBABC_KERNEL bool EliminateChain(Workspace& ws, int rows, Index cases, const Size& size) {
+  const Index nc = ws.nc;
+  bool ok = true;
+  for (int c = 0; c < rows && ok; ++c) {
+    const Index n = size(c);
+    const Index m = size(c + 1);
+    const Index ld = n + m + cases;
+    double* fr = ws.factor[c].re.data();
+    double* fi = ws.factor[c].im.data();
+    if (c == 0) {
+      const double* ar = ws.diagonal[0].re.data();
+      const double* ai = ws.diagonal[0].im.data();
+      for (Index j = 0; j < n; ++j) {
+        std::copy(ar + j * n + j, ar + (j + 1) * n, fr + j * ld + j);
+        std::copy(ai + j * n + j, ai + (j + 1) * n, fi + j * ld + j);
+        for (Index k = 0; k < cases; ++k) {
+          fr[j * ld + n + m + k] = ws.rhs[0].re[k * nc + j];
+          fi[j * ld + n + m + k] = ws.rhs[0].im[k * nc + j];
+        }
+      }
+    }
+    for (Index l = 0; l < m; ++l) {
+      for (Index k = 0; k < n; ++k) {
+        fr[k * ld + n + l] = ws.coupling[c].re[l * n + k];
+        fi[k * ld + n + l] = ws.coupling[c].im[l * n + k];
+      }
+    }
+    ok = FactorLdltSplit(fr, fi, ld, ld, n);
+    if (!ok || m == 0) break;
+    // D V (by columns of V, so that each Schur column's scalars are contiguous) and W.
+    double* dvr = ws.dv.re.data();
+    double* dvi = ws.dv.im.data();
+    double* wr = ws.w.re.data();
+    double* wi = ws.w.im.data();
+    for (Index j = 0; j < n; ++j) {
+      const double dr = fr[j * ld + j];
+      const double di = fi[j * ld + j];
+      const double* xr = fr + j * ld + n;
+      const double* xi = fi + j * ld + n;
+      for (Index l = 0; l < m; ++l) {
+        dvr[l * n + j] = dr * xr[l] - di * xi[l];
+        dvi[l * n + j] = dr * xi[l] + di * xr[l];
+      }
+      for (Index k = 0; k < cases; ++k) {
+        wr[k * n + j] = xr[m + k];
+        wi[k * n + j] = xi[m + k];
+      }
+    }
+    // F_{c+1} = A_{c+1} - V^T D V, column l of its lower triangle at a time (FactorLdltSplit
+    // reads only that): v_j (rows l..m-1) times d_j v_jl, four pivots per pass; and its carried
+    // right-hand sides R_{c+1} - V^T D W.
+    const Index m2 = size(c + 2);
+    const Index ldn = m + m2 + cases;
+    double* nr = ws.factor[c + 1].re.data();
+    double* ni = ws.factor[c + 1].im.data();
+    const double* ar = ws.diagonal[c + 1].re.data();
+    const double* ai = ws.diagonal[c + 1].im.data();
+    for (Index l = 0; l < m; ++l) {
+      double* cr = nr + l * ldn + l;
+      double* ci = ni + l * ldn + l;
+      std::copy(ar + l * m + l, ar + (l + 1) * m, cr);
+      std::copy(ai + l * m + l, ai + (l + 1) * m, ci);
+      SubScaledManySplit(cr, ci, fr + n + l, fi + n + l, ld, dvr + l * n, dvi + l * n, n, m - l);
+      for (Index k = 0; k < cases; ++k) {
+        double br = 0.0;
+        double bi = 0.0;
+        DotSplit(dvr + l * n, dvi + l * n, wr + k * n, wi + k * n, n, &br, &bi);
+        nr[l * ldn + m + m2 + k] = ws.rhs[c + 1].re[k * nc + l] - br;
+        ni[l * ldn + m + m2 + k] = ws.rhs[c + 1].im[k * nc + l] - bi;
+      }
+    }
+  }
+  return ok;
+}
+
+// Back substitution of every case: u_c = L_c^{-T} (w_c - V_c u_{c+1}).
+template <class Size>
+COMBABC_KERNEL void BackSubstituteChain(Workspace& ws, int rows, Index cases, const Size& size) {
+  const Index nc = ws.nc;
+  for (int c = rows - 1; c >= 0; --c) {
+    const Index n = size(c);
+    const Index m = size(c + 1);
+    const Index ld = n + m + cases;
+    const double* fr = ws.factor[c].re.data();
+    const double* fi = ws.factor[c].im.data();
+    for (Index k = 0; k < cases; ++k) {
+      double* yr = ws.u[c].re.data() + k * nc;
+      double* yi = ws.u[c].im.data() + k * nc;
+      for (Index j = 0; j < n; ++j) {
+        // w_j - v_j^T u_{c+1}, both carried in column j below the pivot block.
+        double vr = 0.0;
+        double vi = 0.0;
+        if (m > 0) {
+          DotSplit(fr + j * ld + n,
+                   fi + j * ld + n,
+                   ws.u[c + 1].re.data() + k * nc,
+                   ws.u[c + 1].im.data() + k * nc,
+                   m,
+                   &vr,
+                   &vi);
+        }
+        yr[j] = fr[j * ld + n + m + k] - vr;
+        yi[j] = fi[j * ld + n + m + k] - vi;
+      }
+      SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
+    }
+  }
+}
+
+// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
+// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
+// result.
+template <class Size>
+COMBABC_KERNEL void FlagLargeChainResiduals(Workspace& ws,
+                                            int rows,
+                                            Index cases,
+                                            const Size& size) {
+  const Index nc = ws.nc;
+  double* zr = ws.z.re.data();
+  double* zi = ws.z.im.data();
+  for (Index k = 0; k < cases; ++k) {
+    const Index at = k * nc;
+    ResidualCheck check;
+    for (int c = 0; c < rows; ++c) {
+      const Index n = size(c);
+      if (n == 0) continue;  // a cross-section with every dof fixed has no equation
+      const double* ar = ws.diagonal[c].re.data();
+      const double* ai = ws.diagonal[c].im.data();
+      const double* ur = ws.u[c].re.data() + at;
+      const double* ui = ws.u[c].im.data() + at;
+      const double* br = ws.rhs[c].re.data() + at;
+      const double* bi = ws.rhs[c].im.data() + at;
+      // z = A u - rhs, A symmetric from its lower triangle.
+      SymmetricResidualSplit(ar, ai, n, ur, ui, br, bi, zr, zi);
+      // + U_c u_{c+1} + U_{c-1}^T u_{c-1}.
+      if (c + 1 < rows) {
+        const Split& a = ws.coupling[c];
+        for (Index l = 0; l < size(c + 1); ++l) {
+          SubScaledSplit(zr,
+                         zi,
+                         a.re.data() + l * n,
+                         a.im.data() + l * n,
+                         -ws.u[c + 1].re[at + l],
+                         -ws.u[c + 1].im[at + l],
+                         n);
+        }
+      }
+      if (c > 0) {
+        const Split& a = ws.coupling[c - 1];
+        const Index p = size(c - 1);
+        for (Index j = 0; j < n; ++j) {
+          double vr = 0.0;
+          double vi = 0.0;
+          DotSplit(a.re.data() + j * p,
+                   a.im.data() + j * p,
+                   ws.u[c - 1].re.data() + at,
+                   ws.u[c - 1].im.data() + at,
+                   p,
+                   &vr,
+                   &vi);
+          zr[j] += vr;
+          zi[j] += vi;
+        }
+      }
+      check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[c]);
+    }
+    ws.fallback[k] = check.Passes() ? 0 : 1;
+  }
+}
+
+// Fallback: one sparse partial-pivoting LU of the assembled block-tridiagonal system, solved for
+// each case flagged in ws.fallback.
+template <class Size>
+void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) {
+  const Index nc = ws.nc;
+  std::vector<Eigen::Index> offset(rows + 1, 0);
+  for (int c = 0; c < rows; ++c) offset[c + 1] = offset[c] + size(c);
+  std::vector<Eigen::Triplet<Complex>> triplets;
+  Eigen::MatrixXcd big_rhs(offset[rows], cases);
+  for (int c = 0; c < rows; ++c) {
+    const Index n = size(c);
+    const Split& a = ws.diagonal[c];
+    for (Index j = 0; j < n; ++j) {
+      for (Index i = j; i < n; ++i) {
+        const Complex v(a.re[j * n + i], a.im[j * n + i]);
+        triplets.emplace_back(offset[c] + i, offset[c] + j, v);
+        if (i != j) triplets.emplace_back(offset[c] + j, offset[c] + i, v);
+      }
+      for (Index k = 0; k < cases; ++k) {
+        big_rhs(offset[c] + j, k) = {ws.rhs[c].re[k * nc + j], ws.rhs[c].im[k * nc + j]};
+      }
+    }
+    if (c + 1 < rows) {
+      const Split& u = ws.coupling[c];
+      const Index m = size(c + 1);
+      for (Index j = 0; j < m; ++j) {
+        for (Index i = 0; i < n; ++i) {
+          const Complex v(u.re[j * n + i], u.im[j * n + i]);
+          triplets.emplace_back(offset[c] + i, offset[c + 1] + j, v);
+          triplets.emplace_back(offset[c + 1] + j, offset[c] + i, v);
+        }
+      }
+    }
+  }
+  Eigen::SparseMatrix<Complex> big(offset[rows], offset[rows]);
+  big.setFromTriplets(triplets.begin(), triplets.end());
+  big.makeCompressed();
+  Eigen::SparseLU<Eigen::SparseMatrix<Complex>, Eigen::COLAMDOrdering<int>> lu;
+  lu.compute(big);
+  if (lu.info() != Eigen::Success) {
+    throw Error(ErrorKind::kSoftware, "continuous condensation: singular condensed system");
+  }
+  for (Index k = 0; k < cases; ++k) {
+    if (ws.fallback[k] == 0) continue;
+    const Eigen::VectorXcd b = big_rhs.col(k);
+    const Eigen::VectorXcd solution = lu.solve(b);
+    for (int c = 0; c < rows; ++c) {
+      for (Index j = 0; j < size(c); ++j) {
+        ws.u[c].re[k * nc + j] = solution(offset[c] + j).real();
+        ws.u[c].im[k * nc + j] = solution(offset[c] + j).imag();
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -181,15 +418,30 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     const std::size_t k = kind * 4 + state;
     if (!e->kind_needed[k] || mesh_kind_[kind_section_[kind]] != mesh_kind) continue;
     const SectionData& sec = sections_[k];
-    const Eigen::Index map_size = sec.r_b.size();
+    const OutputLayout& layout = section_layout_[kind_section_[kind]];
     Eigen::VectorXcd& out = e->section[k];
-    out.resize(map_size + (sec.loaded ? 2 * nc_ + sec.num_outputs : 0));
-    out.head(map_size) =
-        (sec.r_b - sec.r_i(Eigen::all, sec.read) * x(sec.read, Eigen::all)).reshaped();
-    if (sec.loaded) {
-      const Eigen::VectorXcd y = solve(sec.f_i);
-      out.segment(map_size, 2 * nc_) = -s_ib(coupled, Eigen::all).transpose() * y(coupled);
-      out.tail(sec.num_outputs) = sec.r_i(Eigen::all, sec.read) * y(sec.read);
+    out.resize(sec.table_re.rows());
+    // The output maps set by set, each by a product of the shape a model of that set alone would
+    // use (a product's blocking, hence its rounding, depends on its shape).
+    for (int set = 0; set < sets_.num_sets(); ++set) {
+      const int first = layout.map_begin[set];
+      const int rows = layout.map_begin[set + 1] - first;
+      if (rows == 0) continue;
+      Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(
+          out.data() + first, rows, 2 * nc_, Eigen::OuterStride<>(sec.map_rows));
+      map = sec.r_b.middleRows(first, rows) -
+            sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * x(sec.read[set], Eigen::all);
+    }
+    for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
+      const Eigen::VectorXcd f = sec.f_i.col(static_cast<Eigen::Index>(l));
+      const Eigen::VectorXcd y = solve(f);
+      const int set = sets_.set_of_case[sec.loaded_cases[l]];
+      const int first = layout.map_begin[set];
+      const int rows = layout.map_begin[set + 1] - first;
+      out.segment(sec.loaded_start[l], 2 * nc_) =
+          -s_ib(coupled, Eigen::all).transpose() * y(coupled);
+      out.segment(sec.loaded_start[l] + 2 * nc_, rows) =
+          sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * y(sec.read[set]);
     }
   }
 }
@@ -232,10 +484,11 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
                                                       std::span<std::complex<double>> w) const {
   const int ns = num_sections_;
   const int nc = nc_;
+  const Index cases = num_cases_;
   const int rows = ns + 1;  // every cross-section c = 0..ns is a row
   thread_local Workspace ws;
   thread_local Evaluated e;
-  ws.Reserve(nc, rows);
+  ws.Reserve(nc, rows, num_cases_);
   ws.state.resize(ns);
   const std::size_t num_states = states_.size();
   const std::size_t num_kind_states = sections_.size();
@@ -270,18 +523,21 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
   const auto piece_of = [&](int s) -> const Complex* {
     return e.piece[static_cast<std::size_t>(mesh_kind_[s]) * 4 + ws.state[s]].data();
   };
+  const auto section_data = [&](int s) -> const SectionData& {
+    return sections_[static_cast<std::size_t>(kind_[s]) * 4 + ws.state[s]];
+  };
   const auto section_of = [&](int s) -> const Eigen::VectorXcd& {
     return e.section[static_cast<std::size_t>(kind_[s]) * 4 + ws.state[s]];
   };
-  const auto loaded = [&](int s) {
-    return sections_[static_cast<std::size_t>(kind_[s]) * 4 + ws.state[s]].loaded;
+  // Section s's load of case k (2 nc, [left; right]) when that load reaches its interior, else
+  // an empty segment.
+  const auto load_of = [&](int s, int k) {
+    const SectionData& sec = section_data(s);
+    const int l = sec.LoadedIndex(k);
+    return section_of(s).segment(l >= 0 ? sec.loaded_start[l] : 0, l >= 0 ? 2 * nc : 0);
   };
-  const auto load_of = [&](int s) {
-    const auto map_size = static_cast<Eigen::Index>(section_outputs_[s].size()) * 2 * nc;
-    return section_of(s).segment(map_size, 2 * nc);
-  };
-  const auto size = [&](int c) { return static_cast<Index>(ws.free[c].size()); };
-  const auto next_size = [&](int c) { return c + 1 < rows ? size(c + 1) : Index{0}; };
+  // Row c's size; 0 past the last row, so that the chain's phases need no special end.
+  const auto size = [&](int c) { return c < rows ? static_cast<Index>(ws.free[c].size()) : 0; };
   const Index right_block = LowerStart(nc);  // = nc (nc + 1) / 2
   const Index coupling_block = 2 * right_block;
   // Assemble: row c gets the right block of section c - 1 and the left block of section c (lower
@@ -309,14 +565,16 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
     ws.diagonal_max2[c] = max2;
-    const bool load_left = c > 0 && loaded(c - 1);
-    const bool load_right = c < ns && loaded(c);
-    for (Index k = 0; k < n; ++k) {
-      Complex v = boundary_load_[c](f[k]);
-      if (load_left) v += load_of(c - 1)(nc + f[k]);
-      if (load_right) v += load_of(c)(f[k]);
-      ws.rhs[c].re[k] = v.real();
-      ws.rhs[c].im[k] = v.imag();
+    for (int k = 0; k < num_cases_; ++k) {
+      const auto load_left = c > 0 ? load_of(c - 1, k) : load_of(0, -1);
+      const auto load_right = c < ns ? load_of(c, k) : load_of(0, -1);
+      for (Index j = 0; j < n; ++j) {
+        Complex v = boundary_load_[c](f[j], k);
+        if (load_left.size() > 0) v += load_left(nc + f[j]);
+        if (load_right.size() > 0) v += load_right(f[j]);
+        ws.rhs[c].re[k * nc + j] = v.real();
+        ws.rhs[c].im[k * nc + j] = v.imag();
+      }
     }
     if (c < ns) {
       const std::vector<int>& g = ws.free[c + 1];
@@ -330,227 +588,66 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
   }
-  // Block LDL^T elimination: F_0 = A_0, F_{c+1} = A_{c+1} - U_c^T F_c^{-1} U_c.
-  // FactorLdltSplit turns the carried rows U_c^T and r'_c^T into V_c^T = (D^{-1} L^{-1} U_c)^T
-  // and w_c^T, so that U_c^T F_c^{-1} U_c = V_c^T D V_c and r'_{c+1} = r_{c+1} - V_c^T D w_c.
-  bool ok = !always_pivot_;
-  for (int c = 0; c < rows && ok; ++c) {
-    const Index n = size(c);
-    const Index m = next_size(c);
-    const Index ld = n + m + 1;
-    double* fr = ws.factor[c].re.data();
-    double* fi = ws.factor[c].im.data();
-    if (c == 0) {
-      const double* ar = ws.diagonal[0].re.data();
-      const double* ai = ws.diagonal[0].im.data();
-      for (Index j = 0; j < n; ++j) {
-        std::copy(ar + j * n + j, ar + (j + 1) * n, fr + j * ld + j);
-        std::copy(ai + j * n + j, ai + (j + 1) * n, fi + j * ld + j);
-        fr[j * ld + n + m] = ws.rhs[0].re[j];
-        fi[j * ld + n + m] = ws.rhs[0].im[j];
-      }
-    }
-    for (Index l = 0; l < m; ++l) {
-      for (Index k = 0; k < n; ++k) {
-        fr[k * ld + n + l] = ws.coupling[c].re[l * n + k];
-        fi[k * ld + n + l] = ws.coupling[c].im[l * n + k];
-      }
-    }
-    ok = FactorLdltSplit(fr, fi, ld, ld, n);
-    if (!ok || m == 0) break;
-    // D V (by columns of V, so that each Schur column's scalars are contiguous) and w.
-    double* dvr = ws.dv.re.data();
-    double* dvi = ws.dv.im.data();
-    double* wr = ws.w.re.data();
-    double* wi = ws.w.im.data();
-    for (Index j = 0; j < n; ++j) {
-      const double dr = fr[j * ld + j];
-      const double di = fi[j * ld + j];
-      const double* xr = fr + j * ld + n;
-      const double* xi = fi + j * ld + n;
-      for (Index l = 0; l < m; ++l) {
-        dvr[l * n + j] = dr * xr[l] - di * xi[l];
-        dvi[l * n + j] = dr * xi[l] + di * xr[l];
-      }
-      wr[j] = xr[m];
-      wi[j] = xi[m];
-    }
-    // F_{c+1} = A_{c+1} - V^T D V, column l of its lower triangle at a time (FactorLdltSplit
-    // reads only that): v_j (rows l..m-1) times d_j v_jl, four pivots per pass; and its carried
-    // right-hand side r_{c+1} - V^T D w.
-    const Index m2 = next_size(c + 1);
-    const Index ldn = m + m2 + 1;
-    double* nr = ws.factor[c + 1].re.data();
-    double* ni = ws.factor[c + 1].im.data();
-    const double* ar = ws.diagonal[c + 1].re.data();
-    const double* ai = ws.diagonal[c + 1].im.data();
-    for (Index l = 0; l < m; ++l) {
-      double* cr = nr + l * ldn + l;
-      double* ci = ni + l * ldn + l;
-      std::copy(ar + l * m + l, ar + (l + 1) * m, cr);
-      std::copy(ai + l * m + l, ai + (l + 1) * m, ci);
-      SubScaledManySplit(cr, ci, fr + n + l, fi + n + l, ld, dvr + l * n, dvi + l * n, n, m - l);
-      double br = 0.0;
-      double bi = 0.0;
-      DotSplit(dvr + l * n, dvi + l * n, wr, wi, n, &br, &bi);
-      nr[l * ldn + m + m2] = ws.rhs[c + 1].re[l] - br;
-      ni[l * ldn + m + m2] = ws.rhs[c + 1].im[l] - bi;
-    }
+  // One factorization for every load case, each case's back substitution, and a residual check
+  // of each. A pivot that breaks down sends every case to the sparse LU; a case whose residual
+  // fails goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateChain(ws, rows, cases, size)) {
+    BackSubstituteChain(ws, rows, cases, size);
+    FlagLargeChainResiduals(ws, rows, cases, size);
   }
-  // Back substitution: u_c = L_c^{-T} (w_c - V_c u_{c+1}).
-  for (int c = rows - 1; c >= 0 && ok; --c) {
-    const Index n = size(c);
-    const Index m = next_size(c);
-    const Index ld = n + m + 1;
-    const double* fr = ws.factor[c].re.data();
-    const double* fi = ws.factor[c].im.data();
-    double* yr = ws.u[c].re.data();
-    double* yi = ws.u[c].im.data();
-    for (Index j = 0; j < n; ++j) {
-      // w_j - v_j^T u_{c+1}, both carried in column j below the pivot block.
-      double vr = 0.0;
-      double vi = 0.0;
-      if (m > 0) {
-        DotSplit(fr + j * ld + n,
-                 fi + j * ld + n,
-                 ws.u[c + 1].re.data(),
-                 ws.u[c + 1].im.data(),
-                 m,
-                 &vr,
-                 &vi);
-      }
-      yr[j] = fr[j * ld + n + m] - vr;
-      yi[j] = fi[j * ld + n + m] - vi;
-    }
-    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
+  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
+    SolveChainPivoting(ws, rows, cases, size);
   }
-  // Residual of the assembled system; the unpivoted path must earn its result.
-  if (ok) {
-    ResidualCheck check;
-    double* zr = ws.z.re.data();
-    double* zi = ws.z.im.data();
+  // Singular or nearly so (plate.hpp), whichever path solved it; case by case.
+  for (Index k = 0; k < cases; ++k) {
+    AmplificationCheck amplification;
     for (int c = 0; c < rows; ++c) {
-      const Index n = size(c);
-      if (n == 0) continue;  // a cross-section with every dof fixed has no equation
-      const double* ar = ws.diagonal[c].re.data();
-      const double* ai = ws.diagonal[c].im.data();
-      const double* ur = ws.u[c].re.data();
-      const double* ui = ws.u[c].im.data();
-      // z = A u - rhs, A symmetric from its lower triangle.
-      SymmetricResidualSplit(ar, ai, n, ur, ui, ws.rhs[c].re.data(), ws.rhs[c].im.data(), zr, zi);
-      // + U_c u_{c+1} + U_{c-1}^T u_{c-1}.
-      if (c + 1 < rows) {
-        const Split& a = ws.coupling[c];
-        for (Index l = 0; l < size(c + 1); ++l) {
-          SubScaledSplit(zr,
-                         zi,
-                         a.re.data() + l * n,
-                         a.im.data() + l * n,
-                         -ws.u[c + 1].re[l],
-                         -ws.u[c + 1].im[l],
-                         n);
-        }
-      }
-      if (c > 0) {
-        const Split& a = ws.coupling[c - 1];
-        const Index p = size(c - 1);
-        for (Index k = 0; k < n; ++k) {
-          double vr = 0.0;
-          double vi = 0.0;
-          DotSplit(a.re.data() + k * p,
-                   a.im.data() + k * p,
-                   ws.u[c - 1].re.data(),
-                   ws.u[c - 1].im.data(),
-                   p,
-                   &vr,
-                   &vi);
-          zr[k] += vr;
-          zi[k] += vi;
-        }
-      }
-      check.AddRow(
-          zr, zi, ws.rhs[c].re.data(), ws.rhs[c].im.data(), ur, ui, n, ws.diagonal_max2[c]);
+      amplification.AddRow(ws.u[c].re.data() + k * nc,
+                           ws.u[c].im.data() + k * nc,
+                           ws.rhs[c].re.data() + k * nc,
+                           ws.rhs[c].im.data() + k * nc,
+                           size(c));
     }
-    ok = check.Passes();
+    if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
   }
-  if (!ok) {
-    // Fallback: sparse partial-pivoting LU of the assembled block-tridiagonal system.
-    std::vector<Eigen::Index> offset(rows + 1, 0);
-    for (int c = 0; c < rows; ++c) offset[c + 1] = offset[c] + size(c);
-    std::vector<Eigen::Triplet<Complex>> triplets;
-    Eigen::VectorXcd big_rhs(offset[rows]);
-    for (int c = 0; c < rows; ++c) {
-      const Index n = size(c);
-      const Split& a = ws.diagonal[c];
-      for (Index j = 0; j < n; ++j) {
-        for (Index i = j; i < n; ++i) {
-          const Complex v(a.re[j * n + i], a.im[j * n + i]);
-          triplets.emplace_back(offset[c] + i, offset[c] + j, v);
-          if (i != j) triplets.emplace_back(offset[c] + j, offset[c] + i, v);
-        }
-        big_rhs(offset[c] + j) = {ws.rhs[c].re[j], ws.rhs[c].im[j]};
-      }
-      if (c + 1 < rows) {
-        const Split& u = ws.coupling[c];
-        const Index m = size(c + 1);
-        for (Index j = 0; j < m; ++j) {
-          for (Index i = 0; i < n; ++i) {
-            const Complex v(u.re[j * n + i], u.im[j * n + i]);
-            triplets.emplace_back(offset[c] + i, offset[c + 1] + j, v);
-            triplets.emplace_back(offset[c + 1] + j, offset[c] + i, v);
-          }
-        }
-      }
-    }
-    Eigen::SparseMatrix<Complex> big(offset[rows], offset[rows]);
-    big.setFromTriplets(triplets.begin(), triplets.end());
-    big.makeCompressed();
-    Eigen::SparseLU<Eigen::SparseMatrix<Complex>, Eigen::COLAMDOrdering<int>> lu;
-    lu.compute(big);
-    if (lu.info() != Eigen::Success) {
-      throw Error(ErrorKind::kSoftware, "continuous condensation: singular condensed system");
-    }
-    const Eigen::VectorXcd solution = lu.solve(big_rhs);
-    for (int c = 0; c < rows; ++c) {
-      for (Index k = 0; k < size(c); ++k) {
-        ws.u[c].re[k] = solution(offset[c] + k).real();
-        ws.u[c].im[k] = solution(offset[c] + k).imag();
-      }
-    }
-  }
-  // Singular or nearly so (plate.hpp), whichever path solved it.
-  AmplificationCheck amplification;
-  for (int c = 0; c < rows; ++c) {
-    amplification.AddRow(
-        ws.u[c].re.data(), ws.u[c].im.data(), ws.rhs[c].re.data(), ws.rhs[c].im.data(), size(c));
-  }
-  if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
-  // Outputs of section s from its two end cross-sections.
+  // Every case's outputs in section s from its two end cross-sections: its offsets (when its
+  // load reaches the interior) plus the output map's rows of its set times its end values.
   for (int s = 0; s < ns; ++s) {
-    const std::vector<int>& outputs = section_outputs_[s];
-    if (outputs.empty()) continue;
-    const auto n_out = static_cast<Eigen::Index>(outputs.size());
+    const OutputLayout& layout = section_layout_[s];
+    if (layout.map_rows() == 0) continue;
+    const SectionData& sec = section_data(s);
     const Eigen::VectorXcd& section = section_of(s);
-    auto ends = ws.ends.head(2 * nc);
-    ends.setZero();
-    for (int side = 0; side < 2; ++side) {
-      const std::vector<int>& f = ws.free[s + side];
-      for (Index k = 0; k < size(s + side); ++k) {
-        ends(Index{side} * nc + f[k]) = {ws.u[s + side].re[k], ws.u[s + side].im[k]};
+    for (int k = 0; k < num_cases_; ++k) {
+      const int set = sets_.set_of_case[k];
+      const std::vector<int>& positions = layout.positions[set];
+      const auto n_out = static_cast<Eigen::Index>(positions.size());
+      if (n_out == 0) continue;
+      auto ends = ws.ends.head(2 * nc);
+      ends.setZero();
+      for (int side = 0; side < 2; ++side) {
+        const std::vector<int>& f = ws.free[s + side];
+        for (Index j = 0; j < size(s + side); ++j) {
+          ends(Index{side} * nc + f[j]) = {ws.u[s + side].re[k * nc + j],
+                                           ws.u[s + side].im[k * nc + j]};
+        }
       }
-    }
-    if (ws.values.size() < n_out) ws.values.resize(n_out);
-    auto values = ws.values.head(n_out);
-    if (loaded(s)) {
-      values = section.tail(n_out);
-    } else {
-      values.setZero();
-    }
-    values.noalias() += Eigen::Map<const Eigen::MatrixXcd>(
-                            section.data(), n_out, 2 * static_cast<Eigen::Index>(nc)) *
-                        ends;
-    for (std::size_t o = 0; o < outputs.size(); ++o) {
-      w[outputs[o]] = values(static_cast<Eigen::Index>(o));
+      if (ws.values.size() < n_out) ws.values.resize(n_out);
+      auto values = ws.values.head(n_out);
+      const int l = sec.LoadedIndex(k);
+      if (l >= 0) {
+        values = section.segment(sec.loaded_start[l] + 2 * nc, n_out);
+      } else {
+        values.setZero();
+      }
+      const Eigen::Map<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(
+          section.data() + layout.map_begin[set],
+          n_out,
+          2 * static_cast<Eigen::Index>(nc),
+          Eigen::OuterStride<>(layout.map_rows()));
+      values.noalias() += map * ends;
+      std::complex<double>* out = w.data() + sets_.first_output[k];
+      for (Eigen::Index o = 0; o < n_out; ++o) out[positions[o]] = values(o);
     }
   }
 }

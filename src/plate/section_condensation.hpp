@@ -19,6 +19,15 @@
 // cached pieces, removes the cross-section dofs that either adjoining section fixes (and those of
 // the short edges), solves it by block elimination and recovers the outputs. Every step is exact
 // algebra on the same discrete system as the full solve.
+//
+// Several load cases (docs/model.md, "Several load cases") share the clamps, the mesh and the
+// frequency, so they share the system matrix: the loads are the columns of one load matrix, the
+// condensed loads g (and the pieces' loads after composition) have one column per case, and a
+// configuration is factorized once and solved for every column. C depends only on a section's
+// mesh and clamp state, so it is condensed once per mesh and state (sections whose elements are
+// the same element matrices) whatever loads or outputs the sections have. Each case has its own
+// outputs (positions and line); cases with equal outputs share one output set, whose maps are
+// condensed once, while each case keeps its own output offsets r_I S_II^{-1} f_I (its own load).
 #include <array>
 #include <complex>
 #include <cstdint>
@@ -98,13 +107,62 @@ inline int ClassifySectionDofs(int m,
   return n_interior;
 }
 
+// One load case's outputs: w along the line y (m) at the positions x (m).
+struct CaseOutputs {
+  std::vector<double> x;
+  double y = 0.0;
+};
+
+// The load cases' outputs grouped into output sets: cases with the same positions and line share
+// one set, whose output maps both condensations condense once. The outputs of case c are
+// w[first_output[c] + k] for its positions k (SensorOptions::OutputOffset).
+struct OutputSets {
+  std::vector<int> set_of_case;  // case -> its set
+  std::vector<int> case_of_set;  // set -> the first case with it (its positions, line)
+  std::vector<std::vector<int>> cases_of_set;  // set -> its cases, ascending
+  std::vector<std::size_t> first_output;       // case -> its first output; [num cases] = the total
+  explicit OutputSets(const std::vector<CaseOutputs>& outputs);
+  int num_sets() const { return static_cast<int>(case_of_set.size()); }
+  int num_cases() const { return static_cast<int>(set_of_case.size()); }
+};
+
+// Where the outputs of a section (or a group of sections) sit in its pieces: the output-map rows
+// set after set, the output offsets case after case (each case has its set's rows, in the same
+// order). Shared by both condensations.
+struct OutputLayout {
+  std::vector<std::vector<int>> positions;  // [set] -> its positions here (indices), ascending
+  std::vector<int> map_begin;               // [set] -> its first map row; [num sets] = the rows
+  std::vector<int> offset_begin;            // [case] -> its first offset; [num cases] = the total
+  // Fills map_begin and offset_begin from positions.
+  void Finish(const OutputSets& sets);
+  int map_rows() const { return map_begin.back(); }
+  int offset_rows() const { return offset_begin.back(); }
+  int rows_of_case(const OutputSets& sets, int c) const {
+    return static_cast<int>(positions[sets.set_of_case[c]].size());
+  }
+};
+
+// The outputs' sections: layouts[s] for each of num_sections sections of `intervals` grid
+// intervals (each output belongs to the section of the element that holds it: an output on a
+// section boundary depends only on that cross-section's dofs, so either neighbour is exact), and
+// relative_x[s][set] their positions relative to the section's start. Shared by both
+// condensations.
+void AssignOutputs(const Plate& plate,
+                   int num_sections,
+                   int intervals,
+                   const std::vector<CaseOutputs>& outputs,
+                   const OutputSets& sets,
+                   std::vector<OutputLayout>* layouts,
+                   std::vector<std::vector<std::vector<double>>>* relative_x);
+
 class SectionCondensation {
  public:
   // `plate` must have num_sections * elements_per_section elements along x (any element order).
   // Masks: dofs fixed on
   // an edge-A / edge-B node by a fixed section, and on every node of the first / last
   // cross-section by the short edges.
-  // group_size must divide num_sections (1 disables grouping). `higham`: the caller has certified
+  // group_size must divide num_sections (1 disables grouping). `loads`: one column per load case
+  // (the plate's load vectors); `outputs`: each case's outputs. `higham`: the caller has certified
   // that the all-free system is a Higham matrix (real and imaginary parts symmetric positive
   // definite; SensorModel checks it), which makes the unpivoted LDL^T provably stable for every
   // configuration, so Solve skips its residual check (section_solve.cpp). `kernels`: the
@@ -118,26 +176,29 @@ class SectionCondensation {
       std::uint8_t fixed_mask_b,
       std::uint8_t start_mask,
       std::uint8_t end_mask,
-      const Eigen::VectorXd& load_vector,
+      const Eigen::MatrixXd& loads,
       double frequency_hz,
-      const std::vector<double>& output_x,
-      double output_y,
+      const std::vector<CaseOutputs>& outputs,
       bool always_pivot = false,
       bool higham = false,
       SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
 
-  // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at the outputs.
+  // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at every case's
+  // outputs, case after case. One factorization of the configuration's system serves all cases.
   void Solve(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
 
   int num_pieces() const { return static_cast<int>(group_pieces_.size()); }
   std::size_t MemoryBytes() const;
 
  private:
+  // A section piece (condensed: its index in section_condensed_, which the sections of one mesh
+  // share in each clamp state) or a group piece (condensed -1: its own, group_condensed).
   struct Piece {
-    Eigen::MatrixXcd condensed;      // 2 nc x 2 nc, [left; right] cross-section dofs
-    Eigen::VectorXcd load;           // 2 nc
-    Eigen::MatrixXcd output_map;     // outputs in the section x 2 nc
-    Eigen::VectorXcd output_offset;  // outputs in the section
+    int condensed = -1;
+    Eigen::MatrixXcd group_condensed;  // 2 nc x 2 nc, [left; right] cross-section dofs
+    Eigen::MatrixXcd load;             // [left; right] x load cases
+    Eigen::MatrixXcd output_map;       // output-set rows (OutputLayout) x [left; right]
+    Eigen::VectorXcd output_offset;    // each case's outputs (OutputLayout)
     int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
     int right_size = 0;  // likewise for the right end
     // A group with no kept end (the whole plate in one group) is solved here, not in Solve: the
@@ -161,20 +222,24 @@ class SectionCondensation {
     // coupling_right^T (nc x rank each), from its SVD less the singular values at round-off level.
     SplitMatrix coupling_left;
     SplitMatrix coupling_right;
-    Eigen::VectorXcd load;           // [left; right] kept dofs
-    SplitMatrix output_map;          // outputs in the group x [left; right] kept dofs
-    Eigen::VectorXcd output_offset;  // outputs in the group
+    Eigen::MatrixXcd load;           // [left; right] kept dofs x load cases
+    SplitMatrix output_map;          // output-set rows in the group x [left; right] kept dofs
+    Eigen::VectorXcd output_offset;  // each case's outputs in the group (group_layout_)
     int left_size = 0;
     int right_size = 0;
     double singular = 0.0;  // as Piece::singular: Solve throws SingularSystem for it
   };
-  Piece Condense(const Plate& plate,
-                 int section,
-                 int state,
-                 const Eigen::VectorXd& load_vector,
-                 double frequency_hz,
-                 const std::vector<double>& output_x,
-                 double output_y) const;
+  // The pieces of the distinct sections (`representatives`, their first sections) in one clamp
+  // state: C once per mesh, then each section's loads and output maps (section_condensation.cpp).
+  void CondenseSections(const Plate& plate,
+                        int state,
+                        const Eigen::MatrixXd& loads,
+                        double frequency_hz,
+                        const std::vector<CaseOutputs>& outputs,
+                        const std::vector<int>& representatives);
+  const Eigen::MatrixXcd& Condensed(const Piece& piece) const {
+    return piece.condensed >= 0 ? section_condensed_[piece.condensed] : piece.group_condensed;
+  }
   Piece ComposeGroup(int group, int state) const;
   // Solve's body, compiled once per instruction set (SolvePortable, SolveAvx2, SolveAvx512).
   void SolveBody(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
@@ -202,17 +267,22 @@ class SectionCondensation {
   std::uint8_t fixed_mask_b_;
   std::uint8_t start_mask_;
   std::uint8_t end_mask_;
+  int num_cases_;
+  OutputSets sets_;
+  // Construction only (released once the group pieces are built).
+  std::vector<int> mesh_of_section_;  // section -> the first section with the same element matrices
+  std::vector<Eigen::MatrixXcd> section_condensed_;  // [mesh section * 4 + state] -> its C
   std::vector<Piece> pieces_;
   std::vector<std::array<int, 4>> piece_index_;  // [section][state] -> pieces_ (deduplicated)
-  std::vector<std::vector<int>> section_outputs_;
+  std::vector<OutputLayout> section_layout_;
   int group_size_;
   bool always_pivot_;
   bool higham_;  // the caller certified a Higham system: no residual check needed (Solve)
   SensorOptions::VectorKernels kernels_;  // which copy Solve runs
   std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
-  std::vector<std::vector<int>> group_outputs_;
-  std::vector<Eigen::VectorXcd> boundary_load_;  // load vector on each cross-section
+  std::vector<OutputLayout> group_layout_;
+  std::vector<Eigen::MatrixXcd> boundary_load_;  // loads on each cross-section (nc x cases)
   // [cross-section][edge A fixed | edge B fixed << 1] -> its free dofs (FreeDofs), for Solve.
   std::vector<std::array<std::vector<int>, 4>> free_dofs_;
 };

@@ -8,6 +8,11 @@
 // work of LU, and symmetric Schur complements). A dense partial-pivoting LU of the whole condensed
 // system is the fallback when a pivot breaks down.
 //
+// Several load cases (docs/model.md, "Several load cases") share the matrix: their right-hand
+// sides are carried as extra rows through the one factorization, each then back-substituted,
+// checked (residual, amplification) and recovered on its own. A case's column sees exactly the
+// operations a single case's did, so one case gives the bits it gave before there were several.
+//
 // When is the unpivoted path safe? For a Higham matrix A = B + iC, B and C real symmetric
 // positive definite, Gaussian elimination without pivoting has growth factor below 3 (Higham,
 // Math. Comp. 67, 1998; below 2 by Drury 2013) and so is backward stable; principal submatrices
@@ -22,7 +27,7 @@
 // Performance (docs/benchmarks.md, docs/model.md "Performance"): the coupling between
 // neighbouring rows is a group's end-to-end block, numerically of low rank (SectionCondensation's
 // constructor factors it as P Q^T), so a Schur complement costs O(n^2 r) rather than O(n^3); the
-// triangular solves with P and the right-hand side ride along inside the factorization. All the
+// triangular solves with P and the right-hand sides ride along inside the factorization. All the
 // per-configuration algebra runs on split real/imaginary arrays (block_ldlt.hpp) in plain loops
 // that the compiler vectorizes, two axpys per pass; the workspace is per thread and reused.
 #include <algorithm>
@@ -52,8 +57,9 @@ struct Split {
 struct Workspace {
   int nc = -1;
   int rows = -1;
-  // Pivot blocks F_i ((n + r + 1) x n, leading dimension n + r + 1), LDL^T in place, with P_i^T
-  // and the right-hand side carried below them.
+  int cases = -1;
+  // Pivot blocks F_i ((n + r + cases) x n, leading dimension n + r + cases), LDL^T in place, with
+  // P_i^T and the right-hand sides (one per load case) carried below them.
   std::vector<Split> factor;
   std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
   std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
@@ -61,37 +67,50 @@ struct Workspace {
   std::vector<Split> p;
   std::vector<Split> q;
   std::vector<Index> rank;
+  // Right-hand sides and solutions of each row, case j at [j nc, j nc + n).
   std::vector<Split> rhs;
   std::vector<Split> u;
+  // With several cases, each row's solution with the cases side by side within each entry
+  // (BackSubstituteCases), and C the same way.
+  std::vector<Split> u_cases;
+  Split c_cases;
+  std::vector<double> scratch;                // SolveUnitUpperSplitCases' dot products
+  std::vector<char> fallback;                 // [case]: solved by the pivoting LU
   std::vector<const std::vector<int>*> free;  // each row's free dofs (free_dofs_)
-  Split s;                                    // [S; c^T], (r + 1) x r: S = V^T D V, c = V^T D w
-  Split t;                                    // Q S, m x r
+  Split s;  // [S; C^T], (r + cases) x r: S = V^T D V, C = V^T D W (a column per case)
+  Split t;  // Q S, m x r
   Split y;
   Split small;
 
-  void Reserve(int nc_, int rows_) {
-    if (nc_ == nc && rows_ <= rows) return;
+  void Reserve(int nc_, int rows_, int cases_) {
+    if (nc_ == nc && rows_ <= rows && cases_ <= cases) return;
     nc = nc_;
     rows = std::max(rows_, rows);
+    cases = std::max(cases_, cases);
     const Index n = nc;
+    const Index k = cases;
     factor.assign(rows, Split{});
     diagonal.assign(rows, Split{});
     p.assign(rows, Split{});
     q.assign(rows, Split{});
     rhs.assign(rows, Split{});
     u.assign(rows, Split{});
+    u_cases.assign(rows, Split{});
     for (int i = 0; i < rows; ++i) {
-      factor[i].Resize((2 * n + 1) * n);
+      factor[i].Resize((2 * n + k) * n);
       diagonal[i].Resize(n * n);
       p[i].Resize(n * n);
       q[i].Resize(n * n);
-      rhs[i].Resize(n);
-      u[i].Resize(n);
+      rhs[i].Resize(n * k);
+      u[i].Resize(n * k);
+      if (k > 1) u_cases[i].Resize(n * k);
     }
+    c_cases.Resize(n * k);
+    scratch.assign(static_cast<std::size_t>(2 * k), 0.0);
     diagonal_max2.assign(rows, 0.0);
     rank.assign(rows, 0);
     free.assign(rows, nullptr);
-    s.Resize((n + 1) * n);
+    s.Resize((n + k) * n);
     t.Resize(n * n);
     y.Resize(n);
     small.Resize(n);
@@ -134,6 +153,370 @@ COMBABC_KERNEL void AssembleDiagonal(const Piece& left,
   }
 }
 
+// The free dofs of block row i: its size.
+COMBABC_KERNEL Index RowSize(const Workspace& ws, int i) {
+  return static_cast<Index>(ws.free[i]->size());
+}
+
+// Block LDL^T elimination of the assembled rows: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i.
+// With U_i = P_i Q_i^T, V_i = D_i^{-1} L_i^{-1} P_i (from the factorization's carried rows) and
+// S_i = V_i^T D_i V_i: U_i^T F_i^{-1} U_i = Q_i S_i Q_i^T. The right-hand sides, one per load
+// case, are eliminated alongside: row i's carried last rows become W_i = D_i^{-1} L_i^{-1} R'_i,
+// and R'_{i+1} = R_{i+1} - Q_i C_i with C_i = V_i^T D_i W_i. Every case's column is carried
+// through the same factorization: each costs its own rows of the updates, nothing more. False
+// where a pivot breaks down.
+COMBABC_KERNEL bool EliminateRows(Workspace& ws, int rows, Index cases, bool higham) {
+  const Index nc = ws.nc;
+  bool ok = true;
+  for (int i = 0; i < rows && ok; ++i) {
+    const Index n = RowSize(ws, i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + cases;
+    double* fr = ws.factor[i].re.data();
+    double* fi = ws.factor[i].im.data();
+    if (i == 0) {
+      for (Index j = 0; j < cases; ++j) {
+        for (Index c = 0; c < n; ++c) {
+          fr[c * ld + n + r + j] = ws.rhs[0].re[j * nc + c];
+          fi[c * ld + n + r + j] = ws.rhs[0].im[j * nc + c];
+        }
+      }
+    }
+    for (Index l = 0; l < r; ++l) {
+      for (Index k = 0; k < n; ++k) {
+        fr[k * ld + n + l] = ws.p[i].re[l * n + k];
+        fi[k * ld + n + l] = ws.p[i].im[l * n + k];
+      }
+    }
+    ok = FactorLdltSplit(fr, fi, ld, ld, n, higham);
+    if (!ok || i + 1 == rows) break;
+    // [S; C^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T and w_j^T the carried rows of column j; S is
+    // symmetric: the lower triangle, then mirrored.
+    double* sr = ws.s.re.data();
+    double* si = ws.s.im.data();
+    const Index ls = r + cases;
+    std::fill(sr, sr + ls * r, 0.0);
+    std::fill(si, si + ls * r, 0.0);
+    for (Index j = 0; j < n; ++j) {
+      const double* xr = fr + j * ld + n;
+      const double* xi = fi + j * ld + n;
+      const double dr = fr[j * ld + j];
+      const double di = fi[j * ld + j];
+      for (Index l = 0; l < r; ++l) {
+        // -(d v_l): SubScaledSplit subtracts.
+        SubScaledSplit(sr + l * ls + l,
+                       si + l * ls + l,
+                       xr + l,
+                       xi + l,
+                       -(dr * xr[l] - di * xi[l]),
+                       -(dr * xi[l] + di * xr[l]),
+                       ls - l);
+      }
+    }
+    for (Index l = 0; l < r; ++l) {
+      for (Index k = 0; k < l; ++k) {
+        sr[l * ls + k] = sr[k * ls + l];
+        si[l * ls + k] = si[k * ls + l];
+      }
+    }
+    // T = Q S (m x r).
+    const Index m = RowSize(ws, i + 1);
+    const Index rn = ws.rank[i + 1];
+    const Index ldn = m + rn + cases;
+    const double* qr = ws.q[i].re.data();
+    const double* qi = ws.q[i].im.data();
+    double* tr = ws.t.re.data();
+    double* ti = ws.t.im.data();
+    std::fill(tr, tr + m * r, 0.0);
+    std::fill(ti, ti + m * r, 0.0);
+    for (Index l = 0; l < r; ++l) {
+      Index k = 0;
+      for (; k + 1 < r; k += 2) {
+        SubScaled2Split(tr + l * m,
+                        ti + l * m,
+                        qr + k * m,
+                        qi + k * m,
+                        -sr[l * ls + k],
+                        -si[l * ls + k],
+                        qr + (k + 1) * m,
+                        qi + (k + 1) * m,
+                        -sr[l * ls + k + 1],
+                        -si[l * ls + k + 1],
+                        m);
+      }
+      if (k < r) {
+        SubScaledSplit(
+            tr + l * m, ti + l * m, qr + k * m, qi + k * m, -sr[l * ls + k], -si[l * ls + k], m);
+      }
+    }
+    // F_{i+1} = A_{i+1} - T Q^T (lower triangle; FactorLdltSplit reads only that), and its
+    // carried right-hand sides R_{i+1} - Q C.
+    double* nr = ws.factor[i + 1].re.data();
+    double* ni = ws.factor[i + 1].im.data();
+    for (Index c = 0; c < m; ++c) {
+      // Q(c, l) for this column, contiguous for SubScaledManySplit.
+      double* qcr = ws.small.re.data();
+      double* qci = ws.small.im.data();
+      for (Index l = 0; l < r; ++l) {
+        qcr[l] = qr[l * m + c];
+        qci[l] = qi[l * m + c];
+      }
+      SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
+    }
+    // Each case's R_{i+1} - Q C by columns of Q: an axpy per column, each entry taking the same
+    // operations in the same order as a dot product over the columns would, without a latency
+    // chain through them.
+    for (Index j = 0; j < cases; ++j) {
+      double* br = ws.small.re.data();
+      double* bi = ws.small.im.data();
+      std::copy_n(ws.rhs[i + 1].re.data() + j * nc, m, br);
+      std::copy_n(ws.rhs[i + 1].im.data() + j * nc, m, bi);
+      for (Index k = 0; k < r; ++k) {
+        SubScaledSplit(br, bi, qr + k * m, qi + k * m, sr[k * ls + r + j], si[k * ls + r + j], m);
+      }
+      for (Index c = 0; c < m; ++c) {
+        nr[c * ldn + m + rn + j] = br[c];
+        ni[c * ldn + m + rn + j] = bi[c];
+      }
+    }
+  }
+  return ok;
+}
+
+// Back substitution of one case: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
+COMBABC_KERNEL void BackSubstituteOne(Workspace& ws, int rows) {
+  for (int i = rows - 1; i >= 0; --i) {
+    const Index n = RowSize(ws, i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + 1;
+    const double* fr = ws.factor[i].re.data();
+    const double* fi = ws.factor[i].im.data();
+    double* yr = ws.u[i].re.data();
+    double* yi = ws.u[i].im.data();
+    double* cr = ws.small.re.data();
+    double* ci = ws.small.im.data();
+    if (r > 0) {
+      const Index m = RowSize(ws, i + 1);
+      for (Index l = 0; l < r; ++l) {
+        DotSplit(ws.q[i].re.data() + l * m,
+                 ws.q[i].im.data() + l * m,
+                 ws.u[i + 1].re.data(),
+                 ws.u[i + 1].im.data(),
+                 m,
+                 cr + l,
+                 ci + l);
+      }
+    }
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T c, both carried in column j below the pivot block.
+      double vr = 0.0;
+      double vi = 0.0;
+      DotSplit(fr + j * ld + n, fi + j * ld + n, cr, ci, r, &vr, &vi);
+      yr[j] = fr[j * ld + n + r] - vr;
+      yi[j] = fi[j * ld + n + r] - vi;
+    }
+    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
+  }
+}
+
+// The same for several cases at once: the cases side by side within each entry (u_cases,
+// c_cases), so that every dot product runs the cases as independent lanes (DotSplitCases). Each
+// case gets BackSubstituteOne's bits; one case alone takes BackSubstituteOne, whose loops are not
+// spread over lanes of one.
+COMBABC_KERNEL void BackSubstituteCases(Workspace& ws, int rows, Index cases) {
+  const Index nc = ws.nc;
+  double* dots = ws.scratch.data();
+  double* cr = ws.c_cases.re.data();
+  double* ci = ws.c_cases.im.data();
+  for (int i = rows - 1; i >= 0; --i) {
+    const Index n = RowSize(ws, i);
+    const Index r = ws.rank[i];
+    const Index ld = n + r + cases;
+    const double* fr = ws.factor[i].re.data();
+    const double* fi = ws.factor[i].im.data();
+    double* yr = ws.u_cases[i].re.data();
+    double* yi = ws.u_cases[i].im.data();
+    if (r > 0) {
+      const Index m = RowSize(ws, i + 1);
+      for (Index l = 0; l < r; ++l) {
+        DotSplitCases(ws.q[i].re.data() + l * m,
+                      ws.q[i].im.data() + l * m,
+                      ws.u_cases[i + 1].re.data(),
+                      ws.u_cases[i + 1].im.data(),
+                      m,
+                      cases,
+                      cr + l * cases,
+                      ci + l * cases);
+      }
+    }
+    for (Index j = 0; j < n; ++j) {
+      // w_j - v_j^T c, both carried in column j below the pivot block (w_j of every case
+      // side by side).
+      double* vr = yr + j * cases;
+      double* vi = yi + j * cases;
+      DotSplitCases(fr + j * ld + n, fi + j * ld + n, cr, ci, r, cases, vr, vi);
+      for (Index c = 0; c < cases; ++c) {
+        vr[c] = fr[j * ld + n + r + c] - vr[c];
+        vi[c] = fi[j * ld + n + r + c] - vi[c];
+      }
+    }
+    SolveUnitUpperSplitCases(fr, fi, ld, n, yr, yi, cases, dots);
+    for (Index c = 0; c < cases; ++c) {
+      for (Index j = 0; j < n; ++j) {
+        ws.u[i].re[c * nc + j] = yr[j * cases + c];
+        ws.u[i].im[c * nc + j] = yi[j * cases + c];
+      }
+    }
+  }
+}
+
+// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
+// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
+// result.
+COMBABC_KERNEL void FlagLargeResiduals(Workspace& ws, int rows, Index cases) {
+  const Index nc = ws.nc;
+  double* zr = ws.y.re.data();
+  double* zi = ws.y.im.data();
+  double* cr = ws.small.re.data();
+  double* ci = ws.small.im.data();
+  for (Index case_index = 0; case_index < cases; ++case_index) {
+    const Index at = case_index * nc;
+    ResidualCheck check;
+    for (int i = 0; i < rows; ++i) {
+      const Index n = RowSize(ws, i);
+      const double* ar = ws.diagonal[i].re.data();
+      const double* ai = ws.diagonal[i].im.data();
+      const double* ur = ws.u[i].re.data() + at;
+      const double* ui = ws.u[i].im.data() + at;
+      const double* br = ws.rhs[i].re.data() + at;
+      const double* bi = ws.rhs[i].im.data() + at;
+      // z = A u - rhs, A symmetric from its lower triangle.
+      SymmetricResidualSplit(ar, ai, n, ur, ui, br, bi, zr, zi);
+      // + P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
+      const auto couple =
+          [&](const Split& a, const Split& b, Index k, Index na, Index nb, int j)
+              COMBABC_KERNEL_LAMBDA {
+                for (Index l = 0; l < k; ++l) {
+                  DotSplit(b.re.data() + l * nb,
+                           b.im.data() + l * nb,
+                           ws.u[j].re.data() + at,
+                           ws.u[j].im.data() + at,
+                           nb,
+                           cr + l,
+                           ci + l);
+                  SubScaledSplit(
+                      zr, zi, a.re.data() + l * na, a.im.data() + l * na, -cr[l], -ci[l], na);
+                }
+              };
+      if (i + 1 < rows) couple(ws.p[i], ws.q[i], ws.rank[i], n, RowSize(ws, i + 1), i + 1);
+      if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, RowSize(ws, i - 1), i - 1);
+      check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[i]);
+    }
+    ws.fallback[case_index] = check.Passes() ? 0 : 1;
+  }
+}
+
+// Fallback: one dense partial-pivoting LU of the whole condensed system (ws.diagonal holds the
+// assembled diagonal blocks), solved for each case flagged in ws.fallback.
+inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
+  const Index nc = ws.nc;
+  const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a, Index ld) {
+    Eigen::MatrixXcd out(rows_a, cols_a);
+    for (Index c = 0; c < cols_a; ++c) {
+      for (Index k = 0; k < rows_a; ++k) out(k, c) = {a.re[c * ld + k], a.im[c * ld + k]};
+    }
+    return out;
+  };
+  std::vector<Index> offset(rows + 1, 0);
+  for (int i = 0; i < rows; ++i) offset[i + 1] = offset[i] + RowSize(ws, i);
+  Eigen::MatrixXcd big = Eigen::MatrixXcd::Zero(offset[rows], offset[rows]);
+  Eigen::MatrixXcd big_rhs(offset[rows], cases);
+  for (int i = 0; i < rows; ++i) {
+    const Index n = RowSize(ws, i);
+    const Eigen::MatrixXcd a = complex_matrix(ws.diagonal[i], n, n, n);
+    auto block = big.block(offset[i], offset[i], n, n);
+    block.triangularView<Eigen::Lower>() = a;
+    block.triangularView<Eigen::StrictlyUpper>() = a.transpose();
+    big_rhs.middleRows(offset[i], n) = complex_matrix(ws.rhs[i], n, cases, nc);
+    if (i + 1 < rows) {
+      const Index m = RowSize(ws, i + 1);
+      const Index r = ws.rank[i];
+      const Eigen::MatrixXcd coupling =
+          complex_matrix(ws.p[i], n, r, n) * complex_matrix(ws.q[i], m, r, m).transpose();
+      big.block(offset[i], offset[i + 1], n, m) = coupling;
+      big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
+    }
+  }
+  const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(big);
+  for (Index j = 0; j < cases; ++j) {
+    if (ws.fallback[j] == 0) continue;
+    const Eigen::VectorXcd b = big_rhs.col(j);
+    const Eigen::VectorXcd solution = lu.solve(b);
+    for (int i = 0; i < rows; ++i) {
+      for (Index k = 0; k < RowSize(ws, i); ++k) {
+        ws.u[i].re[j * nc + k] = solution(offset[i] + k).real();
+        ws.u[i].im[j * nc + k] = solution(offset[i] + k).imag();
+      }
+    }
+  }
+}
+
+// Every case's outputs in group g from its kept end cross-sections (rows g - 1 and g): the
+// case's offsets plus the output map's rows of its set, at the columns of the free end dofs
+// (fixed ones are zero), times that case's values there. A template only so that it can take
+// SectionCondensation's private piece type.
+template <class Piece>
+COMBABC_KERNEL void RecoverGroupOutputs(const Piece& piece,
+                                        const OutputLayout& layout,
+                                        const OutputSets& sets,
+                                        int g,
+                                        Workspace& ws,
+                                        std::span<std::complex<double>> w) {
+  const Index nc = ws.nc;
+  const Index map_rows = piece.output_map.re.rows();
+  double* vr = ws.y.re.data();
+  double* vi = ws.y.im.data();
+  for (int c = 0; c < sets.num_cases(); ++c) {
+    const std::vector<int>& positions = layout.positions[sets.set_of_case[c]];
+    const auto n_out = static_cast<Index>(positions.size());
+    if (n_out == 0) continue;
+    const Index first_row = layout.map_begin[sets.set_of_case[c]];
+    const Index first_offset = layout.offset_begin[c];
+    for (Index k = 0; k < n_out; ++k) {
+      vr[k] = piece.output_offset(first_offset + k).real();
+      vi[k] = piece.output_offset(first_offset + k).imag();
+    }
+    // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
+    // subtracts, so the multipliers are -u.
+    const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
+      const std::vector<int>& f = *ws.free[i];
+      const Index n = RowSize(ws, i);
+      const double* mr = piece.output_map.re.data() + first_row;
+      const double* mi = piece.output_map.im.data() + first_row;
+      double* sr = ws.small.re.data();
+      double* si = ws.small.im.data();
+      for (Index k = 0; k < n; ++k) {
+        sr[k] = -ws.u[i].re[c * nc + k];
+        si[k] = -ws.u[i].im[c * nc + k];
+      }
+      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
+        // A contiguous run of free dofs is a run of adjacent columns: several per pass over v.
+        const Index column = (offset + f[0]) * map_rows;
+        SubScaledManySplit(vr, vi, mr + column, mi + column, map_rows, sr, si, n, n_out);
+      } else {
+        for (Index k = 0; k < n; ++k) {
+          const Index column = (offset + f[k]) * map_rows;
+          SubScaledSplit(vr, vi, mr + column, mi + column, sr[k], si[k], n_out);
+        }
+      }
+    };
+    if (piece.left_size > 0) add_end(g - 1, 0);
+    if (piece.right_size > 0) add_end(g, piece.left_size);
+    std::complex<double>* out = w.data() + sets.first_output[c];
+    for (Index k = 0; k < n_out; ++k) out[positions[k]] = {vr[k], vi[k]};
+  }
+}
+
 }  // namespace
 
 void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
@@ -172,6 +555,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
   const int ns = num_sections_;
   const int ng = ns / group_size_;
   const int nc = nc_;
+  const Index cases = num_cases_;
   const int rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
   // The whole plate in one group was solved in the precompute; singular there is singular here.
   for (int g = 0; g < ng; ++g) {
@@ -179,7 +563,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     if (singular > 0.0) throw SingularSystem(singular);
   }
   thread_local Workspace ws;
-  ws.Reserve(nc, std::max(rows, 1));
+  ws.Reserve(nc, std::max(rows, 1), num_cases_);
   if (ws.y.re.size() < w.size()) ws.y.Resize(static_cast<Index>(w.size()));
   // Free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes it.
   for (int i = 0; i < rows; ++i) {
@@ -188,7 +572,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
     ws.free[i] = &free_dofs_[x][(a ? 1 : 0) | (b ? 2 : 0)];
   }
-  const auto size = [&](int i) { return static_cast<Index>(ws.free[i]->size()); };
+  const auto size = [&](int i) { return RowSize(ws, i); };
   // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
   // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
   // i + 1's, in its factored form.
@@ -205,7 +589,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     const std::vector<int>& f = *ws.free[i];
     const Index n = size(i);
     ws.rank[i] = i + 1 < rows ? right.coupling_left.re.cols() : 0;
-    const Index ld = n + ws.rank[i] + 1;
+    const Index ld = n + ws.rank[i] + cases;
     double* fr = ws.factor[i].re.data();
     double* fi = ws.factor[i].im.data();
     if (in_place) {
@@ -221,11 +605,13 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       }
     }
     const auto boundary = static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(group_size_);
-    for (Index k = 0; k < n; ++k) {
-      const std::complex<double> v =
-          left.load(left.left_size + f[k]) + right.load(f[k]) + boundary_load_[boundary](f[k]);
-      ws.rhs[i].re[k] = v.real();
-      ws.rhs[i].im[k] = v.imag();
+    for (Index j = 0; j < cases; ++j) {
+      for (Index k = 0; k < n; ++k) {
+        const std::complex<double> v = left.load(left.left_size + f[k], j) + right.load(f[k], j) +
+                                       boundary_load_[boundary](f[k], j);
+        ws.rhs[i].re[j * nc + k] = v.real();
+        ws.rhs[i].im[j * nc + k] = v.imag();
+      }
     }
     if (i + 1 < rows) {
       const std::vector<int>& g = *ws.free[i + 1];
@@ -247,286 +633,53 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       }
     }
   }
-  // Block LDL^T elimination: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i. With
-  // U_i = P_i Q_i^T, V_i = D_i^{-1} L_i^{-1} P_i (from the factorization's carried rows) and
-  // S_i = V_i^T D_i V_i: U_i^T F_i^{-1} U_i = Q_i S_i Q_i^T. The right-hand side is eliminated
-  // alongside: row i's carried last row becomes w_i = D_i^{-1} L_i^{-1} r'_i, and
-  // r'_{i+1} = r_{i+1} - Q_i c_i with c_i = V_i^T D_i w_i.
-  bool ok = !always_pivot_;
-  for (int i = 0; i < rows && ok; ++i) {
-    const Index n = size(i);
-    const Index r = ws.rank[i];
-    const Index ld = n + r + 1;
-    double* fr = ws.factor[i].re.data();
-    double* fi = ws.factor[i].im.data();
-    if (i == 0) {
-      for (Index c = 0; c < n; ++c) {
-        fr[c * ld + n + r] = ws.rhs[0].re[c];
-        fi[c * ld + n + r] = ws.rhs[0].im[c];
-      }
-    }
-    for (Index l = 0; l < r; ++l) {
-      for (Index k = 0; k < n; ++k) {
-        fr[k * ld + n + l] = ws.p[i].re[l * n + k];
-        fi[k * ld + n + l] = ws.p[i].im[l * n + k];
-      }
-    }
-    ok = FactorLdltSplit(fr, fi, ld, ld, n, higham_);
-    if (!ok || i + 1 == rows) break;
-    // [S; c^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T the carried rows of column j; S is
-    // symmetric: the lower triangle, then mirrored.
-    double* sr = ws.s.re.data();
-    double* si = ws.s.im.data();
-    const Index ls = r + 1;
-    std::fill(sr, sr + ls * r, 0.0);
-    std::fill(si, si + ls * r, 0.0);
-    for (Index j = 0; j < n; ++j) {
-      const double* xr = fr + j * ld + n;
-      const double* xi = fi + j * ld + n;
-      const double dr = fr[j * ld + j];
-      const double di = fi[j * ld + j];
-      for (Index l = 0; l < r; ++l) {
-        // -(d v_l): SubScaledSplit subtracts.
-        SubScaledSplit(sr + l * ls + l,
-                       si + l * ls + l,
-                       xr + l,
-                       xi + l,
-                       -(dr * xr[l] - di * xi[l]),
-                       -(dr * xi[l] + di * xr[l]),
-                       ls - l);
-      }
-    }
-    for (Index l = 0; l < r; ++l) {
-      for (Index k = 0; k < l; ++k) {
-        sr[l * ls + k] = sr[k * ls + l];
-        si[l * ls + k] = si[k * ls + l];
-      }
-    }
-    // T = Q S (m x r).
-    const Index m = size(i + 1);
-    const Index rn = ws.rank[i + 1];
-    const Index ldn = m + rn + 1;
-    const double* qr = ws.q[i].re.data();
-    const double* qi = ws.q[i].im.data();
-    double* tr = ws.t.re.data();
-    double* ti = ws.t.im.data();
-    std::fill(tr, tr + m * r, 0.0);
-    std::fill(ti, ti + m * r, 0.0);
-    for (Index l = 0; l < r; ++l) {
-      Index k = 0;
-      for (; k + 1 < r; k += 2) {
-        SubScaled2Split(tr + l * m,
-                        ti + l * m,
-                        qr + k * m,
-                        qi + k * m,
-                        -sr[l * ls + k],
-                        -si[l * ls + k],
-                        qr + (k + 1) * m,
-                        qi + (k + 1) * m,
-                        -sr[l * ls + k + 1],
-                        -si[l * ls + k + 1],
-                        m);
-      }
-      if (k < r) {
-        SubScaledSplit(
-            tr + l * m, ti + l * m, qr + k * m, qi + k * m, -sr[l * ls + k], -si[l * ls + k], m);
-      }
-    }
-    // F_{i+1} = A_{i+1} - T Q^T (lower triangle; FactorLdltSplit reads only that), and its
-    // carried right-hand side r_{i+1} - Q c.
-    double* nr = ws.factor[i + 1].re.data();
-    double* ni = ws.factor[i + 1].im.data();
-    for (Index c = 0; c < m; ++c) {
-      // Q(c, l) for this column, contiguous for SubScaledManySplit.
-      double* qcr = ws.small.re.data();
-      double* qci = ws.small.im.data();
-      for (Index l = 0; l < r; ++l) {
-        qcr[l] = qr[l * m + c];
-        qci[l] = qi[l * m + c];
-      }
-      SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
-      double br = ws.rhs[i + 1].re[c];
-      double bi = ws.rhs[i + 1].im[c];
-      for (Index k = 0; k < r; ++k) {
-        const double cr = sr[k * ls + r];
-        const double ci = si[k * ls + r];
-        br -= qr[k * m + c] * cr - qi[k * m + c] * ci;
-        bi -= qr[k * m + c] * ci + qi[k * m + c] * cr;
-      }
-      nr[c * ldn + m + rn] = br;
-      ni[c * ldn + m + rn] = bi;
-    }
-  }
-  // Back substitution: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
-  for (int i = rows - 1; i >= 0 && ok; --i) {
-    const Index n = size(i);
-    const Index r = ws.rank[i];
-    const Index ld = n + r + 1;
-    const double* fr = ws.factor[i].re.data();
-    const double* fi = ws.factor[i].im.data();
-    double* yr = ws.u[i].re.data();
-    double* yi = ws.u[i].im.data();
-    double* cr = ws.small.re.data();
-    double* ci = ws.small.im.data();
-    if (r > 0) {
-      const Index m = size(i + 1);
-      for (Index l = 0; l < r; ++l) {
-        DotSplit(ws.q[i].re.data() + l * m,
-                 ws.q[i].im.data() + l * m,
-                 ws.u[i + 1].re.data(),
-                 ws.u[i + 1].im.data(),
-                 m,
-                 cr + l,
-                 ci + l);
-      }
-    }
-    for (Index j = 0; j < n; ++j) {
-      // w_j - v_j^T c, both carried in column j below the pivot block.
-      double vr = 0.0;
-      double vi = 0.0;
-      DotSplit(fr + j * ld + n, fi + j * ld + n, cr, ci, r, &vr, &vi);
-      yr[j] = fr[j * ld + n + r] - vr;
-      yi[j] = fi[j * ld + n + r] - vi;
-    }
-    SolveUnitUpperSplit(fr, fi, ld, n, yr, yi);
-  }
-  // A certified (Higham) system: the elimination is backward stable; only a non-finite result
-  // (non-finite input) sends it to the fallback.
-  if (ok && higham_) {
-    double sum = 0.0;
-    for (int i = 0; i < rows; ++i) {
-      for (Index k = 0; k < size(i); ++k) sum += ws.u[i].re[k] + ws.u[i].im[k];
-    }
-    ok = std::isfinite(sum);
-  } else if (ok) {
-    // Residual of the assembled system; the unpivoted path must earn its result.
-    ResidualCheck check;
-    double* zr = ws.y.re.data();
-    double* zi = ws.y.im.data();
-    double* cr = ws.small.re.data();
-    double* ci = ws.small.im.data();
-    for (int i = 0; i < rows; ++i) {
-      const Index n = size(i);
-      const double* ar = ws.diagonal[i].re.data();
-      const double* ai = ws.diagonal[i].im.data();
-      const double* ur = ws.u[i].re.data();
-      const double* ui = ws.u[i].im.data();
-      // z = A u - rhs, A symmetric from its lower triangle.
-      SymmetricResidualSplit(ar, ai, n, ur, ui, ws.rhs[i].re.data(), ws.rhs[i].im.data(), zr, zi);
-      // + P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
-      const auto couple = [&](const Split& a, const Split& b, Index k, Index na, Index nb, int j) {
-        for (Index l = 0; l < k; ++l) {
-          DotSplit(b.re.data() + l * nb,
-                   b.im.data() + l * nb,
-                   ws.u[j].re.data(),
-                   ws.u[j].im.data(),
-                   nb,
-                   cr + l,
-                   ci + l);
-          SubScaledSplit(zr, zi, a.re.data() + l * na, a.im.data() + l * na, -cr[l], -ci[l], na);
+  // One factorization for every load case (EliminateRows), then each case's back substitution.
+  // A pivot that breaks down sends every case to the fallback; a case whose own result fails
+  // goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateRows(ws, rows, cases, higham_)) {
+    if (cases == 1) BackSubstituteOne(ws, rows);
+    if (cases > 1) BackSubstituteCases(ws, rows, cases);
+    if (higham_) {
+      // A certified (Higham) system: the elimination is backward stable; only a non-finite
+      // result (non-finite input) sends a case to the fallback.
+      for (Index j = 0; j < cases; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < rows; ++i) {
+          for (Index k = 0; k < size(i); ++k) {
+            sum += ws.u[i].re[j * nc + k] + ws.u[i].im[j * nc + k];
+          }
         }
-      };
-      if (i + 1 < rows) couple(ws.p[i], ws.q[i], ws.rank[i], n, size(i + 1), i + 1);
-      if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, size(i - 1), i - 1);
-      check.AddRow(
-          zr, zi, ws.rhs[i].re.data(), ws.rhs[i].im.data(), ur, ui, n, ws.diagonal_max2[i]);
+        ws.fallback[j] = std::isfinite(sum) ? 0 : 1;
+      }
+    } else {
+      FlagLargeResiduals(ws, rows, cases);
     }
-    ok = check.Passes();
   }
-  if (!ok) {
-    // Fallback: dense partial-pivoting LU of the whole condensed system.
+  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
     if (in_place) {  // the diagonal blocks went into the factorization, which overwrote them
       for (int i = 0; i < rows; ++i) {
         assemble_diagonal(i, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), size(i));
       }
     }
-    const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a) {
-      Eigen::MatrixXcd out(rows_a, cols_a);
-      for (Index c = 0; c < cols_a; ++c) {
-        for (Index k = 0; k < rows_a; ++k) {
-          out(k, c) = {a.re[c * rows_a + k], a.im[c * rows_a + k]};
-        }
-      }
-      return out;
-    };
-    std::vector<Index> offset(rows + 1, 0);
-    for (int i = 0; i < rows; ++i) offset[i + 1] = offset[i] + size(i);
-    Eigen::MatrixXcd big = Eigen::MatrixXcd::Zero(offset[rows], offset[rows]);
-    Eigen::VectorXcd big_rhs(offset[rows]);
-    for (int i = 0; i < rows; ++i) {
-      const Index n = size(i);
-      const Eigen::MatrixXcd a = complex_matrix(ws.diagonal[i], n, n);
-      auto block = big.block(offset[i], offset[i], n, n);
-      block.triangularView<Eigen::Lower>() = a;
-      block.triangularView<Eigen::StrictlyUpper>() = a.transpose();
-      big_rhs.segment(offset[i], n) = complex_matrix(ws.rhs[i], n, 1);
-      if (i + 1 < rows) {
-        const Index m = size(i + 1);
-        const Index r = ws.rank[i];
-        const Eigen::MatrixXcd coupling =
-            complex_matrix(ws.p[i], n, r) * complex_matrix(ws.q[i], m, r).transpose();
-        big.block(offset[i], offset[i + 1], n, m) = coupling;
-        big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
-      }
-    }
-    const Eigen::VectorXcd solution = big.partialPivLu().solve(big_rhs);
-    for (int i = 0; i < rows; ++i) {
-      for (Index k = 0; k < size(i); ++k) {
-        ws.u[i].re[k] = solution(offset[i] + k).real();
-        ws.u[i].im[k] = solution(offset[i] + k).imag();
-      }
-    }
+    SolvePivoting(ws, rows, cases);
   }
   // Singular or nearly so (plate.hpp): every path, the certified one too, since a certificate
-  // by Cholesky can pass a matrix that is singular to working precision.
-  AmplificationCheck amplification;
-  for (int i = 0; i < rows; ++i) {
-    amplification.AddRow(
-        ws.u[i].re.data(), ws.u[i].im.data(), ws.rhs[i].re.data(), ws.rhs[i].im.data(), size(i));
+  // by Cholesky can pass a matrix that is singular to working precision. Case by case: each
+  // load's solution against that load.
+  for (Index j = 0; j < cases; ++j) {
+    AmplificationCheck amplification;
+    for (int i = 0; i < rows; ++i) {
+      amplification.AddRow(ws.u[i].re.data() + j * nc,
+                           ws.u[i].im.data() + j * nc,
+                           ws.rhs[i].re.data() + j * nc,
+                           ws.rhs[i].im.data() + j * nc,
+                           size(i));
+    }
+    if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
   }
-  if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
-  // Outputs of group g from its kept end cross-sections (rows g - 1 and g): the offset plus the
-  // output map's columns of the free end dofs (fixed ones are zero) times their values.
   for (int g = 0; g < ng; ++g) {
-    const std::vector<int>& outputs = group_outputs_[g];
-    if (outputs.empty()) continue;
-    const SolvePiece& piece = GroupPieceOf(g, clamps);
-    const Index n_out = piece.output_map.re.rows();
-    double* vr = ws.y.re.data();
-    double* vi = ws.y.im.data();
-    for (Index k = 0; k < n_out; ++k) {
-      vr[k] = piece.output_offset(k).real();
-      vi[k] = piece.output_offset(k).imag();
-    }
-    // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
-    // subtracts, so the multipliers are -u.
-    const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
-      const std::vector<int>& f = *ws.free[i];
-      const Index n = size(i);
-      const double* mr = piece.output_map.re.data();
-      const double* mi = piece.output_map.im.data();
-      double* sr = ws.small.re.data();
-      double* si = ws.small.im.data();
-      for (Index k = 0; k < n; ++k) {
-        sr[k] = -ws.u[i].re[k];
-        si[k] = -ws.u[i].im[k];
-      }
-      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
-        // A contiguous run of free dofs is a run of adjacent columns: several per pass over v.
-        const Index column = (offset + f[0]) * n_out;
-        SubScaledManySplit(vr, vi, mr + column, mi + column, n_out, sr, si, n, n_out);
-      } else {
-        for (Index k = 0; k < n; ++k) {
-          const Index column = (offset + f[k]) * n_out;
-          SubScaledSplit(vr, vi, mr + column, mi + column, sr[k], si[k], n_out);
-        }
-      }
-    };
-    if (piece.left_size > 0) add_end(g - 1, 0);
-    if (piece.right_size > 0) add_end(g, piece.left_size);
-    for (std::size_t k = 0; k < outputs.size(); ++k) {
-      w[outputs[k]] = {vr[k], vi[k]};
-    }
+    RecoverGroupOutputs(GroupPieceOf(g, clamps), group_layout_[g], sets_, g, ws, w);
   }
 }
 

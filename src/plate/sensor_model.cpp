@@ -96,25 +96,27 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
   for (const LoadCase& c : options_.load_cases) {
     output_positions_.insert(
         output_positions_.end(), c.output_positions.begin(), c.output_positions.end());
-    condensations_.push_back(std::make_unique<SectionCondensation>(
-        *plate_,
-        options_.clamps_per_edge,
-        options_.elements_per_section,
-        // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
-        // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
-        options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
-        SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
-        SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
-        SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
-        SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-        plate_->LoadVector(SensorLoad(options_, c)),
-        options_.frequency_hz,
-        c.output_positions,
-        c.output_y_fraction * options_.width,
-        options_.always_pivot,
-        fast_path_certified_,
-        ResolveKernels(options_.vector_kernels)));
   }
+  // Every load case shares the clamps, the mesh and the frequency: one condensation takes them
+  // all, and each configuration is factorized once for every case's load (docs/model.md,
+  // "Several load cases").
+  condensation_ = std::make_unique<SectionCondensation>(
+      *plate_,
+      options_.clamps_per_edge,
+      options_.elements_per_section,
+      // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
+      // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
+      options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
+      SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
+      SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
+      LoadMatrix(),
+      options_.frequency_hz,
+      CaseOutputList(),
+      options_.always_pivot,
+      fast_path_certified_,
+      ResolveKernels(options_.vector_kernels));
   continuous_ = std::make_unique<ContinuousCache>();
   // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
   // precompute of their own. It holds when every layer has one loss factor, and also when every
@@ -148,11 +150,23 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
 
 SensorModel::~SensorModel() = default;
 
-std::size_t SensorModel::PrecomputedBytes() const {
-  std::size_t bytes = 0;
-  for (const auto& c : condensations_) bytes += c->MemoryBytes();
-  return bytes;
+Eigen::MatrixXd SensorModel::LoadMatrix() const {
+  Eigen::MatrixXd loads(plate_->num_dofs(), num_load_cases());
+  for (int c = 0; c < num_load_cases(); ++c) {
+    loads.col(c) = plate_->LoadVector(SensorLoad(options_, options_.load_cases[c]));
+  }
+  return loads;
 }
+
+std::vector<CaseOutputs> SensorModel::CaseOutputList() const {
+  std::vector<CaseOutputs> outputs;
+  for (const LoadCase& c : options_.load_cases) {
+    outputs.push_back({c.output_positions, c.output_y_fraction * options_.width});
+  }
+  return outputs;
+}
+
+std::size_t SensorModel::PrecomputedBytes() const { return condensation_->MemoryBytes(); }
 
 const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& variation,
                                                       std::complex<double>* factor,
@@ -171,13 +185,6 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
                                k_f * options_.foundation_loss_factor);
   *mu = b / *factor;
   const int index = own ? 1 : 0;
-  if (options_.load_cases.size() != 1) {
-    throw Error(ErrorKind::kConfig,
-                "continuous unknowns need a single load case",
-                "",
-                0,
-                "load_cases.size()");
-  }
   std::call_once(continuous_->once[index], [&] {
     continuous_->base[index] = std::make_unique<ContinuousCondensation>(
         *plate_,
@@ -188,9 +195,8 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
         SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
         SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
         SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-        plate_->LoadVector(SensorLoad(options_, options_.load_cases[0])),
-        options_.load_cases[0].output_positions,
-        options_.load_cases[0].output_y_fraction * options_.width,
+        LoadMatrix(),
+        CaseOutputList(),
         options_.always_pivot,
         ResolveKernels(options_.vector_kernels));
     continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
@@ -233,11 +239,7 @@ void SensorModel::Finish(std::span<const std::complex<double>> w, std::span<doub
 void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
                                  std::span<std::complex<double>> out) const {
   CheckSpans(clamps, out.size());
-  for (std::size_t c = 0; c < condensations_.size(); ++c) {
-    condensations_[c]->Solve(
-        clamps,
-        out.subspan(options_.OutputOffset(c), options_.load_cases[c].output_positions.size()));
-  }
+  condensation_->Solve(clamps, out);
 }
 
 void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double> out) const {

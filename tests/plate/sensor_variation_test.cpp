@@ -416,6 +416,9 @@ TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
     std::optional<double> loss_factor;
     PlateTheory theory = PlateTheory::kKirchhoff;
     int element_order = 1;
+    // 3: two more load cases (docs/model.md, "Several load cases"), one on the default outputs and
+    // one, loading a section inside, on a line of its own.
+    int load_cases = 1;
   };
   // RZT: 5 dofs per node, and the default laminate is not proportionally damped in it.
   for (const Case& c : {Case{4, 2, false, std::nullopt},
@@ -423,10 +426,12 @@ TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
                         Case{4, 2, true, std::nullopt},
                         Case{4, 2, true, 0.05},
                         Case{4, 2, false, std::nullopt, PlateTheory::kRzt},
-                        Case{2, 1, false, std::nullopt, PlateTheory::kRzt, 2}}) {
+                        Case{2, 1, false, std::nullopt, PlateTheory::kRzt, 2},
+                        Case{4, 2, false, std::nullopt, PlateTheory::kKirchhoff, 1, 3}}) {
     SCOPED_TRACE(std::to_string(c.along) + " x " + std::to_string(c.across) +
                  (c.own_loss_factors ? ", own loss factors" : "") +
-                 (c.loss_factor ? ", loss_factor unknown" : "") + ", " + ToString(c.theory));
+                 (c.loss_factor ? ", loss_factor unknown" : "") + ", " + ToString(c.theory) + ", " +
+                 std::to_string(c.load_cases) + " load cases");
     SensorOptions o;
     o.theory = c.theory;
     o.element_order = c.element_order;
@@ -435,6 +440,12 @@ TEST(SensorVariation, MemoryEstimateBoundsTheContinuousPrecompute) {
     if (c.own_loss_factors) {
       o.layers[1].loss_factor = 0.3;
       o.layers[1].poisson_ratio = 0.3;  // the others: 0.45
+    }
+    if (c.load_cases == 3) {
+      o.load_cases.resize(3);
+      o.load_cases[1].load_x = 0.70;
+      o.load_cases[2].load_x = 0.3712;
+      o.load_cases[2].output_y_fraction = 0.25;
     }
     const SensorModel model(o);
     ASSERT_EQ(model.VariationPrecomputedBytes(), 0u);

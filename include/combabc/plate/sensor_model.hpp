@@ -38,6 +38,7 @@ namespace combabc::plate {
 
 class SectionCondensation;     // src/plate/section_condensation.hpp
 class ContinuousCondensation;  // src/plate/continuous_condensation.hpp
+struct CaseOutputs;            // src/plate/section_condensation.hpp
 struct ContinuousCache;        // src/plate/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
@@ -167,9 +168,13 @@ struct SensorOptions {
 
   // Peak memory (bytes) of building the model, from the mesh size (dofs per cross-section,
   // sections, elements), the distinct section and group pieces the precompute will condense, and
-  // the outputs. Measured: 0.95-1.6 x the peak RSS (less the program itself) for widths of 6 to
-  // 24 elements, about 2 x what the finished model keeps. Needs the sizes in range (IsValid
-  // checks them first).
+  // the load cases' outputs and loads (the cases share the pieces: docs/model.md, "Several load
+  // cases"). Measured for Kirchhoff at 6 to 24 elements across with 1 to 4 load cases (on one
+  // output line or each on its own): 1.2-1.5 x the peak RSS (less the program itself), about 2 x
+  // what the finished model keeps. Not counted: the transient of the constructor's Higham
+  // certificate (sparse Cholesky factorizations of the whole plate), which sets the peak of the
+  // shear theories' meshes: for RZT at its default mesh the estimate is 0.4-0.65 x the peak
+  // RSS (about 100 MB). Needs the sizes in range (IsValid checks them first).
   double EstimatedMemoryBytes() const;
   // Peak memory (bytes) of the continuous-unknowns precompute that a mixed run builds on its first
   // simulation (docs/model.md, "Continuous unknowns"), on top of EstimatedMemoryBytes():
@@ -304,6 +309,9 @@ class SensorModel {
  private:
   void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
   void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
+  // The condensations' inputs: every case's load vector (a column each) and outputs.
+  Eigen::MatrixXd LoadMatrix() const;
+  std::vector<CaseOutputs> CaseOutputList() const;
   // The precompute for `variation` (built on first use) and the factors mapping the variation's
   // dynamic stiffness onto it: K(theta) = factor (K_base + mu M_1).
   const ContinuousCondensation& Continuous(const SensorVariation& variation,
@@ -313,7 +321,7 @@ class SensorModel {
   SensorOptions options_;
   std::vector<double> output_positions_;  // every case's, concatenated
   std::unique_ptr<Plate> plate_;
-  std::vector<std::unique_ptr<SectionCondensation>> condensations_;  // one per load case
+  std::unique_ptr<SectionCondensation> condensation_;  // every load case
   bool fast_path_certified_ = false;
   std::unique_ptr<ContinuousCache> continuous_;
 };
