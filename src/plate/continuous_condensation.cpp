@@ -430,7 +430,8 @@ void ContinuousCondensation::BuildTables() {
   for (SectionData& sec : sections_) {
     const Eigen::Index map_rows = sec.out_static.size();
     Eigen::Index rows = map_rows;
-    for (const auto& offsets : sec.offset_terms) rows += 2 * nc_ + offsets.front().size();
+    for (const auto& offsets : sec.offset_terms)
+      rows += 2 * static_cast<Eigen::Index>(nc_) + offsets.front().size();
     const Eigen::Index count = sec.out_terms.empty() ? 1 : columns + 1;
     Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(rows, count);
     for (Eigen::Index j = 0; j < count; ++j) {
@@ -440,7 +441,8 @@ void ContinuousCondensation::BuildTables() {
         const Eigen::VectorXcd& load = j == 0 ? sec.load_static[l] : sec.load_terms[l][j - 1];
         const Eigen::VectorXcd& offsets = sec.offset_terms[l][j];
         table.col(j).segment(sec.loaded_start[l], 2 * nc_) = load;
-        table.col(j).segment(sec.loaded_start[l] + 2 * nc_, offsets.size()) = offsets;
+        table.col(j).segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc_),
+                             offsets.size()) = offsets;
       }
     }
     split(table, own_loss_factors_, nullptr, &sec);

@@ -427,8 +427,10 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
       if (rows == 0) continue;
-      Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(
-          out.data() + first, rows, 2 * nc_, Eigen::OuterStride<>(sec.map_rows));
+      Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(out.data() + first,
+                                                                rows,
+                                                                2 * static_cast<Eigen::Index>(nc_),
+                                                                Eigen::OuterStride<>(sec.map_rows));
       map = sec.r_b.middleRows(first, rows) -
             sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * x(sec.read[set], Eigen::all);
     }
@@ -440,7 +442,7 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
       const int rows = layout.map_begin[set + 1] - first;
       out.segment(sec.loaded_start[l], 2 * nc_) =
           -s_ib(coupled, Eigen::all).transpose() * y(coupled);
-      out.segment(sec.loaded_start[l] + 2 * nc_, rows) =
+      out.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc_), rows) =
           sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * y(sec.read[set]);
     }
   }
@@ -572,8 +574,8 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
         Complex v = boundary_load_[c](f[j], k);
         if (load_left.size() > 0) v += load_left(nc + f[j]);
         if (load_right.size() > 0) v += load_right(f[j]);
-        ws.rhs[c].re[k * nc + j] = v.real();
-        ws.rhs[c].im[k * nc + j] = v.imag();
+        ws.rhs[c].re[static_cast<std::size_t>(k) * nc + j] = v.real();
+        ws.rhs[c].im[static_cast<std::size_t>(k) * nc + j] = v.imag();
       }
     }
     if (c < ns) {
@@ -628,15 +630,15 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       for (int side = 0; side < 2; ++side) {
         const std::vector<int>& f = ws.free[s + side];
         for (Index j = 0; j < size(s + side); ++j) {
-          ends(Index{side} * nc + f[j]) = {ws.u[s + side].re[k * nc + j],
-                                           ws.u[s + side].im[k * nc + j]};
+          ends(Index{side} * nc + f[j]) = {ws.u[s + side].re[static_cast<std::size_t>(k) * nc + j],
+                                           ws.u[s + side].im[static_cast<std::size_t>(k) * nc + j]};
         }
       }
       if (ws.values.size() < n_out) ws.values.resize(n_out);
       auto values = ws.values.head(n_out);
       const int l = sec.LoadedIndex(k);
       if (l >= 0) {
-        values = section.segment(sec.loaded_start[l] + 2 * nc, n_out);
+        values = section.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc), n_out);
       } else {
         values.setZero();
       }

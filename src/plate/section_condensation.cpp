@@ -446,8 +446,9 @@ void SectionCondensation::CondenseSections(const Plate& plate,
   for (std::size_t first = 0; first < representatives.size(); ++first) {
     const int mesh = mesh_of_section_[representatives[first]];
     bool seen = false;  // each mesh once, at its first distinct section
-    for (std::size_t q = 0; q < first; ++q)
+    for (std::size_t q = 0; q < first; ++q) {
       seen = seen || mesh_of_section_[representatives[q]] == mesh;
+    }
     if (seen) continue;
     // The section matrices of the mesh (its first section: the others have the same elements).
     const int mesh_offset = mesh * m * nc_;

@@ -5,6 +5,9 @@
 // stopped by its budget, resumes to the uninterrupted run's history.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -126,10 +129,20 @@ TEST_P(JointEqualsSingles, TheJointSimulatorAndDistanceAreTheSingleOnesOneAfterT
       distances.insert(distances.end(), values.begin(), values.end());
     }
     const std::vector<double> out = joint.simulator->Simulate(bits);
-    ASSERT_EQ(out, outputs) << "configuration " << i;
+    // The joint model solves every load case with one factorization; a case's outputs equal its
+    // own model's to round-off (bit for bit unless another case's load makes a section piece of
+    // its own; docs/model.md, "Several load cases").
+    ASSERT_EQ(out.size(), outputs.size());
+    const double peak = *std::max_element(outputs.begin(), outputs.end());
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      ASSERT_NEAR(out[k], outputs[k], 1e-12 * peak) << "configuration " << i << ", output " << k;
+    }
     std::vector<double> values(components.size());
     joint.distance->Evaluate(out, values);
-    ASSERT_EQ(values, distances) << "configuration " << i;
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      ASSERT_NEAR(values[k], distances[k], 1e-9 * std::max(1.0, std::abs(distances[k])))
+          << "configuration " << i << ", component " << k;
+    }
   }
 }
 
