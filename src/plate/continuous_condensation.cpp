@@ -430,8 +430,9 @@ void ContinuousCondensation::BuildTables() {
   for (SectionData& sec : sections_) {
     const Eigen::Index map_rows = sec.out_static.size();
     Eigen::Index rows = map_rows;
-    for (const auto& offsets : sec.offset_terms)
+    for (const auto& offsets : sec.offset_terms) {
       rows += 2 * static_cast<Eigen::Index>(nc_) + offsets.front().size();
+    }
     const Eigen::Index count = sec.out_terms.empty() ? 1 : columns + 1;
     Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(rows, count);
     for (Eigen::Index j = 0; j < count; ++j) {
