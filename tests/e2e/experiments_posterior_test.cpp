@@ -61,8 +61,9 @@ void WriteSimulatedData(const fs::path& dir, const std::vector<TinyExperiment>& 
     int k = 0;
     WriteExperimentData(dir, experiments[e], [&](double position) {
       for (std::size_t i = 0; i < at.size(); ++i) {
-        if (std::abs(at[i] - position) < 1e-9)
+        if (std::abs(at[i] - position) < 1e-9) {
           return w[begin + i] * (1 + 0.05 * std::sin(1.7 * k++));
+        }
       }
       ADD_FAILURE() << "no output at " << position;
       return 0.0;

@@ -560,15 +560,17 @@ std::string WriteTwoExperiments(const std::string& path) {
 // The experiments are part of the problem's description: any change to their rows is a clean data
 // error on open (the metadata checksum), and verify says so.
 TEST_F(HistoryIntegrityTest, ExperimentsAreCoveredByTheMetadataChecksum) {
-  for (const char* damage :
-       {"UPDATE experiment SET name = 'forged' WHERE e = 0",
-        "UPDATE experiment SET description = 'load at 0.30 m' WHERE e = 1",
-        // Counts moved between experiments still add up: only the checksum tells.
-        "UPDATE experiment SET outputs = outputs + 1 WHERE e = 0; "
-        "UPDATE experiment SET outputs = outputs - 1 WHERE e = 1",
-        "UPDATE experiment SET measured = measured + 0.5 WHERE e = 1",  // a count made REAL
-        "DELETE FROM experiment WHERE e = 1",
-        "INSERT INTO experiment VALUES (2, 'extra', '', 0, 0, 0)"}) {
+  for (
+      const char* damage :
+      {"UPDATE experiment SET name = 'forged' WHERE e = 0",
+       "UPDATE experiment SET description = 'load at 0.30 m' WHERE e = 1",
+       // Counts moved between experiments still add up: only the checksum tells. (Two
+       // statements in one literal, split over two lines on purpose.)
+       "UPDATE experiment SET outputs = outputs + 1 WHERE e = 0; "  // NOLINT(bugprone-suspicious-missing-comma)
+       "UPDATE experiment SET outputs = outputs - 1 WHERE e = 1",
+       "UPDATE experiment SET measured = measured + 0.5 WHERE e = 1",  // a count made REAL
+       "DELETE FROM experiment WHERE e = 1",
+       "INSERT INTO experiment VALUES (2, 'extra', '', 0, 0, 0)"}) {
     SCOPED_TRACE(damage);
     const std::string path = Path("experiments.db");
     for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
