@@ -99,9 +99,6 @@ void ParseOne(TableReader& t,
   const bool sensor = c->simulator.kind == SimulatorKind::kSensor;
   if (x->line != 0) {
     if (auto l = t.Table("load")) {
-      if (!sensor) {
-        // An external simulator gets the load with each request; its keys are the same.
-      }
       ParseLoadTable(*l, &x->load, &x->frequency_hz, &sources);
     }
     if (auto o = t.Table("output")) {

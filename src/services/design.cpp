@@ -160,7 +160,6 @@ std::vector<design::CandidateProfiles> SimulateCandidates(
   }
   const plate::SensorModel model(options);
   const std::size_t n = population.size();
-  const auto d = static_cast<std::size_t>(population.dimension);
   const auto outputs = static_cast<std::size_t>(model.num_outputs());
   std::vector<double> all(n * outputs);
   model.ProfileBatch(population.bits, n, all, threads);
@@ -176,7 +175,6 @@ std::vector<design::CandidateProfiles> SimulateCandidates(
                   profiles[k].values.begin() + static_cast<std::ptrdiff_t>(i * points));
     }
   }
-  (void)d;
   return profiles;
 }
 
