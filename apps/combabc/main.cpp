@@ -19,7 +19,11 @@
 #include <string>
 
 #include "combabc/core/error.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/enumerate.hpp"
+#include "combabc/services/history_tools.hpp"
+#include "combabc/services/report.hpp"
+#include "combabc/services/run.hpp"
+#include "combabc/services/simulate.hpp"
 #include "combabc/services/design.hpp"
 #include "interrupt.hpp"
 #include "progress_display.hpp"
