@@ -61,7 +61,7 @@ void PrintOutcome(const services::RunOutcome& outcome) {
 }
 
 // The outcome of a run or a resume, printed; its exit code.
-int Finish(const services::RunOutcome& outcome) {
+int Conclude(const services::RunOutcome& outcome) {
   PrintOutcome(outcome);
   const bool interrupted = outcome.history.summary.termination == Termination::kInterrupted;
   if (interrupted) {
@@ -88,7 +88,7 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
   request.report = !args.no_report;
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
-    return Finish(services::RunCalibration(request, observer));
+    return Conclude(services::RunCalibration(request, observer));
   });
 }
 
@@ -107,7 +107,7 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
-    return Finish(services::ResumeCalibration(request, observer));
+    return Conclude(services::ResumeCalibration(request, observer));
   });
 }
 
