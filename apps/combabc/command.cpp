@@ -18,6 +18,13 @@
 
 namespace combabc::cli {
 
+void AddNoCacheFlag(CLI::App& command) {
+  command.add_flag_callback(
+      "--no-cache",
+      [] { ::setenv("COMBABC_CACHE_DIR", "", 1); },
+      "Build the sensor's precomputed pieces afresh, without the disk cache");
+}
+
 int Guarded(const Session& session, bool quiet, const std::function<int(SmcObserver*)>& job) {
   ProgressDisplay progress(session.primary() && isatty(STDERR_FILENO) != 0);
   InterruptObserver interrupt(quiet || !session.primary() ? nullptr : &progress);

@@ -33,6 +33,11 @@ int Guarded(const Session& session, bool quiet, const std::function<int(SmcObser
 // Guarded, for a command that writes or prints only: rank 0 does it, the others wait for its code.
 int PrimaryOnly(const Session& session, const std::function<int()>& job);
 
+// --no-cache, for the commands that build the sensor: its precomputed pieces are built afresh and
+// not stored (docs/model.md, "Start-up and the precompute cache"). It empties COMBABC_CACHE_DIR
+// for this process, which is where plate::DefaultPrecomputeCache looks first.
+void AddNoCacheFlag(CLI::App& command);
+
 // A whole number in [0, INT64_MAX], read strictly: CLI11's own conversion turns an out-of-range
 // value into INT64_MAX without a word, and its range check prints DBL_MAX's 309 digits.
 CLI::Validator NonNegativeInteger();

@@ -106,6 +106,7 @@ Command AddDesignCommand(CLI::App& app) {
       ->check(CLI::Range(0, kMaxThreads));
   design->add_flag("--overwrite", request.overwrite, "Write into an existing directory");
   design->add_flag("--no-figure", args->no_figure, "Skip identifiability.<fmt> (needs matplotlib)");
+  AddNoCacheFlag(*design);
   return {design, [args](const Session& session) { return DesignCommand(*args, session); }};
 }
 

@@ -67,6 +67,7 @@ Command AddEnumerateCommand(CLI::App& app) {
       ->check(CLI::Range(1, 1000000));
   enumerate->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   enumerate->add_flag("-q,--quiet", args->quiet, "No progress display");
+  AddNoCacheFlag(*enumerate);
   return {enumerate, [args](const Session& session) { return EnumerateCommand(*args, session); }};
 }
 

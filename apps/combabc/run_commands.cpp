@@ -125,6 +125,7 @@ Command AddRunCommand(CLI::App& app) {
   run->add_flag("--overwrite", request.overwrite, "Replace an existing history file");
   run->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   run->add_flag("-q,--quiet", args->quiet, "No progress display");
+  AddNoCacheFlag(*run);
   return {run, [args](const Session& session) { return RunCommand(*args, session); }};
 }
 
@@ -164,6 +165,7 @@ Command AddResumeCommand(CLI::App& app) {
           ->check(RealIn(0.0, 1.0));
   resume->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", args->quiet, "No progress display");
+  AddNoCacheFlag(*resume);
   return {resume, [args](const Session& session) { return ResumeCommand(*args, session); }};
 }
 

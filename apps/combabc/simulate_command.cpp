@@ -37,6 +37,7 @@ Command AddSimulateCommand(CLI::App& app) {
       ->required();
   simulate->add_option("-o,--output", args->output, "CSV to write (default profile.csv)");
   simulate->add_flag("--overwrite", args->overwrite, "Replace an existing CSV at that path");
+  AddNoCacheFlag(*simulate);
   return {simulate, [args](const Session& session) { return SimulateCommand(*args, session); }};
 }
 

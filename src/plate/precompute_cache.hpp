@@ -1,9 +1,9 @@
 #pragma once
 // The disk cache of a sensor model's precomputed pieces (docs/model.md, "Start-up and the
 // precompute cache"). An entry is one file, `<key>.precompute`, in the cache folder:
-//   header: magic "CMBCPRE1", format version (u32), key (2 x u64), payload size (u64),
-//           payload checksum (XXH3 64-bit, u64)
-//   payload: the bytes a ByteWriter wrote
+//   header: magic "CMBCPRE1", format version (u32), 4 zero bytes, key (2 x u64), payload size
+//           (u64), payload checksum (XXH3 64-bit, u64)
+//   payload: what a ByteWriter wrote
 // The key is a 128-bit XXH3 hash of everything the pieces depend on: the build of the plate code,
 // the element matrices, the mesh, the supports, the loads, the outputs and the frequency
 // (SensorModel::PrecomputeKey). Entries are written to a temporary of their own and renamed into
@@ -12,8 +12,8 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <optional>
-#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -55,14 +55,18 @@ class KeyHasher {
 };
 
 // The payload: fixed-size values in the machine's byte order (the key covers the build, hence the
-// architecture), vectors and matrices with their sizes first.
+// architecture), vectors and matrices with their sizes first. Written straight to the entry's file
+// through a small buffer (no copy of the payload in memory), its checksum computed on the way.
 class ByteWriter {
  public:
+  explicit ByteWriter(int fd);
+  ~ByteWriter();
+  ByteWriter(const ByteWriter&) = delete;
+  ByteWriter& operator=(const ByteWriter&) = delete;
   template <class T>
   void Value(const T& value) {
     static_assert(std::is_trivially_copyable_v<T>);
-    const auto* p = reinterpret_cast<const char*>(&value);
-    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+    Put(&value, sizeof(T));
   }
   template <class T>
   void Vector(const std::vector<T>& v) {
@@ -73,32 +77,42 @@ class ByteWriter {
   void Dense(const Matrix& m) {
     Value(static_cast<std::int64_t>(m.rows()));
     Value(static_cast<std::int64_t>(m.cols()));
-    const auto* p = reinterpret_cast<const char*>(m.data());
-    bytes_.insert(bytes_.end(), p, p + sizeof(typename Matrix::Scalar) * m.size());
+    Put(m.data(), sizeof(typename Matrix::Scalar) * static_cast<std::size_t>(m.size()));
   }
-  const std::vector<char>& bytes() const { return bytes_; }
+  // Writes what is buffered; false if any write failed.
+  bool Flush();
+  std::uint64_t size() const { return size_; }
+  std::uint64_t checksum() const;
 
  private:
-  std::vector<char> bytes_;
+  void Put(const void* data, std::size_t size);
+  int fd_;
+  bool ok_ = true;
+  std::uint64_t size_ = 0;
+  std::vector<char> buffer_;
+  void* state_;  // XXH3-64 over every byte put
 };
 
-// Reads what a ByteWriter wrote. Any read past the end or any size beyond what is left sets
-// failed() and yields zeros: the caller then discards the whole entry.
+// Reads what a ByteWriter wrote, `size` bytes from the entry's file, straight into the values and
+// matrices, the checksum computed on the way. A read past the end, a size beyond what is left or
+// a failed read sets failed() and yields zeros: the caller then discards all it read.
 class ByteReader {
  public:
-  explicit ByteReader(std::span<const char> bytes) : bytes_(bytes) {}
+  ByteReader(int fd, std::uint64_t size);
+  ~ByteReader();
+  ByteReader(const ByteReader&) = delete;
+  ByteReader& operator=(const ByteReader&) = delete;
   template <class T>
   T Value() {
     static_assert(std::is_trivially_copyable_v<T>);
     T value{};
-    if (!Take(sizeof(T))) return value;
-    std::memcpy(&value, bytes_.data() + at_ - sizeof(T), sizeof(T));
+    Get(&value, sizeof(T));
     return value;
   }
   template <class T>
   std::vector<T> Vector() {
     const auto n = Value<std::uint64_t>();
-    if (failed_ || n > (bytes_.size() - at_) / sizeof(T)) {
+    if (failed_ || n > left_ / sizeof(T)) {
       failed_ = true;
       return {};
     }
@@ -111,32 +125,29 @@ class ByteReader {
     const auto rows = Value<std::int64_t>();
     const auto cols = Value<std::int64_t>();
     using Scalar = typename Matrix::Scalar;
-    const std::size_t left = (bytes_.size() - at_) / sizeof(Scalar);
+    const std::uint64_t left = left_ / sizeof(Scalar);
     if (failed_ || rows < 0 || cols < 0 || (Matrix::ColsAtCompileTime == 1 && cols != 1) ||
         (cols > 0 && static_cast<std::uint64_t>(rows) > left / static_cast<std::uint64_t>(cols))) {
       failed_ = true;
       return Matrix();
     }
     Matrix m(rows, cols);
-    const std::size_t size = sizeof(Scalar) * static_cast<std::size_t>(m.size());
-    if (Take(size)) std::memcpy(m.data(), bytes_.data() + at_ - size, size);
+    Get(m.data(), sizeof(Scalar) * static_cast<std::size_t>(m.size()));
     return m;
   }
   bool failed() const { return failed_; }
-  bool at_end() const { return at_ == bytes_.size(); }
+  bool at_end() const { return left_ == 0; }
+  std::uint64_t checksum() const;
 
  private:
-  bool Take(std::size_t size) {
-    if (failed_ || size > bytes_.size() - at_) {
-      failed_ = true;
-      return false;
-    }
-    at_ += size;
-    return true;
-  }
-  std::span<const char> bytes_;
-  std::size_t at_ = 0;
+  void Get(void* data, std::size_t size);
+  int fd_;
+  std::uint64_t left_;       // payload bytes not yet handed out
+  std::uint64_t file_left_;  // payload bytes not yet read from the file
   bool failed_ = false;
+  std::vector<char> buffer_;
+  std::size_t buffer_at_ = 0;
+  void* state_;  // XXH3-64 over every byte read
 };
 
 // The build of the plate code (sources, compiler, flags), set by CMake: an entry written by
@@ -148,14 +159,16 @@ class PrecomputeCache {
   // An empty `directory` disables the cache (Load finds nothing, Store does nothing).
   PrecomputeCache(std::string directory, std::uint64_t max_bytes);
 
-  // The payload stored under `key`; nullopt when there is none or it is damaged. A hit marks the
-  // entry as just used (its modification time), for the eviction order.
-  std::optional<std::vector<char>> Load(const PrecomputeKey& key) const;
+  // Reads the entry stored under `key` with `read`, which returns whether it made sense of it; true
+  // when it did, read the whole payload and the payload's checksum matched (checked after `read`
+  // returns: what it built must not be used otherwise). A hit marks the entry as just used (its
+  // modification time), for the eviction order.
+  bool Load(const PrecomputeKey& key, const std::function<bool(ByteReader&)>& read) const;
 
-  // Stores `payload` under `key` (replacing a damaged entry), then removes the least recently used
-  // entries until the folder's entries fit in max_bytes (never the one just stored). A cache that
-  // cannot be written is skipped: it only saves time. Returns whether the entry was stored.
-  bool Store(const PrecomputeKey& key, std::span<const char> payload) const;
+  // Stores what `write` writes under `key` (replacing a damaged entry), then removes the least
+  // recently used entries until the folder's entries fit in max_bytes (never the one just stored).
+  // A cache that cannot be written is skipped: it only saves time. Returns whether it was stored.
+  bool Store(const PrecomputeKey& key, const std::function<void(ByteWriter&)>& write) const;
 
   // The entry's file name for `key` (32 hex digits + ".precompute").
   static std::string FileName(const PrecomputeKey& key);

@@ -169,10 +169,13 @@ SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& 
   PrecomputeKey key{};
   if (!precompute.cache_directory.empty()) {
     key = KeyOf(*plate_, options_, group_size, masks, loads, outputs);
-    if (std::optional<std::vector<char>> payload = cache.Load(key)) {
-      ByteReader reader(*payload);
-      condensation_ = SectionCondensation::Read(reader, kernels);
-      precompute_from_cache_ = condensation_ != nullptr;
+    std::unique_ptr<SectionCondensation> read;
+    if (cache.Load(key, [&](ByteReader& reader) {
+          read = SectionCondensation::Read(reader, kernels);
+          return read != nullptr;
+        })) {
+      condensation_ = std::move(read);
+      precompute_from_cache_ = true;
     }
   }
   if (condensation_ == nullptr) {
@@ -196,9 +199,7 @@ SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& 
         kernels,
         precompute.pool);
     if (!precompute.cache_directory.empty()) {
-      ByteWriter writer;
-      condensation_->Write(writer);
-      cache.Store(key, writer.bytes());
+      cache.Store(key, [&](ByteWriter& writer) { condensation_->Write(writer); });
     }
   }
   fast_path_certified_ = condensation_->higham();

@@ -65,7 +65,7 @@ void BuildModel(Problem& p, const std::string& history_path) {
   // First, as it is cheap: checks the metric's windows and indicators against the simulator's
   // output coordinates and the data before the model is built or anything simulated or stored.
   if (!p.distance) p.distance = MakeDistance(p.config, p.data);
-  p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path));
+  p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
   p.space.emplace(BinarySpace(p.config.space), p.config.reals);
 }
 

@@ -149,10 +149,12 @@ TEST(PrecomputeCache, ADamagedEntryIsRebuiltNeverTrusted) {
   // A payload with a valid header and checksum that does not describe a condensation.
   damage_and_check(
       [&](const fs::path& entry) {
-        const std::vector<char> garbage(4096, 3);
         const PrecomputeCache cache(folder.path().string(), 1 << 30);
-        ASSERT_TRUE(cache.Store(KeyOfEntry(entry), garbage));
-        ASSERT_TRUE(cache.Load(KeyOfEntry(entry)).has_value());
+        const std::vector<double> garbage(512, 3.0);
+        ASSERT_TRUE(cache.Store(KeyOfEntry(entry), [&](ByteWriter& w) { w.Vector(garbage); }));
+        // A reader that takes the bytes for what they are finds them whole.
+        ASSERT_TRUE(cache.Load(KeyOfEntry(entry),
+                               [&](ByteReader& r) { return r.Vector<double>() == garbage; }));
       },
       "a consistent file of inconsistent content");
 }
