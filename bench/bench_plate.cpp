@@ -3,11 +3,13 @@
 // the same with continuous unknowns per call (SensorVariation, docs/model.md).
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <random>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/sensor_model.hpp"
 
 namespace {
@@ -50,6 +52,39 @@ void BM_SensorPrecompute(benchmark::State& state) {
       static_cast<double>(DefaultModel().PrecomputedBytes()) / (1024.0 * 1024.0);
 }
 BENCHMARK(BM_SensorPrecompute)->Unit(benchmark::kMillisecond);
+
+// The precompute on a pool of state.range(0) threads (the CLI lends the executor's): wall time
+// (UseRealTime), as CPU time is the calling thread's alone.
+void BM_SensorPrecomputeThreads(benchmark::State& state) {
+  combabc::ThreadPool pool(static_cast<int>(state.range(0)));
+  combabc::plate::PrecomputeOptions precompute;
+  precompute.pool = &pool;
+  for (auto _ : state) {
+    SensorModel model{SensorOptions{}, precompute};
+    benchmark::DoNotOptimize(&model);
+  }
+}
+BENCHMARK(BM_SensorPrecomputeThreads)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// A warm start: the default sensor read from the precompute cache (a folder of its own, filled
+// before timing starts).
+void BM_SensorFromCache(benchmark::State& state) {
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / "combabc-bench-precompute-cache";
+  combabc::plate::PrecomputeOptions precompute;
+  precompute.cache_directory = folder.string();
+  { const SensorModel fill{SensorOptions{}, precompute}; }
+  bool hit = true;
+  for (auto _ : state) {
+    SensorModel model{SensorOptions{}, precompute};
+    hit = hit && model.precompute_from_cache();
+    benchmark::DoNotOptimize(&model);
+  }
+  if (!hit) state.SkipWithError("the model was not read from the cache");
+  std::error_code ec;
+  std::filesystem::remove_all(folder, ec);
+}
+BENCHMARK(BM_SensorFromCache)->Unit(benchmark::kMillisecond);
 
 void BM_SensorProfileFast(benchmark::State& state) {
   const SensorModel& model = DefaultModel();
