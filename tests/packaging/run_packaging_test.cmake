@@ -15,7 +15,7 @@ run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release -DEXAMPLE_DIR=${EXAMPLE_DIR})
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
-run(${WORK_DIR}/build/everything ${WORK_DIR}/no-such-history.sqlite)
+run(${WORK_DIR}/build/everything)
 
 # The exact posterior by hand (examples/library/main.cpp): supports 1-3 identified as fixed, free,
 # fixed; supports 4-6 keep their prior. The program itself fails unless ABC-SMC agrees with it.
