@@ -1,14 +1,26 @@
 # Installs the library, headers, an exported CMake package usable as
 #   find_package(combabc) ; target_link_libraries(app PRIVATE combabc::combabc)
+#   find_package(combabc COMPONENTS engine) ; target_link_libraries(app PRIVATE combabc::engine)
 # a pkg-config file, the CLI with its report script, man page and bash completion, and the Python
 # module; and packages all of it as a .deb (cpack -G DEB). The installed tree is relocatable:
 # nothing in it names the prefix (cmake/CombabcLayout.cmake).
 include(CMakePackageConfigHelpers)
 
-install(TARGETS combabc ${COMBABC_COMPONENTS} EXPORT combabcTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# One export file per component (combabc_<name>Targets.cmake), so that the package config loads,
+# and finds the dependencies of, only the components asked for; combabcTargets.cmake holds
+# combabc::combabc, all of them.
+set(COMBABC_COMPONENT_NAMES "")
+foreach(target ${COMBABC_COMPONENTS})
+  string(REGEX REPLACE "^combabc_" "" name ${target})
+  list(APPEND COMBABC_COMPONENT_NAMES ${name})
+  install(TARGETS ${target} EXPORT ${target}Targets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(EXPORT ${target}Targets NAMESPACE combabc:: FILE ${target}Targets.cmake
+    DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/combabc)
+endforeach()
+install(TARGETS combabc EXPORT combabcTargets)
 install(DIRECTORY include/combabc DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT combabcTargets NAMESPACE combabc:: FILE combabcTargets.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/combabc)

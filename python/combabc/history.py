@@ -14,7 +14,9 @@ class Wave:
 
     Attributes: wave (0-based), thresholds, phi, proposal, candidates, accepted, acceptance_rate,
     complete, marginals_paper, marginals_importance, ess, reals_mean, reals_sd, distinct,
-    discarded, wall_seconds; per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
+    discarded, wall_seconds, pair_correlations (float64[d, d]: the Pearson correlation of bits i
+    and j under the particles' weights, 0 for a bit constant among them; 0 x 0 without
+    particles); per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
     log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
     run kept no outputs); failure_index int64[f] and failure_reason (list of str).
     """
@@ -170,6 +172,20 @@ class History:
                              "prob_importance": w.marginals_importance[k]})
         return pd.DataFrame(rows, columns=["wave", "bit", "name", "prob_paper",
                                            "prob_importance"])
+
+    def pair_correlations(self):
+        """Per-wave pair correlations, long, as export's pair_correlations.csv: wave (from 1),
+        bit_i, name_i, bit_j, name_j (one row per pair i < j), correlation."""
+        import pandas as pd
+        rows = []
+        for w in self.waves:
+            r = w.pair_correlations
+            for i, j in zip(*np.triu_indices(len(r), k=1)):
+                rows.append({"wave": w.wave + 1, "bit_i": int(i), "name_i": self.bit_names[i],
+                             "bit_j": int(j), "name_j": self.bit_names[j],
+                             "correlation": r[i, j]})
+        return pd.DataFrame(rows, columns=["wave", "bit_i", "name_i", "bit_j", "name_j",
+                                           "correlation"])
 
     def wave_table(self):
         """One row per wave: wave (from 1), eps_<component> (T_<component> for a likelihood

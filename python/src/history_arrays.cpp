@@ -35,6 +35,10 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   d["distinct"] = wave.distinct;
   d["discarded"] = wave.discarded;
   d["wall_seconds"] = wave.wall_seconds;
+  // d x d (PairCorrelations of the particles), or 0 x 0 for a wave without particles.
+  const auto pairs = static_cast<py::ssize_t>(
+      wave.particles.empty() ? 0 : wave.particles.front().theta.bits.size());
+  d["pair_correlations"] = py::array_t<double>({pairs, pairs}, wave.pair_correlations.data());
 
   const auto n = static_cast<py::ssize_t>(wave.particles.size());
   const auto num_bits = static_cast<py::ssize_t>(names.bits.size());

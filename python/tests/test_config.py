@@ -60,6 +60,8 @@ def test_load_history_equals_the_run(finished_run):
     loaded = combabc.load_history(history.path)
     pd.testing.assert_frame_equal(loaded.particles(), history.particles())
     pd.testing.assert_frame_equal(loaded.marginals(), history.marginals())
+    pd.testing.assert_frame_equal(loaded.pair_correlations(), history.pair_correlations(),
+                                  check_exact=True)
 
 
 def test_same_history_for_any_thread_count(finished_run, tmp_path):
@@ -82,6 +84,8 @@ def test_dataframes_equal_combabc_export(finished_run):
     pd.testing.assert_frame_equal(mine, particles, check_exact=True)
     marginals = pd.read_csv(out / "marginals.csv", float_precision="round_trip")
     pd.testing.assert_frame_equal(history.marginals(), marginals, check_exact=True)
+    pairs = pd.read_csv(out / "pair_correlations.csv", float_precision="round_trip")
+    pd.testing.assert_frame_equal(history.pair_correlations(), pairs, check_exact=True)
     waves = pd.read_csv(out / "waves.csv", float_precision="round_trip")
     mine = history.wave_table()
     for column in ("wave", "eps_least_squares_48_80cm", "phi", "candidates", "accepted",

@@ -91,6 +91,26 @@ def test_same_history_for_one_and_two_threads():
     assert not np.array_equal(one.waves[-1].bits, other_seed.waves[-1].bits)
 
 
+def test_pair_correlations_are_the_weighted_correlations_of_the_bits():
+    history = combabc.run(problem(), options(accepted_per_wave=300))
+    for w in history.waves:
+        bits = w.bits.astype(np.float64)
+        p = w.weight / w.weight.sum()
+        centred = bits - p @ bits
+        cov = centred.T @ (centred * p[:, None])
+        varying = bits.min(axis=0) != bits.max(axis=0)  # a constant bit has no correlation: 0
+        expected = np.zeros((8, 8))
+        sd = np.sqrt(np.diag(cov)[varying])
+        expected[np.ix_(varying, varying)] = cov[np.ix_(varying, varying)] / np.outer(sd, sd)
+        np.testing.assert_allclose(w.pair_correlations, expected, rtol=0, atol=1e-12)
+    last = history.waves[-1].pair_correlations
+    assert np.any((np.abs(last) > 0.05) & (np.abs(last) < 1)), last  # not all trivial
+    table = history.pair_correlations()
+    assert len(table) == len(history.waves) * 28  # 8 bits: 28 pairs a wave
+    assert table.iloc[0].tolist() == [1, 0, history.bit_names[0], 1, history.bit_names[1],
+                                      history.waves[0].pair_correlations[0, 1]]
+
+
 def test_batch_simulator_gives_the_per_sample_history():
     calls = []
 

@@ -114,7 +114,8 @@ std::string SamplerKeyOf(const std::string& field) {
 }
 
 // The sampler's share of memory (bytes): the candidate batch's buffers and, for every wave, its
-// accepted particles (bits, distances, and outputs when kept), which the run keeps until it ends.
+// accepted particles (bits, distances, and outputs when kept) and pair correlations (d x d), which
+// the run keeps until it ends.
 struct SamplerMemory {
   double batch = 0.0;
   double particles = 0.0;
@@ -140,8 +141,10 @@ SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : AutomaticBatchBound(c);
   SamplerMemory memory;
   memory.batch = batch * (2.0 * d + 8.0 * (m + components) + kOverheadBytes);
-  memory.particles = static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
-                     (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes);
+  memory.particles =
+      static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
+          (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes) +
+      static_cast<double>(c.smc.num_waves) * 8.0 * d * d;
   return memory;
 }
 

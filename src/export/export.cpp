@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 
@@ -212,6 +213,25 @@ void WriteMarginals(OutputDirectory& dir, const RunMetadata& m, const RunHistory
   }
 }
 
+// Long, one row per wave and pair of bits i < j (the matrix is symmetric, its diagonal 1 or 0).
+void WritePairCorrelations(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+  std::ostream& out = dir.Add("pair_correlations.csv");
+  out << "wave,bit_i,name_i,bit_j,name_j,correlation\n";
+  auto name = [&](std::size_t b) {
+    return CsvField(b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1));
+  };
+  for (const WaveRecord& w : h.waves) {
+    const std::size_t d = w.particles.empty() ? 0 : w.particles.front().theta.bits.size();
+    COMBABC_CHECK(w.pair_correlations.size() == d * d);  // PairCorrelations(w.particles)
+    for (std::size_t i = 0; i < d; ++i) {
+      for (std::size_t j = i + 1; j < d; ++j) {
+        out << WaveNumber(w) << ',' << i << ',' << name(i) << ',' << j << ',' << name(j) << ','
+            << Number(w.pair_correlations[i * d + j]) << '\n';
+      }
+    }
+  }
+}
+
 void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
   std::ostream& out = dir.Add("particles.csv");
   std::size_t components = m.distance_components.size();
@@ -410,6 +430,7 @@ void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptio
   if (options.csv) {
     WriteWaves(dir, m, h);
     WriteMarginals(dir, m, h);
+    WritePairCorrelations(dir, m, h);
     if (options.particles) WriteParticles(dir, m, h);
     if (options.curves) WriteCurves(dir, m, h);
     WriteMeasured(dir, m);

@@ -255,6 +255,9 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     }
     wave.particles.push_back(std::move(p));
   }
+  // Not stored: recomputed from the stored bits and weights as the run computed them, so a loaded
+  // wave's equal the run's.
+  wave.pair_correlations = PairCorrelations(wave.particles);
   const std::int64_t failures = check.Count(row, kFailures, "failures");
   if (has_failures()) {
     Statement rows(db,

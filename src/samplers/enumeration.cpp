@@ -255,6 +255,9 @@ WaveRecord EnumerationResult::Wave(const std::vector<double>& thresholds,
   w.marginals_importance = marginals;
   w.ess = ess;
   w.distinct = accepted;  // every configuration is enumerated once
+  // Of the kept particles, as for any wave (and as a reloaded history recomputes them): the exact
+  // `correlations` to round-off while no accepted configuration was dropped.
+  w.pair_correlations = PairCorrelations(particles);
   w.wall_seconds = wall_seconds;
   w.particles = particles;
   return w;
@@ -298,9 +301,8 @@ EnumerationResult Enumerate(const SmcProblem& problem,
 
   // Unnormalised sums, accumulated on this thread in configuration order: the same additions in
   // the same order for any executor, hence bit-identical results.
-  double mass_sum = 0.0, mass_sq_sum = 0.0;
-  std::vector<double> ones(d, 0.0), pairs(d * d, 0.0);
-  std::vector<std::size_t> set_bits;
+  BitMoments moments(d);
+  double mass_sq_sum = 0.0;
   Best best(static_cast<std::size_t>(std::max(options.max_particles, options.top)));
   EnumerationBatch batch(
       space, *problem.simulator, *problem.distance, components.size(), options.seed);
@@ -314,19 +316,9 @@ EnumerationResult Enumerate(const SmcProblem& problem,
       ++result.accepted;
       const double log_prior = batch.log_prior(u);
       const double mass = std::exp(log_prior);
-      mass_sum += mass;
       mass_sq_sum += mass * mass;
       const auto bits = batch.bits(u);
-      set_bits.clear();
-      for (std::size_t k = 0; k < d; ++k) {
-        if (bits[k]) set_bits.push_back(k);
-      }
-      for (std::size_t a = 0; a < set_bits.size(); ++a) {
-        ones[set_bits[a]] += mass;
-        for (std::size_t b = a + 1; b < set_bits.size(); ++b) {
-          pairs[set_bits[a] * d + set_bits[b]] += mass;
-        }
-      }
+      moments.Add(bits, mass);
       if (best.WouldKeep(log_prior, next + i)) {
         Particle p;
         p.index = next + i;
@@ -355,30 +347,11 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     }
   }
 
+  const double mass_sum = moments.total();
   result.evidence = mass_sum;
   if (result.accepted > 0) {
-    result.marginals.resize(d);
-    result.correlations.assign(d * d, 0.0);
-    // A bit is constant under the posterior exactly when its sum is 0 or, summed over the same
-    // masses in the same order, equal to the total.
-    std::vector<bool> constant(d);
-    for (std::size_t k = 0; k < d; ++k) {
-      result.marginals[k] = ones[k] / mass_sum;
-      constant[k] = ones[k] == 0.0 || ones[k] == mass_sum;
-    }
-    for (std::size_t i = 0; i < d; ++i) {
-      if (constant[i]) continue;
-      result.correlations[i * d + i] = 1.0;
-      const double mi = result.marginals[i];
-      for (std::size_t j = i + 1; j < d; ++j) {
-        if (constant[j]) continue;
-        const double mj = result.marginals[j];
-        const double cov = pairs[i * d + j] / mass_sum - mi * mj;
-        const double r = std::clamp(cov / std::sqrt(mi * (1 - mi) * mj * (1 - mj)), -1.0, 1.0);
-        result.correlations[i * d + j] = r;
-        result.correlations[j * d + i] = r;
-      }
-    }
+    result.marginals = moments.Marginals();
+    result.correlations = moments.Correlations();
     result.ess = mass_sum * mass_sum / mass_sq_sum;
   }
   auto sorted = best.Sorted();

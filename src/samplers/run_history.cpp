@@ -51,6 +51,56 @@ std::string RunHistory::FullReport(Estimator estimator) const {
   return out.str();
 }
 
+BitMoments::BitMoments(std::size_t bits) : d_(bits), ones_(bits, 0.0), pairs_(bits * bits, 0.0) {}
+
+void BitMoments::Add(std::span<const std::uint8_t> bits, double weight) {
+  total_ += weight;
+  set_.clear();
+  for (std::size_t k = 0; k < d_; ++k) {
+    if (bits[k]) set_.push_back(k);
+  }
+  // Only the set bits: a member costs (its number of ones)^2 / 2, not d^2 / 2.
+  for (std::size_t a = 0; a < set_.size(); ++a) {
+    ones_[set_[a]] += weight;
+    for (std::size_t b = a + 1; b < set_.size(); ++b) pairs_[set_[a] * d_ + set_[b]] += weight;
+  }
+}
+
+std::vector<double> BitMoments::Marginals() const {
+  std::vector<double> marginals(d_);
+  for (std::size_t k = 0; k < d_; ++k) marginals[k] = ones_[k] / total_;
+  return marginals;
+}
+
+std::vector<double> BitMoments::Correlations() const {
+  const std::vector<double> m = Marginals();
+  std::vector<double> r(d_ * d_, 0.0);
+  // A bit is constant exactly when its sum is 0 or, summed over the same weights in the same
+  // order, equal to the total.
+  std::vector<bool> constant(d_);
+  for (std::size_t k = 0; k < d_; ++k) constant[k] = ones_[k] == 0.0 || ones_[k] == total_;
+  for (std::size_t i = 0; i < d_; ++i) {
+    if (constant[i]) continue;
+    r[i * d_ + i] = 1.0;
+    for (std::size_t j = i + 1; j < d_; ++j) {
+      if (constant[j]) continue;
+      const double cov = pairs_[i * d_ + j] / total_ - m[i] * m[j];
+      const double rho =
+          std::clamp(cov / std::sqrt(m[i] * (1 - m[i]) * m[j] * (1 - m[j])), -1.0, 1.0);
+      r[i * d_ + j] = rho;
+      r[j * d_ + i] = rho;
+    }
+  }
+  return r;
+}
+
+std::vector<double> PairCorrelations(const std::vector<Particle>& particles) {
+  if (particles.empty()) return {};
+  BitMoments moments(particles.front().theta.bits.size());
+  for (const Particle& p : particles) moments.Add(p.theta.bits, p.weight);
+  return moments.Correlations();
+}
+
 void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
   const auto n = wave.particles.size();
   wave.accepted = static_cast<std::int64_t>(n);
@@ -65,6 +115,7 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
   if (n == 0) {
     wave.ess = 0.0;
     wave.distinct = 0;
+    wave.pair_correlations.clear();
     return;
   }
   // Self-normalised importance weights w_i ∝ p(theta_i)/q(theta_i), in log space for range.
@@ -101,6 +152,7 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
     }
   }
   for (auto& v : wave.reals_sd) v = std::sqrt(v);
+  wave.pair_correlations = PairCorrelations(wave.particles);
   // Distinct bit configurations (the reals of a continuous kernel are almost surely all distinct).
   std::vector<const std::vector<std::uint8_t>*> configs;
   configs.reserve(n);
@@ -140,6 +192,7 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.reals_mean, y.reals_mean, w + "reals_mean", where) ||
         Differ(x.reals_sd, y.reals_sd, w + "reals_sd", where) ||
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
+        Differ(x.pair_correlations, y.pair_correlations, w + "pair_correlations", where) ||
         Differ(x.failures, y.failures, w + "failures", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;

@@ -120,6 +120,12 @@ TEST(Enumeration, MatchesBruteForcePosterior) {
   EXPECT_EQ(w.marginals_importance, r.marginals);
   EXPECT_EQ(w.marginals_paper, r.marginals);
   EXPECT_TRUE(w.complete);
+  // Its pair correlations are its particles', by the same estimator; every accepted configuration
+  // is kept here, so they are the exact ones to round-off.
+  ASSERT_EQ(w.pair_correlations.size(), r.correlations.size());
+  for (std::size_t k = 0; k < r.correlations.size(); ++k) {
+    EXPECT_NEAR(w.pair_correlations[k], r.correlations[k], 1e-12) << k;
+  }
 }
 
 TEST(Enumeration, MaxParticlesKeepsTheLargestMasses) {

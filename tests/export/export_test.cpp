@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -74,6 +76,10 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   EXPECT_EQ(marginals[1].rfind("1,0,clamp 1,", 0), 0u)
       << "waves from 1, bits from 0: " << marginals[1];
 
+  const auto pairs = Lines(out / "pair_correlations.csv");
+  EXPECT_EQ(pairs[0], "wave,bit_i,name_i,bit_j,name_j,correlation");
+  EXPECT_EQ(pairs.size(), 1u + 2u * 15u);  // 6 bits: 15 pairs a wave
+
   const auto particles = Lines(out / "particles.csv");
   EXPECT_EQ(particles[0],
             "wave,index,bits,bit_0,bit_1,bit_2,bit_3,bit_4,bit_5,log_weight,weight,"
@@ -116,6 +122,34 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
 // A run with continuous parameters: a column per real in particles.csv (after the bits), its mean
 // and sd per wave in waves.csv, and their priors, the proposal options and the fingerprint in
 // summary.json.
+TEST_F(ExportTest, PairCorrelationsAreEachWavesOneRowAPair) {
+  const std::string db = WriteRun(/*outputs=*/false);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+  const RunHistory history = HistoryStore::Open(db, /*read_only=*/true).LoadHistory();
+  const auto rows = Lines(out / "pair_correlations.csv");
+  ASSERT_EQ(rows.size(), 1u + 2u * 15u);
+  std::size_t row = 1;
+  int between = 0;
+  for (const WaveRecord& w : history.waves) {
+    ASSERT_EQ(w.pair_correlations.size(), 36u);
+    for (std::size_t i = 0; i < 6; ++i) {
+      for (std::size_t j = i + 1; j < 6; ++j, ++row) {
+        // Waves from 1, bits from 0 with their names, as in marginals.csv.
+        const std::string key = std::to_string(w.wave + 1) + "," + std::to_string(i) + ",clamp " +
+                                std::to_string(i + 1) + "," + std::to_string(j) + ",clamp " +
+                                std::to_string(j + 1) + ",";
+        ASSERT_EQ(rows[row].rfind(key, 0), 0u) << rows[row];
+        // Shortest round-trip text: the history's value exactly.
+        const double r = std::strtod(rows[row].c_str() + key.size(), nullptr);
+        EXPECT_EQ(r, w.pair_correlations[i * 6 + j]) << rows[row];
+        between += r != 0.0 && std::abs(r) < 1.0;
+      }
+    }
+  }
+  EXPECT_GT(between, 0) << "only trivial correlations: the comparison proves little";
+}
+
 TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
   options_.reals = 2;
   RunMetadata metadata = testing::MakeFakeMetadata(options_);
@@ -131,6 +165,10 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
   }
   const fs::path out = dir_ / "export";
   ExportRun(db, out.string());
+
+  const auto pairs = Lines(out / "pair_correlations.csv");
+  EXPECT_EQ(pairs[0], "wave,bit_i,name_i,bit_j,name_j,correlation");
+  EXPECT_EQ(pairs.size(), 1u + 2u * 15u);  // 6 bits: 15 pairs a wave
 
   const auto particles = Lines(out / "particles.csv");
   EXPECT_EQ(particles[0],

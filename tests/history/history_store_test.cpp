@@ -92,6 +92,27 @@ TEST_F(HistoryStoreTest, RoundTripThroughObserverIsTheSameHistory) {
   EXPECT_FALSE(point.has_partial);
 }
 
+TEST_F(HistoryStoreTest, PairCorrelationsOfALoadedHistoryAreTheRunsExactly) {
+  // Importance weights, so that the particles weigh differently.
+  RunHistory history = MakeFakeHistory(SmallRun());
+  for (WaveRecord& wave : history.waves) ComputeWaveStatistics(wave, Estimator::kImportance);
+  const std::string path = Path("RUN.db");
+  WriteRun(path, history);
+
+  // Not stored: recomputed from the stored bits and weights.
+  const RunHistory loaded = HistoryStore::Open(path, /*read_only=*/true).LoadHistory();
+  ASSERT_EQ(loaded.waves.size(), history.waves.size());
+  const auto d = static_cast<std::size_t>(SmallRun().dimension);
+  int between = 0;  // correlations strictly inside (-1, 1) and not 0: the comparison is not trivial
+  for (std::size_t t = 0; t < history.waves.size(); ++t) {
+    const std::vector<double>& run = history.waves[t].pair_correlations;
+    ASSERT_EQ(run.size(), d * d);
+    EXPECT_EQ(loaded.waves[t].pair_correlations, run) << "wave " << t << ": bit for bit";
+    for (double r : run) between += r != 0.0 && std::abs(r) < 1.0;
+  }
+  EXPECT_GT(between, 0);
+}
+
 TEST_F(HistoryStoreTest, MetadataRoundTrips) {
   const RunMetadata written = MakeFakeMetadata(SmallRun());
   const std::string path = Path("RUN.db");

@@ -12,7 +12,7 @@
 namespace combabc {
 
 struct ExportOptions {
-  bool csv = true;        // waves, marginals, particles, curves, positions, measured, experiments
+  bool csv = true;        // the CSV files: waves, marginals, pair correlations, particles, ...
   bool json = true;       // summary.json: metadata and per-wave statistics
   bool particles = true;  // particles.csv (one row per accepted particle, can be large)
   bool curves = true;     // curves.csv + positions.csv, when the run stored outputs

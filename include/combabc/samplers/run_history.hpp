@@ -4,6 +4,7 @@
 // determinism and resume contract (see SameHistory).
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 #include "combabc/core/enum_names.hpp"
@@ -46,6 +47,9 @@ struct WaveRecord {
   std::vector<double> reals_mean;            // per real: mean under the estimator's weights
   std::vector<double> reals_sd;              // per real: standard deviation, likewise
   std::int64_t distinct = 0;                 // distinct accepted bit configurations
+  // Pearson correlation of bits i and j under the particles' weights (PairCorrelations),
+  // row-major d x d; 0 for a bit constant among the particles. Empty without particles.
+  std::vector<double> pair_correlations;
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
   // The failed simulations among `candidates`, in candidate order.
   std::vector<SimulationFailure> failures;
@@ -100,8 +104,38 @@ struct RunHistory {
   std::string FullReport(Estimator estimator) const;
 };
 
-// Per-bit marginals, the reals' means and standard deviations, ESS and distinct count recomputed
-// from a wave's particles (also used by the storage layer when reloading a run).
+// Weighted sums over a population of bit vectors, from which its marginals and the Pearson
+// correlation of every pair of bits follow (docs/algorithm.md, "Pair correlations"): the one
+// estimator of both, for Enumerate (every accepted configuration, weighted by its prior mass) and
+// for a wave (its particles, weighted as the run's estimator weighs them). Sums run in the order
+// of Add, so a population added in the same order gives the same bits.
+class BitMoments {
+ public:
+  explicit BitMoments(std::size_t bits);
+  void Add(std::span<const std::uint8_t> bits, double weight);
+  double total() const { return total_; }  // the sum of the weights
+  // P(bit k = 1): the weight of the members with bit k set over total() (> 0).
+  std::vector<double> Marginals() const;
+  // Pearson correlation of bits i and j, row-major d x d. A bit constant in the population (its
+  // sum is 0 or total()) has no correlation: reported as 0, diagonal included, so that the matrix
+  // never holds NaN.
+  std::vector<double> Correlations() const;
+
+ private:
+  std::size_t d_;
+  double total_ = 0.0;
+  std::vector<double> ones_;      // per bit: the weight of the members with it set
+  std::vector<double> pairs_;     // at i * d + j, i < j: the weight of those with both set
+  std::vector<std::size_t> set_;  // the set bits of the member being added
+};
+
+// WaveRecord::pair_correlations: BitMoments over the particles in order, with their weights
+// (empty without particles).
+std::vector<double> PairCorrelations(const std::vector<Particle>& particles);
+
+// Per-bit marginals, pair correlations, the reals' means and standard deviations, ESS and
+// distinct count recomputed from a wave's particles (also used by the storage layer when
+// reloading a run).
 void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator);
 
 // True when the two histories agree in everything deterministic (all but wall times). On a
