@@ -35,9 +35,12 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   d["distinct"] = wave.distinct;
   d["discarded"] = wave.discarded;
   d["wall_seconds"] = wave.wall_seconds;
-  // d x d (PairCorrelations of the particles), or 0 x 0 for a wave without particles.
-  const auto pairs = static_cast<py::ssize_t>(
-      wave.particles.empty() ? 0 : wave.particles.front().theta.bits.size());
+  // d x d (PairCorrelations of the particles), or 0 x 0 for a wave without particles or with
+  // more than kMaxPairCorrelationBits bits.
+  const auto pairs =
+      static_cast<py::ssize_t>(wave.particles.empty() || wave.pair_correlations.empty()
+                                   ? 0
+                                   : wave.particles.front().theta.bits.size());
   d["pair_correlations"] = py::array_t<double>({pairs, pairs}, wave.pair_correlations.data());
 
   const auto n = static_cast<py::ssize_t>(wave.particles.size());

@@ -10,6 +10,7 @@
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/samplers/run_history.hpp"
 #include "config_reader.hpp"
 
 namespace combabc {
@@ -144,7 +145,9 @@ SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   memory.particles =
       static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
           (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes) +
-      static_cast<double>(c.smc.num_waves) * 8.0 * d * d;
+      (d <= static_cast<double>(kMaxPairCorrelationBits)
+           ? static_cast<double>(c.smc.num_waves) * 8.0 * d * d
+           : 0.0);
   return memory;
 }
 

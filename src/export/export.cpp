@@ -221,8 +221,11 @@ void WritePairCorrelations(OutputDirectory& dir, const RunMetadata& m, const Run
     return CsvField(b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1));
   };
   for (const WaveRecord& w : h.waves) {
-    const std::size_t d = w.particles.empty() ? 0 : w.particles.front().theta.bits.size();
-    COMBABC_CHECK(w.pair_correlations.size() == d * d);  // PairCorrelations(w.particles)
+    // PairCorrelations(w.particles): none beyond kMaxPairCorrelationBits bits.
+    const std::size_t d = w.particles.empty() || w.pair_correlations.empty()
+                              ? 0
+                              : w.particles.front().theta.bits.size();
+    COMBABC_CHECK(w.pair_correlations.size() == d * d);
     for (std::size_t i = 0; i < d; ++i) {
       for (std::size_t j = i + 1; j < d; ++j) {
         out << WaveNumber(w) << ',' << i << ',' << name(i) << ',' << j << ',' << name(j) << ','

@@ -95,7 +95,7 @@ std::vector<double> BitMoments::Correlations() const {
 }
 
 std::vector<double> PairCorrelations(const std::vector<Particle>& particles) {
-  if (particles.empty()) return {};
+  if (particles.empty() || particles.front().theta.bits.size() > kMaxPairCorrelationBits) return {};
   BitMoments moments(particles.front().theta.bits.size());
   for (const Particle& p : particles) moments.Add(p.theta.bits, p.weight);
   return moments.Correlations();

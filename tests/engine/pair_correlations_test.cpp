@@ -61,5 +61,28 @@ TEST(PairCorrelations, AWaveWithoutParticlesHasNone) {
   EXPECT_TRUE(wave.pair_correlations.empty());
 }
 
+// The matrix is kept up to kMaxPairCorrelationBits bits and not beyond (its cost grows as d^2).
+TEST(PairCorrelations, AreKeptUpToTheirBitLimit) {
+  for (const std::size_t d : {kMaxPairCorrelationBits, kMaxPairCorrelationBits + 1}) {
+    WaveRecord wave;
+    wave.candidates = 4;
+    for (int i = 0; i < 4; ++i) {
+      Particle p;
+      p.index = i;
+      p.theta.bits.assign(d, static_cast<std::uint8_t>(i & 1));
+      p.theta.bits[0] = static_cast<std::uint8_t>(i >> 1);
+      wave.particles.push_back(p);
+    }
+    ComputeWaveStatistics(wave, Estimator::kPaper);
+    if (d <= kMaxPairCorrelationBits) {
+      ASSERT_EQ(wave.pair_correlations.size(), d * d);
+      EXPECT_DOUBLE_EQ(wave.pair_correlations[1 * d + 2], 1.0);  // bits 1 and 2 move together
+      EXPECT_DOUBLE_EQ(wave.pair_correlations[0 * d + 1], 0.0);  // bit 0 is independent of them
+    } else {
+      EXPECT_TRUE(wave.pair_correlations.empty());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace combabc

@@ -48,7 +48,8 @@ struct WaveRecord {
   std::vector<double> reals_sd;              // per real: standard deviation, likewise
   std::int64_t distinct = 0;                 // distinct accepted bit configurations
   // Pearson correlation of bits i and j under the particles' weights (PairCorrelations),
-  // row-major d x d; 0 for a bit constant among the particles. Empty without particles.
+  // row-major d x d; 0 for a bit constant among the particles. Empty without particles, and
+  // beyond kMaxPairCorrelationBits bits.
   std::vector<double> pair_correlations;
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
   // The failed simulations among `candidates`, in candidate order.
@@ -129,8 +130,14 @@ class BitMoments {
   std::vector<std::size_t> set_;  // the set bits of the member being added
 };
 
+// The most bits whose pair correlations each wave keeps: the matrix costs N d^2 / 2 operations
+// and 8 d^2 bytes per wave (256 bits: 0.5 MiB), which at the 4096-bit limit would be 134 MB per
+// wave and dominate the run. Beyond it, pair correlations come from the particles on request
+// (export's particles.csv, Python's History.particles).
+constexpr std::size_t kMaxPairCorrelationBits = 256;
+
 // WaveRecord::pair_correlations: BitMoments over the particles in order, with their weights
-// (empty without particles).
+// (empty without particles or with more than kMaxPairCorrelationBits bits).
 std::vector<double> PairCorrelations(const std::vector<Particle>& particles);
 
 // Per-bit marginals, pair correlations, the reals' means and standard deviations, ESS and
