@@ -14,15 +14,17 @@
 #include <vector>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
+#include "python_call.hpp"
+#include "python_distance.hpp"
 #include "python_simulator.hpp"
 
 namespace {
 
 namespace py = pybind11;
 using namespace combabc;
+using combabc::python::FirstPythonError;
 using combabc::python::PythonDistance;
 using combabc::python::PythonSimulator;
-using combabc::python::TailDistance;
 
 constexpr int kBits = 10;
 constexpr int kOutputs = 3;
@@ -51,8 +53,8 @@ void BM_PythonSimulatorOverhead(benchmark::State& state) {
   options.accepted_per_wave = 20000;
   options.threads = 1;
   options.keep_outputs = false;
+  FirstPythonError first_error;
   std::optional<PythonDistance> in_python;
-  std::optional<TailDistance> tail;
   std::optional<PythonSimulator> simulator;
   {
     py::dict scope;
@@ -75,8 +77,9 @@ class SimulationFailed(Exception):
       in_python.emplace(scope[batch ? "distance_batch" : "distance"],
                         batch,
                         std::vector<std::string>{},
-                        std::vector<double>(kOutputs, 0.0));
-      tail.emplace(in_python->names(), kOutputs);
+                        std::vector<double>(kOutputs, 0.0),
+                        scope["SimulationFailed"],
+                        first_error);
     }
     simulator.emplace(scope[batch ? "batched" : "per_sample"],
                       batch,
@@ -84,9 +87,9 @@ class SimulationFailed(Exception):
                       0,
                       scope["SimulationFailed"],
                       with_rng,
-                      in_python ? &*in_python : nullptr);
+                      first_error);
   }
-  const Distance& distance = tail ? static_cast<const Distance&>(*tail) : zero;
+  const Distance& distance = in_python ? static_cast<const Distance&>(*in_python) : zero;
   state.SetLabel(std::string(batch ? "batch" : "per sample") + (with_rng ? ", rng" : "") +
                  (python_distance ? ", Python distance" : ""));
   std::int64_t simulations = 0;
