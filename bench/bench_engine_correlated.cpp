@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
-#include "engine/correlated_models.hpp"
-#include "engine/toy_models.hpp"
+#include "samplers/correlated_models.hpp"
+#include "samplers/toy_models.hpp"
 
 namespace combabc {
 namespace {

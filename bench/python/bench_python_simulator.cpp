@@ -1,22 +1,29 @@
 // Engine overhead with a simulator written in Python (issue 11: <= 2 us per simulation with a
 // vectorised batch callable, <= 20 us with a per-sample one, d = 10). The interpreter is embedded;
 // the simulator is python/src/python_simulator.cpp, as `combabc.run(Problem(...))` uses it, and
-// returns np.zeros, so that what is timed is the engine plus the Python calls.
+// returns np.zeros, so that what is timed is the engine plus the Python calls. A distance written
+// in Python (python/src/python_simulator.cpp, PythonDistance) is timed the same way: |output[0]|.
 #include <benchmark/benchmark.h>
 #include <pybind11/embed.h>
 
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
+#include "python_call.hpp"
+#include "python_distance.hpp"
 #include "python_simulator.hpp"
 
 namespace {
 
 namespace py = pybind11;
 using namespace combabc;
+using combabc::python::FirstPythonError;
+using combabc::python::PythonDistance;
 using combabc::python::PythonSimulator;
 
 constexpr int kBits = 10;
@@ -33,17 +40,21 @@ class ZeroDistance : public Distance {
 };
 
 // range(0): 0 per sample, 1 vectorised batch; range(1): 1 with an rng (a numpy Generator per
-// candidate). One wave that accepts every candidate.
+// candidate); range(2): 1 with the distance written in Python too (per sample or batched as the
+// simulator). One wave that accepts every candidate.
 void BM_PythonSimulatorOverhead(benchmark::State& state) {
   const bool batch = state.range(0) == 1;
   const bool with_rng = state.range(1) == 1;
+  const bool python_distance = state.range(2) == 1;
   const ParameterSpace space(BinarySpace::Independent(kBits));
-  const ZeroDistance distance;
+  const ZeroDistance zero;
   SmcOptions options;
   options.num_waves = 1;
   options.accepted_per_wave = 20000;
   options.threads = 1;
   options.keep_outputs = false;
+  FirstPythonError first_error;
+  std::optional<PythonDistance> in_python;
   std::optional<PythonSimulator> simulator;
   {
     py::dict scope;
@@ -54,18 +65,33 @@ def per_sample(bits, rng=None):
     return np.zeros(3)
 def batched(bits, rng=None):
     return np.zeros((bits.shape[0], 3))
+def distance(output, observed):
+    return abs(output[0])
+def distance_batch(outputs, observed):
+    return np.abs(outputs[:, 0])
 class SimulationFailed(Exception):
     pass
 )",
              scope);
+    if (python_distance) {
+      in_python.emplace(scope[batch ? "distance_batch" : "distance"],
+                        batch,
+                        std::vector<std::string>{},
+                        std::vector<double>(kOutputs, 0.0),
+                        scope["SimulationFailed"],
+                        first_error);
+    }
     simulator.emplace(scope[batch ? "batched" : "per_sample"],
                       batch,
                       kOutputs,
                       0,
                       scope["SimulationFailed"],
-                      with_rng);
+                      with_rng,
+                      first_error);
   }
-  state.SetLabel(std::string(batch ? "batch" : "per sample") + (with_rng ? ", rng" : ""));
+  const Distance& distance = in_python ? static_cast<const Distance&>(*in_python) : zero;
+  state.SetLabel(std::string(batch ? "batch" : "per sample") + (with_rng ? ", rng" : "") +
+                 (python_distance ? ", Python distance" : ""));
   std::int64_t simulations = 0;
   for (auto _ : state) {
     const py::gil_scoped_release release;  // the engine's threads take it per call, as in Python
@@ -76,12 +102,15 @@ class SimulationFailed(Exception):
   state.counters["per_simulation"] = benchmark::Counter(
       static_cast<double>(simulations), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   simulator.reset();  // with the GIL held
+  in_python.reset();
 }
 BENCHMARK(BM_PythonSimulatorOverhead)
-    ->Args({0, 0})
-    ->Args({1, 0})
-    ->Args({0, 1})
-    ->Args({1, 1})
+    ->Args({0, 0, 0})
+    ->Args({1, 0, 0})
+    ->Args({0, 1, 0})
+    ->Args({1, 1, 0})
+    ->Args({0, 0, 1})
+    ->Args({1, 0, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -101,9 +101,10 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
             options = SmcOptions()
         if threads is not None:
             options.threads = threads
-        data = _core.run_smc(what.space, what.reals, what.simulator, what.batch, what.rng,
-                             what.observed, options, distance=what.distance,
-                             distance_batch=what.distance_batch, components=what.components)
+        data = _core.run_smc(_core.SmcRequest(
+            space=what.space, reals=what.reals, simulator=what.simulator, batch=what.batch,
+            rng=what.rng, observed=what.observed, options=options, distance=what.distance,
+            distance_batch=what.distance_batch, components=what.components))
         # The data's coordinate is the output's index (the NetCDF export's observed_data).
         data.update(measured_position=np.arange(len(what.observed), dtype=np.float64),
                     measured_value=what.observed, position_unit="index",

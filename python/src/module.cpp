@@ -18,6 +18,7 @@
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/distances/euclidean_distance.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/params/binary_space.hpp"
@@ -28,32 +29,14 @@
 #include "combabc/services/run.hpp"
 #include "combabc/services/simulate.hpp"
 #include "history_arrays.hpp"
+#include "python_call.hpp"
+#include "python_distance.hpp"
 #include "python_simulator.hpp"
 
 namespace py = pybind11;
 
 namespace combabc::python {
 namespace {
-
-// Euclidean distance to the observed data: one threshold component, "euclidean".
-class EuclideanDistance final : public Distance {
- public:
-  explicit EuclideanDistance(std::vector<double> observed) : observed_(std::move(observed)) {}
-  std::vector<DistanceComponent> components() const override {
-    return {{"euclidean", ComponentKind::kThreshold, 1.0}};
-  }
-  void Evaluate(std::span<const double> simulated, std::span<double> out) const override {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < observed_.size(); ++i) {
-      const double diff = simulated[i] - observed_[i];
-      sum += diff * diff;
-    }
-    out[0] = std::sqrt(sum);
-  }
-
- private:
-  std::vector<double> observed_;
-};
 
 template <NamedEnum E>
 E Parse(const std::string& text, const std::string& field) {
@@ -281,26 +264,33 @@ py::array_t<double> SimulateNominal(const services::NominalSimulator& model, con
   return out;
 }
 
-// distance: None (Euclidean to `observed`) or a Python callable (PythonDistance; components: the
-// names of its k values, empty for one value named "distance").
-py::dict RunSmc(const BinarySpace& bits,
-                const std::vector<ContinuousParameter>& reals,
-                const py::object& function,
-                bool batch,
-                bool with_rng,
-                const std::vector<double>& observed,
-                const SmcOptions& options,
-                const py::object& distance_function,
-                bool distance_batch,
-                const std::vector<std::string>& components) {
-  if (observed.empty()) {
+// A problem whose simulator (and optionally distance) is written in Python: combabc.Problem's
+// fields and the options of combabc.run(problem, options) (python/combabc/__init__.py).
+struct SmcRequest {
+  BinarySpace space;
+  std::vector<ContinuousParameter> reals;
+  py::object simulator;  // f(bits[, reals]) (PythonSimulator)
+  bool batch = false;    // f takes a batch
+  bool rng = false;      // f takes rng=
+  std::vector<double> observed;
+  SmcOptions options;
+  // None: EuclideanDistance to `observed`; or a Python callable (PythonDistance) whose k values
+  // are named by `components` (empty: one value named "distance").
+  py::object distance;
+  bool distance_batch = false;
+  std::vector<std::string> components;
+};
+
+py::dict RunSmc(const SmcRequest& request) {
+  if (request.observed.empty()) {
     throw Error(ErrorKind::kConfig, "the observed data are empty", {}, 0, "observed");
   }
-  std::optional<PythonDistance> python_distance;
+  const py::object simulation_failed =
+      py::module_::import("combabc._core").attr("SimulationFailed");
+  FirstPythonError first_error;  // outlives the simulator and distance that keep it
   std::unique_ptr<Distance> distance;
-  const auto m = static_cast<int>(observed.size());
-  if (distance_function.is_none()) {
-    if (!components.empty()) {
+  if (request.distance.is_none()) {
+    if (!request.components.empty()) {
       throw Error(ErrorKind::kConfig,
                   "components name the values of a distance written in Python; the built-in "
                   "Euclidean distance has one, \"euclidean\"",
@@ -308,19 +298,23 @@ py::dict RunSmc(const BinarySpace& bits,
                   0,
                   "components");
     }
-    distance = std::make_unique<EuclideanDistance>(observed);
+    distance = std::make_unique<EuclideanDistance>(request.observed);
   } else {
-    python_distance.emplace(distance_function, distance_batch, components, observed);
-    distance = std::make_unique<TailDistance>(python_distance->names(), m);
+    distance = std::make_unique<PythonDistance>(request.distance,
+                                                request.distance_batch,
+                                                request.components,
+                                                request.observed,
+                                                simulation_failed,
+                                                first_error);
   }
-  const ParameterSpace space(bits, reals);
-  const PythonSimulator simulator(function,
-                                  batch,
-                                  m,
+  const ParameterSpace space(request.space, request.reals);
+  const PythonSimulator simulator(request.simulator,
+                                  request.batch,
+                                  static_cast<int>(request.observed.size()),
                                   space.num_reals(),
-                                  py::module_::import("combabc._core").attr("SimulationFailed"),
-                                  with_rng,
-                                  python_distance ? &*python_distance : nullptr);
+                                  simulation_failed,
+                                  request.rng,
+                                  first_error);
   SmcProblem problem;
   problem.space = &space;
   problem.simulator = &simulator;
@@ -329,11 +323,11 @@ py::dict RunSmc(const BinarySpace& bits,
   RunHistory history;
   try {
     const py::gil_scoped_release release;
-    history = RunCombinatorialSmc(problem, options, &signals);
+    history = RunCombinatorialSmc(problem, request.options, &signals);
   } catch (const std::exception& e) {
     // A Python exception that ended the run is raised again as itself, the engine's line (wave
     // and candidate) attached as a note.
-    std::optional<py::error_already_set> raised = simulator.python_error();
+    std::optional<py::error_already_set> raised = first_error.error();
     if (!raised) throw;
     if (py::hasattr(raised->value(), "add_note")) {
       const auto* error = dynamic_cast<const Error*>(&e);
@@ -343,21 +337,15 @@ py::dict RunSmc(const BinarySpace& bits,
     throw *raised;
   }
   signals.RaiseIfInterrupted("combabc: run interrupted");
-  // A Python distance's values rode after the outputs (TailDistance): the outputs are the m first.
-  for (WaveRecord& wave : history.waves) {
-    for (Particle& p : wave.particles) {
-      if (p.output.size() > observed.size()) p.output.resize(observed.size());
-    }
-  }
   // Named as a history file of the same run would be.
   RunMetadata metadata;
   metadata.dimension = space.num_bits();
-  for (int k = 0; k < space.num_bits(); ++k) metadata.bit_names.push_back(bits.name(k));
-  metadata.reals = reals;
+  for (int k = 0; k < space.num_bits(); ++k) metadata.bit_names.push_back(request.space.name(k));
+  metadata.reals = request.reals;
   metadata.distance_components = distance->components();
-  metadata.estimator = ToString(options.estimator);
+  metadata.estimator = ToString(request.options.estimator);
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
-  result["seed"] = options.seed;
+  result["seed"] = request.options.seed;
   return result;
 }
 
@@ -690,16 +678,38 @@ PYBIND11_MODULE(_core, m) {
         const std::vector<std::uint8_t> bits = model.ParseBits(clamps);
         return py::array_t<std::uint8_t>(static_cast<py::ssize_t>(bits.size()), bits.data());
       });
-  m.def("run_smc",
-        &RunSmc,
-        py::arg("space"),
-        py::arg("reals"),
-        py::arg("simulator"),
-        py::arg("batch"),
-        py::arg("rng"),
-        py::arg("observed"),
-        py::arg("options"),
-        py::arg("distance") = py::none(),
-        py::arg("distance_batch") = false,
-        py::arg("components") = std::vector<std::string>{});
+  py::class_<SmcRequest>(m, "SmcRequest")
+      .def(py::init([](const BinarySpace& space,
+                       std::vector<ContinuousParameter> reals,
+                       py::object simulator,
+                       bool batch,
+                       bool rng,
+                       std::vector<double> observed,
+                       const SmcOptions& options,
+                       py::object distance,
+                       bool distance_batch,
+                       std::vector<std::string> components) {
+             return SmcRequest{.space = space,
+                               .reals = std::move(reals),
+                               .simulator = std::move(simulator),
+                               .batch = batch,
+                               .rng = rng,
+                               .observed = std::move(observed),
+                               .options = options,
+                               .distance = std::move(distance),
+                               .distance_batch = distance_batch,
+                               .components = std::move(components)};
+           }),
+           py::kw_only(),
+           py::arg("space"),
+           py::arg("reals") = std::vector<ContinuousParameter>{},
+           py::arg("simulator"),
+           py::arg("batch") = false,
+           py::arg("rng") = false,
+           py::arg("observed"),
+           py::arg("options"),
+           py::arg("distance") = py::none(),
+           py::arg("distance_batch") = false,
+           py::arg("components") = std::vector<std::string>{});
+  m.def("run_smc", &RunSmc, py::arg("request"));
 }

@@ -122,12 +122,7 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
   for (std::size_t i = begin; i < end; ++i) {
     // After the simulator's draws, so that they do not depend on whether it is drawn.
     uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
-    auto out = span_of(distances_, i, c_);
-    if (status_[i] != 0) {
-      // Never accepted: no distance is computed from outputs the simulator did not produce.
-      std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
-      continue;
-    }
+    if (status_[i] != 0) continue;
     // A NaN output is the simulation's failure (a diverged solve, an unreadable value), not the
     // run's: the candidate is recorded as failed and the run goes on.
     const auto output = span_of(outputs_, i, m_);
@@ -135,13 +130,27 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
         std::find_if(output.begin(), output.end(), [](double v) { return std::isnan(v); });
     if (nan != output.end()) {
       Fail(i, "output holds NaN at index " + std::to_string(nan - output.begin()));
+    }
+  }
+  // One call for the batch's candidates still standing (a distance written in Python pays per
+  // call); it skips the failed ones and may fail some itself.
+  try {
+    BatchFailures failures =
+        BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, end - begin);
+    distance_.EvaluateBatch(
+        std::span<const double>(outputs_.data() + begin * m_, (end - begin) * m_),
+        std::span(distances_.data() + begin * c_, (end - begin) * c_),
+        failures);
+  } catch (const std::exception& e) {
+    throw Error(ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
+  }
+  for (std::size_t i = begin; i < end; ++i) {
+    auto out = span_of(distances_, i, c_);
+    if (status_[i] != 0) {
+      // Never accepted: no distance is kept from outputs the simulator did not produce or the
+      // distance could not measure.
       std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
       continue;
-    }
-    try {
-      distance_.Evaluate(output, out);
-    } catch (const std::exception& e) {
-      throw Error(ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
     }
     for (std::size_t k = 0; k < c_; ++k) {
       if (std::isnan(out[k])) {

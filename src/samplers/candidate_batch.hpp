@@ -32,10 +32,11 @@ class CandidateBatch : public BatchTask {
                  std::size_t num_components,
                  bool draw_uniform = false);
 
-  // Proposes, simulates and measures candidates [first, first + count) of `wave`. A candidate
-  // whose simulation failed (SimulationFailed, an output or distance holding NaN) is marked
-  // failed with its reason; any other simulator or distance exception throws Error(kSoftware)
-  // naming the wave and candidates.
+  // Proposes, simulates and measures candidates [first, first + count) of `wave` (the simulator
+  // and the distance called once per range of candidates). A candidate whose simulation failed
+  // (SimulationFailed, an output or distance holding NaN, a candidate the distance failed) is
+  // marked failed with its reason; any other simulator or distance exception throws
+  // Error(kSoftware) naming the wave and candidates.
   void Evaluate(Executor& executor,
                 std::uint64_t seed,
                 int wave,

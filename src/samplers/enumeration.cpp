@@ -85,35 +85,41 @@ class EnumerationBatch : public BatchTask {
     } catch (const std::exception& e) {
       throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
     }
-    const BatchFailures failures{std::span(status_), std::span(reasons_)};
+    // The exact posterior needs every configuration's distance: unlike a sampled run, an
+    // enumeration cannot carry on past a failed simulation. The configurations before the first
+    // failed one are measured (one call), and the first failure in index order ends the run.
+    const BatchFailures all{std::span(status_), std::span(reasons_)};
+    std::size_t measured = begin;
+    while (measured < end && !all.failed(measured)) ++measured;
+    BatchFailures failures = all.Sub(begin, measured - begin);
+    try {
+      distance_.EvaluateBatch(
+          std::span<const double>(outputs_.data() + begin * m_, (measured - begin) * m_),
+          std::span(distances_.data() + begin * c_, (measured - begin) * c_),
+          failures);
+    } catch (const std::exception& e) {
+      throw Error(ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
+    }
+    auto configuration = [&](std::size_t i) {
+      return "enumeration, configuration " + std::to_string(first_ + static_cast<std::int64_t>(i));
+    };
     for (std::size_t i = begin; i < end; ++i) {
-      // The exact posterior needs every configuration's distance: unlike a sampled run, an
-      // enumeration cannot carry on past a failed simulation.
-      if (failures.failed(i)) {
-        throw Error(
-            ErrorKind::kSoftware,
-            "simulation failed: " + std::string(failures.reason(i)) +
-                " (an enumeration needs every configuration)",
-            "",
-            0,
-            "enumeration, configuration " + std::to_string(first_ + static_cast<std::int64_t>(i)));
-      }
-      std::span<double> out(distances_.data() + i * c_, c_);
-      try {
-        distance_.Evaluate(output(i), out);
-      } catch (const std::exception& e) {
-        throw Error(
-            ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
+      if (all.failed(i)) {
+        throw Error(ErrorKind::kSoftware,
+                    "simulation failed: " + std::string(all.reason(i)) +
+                        " (an enumeration needs every configuration)",
+                    "",
+                    0,
+                    configuration(i));
       }
       for (std::size_t k = 0; k < c_; ++k) {
-        if (std::isnan(out[k])) {
+        if (std::isnan(distance(i)[k])) {
           throw Error(ErrorKind::kSoftware,
                       "distance component " + std::to_string(k) +
                           " is NaN (the simulated output holds NaN or the distance is undefined)",
                       "",
                       0,
-                      "enumeration, configuration " +
-                          std::to_string(first_ + static_cast<std::int64_t>(i)));
+                      configuration(i));
         }
       }
     }

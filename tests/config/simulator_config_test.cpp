@@ -2,13 +2,12 @@
 // worker simulators declaring bits and outputs, and every mistake located at its key.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
@@ -79,20 +78,18 @@ TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
 }
 
 TEST(SimulatorConfig, CoordinatesFromACsvFile) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("combabc-coords-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const testing::TempFolder dir("coords");
   // The data CSV's dialect (issue 20, D8): a quoted coordinate and a comment holding commas.
   std::ofstream(dir / "c.csv") << "x_m,comment\r\n0.0,a\r\n\"0.05\",\"c, d\"\r\n\r\n0.2,b\r\n";
   std::string text = kWorker;
   text.replace(text.find("coordinates = [0.0, 0.1, 0.2]"),
                std::string("coordinates = [0.0, 0.1, 0.2]").size(),
                "coordinates_csv = \"c.csv\"");
-  const CalibrationConfig c = ParseConfig(text + kRest, (dir / "run.toml").string());
+  const CalibrationConfig c = ParseConfig(text + kRest, dir / "run.toml");
   EXPECT_EQ(c.simulator.outputs.coordinates, (std::vector<double>{0.0, 0.05, 0.2}));
   std::ofstream(dir / "c.csv") << "x\n0.0\nzero\n";
   try {
-    ParseConfig(text + kRest, (dir / "run.toml").string());
+    ParseConfig(text + kRest, dir / "run.toml");
     ADD_FAILURE();
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kData);
@@ -101,7 +98,7 @@ TEST(SimulatorConfig, CoordinatesFromACsvFile) {
   }
   std::ofstream(dir / "c.csv") << "x,note\n0.0,a\n0.1,b, c\n";
   try {
-    ParseConfig(text + kRest, (dir / "run.toml").string());
+    ParseConfig(text + kRest, dir / "run.toml");
     ADD_FAILURE();
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kData);
@@ -109,7 +106,6 @@ TEST(SimulatorConfig, CoordinatesFromACsvFile) {
               std::string::npos)
         << e.what();
   }
-  std::filesystem::remove_all(dir);
 }
 
 TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {

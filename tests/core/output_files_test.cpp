@@ -15,11 +15,13 @@
 #include <sstream>
 
 #include "combabc/core/error.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::TempFolder;
 
 std::string Read(const fs::path& path) {
   std::ifstream in(path);
@@ -51,15 +53,8 @@ ErrorKind KindOf(const std::function<void()>& f) {
 
 class OutputFilesTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("combabc_output_files_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  const TempFolder folder_{"output-files"};
+  const fs::path dir_ = folder_.path();
 };
 
 TEST_F(OutputFilesTest, AtomicFileCreatesAndRefusesToReplaceUnlessAsked) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "combabc/core/error.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
@@ -252,27 +253,25 @@ TEST(MeasuredData, AllZeroCannotBeNormalised) {
 }
 
 TEST(MeasuredData, LoadsRelativeToConfigDirAndReportsMissingFile) {
-  const auto dir = std::filesystem::temp_directory_path() / "combabc_measured_data_test";
-  std::filesystem::create_directories(dir);
+  const testing::TempFolder dir("measured-data-test");
   {
     std::ofstream f(dir / "p.csv");
     f << "x_cm,u\n1,1\n2,2\n";
   }
   DataConfig c = CentimetreConfig();
   c.csv = "p.csv";
-  const MeasuredData d = LoadMeasuredData(c, dir.string());
+  const MeasuredData d = LoadMeasuredData(c, dir.path().string());
   EXPECT_EQ(d.size(), 2u);
-  EXPECT_EQ(d.source, (dir / "p.csv").string());
+  EXPECT_EQ(d.source, dir / "p.csv");
 
   c.csv = "does_not_exist.csv";
   try {
-    LoadMeasuredData(c, dir.string());
+    LoadMeasuredData(c, dir.path().string());
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kNoInput);
     EXPECT_NE(std::string(e.what()).find("does_not_exist.csv"), std::string::npos) << e.what();
   }
-  std::filesystem::remove_all(dir);
 }
 
 TEST(MeasuredData, GaussianExtensionFillsTheGapToTheImpact) {

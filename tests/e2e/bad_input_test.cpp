@@ -68,7 +68,7 @@ class BadInput : public ::testing::Test {
     return r.err;
   }
   std::string config() const { return dir_ / "config.toml"; }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 TEST_F(BadInput, MissingConfigFile) {

@@ -47,7 +47,7 @@ directory = "out"
 
 // Data: the model's own profile of the truth on 48-80 cm (enough for mechanics; the shipped
 // examples use a finer, perturbed model with noise instead).
-void WriteData(const ScratchDir& dir) {
+void WriteData(const TempFolder& dir) {
   std::ofstream(dir / "model.toml") << Config("");
   const auto r = RunCli(
       {"simulate", dir / "model.toml", "--clamps", kTruth, "-o", dir / "full.csv"}, dir.path());
@@ -74,7 +74,7 @@ void CopyRun(const std::string& from, const std::string& to) {
   if (fs::exists(from + "-wal")) fs::copy_file(from + "-wal", to + "-wal");
 }
 
-void ExpectResumeRefusesDamageAndASecondWriter(const ScratchDir& dir, const std::string& killed) {
+void ExpectResumeRefusesDamageAndASecondWriter(const TempFolder& dir, const std::string& killed) {
   const std::vector<std::string> damages = {
       "UPDATE particle SET distance = NULL WHERE wave = 0",
       "UPDATE wave SET thresholds = substr(thresholds, 1, 4) WHERE wave = 0",
@@ -107,7 +107,7 @@ void ExpectResumeRefusesDamageAndASecondWriter(const ScratchDir& dir, const std:
 }
 
 TEST(Calibration, RunReportExportAndPosteriorNearTheLoad) {
-  ScratchDir dir("e2e-run");
+  TempFolder dir("e2e-run");
   WriteData(dir);
   std::ofstream(dir / "config.toml")
       << Config("waves = 10\naccepted_per_wave = 300\nestimator = \"importance\"\nthreads = 2\n");
@@ -145,7 +145,7 @@ TEST(Calibration, RunReportExportAndPosteriorNearTheLoad) {
 }
 
 TEST(Calibration, ResumeAfterSigkillEqualsTheUninterruptedRun) {
-  ScratchDir dir("e2e-resume");
+  TempFolder dir("e2e-resume");
   WriteData(dir);
   const std::string sampler =
       "waves = 4\naccepted_per_wave = 200\nbatch_size = 8\nthreads = 1\nestimator = \"paper\"\n";
@@ -199,7 +199,7 @@ TEST(Calibration, ResumeAfterSigkillEqualsTheUninterruptedRun) {
 // simulation with the reason, never accepted, while the run goes on (issue 20, D10: it was
 // "solved" to |w| = 1.3e7 m).
 TEST(Calibration, SingularConfigurationsFailTheirCandidateWithTheReason) {
-  ScratchDir dir("e2e-singular");
+  TempFolder dir("e2e-singular");
   WriteTinySensorData(dir.path());
   std::ofstream(dir / "config.toml")
       << "[model]\nfoundation_stiffness = 0.0\n[model.load]\nfrequency = 0.0\n" +

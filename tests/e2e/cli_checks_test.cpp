@@ -82,7 +82,7 @@ class CliChecks : public ::testing::Test {
     std::ofstream(dir_ / "worker.toml") << edit(ReadFile(example / "worker.toml"));
     return dir_ / "worker.toml";
   }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 // D2, D3: the last waves of a finished run deleted by hand, or a trigger of someone else's:

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "support/test_support.hpp"
+
 extern "C" char** environ;
 
 namespace combabc::testing {
@@ -29,23 +31,6 @@ inline std::string ReadFile(const std::filesystem::path& p) {
   s << in.rdbuf();
   return s.str();
 }
-
-// A fresh scratch directory per test, removed afterwards.
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() /
-              ("combabc-" + name + "-" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() { std::filesystem::remove_all(path_); }
-  const std::filesystem::path& path() const { return path_; }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
-};
 
 // Starts `argv` (looked up in PATH) with stdout/stderr redirected to cli.stdout / cli.stderr in
 // `dir` (stdout to `stdout_path` instead when given: an existing file such as /dev/full);

@@ -37,7 +37,7 @@ std::string Config(const std::string& schedule) {
 int Lines(const std::string& s) { return CountLines(s); }
 
 TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
-  ScratchDir dir("enumerate");
+  TempFolder dir("enumerate");
   fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
   std::ofstream(dir / "list.toml") << Config("threshold = [0.5, 0.3]");
   auto r = RunCli({"enumerate", dir / "list.toml", "--no-report", "-q", "--top", "7"}, dir.path());
@@ -84,7 +84,7 @@ TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
 }
 
 TEST(Enumerate, WithoutAFinalThresholdAsksForOne) {
-  ScratchDir dir("enumerate-usage");
+  TempFolder dir("enumerate-usage");
   fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
   std::ofstream(dir / "quantile.toml") << Config("quantile = 0.3");
   const auto r = RunCli({"enumerate", dir / "quantile.toml", "--no-report", "-q"}, dir.path());
@@ -97,7 +97,7 @@ TEST(Enumerate, WithoutAFinalThresholdAsksForOne) {
 // Regression (issue 20, D15): more than 2^24 configurations were refused naming an internal
 // struct ("SmcProblem::space"); the refusal names the config file, line and key that set the bits.
 TEST(Enumerate, TooManyFreeBitsAreRefusedAtTheKeyThatSetsThem) {
-  ScratchDir dir("enumerate-too-many");
+  TempFolder dir("enumerate-too-many");
   fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
   std::string text = Config("threshold = [0.5, 0.3]");
   Replace(text, "per_edge =", "per_edge = 13");  // 26 clamps, 26 free bits

@@ -93,7 +93,7 @@ WaveRecord Enumerated(const fs::path& dir, const std::string& config) {
 }
 
 TEST(ExperimentsPosterior, IsTheProductOfTheExperimentsAcceptanceAndSmcSamplesIt) {
-  ScratchDir dir("e2e-experiments-posterior");
+  TempFolder dir("e2e-experiments-posterior");
   WriteSimulatedData(dir.path(), {kRight, kLeft});
   const int accepted = 1000;
   std::ofstream(dir / "joint.toml") << ExperimentsConfig({kRight, kLeft}, Sampler(accepted));

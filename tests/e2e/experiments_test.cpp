@@ -79,7 +79,7 @@ class JointEqualsSingles : public ::testing::TestWithParam<Setup> {};
 // concatenated, bit for bit, with the components named "<experiment>/<component>".
 TEST_P(JointEqualsSingles, TheJointSimulatorAndDistanceAreTheSingleOnesOneAfterTheOther) {
   const std::vector<TinyExperiment>& experiments = GetParam().experiments;
-  ScratchDir dir(std::string("e2e-experiments-joint-") + GetParam().name);
+  TempFolder dir(std::string("e2e-experiments-joint-") + GetParam().name);
   for (const TinyExperiment& x : experiments) WriteTentData(dir.path(), x);
   const std::string sampler = "seed = 1\n";
   std::ofstream(dir / "joint.toml") << ExperimentsConfig(experiments, sampler);
@@ -162,7 +162,7 @@ INSTANTIATE_TEST_SUITE_P(Experiments,
 // `combabc simulate` on the joint config: each experiment's rows (named in the first column,
 // normalised by its own peak) are the single-experiment config's rows.
 TEST(Experiments, SimulateWritesEachExperimentAsItsOwnConfigDoes) {
-  ScratchDir dir("e2e-experiments-simulate");
+  TempFolder dir("e2e-experiments-simulate");
   const std::vector<TinyExperiment> experiments = {kRight, kLeft};
   std::ofstream(dir / "joint.toml") << ExperimentsConfig(experiments, "seed = 1\n");
   auto r = RunCli({"simulate", dir / "joint.toml", "--clamps", "101101", "-o", dir / "joint.csv"},
@@ -215,7 +215,7 @@ void ReplaceOnce(std::string& text, const std::string& what, const std::string& 
 // Each refusal through `combabc run`: exit 78, one line "FILE:LINE: KEY: ...", before anything is
 // written (no output folder).
 TEST(Experiments, ConfigRefusalsNameTheFileLineAndKey) {
-  ScratchDir dir("e2e-experiments-refusals");
+  TempFolder dir("e2e-experiments-refusals");
   WriteTentData(dir.path(), kRight);
   WriteTentData(dir.path(), kLeft);
   const std::string base = ExperimentsConfig({kRight, kLeft},
@@ -446,7 +446,7 @@ class ExperimentsResume : public ::testing::Test {
     EXPECT_EQ(verified.exit_code, 0) << verified.out << verified.err;
   }
 
-  ScratchDir dir_;
+  TempFolder dir_;
   std::string whole_;
 };
 

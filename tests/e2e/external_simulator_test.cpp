@@ -94,7 +94,7 @@ class ExternalSimulatorCli : public ::testing::Test {
     EXPECT_EQ(HistoryStore::Open(refused, true).LoadMetadata().resume_count, 0);
   }
 
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 TEST_F(ExternalSimulatorCli, ThePythonWorkerRunsResumesAndAChangedWorkerIsRefused) {
@@ -275,7 +275,7 @@ TEST_F(ExternalSimulatorCli, ARunStoppedForFailuresResumesWithARaisedCeiling) {
 // A run killed mid-wave (SIGKILL; a worker sees its stdin close and exits, a command's process
 // group is its own) resumes to the uninterrupted run's history. The worker sleeps 3 ms per
 // request so that the run can be caught mid-wave; a command costs a Python start-up per call.
-void ExpectKilledMidWaveResumesToTheUninterruptedHistory(const ScratchDir& dir,
+void ExpectKilledMidWaveResumesToTheUninterruptedHistory(const TempFolder& dir,
                                                          const std::string& config) {
   std::string text = ReadFile(config);
   text.replace(text.find("seed = 11"), 9, "seed = 11\nbatch_size = 4\nthreads = 1");

@@ -112,7 +112,7 @@ class InputLimits : public ::testing::Test {
     return WaitAtMost(pid, dir_.path(), 60s);
   }
   std::string config() const { return dir_ / "config.toml"; }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 // Regression: with -q the progress display (which polled the interrupt flag) was absent and

@@ -47,7 +47,7 @@ std::vector<std::string> Fields(const std::string& line) {
 class MixedRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new ScratchDir("e2e-mixed");
+    dir_ = new TempFolder("e2e-mixed");
     std::ofstream(*dir_ / "run.toml") << kConfig;
     WriteTinySensorData(dir_->path());
     run_ = new CliResult(RunCli({"run", *dir_ / "run.toml", "--no-report"}, dir_->path()));
@@ -60,11 +60,11 @@ class MixedRun : public ::testing::Test {
 
   static std::string History() { return *dir_ / "out/history.sqlite"; }
 
-  static ScratchDir* dir_;
+  static TempFolder* dir_;
   static CliResult* run_;
 };
 
-ScratchDir* MixedRun::dir_ = nullptr;
+TempFolder* MixedRun::dir_ = nullptr;
 CliResult* MixedRun::run_ = nullptr;
 
 TEST_F(MixedRun, VerifiesSound) {

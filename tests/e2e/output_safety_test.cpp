@@ -36,7 +36,7 @@ class OutputSafety : public ::testing::Test {
     Write("tiny.toml", TinySensorConfig("waves = 1\naccepted_per_wave = 5\n"));
     return dir_ / "tiny.toml";
   }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 const std::string kAllFree = "000000";

@@ -58,7 +58,7 @@ class RaisedLimits : public ::testing::Test {
     EXPECT_EQ(Exported(whole), Exported(resumed));
   }
 
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 // The budget stops the run candidate-exactly; a resume with a larger budget continues from that
@@ -155,7 +155,7 @@ TEST_F(RaisedLimits, AWallTimeStopResumesAndARunThatEndedOnItsOwnIsRefused) {
 // [model] theory because it meant Kirchhoff. Reading that config today gives RZT, whose
 // fingerprint differs; the resume must recognise the old default and continue the run it was.
 TEST(OldDefaultTheory, AHistoryFromBeforeRztWasTheDefaultResumesAsKirchhoff) {
-  ScratchDir dir("e2e-old-default-theory");
+  TempFolder dir("e2e-old-default-theory");
   const fs::path history = dir.path() / "history.sqlite";
   fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "tests/e2e/data/kirchhoff_default_history.sqlite",
                 history);

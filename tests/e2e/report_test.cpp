@@ -50,7 +50,7 @@ class Report : public ::testing::Test {
     EXPECT_EQ(r.out, "") << "partial output on stdout";
     return r.err;
   }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 TEST_F(Report, IntoTheWorkingDirectoryIsRefusedAndDeletesNothing) {
@@ -262,7 +262,7 @@ TEST_F(Report, FailuresAreOneLineAndLeaveNothingBehind) {
 // and cleans up on KeyboardInterrupt) is interrupted and waited for, nothing is published, and
 // combabc ends by the signal (exit status 130). Needs no plotting packages.
 TEST(ReportInterrupt, SigintStopsTheScriptAndNothingIsPublished) {
-  ScratchDir dir("report-interrupt");
+  TempFolder dir("report-interrupt");
   const std::string db = MakeHistory(dir.path() / "RUN.db");
   const std::string script = dir / "slow_report.py";
   std::ofstream(script) << R"(import os, sys, time

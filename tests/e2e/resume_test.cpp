@@ -19,11 +19,11 @@ namespace fs = std::filesystem;
 const std::string kConfig = TinySensorConfig("seed = 3\nwaves = 2\naccepted_per_wave = 5\n",
                                              "[output]\ndirectory = \"out\"\n");
 
-void WriteData(const ScratchDir& dir, double peak) { WriteTinySensorData(dir.path(), peak); }
+void WriteData(const TempFolder& dir, double peak) { WriteTinySensorData(dir.path(), peak); }
 
 // A run that stops on one of its stopping rules says why on stderr, and keeps its history.
 TEST(Stopping, TheReasonIsOnScreen) {
-  ScratchDir dir("e2e-stopping");
+  TempFolder dir("e2e-stopping");
   std::string config = kConfig;
   config.replace(config.find("accepted_per_wave = 5"),
                  std::string("accepted_per_wave = 5").size(),
@@ -67,7 +67,7 @@ class ResumeFingerprint : public ::testing::Test {
     return m;
   }
 
-  ScratchDir dir_;
+  TempFolder dir_;
   RunMetadata finished_;
 };
 

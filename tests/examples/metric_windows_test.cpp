@@ -45,7 +45,7 @@ directory = "out"
 }
 
 std::string RunExpectingConfigError(const std::string& metric, const std::string& data = {}) {
-  ScratchDir dir("metric-windows-" +
+  TempFolder dir("metric-windows-" +
                  std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   std::ofstream(dir / "config.toml") << Config(metric, data);
   const auto r = RunCli({"run", dir / "config.toml", "--no-report", "-q"}, dir.path());

@@ -3,7 +3,6 @@
 // With the gaussian noise model (sigma estimated from the data) no clamp may end confidently
 // wrong (|P - 0.5| > 0.4 on the wrong side of the truth).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -17,6 +16,7 @@
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
 #include "combabc/services/run.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -93,9 +93,8 @@ std::vector<int> ConfidentlyWrong(const fs::path& dir, const std::string& metric
 }
 
 TEST(NoiseAwareSensor, GaussianNoiseModelIsNotConfidentlyWrong) {
-  const fs::path scratch =
-      fs::temp_directory_path() / ("combabc-noise-aware-" + std::to_string(::getpid()));
-  const auto wrong = ConfidentlyWrong(scratch / "gaussian",
+  const TempFolder scratch("noise-aware");
+  const auto wrong = ConfidentlyWrong(scratch.path() / "gaussian",
                                       "[metric]\nquantile = 0.3\nnoise = \"gaussian\"\n"
                                       "sigma_noise = \"estimate\"\n\n[[metric.component]]\n"
                                       "type = \"least_squares\"\nwindow = [30, 89]\n",
@@ -103,7 +102,6 @@ TEST(NoiseAwareSensor, GaussianNoiseModelIsNotConfidentlyWrong) {
   EXPECT_TRUE(wrong.empty()) << wrong.size() << " clamps confidently wrong";
   // The plain least-squares threshold on the same data (10 waves) left clamps confidently wrong
   // (docs/algorithm.md); it asserted nothing here, so it is no longer run (CI time).
-  fs::remove_all(scratch);
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "combabc/config/config.hpp"
 #include "combabc/data/measured_data.hpp"
 #include "combabc/services/run.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -74,8 +75,7 @@ std::string List(const std::vector<int>& clamps) {
 TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
   const auto configs = ExampleConfigs();
   ASSERT_GE(configs.size(), 4u) << "examples/*/*.toml not found";
-  const fs::path scratch =
-      fs::temp_directory_path() / ("combabc-example-posteriors-" + std::to_string(::getpid()));
+  const TempFolder scratch("example-posteriors");
   for (const fs::path& path : configs) {
     const std::string name =
         path.parent_path().filename().string() + "/" + path.filename().string();
@@ -93,7 +93,7 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
 
     services::RunRequest request;
     request.config_path = path.string();
-    request.output_directory = (scratch / name).string();
+    request.output_directory = scratch / name;
     request.threads = 2;
     request.report = false;
     services::RunOutcome outcome;
@@ -119,7 +119,6 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
     // And not merely uninformative: each example identifies the clamps next to its load.
     EXPECT_GE(recovered.size(), 2u) << "recovered only " << List(recovered);
   }
-  fs::remove_all(scratch);
 }
 
 }  // namespace

@@ -57,7 +57,7 @@ class SensorCalculix : public ::testing::Test {
     }
   }
 
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 TEST_F(SensorCalculix, EnumerationPutsTheMassOnTheTruth) {

@@ -2,7 +2,6 @@
 #include "combabc/export/export.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -12,11 +11,13 @@
 
 #include "combabc/core/error.hpp"
 #include "history/fake_run.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::TempFolder;
 
 std::vector<std::string> Lines(const fs::path& path) {
   std::ifstream in(path);
@@ -32,17 +33,11 @@ std::size_t Fields(const std::string& line) {
 class ExportTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("combabc_export_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     options_.waves = 2;
     options_.per_wave = 5;
     options_.dimension = 6;
     options_.points = 7;
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string WriteRun(bool outputs, const std::string& name = "RUN.db") {
     options_.outputs = outputs;
@@ -54,7 +49,8 @@ class ExportTest : public ::testing::Test {
     return path;
   }
 
-  fs::path dir_;
+  const TempFolder folder_{"export-test"};
+  const fs::path dir_ = folder_.path();
   testing::FakeRunOptions options_;
 };
 

@@ -2,7 +2,6 @@
 // kept identical across an interruption and a resume.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,11 +9,13 @@
 
 #include "combabc/history/history_store.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::TempFolder;
 
 constexpr int kBits = 8;
 
@@ -64,15 +65,6 @@ class StopAfter : public SmcObserver {
 
 class HistoryFailures : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("combabc_failures_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   RunMetadata Metadata() const {
     RunMetadata m;
     m.config_text = "# failures test\n";
@@ -100,9 +92,9 @@ class HistoryFailures : public ::testing::Test {
   RunHistory Run(const SmcOptions& o, SmcObserver* observer, const ResumePoint* resume) const {
     return RunCombinatorialSmc({&space_, &simulator_, &distance_}, o, observer, resume);
   }
-  std::string Path(const char* name) const { return (dir_ / name).string(); }
+  std::string Path(const char* name) const { return dir_ / name; }
 
-  fs::path dir_;
+  const TempFolder dir_{"failures-test"};
   ParameterSpace space_{BinarySpace::Independent(kBits)};
   FlakySimulator simulator_;
   L1Distance distance_;

@@ -21,6 +21,7 @@
 #include "history/history_hash.hpp"
 #include "history/history_sqlite.hpp"
 #include "history/sql_test_support.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
@@ -31,6 +32,7 @@ using testing::MakeFakeHistory;
 using testing::MakeFakeMetadata;
 using testing::RecordWave;
 using testing::Sql;
+using testing::TempFolder;
 
 FakeRunOptions SmallRun() {
   FakeRunOptions options;
@@ -44,15 +46,7 @@ FakeRunOptions SmallRun() {
 
 class HistoryIntegrityTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("combabc_integrity_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Path(const std::string& name) const { return dir_ / name; }
 
   // A finished run (one self-contained file), or one killed in wave 2 (0-based 1).
   std::string WriteFinished(const std::string& name) {
@@ -72,7 +66,7 @@ class HistoryIntegrityTest : public ::testing::Test {
     return path;
   }
 
-  fs::path dir_;
+  const TempFolder dir_{"integrity-test"};
 };
 
 // Stores the run's checksums as combabc computed them for `version`.

@@ -15,6 +15,7 @@
 
 #include "combabc/core/error.hpp"
 #include "history/fake_run.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc {
 namespace {
@@ -24,6 +25,7 @@ using testing::FakeRunOptions;
 using testing::MakeFakeHistory;
 using testing::MakeFakeMetadata;
 using testing::RecordWave;
+using testing::TempFolder;
 
 constexpr std::int64_t kBatch = 4;  // several batches per wave of the small run
 
@@ -39,19 +41,7 @@ FakeRunOptions SmallRun() {
 
 class HistoryStoreTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("combabc_history_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ignored);
-    fs::remove_all(dir_, ignored);
-  }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Path(const std::string& name) const { return folder_ / name; }
 
   // Writes `history` completely, as an uninterrupted run would.
   void WriteRun(const std::string& path, const RunHistory& history) {
@@ -60,7 +50,8 @@ class HistoryStoreTest : public ::testing::Test {
     store.Finish(history.summary);
   }
 
-  fs::path dir_;
+  const TempFolder folder_{"history-test"};
+  const fs::path dir_ = folder_.path();
 };
 
 void ExpectSame(const RunHistory& expected, const RunHistory& actual) {

@@ -116,7 +116,7 @@ class MpiRun : public ::testing::Test {
   void WriteConfig(const std::string& name, int waves, int accepted) {
     std::ofstream(dir_ / name) << Config(waves, accepted);
   }
-  ScratchDir dir_;
+  TempFolder dir_;
 };
 
 TEST_F(MpiRun, AnyThreadsAndRanksGiveTheSameHistory) {

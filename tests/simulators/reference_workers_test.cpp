@@ -2,8 +2,11 @@
 // same model: the Python one (worker.py, the README's) and the C++ one (worker.cpp).
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "combabc/simulators/worker_simulator.hpp"
 #include "simulators/simulator_test_support.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -29,7 +32,7 @@ TEST(ReferenceWorkers, PythonAndCppAgreeOnEveryConfiguration) {
     for (int k = 0; k < 6; ++k) c.bits.push_back(static_cast<std::uint8_t>((code >> k) & 1));
     python.Simulate(c.view(), rng, a);
     cpp.Simulate(c.view(), rng, b);
-    for (int j = 0; j < 21; ++j) EXPECT_NEAR(a[j], b[j], 1e-12) << code << " output " << j;
+    ExpectNear(a, b, 1e-12, "configuration " + std::to_string(code) + ", outputs");
     EXPECT_GE(a[0], 0.05);
   }
   // The model responds to its bits: all fixed is the flat baseline.

@@ -15,27 +15,17 @@
 #include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
 #include "combabc/simulators/external_simulator.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::testing {
 
 namespace fs = std::filesystem;
 
-class RunFolder {
+// A TempFolder whose path holds a space and shell metacharacters: a simulator that hands a path to
+// a shell unquoted runs `touch pwned` or breaks.
+class RunFolder : public TempFolder {
  public:
-  explicit RunFolder(const std::string& name)
-      : path_(fs::temp_directory_path() /
-              ("combabc sim $(touch pwned); " + name + "-" + std::to_string(::getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~RunFolder() { fs::remove_all(path_); }
-  RunFolder(const RunFolder&) = delete;
-  RunFolder& operator=(const RunFolder&) = delete;
-  const fs::path& path() const { return path_; }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
+  explicit RunFolder(const std::string& name) : TempFolder("sim $(touch pwned); " + name) {}
 };
 
 // Options for `sh -c script sh [args...]`, 3 bits, no reals, `outputs` outputs.

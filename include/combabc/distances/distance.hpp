@@ -4,9 +4,12 @@
 // component satisfies d_k <= eps_k, every indicator component (Eq. 7's H1, H2) equals its
 // required value, and a uniform u < exp(-sum_k (d_k - m_k) / T_k) over the negative
 // log-likelihood components (noise-aware acceptance, Wilkinson 2013; docs/algorithm.md).
+#include <cstddef>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "combabc/core/batch_failures.hpp"
 #include "combabc/core/enum_names.hpp"
 
 namespace combabc {
@@ -41,6 +44,24 @@ class Distance {
   virtual std::vector<DistanceComponent> components() const = 0;
   // Writes one value per component. Must be thread-safe (called concurrently, const).
   virtual void Evaluate(std::span<const double> simulated, std::span<double> out) const = 0;
+  // The samplers' call: a batch of n = failures.size() outputs, row-major (simulated: n rows of m
+  // values; out: n rows of one value per component). Rows already marked failed are skipped (their
+  // out rows are left as they are); Fail(i, reason) marks a row the distance cannot measure, a
+  // failed simulation with that reason (any exception ends the run). The values must be
+  // Evaluate's, row by row, so that a history does not depend on how candidates are batched. The
+  // default calls Evaluate row by row; a distance that pays per call (one written in Python)
+  // overrides it. Thread-safe, as Evaluate.
+  virtual void EvaluateBatch(std::span<const double> simulated,
+                             std::span<double> out,
+                             BatchFailures& failures) const {
+    const std::size_t n = failures.size();
+    if (n == 0) return;
+    const std::size_t m = simulated.size() / n;
+    const std::size_t k = out.size() / n;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!failures.failed(i)) Evaluate(simulated.subspan(i * m, m), out.subspan(i * k, k));
+    }
+  }
 };
 
 }  // namespace combabc

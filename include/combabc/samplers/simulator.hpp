@@ -1,11 +1,10 @@
 #pragma once
 // The simulator f_theta: from a parameter value (bits + reals) to an output vector Y*.
-#include <cstdint>
 #include <span>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 
+#include "combabc/core/batch_failures.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/params/parameter_value.hpp"
 #include "combabc/rng/random_stream.hpp"
@@ -26,33 +25,6 @@ class SimulationFailed : public std::runtime_error {
 
  private:
   ErrorKind kind_;
-};
-
-// Longest failure reason kept, in bytes: a batch holds each candidate's reason in a fixed-size row
-// (so that a distributed executor can gather it like any other result); longer ones are cut.
-inline constexpr std::size_t kFailureReasonBytes = 200;
-
-// Where a batch records which of its candidates failed: a view on two per-candidate rows of the
-// batch's result buffers, status (0 = simulated, 1 = failed) and the reason, NUL-padded and cut to
-// kFailureReasonBytes - 1 bytes (at a UTF-8 character boundary). A vectorising SimulateBatch marks
-// single candidates failed with Fail(i, reason) instead of throwing for the whole batch.
-class BatchFailures {
- public:
-  BatchFailures(std::span<std::uint8_t> status, std::span<char> reasons)
-      : status_(status), reasons_(reasons) {}
-  std::size_t size() const { return status_.size(); }
-  void Fail(std::size_t i, std::string_view reason);
-  bool failed(std::size_t i) const { return status_[i] != 0; }
-  std::string_view reason(std::size_t i) const;
-  // The candidates [begin, begin + count), for a simulator handing part of a batch on.
-  BatchFailures Sub(std::size_t begin, std::size_t count) const {
-    return {status_.subspan(begin, count),
-            reasons_.subspan(begin * kFailureReasonBytes, count * kFailureReasonBytes)};
-  }
-
- private:
-  std::span<std::uint8_t> status_;
-  std::span<char> reasons_;
 };
 
 class Simulator {

@@ -1,7 +1,8 @@
 #pragma once
 // Binary problems whose ABC posterior couples bits, with the exact posterior by enumeration
 // (pi_eps(theta) ∝ p(theta) 1[D(theta) <= eps] over all 2^d configurations): the truths the
-// kernels are checked against (tests/engine/kernel_exactness_test.cpp, bench/bench_correlated.cpp).
+// kernels are checked against (tests/samplers/kernel_exactness_test.cpp,
+// bench/bench_engine_correlated.cpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -1,3 +1,0 @@
-#include "combabc/distances/distance.hpp"
-
-namespace combabc {}  // namespace combabc
