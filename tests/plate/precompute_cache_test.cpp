@@ -16,30 +16,14 @@
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "plate/precompute_cache.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::plate {
 namespace {
 
 namespace fs = std::filesystem;
 
-class TempFolder {
- public:
-  TempFolder() {
-    std::random_device seed;
-    path_ = fs::temp_directory_path() / ("combabc-cache-test-" + std::to_string(seed()));
-    fs::create_directories(path_);
-  }
-  ~TempFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempFolder(const TempFolder&) = delete;
-  TempFolder& operator=(const TempFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using combabc::testing::TempFolder;
 
 SensorOptions SmallOptions() {
   SensorOptions o;
@@ -83,7 +67,7 @@ PrecomputeKey KeyOfEntry(const fs::path& entry) {
 }
 
 TEST(PrecomputeCache, AModelReadFromTheCacheComputesTheSameBits) {
-  TempFolder folder;
+  TempFolder folder("precompute-cache");
   const std::vector<double> reference = Profiles(SensorModel(SmallOptions()));
   const SensorModel first(SmallOptions(), CacheIn(folder.path()));
   EXPECT_FALSE(first.precompute_from_cache());
@@ -97,7 +81,7 @@ TEST(PrecomputeCache, AModelReadFromTheCacheComputesTheSameBits) {
 }
 
 TEST(PrecomputeCache, OtherInputsMiss) {
-  TempFolder folder;
+  TempFolder folder("precompute-cache");
   const SensorModel first(SmallOptions(), CacheIn(folder.path()));
   SensorOptions other = SmallOptions();
   other.frequency_hz = 6.0;
@@ -118,7 +102,7 @@ TEST(PrecomputeCache, OtherInputsMiss) {
 // Each damage is detected, the model is rebuilt with the same bits, and the entry is replaced by a
 // good one (the next model reads it).
 TEST(PrecomputeCache, ADamagedEntryIsRebuiltNeverTrusted) {
-  TempFolder folder;
+  TempFolder folder("precompute-cache");
   const std::vector<double> reference = Profiles(SensorModel(SmallOptions()));
   const auto damage_and_check = [&](const auto& damage, const std::string& what) {
     SCOPED_TRACE(what);
@@ -160,7 +144,7 @@ TEST(PrecomputeCache, ADamagedEntryIsRebuiltNeverTrusted) {
 }
 
 TEST(PrecomputeCache, TheFolderKeepsToItsCapAndToItsOwnFiles) {
-  TempFolder folder;
+  TempFolder folder("precompute-cache");
   const fs::path foreign = folder.path() / "notes.txt";
   std::ofstream(foreign) << "the user's file";
   const fs::path look_alike = folder.path() / "0123.precompute";  // not a name the cache writes
@@ -186,7 +170,7 @@ TEST(PrecomputeCache, TheFolderKeepsToItsCapAndToItsOwnFiles) {
 }
 
 TEST(PrecomputeCache, ConcurrentBuildersLeaveOneWholeEntry) {
-  TempFolder folder;
+  TempFolder folder("precompute-cache");
   const std::vector<double> reference = Profiles(SensorModel(SmallOptions()));
   std::vector<std::vector<double>> results(4);
   std::vector<std::thread> builders;
