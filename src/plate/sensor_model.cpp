@@ -8,9 +8,9 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
-#include "continuous_condensation.hpp"
-#include "section_condensation.hpp"
-#include "vector_kernels.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
+#include "plate/fast_path/section_condensation.hpp"
+#include "plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {

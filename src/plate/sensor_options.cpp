@@ -2,7 +2,7 @@
 #include <sstream>
 
 #include "combabc/plate/sensor_model.hpp"
-#include "vector_kernels.hpp"
+#include "plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/plate/sensor_model.hpp"
-#include "plate/vector_kernels.hpp"
+#include "plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -31,15 +31,15 @@
 
 #include <Eigen/Dense>
 
-#include "combabc/plate/laminate.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate {
 
-class SectionCondensation;     // src/plate/section_condensation.hpp
-class ContinuousCondensation;  // src/plate/continuous_condensation.hpp
-struct CaseOutputs;            // src/plate/section_condensation.hpp
-struct ContinuousCache;        // src/plate/continuous_condensation.hpp
+class SectionCondensation;     // src/plate/fast_path/section_condensation.hpp
+class ContinuousCondensation;  // src/plate/fast_path/continuous_condensation.hpp
+struct CaseOutputs;            // src/plate/fast_path/section_condensation.hpp
+struct ContinuousCache;        // src/plate/fast_path/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
 // elastomer core carrying the fibre, a polyurethane cover.

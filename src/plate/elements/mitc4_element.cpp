@@ -1,4 +1,4 @@
-#include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/elements/mitc4_element.hpp"
 
 #include <array>
 

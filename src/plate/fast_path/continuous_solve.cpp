@@ -18,10 +18,10 @@
 
 #include <Eigen/SparseLU>
 
-#include "block_ldlt.hpp"
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/block_ldlt.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 namespace combabc::plate {
 

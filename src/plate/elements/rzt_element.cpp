@@ -1,8 +1,8 @@
-#include "combabc/plate/rzt_element.hpp"
+#include "combabc/plate/elements/rzt_element.hpp"
 
 #include <array>
 
-#include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/elements/mitc4_element.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -1,4 +1,4 @@
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 #include <cmath>
 #include <cstdint>

@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <limits>
 
-#include "combabc/plate/plate.hpp"
-#include "vector_kernels.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 

@@ -1,4 +1,4 @@
-#include "section_condensation.hpp"
+#include "plate/fast_path/section_condensation.hpp"
 
 #include <cmath>
 #include <utility>

@@ -45,9 +45,9 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
-#include "section_condensation.hpp"
+#include "plate/fast_path/section_condensation.hpp"
 
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 
 namespace combabc::plate {
 

@@ -34,9 +34,9 @@
 #include <cmath>
 #include <vector>
 
-#include "block_ldlt.hpp"
 #include "combabc/core/check.hpp"
-#include "section_condensation.hpp"
+#include "plate/fast_path/block_ldlt.hpp"
+#include "plate/fast_path/section_condensation.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -36,7 +36,7 @@
 
 #include <Eigen/Dense>
 
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 
 namespace combabc::plate {
