@@ -10,7 +10,6 @@
 #include "combabc/core/thread_pool.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
 #include "plate/fast_path/section_condensation.hpp"
-#include "plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {

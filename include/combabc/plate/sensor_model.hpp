@@ -33,6 +33,7 @@
 
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/elements/laminate.hpp"
+#include "combabc/plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 
@@ -154,12 +155,9 @@ struct SensorOptions {
   // fallback (fast; each solve's residual is checked unless fast_path_certified()); true =
   // always the dense partial-pivoting LU of the condensed system (slower; a cross-check).
   bool always_pivot = false;
-  // Instruction set of the per-configuration solves: kAuto, the widest this CPU supports (AVX-512,
-  // AVX2, or the build's own; checked at run time); kPortable, the build's own; kAvx2 / kAvx512,
-  // that one (invalid where the CPU lacks it). All give bit-identical results (no fused
-  // multiply-adds, the same operations in the same order; tested), so this is not part of a
-  // run's fingerprint: it changes only the speed (docs/benchmarks.md).
-  enum class VectorKernels { kAuto, kPortable, kAvx2, kAvx512 };
+  // Instruction set of the per-configuration solves (vector_kernels.hpp): the widest this CPU
+  // supports by default. All give bit-identical results, so this is not part of a run's
+  // fingerprint: it changes only the speed (docs/benchmarks.md).
   VectorKernels vector_kernels = VectorKernels::kAuto;
 
   // The precompute may use at most this much memory (bytes): options whose EstimatedMemoryBytes()

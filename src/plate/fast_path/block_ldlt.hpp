@@ -5,14 +5,14 @@
 // factorization (FactorLdltSplit), and the complex axpys the solves build their Schur updates,
 // back substitutions and residuals from (SubScaled*Split). Inline so each solve keeps them inlined
 // in its hot loops; forced inline (COMBABC_KERNEL) so that each instruction-set copy of a solve
-// (vector_kernels.hpp) runs them with its own instructions.
+// (kernel_targets.hpp) runs them with its own instructions.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 
 #include "combabc/plate/assembly/plate.hpp"
-#include "plate/fast_path/vector_kernels.hpp"
+#include "plate/fast_path/kernel_targets.hpp"
 
 namespace combabc::plate {
 

@@ -75,7 +75,7 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
                                                const Eigen::MatrixXd& loads,
                                                const std::vector<CaseOutputs>& outputs,
                                                bool always_pivot,
-                                               SensorOptions::VectorKernels kernels)
+                                               VectorKernels kernels)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),

@@ -62,19 +62,18 @@ class ContinuousCondensation {
 
   // As SectionCondensation's constructor; own_loss_factors picks K_base = K_real + i K_imag
   // (else K_real).
-  ContinuousCondensation(
-      const Plate& plate,
-      int num_sections,
-      int elements_per_section,
-      bool own_loss_factors,
-      std::uint8_t fixed_mask_a,
-      std::uint8_t fixed_mask_b,
-      std::uint8_t start_mask,
-      std::uint8_t end_mask,
-      const Eigen::MatrixXd& loads,
-      const std::vector<CaseOutputs>& outputs,
-      bool always_pivot = false,
-      SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
+  ContinuousCondensation(const Plate& plate,
+                         int num_sections,
+                         int elements_per_section,
+                         bool own_loss_factors,
+                         std::uint8_t fixed_mask_a,
+                         std::uint8_t fixed_mask_b,
+                         std::uint8_t start_mask,
+                         std::uint8_t end_mask,
+                         const Eigen::MatrixXd& loads,
+                         const std::vector<CaseOutputs>& outputs,
+                         bool always_pivot = false,
+                         VectorKernels kernels = VectorKernels::kPortable);
 
   // Solves (K_base + mu M_1) u = f for the configuration and every load case's f (one
   // factorization); w: complex w at every case's outputs, case after case (the caller divides by
@@ -147,7 +146,7 @@ class ContinuousCondensation {
     }
   };
   struct Evaluated;  // one call's pieces (continuous_solve.cpp)
-  // Solve's body, compiled once per instruction set (vector_kernels.hpp).
+  // Solve's body, compiled once per instruction set (kernel_targets.hpp).
   void SolveBody(std::span<const std::uint8_t> clamps,
                  std::complex<double> mu,
                  std::span<std::complex<double>> w) const;
@@ -201,11 +200,11 @@ class ContinuousCondensation {
   std::uint8_t start_mask_;
   std::uint8_t end_mask_;
   bool always_pivot_;
-  SensorOptions::VectorKernels kernels_;  // which copy Solve runs
-  std::vector<int> mesh_kind_;            // section -> distinct mesh
-  std::vector<int> mesh_section_;         // distinct mesh -> a section that has it
-  std::vector<int> kind_;                 // section -> distinct section
-  std::vector<int> kind_section_;         // distinct section -> a section that has it
+  VectorKernels kernels_;          // which copy Solve runs
+  std::vector<int> mesh_kind_;     // section -> distinct mesh
+  std::vector<int> mesh_section_;  // distinct mesh -> a section that has it
+  std::vector<int> kind_;          // section -> distinct section
+  std::vector<int> kind_section_;  // distinct section -> a section that has it
   int num_cases_;
   OutputSets sets_;
   std::vector<OutputLayout> section_layout_;     // [section] -> its outputs

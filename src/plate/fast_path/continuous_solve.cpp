@@ -452,14 +452,14 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
                                    Complex mu,
                                    std::span<std::complex<double>> w) const {
   switch (kernels_) {
-    case SensorOptions::VectorKernels::kAvx512:
+    case VectorKernels::kAvx512:
       SolveAvx512(clamps, mu, w);
       return;
-    case SensorOptions::VectorKernels::kAvx2:
+    case VectorKernels::kAvx2:
       SolveAvx2(clamps, mu, w);
       return;
-    case SensorOptions::VectorKernels::kAuto:
-    case SensorOptions::VectorKernels::kPortable:
+    case VectorKernels::kAuto:
+    case VectorKernels::kPortable:
       SolvePortable(clamps, mu, w);
       return;
   }

@@ -83,7 +83,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
                                          const std::vector<CaseOutputs>& outputs,
                                          bool always_pivot,
                                          bool higham,
-                                         SensorOptions::VectorKernels kernels)
+                                         VectorKernels kernels)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),

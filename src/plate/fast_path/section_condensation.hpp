@@ -37,7 +37,7 @@
 #include <Eigen/Dense>
 
 #include "combabc/plate/assembly/plate.hpp"
-#include "combabc/plate/sensor_model.hpp"
+#include "combabc/plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 
@@ -167,21 +167,20 @@ class SectionCondensation {
   // definite; SensorModel checks it), which makes the unpivoted LDL^T provably stable for every
   // configuration, so Solve skips its residual check (section_solve.cpp). `kernels`: the
   // instruction set of Solve's kernels (vector_kernels.hpp; resolved, and supported by the CPU).
-  SectionCondensation(
-      const Plate& plate,
-      int num_sections,
-      int elements_per_section,
-      int group_size,
-      std::uint8_t fixed_mask_a,
-      std::uint8_t fixed_mask_b,
-      std::uint8_t start_mask,
-      std::uint8_t end_mask,
-      const Eigen::MatrixXd& loads,
-      double frequency_hz,
-      const std::vector<CaseOutputs>& outputs,
-      bool always_pivot = false,
-      bool higham = false,
-      SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
+  SectionCondensation(const Plate& plate,
+                      int num_sections,
+                      int elements_per_section,
+                      int group_size,
+                      std::uint8_t fixed_mask_a,
+                      std::uint8_t fixed_mask_b,
+                      std::uint8_t start_mask,
+                      std::uint8_t end_mask,
+                      const Eigen::MatrixXd& loads,
+                      double frequency_hz,
+                      const std::vector<CaseOutputs>& outputs,
+                      bool always_pivot = false,
+                      bool higham = false,
+                      VectorKernels kernels = VectorKernels::kPortable);
 
   // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at every case's
   // outputs, case after case. One factorization of the configuration's system serves all cases.
@@ -277,8 +276,8 @@ class SectionCondensation {
   std::vector<OutputLayout> section_layout_;
   int group_size_;
   bool always_pivot_;
-  bool higham_;  // the caller certified a Higham system: no residual check needed (Solve)
-  SensorOptions::VectorKernels kernels_;  // which copy Solve runs
+  bool higham_;            // the caller certified a Higham system: no residual check needed (Solve)
+  VectorKernels kernels_;  // which copy Solve runs
   std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<OutputLayout> group_layout_;

@@ -522,14 +522,14 @@ COMBABC_KERNEL void RecoverGroupOutputs(const Piece& piece,
 void SectionCondensation::Solve(std::span<const std::uint8_t> clamps,
                                 std::span<std::complex<double>> w) const {
   switch (kernels_) {
-    case SensorOptions::VectorKernels::kAvx512:
+    case VectorKernels::kAvx512:
       SolveAvx512(clamps, w);
       return;
-    case SensorOptions::VectorKernels::kAvx2:
+    case VectorKernels::kAvx2:
       SolveAvx2(clamps, w);
       return;
-    case SensorOptions::VectorKernels::kAuto:
-    case SensorOptions::VectorKernels::kPortable:
+    case VectorKernels::kAuto:
+    case VectorKernels::kPortable:
       SolvePortable(clamps, w);
       return;
   }
