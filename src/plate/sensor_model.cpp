@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/SparseCholesky>
-
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
+#include "plate/fast_path/higham_check.hpp"
 #include "plate/fast_path/section_condensation.hpp"
 
 namespace combabc::plate {
@@ -61,17 +60,6 @@ Load SensorLoad(const SensorOptions& o, const LoadCase& c) {
   return load;
 }
 
-// A = B + iC with B and C (real, symmetric) positive definite, by a sparse Cholesky of each: the
-// class for which elimination without pivoting is provably stable (section_solve.cpp). Fixing
-// dofs keeps a matrix in it, so the all-free system decides for every configuration.
-bool IsHighamMatrix(const Eigen::SparseMatrix<std::complex<double>>& a) {
-  const auto positive_definite = [](const Eigen::SparseMatrix<double>& part) {
-    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(part);
-    return llt.info() == Eigen::Success;
-  };
-  return positive_definite(a.real()) && positive_definite(a.imag());
-}
-
 }  // namespace
 
 SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
@@ -86,12 +74,14 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    options_.foundation_loss_factor,
                                    options_.theory,
                                    options_.ElementOrder());
-  std::vector<int> free_dofs;
-  fast_path_certified_ = IsHighamMatrix(
-      plate_->DynamicStiffness(ConfigurationConstraints(std::vector<std::uint8_t>(
-                                   2 * static_cast<std::size_t>(options_.clamps_per_edge), 0)),
-                               options_.frequency_hz,
-                               &free_dofs));
+  const int intervals = options_.elements_per_section * plate_->element_order();
+  const CrossSectionMasks masks{
+      SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
+      SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
+      SupportMask(Edge::kRight, options_.short_edge_end, options_.theory)};
+  fast_path_certified_ =
+      IsHighamSystem(*plate_, options_.clamps_per_edge, intervals, masks, options_.frequency_hz);
   for (const LoadCase& c : options_.load_cases) {
     output_positions_.insert(
         output_positions_.end(), c.output_positions.begin(), c.output_positions.end());

@@ -3,11 +3,12 @@
 #include <cmath>
 #include <utility>
 
-#include <Eigen/SVD>
+#include <Eigen/QR>
 #include <Eigen/SparseLU>
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/core/thread_pool.hpp"
 
 namespace combabc::plate {
 
@@ -83,7 +84,8 @@ SectionCondensation::SectionCondensation(const Plate& plate,
                                          const std::vector<CaseOutputs>& outputs,
                                          bool always_pivot,
                                          bool higham,
-                                         VectorKernels kernels)
+                                         VectorKernels kernels,
+                                         ThreadPool* pool)
     : num_sections_(num_sections),
       intervals_per_section_(elements_per_section * plate.element_order()),
       ny_(plate.grid().ny()),
@@ -188,7 +190,6 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   const int group_states = 1 << (2 * group_size);
   group_piece_index_.assign(num_groups, std::vector<int>(group_states, -1));
   group_layout_.resize(num_groups);
-  std::vector<Piece> composed;  // [group_piece_index_] -> the composed group pieces
   const auto same_group = [&](int g, int h) {
     // The first and last groups have the plate's end cross-sections folded in: never shared.
     const auto is_end = [&](int k) { return k == 0 || k == num_groups - 1; };
@@ -202,6 +203,23 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     }
     return true;
   };
+  // Jacobi scaling folded into the group pieces: every kept cross-section dof d is replaced by
+  // u_d / s_d with s_d = |C_dd|^{-1/2} from one section piece. The BFS dofs (w, w_x, w_y, w_xy)
+  // carry different units, and on the graded mesh the unscaled block system loses digits in the
+  // unpivoted LDL^T; one scale vector for all cross-sections keeps the pieces shareable.
+  const Eigen::MatrixXcd& reference = Condensed(pieces_[piece_index_[0][0]]);
+  Eigen::VectorXd scale(nc_);
+  for (int d = 0; d < nc_; ++d) {
+    const double a = std::abs(reference(d, d));
+    scale(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
+  }
+  // The distinct groups (not twins) get their pieces, numbered group after group, state after
+  // state. Groups whose sections have the same condensed matrices and the same folded ends (all
+  // the inner groups of a uniform mesh, loaded or not) share the elimination of their inner
+  // cross-sections in each state; only their loads and outputs are their own.
+  std::vector<std::vector<int>> classes;  // groups with one elimination
+  std::vector<std::vector<int>> class_keys;
+  int pieces = 0;
   for (int g = 0; g < num_groups; ++g) {
     OutputLayout& layout = group_layout_[g];
     layout.positions.resize(static_cast<std::size_t>(sets_.num_sets()));
@@ -218,63 +236,40 @@ SectionCondensation::SectionCondensation(const Plate& plate,
       if (same_group(g, h)) twin = h;
     }
     for (int state = 0; state < group_states; ++state) {
-      if (twin >= 0) {
-        group_piece_index_[g][state] = group_piece_index_[twin][state];
-      } else {
-        group_piece_index_[g][state] = static_cast<int>(composed.size());
-        composed.push_back(ComposeGroup(g, state));
+      group_piece_index_[g][state] = twin >= 0 ? group_piece_index_[twin][state] : pieces++;
+    }
+    if (twin >= 0) continue;
+    std::vector<int> key = {g == 0 ? 1 : 0, g == num_groups - 1 ? 1 : 0};
+    for (int k = 0; k < group_size; ++k) key.push_back(mesh_of_section_[g * group_size + k]);
+    std::size_t c = 0;
+    while (c < classes.size() && class_keys[c] != key) ++c;
+    if (c == classes.size()) {
+      classes.emplace_back();
+      class_keys.push_back(key);
+    }
+    classes[c].push_back(g);
+  }
+  // Each (class, state) depends on nothing else: computed on the pool's threads, every piece is
+  // the same for any thread count, and no more than one elimination per thread is alive.
+  group_pieces_.resize(static_cast<std::size_t>(pieces));
+  const auto compose = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t item = begin; item < end; ++item) {
+      const std::vector<int>& groups = classes[item / group_states];
+      const int state = static_cast<int>(item % group_states);
+      const GroupElimination elimination = EliminateGroup(groups.front(), state, scale);
+      for (int g : groups) {
+        group_pieces_[group_piece_index_[g][state]] = FinishGroup(elimination, g, state, scale);
       }
     }
+  };
+  const std::size_t items = classes.size() * static_cast<std::size_t>(group_states);
+  if (pool != nullptr) {
+    pool->ParallelFor(items, 1, compose);
+  } else {
+    compose(0, items);
   }
-  // Jacobi scaling folded into the group pieces: every kept cross-section dof d is replaced by
-  // u_d / s_d with s_d = |C_dd|^{-1/2} from one section piece. The BFS dofs (w, w_x, w_y, w_xy)
-  // carry different units, and on the graded mesh the unscaled block system loses digits in the
-  // unpivoted LDL^T; one scale vector for all cross-sections keeps the pieces shareable.
-  const Eigen::MatrixXcd& reference = Condensed(pieces_[piece_index_[0][0]]);
-  Eigen::VectorXd scale(nc_);
-  for (int d = 0; d < nc_; ++d) {
-    const double a = std::abs(reference(d, d));
-    scale(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
-  }
+  // The composition read the unscaled cross-section loads; Solve reads them scaled.
   for (Eigen::MatrixXcd& b : boundary_load_) b = scale.asDiagonal() * b;
-  // The coupling between a group's two end cross-sections passes through 15 cm of strip, where
-  // all but a few cross-section shapes have decayed: its singular values fall from O(1) to about
-  // 1e-19 times the piece's largest entry. Keeping those above kRankTol times that entry (far below
-  // the round-off of the condensation itself) makes the coupling a product of two nc x rank
-  // factors (rank 5-8 at the default mesh), which the per-configuration solve exploits.
-  constexpr double kRankTol = 1e-17;
-  group_pieces_.reserve(composed.size());
-  for (Piece& piece : composed) {
-    Eigen::VectorXd s(piece.left_size + piece.right_size);
-    if (piece.left_size > 0) s.head(nc_) = scale;
-    if (piece.right_size > 0) s.tail(nc_) = scale;
-    const Eigen::MatrixXcd condensed = s.asDiagonal() * piece.group_condensed * s.asDiagonal();
-    SolvePiece out;
-    out.left_size = piece.left_size;
-    out.right_size = piece.right_size;
-    out.load = s.asDiagonal() * piece.load;
-    out.output_map = SplitMatrix(piece.output_map * s.asDiagonal());
-    out.output_offset = piece.output_offset;
-    out.singular = piece.singular;
-    if (piece.left_size > 0) out.left_block = SplitMatrix(condensed.topLeftCorner(nc_, nc_));
-    if (piece.right_size > 0) {
-      out.right_block = SplitMatrix(condensed.bottomRightCorner(nc_, nc_));
-    }
-    if (piece.left_size > 0 && piece.right_size > 0) {
-      const Eigen::MatrixXcd coupling = condensed.topRightCorner(nc_, nc_);
-      const Eigen::BDCSVD<Eigen::MatrixXcd> svd(coupling,
-                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const double cutoff = kRankTol * condensed.cwiseAbs().maxCoeff();
-      Eigen::Index rank = 0;
-      while (rank < nc_ && svd.singularValues()(rank) > cutoff) ++rank;
-      // coupling = U S V^H = (U S) (conj(V))^T.
-      out.coupling_left =
-          SplitMatrix(svd.matrixU().leftCols(rank) * svd.singularValues().head(rank).asDiagonal());
-      out.coupling_right = SplitMatrix(svd.matrixV().leftCols(rank).conjugate());
-    }
-    group_pieces_.push_back(std::move(out));
-    piece = Piece{};  // the composed piece is not needed any more: keep the peak low
-  }
   // Only the group pieces are read per configuration. (Released last: released before the group
   // pieces are allocated, their memory would hold them, scattered, and the per-configuration
   // solve, which reads pieces all over the 20 MB, measured 15 % slower.)
@@ -285,114 +280,164 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   std::vector<int>().swap(mesh_of_section_);
 }
 
-SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int state) const {
+SectionCondensation::GroupElimination SectionCondensation::EliminateGroup(
+    int group, int state, const Eigen::VectorXd& scale) const {
   const int g = group_size_;
   const int nc = nc_;
   const int first = group * g;
   const auto section_state = [&](int k) { return (state >> (2 * k)) & 3; };
+  GroupElimination e;
   // Group dofs z: cross-section t = 0..g of the group at [t nc, (t + 1) nc). The two ends are
   // kept (index into [left; right]) unless they are the plate's ends, which are folded in; inner
   // cross-sections keep their free dofs (interior).
   const bool fold_left = first == 0;
   const bool fold_right = first + g == num_sections_;
-  const int left_size = fold_left ? 0 : nc;
-  const int right_size = fold_right ? 0 : nc;
+  e.left_size = fold_left ? 0 : nc;
+  e.right_size = fold_right ? 0 : nc;
   const int nz = (g + 1) * nc;
-  std::vector<int> boundary_index(nz, -1);
-  std::vector<int> interior_index(nz, -1);
+  e.boundary_index.assign(nz, -1);
+  e.interior_index.assign(nz, -1);
   for (int d = 0; d < nc; ++d) {
-    if (!fold_left) boundary_index[d] = d;
-    if (!fold_right) boundary_index[g * nc + d] = left_size + d;
+    if (!fold_left) e.boundary_index[d] = d;
+    if (!fold_right) e.boundary_index[g * nc + d] = e.left_size + d;
   }
   int n_interior = 0;
   std::vector<int> free;
-  std::vector<int> interior_cross_sections;
   for (int t = 0; t <= g; ++t) {
     if ((t == 0 && !fold_left) || (t == g && !fold_right)) continue;
-    interior_cross_sections.push_back(t);
+    e.interior_cross_sections.push_back(t);
     const int left = t > 0 ? section_state(t - 1) : 0;
     const int right = t < g ? section_state(t) : 0;
     FreeDofs(first + t, ((left | right) & 1) != 0, ((left | right) & 2) != 0, &free);
-    for (int d : free) interior_index[t * nc + d] = n_interior++;
+    for (int d : free) e.interior_index[t * nc + d] = n_interior++;
   }
-  const int nb = left_size + right_size;
+  const int nb = e.left_size + e.right_size;
   const int np = 2 * nc;  // a section piece's size
-  const int cases = num_cases_;
   Eigen::MatrixXcd k_bb = Eigen::MatrixXcd::Zero(nb, nb);
-  Eigen::MatrixXcd k_bi = Eigen::MatrixXcd::Zero(nb, n_interior);
+  e.k_bi = Eigen::MatrixXcd::Zero(nb, n_interior);
   Eigen::MatrixXcd k_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
   Eigen::MatrixXcd k_ii = Eigen::MatrixXcd::Zero(n_interior, n_interior);
+  for (int k = 0; k < g; ++k) {
+    const Eigen::MatrixXcd& condensed =
+        Condensed(pieces_[piece_index_[first + k][section_state(k)]]);
+    for (int c = 0; c < np; ++c) {
+      const int zc = k * nc + c;  // the piece's [left; right] are cross-sections k and k + 1
+      const int cb = e.boundary_index[zc];
+      const int ci = e.interior_index[zc];
+      for (int r = 0; r < np; ++r) {
+        const int zr = k * nc + r;
+        const int rb = e.boundary_index[zr];
+        const int ri = e.interior_index[zr];
+        const std::complex<double> v = condensed(r, c);
+        if (rb >= 0 && cb >= 0) {
+          k_bb(rb, cb) += v;
+        } else if (rb >= 0 && ci >= 0) {
+          e.k_bi(rb, ci) += v;
+        } else if (ri >= 0 && cb >= 0) {
+          k_ib(ri, cb) += v;
+        } else if (ri >= 0 && ci >= 0) {
+          k_ii(ri, ci) += v;
+        }
+      }
+    }
+  }
+  e.x_b = Eigen::MatrixXcd::Zero(n_interior, nb);
+  if (n_interior > 0) {
+    // Jacobi-scaled (see Plate::SolveHarmonic).
+    e.scale = k_ii.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+    e.lu.compute(e.scale.asDiagonal() * k_ii * e.scale.asDiagonal());
+    // Empty products are skipped: Eigen binds references to their (null) data in Debug.
+    if (nb > 0) e.x_b = e.scale.asDiagonal() * e.lu.solve(e.scale.asDiagonal() * k_ib);
+  }
+  // What Solve reads of the matrix, with the cross-section scale folded in.
+  Eigen::VectorXd s(nb);
+  if (e.left_size > 0) s.head(nc) = scale;
+  if (e.right_size > 0) s.tail(nc) = scale;
+  const Eigen::MatrixXcd condensed = s.asDiagonal() * (k_bb - e.k_bi * e.x_b) * s.asDiagonal();
+  SolvePiece& out = e.blocks;
+  out.left_size = e.left_size;
+  out.right_size = e.right_size;
+  if (e.left_size > 0) out.left_block = SplitMatrix(condensed.topLeftCorner(nc, nc));
+  if (e.right_size > 0) out.right_block = SplitMatrix(condensed.bottomRightCorner(nc, nc));
+  if (e.left_size > 0 && e.right_size > 0) {
+    // The coupling between a group's two end cross-sections passes through 15 cm of strip, where
+    // all but a few cross-section shapes have decayed: its singular values fall from O(1) to
+    // about 1e-19 times the piece's largest entry. A column-pivoted QR reveals that rank at a
+    // fraction of an SVD's cost: |R_kk| decreases and tracks the singular values to within a
+    // modest factor. Keeping the columns with |R_kk| above kRankTol times that entry (far below
+    // the round-off of the condensation itself) makes the coupling a product of two nc x rank
+    // factors (rank 5-8 at the default mesh), which the per-configuration solve exploits.
+    constexpr double kRankTol = 1e-17;
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXcd> qr(condensed.topRightCorner(nc, nc));
+    const double cutoff = kRankTol * condensed.cwiseAbs().maxCoeff();
+    const Eigen::MatrixXcd& packed = qr.matrixQR();
+    Eigen::Index rank = 0;
+    while (rank < nc && std::abs(packed(rank, rank)) > cutoff) ++rank;
+    // coupling P = Q R, so coupling = Q_r (R_r P^T) = Q_r (P R_r^T)^T over the kept rows of R.
+    const Eigen::MatrixXcd q = qr.householderQ() * Eigen::MatrixXcd::Identity(nc, rank);
+    const Eigen::MatrixXcd r = packed.topRows(rank).triangularView<Eigen::Upper>().toDenseMatrix();
+    out.coupling_left = SplitMatrix(q);
+    out.coupling_right = SplitMatrix(qr.colsPermutation() * r.transpose());
+  }
+  return e;
+}
+
+SectionCondensation::SolvePiece SectionCondensation::FinishGroup(
+    const GroupElimination& e, int group, int state, const Eigen::VectorXd& scale) const {
+  const int g = group_size_;
+  const int nc = nc_;
+  const int first = group * g;
+  const auto section_state = [&](int k) { return (state >> (2 * k)) & 3; };
+  const int nb = e.left_size + e.right_size;
+  const auto n_interior = static_cast<int>(e.x_b.rows());
+  const int np = 2 * nc;
+  const int cases = num_cases_;
   Eigen::MatrixXcd g_b = Eigen::MatrixXcd::Zero(nb, cases);
   Eigen::MatrixXcd g_i = Eigen::MatrixXcd::Zero(n_interior, cases);
   for (int k = 0; k < g; ++k) {
     const Piece& piece = pieces_[piece_index_[first + k][section_state(k)]];
-    const Eigen::MatrixXcd& condensed = Condensed(piece);
     for (int c = 0; c < np; ++c) {
-      const int zc = k * nc + c;  // the piece's [left; right] are cross-sections k and k + 1
-      for (int r = 0; r < np; ++r) {
-        const int zr = k * nc + r;
-        const std::complex<double> v = condensed(r, c);
-        if (boundary_index[zr] >= 0 && boundary_index[zc] >= 0) {
-          k_bb(boundary_index[zr], boundary_index[zc]) += v;
-        } else if (boundary_index[zr] >= 0 && interior_index[zc] >= 0) {
-          k_bi(boundary_index[zr], interior_index[zc]) += v;
-        } else if (interior_index[zr] >= 0 && boundary_index[zc] >= 0) {
-          k_ib(interior_index[zr], boundary_index[zc]) += v;
-        } else if (interior_index[zr] >= 0 && interior_index[zc] >= 0) {
-          k_ii(interior_index[zr], interior_index[zc]) += v;
-        }
-      }
-      if (boundary_index[zc] >= 0) g_b.row(boundary_index[zc]) += piece.load.row(c);
-      if (interior_index[zc] >= 0) g_i.row(interior_index[zc]) += piece.load.row(c);
+      const int zc = k * nc + c;
+      if (e.boundary_index[zc] >= 0) g_b.row(e.boundary_index[zc]) += piece.load.row(c);
+      if (e.interior_index[zc] >= 0) g_i.row(e.interior_index[zc]) += piece.load.row(c);
     }
   }
-  for (int t : interior_cross_sections) {
+  for (int t : e.interior_cross_sections) {
     for (int d = 0; d < nc; ++d) {
-      if (interior_index[t * nc + d] >= 0) {
-        g_i.row(interior_index[t * nc + d]) += boundary_load_[first + t].row(d);
+      if (e.interior_index[t * nc + d] >= 0) {
+        g_i.row(e.interior_index[t * nc + d]) += boundary_load_[first + t].row(d);
       }
     }
   }
-  Eigen::MatrixXcd x_b = Eigen::MatrixXcd::Zero(n_interior, nb);
   Eigen::MatrixXcd x_f = Eigen::MatrixXcd::Zero(n_interior, cases);
   double singular = 0.0;
-  if (n_interior > 0) {
-    // Jacobi-scaled (see Plate::SolveHarmonic).
-    const Eigen::VectorXd scale = k_ii.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
-    const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(scale.asDiagonal() * k_ii * scale.asDiagonal());
-    // Empty products are skipped: Eigen binds references to their (null) data in Debug.
-    if (nb > 0) x_b = scale.asDiagonal() * lu.solve(scale.asDiagonal() * k_ib);
-    // One load column at a time, each as the vector it was with a single case.
-    for (int c = 0; c < cases; ++c) {
-      const Eigen::VectorXcd scaled_load = scale.asDiagonal() * g_i.col(c);
-      const Eigen::VectorXcd y = lu.solve(scaled_load);
-      x_f.col(c) = scale.asDiagonal() * y;
-      // With a kept end the interior is held by it; without one (the whole plate in one group)
-      // this is the configuration's whole solve, and may be singular (plate.hpp).
-      const double load = scaled_load.cwiseAbs().maxCoeff();
-      if (nb == 0 && load > 0.0) {
-        const double amplification = y.cwiseAbs().maxCoeff() / load;
-        if (!(amplification <= kMaxAmplification) && !(amplification <= singular)) {
-          singular = amplification;
-        }
+  // One load column at a time, each as the vector it was with a single case.
+  for (int c = 0; c < cases && n_interior > 0; ++c) {
+    const Eigen::VectorXcd scaled_load = e.scale.asDiagonal() * g_i.col(c);
+    const Eigen::VectorXcd y = e.lu.solve(scaled_load);
+    x_f.col(c) = e.scale.asDiagonal() * y;
+    // With a kept end the interior is held by it; without one (the whole plate in one group)
+    // this is the configuration's whole solve, and may be singular (plate.hpp).
+    const double load = scaled_load.cwiseAbs().maxCoeff();
+    if (nb == 0 && load > 0.0) {
+      const double amplification = y.cwiseAbs().maxCoeff() / load;
+      if (!(amplification <= kMaxAmplification) && !(amplification <= singular)) {
+        singular = amplification;
       }
     }
   }
-  Piece result;
-  result.left_size = left_size;
-  result.right_size = right_size;
-  result.singular = singular;
-  result.group_condensed = k_bb - k_bi * x_b;
-  result.load.resize(nb, cases);
+  Eigen::MatrixXcd load(nb, cases);
   for (int c = 0; c < cases && nb > 0; ++c) {
     const Eigen::VectorXcd x = x_f.col(c);
-    result.load.col(c) = g_b.col(c) - k_bi * x;
+    load.col(c) = g_b.col(c) - e.k_bi * x;
   }
   // The outputs: map rows set after set, each set's rows section after section; offsets case
   // after case in the rows of the case's set (OutputLayout).
   const OutputLayout& layout = group_layout_[group];
-  result.output_map = Eigen::MatrixXcd::Zero(layout.map_rows(), nb);
-  result.output_offset = Eigen::VectorXcd::Zero(layout.offset_rows());
+  Eigen::MatrixXcd output_map = Eigen::MatrixXcd::Zero(layout.map_rows(), nb);
+  SolvePiece out = e.blocks;
+  out.singular = singular;
+  out.output_offset = Eigen::VectorXcd::Zero(layout.offset_rows());
   for (int set = 0; set < sets_.num_sets(); ++set) {
     const std::vector<int>& set_cases = sets_.cases_of_set[set];
     int row = layout.map_begin[set];
@@ -403,26 +448,31 @@ SectionCondensation::Piece SectionCondensation::ComposeGroup(int group, int stat
       for (int o = 0; o < rows; ++o, ++row) {
         const int t = row - layout.map_begin[set];  // the row within the set
         for (int c : set_cases) {
-          result.output_offset(layout.offset_begin[c] + t) =
+          out.output_offset(layout.offset_begin[c] + t) =
               piece.output_offset(section.offset_begin[c] + o);
         }
         for (int c = 0; c < np; ++c) {
           const int zc = k * nc + c;
           const std::complex<double> v = piece.output_map(section.map_begin[set] + o, c);
-          if (boundary_index[zc] >= 0) {
-            result.output_map(row, boundary_index[zc]) += v;
-          } else if (interior_index[zc] >= 0) {
+          if (e.boundary_index[zc] >= 0) {
+            output_map(row, e.boundary_index[zc]) += v;
+          } else if (e.interior_index[zc] >= 0) {
             // No kept end, no columns: a row of an empty matrix is null data plus an offset (UB).
-            if (nb > 0) result.output_map.row(row) -= v * x_b.row(interior_index[zc]);
+            if (nb > 0) output_map.row(row) -= v * e.x_b.row(e.interior_index[zc]);
             for (int lc : set_cases) {
-              result.output_offset(layout.offset_begin[lc] + t) += v * x_f(interior_index[zc], lc);
+              out.output_offset(layout.offset_begin[lc] + t) += v * x_f(e.interior_index[zc], lc);
             }
           }
         }
       }
     }
   }
-  return result;
+  Eigen::VectorXd s(nb);
+  if (e.left_size > 0) s.head(nc) = scale;
+  if (e.right_size > 0) s.tail(nc) = scale;
+  out.load = s.asDiagonal() * load;
+  out.output_map = SplitMatrix(output_map * s.asDiagonal());
+  return out;
 }
 
 void SectionCondensation::CondenseSections(const Plate& plate,
@@ -495,9 +545,16 @@ void SectionCondensation::CondenseSections(const Plate& plate,
       }
       x_b = scale.asDiagonal() * lu.solve(scale.asDiagonal() * s_ib);
     }
-    // S_BI = S_IB^T (complex symmetric: transpose, not adjoint).
+    // S_BI = S_IB^T (complex symmetric: transpose, not adjoint). Only the interior dofs of the
+    // elements next to the two end cross-sections couple to them: the products run over those
+    // rows of S_IB alone (a few node lines of the section's interior).
+    std::vector<int> coupled;
+    for (int i = 0; i < n_interior; ++i) {
+      if (s_ib.row(i).cwiseAbs().maxCoeff() != 0.0) coupled.push_back(i);
+    }
+    const Eigen::MatrixXcd s_cb = s_ib(coupled, Eigen::all);
     const int condensed = mesh * 4 + state;
-    section_condensed_[condensed] = s_bb - s_ib.transpose() * x_b;
+    section_condensed_[condensed] = s_bb - s_cb.transpose() * x_b(coupled, Eigen::all);
     // Each distinct section of this mesh: its loads and its outputs.
     for (std::size_t q = first; q < representatives.size(); ++q) {
       const int section = representatives[q];
@@ -505,8 +562,6 @@ void SectionCondensation::CondenseSections(const Plate& plate,
       const int offset = section * m * nc_;
       Piece& piece = pieces_[q * 4 + static_cast<std::size_t>(state)];
       piece.condensed = condensed;
-      piece.left_size = nc_;
-      piece.right_size = nc_;
       piece.load.resize(nb, num_cases_);
       Eigen::MatrixXcd x_f = Eigen::MatrixXcd::Zero(n_interior, num_cases_);
       for (int c = 0; c < num_cases_; ++c) {
@@ -516,7 +571,7 @@ void SectionCondensation::CondenseSections(const Plate& plate,
         }
         Eigen::VectorXcd x = Eigen::VectorXcd::Zero(n_interior);
         if (n_interior > 0) x = scale.asDiagonal() * lu.solve(scale.asDiagonal() * f_interior);
-        piece.load.col(c) = -s_ib.transpose() * x;
+        piece.load.col(c) = -s_cb.transpose() * x(coupled);
         x_f.col(c) = x;
       }
       const OutputLayout& layout = section_layout_[section];

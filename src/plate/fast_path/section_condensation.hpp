@@ -36,6 +36,7 @@
 
 #include <Eigen/Dense>
 
+#include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
 
@@ -167,6 +168,7 @@ class SectionCondensation {
   // definite; SensorModel checks it), which makes the unpivoted LDL^T provably stable for every
   // configuration, so Solve skips its residual check (section_solve.cpp). `kernels`: the
   // instruction set of Solve's kernels (vector_kernels.hpp; resolved, and supported by the CPU).
+  // `pool`: threads for the group pieces (null: this thread); the pieces do not depend on it.
   SectionCondensation(const Plate& plate,
                       int num_sections,
                       int elements_per_section,
@@ -180,7 +182,8 @@ class SectionCondensation {
                       const std::vector<CaseOutputs>& outputs,
                       bool always_pivot = false,
                       bool higham = false,
-                      VectorKernels kernels = VectorKernels::kPortable);
+                      VectorKernels kernels = VectorKernels::kPortable,
+                      ThreadPool* pool = nullptr);
 
   // clamps: 2 num_sections bytes (edge A sections, then edge B); w: complex w at every case's
   // outputs, case after case. One factorization of the configuration's system serves all cases.
@@ -190,19 +193,13 @@ class SectionCondensation {
   std::size_t MemoryBytes() const;
 
  private:
-  // A section piece (condensed: its index in section_condensed_, which the sections of one mesh
-  // share in each clamp state) or a group piece (condensed -1: its own, group_condensed).
+  // A section piece: its condensed matrix C (index in section_condensed_, which the sections of
+  // one mesh share in each clamp state), its loads and outputs.
   struct Piece {
     int condensed = -1;
-    Eigen::MatrixXcd group_condensed;  // 2 nc x 2 nc, [left; right] cross-section dofs
-    Eigen::MatrixXcd load;             // [left; right] x load cases
-    Eigen::MatrixXcd output_map;       // output-set rows (OutputLayout) x [left; right]
-    Eigen::VectorXcd output_offset;    // each case's outputs (OutputLayout)
-    int left_size = 0;   // kept dofs of the left end cross-section: nc, or 0 when folded in
-    int right_size = 0;  // likewise for the right end
-    // A group with no kept end (the whole plate in one group) is solved here, not in Solve: the
-    // amplification of that solve when above kMaxAmplification (singular), else 0.
-    double singular = 0.0;
+    Eigen::MatrixXcd load;           // [left; right] x load cases
+    Eigen::MatrixXcd output_map;     // output-set rows (OutputLayout) x [left; right]
+    Eigen::VectorXcd output_offset;  // each case's outputs (OutputLayout)
   };
   // A complex matrix as two real ones (block_ldlt.hpp's split storage), column-major.
   struct SplitMatrix {
@@ -218,7 +215,7 @@ class SectionCondensation {
     SplitMatrix left_block;   // diagonal block of the kept left end (nc x nc); empty when folded in
     SplitMatrix right_block;  // likewise for the right end
     // Pieces with both ends kept: the coupling block condensed(left, right) = coupling_left *
-    // coupling_right^T (nc x rank each), from its SVD less the singular values at round-off level.
+    // coupling_right^T (nc x rank each), from a rank-revealing QR less the round-off-level rest.
     SplitMatrix coupling_left;
     SplitMatrix coupling_right;
     Eigen::MatrixXcd load;           // [left; right] kept dofs x load cases
@@ -226,7 +223,10 @@ class SectionCondensation {
     Eigen::VectorXcd output_offset;  // each case's outputs in the group (group_layout_)
     int left_size = 0;
     int right_size = 0;
-    double singular = 0.0;  // as Piece::singular: Solve throws SingularSystem for it
+    // A group with no kept end (the whole plate in one group) is solved in FinishGroup, not in
+    // Solve: the amplification of that solve when above kMaxAmplification (singular), else 0;
+    // Solve throws SingularSystem for it.
+    double singular = 0.0;
   };
   // The pieces of the distinct sections (`representatives`, their first sections) in one clamp
   // state: C once per mesh, then each section's loads and output maps (section_condensation.cpp).
@@ -237,9 +237,29 @@ class SectionCondensation {
                         const std::vector<CaseOutputs>& outputs,
                         const std::vector<int>& representatives);
   const Eigen::MatrixXcd& Condensed(const Piece& piece) const {
-    return piece.condensed >= 0 ? section_condensed_[piece.condensed] : piece.group_condensed;
+    return section_condensed_[piece.condensed];
   }
-  Piece ComposeGroup(int group, int state) const;
+  // A group's inner cross-sections eliminated in one clamp state: what depends only on the
+  // condensed matrices of its sections, shared by the groups made of the same ones.
+  struct GroupElimination {
+    int left_size = 0;
+    int right_size = 0;
+    std::vector<int> boundary_index;  // group dof -> [left; right] kept dof, or -1
+    std::vector<int> interior_index;  // group dof -> inner free dof, or -1
+    std::vector<int> interior_cross_sections;
+    Eigen::MatrixXcd k_bi;                     // kept x inner
+    Eigen::VectorXd scale;                     // Jacobi scale of the inner block
+    Eigen::PartialPivLU<Eigen::MatrixXcd> lu;  // of the scaled inner block
+    Eigen::MatrixXcd x_b;                      // inner x kept: K_II^-1 K_IB
+    SolvePiece blocks;  // the kept ends' blocks and coupling as Solve reads them (scaled)
+  };
+  // `scale`: the cross-section Jacobi scale that Solve's pieces carry.
+  GroupElimination EliminateGroup(int group, int state, const Eigen::VectorXd& scale) const;
+  // The group's own piece: its loads and outputs through the shared elimination.
+  SolvePiece FinishGroup(const GroupElimination& e,
+                         int group,
+                         int state,
+                         const Eigen::VectorXd& scale) const;
   // Solve's body, compiled once per instruction set (SolvePortable, SolveAvx2, SolveAvx512).
   void SolveBody(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
   void SolvePortable(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;

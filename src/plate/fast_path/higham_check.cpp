@@ -1,0 +1,121 @@
+#include "plate/fast_path/higham_check.hpp"
+
+#include <complex>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+
+namespace combabc::plate {
+namespace {
+
+// One part (real or imaginary) of a section's matrix: the Schur complement of its interior onto
+// its two end cross-sections, [left; right] (2 nc x 2 nc); false when the interior is not
+// positive definite.
+bool SectionSchur(const Plate& plate,
+                  int section,
+                  int intervals,
+                  int nc,
+                  bool imaginary,
+                  double frequency_hz,
+                  Eigen::MatrixXd* schur) {
+  const int m = intervals;
+  const int elements = m / plate.element_order();
+  const int n_interior = (m - 1) * nc;
+  const int offset = section * m * nc;
+  // Local dofs cross-section after cross-section: the ends [0, nc) and [m nc, (m + 1) nc) are
+  // kept; with no clamp fixed every other dof is interior.
+  const auto kept = [&](int d) { return d < nc ? d : (d >= m * nc ? d - (m - 1) * nc : -1); };
+  const auto inner = [&](int d) { return d >= nc && d < m * nc ? d - nc : -1; };
+  const std::complex<double> mass = plate.MassCoefficient(frequency_hz);
+  const double mass_part = imaginary ? mass.imag() : mass.real();
+  const int nb = 2 * nc;
+  Eigen::MatrixXd a_bb = Eigen::MatrixXd::Zero(nb, nb);
+  Eigen::MatrixXd a_ib = Eigen::MatrixXd::Zero(n_interior, nb);
+  std::vector<Eigen::Triplet<double>> triplets;
+  const int ne = plate.element_dofs();
+  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
+      const ElementMatrices& e = plate.Element(ex, ey);
+      int local[kMaxElementDofs];
+      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < ne; ++c) {
+        for (int r = 0; r < ne; ++r) {
+          const double v = (imaginary ? e.stiffness_imag(r, c) : e.stiffness_real(r, c)) +
+                           mass_part * e.mass_unit(r, c);
+          const int rb = kept(local[r]);
+          const int cb = kept(local[c]);
+          const int ri = inner(local[r]);
+          const int ci = inner(local[c]);
+          if (rb >= 0 && cb >= 0) a_bb(rb, cb) += v;
+          if (ri >= 0 && cb >= 0) a_ib(ri, cb) += v;
+          if (ri >= 0 && ci >= 0) triplets.emplace_back(ri, ci, v);
+        }
+      }
+    }
+  }
+  *schur = a_bb;
+  if (n_interior == 0) return true;
+  Eigen::SparseMatrix<double> a_ii(n_interior, n_interior);
+  a_ii.setFromTriplets(triplets.begin(), triplets.end());
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(a_ii);
+  if (llt.info() != Eigen::Success) return false;
+  *schur -= a_ib.transpose() * llt.solve(a_ib);
+  return true;
+}
+
+}  // namespace
+
+bool IsHighamSystem(const Plate& plate,
+                    int num_sections,
+                    int intervals,
+                    const CrossSectionMasks& masks,
+                    double frequency_hz) {
+  const int ny = plate.grid().ny();
+  const int nc = plate.dofs_per_node() * (ny + 1);
+  const int elements = intervals / plate.element_order();
+  const auto same_elements = [&](int s, int t) {
+    for (int e = 0; e < elements; ++e) {
+      for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
+        if (&plate.Element(s * elements + e, ey) != &plate.Element(t * elements + e, ey)) {
+          return false;
+        }
+      }
+    }
+    return true;
+  };
+  std::vector<int> mesh(num_sections);
+  for (int s = 0; s < num_sections; ++s) {
+    mesh[s] = s;
+    for (int t = 0; t < s && mesh[s] == s; ++t) {
+      if (mesh[t] == t && same_elements(s, t)) mesh[s] = t;
+    }
+  }
+  for (const bool imaginary : {false, true}) {
+    std::vector<Eigen::MatrixXd> schur(num_sections);
+    for (int s = 0; s < num_sections; ++s) {
+      if (mesh[s] != s) continue;
+      if (!SectionSchur(plate, s, intervals, nc, imaginary, frequency_hz, &schur[s])) return false;
+    }
+    // The cross-sections' chain, block after block: the pivot block of cross-section c (its free
+    // dofs) less what the elimination of c - 1 passed on, then what c passes on to c + 1.
+    Eigen::MatrixXd carried = Eigen::MatrixXd::Zero(nc, nc);
+    std::vector<int> free;
+    for (int c = 0; c <= num_sections; ++c) {
+      Eigen::MatrixXd block = -carried;
+      if (c > 0) block += schur[mesh[c - 1]].bottomRightCorner(nc, nc);
+      if (c < num_sections) block += schur[mesh[c]].topLeftCorner(nc, nc);
+      CrossSectionFreeDofs(nc, ny, num_sections, masks, c, false, false, &free);
+      const Eigen::MatrixXd pivot = block(free, free);
+      const Eigen::LLT<Eigen::MatrixXd> llt(pivot);
+      if (llt.info() != Eigen::Success) return false;
+      if (c < num_sections) {
+        const Eigen::MatrixXd coupling = schur[mesh[c]].topRightCorner(nc, nc)(free, Eigen::all);
+        carried = coupling.transpose() * llt.solve(coupling);
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace combabc::plate
