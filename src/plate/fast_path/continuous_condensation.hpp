@@ -51,6 +51,8 @@
 
 namespace combabc::plate {
 
+struct ContinuousWorkspace;  // Solve's per-thread workspace (continuous_solve.cpp)
+
 class ContinuousCondensation {
  public:
   // Truncation of the series, relative to the bound on its whole sum.
@@ -146,10 +148,26 @@ class ContinuousCondensation {
     }
   };
   struct Evaluated;  // one call's pieces (continuous_solve.cpp)
-  // Solve's body, compiled once per instruction set (kernel_targets.hpp).
+  // Solve's body, compiled once per instruction set (kernel_targets.hpp), and the phases of it
+  // that read the pieces (continuous_solve.cpp).
   void SolveBody(std::span<const std::uint8_t> clamps,
                  std::complex<double> mu,
                  std::span<std::complex<double>> w) const;
+  void EvaluatePieces(std::span<const std::uint8_t> clamps,
+                      std::complex<double> mu,
+                      ContinuousWorkspace& ws,
+                      Evaluated& e) const;
+  void Assemble(std::span<const std::uint8_t> clamps,
+                const Evaluated& e,
+                ContinuousWorkspace& ws) const;
+  void RecoverOutputs(const Evaluated& e,
+                      ContinuousWorkspace& ws,
+                      std::span<std::complex<double>> w) const;
+  // Section s's distinct section in clamp state `state`: its index into sections_ (and into an
+  // Evaluated's sections).
+  std::size_t KindIndex(int s, int state) const {
+    return static_cast<std::size_t>(kind_[s]) * 4 + static_cast<std::size_t>(state);
+  }
   void SolvePortable(std::span<const std::uint8_t> clamps,
                      std::complex<double> mu,
                      std::span<std::complex<double>> w) const;

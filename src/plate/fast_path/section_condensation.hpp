@@ -30,6 +30,7 @@
 // condensed once, while each case keeps its own output offsets r_I S_II^{-1} f_I (its own load).
 #include <array>
 #include <complex>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -156,6 +157,8 @@ void AssignOutputs(const Plate& plate,
                    std::vector<OutputLayout>* layouts,
                    std::vector<std::vector<std::vector<double>>>* relative_x);
 
+struct SectionWorkspace;  // Solve's per-thread workspace (section_solve.cpp)
+
 class SectionCondensation {
  public:
   // `plate` must have num_sections * elements_per_section elements along x (any element order).
@@ -260,11 +263,24 @@ class SectionCondensation {
                          int group,
                          int state,
                          const Eigen::VectorXd& scale) const;
-  // Solve's body, compiled once per instruction set (SolvePortable, SolveAvx2, SolveAvx512).
+  // Solve's body, compiled once per instruction set (SolvePortable, SolveAvx2, SolveAvx512), and
+  // the phases of it that read the pieces (section_solve.cpp).
   void SolveBody(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
   void SolvePortable(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
   void SolveAvx2(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
   void SolveAvx512(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
+  void Assemble(std::span<const std::uint8_t> clamps, bool in_place, SectionWorkspace& ws) const;
+  void AssembleDiagonal(std::span<const std::uint8_t> clamps,
+                        int row,
+                        const SectionWorkspace& ws,
+                        double* ar,
+                        double* ai,
+                        std::ptrdiff_t ld) const;
+  void FallBack(std::span<const std::uint8_t> clamps, bool in_place, SectionWorkspace& ws) const;
+  void RecoverGroupOutputs(std::span<const std::uint8_t> clamps,
+                           int group,
+                           SectionWorkspace& ws,
+                           std::span<std::complex<double>> w) const;
   const SolvePiece& GroupPieceOf(int group, std::span<const std::uint8_t> clamps) const;
   // Free dofs (0..nc-1) of a cross-section between sections with edge-A / edge-B flags.
   void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {

@@ -30,6 +30,12 @@
 // triangular solves with P and the right-hand sides ride along inside the factorization. All the
 // per-configuration algebra runs on split real/imaginary arrays (block_ldlt.hpp) in plain loops
 // that the compiler vectorizes, two axpys per pass; the workspace is per thread and reused.
+//
+// SolveBody runs the phases in order: assemble the rows from the configuration's group pieces
+// (Assemble), eliminate (EliminateRows), back-substitute (BackSubstitute), certify or check the
+// results (FlagNonFiniteResults for a certified system, FlagLargeRowResiduals otherwise), fall
+// back for the cases that need it (FallBack), refuse a singular system (ThrowIfSingular) and
+// recover the outputs (RecoverGroupOutputs).
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -39,123 +45,148 @@
 #include "plate/fast_path/section_condensation.hpp"
 
 namespace combabc::plate {
-namespace {
 
-using Index = std::ptrdiff_t;
-
-// A complex matrix or vector in split storage (block_ldlt.hpp), column-major; the leading
-// dimension is chosen per use.
-struct Split {
-  std::vector<double> re;
-  std::vector<double> im;
-  void Resize(Index size) {
-    re.resize(static_cast<std::size_t>(size));
-    im.resize(static_cast<std::size_t>(size));
-  }
-};
-
-struct Workspace {
-  int nc = -1;
-  int rows = -1;
-  int cases = -1;
-  // Pivot blocks F_i ((n + r + cases) x n, leading dimension n + r + cases), LDL^T in place, with
-  // P_i^T and the right-hand sides (one per load case) carried below them.
-  std::vector<Split> factor;
-  std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
-  std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
+// Solve's per-thread workspace: the block rows (BlockWorkspace) and the couplings between them in
+// factored form.
+struct SectionWorkspace : BlockWorkspace {
   // Coupling U_i between rows i and i + 1 as P_i Q_i^T (n_i x r_i and n_{i+1} x r_i).
   std::vector<Split> p;
   std::vector<Split> q;
   std::vector<Index> rank;
-  // Right-hand sides and solutions of each row, case j at [j nc, j nc + n).
-  std::vector<Split> rhs;
-  std::vector<Split> u;
   // With several cases, each row's solution with the cases side by side within each entry
   // (BackSubstituteCases), and C the same way.
   std::vector<Split> u_cases;
   Split c_cases;
-  std::vector<double> scratch;                // SolveUnitUpperSplitCases' dot products
-  std::vector<char> fallback;                 // [case]: solved by the pivoting LU
-  std::vector<const std::vector<int>*> free;  // each row's free dofs (free_dofs_)
+  std::vector<double> scratch;  // SolveUnitUpperSplitCases' dot products
   Split s;  // [S; C^T], (r + cases) x r: S = V^T D V, C = V^T D W (a column per case)
   Split t;  // Q S, m x r
-  Split y;
+  Split y;  // a row's residual; a case's outputs in a group (`outputs` long)
   Split small;
 
-  void Reserve(int nc_, int rows_, int cases_) {
-    if (nc_ == nc && rows_ <= rows && cases_ <= cases) return;
-    nc = nc_;
-    rows = std::max(rows_, rows);
-    cases = std::max(cases_, cases);
-    const Index n = nc;
-    const Index k = cases;
-    factor.assign(rows, Split{});
-    diagonal.assign(rows, Split{});
-    p.assign(rows, Split{});
-    q.assign(rows, Split{});
-    rhs.assign(rows, Split{});
-    u.assign(rows, Split{});
-    u_cases.assign(rows, Split{});
-    for (int i = 0; i < rows; ++i) {
-      factor[i].Resize((2 * n + k) * n);
-      diagonal[i].Resize(n * n);
-      p[i].Resize(n * n);
-      q[i].Resize(n * n);
-      rhs[i].Resize(n * k);
-      u[i].Resize(n * k);
-      if (k > 1) u_cases[i].Resize(n * k);
+  void Reserve(int nc_, int rows_, int cases_, std::size_t outputs) {
+    if (BlockWorkspace::Reserve(nc_, rows_, cases_)) {
+      const Index n = nc;
+      const Index k = cases;
+      p.assign(rows, Split{});
+      q.assign(rows, Split{});
+      u_cases.assign(rows, Split{});
+      for (int i = 0; i < rows; ++i) {
+        p[i].Resize(n * n);
+        q[i].Resize(n * n);
+        if (k > 1) u_cases[i].Resize(n * k);
+      }
+      c_cases.Resize(n * k);
+      scratch.assign(static_cast<std::size_t>(2 * k), 0.0);
+      rank.assign(rows, 0);
+      s.Resize((n + k) * n);
+      t.Resize(n * n);
+      y.Resize(n);
+      small.Resize(n);
     }
-    c_cases.Resize(n * k);
-    scratch.assign(static_cast<std::size_t>(2 * k), 0.0);
-    diagonal_max2.assign(rows, 0.0);
-    rank.assign(rows, 0);
-    free.assign(rows, nullptr);
-    s.Resize((n + k) * n);
-    t.Resize(n * n);
-    y.Resize(n);
-    small.Resize(n);
+    if (y.re.size() < outputs) y.Resize(static_cast<Index>(outputs));
   }
 };
 
-// The lower triangle of a row's diagonal block, A = right block of the group on its left + left
-// block of the group on its right, at the free dofs f, into (ar, ai) with leading dimension ld.
-// The free dofs are a contiguous run (a clamp fixes whole edge nodes, the first or last of a
-// cross-section) unless a mask fixes only some of a node's dofs. A template only so that it can
-// take SectionCondensation's private piece type.
-template <class Piece>
-COMBABC_KERNEL void AssembleDiagonal(const Piece& left,
-                                     const Piece& right,
-                                     const std::vector<int>& f,
-                                     Index nc,
-                                     double* ar,
-                                     double* ai,
-                                     Index ld) {
-  const auto n = static_cast<Index>(f.size());
-  const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
-  for (Index c = 0; c < n; ++c) {
-    const Index column = Index{f[c]} * nc;
-    const double* lr = left.right_block.re.data() + column;
-    const double* li = left.right_block.im.data() + column;
-    const double* rr = right.left_block.re.data() + column;
-    const double* ri = right.left_block.im.data() + column;
-    if (run) {
-      const Index first = f[c];
-      for (Index r = c; r < n; ++r) {
-        ar[c * ld + r] = lr[first + r - c] + rr[first + r - c];
-        ai[c * ld + r] = li[first + r - c] + ri[first + r - c];
-      }
-    } else {
-      for (Index r = c; r < n; ++r) {
-        ar[c * ld + r] = lr[f[r]] + rr[f[r]];
-        ai[c * ld + r] = li[f[r]] + ri[f[r]];
-      }
+namespace {
+
+// Row i's pivot block factored, its Schur complement on row i + 1: F_{i+1} = A_{i+1} -
+// Q_i S_i Q_i^T and the carried right-hand sides R_{i+1} - Q_i C_i (EliminateRows).
+COMBABC_KERNEL void UpdateNextRow(SectionWorkspace& ws, int i, Index cases) {
+  const Index nc = ws.nc;
+  const Index n = ws.RowSize(i);
+  const Index r = ws.rank[i];
+  const Index ld = n + r + cases;
+  const double* fr = ws.factor[i].re.data();
+  const double* fi = ws.factor[i].im.data();
+  // [S; C^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T and w_j^T the carried rows of column j; S is
+  // symmetric: the lower triangle, then mirrored.
+  double* sr = ws.s.re.data();
+  double* si = ws.s.im.data();
+  const Index ls = r + cases;
+  std::fill(sr, sr + ls * r, 0.0);
+  std::fill(si, si + ls * r, 0.0);
+  for (Index j = 0; j < n; ++j) {
+    const double* xr = fr + j * ld + n;
+    const double* xi = fi + j * ld + n;
+    const double dr = fr[j * ld + j];
+    const double di = fi[j * ld + j];
+    for (Index l = 0; l < r; ++l) {
+      // -(d v_l): SubScaledSplit subtracts.
+      SubScaledSplit(sr + l * ls + l,
+                     si + l * ls + l,
+                     xr + l,
+                     xi + l,
+                     -(dr * xr[l] - di * xi[l]),
+                     -(dr * xi[l] + di * xr[l]),
+                     ls - l);
     }
   }
-}
-
-// The free dofs of block row i: its size.
-COMBABC_KERNEL Index RowSize(const Workspace& ws, int i) {
-  return static_cast<Index>(ws.free[i]->size());
+  for (Index l = 0; l < r; ++l) {
+    for (Index k = 0; k < l; ++k) {
+      sr[l * ls + k] = sr[k * ls + l];
+      si[l * ls + k] = si[k * ls + l];
+    }
+  }
+  // T = Q S (m x r).
+  const Index m = ws.RowSize(i + 1);
+  const Index rn = ws.rank[i + 1];
+  const Index ldn = m + rn + cases;
+  const double* qr = ws.q[i].re.data();
+  const double* qi = ws.q[i].im.data();
+  double* tr = ws.t.re.data();
+  double* ti = ws.t.im.data();
+  std::fill(tr, tr + m * r, 0.0);
+  std::fill(ti, ti + m * r, 0.0);
+  for (Index l = 0; l < r; ++l) {
+    Index k = 0;
+    for (; k + 1 < r; k += 2) {
+      SubScaled2Split(tr + l * m,
+                      ti + l * m,
+                      qr + k * m,
+                      qi + k * m,
+                      -sr[l * ls + k],
+                      -si[l * ls + k],
+                      qr + (k + 1) * m,
+                      qi + (k + 1) * m,
+                      -sr[l * ls + k + 1],
+                      -si[l * ls + k + 1],
+                      m);
+    }
+    if (k < r) {
+      SubScaledSplit(
+          tr + l * m, ti + l * m, qr + k * m, qi + k * m, -sr[l * ls + k], -si[l * ls + k], m);
+    }
+  }
+  // F_{i+1} = A_{i+1} - T Q^T (lower triangle; FactorLdltSplit reads only that), and its
+  // carried right-hand sides R_{i+1} - Q C.
+  double* nr = ws.factor[i + 1].re.data();
+  double* ni = ws.factor[i + 1].im.data();
+  for (Index c = 0; c < m; ++c) {
+    // Q(c, l) for this column, contiguous for SubScaledManySplit.
+    double* qcr = ws.small.re.data();
+    double* qci = ws.small.im.data();
+    for (Index l = 0; l < r; ++l) {
+      qcr[l] = qr[l * m + c];
+      qci[l] = qi[l * m + c];
+    }
+    SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
+  }
+  // Each case's R_{i+1} - Q C by columns of Q: an axpy per column, each entry taking the same
+  // operations in the same order as a dot product over the columns would, without a latency
+  // chain through them.
+  for (Index j = 0; j < cases; ++j) {
+    double* br = ws.small.re.data();
+    double* bi = ws.small.im.data();
+    std::copy_n(ws.rhs[i + 1].re.data() + j * nc, m, br);
+    std::copy_n(ws.rhs[i + 1].im.data() + j * nc, m, bi);
+    for (Index k = 0; k < r; ++k) {
+      SubScaledSplit(br, bi, qr + k * m, qi + k * m, sr[k * ls + r + j], si[k * ls + r + j], m);
+    }
+    for (Index c = 0; c < m; ++c) {
+      nr[c * ldn + m + rn + j] = br[c];
+      ni[c * ldn + m + rn + j] = bi[c];
+    }
+  }
 }
 
 // Block LDL^T elimination of the assembled rows: F_0 = A_0; F_{i+1} = A_{i+1} - U_i^T F_i^{-1} U_i.
@@ -165,11 +196,12 @@ COMBABC_KERNEL Index RowSize(const Workspace& ws, int i) {
 // and R'_{i+1} = R_{i+1} - Q_i C_i with C_i = V_i^T D_i W_i. Every case's column is carried
 // through the same factorization: each costs its own rows of the updates, nothing more. False
 // where a pivot breaks down.
-COMBABC_KERNEL bool EliminateRows(Workspace& ws, int rows, Index cases, bool higham) {
+COMBABC_KERNEL bool EliminateRows(SectionWorkspace& ws, Index cases, bool higham) {
   const Index nc = ws.nc;
+  const int rows = ws.num_rows;
   bool ok = true;
   for (int i = 0; i < rows && ok; ++i) {
-    const Index n = RowSize(ws, i);
+    const Index n = ws.RowSize(i);
     const Index r = ws.rank[i];
     const Index ld = n + r + cases;
     double* fr = ws.factor[i].re.data();
@@ -190,103 +222,15 @@ COMBABC_KERNEL bool EliminateRows(Workspace& ws, int rows, Index cases, bool hig
     }
     ok = FactorLdltSplit(fr, fi, ld, ld, n, higham);
     if (!ok || i + 1 == rows) break;
-    // [S; C^T] = sum_j d_j [v_j; w_j] v_j^T, v_j^T and w_j^T the carried rows of column j; S is
-    // symmetric: the lower triangle, then mirrored.
-    double* sr = ws.s.re.data();
-    double* si = ws.s.im.data();
-    const Index ls = r + cases;
-    std::fill(sr, sr + ls * r, 0.0);
-    std::fill(si, si + ls * r, 0.0);
-    for (Index j = 0; j < n; ++j) {
-      const double* xr = fr + j * ld + n;
-      const double* xi = fi + j * ld + n;
-      const double dr = fr[j * ld + j];
-      const double di = fi[j * ld + j];
-      for (Index l = 0; l < r; ++l) {
-        // -(d v_l): SubScaledSplit subtracts.
-        SubScaledSplit(sr + l * ls + l,
-                       si + l * ls + l,
-                       xr + l,
-                       xi + l,
-                       -(dr * xr[l] - di * xi[l]),
-                       -(dr * xi[l] + di * xr[l]),
-                       ls - l);
-      }
-    }
-    for (Index l = 0; l < r; ++l) {
-      for (Index k = 0; k < l; ++k) {
-        sr[l * ls + k] = sr[k * ls + l];
-        si[l * ls + k] = si[k * ls + l];
-      }
-    }
-    // T = Q S (m x r).
-    const Index m = RowSize(ws, i + 1);
-    const Index rn = ws.rank[i + 1];
-    const Index ldn = m + rn + cases;
-    const double* qr = ws.q[i].re.data();
-    const double* qi = ws.q[i].im.data();
-    double* tr = ws.t.re.data();
-    double* ti = ws.t.im.data();
-    std::fill(tr, tr + m * r, 0.0);
-    std::fill(ti, ti + m * r, 0.0);
-    for (Index l = 0; l < r; ++l) {
-      Index k = 0;
-      for (; k + 1 < r; k += 2) {
-        SubScaled2Split(tr + l * m,
-                        ti + l * m,
-                        qr + k * m,
-                        qi + k * m,
-                        -sr[l * ls + k],
-                        -si[l * ls + k],
-                        qr + (k + 1) * m,
-                        qi + (k + 1) * m,
-                        -sr[l * ls + k + 1],
-                        -si[l * ls + k + 1],
-                        m);
-      }
-      if (k < r) {
-        SubScaledSplit(
-            tr + l * m, ti + l * m, qr + k * m, qi + k * m, -sr[l * ls + k], -si[l * ls + k], m);
-      }
-    }
-    // F_{i+1} = A_{i+1} - T Q^T (lower triangle; FactorLdltSplit reads only that), and its
-    // carried right-hand sides R_{i+1} - Q C.
-    double* nr = ws.factor[i + 1].re.data();
-    double* ni = ws.factor[i + 1].im.data();
-    for (Index c = 0; c < m; ++c) {
-      // Q(c, l) for this column, contiguous for SubScaledManySplit.
-      double* qcr = ws.small.re.data();
-      double* qci = ws.small.im.data();
-      for (Index l = 0; l < r; ++l) {
-        qcr[l] = qr[l * m + c];
-        qci[l] = qi[l * m + c];
-      }
-      SubScaledManySplit(nr + c * ldn + c, ni + c * ldn + c, tr + c, ti + c, m, qcr, qci, r, m - c);
-    }
-    // Each case's R_{i+1} - Q C by columns of Q: an axpy per column, each entry taking the same
-    // operations in the same order as a dot product over the columns would, without a latency
-    // chain through them.
-    for (Index j = 0; j < cases; ++j) {
-      double* br = ws.small.re.data();
-      double* bi = ws.small.im.data();
-      std::copy_n(ws.rhs[i + 1].re.data() + j * nc, m, br);
-      std::copy_n(ws.rhs[i + 1].im.data() + j * nc, m, bi);
-      for (Index k = 0; k < r; ++k) {
-        SubScaledSplit(br, bi, qr + k * m, qi + k * m, sr[k * ls + r + j], si[k * ls + r + j], m);
-      }
-      for (Index c = 0; c < m; ++c) {
-        nr[c * ldn + m + rn + j] = br[c];
-        ni[c * ldn + m + rn + j] = bi[c];
-      }
-    }
+    UpdateNextRow(ws, i, cases);
   }
   return ok;
 }
 
 // Back substitution of one case: u_i = L_i^{-T} (w_i - V_i Q_i^T u_{i+1}).
-COMBABC_KERNEL void BackSubstituteOne(Workspace& ws, int rows) {
-  for (int i = rows - 1; i >= 0; --i) {
-    const Index n = RowSize(ws, i);
+COMBABC_KERNEL void BackSubstituteOne(SectionWorkspace& ws) {
+  for (int i = ws.num_rows - 1; i >= 0; --i) {
+    const Index n = ws.RowSize(i);
     const Index r = ws.rank[i];
     const Index ld = n + r + 1;
     const double* fr = ws.factor[i].re.data();
@@ -296,7 +240,7 @@ COMBABC_KERNEL void BackSubstituteOne(Workspace& ws, int rows) {
     double* cr = ws.small.re.data();
     double* ci = ws.small.im.data();
     if (r > 0) {
-      const Index m = RowSize(ws, i + 1);
+      const Index m = ws.RowSize(i + 1);
       for (Index l = 0; l < r; ++l) {
         DotSplit(ws.q[i].re.data() + l * m,
                  ws.q[i].im.data() + l * m,
@@ -323,13 +267,13 @@ COMBABC_KERNEL void BackSubstituteOne(Workspace& ws, int rows) {
 // c_cases), so that every dot product runs the cases as independent lanes (DotSplitCases). Each
 // case gets BackSubstituteOne's bits; one case alone takes BackSubstituteOne, whose loops are not
 // spread over lanes of one.
-COMBABC_KERNEL void BackSubstituteCases(Workspace& ws, int rows, Index cases) {
+COMBABC_KERNEL void BackSubstituteCases(SectionWorkspace& ws, Index cases) {
   const Index nc = ws.nc;
   double* dots = ws.scratch.data();
   double* cr = ws.c_cases.re.data();
   double* ci = ws.c_cases.im.data();
-  for (int i = rows - 1; i >= 0; --i) {
-    const Index n = RowSize(ws, i);
+  for (int i = ws.num_rows - 1; i >= 0; --i) {
+    const Index n = ws.RowSize(i);
     const Index r = ws.rank[i];
     const Index ld = n + r + cases;
     const double* fr = ws.factor[i].re.data();
@@ -337,7 +281,7 @@ COMBABC_KERNEL void BackSubstituteCases(Workspace& ws, int rows, Index cases) {
     double* yr = ws.u_cases[i].re.data();
     double* yi = ws.u_cases[i].im.data();
     if (r > 0) {
-      const Index m = RowSize(ws, i + 1);
+      const Index m = ws.RowSize(i + 1);
       for (Index l = 0; l < r; ++l) {
         DotSplitCases(ws.q[i].re.data() + l * m,
                       ws.q[i].im.data() + l * m,
@@ -370,56 +314,57 @@ COMBABC_KERNEL void BackSubstituteCases(Workspace& ws, int rows, Index cases) {
   }
 }
 
-// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
-// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
-// result.
-COMBABC_KERNEL void FlagLargeResiduals(Workspace& ws, int rows, Index cases) {
-  const Index nc = ws.nc;
-  double* zr = ws.y.re.data();
-  double* zi = ws.y.im.data();
+// Back substitution of every case: one alone by BackSubstituteOne, several side by side.
+COMBABC_KERNEL void BackSubstitute(SectionWorkspace& ws, Index cases) {
+  if (cases == 1) BackSubstituteOne(ws);
+  if (cases > 1) BackSubstituteCases(ws, cases);
+}
+
+// The residual check of every case (FlagLargeResiduals), with the couplings in factored form:
+// row i's residual takes P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
+COMBABC_KERNEL void FlagLargeRowResiduals(SectionWorkspace& ws, Index cases) {
   double* cr = ws.small.re.data();
   double* ci = ws.small.im.data();
-  for (Index case_index = 0; case_index < cases; ++case_index) {
-    const Index at = case_index * nc;
-    ResidualCheck check;
-    for (int i = 0; i < rows; ++i) {
-      const Index n = RowSize(ws, i);
-      const double* ar = ws.diagonal[i].re.data();
-      const double* ai = ws.diagonal[i].im.data();
-      const double* ur = ws.u[i].re.data() + at;
-      const double* ui = ws.u[i].im.data() + at;
-      const double* br = ws.rhs[i].re.data() + at;
-      const double* bi = ws.rhs[i].im.data() + at;
-      // z = A u - rhs, A symmetric from its lower triangle.
-      SymmetricResidualSplit(ar, ai, n, ur, ui, br, bi, zr, zi);
-      // + P_i Q_i^T u_{i+1} + Q_{i-1} P_{i-1}^T u_{i-1}.
-      const auto couple =
-          [&](const Split& a, const Split& b, Index k, Index na, Index nb, int j)
-              COMBABC_KERNEL_LAMBDA {
-                for (Index l = 0; l < k; ++l) {
-                  DotSplit(b.re.data() + l * nb,
-                           b.im.data() + l * nb,
-                           ws.u[j].re.data() + at,
-                           ws.u[j].im.data() + at,
-                           nb,
-                           cr + l,
-                           ci + l);
-                  SubScaledSplit(
-                      zr, zi, a.re.data() + l * na, a.im.data() + l * na, -cr[l], -ci[l], na);
-                }
-              };
-      if (i + 1 < rows) couple(ws.p[i], ws.q[i], ws.rank[i], n, RowSize(ws, i + 1), i + 1);
-      if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], n, RowSize(ws, i - 1), i - 1);
-      check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[i]);
+  const auto add_couplings = [&](int i, Index at, double* zr, double* zi) COMBABC_KERNEL_LAMBDA {
+    const Index n = ws.RowSize(i);
+    const auto couple =
+        [&](const Split& a, const Split& b, Index k, Index nb, int j) COMBABC_KERNEL_LAMBDA {
+          for (Index l = 0; l < k; ++l) {
+            DotSplit(b.re.data() + l * nb,
+                     b.im.data() + l * nb,
+                     ws.u[j].re.data() + at,
+                     ws.u[j].im.data() + at,
+                     nb,
+                     cr + l,
+                     ci + l);
+            SubScaledSplit(zr, zi, a.re.data() + l * n, a.im.data() + l * n, -cr[l], -ci[l], n);
+          }
+        };
+    if (i + 1 < ws.num_rows) couple(ws.p[i], ws.q[i], ws.rank[i], ws.RowSize(i + 1), i + 1);
+    if (i > 0) couple(ws.q[i - 1], ws.p[i - 1], ws.rank[i - 1], ws.RowSize(i - 1), i - 1);
+  };
+  FlagLargeResiduals(ws, cases, ws.y.re.data(), ws.y.im.data(), add_couplings);
+}
+
+// A certified (Higham) system: the elimination is backward stable; only a non-finite result
+// (non-finite input) sends a case to the fallback.
+COMBABC_KERNEL void FlagNonFiniteResults(SectionWorkspace& ws, Index cases) {
+  const Index nc = ws.nc;
+  for (Index j = 0; j < cases; ++j) {
+    double sum = 0.0;
+    for (int i = 0; i < ws.num_rows; ++i) {
+      for (Index k = 0; k < ws.RowSize(i); ++k) {
+        sum += ws.u[i].re[j * nc + k] + ws.u[i].im[j * nc + k];
+      }
     }
-    ws.fallback[case_index] = check.Passes() ? 0 : 1;
+    ws.fallback[j] = std::isfinite(sum) ? 0 : 1;
   }
 }
 
 // Fallback: one dense partial-pivoting LU of the whole condensed system (ws.diagonal holds the
 // assembled diagonal blocks), solved for each case flagged in ws.fallback.
-inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
-  const Index nc = ws.nc;
+inline void SolvePivoting(SectionWorkspace& ws, Index cases) {
+  const int rows = ws.num_rows;
   const auto complex_matrix = [](const Split& a, Index rows_a, Index cols_a, Index ld) {
     Eigen::MatrixXcd out(rows_a, cols_a);
     for (Index c = 0; c < cols_a; ++c) {
@@ -427,19 +372,16 @@ inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
     }
     return out;
   };
-  std::vector<Index> offset(rows + 1, 0);
-  for (int i = 0; i < rows; ++i) offset[i + 1] = offset[i] + RowSize(ws, i);
+  const std::vector<Index> offset = RowOffsets(ws);
   Eigen::MatrixXcd big = Eigen::MatrixXcd::Zero(offset[rows], offset[rows]);
-  Eigen::MatrixXcd big_rhs(offset[rows], cases);
   for (int i = 0; i < rows; ++i) {
-    const Index n = RowSize(ws, i);
+    const Index n = ws.RowSize(i);
     const Eigen::MatrixXcd a = complex_matrix(ws.diagonal[i], n, n, n);
     auto block = big.block(offset[i], offset[i], n, n);
     block.triangularView<Eigen::Lower>() = a;
     block.triangularView<Eigen::StrictlyUpper>() = a.transpose();
-    big_rhs.middleRows(offset[i], n) = complex_matrix(ws.rhs[i], n, cases, nc);
     if (i + 1 < rows) {
-      const Index m = RowSize(ws, i + 1);
+      const Index m = ws.RowSize(i + 1);
       const Index r = ws.rank[i];
       const Eigen::MatrixXcd coupling =
           complex_matrix(ws.p[i], n, r, n) * complex_matrix(ws.q[i], m, r, m).transpose();
@@ -447,74 +389,7 @@ inline void SolvePivoting(Workspace& ws, int rows, Index cases) {
       big.block(offset[i + 1], offset[i], m, n) = coupling.transpose();
     }
   }
-  const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(big);
-  for (Index j = 0; j < cases; ++j) {
-    if (ws.fallback[j] == 0) continue;
-    const Eigen::VectorXcd b = big_rhs.col(j);
-    const Eigen::VectorXcd solution = lu.solve(b);
-    for (int i = 0; i < rows; ++i) {
-      for (Index k = 0; k < RowSize(ws, i); ++k) {
-        ws.u[i].re[j * nc + k] = solution(offset[i] + k).real();
-        ws.u[i].im[j * nc + k] = solution(offset[i] + k).imag();
-      }
-    }
-  }
-}
-
-// Every case's outputs in group g from its kept end cross-sections (rows g - 1 and g): the
-// case's offsets plus the output map's rows of its set, at the columns of the free end dofs
-// (fixed ones are zero), times that case's values there. A template only so that it can take
-// SectionCondensation's private piece type.
-template <class Piece>
-COMBABC_KERNEL void RecoverGroupOutputs(const Piece& piece,
-                                        const OutputLayout& layout,
-                                        const OutputSets& sets,
-                                        int g,
-                                        Workspace& ws,
-                                        std::span<std::complex<double>> w) {
-  const Index nc = ws.nc;
-  const Index map_rows = piece.output_map.re.rows();
-  double* vr = ws.y.re.data();
-  double* vi = ws.y.im.data();
-  for (int c = 0; c < sets.num_cases(); ++c) {
-    const std::vector<int>& positions = layout.positions[sets.set_of_case[c]];
-    const auto n_out = static_cast<Index>(positions.size());
-    if (n_out == 0) continue;
-    const Index first_row = layout.map_begin[sets.set_of_case[c]];
-    const Index first_offset = layout.offset_begin[c];
-    for (Index k = 0; k < n_out; ++k) {
-      vr[k] = piece.output_offset(first_offset + k).real();
-      vi[k] = piece.output_offset(first_offset + k).imag();
-    }
-    // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
-    // subtracts, so the multipliers are -u.
-    const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
-      const std::vector<int>& f = *ws.free[i];
-      const Index n = RowSize(ws, i);
-      const double* mr = piece.output_map.re.data() + first_row;
-      const double* mi = piece.output_map.im.data() + first_row;
-      double* sr = ws.small.re.data();
-      double* si = ws.small.im.data();
-      for (Index k = 0; k < n; ++k) {
-        sr[k] = -ws.u[i].re[c * nc + k];
-        si[k] = -ws.u[i].im[c * nc + k];
-      }
-      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
-        // A contiguous run of free dofs is a run of adjacent columns: several per pass over v.
-        const Index column = (offset + f[0]) * map_rows;
-        SubScaledManySplit(vr, vi, mr + column, mi + column, map_rows, sr, si, n, n_out);
-      } else {
-        for (Index k = 0; k < n; ++k) {
-          const Index column = (offset + f[k]) * map_rows;
-          SubScaledSplit(vr, vi, mr + column, mi + column, sr[k], si[k], n_out);
-        }
-      }
-    };
-    if (piece.left_size > 0) add_end(g - 1, 0);
-    if (piece.right_size > 0) add_end(g, piece.left_size);
-    std::complex<double>* out = w.data() + sets.first_output[c];
-    for (Index k = 0; k < n_out; ++k) out[positions[k]] = {vr[k], vi[k]};
-  }
+  SolveFlaggedCases(ws, cases, offset, Eigen::PartialPivLU<Eigen::MatrixXcd>(big));
 }
 
 }  // namespace
@@ -552,52 +427,70 @@ COMBABC_TARGET_AVX512 void SectionCondensation::SolveAvx512(
 
 COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t> clamps,
                                                    std::span<std::complex<double>> w) const {
-  const int ns = num_sections_;
-  const int ng = ns / group_size_;
-  const int nc = nc_;
+  const int ng = num_sections_ / group_size_;
   const Index cases = num_cases_;
-  const int rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
   // The whole plate in one group was solved in the precompute; singular there is singular here.
   for (int g = 0; g < ng; ++g) {
     const double singular = GroupPieceOf(g, clamps).singular;
     if (singular > 0.0) throw SingularSystem(singular);
   }
-  thread_local Workspace ws;
-  ws.Reserve(nc, std::max(rows, 1), num_cases_);
-  if (ws.y.re.size() < w.size()) ws.y.Resize(static_cast<Index>(w.size()));
-  // Free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes it.
+  thread_local SectionWorkspace ws;
+  ws.Reserve(nc_, std::max(ng - 1, 1), num_cases_, w.size());
+  ws.num_rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
+  // Each A_i goes into the lower triangle of its factorization's storage: straight there for a
+  // certified system; otherwise first into storage of its own, which the residual check reads.
+  const bool in_place = higham_ && !always_pivot_;
+  Assemble(clamps, in_place, ws);
+  // One factorization for every load case (EliminateRows), then each case's back substitution.
+  // A pivot that breaks down sends every case to the fallback; a case whose own result fails
+  // goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateRows(ws, cases, higham_)) {
+    BackSubstitute(ws, cases);
+    if (higham_) {
+      FlagNonFiniteResults(ws, cases);
+    } else {
+      FlagLargeRowResiduals(ws, cases);
+    }
+  }
+  if (ws.AnyFallback()) FallBack(clamps, in_place, ws);
+  ThrowIfSingular(ws, cases);
+  for (int g = 0; g < ng; ++g) RecoverGroupOutputs(clamps, g, ws, w);
+}
+
+// The free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes
+// it. Row i gets the right block of group i and the left block of group i + 1 (lower triangles
+// only: the blocks are symmetric) and the loads of both and of its own cross-section; the
+// coupling of rows i and i + 1 is group i + 1's, in its factored form. `in_place`: each A_i
+// straight into its factorization's storage, else into ws.diagonal first.
+COMBABC_KERNEL void SectionCondensation::Assemble(std::span<const std::uint8_t> clamps,
+                                                  bool in_place,
+                                                  SectionWorkspace& ws) const {
+  const int ns = num_sections_;
+  const int nc = nc_;
+  const Index cases = num_cases_;
+  const int rows = ws.num_rows;
   for (int i = 0; i < rows; ++i) {
     const int x = (i + 1) * group_size_;
     const bool a = clamps[x - 1] != 0 || clamps[x] != 0;
     const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
     ws.free[i] = &free_dofs_[x][(a ? 1 : 0) | (b ? 2 : 0)];
   }
-  const auto size = [&](int i) { return RowSize(ws, i); };
-  // Assemble: row i gets the right block of group i and the left block of group i + 1 (lower
-  // triangles only: the blocks are symmetric); the coupling of rows i and i + 1 is group
-  // i + 1's, in its factored form.
-  const auto assemble_diagonal = [&](int i, double* ar, double* ai, Index ld) {
-    AssembleDiagonal(
-        GroupPieceOf(i, clamps), GroupPieceOf(i + 1, clamps), *ws.free[i], nc, ar, ai, ld);
-  };
-  // Each A_i goes into the lower triangle of its factorization's storage: straight there for a
-  // certified system; otherwise first into storage of its own, which the residual check reads.
-  const bool in_place = higham_ && !always_pivot_;
   for (int i = 0; i < rows; ++i) {
     const SolvePiece& left = GroupPieceOf(i, clamps);
     const SolvePiece& right = GroupPieceOf(i + 1, clamps);
     const std::vector<int>& f = *ws.free[i];
-    const Index n = size(i);
+    const Index n = ws.RowSize(i);
     ws.rank[i] = i + 1 < rows ? right.coupling_left.re.cols() : 0;
     const Index ld = n + ws.rank[i] + cases;
     double* fr = ws.factor[i].re.data();
     double* fi = ws.factor[i].im.data();
     if (in_place) {
-      assemble_diagonal(i, fr, fi, ld);
+      AssembleDiagonal(clamps, i, ws, fr, fi, ld);
     } else {
       double* ar = ws.diagonal[i].re.data();
       double* ai = ws.diagonal[i].im.data();
-      assemble_diagonal(i, ar, ai, n);
+      AssembleDiagonal(clamps, i, ws, ar, ai, n);
       ws.diagonal_max2[i] = LowerMaxNorm2Split(ar, ai, n, n);  // residual scale
       for (Index c = 0; c < n; ++c) {
         std::copy(ar + c * n + c, ar + (c + 1) * n, fr + c * ld + c);
@@ -615,7 +508,7 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
     }
     if (i + 1 < rows) {
       const std::vector<int>& g = *ws.free[i + 1];
-      const Index m = size(i + 1);
+      const Index m = ws.RowSize(i + 1);
       const Index r = ws.rank[i];
       for (Index l = 0; l < r; ++l) {
         const double* pr = right.coupling_left.re.data() + l * nc;
@@ -633,53 +526,112 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
       }
     }
   }
-  // One factorization for every load case (EliminateRows), then each case's back substitution.
-  // A pivot that breaks down sends every case to the fallback; a case whose own result fails
-  // goes there alone, so that each case is solved as a model of it alone would solve it.
-  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
-  if (!always_pivot_ && EliminateRows(ws, rows, cases, higham_)) {
-    if (cases == 1) BackSubstituteOne(ws, rows);
-    if (cases > 1) BackSubstituteCases(ws, rows, cases);
-    if (higham_) {
-      // A certified (Higham) system: the elimination is backward stable; only a non-finite
-      // result (non-finite input) sends a case to the fallback.
-      for (Index j = 0; j < cases; ++j) {
-        double sum = 0.0;
-        for (int i = 0; i < rows; ++i) {
-          for (Index k = 0; k < size(i); ++k) {
-            sum += ws.u[i].re[j * nc + k] + ws.u[i].im[j * nc + k];
-          }
-        }
-        ws.fallback[j] = std::isfinite(sum) ? 0 : 1;
+}
+
+// The lower triangle of row i's diagonal block, A = right block of the group on its left + left
+// block of the group on its right, at the row's free dofs f, into (ar, ai) with leading dimension
+// ld. The free dofs are a contiguous run (a clamp fixes whole edge nodes, the first or last of a
+// cross-section) unless a mask fixes only some of a node's dofs.
+COMBABC_KERNEL void SectionCondensation::AssembleDiagonal(std::span<const std::uint8_t> clamps,
+                                                          int i,
+                                                          const SectionWorkspace& ws,
+                                                          double* ar,
+                                                          double* ai,
+                                                          std::ptrdiff_t ld) const {
+  const SolvePiece& left = GroupPieceOf(i, clamps);
+  const SolvePiece& right = GroupPieceOf(i + 1, clamps);
+  const std::vector<int>& f = *ws.free[i];
+  const Index nc = nc_;
+  const auto n = static_cast<Index>(f.size());
+  const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
+  for (Index c = 0; c < n; ++c) {
+    const Index column = Index{f[c]} * nc;
+    const double* lr = left.right_block.re.data() + column;
+    const double* li = left.right_block.im.data() + column;
+    const double* rr = right.left_block.re.data() + column;
+    const double* ri = right.left_block.im.data() + column;
+    if (run) {
+      const Index first = f[c];
+      for (Index r = c; r < n; ++r) {
+        ar[c * ld + r] = lr[first + r - c] + rr[first + r - c];
+        ai[c * ld + r] = li[first + r - c] + ri[first + r - c];
       }
     } else {
-      FlagLargeResiduals(ws, rows, cases);
-    }
-  }
-  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
-    if (in_place) {  // the diagonal blocks went into the factorization, which overwrote them
-      for (int i = 0; i < rows; ++i) {
-        assemble_diagonal(i, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), size(i));
+      for (Index r = c; r < n; ++r) {
+        ar[c * ld + r] = lr[f[r]] + rr[f[r]];
+        ai[c * ld + r] = li[f[r]] + ri[f[r]];
       }
     }
-    SolvePivoting(ws, rows, cases);
   }
-  // Singular or nearly so (plate.hpp): every path, the certified one too, since a certificate
-  // by Cholesky can pass a matrix that is singular to working precision. Case by case: each
-  // load's solution against that load.
-  for (Index j = 0; j < cases; ++j) {
-    AmplificationCheck amplification;
-    for (int i = 0; i < rows; ++i) {
-      amplification.AddRow(ws.u[i].re.data() + j * nc,
-                           ws.u[i].im.data() + j * nc,
-                           ws.rhs[i].re.data() + j * nc,
-                           ws.rhs[i].im.data() + j * nc,
-                           size(i));
+}
+
+// The cases flagged in ws.fallback by the pivoting LU. Assembled in place, the diagonal blocks
+// went into the factorization, which overwrote them: assembled again first.
+COMBABC_KERNEL void SectionCondensation::FallBack(std::span<const std::uint8_t> clamps,
+                                                  bool in_place,
+                                                  SectionWorkspace& ws) const {
+  if (in_place) {
+    for (int i = 0; i < ws.num_rows; ++i) {
+      AssembleDiagonal(
+          clamps, i, ws, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), ws.RowSize(i));
     }
-    if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
   }
-  for (int g = 0; g < ng; ++g) {
-    RecoverGroupOutputs(GroupPieceOf(g, clamps), group_layout_[g], sets_, g, ws, w);
+  SolvePivoting(ws, num_cases_);
+}
+
+// Every case's outputs in group g from its kept end cross-sections (rows g - 1 and g): the
+// case's offsets plus the output map's rows of its set, at the columns of the free end dofs
+// (fixed ones are zero), times that case's values there.
+COMBABC_KERNEL void SectionCondensation::RecoverGroupOutputs(
+    std::span<const std::uint8_t> clamps,
+    int g,
+    SectionWorkspace& ws,
+    std::span<std::complex<double>> w) const {
+  const SolvePiece& piece = GroupPieceOf(g, clamps);
+  const OutputLayout& layout = group_layout_[g];
+  const OutputSets& sets = sets_;
+  const Index nc = ws.nc;
+  const Index map_rows = piece.output_map.re.rows();
+  double* vr = ws.y.re.data();
+  double* vi = ws.y.im.data();
+  for (int c = 0; c < sets.num_cases(); ++c) {
+    const std::vector<int>& positions = layout.positions[sets.set_of_case[c]];
+    const auto n_out = static_cast<Index>(positions.size());
+    if (n_out == 0) continue;
+    const Index first_row = layout.map_begin[sets.set_of_case[c]];
+    const Index first_offset = layout.offset_begin[c];
+    for (Index k = 0; k < n_out; ++k) {
+      vr[k] = piece.output_offset(first_offset + k).real();
+      vi[k] = piece.output_offset(first_offset + k).imag();
+    }
+    // v += (the output map's columns of end cross-section i's free dofs) u_i. SubScaled*Split
+    // subtracts, so the multipliers are -u.
+    const auto add_end = [&](int i, Index offset) COMBABC_KERNEL_LAMBDA {
+      const std::vector<int>& f = *ws.free[i];
+      const Index n = ws.RowSize(i);
+      const double* mr = piece.output_map.re.data() + first_row;
+      const double* mi = piece.output_map.im.data() + first_row;
+      double* sr = ws.small.re.data();
+      double* si = ws.small.im.data();
+      for (Index k = 0; k < n; ++k) {
+        sr[k] = -ws.u[i].re[c * nc + k];
+        si[k] = -ws.u[i].im[c * nc + k];
+      }
+      if (n > 0 && f[n - 1] - f[0] + 1 == n) {
+        // A contiguous run of free dofs is a run of adjacent columns: several per pass over v.
+        const Index column = (offset + f[0]) * map_rows;
+        SubScaledManySplit(vr, vi, mr + column, mi + column, map_rows, sr, si, n, n_out);
+      } else {
+        for (Index k = 0; k < n; ++k) {
+          const Index column = (offset + f[k]) * map_rows;
+          SubScaledSplit(vr, vi, mr + column, mi + column, sr[k], si[k], n_out);
+        }
+      }
+    };
+    if (piece.left_size > 0) add_end(g - 1, 0);
+    if (piece.right_size > 0) add_end(g, piece.left_size);
+    std::complex<double>* out = w.data() + sets.first_output[c];
+    for (Index k = 0; k < n_out; ++k) out[positions[k]] = {vr[k], vi[k]};
   }
 }
 
