@@ -12,7 +12,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/enumerate.hpp"
 
 namespace {
 

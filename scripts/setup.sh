@@ -9,6 +9,7 @@ packages=(
   libcli11-dev           # command-line parsing
   libsqlite3-dev sqlite3 # run history
   libcsv-dev             # RFC 4180 CSV parsing of the data files (runtime: libcsv3)
+  libxxhash-dev          # XXH3 for the sensor's precompute cache (header-only: no runtime)
   libopenmpi-dev openmpi-bin  # the MPI executor (mpirun -np N combabc run; COMBABC_MPI)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy

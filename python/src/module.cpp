@@ -23,7 +23,10 @@
 #include "combabc/params/binary_space.hpp"
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/enumerate.hpp"
+#include "combabc/services/history_tools.hpp"
+#include "combabc/services/run.hpp"
+#include "combabc/services/simulate.hpp"
 #include "history_arrays.hpp"
 #include "python_simulator.hpp"
 

@@ -13,18 +13,21 @@ _combabc() {
   done
   local opts files
   case $cmd in
-    run) opts="-h --help -o --output -j --threads --overwrite --no-report -q --quiet"; files=toml ;;
+    run)
+      opts="-h --help -o --output -j --threads --overwrite --no-report -q --quiet --no-cache"
+      files=toml ;;
     resume)
       opts="-h --help -j --threads --max-simulations --max-wall-time --min-acceptance-rate
-            --max-failure-fraction --no-report -q --quiet"
+            --max-failure-fraction --no-report -q --quiet --no-cache"
       files=sqlite ;;
     enumerate)
-      opts="-h --help --threshold -o --output -j --threads --overwrite --top --no-report -q --quiet"
+      opts="-h --help --threshold -o --output -j --threads --overwrite --top --no-report -q --quiet
+            --no-cache"
       files=toml ;;
     design)
-      opts="-h --help --posterior -o --output -j --threads --overwrite --no-figure"
+      opts="-h --help --posterior -o --output -j --threads --overwrite --no-figure --no-cache"
       files=toml ;;
-    simulate) opts="-h --help --clamps -o --output --overwrite"; files=toml ;;
+    simulate) opts="-h --help --clamps -o --output --overwrite --no-cache"; files=toml ;;
     report) opts="-h --help -o --output --overwrite"; files=sqlite ;;
     export) opts="-h --help -o --output --overwrite --no-netcdf"; files=sqlite ;;
     verify) opts="-h --help"; files=sqlite ;;

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <optional>
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
 #include "plate/fast_path/higham_check.hpp"
+#include "plate/fast_path/precompute_cache.hpp"
 #include "plate/fast_path/section_condensation.hpp"
 
 namespace combabc::plate {
@@ -60,9 +63,79 @@ Load SensorLoad(const SensorOptions& o, const LoadCase& c) {
   return load;
 }
 
+// Everything the condensation depends on (precompute_cache.hpp): the build of this code, the
+// mesh and its element matrices (which carry the laminate, the theory and the foundation), the
+// supports, the loads, the outputs and the frequency.
+PrecomputeKey KeyOf(const Plate& plate,
+                    const SensorOptions& o,
+                    int group_size,
+                    const CrossSectionMasks& masks,
+                    const Eigen::MatrixXd& loads,
+                    const std::vector<CaseOutputs>& outputs) {
+  KeyHasher h;
+  h.AddText(PlateBuildId());
+  h.AddValue(static_cast<int>(plate.theory()));
+  for (int v : {plate.element_order(),
+                plate.dofs_per_node(),
+                plate.element_dofs(),
+                plate.num_elements_x(),
+                plate.num_elements_y()}) {
+    h.AddValue(v);
+  }
+  h.AddValue(plate.grid().x.size());
+  h.Add(plate.grid().x.data(), sizeof(double) * plate.grid().x.size());
+  h.AddValue(plate.grid().y.size());
+  h.Add(plate.grid().y.data(), sizeof(double) * plate.grid().y.size());
+  // Elements of equal size share their matrices: each distinct one once, then which is where.
+  std::vector<const ElementMatrices*> distinct;
+  for (int ex = 0; ex < plate.num_elements_x(); ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
+      const ElementMatrices* e = &plate.Element(ex, ey);
+      auto it = std::find(distinct.begin(), distinct.end(), e);
+      if (it == distinct.end()) {
+        h.AddMatrix(e->stiffness_real);
+        h.AddMatrix(e->stiffness_imag);
+        h.AddMatrix(e->mass_unit);
+        h.AddMatrix(e->rotary_inertia);
+        it = distinct.insert(distinct.end(), e);
+      }
+      h.AddValue(it - distinct.begin());
+    }
+  }
+  h.AddValue(plate.foundation_stiffness());
+  h.AddValue(plate.foundation_loss_factor());
+  h.AddValue(plate.MassCoefficient(o.frequency_hz));
+  h.AddValue(o.frequency_hz);
+  h.AddValue(o.clamps_per_edge);
+  h.AddValue(o.elements_per_section);
+  h.AddValue(group_size);
+  h.AddValue(masks);
+  h.AddValue(o.always_pivot);
+  h.AddMatrix(loads);
+  h.AddValue(outputs.size());
+  for (const CaseOutputs& c : outputs) {
+    h.AddValue(c.y);
+    h.AddValue(c.x.size());
+    h.Add(c.x.data(), sizeof(double) * c.x.size());
+  }
+  return h.Finish();
+}
+
 }  // namespace
 
-SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
+std::string DefaultPrecomputeCache() {
+  if (const char* dir = std::getenv("COMBABC_CACHE_DIR")) return dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg == '/') {
+    return std::string(xdg) + "/combabc/precompute";
+  }
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+    return std::string(home) + "/.cache/combabc/precompute";
+  }
+  return "";
+}
+
+SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& precompute)
+    : options_(options) {
   std::string why;
   if (!options_.IsValid(&why)) {
     const std::string field = why.substr(0, why.find(' '));
@@ -74,38 +147,61 @@ SensorModel::SensorModel(const SensorOptions& options) : options_(options) {
                                    options_.foundation_loss_factor,
                                    options_.theory,
                                    options_.ElementOrder());
+  for (const LoadCase& c : options_.load_cases) {
+    output_positions_.insert(
+        output_positions_.end(), c.output_positions.begin(), c.output_positions.end());
+  }
   const int intervals = options_.elements_per_section * plate_->element_order();
   const CrossSectionMasks masks{
       SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
       SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
       SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
       SupportMask(Edge::kRight, options_.short_edge_end, options_.theory)};
-  fast_path_certified_ =
-      IsHighamSystem(*plate_, options_.clamps_per_edge, intervals, masks, options_.frequency_hz);
-  for (const LoadCase& c : options_.load_cases) {
-    output_positions_.insert(
-        output_positions_.end(), c.output_positions.begin(), c.output_positions.end());
+  // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
+  // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
+  const int group_size =
+      options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1);
+  const Eigen::MatrixXd loads = LoadMatrix();
+  const std::vector<CaseOutputs> outputs = CaseOutputList();
+  const VectorKernels kernels = ResolveKernels(options_.vector_kernels);
+  const PrecomputeCache cache(precompute.cache_directory, precompute.cache_max_bytes);
+  PrecomputeKey key{};
+  if (!precompute.cache_directory.empty()) {
+    key = KeyOf(*plate_, options_, group_size, masks, loads, outputs);
+    std::unique_ptr<SectionCondensation> read;
+    if (cache.Load(key, [&](ByteReader& reader) {
+          read = SectionCondensation::Read(reader, kernels);
+          return read != nullptr;
+        })) {
+      condensation_ = std::move(read);
+      precompute_from_cache_ = true;
+    }
   }
-  // Every load case shares the clamps, the mesh and the frequency: one condensation takes them
-  // all, and each configuration is factorized once for every case's load (docs/model.md,
-  // "Several load cases").
-  condensation_ = std::make_unique<SectionCondensation>(
-      *plate_,
-      options_.clamps_per_edge,
-      options_.elements_per_section,
-      // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
-      // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
-      options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1),
-      SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
-      SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
-      SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
-      SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-      LoadMatrix(),
-      options_.frequency_hz,
-      CaseOutputList(),
-      options_.always_pivot,
-      fast_path_certified_,
-      ResolveKernels(options_.vector_kernels));
+  if (condensation_ == nullptr) {
+    // Every load case shares the clamps, the mesh and the frequency: one condensation takes them
+    // all, and each configuration is factorized once for every case's load (docs/model.md,
+    // "Several load cases").
+    condensation_ = std::make_unique<SectionCondensation>(
+        *plate_,
+        options_.clamps_per_edge,
+        options_.elements_per_section,
+        group_size,
+        masks.fixed_a,
+        masks.fixed_b,
+        masks.start,
+        masks.end,
+        loads,
+        options_.frequency_hz,
+        outputs,
+        options_.always_pivot,
+        IsHighamSystem(*plate_, options_.clamps_per_edge, intervals, masks, options_.frequency_hz),
+        kernels,
+        precompute.pool);
+    if (!precompute.cache_directory.empty()) {
+      cache.Store(key, [&](ByteWriter& writer) { condensation_->Write(writer); });
+    }
+  }
+  fast_path_certified_ = condensation_->higham();
   continuous_ = std::make_unique<ContinuousCache>();
   // Proportional damping, K_imag = eta K_real: the layers' own loss factors then need no
   // precompute of their own. It holds when every layer has one loss factor, and also when every

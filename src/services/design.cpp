@@ -158,7 +158,11 @@ std::vector<design::CandidateProfiles> SimulateCandidates(
     lc.output_y_fraction = k.scan_y_fraction;
     options.load_cases.push_back(std::move(lc));
   }
-  const plate::SensorModel model(options);
+  ThreadPool pool(threads);
+  plate::PrecomputeOptions precompute;
+  precompute.pool = &pool;
+  precompute.cache_directory = plate::DefaultPrecomputeCache();
+  const plate::SensorModel model(options, precompute);
   const std::size_t n = population.size();
   const auto outputs = static_cast<std::size_t>(model.num_outputs());
   std::vector<double> all(n * outputs);

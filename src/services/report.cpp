@@ -6,7 +6,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/report.hpp"
 #include "services/python_script.hpp"
 #include "services/report_checks.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// What the calibration services need of the report before a run starts (src/services/report.cpp).
+// What run, resume and enumerate need of the report before they start (src/services/report.cpp).
 #include <string>
 
 namespace combabc::services {

@@ -6,7 +6,8 @@
 namespace combabc::services {
 
 SensorSimulator::SensorSimulator(const std::vector<SensorModelPlan>& plans,
-                                 std::vector<std::string> real_names)
+                                 std::vector<std::string> real_names,
+                                 const plate::PrecomputeOptions& precompute)
     : real_names_(std::move(real_names)) {
   COMBABC_CHECK(!plans.empty());
   for (const auto& name : real_names_) {
@@ -34,7 +35,7 @@ SensorSimulator::SensorSimulator(const std::vector<SensorModelPlan>& plans,
   output_size_ = static_cast<int>(offsets.back());
   for (const SensorModelPlan& plan : plans) {
     Model m;
-    m.model = std::make_unique<plate::SensorModel>(plan.options);
+    m.model = std::make_unique<plate::SensorModel>(plan.options, precompute);
     bool in_order = plans.size() == 1;
     for (std::size_t c = 0; c < plan.experiments.size(); ++c) {
       in_order = in_order && plan.experiments[c] == c;

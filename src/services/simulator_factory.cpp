@@ -16,12 +16,18 @@ std::string WorkDirectoryOf(const std::string& history_path) {
   return (history.parent_path() / (history.stem().string() + ".work")).string();
 }
 
-BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string& work_directory) {
+BuiltSimulator MakeSimulator(const CalibrationConfig& config,
+                             const std::string& work_directory,
+                             ThreadPool* threads) {
   BuiltSimulator built;
   if (config.simulator.kind == SimulatorKind::kSensor) {
     std::vector<std::string> real_names;
     for (const auto& r : config.reals) real_names.push_back(r.name);
-    auto sensor = std::make_unique<SensorSimulator>(SensorModels(config), std::move(real_names));
+    plate::PrecomputeOptions precompute;
+    precompute.pool = threads;
+    precompute.cache_directory = plate::DefaultPrecomputeCache();
+    auto sensor =
+        std::make_unique<SensorSimulator>(SensorModels(config), std::move(real_names), precompute);
     const int clamps = sensor->num_clamps();
     if (config.space.dimension != clamps) {
       throw Error(ErrorKind::kConfig,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "combabc/config/config.hpp"
+#include "combabc/core/thread_pool.hpp"
 #include "combabc/samplers/simulator.hpp"
 
 namespace combabc::services {
@@ -19,8 +20,12 @@ struct BuiltSimulator {
 
 // work_directory: where an external simulator makes its per-call / per-worker folders (inside the
 // run's output folder). Throws combabc::Error(kConfig) for a simulator that does not fit the
-// config (the sensor's clamp count, a worker that fails its handshake).
-BuiltSimulator MakeSimulator(const CalibrationConfig& config, const std::string& work_directory);
+// config (the sensor's clamp count, a worker that fails its handshake). `threads`: lent to the
+// sensor's precompute (null: this thread); the sensor uses the precompute cache
+// (plate::DefaultPrecomputeCache, docs/model.md).
+BuiltSimulator MakeSimulator(const CalibrationConfig& config,
+                             const std::string& work_directory,
+                             ThreadPool* threads = nullptr);
 
 // The work folder of the run whose history is `history_path`: "<history stem>.work" beside it.
 std::string WorkDirectoryOf(const std::string& history_path);

@@ -19,7 +19,7 @@
 #include "cli_runner.hpp"
 #include "combabc/config/config.hpp"
 #include "combabc/history/history_store.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/simulate.hpp"
 #include "tiny_experiments.hpp"
 
 namespace combabc::testing {

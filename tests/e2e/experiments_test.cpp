@@ -22,7 +22,8 @@
 #include "combabc/config/config.hpp"
 #include "combabc/config/distance_from_config.hpp"
 #include "combabc/history/history_store.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/run.hpp"
+#include "combabc/services/simulate.hpp"
 #include "tiny_experiments.hpp"
 
 namespace combabc::testing {

@@ -16,7 +16,7 @@
 #include "combabc/config/config.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/run.hpp"
 
 namespace combabc::testing {
 namespace {

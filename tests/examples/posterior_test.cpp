@@ -17,7 +17,7 @@
 
 #include "combabc/config/config.hpp"
 #include "combabc/data/measured_data.hpp"
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/run.hpp"
 
 namespace combabc::testing {
 namespace {

@@ -47,7 +47,7 @@ touch "$dir/a.toml" "$dir/b.sqlite" "$dir/c.txt"
 got=$(cd "$dir" && bash -c 'source "$1"
   complete() { COMP_WORDS=("$@"); COMP_CWORD=$((${#COMP_WORDS[@]} - 1)); _combabc; echo "${COMPREPLY[*]}"; }
   complete combabc re; complete combabc run --no; complete combabc run ""; complete combabc report ""' _ "$completion")
-expected=$'resume report\n--no-report\na.toml\nb.sqlite'
+expected=$'resume report\n--no-report --no-cache\na.toml\nb.sqlite'
 [ "$got" = "$expected" ] || problem "completion gave [$got], expected [$expected]"
 if ((fail)); then exit 1; fi
 echo "man page and completion cover $(wc -w <<<"$commands") commands and their options"

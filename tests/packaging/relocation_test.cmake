@@ -62,7 +62,7 @@ endif()
 # pkg-config against the moved tree.
 file(WRITE ${WORK_DIR}/use.cpp [=[
 #include <iostream>
-#include "combabc/services/calibration.hpp"
+#include "combabc/services/history_tools.hpp"
 int main(int argc, char** argv) {
   if (argc != 2) return 2;
   const auto outcome = combabc::services::VerifyHistory(argv[1]);

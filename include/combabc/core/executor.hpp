@@ -54,6 +54,9 @@ class Executor {
   virtual bool FromPrimary(bool value) { return value; }
   // The same for a number (the measured cost of a simulation, which sizes the batches).
   virtual double FromPrimary(double value) { return value; }
+  // This worker's threads, for work that is not a batch of candidates (a simulator's set-up: the
+  // sensor's precompute); null when it has none to lend.
+  virtual ThreadPool* thread_pool() { return nullptr; }
 };
 
 // Shared memory: ranges run on a ThreadPool (threads = 0: all cores; 1: inline, no threads).
@@ -62,6 +65,7 @@ class ThreadPoolExecutor : public Executor {
   explicit ThreadPoolExecutor(int threads) : pool_(threads) {}
   int concurrency() const override { return pool_.size(); }
   void Execute(std::size_t n, BatchTask& task) override;
+  ThreadPool* thread_pool() override { return &pool_; }
 
  private:
   ThreadPool pool_;

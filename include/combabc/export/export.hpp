@@ -20,7 +20,7 @@ struct ExportOptions {
   // files of the same names; nothing else in it is ever removed.
   bool overwrite = false;
   // Called with the CSV and JSON files staged, before anything is committed: adds files made
-  // from them (the NetCDF file, written by a script: services/tools.cpp). Empty: none.
+  // from them (the NetCDF file, written by a script: services/history_tools.cpp). Empty: none.
   std::function<void(OutputDirectory&)> add_files;
 };
 

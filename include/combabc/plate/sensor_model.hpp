@@ -31,6 +31,7 @@
 
 #include <Eigen/Dense>
 
+#include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/elements/laminate.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
@@ -237,9 +238,26 @@ struct SensorModes {
   Eigen::MatrixXd shapes;              // num_outputs x count: w of each mass-normalised mode
 };
 
+// How a SensorModel builds its precomputed pieces (docs/model.md, "Start-up and the precompute
+// cache"). Neither choice changes a single bit of what the model computes.
+struct PrecomputeOptions {
+  // Threads for the precompute's independent pieces; null: the calling thread alone.
+  ThreadPool* pool = nullptr;
+  // The disk cache's folder (created when missing); empty: no cache. DefaultPrecomputeCache() is
+  // what the CLI and Python use.
+  std::string cache_directory;
+  // The cache's entries beyond this many bytes are removed, least recently used first.
+  std::uint64_t cache_max_bytes = std::uint64_t{512} << 20;
+};
+
+// $COMBABC_CACHE_DIR if set (an empty value: no cache), else $XDG_CACHE_HOME/combabc/precompute,
+// else $HOME/.cache/combabc/precompute; empty (no cache) when none of them is set.
+std::string DefaultPrecomputeCache();
+
 class SensorModel {
  public:
-  explicit SensorModel(const SensorOptions& options);  // throws combabc::Error if invalid
+  // Throws combabc::Error if `options` is invalid.
+  explicit SensorModel(const SensorOptions& options, const PrecomputeOptions& precompute = {});
   ~SensorModel();
   SensorModel(const SensorModel&) = delete;
   SensorModel& operator=(const SensorModel&) = delete;
@@ -258,6 +276,8 @@ class SensorModel {
   // definite), so every configuration's unpivoted LDL^T is provably stable (section_solve.cpp).
   // True for the default sensor; false e.g. above the first resonance.
   bool fast_path_certified() const { return fast_path_certified_; }
+  // Whether the precomputed pieces came from the disk cache (PrecomputeOptions).
+  bool precompute_from_cache() const { return precompute_from_cache_; }
 
   // clamps[k] = 1: clamp k + 1 fixed; 0: free (paper section 5). Writes |w| (m, or each case's
   // profile normalised to a maximum of 1) at the output positions of every load case. Thread-safe.
@@ -321,6 +341,7 @@ class SensorModel {
   std::unique_ptr<Plate> plate_;
   std::unique_ptr<SectionCondensation> condensation_;  // every load case
   bool fast_path_certified_ = false;
+  bool precompute_from_cache_ = false;
   std::unique_ptr<ContinuousCache> continuous_;
 };
 

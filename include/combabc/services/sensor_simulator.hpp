@@ -19,8 +19,10 @@ class SensorSimulator : public Simulator {
   // plans: SensorModels(config), each model's load cases being the experiments it lists (their
   // outputs in experiment order make the simulator's output). real_names: the ParameterSpace's
   // reals, in order; each must name a SensorVariation field (throws combabc::Error(kConfig)).
+  // precompute: how the models build their pieces (threads, the disk cache; bit-neutral).
   explicit SensorSimulator(const std::vector<SensorModelPlan>& plans,
-                           std::vector<std::string> real_names = {});
+                           std::vector<std::string> real_names = {},
+                           const plate::PrecomputeOptions& precompute = {});
   int output_size() const override { return output_size_; }
   void Simulate(const ParameterView& theta,
                 RandomStream& rng,

@@ -32,6 +32,7 @@
 #include <complex>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -42,6 +43,9 @@
 #include "combabc/plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
+
+class ByteWriter;  // precompute_cache.hpp
+class ByteReader;
 
 // The masks that fix a cross-section's dofs (bit k of a mask: the node's dof k is fixed): an
 // edge node of a fixed clamp (edge A at j = 0, edge B at j = ny) and the plate's two end
@@ -123,6 +127,7 @@ struct OutputSets {
   std::vector<int> case_of_set;  // set -> the first case with it (its positions, line)
   std::vector<std::vector<int>> cases_of_set;  // set -> its cases, ascending
   std::vector<std::size_t> first_output;       // case -> its first output; [num cases] = the total
+  OutputSets() = default;                      // empty; filled by SectionCondensation::Read
   explicit OutputSets(const std::vector<CaseOutputs>& outputs);
   int num_sets() const { return static_cast<int>(case_of_set.size()); }
   int num_cases() const { return static_cast<int>(set_of_case.size()); }
@@ -193,9 +198,18 @@ class SectionCondensation {
   void Solve(std::span<const std::uint8_t> clamps, std::span<std::complex<double>> w) const;
 
   int num_pieces() const { return static_cast<int>(group_pieces_.size()); }
+  bool higham() const { return higham_; }
+
+  // The precompute cache's payload (precompute_cache.hpp; section_condensation_io.cpp): Write
+  // stores every member Solve reads; Read rebuilds the condensation from it, or returns null when
+  // the bytes do not describe a consistent one (nothing of it may then be trusted).
+  void Write(ByteWriter& w) const;
+  static std::unique_ptr<SectionCondensation> Read(ByteReader& r, VectorKernels kernels);
   std::size_t MemoryBytes() const;
 
  private:
+  SectionCondensation() = default;  // for Read
+  bool Consistent() const;          // Read's check of a payload's sizes and indices
   // A section piece: its condensed matrix C (index in section_condensed_, which the sections of
   // one mesh share in each clamp state), its loads and outputs.
   struct Piece {
@@ -294,15 +308,15 @@ class SectionCondensation {
                          free);
   }
 
-  int num_sections_;
-  int intervals_per_section_;  // grid intervals: elements_per_section x the element order
-  int ny_;
-  int nc_;  // dofs per cross-section, dofs_per_node (ny + 1) over the grid's ny
-  std::uint8_t fixed_mask_a_;
-  std::uint8_t fixed_mask_b_;
-  std::uint8_t start_mask_;
-  std::uint8_t end_mask_;
-  int num_cases_;
+  int num_sections_ = 0;
+  int intervals_per_section_ = 0;  // grid intervals: elements_per_section x the element order
+  int ny_ = 0;
+  int nc_ = 0;  // dofs per cross-section, dofs_per_node (ny + 1) over the grid's ny
+  std::uint8_t fixed_mask_a_ = 0;
+  std::uint8_t fixed_mask_b_ = 0;
+  std::uint8_t start_mask_ = 0;
+  std::uint8_t end_mask_ = 0;
+  int num_cases_ = 0;
   OutputSets sets_;
   // Construction only (released once the group pieces are built).
   std::vector<int> mesh_of_section_;  // section -> the first section with the same element matrices
@@ -310,10 +324,10 @@ class SectionCondensation {
   std::vector<Piece> pieces_;
   std::vector<std::array<int, 4>> piece_index_;  // [section][state] -> pieces_ (deduplicated)
   std::vector<OutputLayout> section_layout_;
-  int group_size_;
-  bool always_pivot_;
-  bool higham_;            // the caller certified a Higham system: no residual check needed (Solve)
-  VectorKernels kernels_;  // which copy Solve runs
+  int group_size_ = 0;
+  bool always_pivot_ = false;
+  bool higham_ = false;  // the caller certified a Higham system: no residual check needed (Solve)
+  VectorKernels kernels_ = VectorKernels::kPortable;  // which copy Solve runs
   std::vector<SolvePiece> group_pieces_;
   std::vector<std::vector<int>> group_piece_index_;  // [group][state] -> group_pieces_
   std::vector<OutputLayout> group_layout_;

@@ -1,69 +1,16 @@
-// The non-sampling jobs: simulate one configuration, export a history (the report: report.cpp).
+// `combabc simulate`: one configuration through the config's simulator at its nominal values.
+#include "combabc/services/simulate.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
-#include "combabc/export/export.hpp"
-#include "combabc/services/calibration.hpp"
-#include "services/python_script.hpp"
 #include "services/simulator_factory.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
-namespace {
-
-std::string Sibling(const std::string& history_path, const std::string& name) {
-  const auto parent = fs::path(history_path).parent_path();
-  return (parent.empty() ? fs::path(name) : parent / name).string();
-}
-
-constexpr const char* kNetcdfFile = "inference_data.nc";
-constexpr const char* kNetcdfNeeds =
-    "the NetCDF file needs Python 3 with xarray and netCDF4 (Debian: apt-get install "
-    "python3-xarray python3-netcdf4), or COMBABC_PYTHON naming such a python";
-
-// inference_data.nc (ArviZ's InferenceData layout, docs/history.md) made by
-// scripts/report/combabc_netcdf.py from the staged CSV and JSON files, so that its values are
-// theirs. Without the script's Python packages the export goes on without it and says why in
-// outcome.note; any other failure of the script fails the export (nothing is written).
-void AddNetcdf(OutputDirectory& dir, ExportOutcome& outcome) {
-  PythonScript tools;
-  try {
-    tools = FindPythonScript("combabc_netcdf.py", "COMBABC_NETCDF_SCRIPT", kNetcdfNeeds);
-  } catch (const Error& e) {
-    outcome.note = std::string("no ") + kNetcdfFile + ": " + e.what();
-    return;
-  }
-  dir.Add(kNetcdfFile);
-  const std::vector<std::string> args = {tools.python,
-                                         tools.script,
-                                         "--particles",
-                                         dir.StagedPath("particles.csv"),
-                                         "--measured",
-                                         dir.StagedPath("measured.csv"),
-                                         "--summary",
-                                         dir.StagedPath("summary.json"),
-                                         "--out",
-                                         dir.StagedPath(kNetcdfFile)};
-  const ProcessResult result = RunProcess(args, kNetcdfNeeds);
-  constexpr int kUnavailable = 69;  // EX_UNAVAILABLE: xarray or netCDF4 missing
-  if (result.status == kUnavailable) {
-    dir.Discard(kNetcdfFile);
-    outcome.note = std::string("no ") + kNetcdfFile + ": " +
-                   ScriptMessage(result.err, result.status, "combabc_netcdf");
-    return;
-  }
-  if (result.status != 0) {
-    throw Error(KindOfScriptStatus(result.status),
-                std::string(kNetcdfFile) + ": " +
-                    ScriptMessage(result.err, result.status, "combabc_netcdf"));
-  }
-  outcome.netcdf_path = (fs::path(dir.path()) / kNetcdfFile).string();
-}
-
-}  // namespace
 
 NominalSimulator::NominalSimulator(CalibrationConfig config, const std::string& work_directory)
     : config_(std::move(config)) {
@@ -189,46 +136,6 @@ void SimulateConfiguration(const std::string& config_path,
     begin = end;
   }
   out.Commit();
-}
-
-VerifyOutcome VerifyHistory(const std::string& history_path) {
-  const HistoryCheck check = HistoryStore::Verify(history_path);
-  VerifyOutcome outcome;
-  outcome.ok = check.problems.empty();
-  if (!outcome.ok) {
-    outcome.lines = check.problems;
-    return outcome;
-  }
-  const std::string waves = std::to_string(check.waves) + (check.waves == 1 ? " wave" : " waves");
-  outcome.lines.push_back(history_path + ": OK (" + waves +
-                          (check.checksummed
-                               ? ", checksums verified)"
-                               : "; no checksums (schema v" + std::to_string(check.schema_version) +
-                                     "): structure checked only)"));
-  // The limits the run ran under, where a resume changed the config's (docs/history.md).
-  const RunMetadata metadata = HistoryStore::Open(history_path, true).LoadMetadata();
-  std::string limits;
-  for (const auto& [key, value] : metadata.stop_limits) {
-    if (!limits.empty()) limits += ", ";
-    limits.append(key).append(" = ").append(value);
-  }
-  if (!limits.empty()) outcome.lines.back() += "; stop limits set on resume: " + limits;
-  return outcome;
-}
-
-ExportOutcome ExportHistory(const std::string& history_path,
-                            const std::string& directory,
-                            bool overwrite,
-                            bool netcdf) {
-  ExportOutcome outcome;
-  outcome.directory = directory.empty() ? Sibling(history_path, "export") : directory;
-  ExportOptions options;
-  options.overwrite = overwrite;
-  if (netcdf) {
-    options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, outcome); };
-  }
-  ExportRun(history_path, outcome.directory, options);
-  return outcome;
 }
 
 }  // namespace combabc::services

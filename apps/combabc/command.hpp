@@ -1,0 +1,49 @@
+#pragma once
+// What every subcommand of the CLI has: its entry in the command line and its job, the way a job
+// ends (a failure is one line and an exit code) and the option checks the subcommands share.
+#include <CLI/CLI.hpp>
+#include <functional>
+
+#include "combabc/samplers/observer.hpp"
+#include "session.hpp"
+
+namespace combabc::cli {
+
+// sysexits.h codes for failures that are not combabc::Error.
+constexpr int kExitUsage = 64;
+constexpr int kExitSoftware = 70;
+// A run, resume or enumeration stopped by SIGINT or SIGTERM during a wave (128 + SIGINT).
+constexpr int kExitInterrupted = 130;
+// The same bound as [sampler] threads (SmcOptions::IsValid).
+constexpr int kMaxThreads = 4096;
+
+// One subcommand: its entry in the command line, whose options fill values that `run` reads, and
+// `run`, which does the job once the command line named it and returns the exit code.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int(const Session&)> run;
+};
+
+// Runs `job` with what every command has: the progress display on stderr (on a terminal, on rank
+// 0, not with `quiet`) and SIGINT/SIGTERM handling (interrupt.hpp), given to `job` as one
+// observer. A combabc::Error ends it as one line "combabc: <kind>: <message>" and its sysexits
+// code; any other exception as "internal error" and 70. `job` returns the exit code.
+int Guarded(const Session& session, bool quiet, const std::function<int(SmcObserver*)>& job);
+
+// Guarded, for a command that writes or prints only: rank 0 does it, the others wait for its code.
+int PrimaryOnly(const Session& session, const std::function<int()>& job);
+
+// --no-cache, for the commands that build the sensor: its precomputed pieces are built afresh and
+// not stored (docs/model.md, "Start-up and the precompute cache"). It empties COMBABC_CACHE_DIR
+// for this process, which is where plate::DefaultPrecomputeCache looks first.
+void AddNoCacheFlag(CLI::App& command);
+
+// A whole number in [0, INT64_MAX], read strictly: CLI11's own conversion turns an out-of-range
+// value into INT64_MAX without a word, and its range check prints DBL_MAX's 309 digits.
+CLI::Validator NonNegativeInteger();
+
+// A number in [low, high] (high may be infinity), never NaN: CLI11's NonNegativeNumber and Range
+// let nan through, and NonNegativeNumber prints DBL_MAX's 309 digits for a negative value.
+CLI::Validator RealIn(double low, double high);
+
+}  // namespace combabc::cli

@@ -1,0 +1,172 @@
+// `combabc run` and `combabc resume`.
+#include <cstdint>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "combabc/services/run.hpp"
+#include "interrupt.hpp"
+#include "subcommands.hpp"
+
+namespace combabc::cli {
+namespace {
+
+// A run stopped because too many simulations failed: the simulator, not the calibration, is the
+// problem (sysexits EX_UNAVAILABLE). Its finished waves are kept.
+constexpr int kExitTooManyFailures = 69;
+
+struct RunArgs {
+  services::RunRequest request;
+  bool no_report = false;
+  bool quiet = false;
+};
+
+struct ResumeArgs {
+  services::ResumeRequest request;
+  // Each sets its limit only when given (its option's count).
+  std::int64_t max_simulations = 0;
+  double max_wall_time = 0.0;
+  double min_acceptance_rate = 0.0;
+  double max_failure_fraction = 0.0;
+  CLI::Option* max_simulations_option = nullptr;
+  CLI::Option* max_wall_time_option = nullptr;
+  CLI::Option* min_acceptance_rate_option = nullptr;
+  CLI::Option* max_failure_fraction_option = nullptr;
+  bool no_report = false;
+  bool quiet = false;
+};
+
+void PrintOutcome(const services::RunOutcome& outcome) {
+  const RunSummary& summary = outcome.history.summary;
+  std::cout << summary.BriefReport() << "\n"
+            << "history: " << outcome.history_path << "\n";
+  if (!outcome.report_directory.empty()) {
+    std::cout << "report:  " << outcome.report_directory << "/index.html\n";
+  }
+  // A run that gave up says why on stderr too, where a user watching the progress looks.
+  switch (summary.termination) {
+    case Termination::kBudgetExhausted:
+    case Termination::kAcceptanceRateTooLow:
+    case Termination::kWallTimeExceeded:
+    case Termination::kTooManyFailures:
+      std::cerr << "stopped: " << summary.message << "\n"
+                << "finished waves are kept; to go on, raise the limit: combabc resume "
+                << outcome.history_path << " " << services::LimitOption(summary.termination)
+                << " ...\n";
+      break;
+    default:
+      break;
+  }
+}
+
+// The outcome of a run or a resume, printed; its exit code.
+int Conclude(const services::RunOutcome& outcome) {
+  PrintOutcome(outcome);
+  const bool interrupted = outcome.history.summary.termination == Termination::kInterrupted;
+  if (interrupted) {
+    std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path << "\n";
+  }
+  if (outcome.history.summary.termination == Termination::kTooManyFailures) {
+    return kExitTooManyFailures;
+  }
+  return interrupted ? kExitInterrupted : 0;
+}
+
+// Under mpirun, rank 0's word if mpirun ends the job (a rank died): where the committed work is.
+void NoteHistory(const Session& session, const std::string& path) {
+  if (!session.primary() || !session.under_mpirun()) return;
+  SetTermNote(
+      "combabc: SIGTERM from mpirun (a rank died, or the job was stopped): the batches "
+      "committed so far are kept in " +
+      path + "; continue with: combabc resume " + path + "\n");
+}
+
+int RunCommand(RunArgs& args, const Session& session) {
+  services::RunRequest& request = args.request;
+  request.executor = session.executor();
+  request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
+  request.report = !args.no_report;
+  return Guarded(session, args.quiet, [&](SmcObserver* observer) {
+    return Conclude(services::RunCalibration(request, observer));
+  });
+}
+
+int ResumeCommand(ResumeArgs& args, const Session& session) {
+  services::ResumeRequest& request = args.request;
+  NoteHistory(session, request.history_path);
+  request.report = !args.no_report;
+  request.executor = session.executor();
+  services::StopLimits& limits = request.limits;
+  if (args.max_simulations_option->count() > 0) limits.max_simulations = args.max_simulations;
+  if (args.max_wall_time_option->count() > 0) limits.max_wall_time_s = args.max_wall_time;
+  if (args.min_acceptance_rate_option->count() > 0) {
+    limits.min_acceptance_rate = args.min_acceptance_rate;
+  }
+  if (args.max_failure_fraction_option->count() > 0) {
+    limits.max_failure_fraction = args.max_failure_fraction;
+  }
+  return Guarded(session, args.quiet, [&](SmcObserver* observer) {
+    return Conclude(services::ResumeCalibration(request, observer));
+  });
+}
+
+}  // namespace
+
+Command AddRunCommand(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  services::RunRequest& request = args->request;
+  auto* run = app.add_subcommand("run", "Run a calibration from a TOML config (docs/config.md)");
+  run->add_option("CONFIG", request.config_path, "Config file")->required();
+  run->add_option("-o,--output", request.output_directory, "Output directory (overrides [output])");
+  // -1 (the default) means "not given"; a user may only ask for 0 (all cores) .. kMaxThreads.
+  run->add_option("-j,--threads", request.threads, "Threads, 0 = all cores (overrides [sampler])")
+      ->check(CLI::Range(0, kMaxThreads));
+  run->add_flag("--overwrite", request.overwrite, "Replace an existing history file");
+  run->add_flag("--no-report", args->no_report, "Do not write figures at the end");
+  run->add_flag("-q,--quiet", args->quiet, "No progress display");
+  AddNoCacheFlag(*run);
+  return {run, [args](const Session& session) { return RunCommand(*args, session); }};
+}
+
+Command AddResumeCommand(CLI::App& app) {
+  auto args = std::make_shared<ResumeArgs>();
+  auto* resume = app.add_subcommand(
+      "resume",
+      "Continue a killed or interrupted run, or one stopped on a limit (raise it with the options "
+      "below; they replace the config's [sampler] values and are recorded in the history)");
+  resume->add_option("RUN.sqlite", args->request.history_path, "History file of the run")
+      ->required();
+  resume
+      ->add_option(
+          "-j,--threads", args->request.threads, "Threads, 0 = all cores (default: the run's)")
+      ->check(CLI::Range(0, kMaxThreads));
+  args->max_simulations_option =
+      resume
+          ->add_option(
+              "--max-simulations", args->max_simulations, "Simulation budget, 0 = no limit")
+          ->check(NonNegativeInteger());
+  args->max_wall_time_option =
+      resume
+          ->add_option("--max-wall-time",
+                       args->max_wall_time,
+                       "Seconds this resume may run (each resume has its own), 0 = no limit")
+          ->check(RealIn(0.0, std::numeric_limits<double>::max()));
+  args->min_acceptance_rate_option =
+      resume
+          ->add_option(
+              "--min-acceptance-rate", args->min_acceptance_rate, "Acceptance-rate floor, 0 = none")
+          ->check(RealIn(0.0, 1.0));
+  args->max_failure_fraction_option =
+      resume
+          ->add_option("--max-failure-fraction",
+                       args->max_failure_fraction,
+                       "Failed simulations tolerated, as a fraction; 1 = never stop")
+          ->check(RealIn(0.0, 1.0));
+  resume->add_flag("--no-report", args->no_report, "Do not write figures at the end");
+  resume->add_flag("-q,--quiet", args->quiet, "No progress display");
+  AddNoCacheFlag(*resume);
+  return {resume, [args](const Session& session) { return ResumeCommand(*args, session); }};
+}
+
+}  // namespace combabc::cli

@@ -1,0 +1,45 @@
+#pragma once
+// `combabc enumerate`: the exact ABC posterior of a config's problem by simulating every
+// configuration of its free bits.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "combabc/samplers/observer.hpp"
+#include "combabc/services/executor_factory.hpp"
+
+namespace combabc::services {
+
+struct EnumerateRequest {
+  std::string config_path;
+  std::string output_directory;    // overrides [output] directory when not empty
+  int threads = -1;                // overrides [sampler] threads when >= 0
+  bool overwrite = false;          // replace an existing history file
+  bool report = true;              // write the report (report/ beside the history) when it ends
+  std::vector<double> thresholds;  // one per threshold component; empty = the config's final ones
+  int top = 20;                    // configurations in top_configurations.csv
+  int max_particles = 100000;      // accepted configurations kept in the history (by mass)
+  ExecutorFactory executor;        // empty: threads on this machine
+};
+
+struct EnumerateOutcome {
+  std::string history_path;           // empty when interrupted (nothing is written)
+  std::string enumeration_directory;  // RUN.enumeration/ beside the history
+  std::string report_directory;       // empty when no report was written
+  std::int64_t configurations = 0;
+  std::int64_t enumerated = 0;
+  std::int64_t accepted = 0;
+  double evidence = 0.0;
+  double wall_seconds = 0.0;
+  bool interrupted = false;
+};
+
+// Exact ABC posterior of the config's problem at the given (or the config's final) thresholds by
+// enumerating every free-bit configuration (docs/algorithm.md, "Exact enumeration"). Writes a
+// history with one wave (termination "enumerated") that report and export read like any run, and
+// pair_correlations.csv and top_configurations.csv into RUN.enumeration/ (OutputDirectory rules).
+// An interrupted enumeration writes nothing: it has nothing to resume from. Without thresholds and
+// without final ones in the config: Error kUsage.
+EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress = nullptr);
+
+}  // namespace combabc::services

@@ -1,0 +1,34 @@
+#pragma once
+// The tools that read a finished (or any) history: `combabc verify` and `combabc export`.
+#include <string>
+#include <vector>
+
+namespace combabc::services {
+
+// The result of `combabc verify`: one "OK" line, or one line per problem found.
+struct VerifyOutcome {
+  bool ok = true;
+  std::vector<std::string> lines;
+};
+
+// Checks a history end to end (SQLite integrity_check, metadata, every wave's vectors and
+// checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
+VerifyOutcome VerifyHistory(const std::string& history_path);
+
+struct ExportOutcome {
+  std::string directory;
+  std::string netcdf_path;  // empty when no NetCDF file was written
+  std::string note;         // why not, when it was asked for but its Python packages are missing
+};
+
+// CSV + JSON export (docs/history.md); default directory: export/ beside the history; directory
+// rules as for the report (`overwrite`: write into a directory combabc did not write). With
+// `netcdf`, also inference_data.nc (ArviZ's InferenceData layout) by
+// scripts/report/combabc_netcdf.py when $COMBABC_PYTHON (default /usr/bin/python3) has xarray and
+// netCDF4; without them the rest is written and `note` says so.
+ExportOutcome ExportHistory(const std::string& history_path,
+                            const std::string& directory = {},
+                            bool overwrite = false,
+                            bool netcdf = true);
+
+}  // namespace combabc::services

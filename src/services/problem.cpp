@@ -1,0 +1,129 @@
+#include "services/problem.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "services/worker_steps.hpp"
+
+#ifndef COMBABC_GIT_HASH
+#define COMBABC_GIT_HASH ""
+#endif
+#ifndef COMBABC_VERSION
+#define COMBABC_VERSION "unknown"
+#endif
+
+namespace combabc::services {
+namespace fs = std::filesystem;
+namespace {
+
+// "load at 0.45 m (y 0.5 of the width), 0.04 N, 5 Hz; scan 0-0.9 m at y 0.5": what a report
+// titles the experiment's panels with.
+std::string ExperimentDescription(const CalibrationConfig& c, const ExperimentConfig& x) {
+  char text[200];
+  if (c.simulator.kind != SimulatorKind::kSensor) {
+    if (x.line == 0) return "";
+    std::snprintf(text,
+                  sizeof text,
+                  "load at %g m (y %g of the width), %g N, %g Hz",
+                  x.load.load_x,
+                  x.load.load_y_fraction,
+                  x.load.load_force,
+                  x.frequency_hz);
+    return text;
+  }
+  const std::vector<double>& out = x.load.output_positions;
+  std::snprintf(text,
+                sizeof text,
+                "load at %g m (y %g of the width), %g N, %g Hz; scan %g-%g m at y %g",
+                x.load.load_x,
+                x.load.load_y_fraction,
+                x.load.load_force,
+                x.frequency_hz,
+                out.front(),
+                out.back(),
+                x.load.output_y_fraction);
+  return text;
+}
+
+}  // namespace
+
+void LoadProblem(const std::string& config_path, int threads, Problem& p) {
+  p.config = LoadConfig(config_path);
+  if (threads >= 0) p.config.smc.threads = threads;
+  p.data = ProfilesOf(LoadExperimentData(p.config));
+  p.distance = MakeDistance(p.config, p.data);
+}
+
+void MakeExecutor(Problem& p, const ExecutorFactory& factory) {
+  p.executor = factory ? factory(p.config.smc.threads)
+                       : std::make_unique<ThreadPoolExecutor>(p.config.smc.threads);
+}
+
+void BuildModel(Problem& p, const std::string& history_path) {
+  // First, as it is cheap: checks the metric's windows and indicators against the simulator's
+  // output coordinates and the data before the model is built or anything simulated or stored.
+  if (!p.distance) p.distance = MakeDistance(p.config, p.data);
+  p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
+  p.space.emplace(BinarySpace(p.config.space), p.config.reals);
+}
+
+void BuildModelIn(Problem& p, const std::string& history_path) {
+  OnEvery(*p.executor, [&] { BuildModel(p, history_path); });
+}
+
+Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config) {
+  FingerprintInputs inputs;
+  inputs.config = config != nullptr ? config : &p.config;
+  inputs.space = &*p.space;
+  inputs.data = p.data;
+  inputs.components = p.distance->components();
+  inputs.version = COMBABC_VERSION;
+  inputs.handshake = p.simulator.handshake;
+  return ComputeFingerprint(inputs);
+}
+
+RunMetadata Describe(const Problem& p) {
+  RunMetadata m;
+  m.combabc_version = COMBABC_VERSION;
+  m.config_text = p.config.text;
+  // Absolute: a resume from another folder must find {config_dir} (and report paths) the same.
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p.config.path, ec);
+  m.config_path = ec ? p.config.path : absolute.lexically_normal().string();
+  m.git_hash = COMBABC_GIT_HASH;
+  m.seed = p.config.smc.seed;
+  // 0 means all cores (as ThreadPool resolves it): record how many that was.
+  m.threads = p.config.smc.threads > 0
+                  ? p.config.smc.threads
+                  : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  m.estimator = ToString(p.config.smc.estimator);
+  const BinarySpace& bits = p.space->binary();
+  m.dimension = bits.dimension();
+  for (int k = 0; k < bits.dimension(); ++k) m.bit_names.push_back(bits.name(k));
+  m.bit_prior_one = bits.bit_prior_one();
+  m.distance_components = p.distance->components();
+  m.output_positions = p.config.simulator.outputs.coordinates;
+  m.position_unit = "m";
+  for (std::size_t e = 0; e < p.config.experiments.size(); ++e) {
+    const ExperimentConfig& x = p.config.experiments[e];
+    const MeasuredProfile& data = p.data[e];
+    m.measured.positions.insert(
+        m.measured.positions.end(), data.positions.begin(), data.positions.end());
+    m.measured.values.insert(m.measured.values.end(), data.values.begin(), data.values.end());
+    const JointDistance::Part& part = p.distance->parts()[e];
+    m.experiments.push_back({x.name,
+                             ExperimentDescription(p.config, x),
+                             static_cast<int>(part.distance->output_size()),
+                             static_cast<int>(data.positions.size()),
+                             static_cast<int>(part.distance->configs().size())});
+  }
+  m.reals = p.space->reals();
+  m.proposal = p.config.smc.proposal;
+  m.tempering_form = ToString(p.config.smc.tempering.form);
+  m.fingerprint = FingerprintOf(p);
+  return m;
+}
+
+}  // namespace combabc::services

@@ -1,0 +1,61 @@
+#pragma once
+// What a run, a resume and an enumeration sample: the config, the measured data, the metric, the
+// parameter space, the executor and the simulator, built the same way for each. Private to
+// src/services.
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "combabc/config/config.hpp"
+#include "combabc/config/distance_from_config.hpp"
+#include "combabc/core/executor.hpp"
+#include "combabc/history/history_store.hpp"
+#include "combabc/metrics/joint_distance.hpp"
+#include "combabc/params/parameter_space.hpp"
+#include "combabc/samplers/combinatorial_smc.hpp"
+#include "combabc/services/executor_factory.hpp"
+#include "services/run_fingerprint.hpp"
+#include "services/simulator_factory.hpp"
+
+namespace combabc::services {
+
+// Everything a run needs besides its history: built identically for a new run and a resume,
+// which is what makes a resumed history equal to an uninterrupted one.
+struct Problem {
+  CalibrationConfig config;
+  std::vector<MeasuredProfile> data;  // one per experiment, as the metric compares them
+  std::unique_ptr<JointDistance> distance;
+  std::optional<ParameterSpace> space;
+  std::unique_ptr<Executor> executor;
+  BuiltSimulator simulator;  // last: external processes end before anything else goes
+
+  SmcProblem view() const {
+    SmcProblem v{&*space, simulator.simulator.get(), distance.get()};
+    v.executor = executor.get();
+    return v;
+  }
+};
+
+// A new run's problem from its config file: the config (threads >= 0 overrides the config's), the
+// measured data read from disk and the metric; BuildModelIn follows once the output folder
+// exists. (A resume takes the data stored in its history.)
+void LoadProblem(const std::string& config_path, int threads, Problem& p);
+
+// The executor for the problem's threads (after LoadProblem or the resume's config).
+void MakeExecutor(Problem& p, const ExecutorFactory& factory);
+
+// history_path: the run's history file; an external simulator works in a folder beside it.
+void BuildModel(Problem& p, const std::string& history_path);
+
+// Builds the model on every worker once the output folder exists (an external simulator works
+// inside it).
+void BuildModelIn(Problem& p, const std::string& history_path);
+
+// `config` defaults to the problem's own; resume also asks what another reading of it would give.
+Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config = nullptr);
+
+// The run's metadata as its history stores it (the fingerprint included).
+RunMetadata Describe(const Problem& p);
+
+}  // namespace combabc::services
