@@ -38,9 +38,10 @@
 
 namespace combabc::plate {
 
+class SectionLayout;           // src/plate/fast_path/section_layout.hpp
+struct CaseOutputs;            // src/plate/fast_path/section_layout.hpp
 class SectionCondensation;     // src/plate/fast_path/section_condensation.hpp
 class ContinuousCondensation;  // src/plate/fast_path/continuous_condensation.hpp
-struct CaseOutputs;            // src/plate/fast_path/section_condensation.hpp
 struct ContinuousCache;        // src/plate/fast_path/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
@@ -327,7 +328,7 @@ class SensorModel {
  private:
   void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
   void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
-  // The condensations' inputs: every case's load vector (a column each) and outputs.
+  // The layout's inputs: every case's load vector (a column each) and outputs.
   Eigen::MatrixXd LoadMatrix() const;
   std::vector<CaseOutputs> CaseOutputList() const;
   // The precompute for `variation` (built on first use) and the factors mapping the variation's
@@ -339,6 +340,8 @@ class SensorModel {
   SensorOptions options_;
   std::vector<double> output_positions_;  // every case's, concatenated
   std::unique_ptr<Plate> plate_;
+  // The sections, their free dofs, outputs and loads: every condensation's (shared with them).
+  std::shared_ptr<const SectionLayout> layout_;
   std::unique_ptr<SectionCondensation> condensation_;  // every load case
   bool fast_path_certified_ = false;
   bool precompute_from_cache_ = false;

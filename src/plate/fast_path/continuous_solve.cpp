@@ -44,9 +44,8 @@ struct ContinuousCondensation::Evaluated {
 
 // Solve's per-thread workspace: the block rows (BlockWorkspace) and the couplings between them.
 struct ContinuousWorkspace : BlockWorkspace {
-  std::vector<Split> coupling;              // U_c between rows c and c + 1 (n_c x n_{c+1})
-  std::vector<std::vector<int>> free_dofs;  // each row's free dofs, for BlockWorkspace::free
-  std::vector<int> state;                   // each section's clamp state
+  std::vector<Split> coupling;  // U_c between rows c and c + 1 (n_c x n_{c+1})
+  std::vector<int> state;       // each section's clamp state
   Split dv;  // D_c V_c (n x m, leading dimension n): column l holds d_j v_jl over the pivots j
   Split w;   // W_c gathered from the factor's carried last rows (n x cases)
   Split z;   // one row's residual
@@ -59,7 +58,6 @@ struct ContinuousWorkspace : BlockWorkspace {
     const Index k = cases;
     coupling.assign(rows, Split{});
     for (int c = 0; c < rows; ++c) coupling[c].Resize(n * n);
-    free_dofs.assign(rows, {});
     dv.Resize(n * n);
     w.Resize(n * k);
     z.Resize(n);
@@ -308,6 +306,7 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
                                             int state,
                                             Complex mu,
                                             Evaluated* e) const {
+  const int nc = layout_->nc();
   const std::size_t index = static_cast<std::size_t>(mesh_kind) * 4 + state;
   const StateData& sd = states_[index];
   const Eigen::MatrixXcd s_bb = sd.k_bb + mu * sd.m_bb;
@@ -345,18 +344,18 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     const std::size_t k = kind * 4 + state;
     if (!e->kind_needed[k] || mesh_kind_[kind_section_[kind]] != mesh_kind) continue;
     const SectionData& sec = sections_[k];
-    const OutputLayout& layout = section_layout_[kind_section_[kind]];
+    const OutputLayout& layout = layout_->SectionOutputs(kind_section_[kind]);
     Eigen::VectorXcd& out = e->section[k];
     out.resize(sec.table_re.rows());
     // The output maps set by set, each by a product of the shape a model of that set alone would
     // use (a product's blocking, hence its rounding, depends on its shape).
-    for (int set = 0; set < sets_.num_sets(); ++set) {
+    for (int set = 0; set < layout_->sets().num_sets(); ++set) {
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
       if (rows == 0) continue;
       Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(out.data() + first,
                                                                 rows,
-                                                                2 * static_cast<Eigen::Index>(nc_),
+                                                                2 * static_cast<Eigen::Index>(nc),
                                                                 Eigen::OuterStride<>(sec.map_rows));
       map = sec.r_b.middleRows(first, rows) -
             sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * x(sec.read[set], Eigen::all);
@@ -364,12 +363,12 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
       const Eigen::VectorXcd f = sec.f_i.col(static_cast<Eigen::Index>(l));
       const Eigen::VectorXcd y = solve(f);
-      const int set = sets_.set_of_case[sec.loaded_cases[l]];
+      const int set = layout_->sets().set_of_case[sec.loaded_cases[l]];
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
-      out.segment(sec.loaded_start[l], 2 * nc_) =
+      out.segment(sec.loaded_start[l], 2 * nc) =
           -s_ib(coupled, Eigen::all).transpose() * y(coupled);
-      out.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc_), rows) =
+      out.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc), rows) =
           sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * y(sec.read[set]);
     }
   }
@@ -411,11 +410,12 @@ COMBABC_TARGET_AVX512 void ContinuousCondensation::SolveAvx512(
 COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8_t> clamps,
                                                       Complex mu,
                                                       std::span<std::complex<double>> w) const {
-  const Index cases = num_cases_;
+  const int ns = layout_->num_sections();
+  const Index cases = layout_->num_cases();
   thread_local ContinuousWorkspace ws;
   thread_local Evaluated e;
-  ws.Reserve(nc_, num_sections_ + 1, num_cases_);
-  ws.num_rows = num_sections_ + 1;  // every cross-section c = 0..ns is a row
+  ws.Reserve(layout_->nc(), ns + 1, layout_->num_cases());
+  ws.num_rows = ns + 1;  // every cross-section c = 0..ns is a row
   EvaluatePieces(clamps, mu, ws, e);
   Assemble(clamps, e, ws);
   // One factorization for every load case, each case's back substitution, and a residual check
@@ -437,7 +437,7 @@ COMBABC_KERNEL void ContinuousCondensation::EvaluatePieces(std::span<const std::
                                                            Complex mu,
                                                            ContinuousWorkspace& ws,
                                                            Evaluated& e) const {
-  const int ns = num_sections_;
+  const int ns = layout_->num_sections();
   ws.state.resize(ns);
   const std::size_t num_states = states_.size();
   const std::size_t num_kind_states = sections_.size();
@@ -464,22 +464,18 @@ COMBABC_KERNEL void ContinuousCondensation::EvaluatePieces(std::span<const std::
   }
 }
 
-// The free dofs of each cross-section (a node on edge A (B) is fixed when either adjoining
-// section fixes it; the short edges fix the first and last). Row c gets the right block of
-// section c - 1 and the left block of section c (lower triangles), the loads of both and of its
-// own cross-section; section c couples rows c and c + 1.
+// The free dofs of each cross-section (SectionLayout::FreeDofs: a node on edge A (B) is fixed when
+// either adjoining section fixes it; the short edges fix the first and last). Row c gets the right
+// block of section c - 1 and the left block of section c (lower triangles), the loads of both and
+// of its own cross-section; section c couples rows c and c + 1.
 COMBABC_KERNEL void ContinuousCondensation::Assemble(std::span<const std::uint8_t> clamps,
                                                      const Evaluated& e,
                                                      ContinuousWorkspace& ws) const {
-  const int ns = num_sections_;
-  const int nc = nc_;
+  const int ns = layout_->num_sections();
+  const int nc = layout_->nc();
+  const int num_cases = layout_->num_cases();
   const int rows = ws.num_rows;
-  for (int c = 0; c < rows; ++c) {
-    const bool a = (c > 0 && clamps[c - 1] != 0) || (c < ns && clamps[c] != 0);
-    const bool b = (c > 0 && clamps[ns + c - 1] != 0) || (c < ns && clamps[ns + c] != 0);
-    FreeDofs(c, a, b, &ws.free_dofs[c]);
-    ws.free[c] = &ws.free_dofs[c];
-  }
+  for (int c = 0; c < rows; ++c) ws.free[c] = &layout_->FreeDofs(c, clamps);
   const auto piece_of = [&](int s) -> const Complex* {
     return e.piece[static_cast<std::size_t>(mesh_kind_[s]) * 4 + ws.state[s]].data();
   };
@@ -516,7 +512,7 @@ COMBABC_KERNEL void ContinuousCondensation::Assemble(std::span<const std::uint8_
       }
     }
     ws.diagonal_max2[c] = max2;
-    for (int k = 0; k < num_cases_; ++k) {
+    for (int k = 0; k < num_cases; ++k) {
       const auto load_left = c > 0 ? load_of(c - 1, k) : load_of(0, -1);
       const auto load_right = c < ns ? load_of(c, k) : load_of(0, -1);
       for (Index j = 0; j < n; ++j) {
@@ -545,15 +541,16 @@ COMBABC_KERNEL void ContinuousCondensation::Assemble(std::span<const std::uint8_
 // reaches the interior) plus the output map's rows of its set times its end values.
 COMBABC_KERNEL void ContinuousCondensation::RecoverOutputs(
     const Evaluated& e, ContinuousWorkspace& ws, std::span<std::complex<double>> w) const {
-  const int nc = nc_;
-  for (int s = 0; s < num_sections_; ++s) {
-    const OutputLayout& layout = section_layout_[s];
+  const int nc = layout_->nc();
+  const OutputSets& sets = layout_->sets();
+  for (int s = 0; s < layout_->num_sections(); ++s) {
+    const OutputLayout& layout = layout_->SectionOutputs(s);
     if (layout.map_rows() == 0) continue;
     const std::size_t index = KindIndex(s, ws.state[s]);
     const SectionData& sec = sections_[index];
     const Eigen::VectorXcd& section = e.section[index];
-    for (int k = 0; k < num_cases_; ++k) {
-      const int set = sets_.set_of_case[k];
+    for (int k = 0; k < sets.num_cases(); ++k) {
+      const int set = sets.set_of_case[k];
       const std::vector<int>& positions = layout.positions[set];
       const auto n_out = static_cast<Eigen::Index>(positions.size());
       if (n_out == 0) continue;
@@ -580,7 +577,7 @@ COMBABC_KERNEL void ContinuousCondensation::RecoverOutputs(
           2 * static_cast<Eigen::Index>(nc),
           Eigen::OuterStride<>(layout.map_rows()));
       values.noalias() += map * ends;
-      std::complex<double>* out = w.data() + sets_.first_output[k];
+      std::complex<double>* out = w.data() + sets.first_output[k];
       for (Eigen::Index o = 0; o < n_out; ++o) out[positions[o]] = values(o);
     }
   }

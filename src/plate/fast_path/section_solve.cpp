@@ -427,15 +427,15 @@ COMBABC_TARGET_AVX512 void SectionCondensation::SolveAvx512(
 
 COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t> clamps,
                                                    std::span<std::complex<double>> w) const {
-  const int ng = num_sections_ / group_size_;
-  const Index cases = num_cases_;
+  const int ng = layout_->num_sections() / group_size_;
+  const Index cases = layout_->num_cases();
   // The whole plate in one group was solved in the precompute; singular there is singular here.
   for (int g = 0; g < ng; ++g) {
     const double singular = GroupPieceOf(g, clamps).singular;
     if (singular > 0.0) throw SingularSystem(singular);
   }
   thread_local SectionWorkspace ws;
-  ws.Reserve(nc_, std::max(ng - 1, 1), num_cases_, w.size());
+  ws.Reserve(layout_->nc(), std::max(ng - 1, 1), layout_->num_cases(), w.size());
   ws.num_rows = ng - 1;  // inner group boundaries c = 1..ng-1 are rows c - 1
   // Each A_i goes into the lower triangle of its factorization's storage: straight there for a
   // certified system; otherwise first into storage of its own, which the residual check reads.
@@ -458,24 +458,18 @@ COMBABC_KERNEL void SectionCondensation::SolveBody(std::span<const std::uint8_t>
   for (int g = 0; g < ng; ++g) RecoverGroupOutputs(clamps, g, ws, w);
 }
 
-// The free dofs of each row: a node on edge A (B) is fixed when either adjoining section fixes
-// it. Row i gets the right block of group i and the left block of group i + 1 (lower triangles
-// only: the blocks are symmetric) and the loads of both and of its own cross-section; the
-// coupling of rows i and i + 1 is group i + 1's, in its factored form. `in_place`: each A_i
-// straight into its factorization's storage, else into ws.diagonal first.
+// The free dofs of each row (SectionLayout::FreeDofs: a node on edge A (B) is fixed when either
+// adjoining section fixes it). Row i gets the right block of group i and the left block of group
+// i + 1 (lower triangles only: the blocks are symmetric) and the loads of both and of its own
+// cross-section; the coupling of rows i and i + 1 is group i + 1's, in its factored form.
+// `in_place`: each A_i straight into its factorization's storage, else into ws.diagonal first.
 COMBABC_KERNEL void SectionCondensation::Assemble(std::span<const std::uint8_t> clamps,
                                                   bool in_place,
                                                   SectionWorkspace& ws) const {
-  const int ns = num_sections_;
-  const int nc = nc_;
-  const Index cases = num_cases_;
+  const int nc = layout_->nc();
+  const Index cases = layout_->num_cases();
   const int rows = ws.num_rows;
-  for (int i = 0; i < rows; ++i) {
-    const int x = (i + 1) * group_size_;
-    const bool a = clamps[x - 1] != 0 || clamps[x] != 0;
-    const bool b = clamps[ns + x - 1] != 0 || clamps[ns + x] != 0;
-    ws.free[i] = &free_dofs_[x][(a ? 1 : 0) | (b ? 2 : 0)];
-  }
+  for (int i = 0; i < rows; ++i) ws.free[i] = &layout_->FreeDofs((i + 1) * group_size_, clamps);
   for (int i = 0; i < rows; ++i) {
     const SolvePiece& left = GroupPieceOf(i, clamps);
     const SolvePiece& right = GroupPieceOf(i + 1, clamps);
@@ -541,7 +535,7 @@ COMBABC_KERNEL void SectionCondensation::AssembleDiagonal(std::span<const std::u
   const SolvePiece& left = GroupPieceOf(i, clamps);
   const SolvePiece& right = GroupPieceOf(i + 1, clamps);
   const std::vector<int>& f = *ws.free[i];
-  const Index nc = nc_;
+  const Index nc = layout_->nc();
   const auto n = static_cast<Index>(f.size());
   const bool run = n > 0 && f[n - 1] - f[0] + 1 == n;
   for (Index c = 0; c < n; ++c) {
@@ -576,7 +570,7 @@ COMBABC_KERNEL void SectionCondensation::FallBack(std::span<const std::uint8_t> 
           clamps, i, ws, ws.diagonal[i].re.data(), ws.diagonal[i].im.data(), ws.RowSize(i));
     }
   }
-  SolvePivoting(ws, num_cases_);
+  SolvePivoting(ws, layout_->num_cases());
 }
 
 // Every case's outputs in group g from its kept end cross-sections (rows g - 1 and g): the
@@ -589,7 +583,7 @@ COMBABC_KERNEL void SectionCondensation::RecoverGroupOutputs(
     std::span<std::complex<double>> w) const {
   const SolvePiece& piece = GroupPieceOf(g, clamps);
   const OutputLayout& layout = group_layout_[g];
-  const OutputSets& sets = sets_;
+  const OutputSets& sets = layout_->sets();
   const Index nc = ws.nc;
   const Index map_rows = piece.output_map.re.rows();
   double* vr = ws.y.re.data();
