@@ -130,7 +130,7 @@ BENCHMARK(BM_SensorPrecomputeLoadCases)->DenseRange(1, 4)->Unit(benchmark::kMill
 // 2 AVX2, 3 AVX-512; the default takes the widest the CPU has, all with bit-identical results).
 void BM_SensorProfileFastKernels(benchmark::State& state) {
   SensorOptions options;
-  options.vector_kernels = static_cast<SensorOptions::VectorKernels>(state.range(0));
+  options.vector_kernels = static_cast<combabc::plate::VectorKernels>(state.range(0));
   if (!options.IsValid(nullptr)) {
     state.SkipWithError("this CPU lacks the instruction set");
     return;

@@ -3,6 +3,12 @@
 # from L itself and the layers L is declared to depend on, and every declared dependency must come
 # earlier in `order`, so no back edge (and no cycle) can be declared either. Like Stan's
 # test-math-dependencies: a cheap grep that fails CI. There is no exception list.
+#
+# A layer may also be split into sub-layers, folders inside its folders (src/<layer>/<sub>/ and
+# include/combabc/<layer>/<sub>/), listed lowest first: a file in a sub-layer may include headers
+# of its own sub-layer and earlier ones only, and the files directly in the layer's folders sit
+# above every sub-layer. Public headers are named from include/ ("combabc/plate/elements/x.hpp"),
+# private ones from src/ ("plate/fast_path/x.hpp").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 order=(core mpi rng params schedules proposals distances samplers design simulators plate data metrics
@@ -26,6 +32,12 @@ declare -A deps=(
   [export]="core history"
   [services]="core rng params proposals distances schedules samplers design simulators plate data metrics config history export"
 )
+# plate: the element kernels (and the laminate they take) <- the assembled plate (grid,
+# constraints, loads, full solves, modes) <- the fast paths (condensations and their solves) <- the
+# sensor model at the top (docs/architecture.md).
+declare -A sublayers=(
+  [plate]="elements assembly fast_path"
+)
 status=0
 declare -A rank=()
 for i in "${!order[@]}"; do rank[${order[$i]}]=$i; done
@@ -48,6 +60,34 @@ for layer in "${order[@]}"; do
     for used in $(grep -ho '#include "combabc/[a-z_]*/' "$f" | sed 's|.*combabc/||; s|/||' | sort -u); do
       if [[ " $layer ${deps[$layer]} " != *" $used "* ]]; then
         echo "layering: $f ($layer) includes combabc/$used/"; status=1
+      fi
+    done
+  done
+done
+# Sub-layers: every file of a layer with sub-layers lies in one of them or at the layer's top, and
+# none includes a header of a later sub-layer or of the top.
+declare -A subrank=()
+sub_rank() {  # the rank of a path below the layer's folder ("fast_path/x.hpp": fast_path's)
+  if [[ "$2" != */* ]]; then echo "top"; else echo "${subrank[$1/${2%%/*}]-none}"; fi
+}
+for layer in "${!sublayers[@]}"; do
+  read -ra subs <<<"${sublayers[$layer]}"
+  for i in "${!subs[@]}"; do subrank[$layer/${subs[$i]}]=$i; done
+  subrank[$layer/top]=${#subs[@]}
+  for f in $(git ls-files "include/combabc/$layer/*" "src/$layer/*"); do
+    inner=${f#include/combabc/"$layer"/}
+    own=$(sub_rank "$layer" "${inner#src/"$layer"/}")
+    if [[ "$own" == none ]]; then
+      echo "layering: $f is not in a declared sub-layer of $layer (${sublayers[$layer]})"; status=1
+      continue
+    fi
+    [[ "$own" == top ]] && continue  # the top may include every sub-layer
+    for used in $(grep -hoE "#include \"(combabc/)?$layer/[a-z0-9_./]+\"" "$f" |
+        sed -E "s|#include \"(combabc/)?$layer/||; s|\"\$||"); do
+      rank=$(sub_rank "$layer" "$used")
+      if [[ "$rank" == top || "$rank" == none || $rank -gt $own ]]; then
+        echo "layering: $f ($layer/${subs[$own]}) includes $layer/$used, not a lower sub-layer"
+        status=1
       fi
     done
   done

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "combabc/plate/sensor_model.hpp"
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -8,11 +8,11 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
-#include "continuous_condensation.hpp"
-#include "higham_check.hpp"
-#include "precompute_cache.hpp"
-#include "section_condensation.hpp"
-#include "vector_kernels.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
+#include "plate/fast_path/higham_check.hpp"
+#include "plate/fast_path/precompute_cache.hpp"
+#include "plate/fast_path/section_condensation.hpp"
+#include "plate/fast_path/section_layout.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -70,9 +70,7 @@ Load SensorLoad(const SensorOptions& o, const LoadCase& c) {
 PrecomputeKey KeyOf(const Plate& plate,
                     const SensorOptions& o,
                     int group_size,
-                    const CrossSectionMasks& masks,
-                    const Eigen::MatrixXd& loads,
-                    const std::vector<CaseOutputs>& outputs) {
+                    const SectionLayout& layout) {
   KeyHasher h;
   h.AddText(PlateBuildId());
   h.AddValue(static_cast<int>(plate.theory()));
@@ -110,11 +108,11 @@ PrecomputeKey KeyOf(const Plate& plate,
   h.AddValue(o.clamps_per_edge);
   h.AddValue(o.elements_per_section);
   h.AddValue(group_size);
-  h.AddValue(masks);
+  h.AddValue(layout.masks());
   h.AddValue(o.always_pivot);
-  h.AddMatrix(loads);
-  h.AddValue(outputs.size());
-  for (const CaseOutputs& c : outputs) {
+  h.AddMatrix(layout.loads());
+  h.AddValue(layout.outputs().size());
+  for (const CaseOutputs& c : layout.outputs()) {
     h.AddValue(c.y);
     h.AddValue(c.x.size());
     h.Add(c.x.data(), sizeof(double) * c.x.size());
@@ -152,26 +150,32 @@ SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& 
     output_positions_.insert(
         output_positions_.end(), c.output_positions.begin(), c.output_positions.end());
   }
-  const int intervals = options_.elements_per_section * plate_->element_order();
   const CrossSectionMasks masks{
       SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
       SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
       SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
       SupportMask(Edge::kRight, options_.short_edge_end, options_.theory)};
+  // Every load case shares the clamps, the mesh and the frequency: one layout and one
+  // condensation take them all, and each configuration is factorized once for every case's load
+  // (docs/model.md, "Several load cases").
+  layout_ = std::make_shared<const SectionLayout>(*plate_,
+                                                  options_.clamps_per_edge,
+                                                  options_.elements_per_section,
+                                                  masks,
+                                                  LoadMatrix(),
+                                                  CaseOutputList());
   // Groups of 3 sections (64 states each) when the layout allows: 18 sections -> 5 unknown
   // cross-sections per configuration, ~14 MiB of pieces (docs/model.md).
   const int group_size =
       options_.clamps_per_edge % 3 == 0 ? 3 : (options_.clamps_per_edge % 2 == 0 ? 2 : 1);
-  const Eigen::MatrixXd loads = LoadMatrix();
-  const std::vector<CaseOutputs> outputs = CaseOutputList();
-  const SensorOptions::VectorKernels kernels = ResolveKernels(options_.vector_kernels);
+  const VectorKernels kernels = ResolveKernels(options_.vector_kernels);
   const PrecomputeCache cache(precompute.cache_directory, precompute.cache_max_bytes);
   PrecomputeKey key{};
   if (!precompute.cache_directory.empty()) {
-    key = KeyOf(*plate_, options_, group_size, masks, loads, outputs);
+    key = KeyOf(*plate_, options_, group_size, *layout_);
     std::unique_ptr<SectionCondensation> read;
     if (cache.Load(key, [&](ByteReader& reader) {
-          read = SectionCondensation::Read(reader, kernels);
+          read = SectionCondensation::Read(reader, layout_, kernels);
           return read != nullptr;
         })) {
       condensation_ = std::move(read);
@@ -179,25 +183,14 @@ SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& 
     }
   }
   if (condensation_ == nullptr) {
-    // Every load case shares the clamps, the mesh and the frequency: one condensation takes them
-    // all, and each configuration is factorized once for every case's load (docs/model.md,
-    // "Several load cases").
-    condensation_ = std::make_unique<SectionCondensation>(
-        *plate_,
-        options_.clamps_per_edge,
-        options_.elements_per_section,
-        group_size,
-        masks.fixed_a,
-        masks.fixed_b,
-        masks.start,
-        masks.end,
-        loads,
-        options_.frequency_hz,
-        outputs,
-        options_.always_pivot,
-        IsHighamSystem(*plate_, options_.clamps_per_edge, intervals, masks, options_.frequency_hz),
-        kernels,
-        precompute.pool);
+    SectionCondensation::Settings settings;
+    settings.group_size = group_size;
+    settings.frequency_hz = options_.frequency_hz;
+    settings.always_pivot = options_.always_pivot;
+    settings.higham = IsHighamSystem(*plate_, *layout_, options_.frequency_hz);
+    settings.kernels = kernels;
+    settings.pool = precompute.pool;
+    condensation_ = std::make_unique<SectionCondensation>(*plate_, layout_, settings);
     if (!precompute.cache_directory.empty()) {
       cache.Store(key, [&](ByteWriter& writer) { condensation_->Write(writer); });
     }
@@ -272,19 +265,11 @@ const ContinuousCondensation& SensorModel::Continuous(const SensorVariation& var
   *mu = b / *factor;
   const int index = own ? 1 : 0;
   std::call_once(continuous_->once[index], [&] {
-    continuous_->base[index] = std::make_unique<ContinuousCondensation>(
-        *plate_,
-        options_.clamps_per_edge,
-        options_.elements_per_section,
-        own,
-        SupportMask(Edge::kBottom, options_.fixed_support, options_.theory),
-        SupportMask(Edge::kTop, options_.fixed_support, options_.theory),
-        SupportMask(Edge::kLeft, options_.short_edge_start, options_.theory),
-        SupportMask(Edge::kRight, options_.short_edge_end, options_.theory),
-        LoadMatrix(),
-        CaseOutputList(),
-        options_.always_pivot,
-        ResolveKernels(options_.vector_kernels));
+    ContinuousCondensation::Settings settings;
+    settings.own_loss_factors = own;
+    settings.always_pivot = options_.always_pivot;
+    settings.kernels = ResolveKernels(options_.vector_kernels);
+    continuous_->base[index] = std::make_unique<ContinuousCondensation>(*plate_, layout_, settings);
     continuous_->ready[index].store(continuous_->base[index].get(), std::memory_order_release);
   });
   return *continuous_->base[index];

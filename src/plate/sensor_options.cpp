@@ -2,7 +2,6 @@
 #include <sstream>
 
 #include "combabc/plate/sensor_model.hpp"
-#include "vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -6,7 +6,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/sensor_model.hpp"
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -12,7 +12,7 @@
 #include "combabc/distances/distance.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/metrics/metric_component.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/samplers/smc_options.hpp"
 #include "combabc/schedules/tempering_schedule.hpp"

@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 #include "layered_exact.hpp"
 #include "plate_test_support.hpp"
 

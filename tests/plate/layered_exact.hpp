@@ -18,7 +18,7 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate::testing {
 

@@ -12,8 +12,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "combabc/plate/mitc9_element.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/elements/mitc9_element.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 
-#include "combabc/plate/laminate.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate::testing {
 

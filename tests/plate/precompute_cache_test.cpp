@@ -15,7 +15,7 @@
 
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/sensor_model.hpp"
-#include "plate/precompute_cache.hpp"
+#include "plate/fast_path/precompute_cache.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc::plate {

@@ -15,8 +15,8 @@
 #include <Eigen/SparseCholesky>
 
 #include "combabc/core/error.hpp"
+#include "combabc/plate/fast_path/vector_kernels.hpp"
 #include "combabc/plate/sensor_model.hpp"
-#include "plate/vector_kernels.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -272,13 +272,13 @@ TEST(PlateSensorModel, ElementOrderIsCheckedAndNamed) {
 // theory; the clamp-only fast path and the continuous unknowns' solve (SensorVariation). Checked
 // to fail when a copy may fuse multiply-adds (target "avx2,fma": thousands of outputs differ).
 void ExpectKernelsBitIdentical(SensorOptions o,
-                               SensorOptions::VectorKernels kernels,
+                               VectorKernels kernels,
                                int configurations,
                                std::uint64_t seed,
                                bool variation_too = false) {
   o.vector_kernels = kernels;
   const SensorModel vectorised(o);
-  o.vector_kernels = SensorOptions::VectorKernels::kPortable;
+  o.vector_kernels = VectorKernels::kPortable;
   const SensorModel portable(o);
   SensorVariation variation;
   variation.foundation_stiffness = 3.0e4;
@@ -311,7 +311,7 @@ void ExpectKernelsBitIdentical(SensorOptions o,
 
 // Two elements per section (the identity is per operation, not per mesh) keep it light under the
 // sanitizers; Kirchhoff above a resonance covers the uncertified path.
-void ExpectKernelsBitIdentical(SensorOptions::VectorKernels kernels) {
+void ExpectKernelsBitIdentical(VectorKernels kernels) {
   SensorOptions o = CoarseOptions();
   o.elements_per_section = 2;
   ExpectKernelsBitIdentical(o, kernels, 40, 21, true);
@@ -332,23 +332,21 @@ void ExpectKernelsBitIdentical(SensorOptions::VectorKernels kernels) {
 }
 
 TEST(PlateSensorModel, VectorKernelsAvx2GiveBitIdenticalProfiles) {
-  if (!CpuSupports(SensorOptions::VectorKernels::kAvx2)) GTEST_SKIP() << "this CPU has no AVX2";
-  ExpectKernelsBitIdentical(SensorOptions::VectorKernels::kAvx2);
+  if (!CpuSupports(VectorKernels::kAvx2)) GTEST_SKIP() << "this CPU has no AVX2";
+  ExpectKernelsBitIdentical(VectorKernels::kAvx2);
 }
 
 TEST(PlateSensorModel, VectorKernelsAvx512GiveBitIdenticalProfiles) {
-  if (!CpuSupports(SensorOptions::VectorKernels::kAvx512)) {
+  if (!CpuSupports(VectorKernels::kAvx512)) {
     GTEST_SKIP() << "this CPU has no AVX-512";
   }
-  ExpectKernelsBitIdentical(SensorOptions::VectorKernels::kAvx512);
+  ExpectKernelsBitIdentical(VectorKernels::kAvx512);
 }
 
 // kAuto takes the widest the CPU has; asking for one it lacks is an invalid option, named.
 TEST(PlateSensorModel, VectorKernelsTheCpuLacksAreRefused) {
-  EXPECT_NE(ResolveKernels(SensorOptions::VectorKernels::kAuto),
-            SensorOptions::VectorKernels::kAuto);
-  for (const auto k :
-       {SensorOptions::VectorKernels::kAvx2, SensorOptions::VectorKernels::kAvx512}) {
+  EXPECT_NE(ResolveKernels(VectorKernels::kAuto), VectorKernels::kAuto);
+  for (const auto k : {VectorKernels::kAvx2, VectorKernels::kAvx512}) {
     SensorOptions o = CoarseOptions();
     o.vector_kernels = k;
     std::string why;

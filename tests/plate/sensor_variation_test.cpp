@@ -16,7 +16,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/plate/sensor_model.hpp"
-#include "plate/continuous_condensation.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
 
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 
 namespace combabc::plate {

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -32,15 +32,17 @@
 #include <Eigen/Dense>
 
 #include "combabc/core/thread_pool.hpp"
-#include "combabc/plate/laminate.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/elements/laminate.hpp"
+#include "combabc/plate/fast_path/vector_kernels.hpp"
 
 namespace combabc::plate {
 
-class SectionCondensation;     // src/plate/section_condensation.hpp
-class ContinuousCondensation;  // src/plate/continuous_condensation.hpp
-struct CaseOutputs;            // src/plate/section_condensation.hpp
-struct ContinuousCache;        // src/plate/continuous_condensation.hpp
+class SectionLayout;           // src/plate/fast_path/section_layout.hpp
+struct CaseOutputs;            // src/plate/fast_path/section_layout.hpp
+class SectionCondensation;     // src/plate/fast_path/section_condensation.hpp
+class ContinuousCondensation;  // src/plate/fast_path/continuous_condensation.hpp
+struct ContinuousCache;        // src/plate/fast_path/continuous_condensation.hpp
 
 // Default laminate, bottom to top (assumptions, docs/model.md): a soft polyurethane base, an
 // elastomer core carrying the fibre, a polyurethane cover.
@@ -155,12 +157,9 @@ struct SensorOptions {
   // fallback (fast; each solve's residual is checked unless fast_path_certified()); true =
   // always the dense partial-pivoting LU of the condensed system (slower; a cross-check).
   bool always_pivot = false;
-  // Instruction set of the per-configuration solves: kAuto, the widest this CPU supports (AVX-512,
-  // AVX2, or the build's own; checked at run time); kPortable, the build's own; kAvx2 / kAvx512,
-  // that one (invalid where the CPU lacks it). All give bit-identical results (no fused
-  // multiply-adds, the same operations in the same order; tested), so this is not part of a
-  // run's fingerprint: it changes only the speed (docs/benchmarks.md).
-  enum class VectorKernels { kAuto, kPortable, kAvx2, kAvx512 };
+  // Instruction set of the per-configuration solves (vector_kernels.hpp): the widest this CPU
+  // supports by default. All give bit-identical results, so this is not part of a run's
+  // fingerprint: it changes only the speed (docs/benchmarks.md).
   VectorKernels vector_kernels = VectorKernels::kAuto;
 
   // The precompute may use at most this much memory (bytes): options whose EstimatedMemoryBytes()
@@ -329,7 +328,7 @@ class SensorModel {
  private:
   void CheckSpans(std::span<const std::uint8_t> clamps, std::size_t out_size) const;
   void Finish(std::span<const std::complex<double>> w, std::span<double> out) const;
-  // The condensations' inputs: every case's load vector (a column each) and outputs.
+  // The layout's inputs: every case's load vector (a column each) and outputs.
   Eigen::MatrixXd LoadMatrix() const;
   std::vector<CaseOutputs> CaseOutputList() const;
   // The precompute for `variation` (built on first use) and the factors mapping the variation's
@@ -341,6 +340,8 @@ class SensorModel {
   SensorOptions options_;
   std::vector<double> output_positions_;  // every case's, concatenated
   std::unique_ptr<Plate> plate_;
+  // The sections, their free dofs, outputs and loads: every condensation's (shared with them).
+  std::shared_ptr<const SectionLayout> layout_;
   std::unique_ptr<SectionCondensation> condensation_;  // every load case
   bool fast_path_certified_ = false;
   bool precompute_from_cache_ = false;

@@ -1,4 +1,4 @@
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 #include <array>
 #include <cmath>

@@ -9,8 +9,8 @@
 // answer on a fixed mesh (tests/plate/rzt_validation_test.cpp). The bending part pairs the
 // curvatures of theta and of psi through the 6 x 6 zigzag_bending matrix.
 // Local dof 5 (a + 2 b) + k for corner (a, b) (element.hpp).
-#include "combabc/plate/element.hpp"
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/element.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate {
 

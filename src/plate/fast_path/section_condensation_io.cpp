@@ -1,11 +1,13 @@
 // SectionCondensation to and from the precompute cache's payload (precompute_cache.hpp): every
-// member Solve reads, as it stands after construction. A payload that does not describe a
-// consistent condensation is refused (the caller rebuilds it), so no read can go out of bounds.
-#include <algorithm>
+// member Solve reads, as it stands after construction, except the layout, which the reader
+// brings (the cache's key covers everything it is built from). A payload that does not describe a
+// condensation consistent with that layout is refused (the caller rebuilds it), so no read can
+// go out of bounds.
 #include <memory>
+#include <utility>
 
-#include "precompute_cache.hpp"
-#include "section_condensation.hpp"
+#include "plate/fast_path/precompute_cache.hpp"
+#include "plate/fast_path/section_condensation.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -31,17 +33,9 @@ OutputLayout ReadLayout(ByteReader& r) {
 }  // namespace
 
 void SectionCondensation::Write(ByteWriter& w) const {
-  for (int v : {num_sections_, intervals_per_section_, ny_, nc_, num_cases_, group_size_}) {
-    w.Value(v);
-  }
-  for (std::uint8_t m : {fixed_mask_a_, fixed_mask_b_, start_mask_, end_mask_}) w.Value(m);
+  w.Value(group_size_);
   w.Value(always_pivot_);
   w.Value(higham_);
-  w.Vector(sets_.set_of_case);
-  w.Vector(sets_.case_of_set);
-  w.Value(static_cast<std::uint64_t>(sets_.cases_of_set.size()));
-  for (const std::vector<int>& c : sets_.cases_of_set) w.Vector(c);
-  w.Vector(sets_.first_output);
   w.Value(static_cast<std::uint64_t>(group_pieces_.size()));
   for (const SolvePiece& p : group_pieces_) {
     for (const SplitMatrix* m :
@@ -61,35 +55,16 @@ void SectionCondensation::Write(ByteWriter& w) const {
   for (const OutputLayout& layout : group_layout_) WriteLayout(w, layout);
   w.Value(static_cast<std::uint64_t>(boundary_load_.size()));
   for (const Eigen::MatrixXcd& b : boundary_load_) w.Dense(b);
-  w.Value(static_cast<std::uint64_t>(free_dofs_.size()));
-  for (const std::array<std::vector<int>, 4>& f : free_dofs_) {
-    for (const std::vector<int>& v : f) w.Vector(v);
-  }
 }
 
 std::unique_ptr<SectionCondensation> SectionCondensation::Read(
-    ByteReader& r, SensorOptions::VectorKernels kernels) {
+    ByteReader& r, std::shared_ptr<const SectionLayout> section_layout, VectorKernels kernels) {
   std::unique_ptr<SectionCondensation> s(new SectionCondensation());
-  s->num_sections_ = r.Value<int>();
-  s->intervals_per_section_ = r.Value<int>();
-  s->ny_ = r.Value<int>();
-  s->nc_ = r.Value<int>();
-  s->num_cases_ = r.Value<int>();
+  s->layout_ = std::move(section_layout);
   s->group_size_ = r.Value<int>();
-  s->fixed_mask_a_ = r.Value<std::uint8_t>();
-  s->fixed_mask_b_ = r.Value<std::uint8_t>();
-  s->start_mask_ = r.Value<std::uint8_t>();
-  s->end_mask_ = r.Value<std::uint8_t>();
   s->always_pivot_ = r.Value<bool>();
   s->higham_ = r.Value<bool>();
   s->kernels_ = kernels;
-  s->sets_.set_of_case = r.Vector<int>();
-  s->sets_.case_of_set = r.Vector<int>();
-  const auto sets = r.Value<std::uint64_t>();
-  for (std::uint64_t k = 0; k < sets && !r.failed(); ++k) {
-    s->sets_.cases_of_set.push_back(r.Vector<int>());
-  }
-  s->sets_.first_output = r.Vector<std::size_t>();
   const auto pieces = r.Value<std::uint64_t>();
   for (std::uint64_t k = 0; k < pieces && !r.failed(); ++k) {
     SolvePiece p;
@@ -117,44 +92,20 @@ std::unique_ptr<SectionCondensation> SectionCondensation::Read(
   for (std::uint64_t c = 0; c < loads && !r.failed(); ++c) {
     s->boundary_load_.push_back(r.Dense<Eigen::MatrixXcd>());
   }
-  const auto cross_sections = r.Value<std::uint64_t>();
-  for (std::uint64_t c = 0; c < cross_sections && !r.failed(); ++c) {
-    std::array<std::vector<int>, 4> f;
-    for (std::vector<int>& v : f) v = r.Vector<int>();
-    s->free_dofs_.push_back(std::move(f));
-  }
   if (r.failed() || !r.at_end() || !s->Consistent()) return nullptr;
   return s;
 }
 
-// Every size and index Solve relies on, against the dimensions read first.
+// Every size and index Solve relies on, against the layout's dimensions.
 bool SectionCondensation::Consistent() const {
-  const int nc = nc_;
-  const int sections = num_sections_;
-  if (nc <= 0 || sections <= 0 || group_size_ <= 0 || sections % group_size_ != 0 ||
-      group_size_ > 8 || num_cases_ <= 0 || intervals_per_section_ <= 0 || ny_ < 0) {
-    return false;
-  }
+  const int nc = layout_->nc();
+  const int sections = layout_->num_sections();
+  const int num_cases = layout_->num_cases();
+  const OutputSets& sets = layout_->sets();
+  if (group_size_ <= 0 || sections % group_size_ != 0 || group_size_ > 8) return false;
   const int groups = sections / group_size_;
-  const auto cases = static_cast<std::size_t>(num_cases_);
-  const auto n_sets = sets_.case_of_set.size();
-  if (sets_.set_of_case.size() != cases || sets_.cases_of_set.size() != n_sets ||
-      sets_.first_output.size() != cases + 1) {
-    return false;
-  }
-  for (std::size_t c = 0; c < cases; ++c) {
-    if (sets_.set_of_case[c] < 0 || static_cast<std::size_t>(sets_.set_of_case[c]) >= n_sets ||
-        sets_.first_output[c + 1] < sets_.first_output[c]) {
-      return false;
-    }
-  }
-  for (std::size_t set = 0; set < n_sets; ++set) {
-    const int first = sets_.case_of_set[set];
-    if (first < 0 || static_cast<std::size_t>(first) >= cases) return false;
-    for (int c : sets_.cases_of_set[set]) {
-      if (c < 0 || static_cast<std::size_t>(c) >= cases) return false;
-    }
-  }
+  const auto cases = static_cast<std::size_t>(num_cases);
+  const auto n_sets = sets.case_of_set.size();
   const auto is_block = [&](const SplitMatrix& m, Eigen::Index rows, Eigen::Index cols) {
     return m.re.rows() == rows && m.re.cols() == cols && m.im.rows() == rows && m.im.cols() == cols;
   };
@@ -169,7 +120,7 @@ bool SectionCondensation::Consistent() const {
         !is_block(p.coupling_left, p.left_size > 0 && p.right_size > 0 ? nc : 0, rank) ||
         !is_block(p.coupling_right, p.coupling_left.re.rows(), rank) || rank > nc ||
         p.output_map.re.cols() != nb || p.output_map.im.rows() != p.output_map.re.rows() ||
-        p.output_map.im.cols() != nb || p.load.rows() != nb || p.load.cols() != num_cases_) {
+        p.output_map.im.cols() != nb || p.load.rows() != nb || p.load.cols() != num_cases) {
       return false;
     }
   }
@@ -185,8 +136,8 @@ bool SectionCondensation::Consistent() const {
       return false;
     }
     for (std::size_t set = 0; set < n_sets; ++set) {
-      const int c = sets_.case_of_set[set];
-      const std::size_t outputs = sets_.first_output[c + 1] - sets_.first_output[c];
+      const int c = sets.case_of_set[set];
+      const std::size_t outputs = sets.first_output[c + 1] - sets.first_output[c];
       if (layout.map_begin[set + 1] - layout.map_begin[set] !=
           static_cast<int>(layout.positions[set].size())) {
         return false;
@@ -196,7 +147,7 @@ bool SectionCondensation::Consistent() const {
       }
     }
     for (std::size_t c = 0; c < cases; ++c) {
-      const auto set = static_cast<std::size_t>(sets_.set_of_case[c]);
+      const auto set = static_cast<std::size_t>(sets.set_of_case[c]);
       if (layout.offset_begin[c + 1] - layout.offset_begin[c] !=
           static_cast<int>(layout.positions[set].size())) {
         return false;
@@ -213,21 +164,9 @@ bool SectionCondensation::Consistent() const {
       }
     }
   }
-  if (boundary_load_.size() != static_cast<std::size_t>(sections) + 1 ||
-      free_dofs_.size() != static_cast<std::size_t>(sections) + 1) {
-    return false;
-  }
+  if (boundary_load_.size() != static_cast<std::size_t>(sections) + 1) return false;
   for (const Eigen::MatrixXcd& b : boundary_load_) {
-    if (b.rows() != nc || b.cols() != num_cases_) return false;
-  }
-  for (const std::array<std::vector<int>, 4>& f : free_dofs_) {
-    for (const std::vector<int>& v : f) {
-      if (v.size() > static_cast<std::size_t>(nc) || !std::is_sorted(v.begin(), v.end()) ||
-          std::adjacent_find(v.begin(), v.end()) != v.end() ||
-          (!v.empty() && (v.front() < 0 || v.back() >= nc))) {
-        return false;
-      }
-    }
+    if (b.rows() != nc || b.cols() != num_cases) return false;
   }
   return true;
 }

@@ -10,6 +10,12 @@
 // section_solve.cpp, all the per-call algebra of the elimination runs on split real/imaginary
 // arrays in plain loops (the Schur update V^T D V four pivots per pass); the workspace is per
 // thread and reused.
+//
+// SolveBody runs the phases in order: evaluate the pieces the configuration uses (EvaluatePieces),
+// assemble the chain (Assemble), eliminate (EliminateChain), back-substitute
+// (BackSubstituteChain), check the results (FlagLargeChainResiduals), fall back for the cases that
+// need it (SolveChainPivoting), refuse a singular system (ThrowIfSingular) and recover the outputs
+// (RecoverOutputs).
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -18,10 +24,10 @@
 
 #include <Eigen/SparseLU>
 
-#include "block_ldlt.hpp"
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/block_ldlt.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 namespace combabc::plate {
 
@@ -36,39 +42,10 @@ struct ContinuousCondensation::Evaluated {
   Eigen::MatrixXd acc;  // real and imaginary parts of a table's sum
 };
 
-namespace {
-
-using Complex = std::complex<double>;
-
-using Index = std::ptrdiff_t;
-
-// A complex matrix or vector in split storage (block_ldlt.hpp), column-major; the leading
-// dimension is chosen per use.
-struct Split {
-  std::vector<double> re;
-  std::vector<double> im;
-  void Resize(Index size) {
-    re.resize(static_cast<std::size_t>(size));
-    im.resize(static_cast<std::size_t>(size));
-  }
-};
-
-struct Workspace {
-  int nc = -1;
-  int rows = -1;
-  int cases = -1;
-  // Pivot blocks F_c ((n + m + cases) x n, leading dimension n + m + cases, m the next row's
-  // size), LDL^T in place, with U_c^T and the right-hand sides (a column per case) carried below.
-  std::vector<Split> factor;
-  std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
-  std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
-  std::vector<Split> coupling;        // U_c between rows c and c + 1 (n_c x n_{c+1})
-  // Right-hand sides and solutions of each row, case j at [j nc, j nc + n).
-  std::vector<Split> rhs;
-  std::vector<Split> u;
-  std::vector<std::vector<int>> free;
-  std::vector<int> state;
-  std::vector<char> fallback;  // [case]: solved by the sparse LU
+// Solve's per-thread workspace: the block rows (BlockWorkspace) and the couplings between them.
+struct ContinuousWorkspace : BlockWorkspace {
+  std::vector<Split> coupling;  // U_c between rows c and c + 1 (n_c x n_{c+1})
+  std::vector<int> state;       // each section's clamp state
   Split dv;  // D_c V_c (n x m, leading dimension n): column l holds d_j v_jl over the pivots j
   Split w;   // W_c gathered from the factor's carried last rows (n x cases)
   Split z;   // one row's residual
@@ -76,32 +53,21 @@ struct Workspace {
   Eigen::VectorXcd values;
 
   void Reserve(int nc_, int rows_, int cases_) {
-    if (nc_ == nc && rows_ <= rows && cases_ <= cases) return;
-    nc = nc_;
-    rows = std::max(rows_, rows);
-    cases = std::max(cases_, cases);
+    if (!BlockWorkspace::Reserve(nc_, rows_, cases_)) return;
     const Index n = nc;
     const Index k = cases;
-    factor.assign(rows, Split{});
-    diagonal.assign(rows, Split{});
     coupling.assign(rows, Split{});
-    rhs.assign(rows, Split{});
-    u.assign(rows, Split{});
-    for (int c = 0; c < rows; ++c) {
-      factor[c].Resize((2 * n + k) * n);
-      diagonal[c].Resize(n * n);
-      coupling[c].Resize(n * n);
-      rhs[c].Resize(n * k);
-      u[c].Resize(n * k);
-    }
-    diagonal_max2.assign(rows, 0.0);
-    free.assign(rows, {});
+    for (int c = 0; c < rows; ++c) coupling[c].Resize(n * n);
     dv.Resize(n * n);
     w.Resize(n * k);
     z.Resize(n);
     ends.resize(2 * n);
   }
 };
+
+namespace {
+
+using Complex = std::complex<double>;
 
 // out = sum_{j < columns} (-mu)^j V_j for the table V = re + i im (im empty when K_base is real):
 // one pass over the table's columns (the memory traffic bounds this step), accumulating the real
@@ -134,15 +100,14 @@ void EvaluateTable(const Eigen::MatrixXd& re,
 // Block LDL^T elimination of the chain: F_0 = A_0, F_{c+1} = A_{c+1} - U_c^T F_c^{-1} U_c.
 // FactorLdltSplit turns the carried rows U_c^T and R'_c^T into V_c^T = (D^{-1} L^{-1} U_c)^T
 // and W_c^T (a column per load case), so that U_c^T F_c^{-1} U_c = V_c^T D V_c and
-// R'_{c+1} = R_{c+1} - V_c^T D W_c. `size(c)` is row c's free dofs (0 past the last row).
-// False where a pivot breaks down.
-template <class Size>
-COMBABC_KERNEL bool EliminateChain(Workspace& ws, int rows, Index cases, const Size& size) {
+// R'_{c+1} = R_{c+1} - V_c^T D W_c. False where a pivot breaks down.
+COMBABC_KERNEL bool EliminateChain(ContinuousWorkspace& ws, Index cases) {
   const Index nc = ws.nc;
+  const int rows = ws.num_rows;
   bool ok = true;
   for (int c = 0; c < rows && ok; ++c) {
-    const Index n = size(c);
-    const Index m = size(c + 1);
+    const Index n = ws.RowSize(c);
+    const Index m = ws.RowSize(c + 1);
     const Index ld = n + m + cases;
     double* fr = ws.factor[c].re.data();
     double* fi = ws.factor[c].im.data();
@@ -188,7 +153,7 @@ COMBABC_KERNEL bool EliminateChain(Workspace& ws, int rows, Index cases, const S
     // F_{c+1} = A_{c+1} - V^T D V, column l of its lower triangle at a time (FactorLdltSplit
     // reads only that): v_j (rows l..m-1) times d_j v_jl, four pivots per pass; and its carried
     // right-hand sides R_{c+1} - V^T D W.
-    const Index m2 = size(c + 2);
+    const Index m2 = ws.RowSize(c + 2);
     const Index ldn = m + m2 + cases;
     double* nr = ws.factor[c + 1].re.data();
     double* ni = ws.factor[c + 1].im.data();
@@ -213,12 +178,11 @@ COMBABC_KERNEL bool EliminateChain(Workspace& ws, int rows, Index cases, const S
 }
 
 // Back substitution of every case: u_c = L_c^{-T} (w_c - V_c u_{c+1}).
-template <class Size>
-COMBABC_KERNEL void BackSubstituteChain(Workspace& ws, int rows, Index cases, const Size& size) {
+COMBABC_KERNEL void BackSubstituteChain(ContinuousWorkspace& ws, Index cases) {
   const Index nc = ws.nc;
-  for (int c = rows - 1; c >= 0; --c) {
-    const Index n = size(c);
-    const Index m = size(c + 1);
+  for (int c = ws.num_rows - 1; c >= 0; --c) {
+    const Index n = ws.RowSize(c);
+    const Index m = ws.RowSize(c + 1);
     const Index ld = n + m + cases;
     const double* fr = ws.factor[c].re.data();
     const double* fi = ws.factor[c].im.data();
@@ -246,78 +210,52 @@ COMBABC_KERNEL void BackSubstituteChain(Workspace& ws, int rows, Index cases, co
   }
 }
 
-// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
-// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
-// result.
-template <class Size>
-COMBABC_KERNEL void FlagLargeChainResiduals(Workspace& ws,
-                                            int rows,
-                                            Index cases,
-                                            const Size& size) {
-  const Index nc = ws.nc;
-  double* zr = ws.z.re.data();
-  double* zi = ws.z.im.data();
-  for (Index k = 0; k < cases; ++k) {
-    const Index at = k * nc;
-    ResidualCheck check;
-    for (int c = 0; c < rows; ++c) {
-      const Index n = size(c);
-      if (n == 0) continue;  // a cross-section with every dof fixed has no equation
-      const double* ar = ws.diagonal[c].re.data();
-      const double* ai = ws.diagonal[c].im.data();
-      const double* ur = ws.u[c].re.data() + at;
-      const double* ui = ws.u[c].im.data() + at;
-      const double* br = ws.rhs[c].re.data() + at;
-      const double* bi = ws.rhs[c].im.data() + at;
-      // z = A u - rhs, A symmetric from its lower triangle.
-      SymmetricResidualSplit(ar, ai, n, ur, ui, br, bi, zr, zi);
-      // + U_c u_{c+1} + U_{c-1}^T u_{c-1}.
-      if (c + 1 < rows) {
-        const Split& a = ws.coupling[c];
-        for (Index l = 0; l < size(c + 1); ++l) {
-          SubScaledSplit(zr,
-                         zi,
-                         a.re.data() + l * n,
-                         a.im.data() + l * n,
-                         -ws.u[c + 1].re[at + l],
-                         -ws.u[c + 1].im[at + l],
-                         n);
-        }
+// The residual check of every case (FlagLargeResiduals), with full couplings: row c's residual
+// takes U_c u_{c+1} + U_{c-1}^T u_{c-1}.
+COMBABC_KERNEL void FlagLargeChainResiduals(ContinuousWorkspace& ws, Index cases) {
+  const auto add_couplings = [&](int c, Index at, double* zr, double* zi) COMBABC_KERNEL_LAMBDA {
+    const Index n = ws.RowSize(c);
+    if (c + 1 < ws.num_rows) {
+      const Split& a = ws.coupling[c];
+      for (Index l = 0; l < ws.RowSize(c + 1); ++l) {
+        SubScaledSplit(zr,
+                       zi,
+                       a.re.data() + l * n,
+                       a.im.data() + l * n,
+                       -ws.u[c + 1].re[at + l],
+                       -ws.u[c + 1].im[at + l],
+                       n);
       }
-      if (c > 0) {
-        const Split& a = ws.coupling[c - 1];
-        const Index p = size(c - 1);
-        for (Index j = 0; j < n; ++j) {
-          double vr = 0.0;
-          double vi = 0.0;
-          DotSplit(a.re.data() + j * p,
-                   a.im.data() + j * p,
-                   ws.u[c - 1].re.data() + at,
-                   ws.u[c - 1].im.data() + at,
-                   p,
-                   &vr,
-                   &vi);
-          zr[j] += vr;
-          zi[j] += vi;
-        }
-      }
-      check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[c]);
     }
-    ws.fallback[k] = check.Passes() ? 0 : 1;
-  }
+    if (c > 0) {
+      const Split& a = ws.coupling[c - 1];
+      const Index p = ws.RowSize(c - 1);
+      for (Index j = 0; j < n; ++j) {
+        double vr = 0.0;
+        double vi = 0.0;
+        DotSplit(a.re.data() + j * p,
+                 a.im.data() + j * p,
+                 ws.u[c - 1].re.data() + at,
+                 ws.u[c - 1].im.data() + at,
+                 p,
+                 &vr,
+                 &vi);
+        zr[j] += vr;
+        zi[j] += vi;
+      }
+    }
+  };
+  FlagLargeResiduals(ws, cases, ws.z.re.data(), ws.z.im.data(), add_couplings);
 }
 
 // Fallback: one sparse partial-pivoting LU of the assembled block-tridiagonal system, solved for
 // each case flagged in ws.fallback.
-template <class Size>
-void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) {
-  const Index nc = ws.nc;
-  std::vector<Eigen::Index> offset(rows + 1, 0);
-  for (int c = 0; c < rows; ++c) offset[c + 1] = offset[c] + size(c);
+inline void SolveChainPivoting(ContinuousWorkspace& ws, Index cases) {
+  const int rows = ws.num_rows;
+  const std::vector<Index> offset = RowOffsets(ws);
   std::vector<Eigen::Triplet<Complex>> triplets;
-  Eigen::MatrixXcd big_rhs(offset[rows], cases);
   for (int c = 0; c < rows; ++c) {
-    const Index n = size(c);
+    const Index n = ws.RowSize(c);
     const Split& a = ws.diagonal[c];
     for (Index j = 0; j < n; ++j) {
       for (Index i = j; i < n; ++i) {
@@ -325,13 +263,10 @@ void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) 
         triplets.emplace_back(offset[c] + i, offset[c] + j, v);
         if (i != j) triplets.emplace_back(offset[c] + j, offset[c] + i, v);
       }
-      for (Index k = 0; k < cases; ++k) {
-        big_rhs(offset[c] + j, k) = {ws.rhs[c].re[k * nc + j], ws.rhs[c].im[k * nc + j]};
-      }
     }
     if (c + 1 < rows) {
       const Split& u = ws.coupling[c];
-      const Index m = size(c + 1);
+      const Index m = ws.RowSize(c + 1);
       for (Index j = 0; j < m; ++j) {
         for (Index i = 0; i < n; ++i) {
           const Complex v(u.re[j * n + i], u.im[j * n + i]);
@@ -349,17 +284,7 @@ void SolveChainPivoting(Workspace& ws, int rows, Index cases, const Size& size) 
   if (lu.info() != Eigen::Success) {
     throw Error(ErrorKind::kSoftware, "continuous condensation: singular condensed system");
   }
-  for (Index k = 0; k < cases; ++k) {
-    if (ws.fallback[k] == 0) continue;
-    const Eigen::VectorXcd b = big_rhs.col(k);
-    const Eigen::VectorXcd solution = lu.solve(b);
-    for (int c = 0; c < rows; ++c) {
-      for (Index j = 0; j < size(c); ++j) {
-        ws.u[c].re[k * nc + j] = solution(offset[c] + j).real();
-        ws.u[c].im[k * nc + j] = solution(offset[c] + j).imag();
-      }
-    }
-  }
+  SolveFlaggedCases(ws, cases, offset, lu);
 }
 
 }  // namespace
@@ -381,6 +306,7 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
                                             int state,
                                             Complex mu,
                                             Evaluated* e) const {
+  const int nc = layout_->nc();
   const std::size_t index = static_cast<std::size_t>(mesh_kind) * 4 + state;
   const StateData& sd = states_[index];
   const Eigen::MatrixXcd s_bb = sd.k_bb + mu * sd.m_bb;
@@ -418,18 +344,18 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     const std::size_t k = kind * 4 + state;
     if (!e->kind_needed[k] || mesh_kind_[kind_section_[kind]] != mesh_kind) continue;
     const SectionData& sec = sections_[k];
-    const OutputLayout& layout = section_layout_[kind_section_[kind]];
+    const OutputLayout& layout = layout_->SectionOutputs(kind_section_[kind]);
     Eigen::VectorXcd& out = e->section[k];
     out.resize(sec.table_re.rows());
     // The output maps set by set, each by a product of the shape a model of that set alone would
     // use (a product's blocking, hence its rounding, depends on its shape).
-    for (int set = 0; set < sets_.num_sets(); ++set) {
+    for (int set = 0; set < layout_->sets().num_sets(); ++set) {
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
       if (rows == 0) continue;
       Eigen::Map<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> map(out.data() + first,
                                                                 rows,
-                                                                2 * static_cast<Eigen::Index>(nc_),
+                                                                2 * static_cast<Eigen::Index>(nc),
                                                                 Eigen::OuterStride<>(sec.map_rows));
       map = sec.r_b.middleRows(first, rows) -
             sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * x(sec.read[set], Eigen::all);
@@ -437,12 +363,12 @@ void ContinuousCondensation::EvaluateDirect(int mesh_kind,
     for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
       const Eigen::VectorXcd f = sec.f_i.col(static_cast<Eigen::Index>(l));
       const Eigen::VectorXcd y = solve(f);
-      const int set = sets_.set_of_case[sec.loaded_cases[l]];
+      const int set = layout_->sets().set_of_case[sec.loaded_cases[l]];
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
-      out.segment(sec.loaded_start[l], 2 * nc_) =
+      out.segment(sec.loaded_start[l], 2 * nc) =
           -s_ib(coupled, Eigen::all).transpose() * y(coupled);
-      out.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc_), rows) =
+      out.segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc), rows) =
           sec.r_i(Eigen::seqN(first, rows), sec.read[set]) * y(sec.read[set]);
     }
   }
@@ -452,14 +378,14 @@ void ContinuousCondensation::Solve(std::span<const std::uint8_t> clamps,
                                    Complex mu,
                                    std::span<std::complex<double>> w) const {
   switch (kernels_) {
-    case SensorOptions::VectorKernels::kAvx512:
+    case VectorKernels::kAvx512:
       SolveAvx512(clamps, mu, w);
       return;
-    case SensorOptions::VectorKernels::kAvx2:
+    case VectorKernels::kAvx2:
       SolveAvx2(clamps, mu, w);
       return;
-    case SensorOptions::VectorKernels::kAuto:
-    case SensorOptions::VectorKernels::kPortable:
+    case VectorKernels::kAuto:
+    case VectorKernels::kPortable:
       SolvePortable(clamps, mu, w);
       return;
   }
@@ -484,13 +410,34 @@ COMBABC_TARGET_AVX512 void ContinuousCondensation::SolveAvx512(
 COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8_t> clamps,
                                                       Complex mu,
                                                       std::span<std::complex<double>> w) const {
-  const int ns = num_sections_;
-  const int nc = nc_;
-  const Index cases = num_cases_;
-  const int rows = ns + 1;  // every cross-section c = 0..ns is a row
-  thread_local Workspace ws;
+  const int ns = layout_->num_sections();
+  const Index cases = layout_->num_cases();
+  thread_local ContinuousWorkspace ws;
   thread_local Evaluated e;
-  ws.Reserve(nc, rows, num_cases_);
+  ws.Reserve(layout_->nc(), ns + 1, layout_->num_cases());
+  ws.num_rows = ns + 1;  // every cross-section c = 0..ns is a row
+  EvaluatePieces(clamps, mu, ws, e);
+  Assemble(clamps, e, ws);
+  // One factorization for every load case, each case's back substitution, and a residual check
+  // of each. A pivot that breaks down sends every case to the sparse LU; a case whose residual
+  // fails goes there alone, so that each case is solved as a model of it alone would solve it.
+  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
+  if (!always_pivot_ && EliminateChain(ws, cases)) {
+    BackSubstituteChain(ws, cases);
+    FlagLargeChainResiduals(ws, cases);
+  }
+  if (ws.AnyFallback()) SolveChainPivoting(ws, cases);
+  ThrowIfSingular(ws, cases);
+  RecoverOutputs(e, ws, w);
+}
+
+// The clamp state of each section, and the pieces of the (mesh, state) pairs the configuration
+// uses at this mu: by the series where it converges fast enough, else directly.
+COMBABC_KERNEL void ContinuousCondensation::EvaluatePieces(std::span<const std::uint8_t> clamps,
+                                                           Complex mu,
+                                                           ContinuousWorkspace& ws,
+                                                           Evaluated& e) const {
+  const int ns = layout_->num_sections();
   ws.state.resize(ns);
   const std::size_t num_states = states_.size();
   const std::size_t num_kind_states = sections_.size();
@@ -515,38 +462,36 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       EvaluateDirect(mesh, state, mu, &e);
     }
   }
-  // Free dofs of each cross-section: a node on edge A (B) is fixed when either adjoining section
-  // fixes it; the short edges fix the first and last.
-  for (int c = 0; c < rows; ++c) {
-    const bool a = (c > 0 && clamps[c - 1] != 0) || (c < ns && clamps[c] != 0);
-    const bool b = (c > 0 && clamps[ns + c - 1] != 0) || (c < ns && clamps[ns + c] != 0);
-    FreeDofs(c, a, b, &ws.free[c]);
-  }
+}
+
+// The free dofs of each cross-section (SectionLayout::FreeDofs: a node on edge A (B) is fixed when
+// either adjoining section fixes it; the short edges fix the first and last). Row c gets the right
+// block of section c - 1 and the left block of section c (lower triangles), the loads of both and
+// of its own cross-section; section c couples rows c and c + 1.
+COMBABC_KERNEL void ContinuousCondensation::Assemble(std::span<const std::uint8_t> clamps,
+                                                     const Evaluated& e,
+                                                     ContinuousWorkspace& ws) const {
+  const int ns = layout_->num_sections();
+  const int nc = layout_->nc();
+  const int num_cases = layout_->num_cases();
+  const int rows = ws.num_rows;
+  for (int c = 0; c < rows; ++c) ws.free[c] = &layout_->FreeDofs(c, clamps);
   const auto piece_of = [&](int s) -> const Complex* {
     return e.piece[static_cast<std::size_t>(mesh_kind_[s]) * 4 + ws.state[s]].data();
-  };
-  const auto section_data = [&](int s) -> const SectionData& {
-    return sections_[static_cast<std::size_t>(kind_[s]) * 4 + ws.state[s]];
-  };
-  const auto section_of = [&](int s) -> const Eigen::VectorXcd& {
-    return e.section[static_cast<std::size_t>(kind_[s]) * 4 + ws.state[s]];
   };
   // Section s's load of case k (2 nc, [left; right]) when that load reaches its interior, else
   // an empty segment.
   const auto load_of = [&](int s, int k) {
-    const SectionData& sec = section_data(s);
+    const std::size_t index = KindIndex(s, ws.state[s]);
+    const SectionData& sec = sections_[index];
     const int l = sec.LoadedIndex(k);
-    return section_of(s).segment(l >= 0 ? sec.loaded_start[l] : 0, l >= 0 ? 2 * nc : 0);
+    return e.section[index].segment(l >= 0 ? sec.loaded_start[l] : 0, l >= 0 ? 2 * nc : 0);
   };
-  // Row c's size; 0 past the last row, so that the chain's phases need no special end.
-  const auto size = [&](int c) { return c < rows ? static_cast<Index>(ws.free[c].size()) : 0; };
   const Index right_block = LowerStart(nc);  // = nc (nc + 1) / 2
   const Index coupling_block = 2 * right_block;
-  // Assemble: row c gets the right block of section c - 1 and the left block of section c (lower
-  // triangles); section c couples rows c and c + 1.
   for (int c = 0; c < rows; ++c) {
-    const std::vector<int>& f = ws.free[c];
-    const Index n = size(c);
+    const std::vector<int>& f = *ws.free[c];
+    const Index n = ws.RowSize(c);
     const Complex* left = c > 0 ? piece_of(c - 1) + right_block : nullptr;
     const Complex* right = c < ns ? piece_of(c) : nullptr;
     const Complex* only = left != nullptr ? left : right;  // the plate's end cross-sections
@@ -567,7 +512,7 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
     ws.diagonal_max2[c] = max2;
-    for (int k = 0; k < num_cases_; ++k) {
+    for (int k = 0; k < num_cases; ++k) {
       const auto load_left = c > 0 ? load_of(c - 1, k) : load_of(0, -1);
       const auto load_right = c < ns ? load_of(c, k) : load_of(0, -1);
       for (Index j = 0; j < n; ++j) {
@@ -579,9 +524,9 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
     if (c < ns) {
-      const std::vector<int>& g = ws.free[c + 1];
+      const std::vector<int>& g = *ws.free[c + 1];
       const Complex* coupling = right + coupling_block;  // nc x nc by columns
-      for (Index l = 0; l < size(c + 1); ++l) {
+      for (Index l = 0; l < ws.RowSize(c + 1); ++l) {
         const Complex* column = coupling + Index{g[l]} * nc;
         for (Index k = 0; k < n; ++k) {
           ws.coupling[c].re[l * n + k] = column[f[k]].real();
@@ -590,46 +535,30 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
       }
     }
   }
-  // One factorization for every load case, each case's back substitution, and a residual check
-  // of each. A pivot that breaks down sends every case to the sparse LU; a case whose residual
-  // fails goes there alone, so that each case is solved as a model of it alone would solve it.
-  ws.fallback.assign(static_cast<std::size_t>(cases), 1);
-  if (!always_pivot_ && EliminateChain(ws, rows, cases, size)) {
-    BackSubstituteChain(ws, rows, cases, size);
-    FlagLargeChainResiduals(ws, rows, cases, size);
-  }
-  if (std::find(ws.fallback.begin(), ws.fallback.end(), 1) != ws.fallback.end()) {
-    SolveChainPivoting(ws, rows, cases, size);
-  }
-  // Singular or nearly so (plate.hpp), whichever path solved it; case by case.
-  for (Index k = 0; k < cases; ++k) {
-    AmplificationCheck amplification;
-    for (int c = 0; c < rows; ++c) {
-      amplification.AddRow(ws.u[c].re.data() + k * nc,
-                           ws.u[c].im.data() + k * nc,
-                           ws.rhs[c].re.data() + k * nc,
-                           ws.rhs[c].im.data() + k * nc,
-                           size(c));
-    }
-    if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
-  }
-  // Every case's outputs in section s from its two end cross-sections: its offsets (when its
-  // load reaches the interior) plus the output map's rows of its set times its end values.
-  for (int s = 0; s < ns; ++s) {
-    const OutputLayout& layout = section_layout_[s];
+}
+
+// Every case's outputs in section s from its two end cross-sections: its offsets (when its load
+// reaches the interior) plus the output map's rows of its set times its end values.
+COMBABC_KERNEL void ContinuousCondensation::RecoverOutputs(
+    const Evaluated& e, ContinuousWorkspace& ws, std::span<std::complex<double>> w) const {
+  const int nc = layout_->nc();
+  const OutputSets& sets = layout_->sets();
+  for (int s = 0; s < layout_->num_sections(); ++s) {
+    const OutputLayout& layout = layout_->SectionOutputs(s);
     if (layout.map_rows() == 0) continue;
-    const SectionData& sec = section_data(s);
-    const Eigen::VectorXcd& section = section_of(s);
-    for (int k = 0; k < num_cases_; ++k) {
-      const int set = sets_.set_of_case[k];
+    const std::size_t index = KindIndex(s, ws.state[s]);
+    const SectionData& sec = sections_[index];
+    const Eigen::VectorXcd& section = e.section[index];
+    for (int k = 0; k < sets.num_cases(); ++k) {
+      const int set = sets.set_of_case[k];
       const std::vector<int>& positions = layout.positions[set];
       const auto n_out = static_cast<Eigen::Index>(positions.size());
       if (n_out == 0) continue;
       auto ends = ws.ends.head(2 * nc);
       ends.setZero();
       for (int side = 0; side < 2; ++side) {
-        const std::vector<int>& f = ws.free[s + side];
-        for (Index j = 0; j < size(s + side); ++j) {
+        const std::vector<int>& f = *ws.free[s + side];
+        for (Index j = 0; j < ws.RowSize(s + side); ++j) {
           ends(Index{side} * nc + f[j]) = {ws.u[s + side].re[static_cast<std::size_t>(k) * nc + j],
                                            ws.u[s + side].im[static_cast<std::size_t>(k) * nc + j]};
         }
@@ -648,7 +577,7 @@ COMBABC_KERNEL void ContinuousCondensation::SolveBody(std::span<const std::uint8
           2 * static_cast<Eigen::Index>(nc),
           Eigen::OuterStride<>(layout.map_rows()));
       values.noalias() += map * ends;
-      std::complex<double>* out = w.data() + sets_.first_output[k];
+      std::complex<double>* out = w.data() + sets.first_output[k];
       for (Eigen::Index o = 0; o < n_out; ++o) out[positions[o]] = values(o);
     }
   }

@@ -1,4 +1,4 @@
-#include "combabc/plate/mitc9_element.hpp"
+#include "combabc/plate/elements/mitc9_element.hpp"
 
 #include <array>
 #include <cmath>

@@ -12,8 +12,8 @@
 // zero the element returns the Kirchhoff answer on a fixed mesh (tests/plate/mitc9_test.cpp).
 // RZT9 ties both shear strain sets of the refined zigzag theory (w_,a - theta_a and psi_a) at the
 // same points, as RZT4 does with MITC4 (rzt_element.hpp). Bending: full 3 x 3 Gauss.
-#include "combabc/plate/element.hpp"
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/element.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate {
 

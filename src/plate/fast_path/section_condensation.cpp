@@ -1,4 +1,4 @@
-#include "section_condensation.hpp"
+#include "plate/fast_path/section_condensation.hpp"
 
 #include <cmath>
 #include <utility>
@@ -12,160 +12,25 @@
 
 namespace combabc::plate {
 
-OutputSets::OutputSets(const std::vector<CaseOutputs>& outputs) {
-  first_output.push_back(0);
-  for (std::size_t c = 0; c < outputs.size(); ++c) {
-    int set = -1;
-    for (int k = 0; k < num_sets() && set < 0; ++k) {
-      const CaseOutputs& other = outputs[static_cast<std::size_t>(case_of_set[k])];
-      if (other.y == outputs[c].y && other.x == outputs[c].x) set = k;
-    }
-    if (set < 0) {
-      set = num_sets();
-      case_of_set.push_back(static_cast<int>(c));
-      cases_of_set.emplace_back();
-    }
-    set_of_case.push_back(set);
-    cases_of_set[static_cast<std::size_t>(set)].push_back(static_cast<int>(c));
-    first_output.push_back(first_output.back() + outputs[c].x.size());
-  }
-}
-
-void OutputLayout::Finish(const OutputSets& sets) {
-  map_begin.assign(1, 0);
-  for (const std::vector<int>& p : positions) {
-    map_begin.push_back(map_begin.back() + static_cast<int>(p.size()));
-  }
-  offset_begin.assign(1, 0);
-  for (int c = 0; c < sets.num_cases(); ++c) {
-    offset_begin.push_back(offset_begin.back() + rows_of_case(sets, c));
-  }
-}
-
-void AssignOutputs(const Plate& plate,
-                   int num_sections,
-                   int intervals,
-                   const std::vector<CaseOutputs>& outputs,
-                   const OutputSets& sets,
-                   std::vector<OutputLayout>* layouts,
-                   std::vector<std::vector<std::vector<double>>>* relative_x) {
-  const int nc = plate.dofs_per_node() * (plate.grid().ny() + 1);
-  const auto num_sets = static_cast<std::size_t>(sets.num_sets());
-  layouts->assign(static_cast<std::size_t>(num_sections), OutputLayout{});
-  relative_x->assign(static_cast<std::size_t>(num_sections),
-                     std::vector<std::vector<double>>(num_sets));
-  for (OutputLayout& layout : *layouts) layout.positions.resize(num_sets);
-  for (std::size_t set = 0; set < num_sets; ++set) {
-    const CaseOutputs& o = outputs[static_cast<std::size_t>(sets.case_of_set[set])];
-    for (std::size_t k = 0; k < o.x.size(); ++k) {
-      int dofs[kMaxElementDofs];
-      ElementVector row;
-      plate.InterpolationRow(o.x[k], o.y, dofs, &row);
-      const int section = dofs[0] / nc / intervals;
-      (*layouts)[section].positions[set].push_back(static_cast<int>(k));
-      const auto first_node =
-          static_cast<std::size_t>(section) * static_cast<std::size_t>(intervals);
-      (*relative_x)[section][set].push_back(o.x[k] - plate.grid().x[first_node]);
-    }
-  }
-  for (OutputLayout& layout : *layouts) layout.Finish(sets);
-}
-
 SectionCondensation::SectionCondensation(const Plate& plate,
-                                         int num_sections,
-                                         int elements_per_section,
-                                         int group_size,
-                                         std::uint8_t fixed_mask_a,
-                                         std::uint8_t fixed_mask_b,
-                                         std::uint8_t start_mask,
-                                         std::uint8_t end_mask,
-                                         const Eigen::MatrixXd& loads,
-                                         double frequency_hz,
-                                         const std::vector<CaseOutputs>& outputs,
-                                         bool always_pivot,
-                                         bool higham,
-                                         SensorOptions::VectorKernels kernels,
-                                         ThreadPool* pool)
-    : num_sections_(num_sections),
-      intervals_per_section_(elements_per_section * plate.element_order()),
-      ny_(plate.grid().ny()),
-      nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
-      fixed_mask_a_(fixed_mask_a),
-      fixed_mask_b_(fixed_mask_b),
-      start_mask_(start_mask),
-      end_mask_(end_mask),
-      num_cases_(static_cast<int>(loads.cols())),
-      sets_(outputs),
-      group_size_(group_size),
-      always_pivot_(always_pivot),
-      higham_(higham),
-      kernels_(kernels) {
-  const Grid& grid = plate.grid();
-  // Node arithmetic below counts grid intervals: 2 per element at element order 2, whose
-  // mid-side node lines are interior to their section like any other.
-  const int intervals = intervals_per_section_;
-  COMBABC_CHECK(grid.nx() == num_sections * intervals);
+                                         std::shared_ptr<const SectionLayout> section_layout,
+                                         const Settings& settings)
+    : layout_(std::move(section_layout)),
+      group_size_(settings.group_size),
+      always_pivot_(settings.always_pivot),
+      higham_(settings.higham),
+      kernels_(settings.kernels) {
+  const SectionLayout& sections = *layout_;
+  const int num_sections = sections.num_sections();
+  const int group_size = group_size_;
+  const int nc = sections.nc();
+  COMBABC_CHECK(plate.grid().nx() == num_sections * sections.intervals());
   COMBABC_CHECK(group_size >= 1 && num_sections % group_size == 0);
-  COMBABC_CHECK(num_cases_ >= 1 && outputs.size() == static_cast<std::size_t>(num_cases_));
-  COMBABC_CHECK(loads.rows() == static_cast<Eigen::Index>(grid.nx() + 1) * nc_);
-  std::vector<std::vector<std::vector<double>>> relative_x;
-  AssignOutputs(plate, num_sections, intervals, outputs, sets_, &section_layout_, &relative_x);
-  for (int c = 0; c <= num_sections; ++c) {
-    boundary_load_.push_back(loads.middleRows(static_cast<Eigen::Index>(c) * intervals * nc_, nc_)
-                                 .cast<std::complex<double>>());
-  }
-  free_dofs_.resize(num_sections + 1);
-  for (int c = 0; c <= num_sections; ++c) {
-    for (int edges = 0; edges < 4; ++edges) {
-      FreeDofs(c, (edges & 1) != 0, (edges & 2) != 0, &free_dofs_[c][edges]);
-    }
-  }
-  // Sections made of the same element matrices (Plate shares them between elements of equal
-  // size) have the same C in every clamp state, bit for bit: CondenseSections condenses each such
-  // mesh once, whatever loads and outputs its sections have.
-  const int elements = intervals / plate.element_order();
-  const auto same_elements = [&](int s, int t) {
-    for (int e = 0; e < elements; ++e) {
-      for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
-        if (&plate.Element(s * elements + e, ey) != &plate.Element(t * elements + e, ey)) {
-          return false;
-        }
-      }
-    }
-    return true;
-  };
-  mesh_of_section_.resize(num_sections);
-  for (int s = 0; s < num_sections; ++s) {
-    mesh_of_section_[s] = s;
-    for (int t = 0; t < s && mesh_of_section_[s] == s; ++t) {
-      if (mesh_of_section_[t] == t && same_elements(s, t)) mesh_of_section_[s] = t;
-    }
-  }
   // Sections with the same element sizes, no interior load in any case and outputs at the same
   // relative positions in every output set have identical pieces: compute those once.
-  const double tol = 1e-12 * grid.x.back();
-  const auto loaded = [&](int k) {
-    return intervals > 1 && loads.middleRows((static_cast<Eigen::Index>(k) * intervals + 1) * nc_,
-                                             static_cast<Eigen::Index>(intervals - 1) * nc_)
-                                    .cwiseAbs()
-                                    .maxCoeff() != 0.0;
-  };
   const auto same_section = [&](int s, int t) {
-    if (loaded(s) || loaded(t)) return false;
-    for (int e = 0; e < intervals; ++e) {
-      const double hs = grid.x[s * intervals + e + 1] - grid.x[s * intervals + e];
-      const double ht = grid.x[t * intervals + e + 1] - grid.x[t * intervals + e];
-      if (std::abs(hs - ht) > tol) return false;
-    }
-    for (std::size_t set = 0; set < relative_x[s].size(); ++set) {
-      const std::vector<double>& a = relative_x[s][set];
-      const std::vector<double>& b = relative_x[t][set];
-      if (a.size() != b.size()) return false;
-      for (std::size_t k = 0; k < a.size(); ++k) {
-        if (std::abs(a[k] - b[k]) > tol) return false;
-      }
-    }
-    return true;
+    return !sections.InteriorLoaded(s) && !sections.InteriorLoaded(t) &&
+           sections.SameSpacing(s, t) && sections.SameOutputPositions(s, t);
   };
   piece_index_.resize(num_sections);
   std::vector<int> representatives;  // the first section of each distinct kind
@@ -183,7 +48,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   pieces_.resize(representatives.size() * 4);
   section_condensed_.resize(static_cast<std::size_t>(num_sections) * 4);
   for (int state = 0; state < 4; ++state) {
-    CondenseSections(plate, state, loads, frequency_hz, outputs, representatives);
+    CondenseSections(plate, state, settings.frequency_hz, representatives);
   }
   // Groups made of the same section pieces with no load on their inner cross-sections are equal.
   const int num_groups = num_sections / group_size;
@@ -196,23 +61,15 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     if (is_end(g) || is_end(h)) return false;
     for (int k = 0; k < group_size; ++k) {
       if (piece_index_[g * group_size + k] != piece_index_[h * group_size + k]) return false;
-      if (k > 0 && (boundary_load_[g * group_size + k].cwiseAbs().maxCoeff() != 0.0 ||
-                    boundary_load_[h * group_size + k].cwiseAbs().maxCoeff() != 0.0)) {
+      if (k > 0 && (sections.BoundaryLoad(g * group_size + k).cwiseAbs().maxCoeff() != 0.0 ||
+                    sections.BoundaryLoad(h * group_size + k).cwiseAbs().maxCoeff() != 0.0)) {
         return false;
       }
     }
     return true;
   };
-  // Jacobi scaling folded into the group pieces: every kept cross-section dof d is replaced by
-  // u_d / s_d with s_d = |C_dd|^{-1/2} from one section piece. The BFS dofs (w, w_x, w_y, w_xy)
-  // carry different units, and on the graded mesh the unscaled block system loses digits in the
-  // unpivoted LDL^T; one scale vector for all cross-sections keeps the pieces shareable.
-  const Eigen::MatrixXcd& reference = Condensed(pieces_[piece_index_[0][0]]);
-  Eigen::VectorXd scale(nc_);
-  for (int d = 0; d < nc_; ++d) {
-    const double a = std::abs(reference(d, d));
-    scale(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
-  }
+  // Jacobi scaling folded into the group pieces (CrossSectionScale), from one section piece.
+  const Eigen::VectorXd scale = CrossSectionScale(Condensed(pieces_[piece_index_[0][0]]), nc);
   // The distinct groups (not twins) get their pieces, numbered group after group, state after
   // state. Groups whose sections have the same condensed matrices and the same folded ends (all
   // the inner groups of a uniform mesh, loaded or not) share the elimination of their inner
@@ -222,15 +79,15 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   int pieces = 0;
   for (int g = 0; g < num_groups; ++g) {
     OutputLayout& layout = group_layout_[g];
-    layout.positions.resize(static_cast<std::size_t>(sets_.num_sets()));
+    layout.positions.resize(static_cast<std::size_t>(sections.sets().num_sets()));
     for (int k = 0; k < group_size; ++k) {
-      const OutputLayout& section = section_layout_[g * group_size + k];
+      const OutputLayout& section = sections.SectionOutputs(g * group_size + k);
       for (std::size_t set = 0; set < layout.positions.size(); ++set) {
         const std::vector<int>& p = section.positions[set];
         layout.positions[set].insert(layout.positions[set].end(), p.begin(), p.end());
       }
     }
-    layout.Finish(sets_);
+    layout.Finish(sections.sets());
     int twin = -1;
     for (int h = 0; h < g && twin < 0; ++h) {
       if (same_group(g, h)) twin = h;
@@ -240,7 +97,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     }
     if (twin >= 0) continue;
     std::vector<int> key = {g == 0 ? 1 : 0, g == num_groups - 1 ? 1 : 0};
-    for (int k = 0; k < group_size; ++k) key.push_back(mesh_of_section_[g * group_size + k]);
+    for (int k = 0; k < group_size; ++k) key.push_back(sections.MeshOfSection(g * group_size + k));
     std::size_t c = 0;
     while (c < classes.size() && class_keys[c] != key) ++c;
     if (c == classes.size()) {
@@ -263,27 +120,27 @@ SectionCondensation::SectionCondensation(const Plate& plate,
     }
   };
   const std::size_t items = classes.size() * static_cast<std::size_t>(group_states);
-  if (pool != nullptr) {
-    pool->ParallelFor(items, 1, compose);
+  if (settings.pool != nullptr) {
+    settings.pool->ParallelFor(items, 1, compose);
   } else {
     compose(0, items);
   }
   // The composition read the unscaled cross-section loads; Solve reads them scaled.
-  for (Eigen::MatrixXcd& b : boundary_load_) b = scale.asDiagonal() * b;
+  for (int c = 0; c <= num_sections; ++c) {
+    boundary_load_.push_back(scale.asDiagonal() * sections.BoundaryLoad(c));
+  }
   // Only the group pieces are read per configuration. (Released last: released before the group
   // pieces are allocated, their memory would hold them, scattered, and the per-configuration
   // solve, which reads pieces all over the 20 MB, measured 15 % slower.)
   std::vector<Piece>().swap(pieces_);
   std::vector<Eigen::MatrixXcd>().swap(section_condensed_);
   std::vector<std::array<int, 4>>().swap(piece_index_);
-  std::vector<OutputLayout>().swap(section_layout_);
-  std::vector<int>().swap(mesh_of_section_);
 }
 
 SectionCondensation::GroupElimination SectionCondensation::EliminateGroup(
     int group, int state, const Eigen::VectorXd& scale) const {
   const int g = group_size_;
-  const int nc = nc_;
+  const int nc = layout_->nc();
   const int first = group * g;
   const auto section_state = [&](int k) { return (state >> (2 * k)) & 3; };
   GroupElimination e;
@@ -291,7 +148,7 @@ SectionCondensation::GroupElimination SectionCondensation::EliminateGroup(
   // kept (index into [left; right]) unless they are the plate's ends, which are folded in; inner
   // cross-sections keep their free dofs (interior).
   const bool fold_left = first == 0;
-  const bool fold_right = first + g == num_sections_;
+  const bool fold_right = first + g == layout_->num_sections();
   e.left_size = fold_left ? 0 : nc;
   e.right_size = fold_right ? 0 : nc;
   const int nz = (g + 1) * nc;
@@ -302,13 +159,13 @@ SectionCondensation::GroupElimination SectionCondensation::EliminateGroup(
     if (!fold_right) e.boundary_index[g * nc + d] = e.left_size + d;
   }
   int n_interior = 0;
-  std::vector<int> free;
   for (int t = 0; t <= g; ++t) {
     if ((t == 0 && !fold_left) || (t == g && !fold_right)) continue;
     e.interior_cross_sections.push_back(t);
     const int left = t > 0 ? section_state(t - 1) : 0;
     const int right = t < g ? section_state(t) : 0;
-    FreeDofs(first + t, ((left | right) & 1) != 0, ((left | right) & 2) != 0, &free);
+    const std::vector<int>& free =
+        layout_->FreeDofs(first + t, ((left | right) & 1) != 0, ((left | right) & 2) != 0);
     for (int d : free) e.interior_index[t * nc + d] = n_interior++;
   }
   const int nb = e.left_size + e.right_size;
@@ -385,13 +242,13 @@ SectionCondensation::GroupElimination SectionCondensation::EliminateGroup(
 SectionCondensation::SolvePiece SectionCondensation::FinishGroup(
     const GroupElimination& e, int group, int state, const Eigen::VectorXd& scale) const {
   const int g = group_size_;
-  const int nc = nc_;
+  const int nc = layout_->nc();
   const int first = group * g;
   const auto section_state = [&](int k) { return (state >> (2 * k)) & 3; };
   const int nb = e.left_size + e.right_size;
   const auto n_interior = static_cast<int>(e.x_b.rows());
   const int np = 2 * nc;
-  const int cases = num_cases_;
+  const int cases = layout_->num_cases();
   Eigen::MatrixXcd g_b = Eigen::MatrixXcd::Zero(nb, cases);
   Eigen::MatrixXcd g_i = Eigen::MatrixXcd::Zero(n_interior, cases);
   for (int k = 0; k < g; ++k) {
@@ -405,7 +262,7 @@ SectionCondensation::SolvePiece SectionCondensation::FinishGroup(
   for (int t : e.interior_cross_sections) {
     for (int d = 0; d < nc; ++d) {
       if (e.interior_index[t * nc + d] >= 0) {
-        g_i.row(e.interior_index[t * nc + d]) += boundary_load_[first + t].row(d);
+        g_i.row(e.interior_index[t * nc + d]) += layout_->BoundaryLoad(first + t).row(d);
       }
     }
   }
@@ -433,17 +290,18 @@ SectionCondensation::SolvePiece SectionCondensation::FinishGroup(
   }
   // The outputs: map rows set after set, each set's rows section after section; offsets case
   // after case in the rows of the case's set (OutputLayout).
+  const OutputSets& sets = layout_->sets();
   const OutputLayout& layout = group_layout_[group];
   Eigen::MatrixXcd output_map = Eigen::MatrixXcd::Zero(layout.map_rows(), nb);
   SolvePiece out = e.blocks;
   out.singular = singular;
   out.output_offset = Eigen::VectorXcd::Zero(layout.offset_rows());
-  for (int set = 0; set < sets_.num_sets(); ++set) {
-    const std::vector<int>& set_cases = sets_.cases_of_set[set];
+  for (int set = 0; set < sets.num_sets(); ++set) {
+    const std::vector<int>& set_cases = sets.cases_of_set[set];
     int row = layout.map_begin[set];
     for (int k = 0; k < g; ++k) {
       const Piece& piece = pieces_[piece_index_[first + k][section_state(k)]];
-      const OutputLayout& section = section_layout_[first + k];
+      const OutputLayout& section = layout_->SectionOutputs(first + k);
       const auto rows = static_cast<int>(section.positions[set].size());
       for (int o = 0; o < rows; ++o, ++row) {
         const int t = row - layout.map_begin[set];  // the row within the set
@@ -477,31 +335,33 @@ SectionCondensation::SolvePiece SectionCondensation::FinishGroup(
 
 void SectionCondensation::CondenseSections(const Plate& plate,
                                            int state,
-                                           const Eigen::MatrixXd& loads,
                                            double frequency_hz,
-                                           const std::vector<CaseOutputs>& outputs,
                                            const std::vector<int>& representatives) {
-  const int m = intervals_per_section_;
-  const int n_local = (m + 1) * nc_;
+  const Eigen::MatrixXd& loads = layout_->loads();
+  const std::vector<CaseOutputs>& outputs = layout_->outputs();
+  const OutputSets& sets = layout_->sets();
+  const int nc = layout_->nc();
+  const int num_cases = layout_->num_cases();
+  const int m = layout_->intervals();
+  const int n_local = (m + 1) * nc;
   const int elements = m / plate.element_order();
   // Classify local dofs: boundary (index into [left; right]), interior (index into I), or fixed.
   // The same for every section in this state.
   std::vector<int> boundary_index;
   std::vector<int> interior_index;
-  const int n_interior = ClassifySectionDofs(
-      m, nc_, ny_, state, fixed_mask_a_, fixed_mask_b_, &boundary_index, &interior_index);
-  const int nb = 2 * nc_;
+  const int n_interior = layout_->ClassifySectionDofs(state, &boundary_index, &interior_index);
+  const int nb = 2 * nc;
   const std::complex<double> mass_coefficient = plate.MassCoefficient(frequency_hz);
   const std::complex<double> i_unit(0.0, 1.0);
   for (std::size_t first = 0; first < representatives.size(); ++first) {
-    const int mesh = mesh_of_section_[representatives[first]];
+    const int mesh = layout_->MeshOfSection(representatives[first]);
     bool seen = false;  // each mesh once, at its first distinct section
     for (std::size_t q = 0; q < first; ++q) {
-      seen = seen || mesh_of_section_[representatives[q]] == mesh;
+      seen = seen || layout_->MeshOfSection(representatives[q]) == mesh;
     }
     if (seen) continue;
     // The section matrices of the mesh (its first section: the others have the same elements).
-    const int mesh_offset = mesh * m * nc_;
+    const int mesh_offset = mesh * m * nc;
     Eigen::MatrixXcd s_bb = Eigen::MatrixXcd::Zero(nb, nb);
     Eigen::MatrixXcd s_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
     std::vector<Eigen::Triplet<std::complex<double>>> triplets;
@@ -558,13 +418,13 @@ void SectionCondensation::CondenseSections(const Plate& plate,
     // Each distinct section of this mesh: its loads and its outputs.
     for (std::size_t q = first; q < representatives.size(); ++q) {
       const int section = representatives[q];
-      if (mesh_of_section_[section] != mesh) continue;
-      const int offset = section * m * nc_;
+      if (layout_->MeshOfSection(section) != mesh) continue;
+      const int offset = section * m * nc;
       Piece& piece = pieces_[q * 4 + static_cast<std::size_t>(state)];
       piece.condensed = condensed;
-      piece.load.resize(nb, num_cases_);
-      Eigen::MatrixXcd x_f = Eigen::MatrixXcd::Zero(n_interior, num_cases_);
-      for (int c = 0; c < num_cases_; ++c) {
+      piece.load.resize(nb, num_cases);
+      Eigen::MatrixXcd x_f = Eigen::MatrixXcd::Zero(n_interior, num_cases);
+      for (int c = 0; c < num_cases; ++c) {
         Eigen::VectorXcd f_interior = Eigen::VectorXcd::Zero(n_interior);
         for (int d = 0; d < n_local; ++d) {
           if (interior_index[d] >= 0) f_interior(interior_index[d]) = loads(offset + d, c);
@@ -574,11 +434,11 @@ void SectionCondensation::CondenseSections(const Plate& plate,
         piece.load.col(c) = -s_cb.transpose() * x(coupled);
         x_f.col(c) = x;
       }
-      const OutputLayout& layout = section_layout_[section];
+      const OutputLayout& layout = layout_->SectionOutputs(section);
       piece.output_map = Eigen::MatrixXcd::Zero(layout.map_rows(), nb);
       piece.output_offset = Eigen::VectorXcd::Zero(layout.offset_rows());
-      for (int set = 0; set < sets_.num_sets(); ++set) {
-        const CaseOutputs& o = outputs[static_cast<std::size_t>(sets_.case_of_set[set])];
+      for (int set = 0; set < sets.num_sets(); ++set) {
+        const CaseOutputs& o = outputs[static_cast<std::size_t>(sets.case_of_set[set])];
         const std::vector<int>& positions = layout.positions[set];
         for (std::size_t t = 0; t < positions.size(); ++t) {
           const int row_index = layout.map_begin[set] + static_cast<int>(t);
@@ -592,7 +452,7 @@ void SectionCondensation::CondenseSections(const Plate& plate,
               piece.output_map(row_index, boundary_index[d]) += row(q2);
             } else if (interior_index[d] >= 0) {
               piece.output_map.row(row_index) -= row(q2) * x_b.row(interior_index[d]);
-              for (int c : sets_.cases_of_set[set]) {
+              for (int c : sets.cases_of_set[set]) {
                 piece.output_offset(layout.offset_begin[c] + static_cast<int>(t)) +=
                     row(q2) * x_f(interior_index[d], c);
               }
@@ -606,11 +466,11 @@ void SectionCondensation::CondenseSections(const Plate& plate,
 
 const SectionCondensation::SolvePiece& SectionCondensation::GroupPieceOf(
     int group, std::span<const std::uint8_t> clamps) const {
+  const int ns = layout_->num_sections();
   int state = 0;
   for (int k = 0; k < group_size_; ++k) {
     const int section = group * group_size_ + k;
-    state |= ((clamps[section] != 0 ? 1 : 0) | (clamps[num_sections_ + section] != 0 ? 2 : 0))
-             << (2 * k);
+    state |= ((clamps[section] != 0 ? 1 : 0) | (clamps[ns + section] != 0 ? 2 : 0)) << (2 * k);
   }
   return group_pieces_[group_piece_index_[group][state]];
 }

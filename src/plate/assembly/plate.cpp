@@ -1,4 +1,4 @@
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -11,10 +11,10 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
-#include "combabc/plate/bfs_element.hpp"
-#include "combabc/plate/mitc4_element.hpp"
-#include "combabc/plate/mitc9_element.hpp"
-#include "combabc/plate/rzt_element.hpp"
+#include "combabc/plate/elements/bfs_element.hpp"
+#include "combabc/plate/elements/mitc4_element.hpp"
+#include "combabc/plate/elements/mitc9_element.hpp"
+#include "combabc/plate/elements/rzt_element.hpp"
 
 namespace combabc::plate {
 namespace {

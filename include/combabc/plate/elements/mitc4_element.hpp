@@ -10,8 +10,8 @@
 // the shear strains gamma = (w_x - phi_x, w_y - phi_y) vanish; curvatures (phi_x,x, phi_y,y,
 // phi_x,y + phi_y,x) pair with the same bending stiffness D as Kirchhoff's (w_xx, w_yy, 2 w_xy).
 // Local dof 3 (a + 2 b) + k for corner (a, b) (element.hpp).
-#include "combabc/plate/element.hpp"
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/element.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate {
 

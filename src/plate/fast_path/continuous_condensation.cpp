@@ -1,4 +1,4 @@
-#include "continuous_condensation.hpp"
+#include "plate/fast_path/continuous_condensation.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -65,64 +65,23 @@ int ContinuousCondensation::TermsFor(double q) {
 }
 
 ContinuousCondensation::ContinuousCondensation(const Plate& plate,
-                                               int num_sections,
-                                               int elements_per_section,
-                                               bool own_loss_factors,
-                                               std::uint8_t fixed_mask_a,
-                                               std::uint8_t fixed_mask_b,
-                                               std::uint8_t start_mask,
-                                               std::uint8_t end_mask,
-                                               const Eigen::MatrixXd& loads,
-                                               const std::vector<CaseOutputs>& outputs,
-                                               bool always_pivot,
-                                               SensorOptions::VectorKernels kernels)
-    : num_sections_(num_sections),
-      intervals_per_section_(elements_per_section * plate.element_order()),
-      ny_(plate.grid().ny()),
-      nc_(plate.dofs_per_node() * (plate.grid().ny() + 1)),
-      own_loss_factors_(own_loss_factors),
-      fixed_mask_a_(fixed_mask_a),
-      fixed_mask_b_(fixed_mask_b),
-      start_mask_(start_mask),
-      end_mask_(end_mask),
-      always_pivot_(always_pivot),
-      kernels_(kernels),
-      num_cases_(static_cast<int>(loads.cols())),
-      sets_(outputs) {
-  const Grid& grid = plate.grid();
-  // Grid intervals per section (2 per element at element order 2), as SectionCondensation.
-  const int m = intervals_per_section_;
-  COMBABC_CHECK(grid.nx() == num_sections * m);
-  COMBABC_CHECK(num_cases_ >= 1 && outputs.size() == static_cast<std::size_t>(num_cases_));
-  // Outputs by section, as SectionCondensation assigns them.
-  std::vector<std::vector<std::vector<double>>> relative_x;
-  AssignOutputs(plate, num_sections, m, outputs, sets_, &section_layout_, &relative_x);
-  for (int c = 0; c <= num_sections; ++c) {
-    boundary_load_.push_back(
-        loads.middleRows(static_cast<Eigen::Index>(c) * m * nc_, nc_).cast<Complex>());
-  }
+                                               std::shared_ptr<const SectionLayout> section_layout,
+                                               const Settings& settings)
+    : layout_(std::move(section_layout)),
+      own_loss_factors_(settings.own_loss_factors),
+      always_pivot_(settings.always_pivot),
+      kernels_(settings.kernels) {
+  const SectionLayout& sections = *layout_;
+  const int num_sections = sections.num_sections();
+  const int nc = sections.nc();
+  COMBABC_CHECK(plate.grid().nx() == num_sections * sections.intervals());
   // Distinct meshes: the same element lengths. Distinct sections: the same mesh, no interior
   // load in any case and outputs at the same relative positions in every output set (as
   // SectionCondensation shares pieces).
-  const double tol = 1e-12 * grid.x.back();
-  const auto same_mesh = [&](int s, int t) {
-    for (int e = 0; e < m; ++e) {
-      const double hs = grid.x[s * m + e + 1] - grid.x[s * m + e];
-      const double ht = grid.x[t * m + e + 1] - grid.x[t * m + e];
-      if (std::abs(hs - ht) > tol) return false;
-    }
-    return true;
-  };
-  const auto loaded = [&](int s) {
-    return m > 1 && loads.middleRows((static_cast<Eigen::Index>(s) * m + 1) * nc_,
-                                     static_cast<Eigen::Index>(m - 1) * nc_)
-                            .cwiseAbs()
-                            .maxCoeff() != 0.0;
-  };
   for (int s = 0; s < num_sections; ++s) {
     int mesh = -1;
     for (std::size_t k = 0; k < mesh_section_.size() && mesh < 0; ++k) {
-      if (same_mesh(s, mesh_section_[k])) mesh = static_cast<int>(k);
+      if (sections.SameSpacing(s, mesh_section_[k])) mesh = static_cast<int>(k);
     }
     if (mesh < 0) {
       mesh = static_cast<int>(mesh_section_.size());
@@ -130,19 +89,11 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
     }
     mesh_kind_.push_back(mesh);
     int kind = -1;
-    for (std::size_t k = 0; k < kind_section_.size() && kind < 0 && !loaded(s); ++k) {
+    for (std::size_t k = 0; k < kind_section_.size() && kind < 0 && !sections.InteriorLoaded(s);
+         ++k) {
       const int t = kind_section_[k];
-      if (mesh_kind_[t] != mesh || loaded(t)) continue;
-      bool same = true;
-      for (std::size_t set = 0; set < relative_x[s].size() && same; ++set) {
-        const std::vector<double>& a = relative_x[s][set];
-        const std::vector<double>& b = relative_x[t][set];
-        same = a.size() == b.size();
-        for (std::size_t o = 0; o < a.size() && same; ++o) {
-          same = std::abs(a[o] - b[o]) <= tol;
-        }
-      }
-      if (same) kind = static_cast<int>(k);
+      if (mesh_kind_[t] != mesh || sections.InteriorLoaded(t)) continue;
+      if (sections.SameOutputPositions(s, t)) kind = static_cast<int>(k);
     }
     if (kind < 0) {
       kind = static_cast<int>(kind_section_.size());
@@ -154,19 +105,14 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
   sections_.resize(kind_section_.size() * 4);
   for (int mesh = 0; mesh < static_cast<int>(mesh_section_.size()); ++mesh) {
     for (int state = 0; state < 4; ++state) {
-      Precompute(plate, mesh, state, loads, outputs);
+      Precompute(plate, mesh, state);
     }
   }
-  // Jacobi scaling of the cross-section dofs, as in SectionCondensation: one scale vector for all
-  // cross-sections (from the static piece of section 0, both edges free), so that the BFS dofs'
-  // different units do not cost digits in the unpivoted block LDL^T.
-  const Eigen::MatrixXcd& reference = states_[static_cast<std::size_t>(mesh_kind_[0]) * 4].k_static;
-  boundary_scale_.resize(nc_);
-  for (int d = 0; d < nc_; ++d) {
-    const double a = std::abs(reference(d, d));
-    boundary_scale_(d) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
-  }
-  Eigen::VectorXd s2(2 * nc_);
+  // Jacobi scaling of the cross-section dofs, as in SectionCondensation (CrossSectionScale), from
+  // the static piece of section 0, both edges free.
+  boundary_scale_ =
+      CrossSectionScale(states_[static_cast<std::size_t>(mesh_kind_[0]) * 4].k_static, nc);
+  Eigen::VectorXd s2(2 * nc);
   s2 << boundary_scale_, boundary_scale_;
   const auto both = [&](Eigen::MatrixXcd& a) { a = s2.asDiagonal() * a * s2.asDiagonal(); };
   for (StateData& sd : states_) {
@@ -187,30 +133,32 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
       for (Eigen::VectorXcd& t : sec.load_terms[l]) t = s2.asDiagonal() * t;
     }
   }
-  for (Eigen::MatrixXcd& b : boundary_load_) b = boundary_scale_.asDiagonal() * b;
+  for (int c = 0; c <= num_sections; ++c) {
+    boundary_load_.push_back(boundary_scale_.asDiagonal() * sections.BoundaryLoad(c));
+  }
   BuildTables();
 }
 
-void ContinuousCondensation::Precompute(const Plate& plate,
-                                        int mesh_kind,
-                                        int state,
-                                        const Eigen::MatrixXd& loads,
-                                        const std::vector<CaseOutputs>& outputs) {
-  const int m = intervals_per_section_;
+void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int state) {
+  const Eigen::MatrixXd& loads = layout_->loads();
+  const std::vector<CaseOutputs>& outputs = layout_->outputs();
+  const OutputSets& sets = layout_->sets();
+  const int nc = layout_->nc();
+  const int num_cases = layout_->num_cases();
+  const int m = layout_->intervals();
   const int elements = m / plate.element_order();
-  const int n_local = (m + 1) * nc_;
-  const int nb = 2 * nc_;
+  const int n_local = (m + 1) * nc;
+  const int nb = 2 * nc;
   // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
-  // SectionCondensation::Condense.
+  // SectionCondensation::CondenseSections.
   std::vector<int> boundary_index;
   std::vector<int> interior_index;
-  const int n_interior = ClassifySectionDofs(
-      m, nc_, ny_, state, fixed_mask_a_, fixed_mask_b_, &boundary_index, &interior_index);
+  const int n_interior = layout_->ClassifySectionDofs(state, &boundary_index, &interior_index);
   // The section matrices split by physics: K_base (K_real, + i K_imag for the layers' own loss
   // factors) and M_1. Sections of one mesh have equal element matrices.
   StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
   const int section = mesh_section_[mesh_kind];
-  const int offset = section * m * nc_;
+  const int offset = section * m * nc;
   sd.k_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.m_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.k_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
@@ -260,13 +208,13 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   for (int kind : kinds) {
     SectionData& sec = sections_[static_cast<std::size_t>(kind) * 4 + state];
     const int s = kind_section_[kind];
-    const int s_offset = s * m * nc_;
-    const OutputLayout& layout = section_layout_[s];
+    const int s_offset = s * m * nc;
+    const OutputLayout& layout = layout_->SectionOutputs(s);
     const auto n_out = static_cast<Eigen::Index>(layout.map_rows());
     sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
     sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
-    for (int set = 0; set < sets_.num_sets(); ++set) {
-      const CaseOutputs& o = outputs[static_cast<std::size_t>(sets_.case_of_set[set])];
+    for (int set = 0; set < sets.num_sets(); ++set) {
+      const CaseOutputs& o = outputs[static_cast<std::size_t>(sets.case_of_set[set])];
       const std::vector<int>& positions = layout.positions[set];
       for (std::size_t t = 0; t < positions.size(); ++t) {
         const Eigen::Index k = layout.map_begin[set] + static_cast<Eigen::Index>(t);
@@ -286,7 +234,7 @@ void ContinuousCondensation::Precompute(const Plate& plate,
     sec.loaded_start.clear();
     std::vector<Eigen::VectorXcd> f;
     Eigen::Index next_row = n_out * nb;
-    for (int c = 0; c < num_cases_; ++c) {
+    for (int c = 0; c < num_cases; ++c) {
       Eigen::VectorXcd f_c = Eigen::VectorXcd::Zero(n_interior);
       for (int d = 0; d < n_local; ++d) {
         if (interior_index[d] >= 0) f_c(interior_index[d]) = loads(s_offset + d, c);
@@ -294,14 +242,14 @@ void ContinuousCondensation::Precompute(const Plate& plate,
       if (n_interior == 0 || f_c.cwiseAbs().maxCoeff() == 0.0) continue;
       sec.loaded_cases.push_back(c);
       sec.loaded_start.push_back(next_row);
-      next_row += nb + layout.rows_of_case(sets_, c);
+      next_row += nb + layout.rows_of_case(sets, c);
       f.push_back(std::move(f_c));
     }
     sec.f_i.resize(n_interior, static_cast<Eigen::Index>(f.size()));
     for (std::size_t l = 0; l < f.size(); ++l) sec.f_i.col(static_cast<Eigen::Index>(l)) = f[l];
     sec.map_rows = static_cast<int>(n_out);
-    sec.read.assign(static_cast<std::size_t>(sets_.num_sets()), {});
-    for (int set = 0; set < sets_.num_sets(); ++set) {
+    sec.read.assign(static_cast<std::size_t>(sets.num_sets()), {});
+    for (int set = 0; set < sets.num_sets(); ++set) {
       const int first = layout.map_begin[set];
       const int rows = layout.map_begin[set + 1] - first;
       for (int i = 0; i < n_interior; ++i) {
@@ -369,8 +317,8 @@ void ContinuousCondensation::Precompute(const Plate& plate,
   }
   // The output rows of loaded case l of a section: its set's rows.
   const auto case_rows = [&](const SectionData& sec, int kind, std::size_t l) {
-    const OutputLayout& layout = section_layout_[kind_section_[kind]];
-    const int set = sets_.set_of_case[sec.loaded_cases[l]];
+    const OutputLayout& layout = layout_->SectionOutputs(kind_section_[kind]);
+    const int set = sets.set_of_case[sec.loaded_cases[l]];
     return sec.r_i.middleRows(layout.map_begin[set],
                               layout.map_begin[set + 1] - layout.map_begin[set]);
   };
@@ -393,19 +341,21 @@ void ContinuousCondensation::Precompute(const Plate& plate,
 }
 
 void ContinuousCondensation::PackPiece(const Eigen::MatrixXcd& piece, Complex* out) const {
+  const int nc = layout_->nc();
   Eigen::Index k = 0;
   for (int block = 0; block < 2; ++block) {
-    const int o = block * nc_;
-    for (int j = 0; j < nc_; ++j) {
-      for (int i = j; i < nc_; ++i) out[k++] = piece(o + i, o + j);
+    const int o = block * nc;
+    for (int j = 0; j < nc; ++j) {
+      for (int i = j; i < nc; ++i) out[k++] = piece(o + i, o + j);
     }
   }
-  for (int j = 0; j < nc_; ++j) {
-    for (int i = 0; i < nc_; ++i) out[k++] = piece(i, nc_ + j);
+  for (int j = 0; j < nc; ++j) {
+    for (int i = 0; i < nc; ++i) out[k++] = piece(i, nc + j);
   }
 }
 
 void ContinuousCondensation::BuildTables() {
+  const int nc = layout_->nc();
   const int columns = TermsFor(kMaxRatio);
   const auto split =
       [](const Eigen::MatrixXcd& table, bool complex_base, StateData* sd, SectionData* sec) {
@@ -431,7 +381,7 @@ void ContinuousCondensation::BuildTables() {
     const Eigen::Index map_rows = sec.out_static.size();
     Eigen::Index rows = map_rows;
     for (const auto& offsets : sec.offset_terms) {
-      rows += 2 * static_cast<Eigen::Index>(nc_) + offsets.front().size();
+      rows += 2 * static_cast<Eigen::Index>(nc) + offsets.front().size();
     }
     const Eigen::Index count = sec.out_terms.empty() ? 1 : columns + 1;
     Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(rows, count);
@@ -441,8 +391,8 @@ void ContinuousCondensation::BuildTables() {
       for (std::size_t l = 0; l < sec.loaded_cases.size(); ++l) {
         const Eigen::VectorXcd& load = j == 0 ? sec.load_static[l] : sec.load_terms[l][j - 1];
         const Eigen::VectorXcd& offsets = sec.offset_terms[l][j];
-        table.col(j).segment(sec.loaded_start[l], 2 * nc_) = load;
-        table.col(j).segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc_),
+        table.col(j).segment(sec.loaded_start[l], 2 * nc) = load;
+        table.col(j).segment(sec.loaded_start[l] + 2 * static_cast<Eigen::Index>(nc),
                              offsets.size()) = offsets;
       }
     }

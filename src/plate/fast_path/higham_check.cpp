@@ -1,4 +1,4 @@
-#include "higham_check.hpp"
+#include "plate/fast_path/higham_check.hpp"
 
 #include <complex>
 #include <vector>
@@ -66,51 +66,30 @@ bool SectionSchur(const Plate& plate,
 
 }  // namespace
 
-bool IsHighamSystem(const Plate& plate,
-                    int num_sections,
-                    int intervals,
-                    const CrossSectionMasks& masks,
-                    double frequency_hz) {
-  const int ny = plate.grid().ny();
-  const int nc = plate.dofs_per_node() * (ny + 1);
-  const int elements = intervals / plate.element_order();
-  const auto same_elements = [&](int s, int t) {
-    for (int e = 0; e < elements; ++e) {
-      for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
-        if (&plate.Element(s * elements + e, ey) != &plate.Element(t * elements + e, ey)) {
-          return false;
-        }
-      }
-    }
-    return true;
-  };
-  std::vector<int> mesh(num_sections);
-  for (int s = 0; s < num_sections; ++s) {
-    mesh[s] = s;
-    for (int t = 0; t < s && mesh[s] == s; ++t) {
-      if (mesh[t] == t && same_elements(s, t)) mesh[s] = t;
-    }
-  }
+bool IsHighamSystem(const Plate& plate, const SectionLayout& layout, double frequency_hz) {
+  const int num_sections = layout.num_sections();
+  const int intervals = layout.intervals();
+  const int nc = layout.nc();
+  const auto mesh = [&](int s) { return layout.MeshOfSection(s); };
   for (const bool imaginary : {false, true}) {
     std::vector<Eigen::MatrixXd> schur(num_sections);
     for (int s = 0; s < num_sections; ++s) {
-      if (mesh[s] != s) continue;
+      if (mesh(s) != s) continue;
       if (!SectionSchur(plate, s, intervals, nc, imaginary, frequency_hz, &schur[s])) return false;
     }
     // The cross-sections' chain, block after block: the pivot block of cross-section c (its free
     // dofs) less what the elimination of c - 1 passed on, then what c passes on to c + 1.
     Eigen::MatrixXd carried = Eigen::MatrixXd::Zero(nc, nc);
-    std::vector<int> free;
     for (int c = 0; c <= num_sections; ++c) {
       Eigen::MatrixXd block = -carried;
-      if (c > 0) block += schur[mesh[c - 1]].bottomRightCorner(nc, nc);
-      if (c < num_sections) block += schur[mesh[c]].topLeftCorner(nc, nc);
-      CrossSectionFreeDofs(nc, ny, num_sections, masks, c, false, false, &free);
+      if (c > 0) block += schur[mesh(c - 1)].bottomRightCorner(nc, nc);
+      if (c < num_sections) block += schur[mesh(c)].topLeftCorner(nc, nc);
+      const std::vector<int>& free = layout.FreeDofs(c, false, false);
       const Eigen::MatrixXd pivot = block(free, free);
       const Eigen::LLT<Eigen::MatrixXd> llt(pivot);
       if (llt.info() != Eigen::Success) return false;
       if (c < num_sections) {
-        const Eigen::MatrixXd coupling = schur[mesh[c]].topRightCorner(nc, nc)(free, Eigen::all);
+        const Eigen::MatrixXd coupling = schur[mesh(c)].topRightCorner(nc, nc)(free, Eigen::all);
         carried = coupling.transpose() * llt.solve(coupling);
       }
     }

@@ -1,8 +1,9 @@
-#include "combabc/plate/rzt_element.hpp"
+#include "combabc/plate/elements/rzt_element.hpp"
 
 #include <array>
 
-#include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/elements/mitc4_element.hpp"
+#include "plate/elements/linear_basis.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -12,17 +13,14 @@ namespace {
 constexpr std::array<double, 2> kRztGaussPoint = {0.2113248654051871, 0.7886751345948129};
 constexpr double kRztGaussWeight = 0.5;
 
-using ShearRows = Eigen::Matrix<double, 2, kRztElementDofs>;
+using RztShearRows = Eigen::Matrix<double, 2, kRztElementDofs>;
 
 int RztLocalDof(int a, int b, int k) { return kRztDofsPerNode * (a + 2 * b) + k; }
 
-double Linear(int a, double s) { return a == 0 ? 1.0 - s : s; }
-double LinearSlope(int a) { return a == 0 ? -1.0 : 1.0; }
-
 // Displacement-based shear strain rows at local (s, t) in [0, 1]^2 in direction `dir` (0 x,
 // 1 y): row 0 w_,dir - theta_dir, row 1 psi_dir.
-ShearRows Shear(int dir, double hx, double hy, double s, double t) {
-  ShearRows rows = ShearRows::Zero();
+RztShearRows Shear(int dir, double hx, double hy, double s, double t) {
+  RztShearRows rows = RztShearRows::Zero();
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
       const double n = Linear(a, s) * Linear(b, t);
@@ -58,10 +56,10 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
   // Tying points (Bathe & Dvorkin 1985): the x shear strains at the midpoints of the edges t = 0
   // and t = 1, interpolated linearly in t; the y ones at the midpoints of s = 0 and s = 1,
   // linearly in s.
-  const ShearRows bottom = Shear(0, hx, hy, 0.5, 0.0);
-  const ShearRows top = Shear(0, hx, hy, 0.5, 1.0);
-  const ShearRows left = Shear(1, hx, hy, 0.0, 0.5);
-  const ShearRows right = Shear(1, hx, hy, 1.0, 0.5);
+  const RztShearRows bottom = Shear(0, hx, hy, 0.5, 0.0);
+  const RztShearRows top = Shear(0, hx, hy, 0.5, 1.0);
+  const RztShearRows left = Shear(1, hx, hy, 0.0, 0.5);
+  const RztShearRows right = Shear(1, hx, hy, 1.0, 0.5);
 
   ElementMatrices m;
   m.stiffness_real.setZero(kRztElementDofs, kRztElementDofs);
@@ -99,8 +97,8 @@ ElementMatrices RztElementMatrices(double hx, double hy, const PlateSection& sec
           }
         }
       }
-      const ShearRows shear_x = (1.0 - t) * bottom + t * top;
-      const ShearRows shear_y = (1.0 - s) * left + s * right;
+      const RztShearRows shear_x = (1.0 - t) * bottom + t * top;
+      const RztShearRows shear_y = (1.0 - s) * left + s * right;
       m.stiffness_real += weight * (bending.transpose() * section.zigzag_bending_real * bending +
                                     shear_x.transpose() * section.zigzag_shear_real * shear_x +
                                     shear_y.transpose() * section.zigzag_shear_real * shear_y);

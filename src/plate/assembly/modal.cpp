@@ -11,7 +11,7 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 
 namespace combabc::plate {
 namespace {

@@ -1,6 +1,8 @@
-#include "combabc/plate/mitc4_element.hpp"
+#include "combabc/plate/elements/mitc4_element.hpp"
 
 #include <array>
+
+#include "plate/elements/linear_basis.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -11,10 +13,6 @@ constexpr std::array<double, 2> kMitc4GaussPoint = {0.2113248654051871, 0.788675
 constexpr double kMitc4GaussWeight = 0.5;
 
 int Mitc4LocalDof(int a, int b, int k) { return kMitc4DofsPerNode * (a + 2 * b) + k; }
-
-// Linear basis on [0, 1]: value of end a at s.
-double Linear(int a, double s) { return a == 0 ? 1.0 - s : s; }
-double LinearSlope(int a) { return a == 0 ? -1.0 : 1.0; }
 
 // Displacement-based shear strain rows at local (s, t) in [0, 1]^2: gamma_x = w_x - phi_x
 // (row 0) and gamma_y = w_y - phi_y (row 1).

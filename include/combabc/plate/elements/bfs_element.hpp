@@ -8,7 +8,7 @@
 // left corner; local dof 4 (a + 2 b) + k with k = 0 w, 1 w_x, 2 w_y, 3 w_xy.
 #include <Eigen/Dense>
 
-#include "combabc/plate/element.hpp"
+#include "combabc/plate/elements/element.hpp"
 
 namespace combabc::plate {
 

@@ -1,18 +1,25 @@
 #pragma once
-// The dense kernels shared by the per-configuration block solves (section_solve.cpp for the
-// clamp-only fast path, continuous_solve.cpp for continuous unknowns), all on split
-// real/imaginary storage: an unpivoted complex-symmetric LDL^T that carries extra rows through the
-// factorization (FactorLdltSplit), and the complex axpys the solves build their Schur updates,
-// back substitutions and residuals from (SubScaled*Split). Inline so each solve keeps them inlined
-// in its hot loops; forced inline (COMBABC_KERNEL) so that each instruction-set copy of a solve
-// (vector_kernels.hpp) runs them with its own instructions.
+// What the per-configuration block solves share (section_solve.cpp for the clamp-only fast path,
+// continuous_solve.cpp for continuous unknowns), all on split real/imaginary storage: the dense
+// kernels, an unpivoted complex-symmetric LDL^T that carries extra rows through the factorization
+// (FactorLdltSplit) and the complex axpys the solves build their Schur updates, back
+// substitutions and residuals from (SubScaled*Split); the per-thread workspace of the block rows
+// (BlockWorkspace); and the phases both solves run alike on it: the residual check's frame, the
+// pivoting fallback's frame and the singularity check. Inline so each solve keeps them inlined in
+// its hot loops; forced inline (COMBABC_KERNEL) so that each instruction-set copy of a solve
+// (kernel_targets.hpp) runs them with its own instructions. Only the two solves' files include
+// this header: they are compiled without fused multiply-adds (src/CMakeLists.txt).
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstddef>
 #include <limits>
+#include <vector>
 
-#include "combabc/plate/plate.hpp"
-#include "vector_kernels.hpp"
+#include <Eigen/Dense>
+
+#include "combabc/plate/assembly/plate.hpp"
+#include "plate/fast_path/kernel_targets.hpp"
 
 namespace combabc::plate {
 
@@ -22,6 +29,19 @@ inline constexpr double kResidualTol = 1e-10;  // relative residual accepted fro
 // Split storage: a complex matrix as two column-major arrays of doubles (real and imaginary parts,
 // leading dimension ld). Plain loops over them vectorize with SSE2 alone; interleaved
 // std::complex needs shuffles, and its operator* calls __muldc3 unless -ffast-math.
+
+using Index = std::ptrdiff_t;
+
+// A complex matrix or vector in split storage, column-major; the leading dimension is chosen per
+// use.
+struct Split {
+  std::vector<double> re;
+  std::vector<double> im;
+  void Resize(Index size) {
+    re.resize(static_cast<std::size_t>(size));
+    im.resize(static_cast<std::size_t>(size));
+  }
+};
 
 // c -= x s over `len` entries (complex axpy in split storage).
 COMBABC_KERNEL void SubScaledSplit(double* __restrict cr,
@@ -452,6 +472,137 @@ COMBABC_KERNEL bool FactorLdltSplit(double* re,
     scale_column(j, ir, ii);
   }
   return true;
+}
+
+// The per-thread workspace of a block-tridiagonal solve, reused from call to call: for each block
+// row (the free dofs of one unknown cross-section) its assembled diagonal block, its pivot block
+// with the rows carried through the factorization, and every load case's right-hand side and
+// solution (case j at [j nc, j nc + n)). Each solve extends it with its couplings' storage.
+struct BlockWorkspace {
+  int nc = -1;
+  int rows = -1;     // capacity
+  int cases = -1;    // capacity
+  int num_rows = 0;  // this call's block rows
+  // Pivot blocks F_i ((n + carried) x n, leading dimension n + carried: at most 2 nc + cases),
+  // LDL^T in place, with the coupling and the right-hand sides carried below them.
+  std::vector<Split> factor;
+  std::vector<Split> diagonal;        // assembled diagonal blocks, lower triangles (n x n)
+  std::vector<double> diagonal_max2;  // max |a|^2 over each diagonal block
+  std::vector<Split> rhs;
+  std::vector<Split> u;
+  std::vector<const std::vector<int>*> free;  // each row's free dofs (0..nc-1, ascending)
+  std::vector<char> fallback;                 // [case]: solved by the pivoting fallback
+
+  // Sizes the storage for rows of nc dofs and `cases` load cases; true when it was (re)allocated,
+  // so that the solve sizes its own storage too.
+  bool Reserve(int nc_, int rows_, int cases_) {
+    if (nc_ == nc && rows_ <= rows && cases_ <= cases) return false;
+    nc = nc_;
+    rows = std::max(rows_, rows);
+    cases = std::max(cases_, cases);
+    const Index n = nc;
+    const Index k = cases;
+    factor.assign(rows, Split{});
+    diagonal.assign(rows, Split{});
+    rhs.assign(rows, Split{});
+    u.assign(rows, Split{});
+    for (int i = 0; i < rows; ++i) {
+      factor[i].Resize((2 * n + k) * n);
+      diagonal[i].Resize(n * n);
+      rhs[i].Resize(n * k);
+      u[i].Resize(n * k);
+    }
+    diagonal_max2.assign(rows, 0.0);
+    free.assign(rows, nullptr);
+    return true;
+  }
+  // Row i's size, its free dofs; 0 past the last row, so that a chain's phases need no special
+  // end.
+  COMBABC_KERNEL Index RowSize(int i) const {
+    return i < num_rows ? static_cast<Index>(free[i]->size()) : 0;
+  }
+  bool AnyFallback() const {
+    return std::find(fallback.begin(), fallback.end(), 1) != fallback.end();
+  }
+};
+
+// Flags each case whose solution has too large a residual in the assembled system (ResidualCheck,
+// case by case: each has its own scale) for the fallback: the unpivoted path must earn each
+// result. `add_couplings(i, at, zr, zi)` adds to row i's residual z the off-diagonal blocks times
+// the neighbouring rows' solutions of the case at `at`; the diagonal block's part is common.
+template <class AddCouplings>
+COMBABC_KERNEL void FlagLargeResiduals(
+    BlockWorkspace& ws, Index cases, double* zr, double* zi, const AddCouplings& add_couplings) {
+  const Index nc = ws.nc;
+  for (Index k = 0; k < cases; ++k) {
+    const Index at = k * nc;
+    ResidualCheck check;
+    for (int i = 0; i < ws.num_rows; ++i) {
+      const Index n = ws.RowSize(i);
+      if (n == 0) continue;  // a cross-section with every dof fixed has no equation
+      const double* ar = ws.diagonal[i].re.data();
+      const double* ai = ws.diagonal[i].im.data();
+      const double* ur = ws.u[i].re.data() + at;
+      const double* ui = ws.u[i].im.data() + at;
+      const double* br = ws.rhs[i].re.data() + at;
+      const double* bi = ws.rhs[i].im.data() + at;
+      // z = A u - rhs, A symmetric from its lower triangle.
+      SymmetricResidualSplit(ar, ai, n, ur, ui, br, bi, zr, zi);
+      add_couplings(i, at, zr, zi);
+      check.AddRow(zr, zi, br, bi, ur, ui, n, ws.diagonal_max2[i]);
+    }
+    ws.fallback[k] = check.Passes() ? 0 : 1;
+  }
+}
+
+// The fallback's frame: `big` is the whole assembled system with the rows one after the other
+// (RowOffsets) and `lu` a pivoting LU of it (dense or sparse); each case flagged in ws.fallback
+// is solved by it and written back into its rows.
+inline std::vector<Index> RowOffsets(const BlockWorkspace& ws) {
+  std::vector<Index> offset(ws.num_rows + 1, 0);
+  for (int i = 0; i < ws.num_rows; ++i) offset[i + 1] = offset[i] + ws.RowSize(i);
+  return offset;
+}
+template <class Lu>
+void SolveFlaggedCases(BlockWorkspace& ws,
+                       Index cases,
+                       const std::vector<Index>& offset,
+                       const Lu& lu) {
+  const Index nc = ws.nc;
+  for (Index j = 0; j < cases; ++j) {
+    if (ws.fallback[j] == 0) continue;
+    Eigen::VectorXcd b(offset[ws.num_rows]);
+    for (int i = 0; i < ws.num_rows; ++i) {
+      for (Index k = 0; k < ws.RowSize(i); ++k) {
+        b(offset[i] + k) = {ws.rhs[i].re[j * nc + k], ws.rhs[i].im[j * nc + k]};
+      }
+    }
+    const Eigen::VectorXcd solution = lu.solve(b);
+    for (int i = 0; i < ws.num_rows; ++i) {
+      for (Index k = 0; k < ws.RowSize(i); ++k) {
+        ws.u[i].re[j * nc + k] = solution(offset[i] + k).real();
+        ws.u[i].im[j * nc + k] = solution(offset[i] + k).imag();
+      }
+    }
+  }
+}
+
+// Singular or nearly so (plate.hpp), whichever path solved it: every path, the certified one too,
+// since a certificate by Cholesky can pass a matrix that is singular to working precision. Case
+// by case: each load's solution against that load.
+COMBABC_KERNEL void ThrowIfSingular(const BlockWorkspace& ws, Index cases) {
+  const Index nc = ws.nc;
+  for (Index j = 0; j < cases; ++j) {
+    AmplificationCheck amplification;
+    for (int i = 0; i < ws.num_rows; ++i) {
+      amplification.AddRow(ws.u[i].re.data() + j * nc,
+                           ws.u[i].im.data() + j * nc,
+                           ws.rhs[i].re.data() + j * nc,
+                           ws.rhs[i].im.data() + j * nc,
+                           ws.RowSize(i));
+    }
+    if (!amplification.Passes()) throw SingularSystem(amplification.amplification());
+  }
 }
 
 }  // namespace combabc::plate

@@ -27,8 +27,8 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
-#include "combabc/plate/element.hpp"
-#include "combabc/plate/laminate.hpp"
+#include "combabc/plate/elements/element.hpp"
+#include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate {
 

@@ -1,4 +1,4 @@
-#include "combabc/plate/bfs_element.hpp"
+#include "combabc/plate/elements/bfs_element.hpp"
 
 #include <array>
 

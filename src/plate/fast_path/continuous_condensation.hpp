@@ -45,11 +45,13 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 
-#include "section_condensation.hpp"
-
-#include "combabc/plate/plate.hpp"
+#include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/fast_path/vector_kernels.hpp"
+#include "plate/fast_path/section_layout.hpp"
 
 namespace combabc::plate {
+
+struct ContinuousWorkspace;  // Solve's per-thread workspace (continuous_solve.cpp)
 
 class ContinuousCondensation {
  public:
@@ -60,21 +62,15 @@ class ContinuousCondensation {
   // 0.5 would need 58 terms for less than twice the range.
   static constexpr double kMaxRatio = 0.3;
 
-  // As SectionCondensation's constructor; own_loss_factors picks K_base = K_real + i K_imag
-  // (else K_real).
-  ContinuousCondensation(
-      const Plate& plate,
-      int num_sections,
-      int elements_per_section,
-      bool own_loss_factors,
-      std::uint8_t fixed_mask_a,
-      std::uint8_t fixed_mask_b,
-      std::uint8_t start_mask,
-      std::uint8_t end_mask,
-      const Eigen::MatrixXd& loads,
-      const std::vector<CaseOutputs>& outputs,
-      bool always_pivot = false,
-      SensorOptions::VectorKernels kernels = SensorOptions::VectorKernels::kPortable);
+  struct Settings {
+    bool own_loss_factors = false;  // K_base = K_real + i K_imag (else K_real)
+    bool always_pivot = false;      // as SectionCondensation's
+    VectorKernels kernels = VectorKernels::kPortable;
+  };
+  // The precompute of `plate` sectioned as `section_layout` says (its loads and outputs).
+  ContinuousCondensation(const Plate& plate,
+                         std::shared_ptr<const SectionLayout> section_layout,
+                         const Settings& settings);
 
   // Solves (K_base + mu M_1) u = f for the configuration and every load case's f (one
   // factorization); w: complex w at every case's outputs, case after case (the caller divides by
@@ -147,10 +143,26 @@ class ContinuousCondensation {
     }
   };
   struct Evaluated;  // one call's pieces (continuous_solve.cpp)
-  // Solve's body, compiled once per instruction set (vector_kernels.hpp).
+  // Solve's body, compiled once per instruction set (kernel_targets.hpp), and the phases of it
+  // that read the pieces (continuous_solve.cpp).
   void SolveBody(std::span<const std::uint8_t> clamps,
                  std::complex<double> mu,
                  std::span<std::complex<double>> w) const;
+  void EvaluatePieces(std::span<const std::uint8_t> clamps,
+                      std::complex<double> mu,
+                      ContinuousWorkspace& ws,
+                      Evaluated& e) const;
+  void Assemble(std::span<const std::uint8_t> clamps,
+                const Evaluated& e,
+                ContinuousWorkspace& ws) const;
+  void RecoverOutputs(const Evaluated& e,
+                      ContinuousWorkspace& ws,
+                      std::span<std::complex<double>> w) const;
+  // Section s's distinct section in clamp state `state`: its index into sections_ (and into an
+  // Evaluated's sections).
+  std::size_t KindIndex(int s, int state) const {
+    return static_cast<std::size_t>(kind_[s]) * 4 + static_cast<std::size_t>(state);
+  }
   void SolvePortable(std::span<const std::uint8_t> clamps,
                      std::complex<double> mu,
                      std::span<std::complex<double>> w) const;
@@ -161,11 +173,7 @@ class ContinuousCondensation {
                    std::complex<double> mu,
                    std::span<std::complex<double>> w) const;
 
-  void Precompute(const Plate& plate,
-                  int mesh_kind,
-                  int state,
-                  const Eigen::MatrixXd& loads,
-                  const std::vector<CaseOutputs>& outputs);
+  void Precompute(const Plate& plate, int mesh_kind, int state);
   void EvaluateSeries(
       int mesh_kind, int state, int terms, std::complex<double> mu, Evaluated* e) const;
   void EvaluateDirect(int mesh_kind, int state, std::complex<double> mu, Evaluated* e) const;
@@ -174,41 +182,23 @@ class ContinuousCondensation {
   // and right diagonal blocks by columns (column j of a triangle starts at LowerStart(j)), then
   // its coupling block (rows left, columns right) by columns.
   Eigen::Index PackedSize() const {
-    return static_cast<Eigen::Index>(nc_) * (nc_ + 1) + static_cast<Eigen::Index>(nc_) * nc_;
+    const Eigen::Index nc = layout_->nc();
+    return nc * (nc + 1) + nc * nc;
   }
   Eigen::Index LowerStart(int j) const {
-    return static_cast<Eigen::Index>(j) * nc_ - static_cast<Eigen::Index>(j) * (j - 1) / 2;
+    return static_cast<Eigen::Index>(j) * layout_->nc() -
+           static_cast<Eigen::Index>(j) * (j - 1) / 2;
   }
   void PackPiece(const Eigen::MatrixXcd& piece, std::complex<double>* out) const;
-  void FreeDofs(int cross_section, bool fixed_a, bool fixed_b, std::vector<int>* free) const {
-    CrossSectionFreeDofs(nc_,
-                         ny_,
-                         num_sections_,
-                         {fixed_mask_a_, fixed_mask_b_, start_mask_, end_mask_},
-                         cross_section,
-                         fixed_a,
-                         fixed_b,
-                         free);
-  }
 
-  int num_sections_;
-  int intervals_per_section_;  // grid intervals: elements_per_section x the element order
-  int ny_;
-  int nc_;
+  std::shared_ptr<const SectionLayout> layout_;
   bool own_loss_factors_;
-  std::uint8_t fixed_mask_a_;
-  std::uint8_t fixed_mask_b_;
-  std::uint8_t start_mask_;
-  std::uint8_t end_mask_;
   bool always_pivot_;
-  SensorOptions::VectorKernels kernels_;  // which copy Solve runs
-  std::vector<int> mesh_kind_;            // section -> distinct mesh
-  std::vector<int> mesh_section_;         // distinct mesh -> a section that has it
-  std::vector<int> kind_;                 // section -> distinct section
-  std::vector<int> kind_section_;         // distinct section -> a section that has it
-  int num_cases_;
-  OutputSets sets_;
-  std::vector<OutputLayout> section_layout_;     // [section] -> its outputs
+  VectorKernels kernels_;                        // which copy Solve runs
+  std::vector<int> mesh_kind_;                   // section -> distinct mesh
+  std::vector<int> mesh_section_;                // distinct mesh -> a section that has it
+  std::vector<int> kind_;                        // section -> distinct section
+  std::vector<int> kind_section_;                // distinct section -> a section that has it
   std::vector<StateData> states_;                // [mesh kind * 4 + state]
   std::vector<SectionData> sections_;            // [kind * 4 + state]
   Eigen::VectorXd boundary_scale_;               // nc: Jacobi scale of every cross-section's dofs

@@ -1,6 +1,7 @@
 #pragma once
-// Run-time choice of the instruction set for the per-configuration solves (section_solve.cpp,
-// continuous_solve.cpp; docs/model.md, "Performance").
+// How the per-configuration solves (section_solve.cpp, continuous_solve.cpp; docs/model.md,
+// "Performance") are compiled once per instruction set, for the run-time choice of
+// combabc/plate/fast_path/vector_kernels.hpp.
 //
 // The portable build targets the x86-64 baseline (SSE2: two doubles per vector). Each solve's body
 // is compiled twice more, with AVX2 (four doubles per vector) and with AVX-512 (eight), and the
@@ -14,8 +15,6 @@
 //
 // COMBABC_KERNEL: the kernels are forced inline, so that each copy of a solve's body runs them
 // with its own instruction set (a kernel left out of line would run the baseline's).
-
-#include "combabc/plate/sensor_model.hpp"
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define COMBABC_HAVE_VECTOR_KERNELS 1
@@ -34,37 +33,3 @@
 #define COMBABC_KERNEL inline
 #define COMBABC_KERNEL_LAMBDA
 #endif
-
-namespace combabc::plate {
-
-using VectorKernels = SensorOptions::VectorKernels;
-
-// Whether this CPU and its operating system support the kernels' instruction set (kAuto and
-// kPortable always).
-inline bool CpuSupports(VectorKernels kernels) {
-#if COMBABC_HAVE_VECTOR_KERNELS
-  switch (kernels) {
-    case VectorKernels::kAvx2:
-      return __builtin_cpu_supports("avx2") != 0;
-    case VectorKernels::kAvx512:
-      return __builtin_cpu_supports("avx512f") != 0;
-    case VectorKernels::kAuto:
-    case VectorKernels::kPortable:
-      return true;
-  }
-  return false;
-#else
-  return kernels == VectorKernels::kAuto || kernels == VectorKernels::kPortable;
-#endif
-}
-
-// The instruction set the solves run: kAuto resolved to the widest the CPU supports.
-inline VectorKernels ResolveKernels(VectorKernels requested) {
-  if (requested != VectorKernels::kAuto) return requested;
-  for (const VectorKernels k : {VectorKernels::kAvx512, VectorKernels::kAvx2}) {
-    if (CpuSupports(k)) return k;
-  }
-  return VectorKernels::kPortable;
-}
-
-}  // namespace combabc::plate
