@@ -146,7 +146,6 @@ void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int s
   const int nc = layout_->nc();
   const int num_cases = layout_->num_cases();
   const int m = layout_->intervals();
-  const int elements = m / plate.element_order();
   const int n_local = (m + 1) * nc;
   const int nb = 2 * nc;
   // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
@@ -158,7 +157,6 @@ void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int s
   // factors) and M_1. Sections of one mesh have equal element matrices.
   StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
   const int section = mesh_section_[mesh_kind];
-  const int offset = section * m * nc;
   sd.k_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.m_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.k_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
@@ -167,39 +165,30 @@ void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int s
   std::vector<Eigen::Triplet<Complex>> m_triplets;
   std::vector<Eigen::Triplet<double>> real_triplets;
   std::vector<Eigen::Triplet<double>> mass_triplets;
-  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
-    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
-      const ElementMatrices& e = plate.Element(ex, ey);
-      const int ne = plate.element_dofs();
-      int local[kMaxElementDofs];
-      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < ne; ++c) {
-        for (int r = 0; r < ne; ++r) {
-          const double kr = e.stiffness_real(r, c);
-          const Complex k(kr, own_loss_factors_ ? e.stiffness_imag(r, c) : 0.0);
-          const double mm = e.mass_unit(r, c);
-          const int rb = boundary_index[local[r]];
-          const int cb = boundary_index[local[c]];
-          const int ri = interior_index[local[r]];
-          const int ci = interior_index[local[c]];
-          if (rb >= 0 && cb >= 0) {
-            sd.k_bb(rb, cb) += k;
-            sd.m_bb(rb, cb) += mm;
-          }
-          if (ri >= 0 && cb >= 0) {
-            sd.k_ib(ri, cb) += k;
-            sd.m_ib(ri, cb) += mm;
-          }
-          if (ri >= 0 && ci >= 0) {
-            k_triplets.emplace_back(ri, ci, k);
-            m_triplets.emplace_back(ri, ci, mm);
-            real_triplets.emplace_back(ri, ci, kr);
-            mass_triplets.emplace_back(ri, ci, mm);
-          }
+  ForEachSectionEntry(
+      plate, section, m, [&](const ElementMatrices& e, int r, int c, int lr, int lc) {
+        const double kr = e.stiffness_real(r, c);
+        const Complex k(kr, own_loss_factors_ ? e.stiffness_imag(r, c) : 0.0);
+        const double mm = e.mass_unit(r, c);
+        const int rb = boundary_index[lr];
+        const int cb = boundary_index[lc];
+        const int ri = interior_index[lr];
+        const int ci = interior_index[lc];
+        if (rb >= 0 && cb >= 0) {
+          sd.k_bb(rb, cb) += k;
+          sd.m_bb(rb, cb) += mm;
         }
-      }
-    }
-  }
+        if (ri >= 0 && cb >= 0) {
+          sd.k_ib(ri, cb) += k;
+          sd.m_ib(ri, cb) += mm;
+        }
+        if (ri >= 0 && ci >= 0) {
+          k_triplets.emplace_back(ri, ci, k);
+          m_triplets.emplace_back(ri, ci, mm);
+          real_triplets.emplace_back(ri, ci, kr);
+          mass_triplets.emplace_back(ri, ci, mm);
+        }
+      });
   // The distinct sections of this mesh: their output rows r_I, r_B and interior load f_I.
   std::vector<int> kinds;
   for (int kind = 0; kind < static_cast<int>(kind_section_.size()); ++kind) {

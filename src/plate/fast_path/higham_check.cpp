@@ -20,9 +20,7 @@ bool SectionSchur(const Plate& plate,
                   double frequency_hz,
                   Eigen::MatrixXd* schur) {
   const int m = intervals;
-  const int elements = m / plate.element_order();
   const int n_interior = (m - 1) * nc;
-  const int offset = section * m * nc;
   // Local dofs cross-section after cross-section: the ends [0, nc) and [m nc, (m + 1) nc) are
   // kept; with no clamp fixed every other dof is interior.
   const auto kept = [&](int d) { return d < nc ? d : (d >= m * nc ? d - (m - 1) * nc : -1); };
@@ -33,27 +31,18 @@ bool SectionSchur(const Plate& plate,
   Eigen::MatrixXd a_bb = Eigen::MatrixXd::Zero(nb, nb);
   Eigen::MatrixXd a_ib = Eigen::MatrixXd::Zero(n_interior, nb);
   std::vector<Eigen::Triplet<double>> triplets;
-  const int ne = plate.element_dofs();
-  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
-    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
-      const ElementMatrices& e = plate.Element(ex, ey);
-      int local[kMaxElementDofs];
-      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
-      for (int c = 0; c < ne; ++c) {
-        for (int r = 0; r < ne; ++r) {
-          const double v = (imaginary ? e.stiffness_imag(r, c) : e.stiffness_real(r, c)) +
-                           mass_part * e.mass_unit(r, c);
-          const int rb = kept(local[r]);
-          const int cb = kept(local[c]);
-          const int ri = inner(local[r]);
-          const int ci = inner(local[c]);
-          if (rb >= 0 && cb >= 0) a_bb(rb, cb) += v;
-          if (ri >= 0 && cb >= 0) a_ib(ri, cb) += v;
-          if (ri >= 0 && ci >= 0) triplets.emplace_back(ri, ci, v);
-        }
-      }
-    }
-  }
+  ForEachSectionEntry(
+      plate, section, m, [&](const ElementMatrices& e, int r, int c, int lr, int lc) {
+        const double v = (imaginary ? e.stiffness_imag(r, c) : e.stiffness_real(r, c)) +
+                         mass_part * e.mass_unit(r, c);
+        const int rb = kept(lr);
+        const int cb = kept(lc);
+        const int ri = inner(lr);
+        const int ci = inner(lc);
+        if (rb >= 0 && cb >= 0) a_bb(rb, cb) += v;
+        if (ri >= 0 && cb >= 0) a_ib(ri, cb) += v;
+        if (ri >= 0 && ci >= 0) triplets.emplace_back(ri, ci, v);
+      });
   *schur = a_bb;
   if (n_interior == 0) return true;
   Eigen::SparseMatrix<double> a_ii(n_interior, n_interior);

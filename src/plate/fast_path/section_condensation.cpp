@@ -344,7 +344,6 @@ void SectionCondensation::CondenseSections(const Plate& plate,
   const int num_cases = layout_->num_cases();
   const int m = layout_->intervals();
   const int n_local = (m + 1) * nc;
-  const int elements = m / plate.element_order();
   // Classify local dofs: boundary (index into [left; right]), interior (index into I), or fixed.
   // The same for every section in this state.
   std::vector<int> boundary_index;
@@ -361,32 +360,21 @@ void SectionCondensation::CondenseSections(const Plate& plate,
     }
     if (seen) continue;
     // The section matrices of the mesh (its first section: the others have the same elements).
-    const int mesh_offset = mesh * m * nc;
     Eigen::MatrixXcd s_bb = Eigen::MatrixXcd::Zero(nb, nb);
     Eigen::MatrixXcd s_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
     std::vector<Eigen::Triplet<std::complex<double>>> triplets;
-    for (int ex = mesh * elements; ex < (mesh + 1) * elements; ++ex) {
-      for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
-        const ElementMatrices& e = plate.Element(ex, ey);
-        const int ne = plate.element_dofs();
-        int local[kMaxElementDofs];
-        for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - mesh_offset;
-        for (int c = 0; c < ne; ++c) {
-          for (int r = 0; r < ne; ++r) {
-            const std::complex<double> v = e.stiffness_real(r, c) +
-                                           i_unit * e.stiffness_imag(r, c) +
-                                           mass_coefficient * e.mass_unit(r, c);
-            const int rb = boundary_index[local[r]];
-            const int cb = boundary_index[local[c]];
-            const int ri = interior_index[local[r]];
-            const int ci = interior_index[local[c]];
-            if (rb >= 0 && cb >= 0) s_bb(rb, cb) += v;
-            if (ri >= 0 && cb >= 0) s_ib(ri, cb) += v;
-            if (ri >= 0 && ci >= 0) triplets.emplace_back(ri, ci, v);
-          }
-        }
-      }
-    }
+    ForEachSectionEntry(
+        plate, mesh, m, [&](const ElementMatrices& e, int r, int c, int lr, int lc) {
+          const std::complex<double> v = e.stiffness_real(r, c) + i_unit * e.stiffness_imag(r, c) +
+                                         mass_coefficient * e.mass_unit(r, c);
+          const int rb = boundary_index[lr];
+          const int cb = boundary_index[lc];
+          const int ri = interior_index[lr];
+          const int ci = interior_index[lc];
+          if (rb >= 0 && cb >= 0) s_bb(rb, cb) += v;
+          if (ri >= 0 && cb >= 0) s_ib(ri, cb) += v;
+          if (ri >= 0 && ci >= 0) triplets.emplace_back(ri, ci, v);
+        });
     Eigen::MatrixXcd x_b = Eigen::MatrixXcd::Zero(n_interior, nb);
     // Complex symmetric: LU, never a Cholesky-type factorization (they conjugate).
     Eigen::SparseLU<Eigen::SparseMatrix<std::complex<double>>, Eigen::COLAMDOrdering<int>> lu;

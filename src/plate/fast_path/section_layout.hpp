@@ -28,6 +28,28 @@ struct CrossSectionMasks {
   std::uint8_t fixed_a, fixed_b, start, end;
 };
 
+// Calls visit(e, r, c, local_r, local_c) for every entry (r, c) of every element matrix e of
+// section `section` of `intervals` grid intervals, with the entry's local dofs (cross-section after
+// cross-section from the section's start): the assembly loop the section condensations and the
+// certification (higham_check.cpp) share. Always in the same order, so the sums it feeds are too.
+template <class Visit>
+void ForEachSectionEntry(const Plate& plate, int section, int intervals, Visit&& visit) {
+  const int elements = intervals / plate.element_order();
+  const int nc = plate.dofs_per_node() * (plate.grid().ny() + 1);
+  const int offset = section * intervals * nc;
+  const int ne = plate.element_dofs();
+  for (int ex = section * elements; ex < (section + 1) * elements; ++ex) {
+    for (int ey = 0; ey < plate.num_elements_y(); ++ey) {
+      const ElementMatrices& e = plate.Element(ex, ey);
+      int local[kMaxElementDofs];
+      for (int k = 0; k < ne; ++k) local[k] = plate.ElementDof(ex, ey, k) - offset;
+      for (int c = 0; c < ne; ++c) {
+        for (int r = 0; r < ne; ++r) visit(e, r, c, local[r], local[c]);
+      }
+    }
+  }
+}
+
 // One load case's outputs: w along the line y (m) at the positions x (m).
 struct CaseOutputs {
   std::vector<double> x;
