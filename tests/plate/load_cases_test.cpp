@@ -18,6 +18,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/plate/sensor_model.hpp"
+#include "plate_test_support.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -31,11 +32,7 @@ constexpr double kSameModelTol = 1e-12;
 // Against the full sparse solve, relative to each case's maximum (as the single-case tests).
 constexpr double kFullSolveTol = 1e-9;
 
-std::vector<std::uint8_t> RandomClamps(std::mt19937_64& rng, int n) {
-  std::vector<std::uint8_t> c(n);
-  for (auto& v : c) v = static_cast<std::uint8_t>(rng() & 1);
-  return c;
-}
+using testing::RandomClamps;
 
 // All fixed, all free, then random configurations.
 std::vector<std::vector<std::uint8_t>> Configurations(int count, int clamps, std::uint64_t seed) {

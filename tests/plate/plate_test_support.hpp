@@ -1,10 +1,14 @@
 #pragma once
-// Helpers shared by the plate theories' validation tests (fsdt_validation_test.cpp,
-// rzt_validation_test.cpp): the default sensor's laminate and the simply supported square under
-// a uniform or a sinusoidal load, whose closed-form and exact 3D solutions (layered_exact.hpp)
-// are the references.
+// Helpers shared by the plate's tests: random clamp configurations and the relative difference
+// of two profiles (the sensor model's tests), and for the theories' validation tests
+// (fsdt_validation_test.cpp, rzt_validation_test.cpp) the default sensor's laminate and the simply
+// supported square under a uniform or a sinusoidal load, whose closed-form and exact 3D solutions
+// (layered_exact.hpp) are the references.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,6 +18,24 @@
 #include "combabc/plate/elements/laminate.hpp"
 
 namespace combabc::plate::testing {
+
+// n clamps, each fixed (1) or free (0) with probability 1/2.
+inline std::vector<std::uint8_t> RandomClamps(std::mt19937_64& rng, int n) {
+  std::vector<std::uint8_t> c(n);
+  for (auto& v : c) v = static_cast<std::uint8_t>(rng() & 1);
+  return c;
+}
+
+// max |a - b| relative to max |b|.
+inline double MaxRelativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  double diff = 0.0;
+  double scale = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    diff = std::max(diff, std::abs(a[k] - b[k]));
+    scale = std::max(scale, std::abs(b[k]));
+  }
+  return diff / scale;
+}
 
 // The default sensor's laminate (docs/model.md): faces 1.5 mm, E 30 MPa; core 1.0 mm, E 5 MPa;
 // with its loss factors (faces 0.10, core 0.15) only where asked: the FE checks are static,

@@ -16,6 +16,7 @@
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "plate/fast_path/precompute_cache.hpp"
+#include "plate_test_support.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc::plate {
@@ -45,9 +46,7 @@ std::vector<double> Profiles(const SensorModel& model) {
   std::vector<double> all;
   std::vector<double> out(static_cast<std::size_t>(model.num_outputs()));
   for (int k = 0; k < 12; ++k) {
-    std::vector<std::uint8_t> clamps(static_cast<std::size_t>(model.num_clamps()));
-    for (auto& c : clamps) c = static_cast<std::uint8_t>(rng() & 1);
-    model.Profile(clamps, out);
+    model.Profile(testing::RandomClamps(rng, model.num_clamps()), out);
     all.insert(all.end(), out.begin(), out.end());
   }
   return all;

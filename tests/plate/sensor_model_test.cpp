@@ -17,27 +17,15 @@
 #include "combabc/core/error.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
 #include "combabc/plate/sensor_model.hpp"
+#include "plate_test_support.hpp"
 
 namespace combabc::plate {
 namespace {
 
 constexpr double kFastPathTol = 1e-8;  // relative to the profile's maximum (issue)
 
-std::vector<std::uint8_t> RandomClamps(std::mt19937_64& rng, int n) {
-  std::vector<std::uint8_t> c(n);
-  for (auto& v : c) v = static_cast<std::uint8_t>(rng() & 1);
-  return c;
-}
-
-double MaxRelativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
-  double diff = 0.0;
-  double scale = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    diff = std::max(diff, std::abs(a[k] - b[k]));
-    scale = std::max(scale, std::abs(b[k]));
-  }
-  return diff / scale;
-}
+using testing::MaxRelativeDifference;
+using testing::RandomClamps;
 
 void ExpectFastEqualsFull(const SensorOptions& options,
                           int configurations,

@@ -17,6 +17,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
+#include "plate_test_support.hpp"
 
 namespace combabc::plate {
 namespace {
@@ -30,21 +31,8 @@ constexpr double kVariationTol = 1e-9;
 // 7e-11 - 1e-10 (checked), still inside kVariationTol.
 constexpr double kRoundOffTol = 1e-12;
 
-std::vector<std::uint8_t> RandomClamps(std::mt19937_64& rng, int n) {
-  std::vector<std::uint8_t> c(n);
-  for (auto& v : c) v = static_cast<std::uint8_t>(rng() & 1);
-  return c;
-}
-
-double MaxRelativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
-  double diff = 0.0;
-  double scale = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    diff = std::max(diff, std::abs(a[k] - b[k]));
-    scale = std::max(scale, std::abs(b[k]));
-  }
-  return diff / scale;
-}
+using testing::MaxRelativeDifference;
+using testing::RandomClamps;
 
 SensorVariation Variation(std::optional<double> k_f,
                           std::optional<double> s,
