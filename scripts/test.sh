@@ -28,12 +28,13 @@ bash scripts/check-format.sh
 stage "== configure with the CLI off (the library and its tests stand without it)"
 cmake -S . -B build-noapps -G Ninja -DCOMBABC_BUILD_APPS=OFF -DCOMBABC_BUILD_BENCH=OFF > /dev/null
 
-# clang-tidy needs only a compile database of the individual sources (the unity builds below
-# name their batches instead): a configure-only tree. It starts now and runs beside every stage
-# below at the lowest priority, on the CPU they leave idle; the script waits for it at the end. In
-# a session of its own, so that the trap can stop the whole run-clang-tidy tree on a failure.
+# clang-tidy needs only a compile database: a configure-only tree, with the library's unity
+# batches, which it checks one batch at a time (scripts/check-tidy.sh, docs/ci.md). It starts now
+# and runs beside every stage below at the lowest priority, on the CPU they leave idle; the script
+# waits for it at the end. In a session of its own, so that the trap can stop the whole
+# run-clang-tidy tree on a failure.
 stage "== clang-tidy on every source: started, beside the stages below"
-cmake -S . -B build-tidy -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
+cmake -S . -B build-tidy -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_UNITY=ON > /dev/null
 tidy_log=$(mktemp)
 # A new session is a new scheduling group where the kernel groups by session (autogroup), and a
 # group's own nice level is what ranks it against the others: 19 there too, set from inside the
