@@ -58,7 +58,7 @@ def extract(path, text):
     snippets, errors = [], []
     lines = text.splitlines()
     for i, line in enumerate(lines):
-        if line.strip() != MARKER:
+        if line.rstrip() != MARKER:  # exactly; an indented one is an example of it
             continue
         fence = lines[i + 1] if i + 1 < len(lines) else ""
         match = re.fullmatch(r"```(\w+)\s*", fence)
@@ -146,7 +146,7 @@ def scratch_checkout(source_dir, combabc):
     return root
 
 
-def run(snippet, root, env, python, timeout):
+def run(snippet, root, env, python, timeout, verbose):
     """Runs one snippet in root; returns None when it passed, else a report of the failure."""
     if snippet.language == "shell":
         # The ERR trap names the failing line; bash numbers the script's lines from 1.
@@ -160,6 +160,8 @@ def run(snippet, root, env, python, timeout):
                                 timeout=timeout, check=False)
     except subprocess.TimeoutExpired:
         return (snippet.where(1), "snippet", f"timed out after {timeout} s")
+    if verbose:
+        print(result.stdout.rstrip())
     if result.returncode == 0:
         return None
     failed = re.findall(r"snippet line (\d+) failed", result.stdout)
@@ -176,6 +178,7 @@ def main():
     parser.add_argument("--python", default="", help="a python that imports the built module")
     parser.add_argument("--pythonpath", default="", help="where the built module is")
     parser.add_argument("--timeout", type=float, default=60.0, help="seconds per snippet")
+    parser.add_argument("--verbose", action="store_true", help="print every snippet's output")
     parser.add_argument("--expect-failure", action="append", default=[],
                         metavar="FILE:LINE:KIND",
                         help="the self-test: exactly these failures, and no other")
@@ -216,7 +219,7 @@ def main():
                     skipped += 1
                     continue
                 began = time.monotonic()
-                failure = run(snippet, root, env, python, args.timeout)
+                failure = run(snippet, root, env, python, args.timeout, args.verbose)
                 ran += 1
                 print(f"{snippet.where()}: {'FAILED' if failure else 'ok'} "
                       f"({time.monotonic() - began:.1f} s)")
