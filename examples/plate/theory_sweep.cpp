@@ -14,7 +14,8 @@
 // Writes CSV to stdout (progress to stderr); scripts/figures/theories.py plots it.
 // Usage: plate_theory_sweep [mesh refinement factor, default 1: 10 x 6 per section]
 // At the default mesh FSDT's and RZT's peaks next to fixed clamps are about 8 % below converged
-// (docs/model.md, "Mesh convergence of the shear theories"); factor 2 takes about 10 times longer.
+// (docs/model.md, "Mesh convergence of the shear theories"); factor 2 takes about 7 times longer
+// (examples/plate/README.md).
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
