@@ -21,7 +21,8 @@ must be an option of `combabc COMMAND --help` (an option renamed or removed cann
 example nobody runs).
 
 Usage:
-  run_snippets.py --source-dir ROOT --combabc CLI [--python PY --pythonpath DIR] FILE...
+  run_snippets.py --source-dir ROOT --combabc CLI [--python PY --pythonpath DIR] [--verbose]
+                  [FILE...]      (default: README.md, docs/*.md, every .md under examples/)
   run_snippets.py ... --expect-failure FILE:LINE:KIND ... FILE
       the self-test: passes only if exactly these failures are found (KIND: snippet, option or
       marker), on a fixture that drifted, so the checks are shown to catch drift.
