@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds combabc and runs every test: the Release build with warnings as errors (all labels:
-# unit, statistical, slow, packaging, browser), its .deb installed and run (scripts/check-deb.sh,
+# unit, statistical, slow, packaging, browser, docs), its .deb installed and run (scripts/check-deb.sh,
 # as root), clang-tidy on it, the unit tests again under ASan+UBSan, the fuzzing of the input
 # readers (COMBABC_FUZZ_SECONDS per target, default 30; 0 skips it; docs/fuzzing.md) from the same
 # sanitizer build, the tests labelled threads under ThreadSanitizer, and the layering and

@@ -11,10 +11,11 @@
 // The shortest distance between supports sets the shortest wavelength, so these are the three
 // ratios that decide how much transverse shear (FSDT) and the core's zigzag (RZT) matter:
 // stiffness of the core against the faces, thickness against span, span itself.
-// Writes CSV to stdout (progress to stderr); scripts/report/theory_figure.py plots it.
+// Writes CSV to stdout (progress to stderr); scripts/figures/theories.py plots it.
 // Usage: plate_theory_sweep [mesh refinement factor, default 1: 10 x 6 per section]
 // At the default mesh FSDT's and RZT's peaks next to fixed clamps are about 8 % below converged
-// (docs/model.md, "Mesh convergence of the shear theories"); factor 2 takes about 10 times longer.
+// (docs/model.md, "Mesh convergence of the shear theories"); factor 2 takes about 7 times longer
+// (examples/plate/README.md).
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>

@@ -6,7 +6,7 @@ where it is, and the largest difference of the two profiles each normalised by i
 0-90 cm and over the 48-80 cm window), and the time of each CalculiX run.
 
     python3 examples/sensor-calculix/compare.py [path/to/combabc [theory]]
-    # defaults: build/apps/combabc, kirchhoff (the theory of the README's table; CalculiX's S4
+    # defaults: combabc (on PATH), kirchhoff (the theory of the README's table; CalculiX's S4
     # shell is an equivalent single layer, closest to the built-in "fsdt")
 """
 import csv
@@ -52,7 +52,7 @@ def builtin(combabc, theory, clamps, work):
 
 
 def main():
-    combabc = sys.argv[1] if len(sys.argv) > 1 else "build/apps/combabc"
+    combabc = sys.argv[1] if len(sys.argv) > 1 else "combabc"
     theory = sys.argv[2] if len(sys.argv) > 2 else "kirchhoff"
     print("bits  clamps fixed      CalculiX peak        built-in peak        ratio  "
           "max |diff| normalised (0-90 / 48-80 cm)  ccx run")

@@ -5,7 +5,7 @@ static step has no damping). Prints a Markdown table: per configuration and theo
 theory / 3D and the largest difference of the two profiles, each divided by its own peak, in % of
 the peak.
 
-    /usr/bin/python3 examples/plate/solid3d/compare.py [--combabc build/apps/combabc]
+    /usr/bin/python3 examples/plate/solid3d/compare.py [--combabc combabc]
         [--out results-solid3d] [--mesh 40x24] [--solid 10x8x2] [--face top|mid]
         [--theories kirchhoff:20x12,fsdt,rzt:10x3:2] [--cases 1,3]
 
@@ -128,7 +128,7 @@ def mesh_arg(text, n):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--combabc", default="build/apps/combabc")
+    p.add_argument("--combabc", default="combabc", help="the CLI (default: combabc on PATH)")
     p.add_argument("--out", default="results-solid3d", help="cache folder for the profiles")
     p.add_argument("--mesh", type=lambda t: mesh_arg(t, 2), default=(40, 24),
                    help="combabc elements per section x across the width")
