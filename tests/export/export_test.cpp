@@ -130,10 +130,10 @@ TEST_F(ExportTest, PairCorrelationsAreEachWavesOneRowAPair) {
     ASSERT_EQ(w.pair_correlations.size(), 36u);
     for (std::size_t i = 0; i < 6; ++i) {
       for (std::size_t j = i + 1; j < 6; ++j, ++row) {
-        // Waves from 1, bits from 0 with their names, as in marginals.csv.
-        const std::string key = std::to_string(w.wave + 1) + "," + std::to_string(i) + ",clamp " +
-                                std::to_string(i + 1) + "," + std::to_string(j) + ",clamp " +
-                                std::to_string(j + 1) + ",";
+        // Waves and bits from 1, the bits with their names, as in marginals.csv.
+        const std::string key = std::to_string(w.wave + 1) + "," + std::to_string(i + 1) +
+                                ",clamp " + std::to_string(i + 1) + "," + std::to_string(j + 1) +
+                                ",clamp " + std::to_string(j + 1) + ",";
         ASSERT_EQ(rows[row].rfind(key, 0), 0u) << rows[row];
         // Shortest round-trip text: the history's value exactly.
         const double r = std::strtod(rows[row].c_str() + key.size(), nullptr);
