@@ -340,6 +340,21 @@ HistoryStore OpenPythonRun(const std::string& path,
                   path);
     }
   }
+  if (on_limit) {
+    // Resuming would only record the same stop again: say which limit to raise instead.
+    const ResumePoint point = HistoryStore::Open(path, /*read_only=*/true).LoadResumePoint();
+    if (const auto again = ImmediateStop(options, point)) {
+      const Termination t = again->first;
+      const char* keyword = t == Termination::kBudgetExhausted        ? "max_simulations"
+                            : t == Termination::kAcceptanceRateTooLow ? "min_acceptance_rate"
+                            : t == Termination::kTooManyFailures      ? "max_failure_fraction"
+                                                                      : "max_wall_time";
+      throw Error(ErrorKind::kUsage,
+                  "the run stopped (" + std::string(ToString(t)) + ": " + again->second +
+                      ") and would stop again at once; raise the limit with " + keyword + "=",
+                  path);
+    }
+  }
   return HistoryStore::Open(path);
 }
 

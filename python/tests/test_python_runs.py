@@ -108,3 +108,19 @@ def test_a_problem_run_draws_its_report(tmp_path):
     history = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path,
                           report=True)
     assert os.path.isfile(os.path.join(history.report_directory, "index.html"))
+
+
+def test_a_run_stopped_on_its_budget_resumes_with_a_raised_limit(tmp_path):
+    whole = combabc.run(problem(), options(accepted_per_wave=200),
+                        output_directory=tmp_path / "whole")
+    total = int(whole.summary["simulations"])
+    stopped = combabc.run(problem(), options(accepted_per_wave=200, max_simulations=total // 2),
+                          output_directory=tmp_path / "stopped")
+    assert stopped.termination == "budget_exhausted"
+    with pytest.raises(combabc.Error, match="max_simulations="):  # it would stop again at once
+        combabc.resume(stopped, problem(), options(accepted_per_wave=200,
+                                                   max_simulations=total // 2))
+    resumed = combabc.resume(stopped, problem(), options(accepted_per_wave=200),
+                             max_simulations=total + 1000)
+    assert resumed.termination == whole.termination
+    pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)
