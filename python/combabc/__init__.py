@@ -10,6 +10,7 @@
     history = combabc.run(problem, options, output_directory="out")  # writes out/history.sqlite
     history = combabc.resume(history.path, problem, options)  # a Problem's run, continued
     history = combabc.enumerate("config.toml")            # as `combabc enumerate`
+    figure = combabc.plot.marginals(history)              # matplotlib figures (combabc.plot)
     model = combabc.SensorModel("config.toml")            # as `combabc simulate`
     y = model.profile("0110...")
 
@@ -32,7 +33,7 @@ __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
            "LogisticKernelOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
            "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
-           "load_history", "make_options", "resume", "run"]
+           "load_history", "make_options", "plot", "resume", "run"]
 
 
 class Problem:

@@ -136,14 +136,15 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
 
     def resampled(wave):
         weight = np.asarray(wave["weight"], dtype=np.float64)
+        distance = np.asarray(wave["distance"], dtype=np.float64).reshape(len(weight),
+                                                                          len(components))
         uniform = estimator == "paper"
         rows = resample(np.ones_like(weight) if uniform else weight, seed, wave["number"])
         n = len(rows)
         stats = {
             "weight": (("chain", "draw"), weight[rows][None]),
             "log_weight": (("chain", "draw"), np.asarray(wave["log_weight"])[rows][None]),
-            "distance": (("chain", "draw", "component"), np.asarray(
-                wave["distance"], dtype=np.float64).reshape(len(weight), len(components))[rows][None]),
+            "distance": (("chain", "draw", "component"), distance[rows][None]),
             "particle_index": (("chain", "draw"), np.asarray(wave["index"],
                                                              dtype=np.int64)[rows][None]),
         }
