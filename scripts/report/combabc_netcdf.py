@@ -73,7 +73,8 @@ def resample(weight, seed, wave):
 
 
 def prior_draws(n, bit_prior_one, dimension, real_priors, seed):
-    """n draws from the stated prior: independent bits, the continuous parameters' priors."""
+    """n draws from the stated prior: independent bits at their prior P(1) (ties are not
+    kept: the export does not carry them), the continuous parameters' priors."""
     import numpy as np
     rng = np.random.default_rng([int(seed or 0), 0])
     p = np.asarray(bit_prior_one if len(bit_prior_one) else [0.5] * dimension, dtype=np.float64)
