@@ -23,6 +23,7 @@ struct OutputArgs {
 
 struct ExportArgs : OutputArgs {
   bool no_netcdf = false;
+  bool all_waves = false;
 };
 
 int ReportCommand(const OutputArgs& args, const Session& session) {
@@ -36,8 +37,8 @@ int ReportCommand(const OutputArgs& args, const Session& session) {
 
 int ExportCommand(const ExportArgs& args, const Session& session) {
   return PrimaryOnly(session, [&] {
-    const auto outcome =
-        services::ExportHistory(args.history, args.directory, args.overwrite, !args.no_netcdf);
+    const auto outcome = services::ExportHistory(
+        args.history, args.directory, args.overwrite, !args.no_netcdf, args.all_waves);
     std::cout << "export: " << outcome.directory << "\n";
     if (!outcome.note.empty()) std::cerr << "combabc: note: " << outcome.note << "\n";
     return 0;
@@ -78,6 +79,10 @@ Command AddExportCommand(CLI::App& app) {
   exporter->add_flag("--no-netcdf",
                      args->no_netcdf,
                      "Skip inference_data.nc (ArviZ layout; needs python3-xarray)");
+  exporter->add_flag("--all-waves",
+                     args->all_waves,
+                     "inference_data.nc: also every wave's resampled posterior "
+                     "(groups posterior_wave_<k>, sample_stats_wave_<k>)");
   return {exporter, [args](const Session& session) { return ExportCommand(*args, session); }};
 }
 

@@ -2,7 +2,8 @@
 """combabc from Python, step by step (docs/python.md).
 
 1. A toy model: ten on/off switches seen through a noisy linear sensor. Its exact ABC posterior
-   comes from enumerating all 2^10 configurations; ABC-SMC with a Python simulator recovers it.
+   comes from enumerating all 2^10 configurations; ABC-SMC with a Python simulator recovers it,
+   writes its history and draws its figures (combabc.plot).
 2. The sensor: the built-in plate model of the 45 cm fibre-optic sensor, its profile for a clamp
    configuration, a short calibration from its config file, and the result as pandas tables and
    as an ArviZ-style NetCDF file.
@@ -54,7 +55,7 @@ def exact_marginals(eps):
     return accepted.mean(axis=0), len(accepted)
 
 
-def toy_model(accepted_per_wave):
+def toy_model(accepted_per_wave, out):
     print("1. A toy model: 10 switches, 4 readings")
     space = combabc.BinarySpace(dimension=D, default_prior_one=PRIOR,
                                 names=[f"switch {k + 1}" for k in range(D)])
@@ -62,7 +63,9 @@ def toy_model(accepted_per_wave):
     options = combabc.make_options(num_waves=len(THRESHOLDS), accepted_per_wave=accepted_per_wave,
                                    thresholds=THRESHOLDS, estimator="importance", seed=7,
                                    threads=2)
-    history = combabc.run(problem, options)
+    # output_directory: the run writes its history (out/toy/history.sqlite), which
+    # combabc.resume(path, problem, options) continues after a crash and combabc.export reads.
+    history = combabc.run(problem, options, output_directory=out / "toy", overwrite=True)
     print(history)
     print(history.wave_table()[["wave", "eps_euclidean", "candidates", "accepted", "ess"]]
           .to_string(index=False))
@@ -79,7 +82,23 @@ def toy_model(accepted_per_wave):
     # The same run, one configuration per call: the same history, whatever the batching.
     single = combabc.run(combabc.Problem(space, simulate, observed=OBSERVED), options)
     assert np.array_equal(single.waves[-1].bits, last.bits)
-    print("the per-sample simulator gives the same history\n")
+    print("the per-sample simulator gives the same history")
+    figures(history, out / "toy")
+    print()
+
+
+def figures(history, out):
+    """combabc.plot's figures of a run, as PNG files (needs python3-matplotlib)."""
+    try:
+        import matplotlib
+    except ImportError as missing:
+        print(f"no figures ({missing})")
+        return
+    matplotlib.use("Agg")
+    import combabc.plot
+    for name in ("marginals", "curves", "thresholds", "predictive_band"):
+        getattr(combabc.plot, name)(history).savefig(out / f"{name}.png", dpi=80)
+    print(f"figures: {out}/{{marginals,curves,thresholds,predictive_band}}.png")
 
 
 # --- 2. the sensor -------------------------------------------------------------------------------
@@ -138,7 +157,7 @@ def main():
     args = parser.parse_args()
     out = pathlib.Path(args.out) if args.out else pathlib.Path(tempfile.mkdtemp(prefix="combabc-"))
     out.mkdir(parents=True, exist_ok=True)
-    toy_model(1000 if args.small else 5000)
+    toy_model(1000 if args.small else 5000, out)
     sensor(out, args.small)
     print(f"files in {out}")
 

@@ -7,7 +7,10 @@
     problem = combabc.Problem(space, simulate, observed=y)  # simulate(bits) -> ndarray[m]
     history = combabc.run(problem, combabc.SmcOptions(...))
     history = combabc.resume("results/history.sqlite")   # as `combabc resume`
+    history = combabc.run(problem, options, output_directory="out")  # writes out/history.sqlite
+    history = combabc.resume(history.path, problem, options)  # a Problem's run, continued
     history = combabc.enumerate("config.toml")            # as `combabc enumerate`
+    figure = combabc.plot.marginals(history)              # matplotlib figures (combabc.plot)
     model = combabc.SensorModel("config.toml")            # as `combabc simulate`
     y = model.profile("0110...")
 
@@ -23,13 +26,14 @@ from . import _core
 from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
                     ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
+from . import plot
 from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
            "LogisticKernelOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
            "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
-           "load_history", "make_options", "resume", "run"]
+           "load_history", "make_options", "plot", "resume", "run"]
 
 
 class Problem:
@@ -87,6 +91,26 @@ def make_options(**fields):
     return options
 
 
+def _smc_request(problem, options):
+    return _core.SmcRequest(
+        space=problem.space, reals=problem.reals, simulator=problem.simulator,
+        batch=problem.batch, rng=problem.rng, observed=problem.observed, options=options,
+        distance=problem.distance, distance_batch=problem.distance_batch,
+        components=problem.components)
+
+
+def _problem_history(data, problem):
+    # The data's coordinate is the output's index (the NetCDF export's observed_data), for the
+    # outputs as for the data; a history file records the same.
+    positions = np.arange(len(problem.observed), dtype=np.float64)
+    data.setdefault("measured_position", positions)
+    data.setdefault("measured_value", problem.observed)
+    data.setdefault("output_position", positions)
+    data.setdefault("position_unit", "index")
+    data.setdefault("combabc_version", __version__)
+    return History(data)
+
+
 def run(what, options=None, *, threads=None, output_directory=None, overwrite=False,
         report=False):
     """Runs a calibration and returns its History.
@@ -94,22 +118,25 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
     what: a config file (str or path): the same run as `combabc run` (threads, output_directory,
     overwrite as its options; report=True draws the report too); the History is read back from
     the history file it wrote (History.path). Or a Problem, run with `options` (SmcOptions; a
-    threads argument overrides options.threads); nothing is written.
+    threads argument overrides options.threads): with output_directory it writes the history
+    file history.sqlite there (overwrite: replace one; report=True draws the report too), which
+    combabc.export, combabc.load_history and combabc.resume(path, problem, options) read;
+    without, nothing is written (History.path is None).
     """
     if isinstance(what, Problem):
         if options is None:
             options = SmcOptions()
         if threads is not None:
             options.threads = threads
-        data = _core.run_smc(_core.SmcRequest(
-            space=what.space, reals=what.reals, simulator=what.simulator, batch=what.batch,
-            rng=what.rng, observed=what.observed, options=options, distance=what.distance,
-            distance_batch=what.distance_batch, components=what.components))
-        # The data's coordinate is the output's index (the NetCDF export's observed_data).
-        data.update(measured_position=np.arange(len(what.observed), dtype=np.float64),
-                    measured_value=what.observed, position_unit="index",
-                    combabc_version=__version__)
-        return History(data)
+        if report and output_directory is None:
+            raise ValueError("report=True needs output_directory: the report is drawn from the "
+                             "history file written there")
+        path = ""
+        if output_directory is not None:
+            os.makedirs(output_directory, exist_ok=True)
+            path = os.path.join(os.fspath(output_directory), "history.sqlite")
+        data = _core.run_smc(_smc_request(what, options), path, overwrite, False, report)
+        return _problem_history(data, what)
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")
     data = _core.run_config(os.fspath(what), -1 if threads is None else threads,
@@ -122,27 +149,61 @@ def load_history(path):
     return History(_core.load_history(os.fspath(path)))
 
 
-def export(path, directory=None, *, overwrite=False, netcdf=True):
+def _history_path(history):
+    """A history file's path from a path or a History."""
+    if isinstance(history, History):
+        if not history.path:
+            raise ValueError("this History has no history file: run the problem with "
+                             "combabc.run(problem, options, output_directory=...) to write one")
+        return history.path
+    return os.fspath(history)
+
+
+def export(path, directory=None, *, overwrite=False, netcdf=True, all_waves=False):
     """`combabc export RUN.sqlite`: the CSV and JSON files, and inference_data.nc (netcdf=False
-    skips it), into `directory` (default export/ beside the history). Returns the directory. When
-    the NetCDF file cannot be made (no xarray for the report's python) the rest is written and a
-    UserWarning says why, as the CLI's note."""
-    outcome = _core.export(os.fspath(path), os.fspath(directory or ""), overwrite, netcdf)
+    skips it; all_waves=True adds every wave's resampled posterior, as --all-waves), into
+    `directory` (default export/ beside the history). path: the history file or a History that
+    has one (History.path). Returns the directory. When the NetCDF file cannot be made (no
+    xarray for the report's python) the rest is written and a UserWarning says why, as the CLI's
+    note."""
+    outcome = _core.export(_history_path(path), os.fspath(directory or ""), overwrite, netcdf,
+                           all_waves)
     if outcome["note"]:
         warnings.warn(outcome["note"], stacklevel=2)
     return outcome["directory"]
 
 
-def resume(path, *, threads=None, report=False, max_simulations=None, max_wall_time=None,
-           min_acceptance_rate=None, max_failure_fraction=None):
-    """Continues an interrupted or killed run from its history file, as `combabc resume` (the
-    result equals an uninterrupted run's); returns its History. A run that stopped on a limit
-    continues with that limit raised (the keywords are `combabc resume`'s --max-simulations,
-    --max-wall-time (seconds), --min-acceptance-rate and --max-failure-fraction). A finished run,
-    or a stopped one whose limits would stop it again at once, is a combabc.Error (usage)."""
-    return History(_core.resume(os.fspath(path), -1 if threads is None else threads, report,
-                                max_simulations, max_wall_time, min_acceptance_rate,
-                                max_failure_fraction))
+def resume(path, problem=None, options=None, *, threads=None, report=False,
+           max_simulations=None, max_wall_time=None, min_acceptance_rate=None,
+           max_failure_fraction=None):
+    """Continues an interrupted, killed or failed run from its history file (a path or a
+    History), as `combabc resume` (the result equals an uninterrupted run's); returns its
+    History. A run that stopped on a limit continues with that limit raised (the keywords are
+    `combabc resume`'s --max-simulations, --max-wall-time (seconds), --min-acceptance-rate and
+    --max-failure-fraction). A finished run, or a stopped one whose limits would stop it again at
+    once, is a combabc.Error (usage).
+
+    A run of a Problem (combabc.run(problem, options, output_directory=...)) is resumed with the
+    same Problem (the same simulator and distance functions) and the same options passed again:
+    the history's fingerprint refuses other ones (threads and the stop limits may differ)."""
+    path = _history_path(path)
+    if problem is None:
+        if options is not None:
+            raise TypeError("options apply to a Problem's run; a config run carries its own")
+        return History(_core.resume(path, -1 if threads is None else threads, report,
+                                    max_simulations, max_wall_time, min_acceptance_rate,
+                                    max_failure_fraction))
+    if options is None:
+        options = SmcOptions()
+    if threads is not None:
+        options.threads = threads
+    for name, value in (("max_simulations", max_simulations), ("max_wall_time_s", max_wall_time),
+                        ("min_acceptance_rate", min_acceptance_rate),
+                        ("max_failure_fraction", max_failure_fraction)):
+        if value is not None:
+            setattr(options, name, value)
+    data = _core.run_smc(_smc_request(problem, options), path, False, True, report)
+    return _problem_history(data, problem)
 
 
 def enumerate(config, *, thresholds=None, threads=None, output_directory=None, overwrite=False,

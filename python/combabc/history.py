@@ -1,7 +1,9 @@
 """A run history as NumPy arrays and pandas DataFrames (docs/python.md).
 
-The column names follow `combabc export` (docs/history.md, "Export"): waves are numbered from 1 in
-the DataFrames as in the CSV files, bits and indices stay 0-based.
+The column names follow `combabc export` (docs/history.md, "Export"). Numbering (docs/python.md,
+"Numbering"): waves are numbered from 1 (`Wave.number`, every `wave=` argument, the DataFrames'
+`wave` column), bits are named (`History.bit_names`; the DataFrames' bit columns) or counted from
+1; NumPy arrays stay positional (column j of `bits` is bit j + 1).
 """
 
 import os
@@ -12,7 +14,7 @@ import numpy as np
 class Wave:
     """One wave: its statistics and its accepted particles as NumPy arrays.
 
-    Attributes: wave (0-based), thresholds, phi, proposal, candidates, accepted, acceptance_rate,
+    Attributes: number (from 1), thresholds, phi, proposal, candidates, accepted, acceptance_rate,
     complete, marginals_paper, marginals_importance, ess, reals_mean, reals_sd, distinct,
     discarded, wall_seconds, pair_correlations (float64[d, d]: the Pearson correlation of bits i
     and j under the particles' weights, 0 for a bit constant among them; 0 x 0 without
@@ -33,7 +35,7 @@ class Wave:
         return self.marginals_importance
 
     def __repr__(self):
-        return (f"Wave({self.wave + 1}: {self.accepted} accepted of {self.candidates}, "
+        return (f"Wave({self.number}: {self.accepted} accepted of {self.candidates}, "
                 f"thresholds {list(self.thresholds)})")
 
 
@@ -91,6 +93,10 @@ class History:
         self.status = data.get("status")
         self.report_directory = data.get("report_directory") or None
         self.seed = data.get("seed")
+        # The stated prior: P(bit = 1) per bit (empty: 0.5 each) and each continuous parameter's
+        # prior as a dict (kind, low, high, mean, sd), for the NetCDF prior group.
+        self.bit_prior_one = list(data.get("bit_prior_one") or ())
+        self.real_priors = list(data.get("real_priors") or ())
         # `enumerate` only: directory, configurations, accepted, evidence, wall_seconds.
         self.enumeration = data.get("enumeration")
         # The measured data (positions in position_unit); for a Problem, the observed data by
@@ -128,29 +134,49 @@ class History:
             raise KeyError(f"no experiment named {which!r} (the run has {names})")
         return self.experiments[which]
 
-    def curves(self, wave=-1, experiment=None):
+    def wave(self, number=None):
+        """A Wave by its number (from 1), or the last wave for None."""
+        if number is None:
+            return self.waves[-1]
+        if isinstance(number, bool) or not isinstance(number, (int, np.integer)) or \
+                not 1 <= number <= len(self.waves):
+            raise IndexError(f"wave={number!r}: waves are numbered 1 to {len(self.waves)}")
+        return self.waves[int(number) - 1]
+
+    def bit(self, which):
+        """A bit's position (from 0, its column in the NumPy arrays) from its name or its number
+        (from 1)."""
+        if isinstance(which, str):
+            if which not in self.bit_names:
+                raise KeyError(f"no bit named {which!r} (bits: {', '.join(self.bit_names)})")
+            return self.bit_names.index(which)
+        if isinstance(which, bool) or not isinstance(which, (int, np.integer)) or \
+                not 1 <= which <= self.dimension:
+            raise IndexError(f"bit {which!r}: bits are numbered 1 to {self.dimension}, or named")
+        return int(which) - 1
+
+    def curves(self, wave=None, experiment=None):
         """A wave's accepted simulated outputs, float64[n, m]: every output, or one experiment's
-        (its name, index or Experiment; columns at that experiment's output_position). wave: a
-        wave's index in `waves` (0-based; default the last). Empty (n x 0) when the run kept no
-        outputs."""
-        output = self.waves[wave].output
+        (its name, index or Experiment; columns at that experiment's output_position). wave: its
+        number (from 1; default the last). Empty (n x 0) when the run kept no outputs."""
+        output = self.wave(wave).output
         if experiment is None or not output.shape[1]:
             return output
         return output[:, self.experiment(experiment).outputs]
 
     def particles(self, wave=None):
         """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
-        bit_0..bit_{d-1}, one column per continuous parameter, log_weight, weight and
-        d_<component> (component names made column-safe, as in the export). wave: a 0-based
-        wave number, or None for every wave."""
+        one column per bit named by its name (bit_names), one column per continuous parameter,
+        log_weight, weight and d_<component> (component names made column-safe, as in the
+        export). wave: a wave's number (from 1), or None for every wave."""
         import pandas as pd
         frames = []
         for w in self._selected(wave):
-            columns = {"wave": np.full(len(w.index), w.wave + 1, dtype=np.int64),
+            columns = {"wave": np.full(len(w.index), w.number, dtype=np.int64),
                        "index": w.index,
                        "bits": ["".join("1" if b else "0" for b in row) for row in w.bits]}
-            for k in range(self.dimension):
-                columns[f"bit_{k}"] = w.bits[:, k].astype(np.int64)
+            for k, name in enumerate(self.bit_names):
+                columns[name] = w.bits[:, k].astype(np.int64)
             for k, name in enumerate(self.real_names):
                 columns[name] = w.reals[:, k]
             columns["log_weight"] = w.log_weight
@@ -161,13 +187,13 @@ class History:
         return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
     def marginals(self):
-        """Per-bit marginals, long, as export's marginals.csv: wave (from 1), bit, name,
+        """Per-bit marginals, long, as export's marginals.csv: wave (from 1), bit (from 1), name,
         prob_paper, prob_importance."""
         import pandas as pd
         rows = []
         for w in self.waves:
             for k in range(min(self.dimension, len(w.marginals_paper))):
-                rows.append({"wave": w.wave + 1, "bit": k, "name": self.bit_names[k],
+                rows.append({"wave": w.number, "bit": k + 1, "name": self.bit_names[k],
                              "prob_paper": w.marginals_paper[k],
                              "prob_importance": w.marginals_importance[k]})
         return pd.DataFrame(rows, columns=["wave", "bit", "name", "prob_paper",
@@ -175,14 +201,14 @@ class History:
 
     def pair_correlations(self):
         """Per-wave pair correlations, long, as export's pair_correlations.csv: wave (from 1),
-        bit_i, name_i, bit_j, name_j (one row per pair i < j), correlation."""
+        bit_i, name_i, bit_j, name_j (bits from 1; one row per pair i < j), correlation."""
         import pandas as pd
         rows = []
         for w in self.waves:
             r = w.pair_correlations
             for i, j in zip(*np.triu_indices(len(r), k=1)):
-                rows.append({"wave": w.wave + 1, "bit_i": int(i), "name_i": self.bit_names[i],
-                             "bit_j": int(j), "name_j": self.bit_names[j],
+                rows.append({"wave": w.number, "bit_i": int(i) + 1, "name_i": self.bit_names[i],
+                             "bit_j": int(j) + 1, "name_j": self.bit_names[j],
                              "correlation": r[i, j]})
         return pd.DataFrame(rows, columns=["wave", "bit_i", "name_i", "bit_j", "name_j",
                                            "correlation"])
@@ -194,7 +220,7 @@ class History:
         import pandas as pd
         rows = []
         for w in self.waves:
-            row = {"wave": w.wave + 1}
+            row = {"wave": w.number}
             for name, eps in zip(self._threshold_columns, w.thresholds):
                 row[name] = eps
             row.update(phi=w.phi, candidates=w.candidates, accepted=w.accepted,
@@ -204,43 +230,51 @@ class History:
             rows.append(row)
         return pd.DataFrame(rows)
 
-    def to_inference_data(self):
-        """The final wave in ArviZ's InferenceData layout: a dict of xarray Datasets, groups
-        posterior (bits and the continuous parameters; dims chain = 1, draw = particle),
-        sample_stats (weight, log_weight, distance per component, particle_index) and
-        observed_data (measured, by position; with named experiments measured_<name> by
-        position_<name>, one per experiment), as `combabc export` writes in inference_data.nc
-        (docs/history.md, "NetCDF"). Needs xarray (python3-xarray)."""
+    def to_inference_data(self, all_waves=False):
+        """The run in ArviZ's InferenceData layout: a dict of xarray Datasets, groups posterior
+        (the final wave's particles resampled to equally weighted draws: bits and the continuous
+        parameters; dims chain = 1, draw), sample_stats (per draw its particle's weight,
+        log_weight, distance per component, particle_index), prior, posterior_predictive (the
+        resampled accepted curves, when the run kept outputs) and observed_data, as
+        `combabc export` writes in inference_data.nc (docs/history.md, "NetCDF"); all_waves=True
+        adds posterior_wave_<k> and sample_stats_wave_<k> for every wave k. Needs xarray
+        (python3-xarray)."""
         from . import _netcdf
         w = self.waves[-1]
         attrs = {"inference_library_version": self._provenance["combabc_version"],
-                 "seed": self.seed if self.seed is not None else "", "wave": w.wave + 1,
+                 "seed": self.seed if self.seed is not None else "", "wave": w.number,
                  "termination": self.termination, "status": self.status or "",
                  "estimator": self.estimator, "created_at": self._provenance["end_time"],
                  "config_path": self._provenance["config_path"],
                  "config_text": self._provenance["config_text"]}
+        waves = self.waves if all_waves else list({id(x): x for x in (self.waves[0], w)}.values())
         return _netcdf.inference_data(
-            bits=w.bits, reals=w.reals, log_weight=w.log_weight, weight=w.weight,
-            distance=w.distance, index=w.index, bit_names=self.bit_names,
-            real_names=self.real_names, components=self.components,
+            waves=[{"number": x.number, "thresholds": x.thresholds, "bits": x.bits,
+                    "reals": x.reals, "log_weight": x.log_weight, "weight": x.weight,
+                    "distance": x.distance, "index": x.index, "output": x.output}
+                   for x in waves],
+            bit_names=self.bit_names, real_names=self.real_names, components=self.components,
             measured_position=self.measured_position, measured_value=self.measured_value,
-            position_unit=self.position_unit, attrs=attrs,
+            position_unit=self.position_unit, attrs=attrs, estimator=self.estimator,
+            seed=self.seed, bit_prior_one=self.bit_prior_one, real_priors=self.real_priors,
+            output_position=self.output_position, all_waves=all_waves,
             experiments=[{"name": x.name, "description": x.description,
                           "first_measured": x.measured.start,
                           "measured": len(x.measured_position),
                           "first_component": x.components.start,
-                          "components": len(x.component_names)} for x in self.experiments])
+                          "components": len(x.component_names),
+                          "first_output": x.outputs.start,
+                          "outputs": len(x.output_position)} for x in self.experiments])
 
-    def to_netcdf(self, path):
-        """to_inference_data() written to `path` (NetCDF-4, one group each; arviz.from_netcdf
-        reads it). Needs xarray and netCDF4 (python3-xarray python3-netcdf4)."""
+    def to_netcdf(self, path, all_waves=False):
+        """to_inference_data(all_waves) written to `path` (NetCDF-4, one group each;
+        arviz.from_netcdf reads it). Needs xarray and netCDF4 (python3-xarray python3-netcdf4)."""
         from . import _netcdf
-        _netcdf.write_netcdf(self.to_inference_data(), os.fspath(path))
-
+        _netcdf.write_netcdf(self.to_inference_data(all_waves), os.fspath(path))
     def _selected(self, wave):
         if wave is None:
             return self.waves
-        return [self.waves[wave]]
+        return [self.wave(wave)]
 
     def __repr__(self):
         return (f"History({len(self.waves)} waves, termination {self.termination}, "

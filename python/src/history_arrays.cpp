@@ -19,7 +19,7 @@ py::array_t<double> Vector(const std::vector<double>& v) {
 
 py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   py::dict d;
-  d["wave"] = wave.wave;
+  d["number"] = wave.wave + 1;  // waves count from 1 wherever a user sees them
   d["thresholds"] = Vector(wave.thresholds);
   d["phi"] = wave.phi;
   d["proposal"] = Vector(wave.proposal);

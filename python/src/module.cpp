@@ -26,11 +26,13 @@
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/enumerate.hpp"
 #include "combabc/services/history_tools.hpp"
+#include "combabc/services/report.hpp"
 #include "combabc/services/run.hpp"
 #include "combabc/services/simulate.hpp"
 #include "history_arrays.hpp"
 #include "python_call.hpp"
 #include "python_distance.hpp"
+#include "python_history.hpp"
 #include "python_simulator.hpp"
 
 namespace py = pybind11;
@@ -98,6 +100,21 @@ HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
   return names;
 }
 
+// Each continuous parameter's prior as summary.json's "reals" give it (History.real_priors).
+py::list RealPriors(const std::vector<ContinuousParameter>& reals) {
+  py::list priors;
+  for (const ContinuousParameter& r : reals) {
+    py::dict prior;
+    prior["kind"] = std::string(ToString(r.prior.kind));
+    prior["low"] = r.prior.low;
+    prior["high"] = r.prior.high;
+    prior["mean"] = r.prior.mean;
+    prior["sd"] = r.prior.sd;
+    priors.append(prior);
+  }
+  return priors;
+}
+
 py::dict LoadHistory(const std::string& path) {
   RunMetadata metadata;
   RunHistory history;
@@ -110,6 +127,7 @@ py::dict LoadHistory(const std::string& path) {
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["status"] = std::string(ToString(metadata.status));
   result["bit_prior_one"] = metadata.bit_prior_one;
+  result["real_priors"] = RealPriors(metadata.reals);
   result["seed"] = metadata.seed;
   result["path"] = path;
   // What the NetCDF export records beside the particles (History.to_inference_data).
@@ -214,11 +232,12 @@ py::dict Enumerate(const std::string& config_path,
 py::dict Export(const std::string& history_path,
                 const std::string& directory,
                 bool overwrite,
-                bool netcdf) {
+                bool netcdf,
+                bool all_waves) {
   services::ExportOutcome outcome;
   {
     const py::gil_scoped_release release;
-    outcome = services::ExportHistory(history_path, directory, overwrite, netcdf);
+    outcome = services::ExportHistory(history_path, directory, overwrite, netcdf, all_waves);
   }
   py::dict result;
   result["directory"] = outcome.directory;
@@ -281,7 +300,105 @@ struct SmcRequest {
   std::vector<std::string> components;
 };
 
-py::dict RunSmc(const SmcRequest& request) {
+// The history of a Python run, opened to continue it: refused (kUsage) for a config run's history,
+// a run that has finished (not on a limit), and a problem or options other than the run's.
+HistoryStore OpenPythonRun(const std::string& path,
+                           const PythonProblem& problem,
+                           const SmcOptions& options) {
+  const RunMetadata m = HistoryStore::Open(path, /*read_only=*/true).LoadMetadata();
+  auto part = [](const std::vector<std::pair<std::string, std::string>>& parts,
+                 const std::string& name) {
+    for (const auto& [key, digest] : parts) {
+      if (key == name) return digest;
+    }
+    return std::string();
+  };
+  if (part(m.fingerprint, kPythonFingerprintPart).empty()) {
+    throw Error(ErrorKind::kUsage,
+                "a config run's history; resume it with combabc.resume(path), without a problem",
+                path);
+  }
+  const auto stop = ParseEnum<Termination>(m.termination);
+  const bool on_limit =
+      stop &&
+      (*stop == Termination::kBudgetExhausted || *stop == Termination::kWallTimeExceeded ||
+       *stop == Termination::kAcceptanceRateTooLow || *stop == Termination::kTooManyFailures);
+  if (m.status == RunStatus::kFinished && !on_limit) {
+    throw Error(ErrorKind::kUsage,
+                "the run has already finished (" + m.termination + "); nothing to resume",
+                path);
+  }
+  const auto now = PythonRunFingerprint(problem, options);
+  for (const auto& [key, digest] : now) {
+    if (part(m.fingerprint, key) != digest) {
+      throw Error(ErrorKind::kUsage,
+                  std::string(key == kPythonFingerprintPart ? "the problem (space, reals, data, "
+                                                              "distance)"
+                                                            : "the options") +
+                      " differ from the run's: resume it with the problem and options it "
+                      "started with (threads and stop limits may change)",
+                  path);
+    }
+  }
+  if (on_limit) {
+    // Resuming would only record the same stop again: say which limit to raise instead.
+    const ResumePoint point = HistoryStore::Open(path, /*read_only=*/true).LoadResumePoint();
+    if (const auto again = ImmediateStop(options, point)) {
+      const Termination t = again->first;
+      const char* keyword = t == Termination::kBudgetExhausted        ? "max_simulations"
+                            : t == Termination::kAcceptanceRateTooLow ? "min_acceptance_rate"
+                            : t == Termination::kTooManyFailures      ? "max_failure_fraction"
+                                                                      : "max_wall_time";
+      throw Error(ErrorKind::kUsage,
+                  "the run stopped (" + std::string(ToString(t)) + ": " + again->second +
+                      ") and would stop again at once; raise the limit with " + keyword + "=",
+                  path);
+    }
+  }
+  return HistoryStore::Open(path);
+}
+
+// The run's history (when it writes one) and Ctrl-C, as one observer.
+class StoredRun final : public SmcObserver {
+ public:
+  StoredRun(HistoryStore* store, PythonSignals& signals) : store_(store), signals_(signals) {}
+  void OnWaveStart(const WaveRecord& wave) override {
+    if (store_) store_->OnWaveStart(wave);
+  }
+  void OnBatch(const BatchProgress& progress, std::span<const Particle> accepted) override {
+    if (store_) store_->OnBatch(progress, accepted);
+  }
+  void OnWaveEnd(const WaveRecord& wave) override {
+    if (store_) store_->OnWaveEnd(wave);
+  }
+  bool ShouldStop() override { return signals_.ShouldStop(); }
+
+ private:
+  HistoryStore* store_;
+  PythonSignals& signals_;
+};
+
+// Where a Python run writes: nothing (empty path), a new history (combabc.run with
+// output_directory) or the continuation of one (combabc.resume with the problem).
+struct PythonRunFile {
+  std::string history_path;
+  bool overwrite = false;
+  bool resume = false;
+  bool report = false;
+};
+
+// Raises the user's Python exception that ended a run as itself (its type, message and
+// traceback), with the engine's line (wave and candidate) attached as a note; else rethrows.
+[[noreturn]] void RaiseFirstError(const FirstPythonError& first_error, const std::exception& e) {
+  std::optional<py::error_already_set> raised = first_error.error();
+  if (!raised) throw;
+  if (py::hasattr(raised->value(), "add_note")) {
+    raised->value().attr("add_note")(std::string("combabc: ") + e.what());
+  }
+  throw *raised;
+}
+
+py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   if (request.observed.empty()) {
     throw Error(ErrorKind::kConfig, "the observed data are empty", {}, 0, "observed");
   }
@@ -319,40 +436,102 @@ py::dict RunSmc(const SmcRequest& request) {
   problem.space = &space;
   problem.simulator = &simulator;
   problem.distance = distance.get();
+  const PythonProblem described{.space = &request.space,
+                                .reals = &request.reals,
+                                .observed = &request.observed,
+                                .components = distance->components(),
+                                .batch = request.batch,
+                                .rng = request.rng,
+                                .python_distance = !request.distance.is_none(),
+                                .distance_batch = request.distance_batch};
+  std::optional<HistoryStore> store;
+  std::optional<ResumePoint> resume;
+  if (!file.history_path.empty()) {
+    const py::gil_scoped_release release;
+    if (file.resume) {
+      store.emplace(OpenPythonRun(file.history_path, described, request.options));
+      resume = store->BeginResume();
+    } else {
+      store.emplace(HistoryStore::Create(
+          file.history_path, PythonRunMetadata(described, request.options), file.overwrite));
+    }
+  }
   PythonSignals signals;
+  StoredRun observer(store ? &*store : nullptr, signals);
   RunHistory history;
   try {
     const py::gil_scoped_release release;
-    history = RunCombinatorialSmc(problem, request.options, &signals);
+    history = RunCombinatorialSmc(problem, request.options, &observer, resume ? &*resume : nullptr);
   } catch (const std::exception& e) {
-    // A Python exception that ended the run is raised again as itself, the engine's line (wave
-    // and candidate) attached as a note.
-    std::optional<py::error_already_set> raised = first_error.error();
-    if (!raised) throw;
-    if (py::hasattr(raised->value(), "add_note")) {
-      const auto* error = dynamic_cast<const Error*>(&e);
-      raised->value().attr("add_note")(
-          error ? std::string(ToString(error->kind())) + ": " + error->what() : e.what());
+    if (store) {
+      try {
+        store->MarkFailed(e.what());
+      } catch (const std::exception&) {
+        // The store itself may be what failed (disk full); the first error is the one to report.
+      }
     }
-    throw *raised;
+    RaiseFirstError(first_error, e);
   }
-  signals.RaiseIfInterrupted("combabc: run interrupted");
+  if (store) {
+    const py::gil_scoped_release release;
+    store->Finish(history.summary);
+    store.reset();  // closed: the history is read back from the file below
+  }
+  signals.RaiseIfInterrupted(file.history_path.empty()
+                                 ? "combabc: run interrupted"
+                                 : "combabc: interrupted; continue with combabc.resume(\"" +
+                                       file.history_path + "\", problem, options)");
+  if (!file.history_path.empty()) {
+    // Read back from the file, as a config run's, so that the arrays are what export writes.
+    py::dict result = LoadHistory(file.history_path);
+    if (file.report) {
+      std::string report_directory;
+      {
+        const py::gil_scoped_release release;
+        report_directory = services::WriteReport(file.history_path);
+      }
+      result["report_directory"] = report_directory;
+    }
+    return result;
+  }
   // Named as a history file of the same run would be.
-  RunMetadata metadata;
-  metadata.dimension = space.num_bits();
-  for (int k = 0; k < space.num_bits(); ++k) metadata.bit_names.push_back(request.space.name(k));
-  metadata.reals = request.reals;
-  metadata.distance_components = distance->components();
-  metadata.estimator = ToString(request.options.estimator);
+  const RunMetadata metadata = PythonRunMetadata(described, request.options);
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["seed"] = request.options.seed;
+  result["bit_prior_one"] = metadata.bit_prior_one;
+  result["real_priors"] = RealPriors(metadata.reals);
   return result;
+}
+
+// A bit of BinarySpace(tied=...) by name or by number from 1, as the config's `tie` counts them,
+// to its position from 0.
+int TiedBit(const py::handle& bit, int dimension, const std::vector<std::string>& names) {
+  if (py::isinstance<py::str>(bit)) {
+    const auto name = bit.cast<std::string>();
+    const auto found = std::find(names.begin(), names.end(), name);
+    if (found == names.end()) {
+      throw py::value_error("BinarySpace: tied names " + Excerpt(name) +
+                            ", which is not one of names");
+    }
+    return static_cast<int>(found - names.begin());
+  }
+  if (!py::isinstance<py::int_>(bit) || py::isinstance<py::bool_>(bit)) {
+    throw py::type_error("BinarySpace: tied holds bit names or numbers (from 1), not " +
+                         std::string(py::str(py::type::of(bit).attr("__name__"))));
+  }
+  const auto number = bit.cast<long long>();
+  if (number < 1 || number > dimension) {
+    throw py::value_error("BinarySpace: tied bit " + std::to_string(number) +
+                          "; bits are numbered 1 to " + std::to_string(dimension) +
+                          " (as the config's tie), or named");
+  }
+  return static_cast<int>(number - 1);
 }
 
 BinarySpace MakeBinarySpace(int dimension,
                             const std::vector<double>& prior_one,
                             double default_prior_one,
-                            const std::vector<std::vector<int>>& tied,
+                            const std::vector<std::vector<py::object>>& tied_bits,
                             const std::vector<std::string>& names) {
   // The config's bounds on declared bits ([simulator.bits]): at most kMaxBits, distinct names. A
   // ValueError like Python's own, before anything is sized by `dimension`.
@@ -367,6 +546,11 @@ BinarySpace MakeBinarySpace(int dimension,
       throw py::value_error("BinarySpace: names[" + std::to_string(k) + "] " + Excerpt(names[k]) +
                             " repeats names[" + std::to_string(it->second) + "]");
     }
+  }
+  std::vector<std::vector<int>> tied;
+  for (const auto& group : tied_bits) {
+    std::vector<int>& bits = tied.emplace_back();
+    for (const py::object& bit : group) bits.push_back(TiedBit(bit, dimension, names));
   }
   BinarySpaceOptions options;
   options.dimension = dimension;
@@ -508,7 +692,7 @@ void BindTypes(py::module_& m) {
            py::arg("dimension"),
            py::arg("prior_one") = std::vector<double>{},
            py::arg("default_prior_one") = 0.5,
-           py::arg("tied") = std::vector<std::vector<int>>{},
+           py::arg("tied") = std::vector<std::vector<py::object>>{},
            py::arg("names") = std::vector<std::string>{})
       .def_property_readonly("dimension", &BinarySpace::dimension)
       .def_property_readonly("num_free", &BinarySpace::num_free)
@@ -646,7 +830,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("history_path"),
         py::arg("directory") = std::string(),
         py::arg("overwrite") = false,
-        py::arg("netcdf") = true);
+        py::arg("netcdf") = true,
+        py::arg("all_waves") = false);
   m.def("resume",
         &Resume,
         py::arg("history_path"),
@@ -711,5 +896,22 @@ PYBIND11_MODULE(_core, m) {
            py::arg("distance") = py::none(),
            py::arg("distance_batch") = false,
            py::arg("components") = std::vector<std::string>{});
-  m.def("run_smc", &RunSmc, py::arg("request"));
+  m.def(
+      "run_smc",
+      [](const SmcRequest& request,
+         const std::string& history_path,
+         bool overwrite,
+         bool resume,
+         bool report) {
+        return RunSmc(request,
+                      {.history_path = history_path,
+                       .overwrite = overwrite,
+                       .resume = resume,
+                       .report = report});
+      },
+      py::arg("request"),
+      py::arg("history_path") = std::string(),
+      py::arg("overwrite") = false,
+      py::arg("resume") = false,
+      py::arg("report") = false);
 }

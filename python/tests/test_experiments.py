@@ -111,8 +111,8 @@ def test_curves_per_experiment(two):
         curves = history.curves(experiment=x.name)
         assert curves.shape == (final.accepted, len(x.output_position))
         np.testing.assert_array_equal(curves, final.output[:, x.outputs])
-    np.testing.assert_array_equal(history.curves(0), history.waves[0].output)
-    np.testing.assert_array_equal(history.curves(0, experiment=1),
+    np.testing.assert_array_equal(history.curves(1), history.waves[0].output)
+    np.testing.assert_array_equal(history.curves(1, experiment=1),
                                   history.waves[0].output[:, history.experiments[1].outputs])
     # The same from the file as from the run.
     loaded = combabc.load_history(history.path)

@@ -107,7 +107,7 @@ def test_pair_correlations_are_the_weighted_correlations_of_the_bits():
     assert np.any((np.abs(last) > 0.05) & (np.abs(last) < 1)), last  # not all trivial
     table = history.pair_correlations()
     assert len(table) == len(history.waves) * 28  # 8 bits: 28 pairs a wave
-    assert table.iloc[0].tolist() == [1, 0, history.bit_names[0], 1, history.bit_names[1],
+    assert table.iloc[0].tolist() == [1, 1, history.bit_names[0], 2, history.bit_names[1],
                                       history.waves[0].pair_correlations[0, 1]]
 
 

@@ -29,7 +29,7 @@ _combabc() {
       files=toml ;;
     simulate) opts="-h --help --clamps -o --output --overwrite --no-cache"; files=toml ;;
     report) opts="-h --help -o --output --overwrite"; files=sqlite ;;
-    export) opts="-h --help -o --output --overwrite --no-netcdf"; files=sqlite ;;
+    export) opts="-h --help -o --output --overwrite --no-netcdf --all-waves"; files=sqlite ;;
     verify) opts="-h --help"; files=sqlite ;;
     *)
       mapfile -t COMPREPLY < <(compgen -W "$commands -h --help --version" -- "$cur")

@@ -2,21 +2,34 @@
 """A combabc run as a NetCDF file in ArviZ's InferenceData layout (docs/history.md, "NetCDF").
 
     combabc_netcdf.py --particles particles.csv --measured measured.csv --summary summary.json
+                      [--curves curves.csv --positions positions.csv] [--all-waves]
                       --out inference_data.nc
 
 `combabc export` runs it on the files it has just staged, so that the NetCDF values are the CSVs'
 (it is not meant to be run by hand, though it can be on any export directory). The Python module
 imports the same builder (`inference_data`) for History.to_inference_data(), so both write one
-layout:
+layout. Waves are numbered from 1 and bits named, as everywhere a user sees them:
 
-- posterior: the final wave's accepted particles as draws of one chain: `bits` (chain, draw, bit;
-  uint8, the bit coordinate holds the bit / clamp names) and one variable per continuous parameter
-  (chain, draw);
-- sample_stats: `weight` and `log_weight` (chain, draw), `distance` (chain, draw, component) and
-  `particle_index`, the particle's candidate index in its wave;
+- posterior: equally weighted draws of the final wave (one chain, as many draws as particles),
+  resampled from its weighted particles by systematic resampling under the run's estimator's
+  weights (importance: the particles' weights; paper: equal), its uniform draw seeded by
+  (run seed, wave): so ArviZ's and xarray's means equal combabc's marginals within resampling
+  error, and the file is reproducible. `bits` (chain, draw, bit; uint8, the bit coordinate holds
+  the bit / clamp names) and one variable per continuous parameter (chain, draw);
+- sample_stats, per draw, of the particle it was drawn from: `weight` and `log_weight`,
+  `distance` (chain, draw, component) and `particle_index` (its candidate index in the wave);
+- prior: wave 1's particles when its thresholds are all infinite (prior draws), else as many
+  draws from the stated prior (independent bits at bit_prior_one, the continuous priors);
+  attribute `source` says which;
+- posterior_predictive (when the run kept its outputs): the accepted curves of the final wave,
+  resampled as the posterior (the same draws). Per experiment, named as its observed variable on
+  the same positions when the outputs lie at the measured positions, else `simulated`
+  (`simulated_<name>`) on `output_position` (`output_position_<name>`);
 - observed_data: `measured` (position), its coordinate the measured positions; a run of named
   experiments instead has one variable per experiment, `measured_<name>` (position_<name>), each
   with its own positions, and sample_stats the coordinate `component_experiment` (component);
+- with --all-waves (History.to_inference_data(all_waves=True)) also `posterior_wave_<k>` and
+  `sample_stats_wave_<k>` for every wave k from 1, resampled likewise;
 - attributes of every group: inference_library = combabc, its version, the seed, the wave (from 1),
   the termination, the config file's path and text.
 
@@ -25,6 +38,7 @@ Exit status (sysexits): 0, 64 usage, 65 unreadable input, 69 xarray or netCDF4 m
 
 import argparse
 import json
+import os
 import sys
 
 EX_USAGE, EX_DATAERR, EX_UNAVAILABLE, EX_SOFTWARE, EX_IOERR = 64, 65, 69, 70, 74
@@ -44,66 +58,165 @@ def named_experiments(experiments):
     return experiments if any(x["name"] for x in experiments) else None
 
 
-def inference_data(*, bits, reals, log_weight, weight, distance, index, bit_names, real_names,
-                   components, measured_position, measured_value, position_unit, attrs,
-                   experiments=None):
-    """The groups posterior, sample_stats and observed_data as xarray Datasets (a dict by group
-    name), from one wave's particles as NumPy arrays (n draws): bits uint8[n, d], reals
-    float64[n, r], log_weight, weight float64[n], distance float64[n, k], index int64[n].
-    experiments: the run's experiments as dicts (name, description, first_measured, measured,
-    first_component, components: summary.json's "experiments"), or None for one holding
-    everything."""
+def resample(weight, seed, wave):
+    """Systematic resampling: n indices into the n weighted particles, the one uniform draw seeded
+    by (seed, wave) so that the same run always gives the same draws."""
+    import numpy as np
+    weight = np.asarray(weight, dtype=np.float64)
+    n = len(weight)
+    if n == 0 or not np.sum(weight) > 0:
+        return np.zeros(0, dtype=np.int64)
+    cumulative = np.cumsum(weight / np.sum(weight))
+    u = np.random.default_rng([int(seed or 0), int(wave)]).random()
+    indices = np.searchsorted(cumulative, (u + np.arange(n)) / n, side="right")
+    return np.minimum(indices, n - 1).astype(np.int64)
+
+
+def prior_draws(n, bit_prior_one, dimension, real_priors, seed):
+    """n draws from the stated prior: independent bits at their prior P(1) (ties are not
+    kept: the export does not carry them), the continuous parameters' priors."""
+    import numpy as np
+    rng = np.random.default_rng([int(seed or 0), 0])
+    p = np.asarray(bit_prior_one if len(bit_prior_one) else [0.5] * dimension, dtype=np.float64)
+    bits = (rng.random((n, dimension)) < p).astype(np.uint8)
+    reals = np.empty((n, len(real_priors)))
+    for k, prior in enumerate(real_priors):
+        kind = prior["kind"]
+        if kind == "uniform":
+            reals[:, k] = rng.uniform(prior["low"], prior["high"], n)
+        elif kind == "normal":
+            reals[:, k] = rng.normal(prior["mean"], prior["sd"], n)
+        elif kind == "lognormal":
+            reals[:, k] = np.exp(rng.normal(prior["mean"], prior["sd"], n))
+        else:  # truncated_normal, by rejection
+            values = np.empty(0)
+            while len(values) < n:
+                x = rng.normal(prior["mean"], prior["sd"], 4 * n)
+                values = np.concatenate([values, x[(x >= prior["low"]) & (x <= prior["high"])]])
+            reals[:, k] = values[:n]
+    return bits, reals
+
+
+def inference_data(*, waves, bit_names, real_names, components, measured_position,
+                   measured_value, position_unit, attrs, estimator, seed, bit_prior_one=(),
+                   real_priors=(), output_position=(), experiments=None, all_waves=False):
+    """The InferenceData groups (above) as xarray Datasets, a dict by group name. waves: every wave
+    (at least the final one, last), each a dict: number (from 1), thresholds, and its particles as
+    NumPy arrays (n particles): bits uint8[n, d], reals float64[n, r], log_weight, weight
+    float64[n], distance float64[n, k], index int64[n], output float64[n, m] (m = 0 without
+    outputs). experiments: the run's experiments as dicts (name, description, first_measured,
+    measured, first_component, components, first_output, outputs: summary.json's
+    "experiments"), or None for one holding everything. real_priors: per continuous parameter its
+    prior as a dict (kind, low, high, mean, sd)."""
     import numpy as np
     import xarray as xr
 
-    n = len(weight)
     attrs = {key: ("" if value is None else value) for key, value in attrs.items()}
     attrs.setdefault("inference_library", "combabc")
-    draws = {"chain": np.array([0]), "draw": np.arange(n)}
-    posterior = {"bits": (("chain", "draw", "bit"),
-                          np.asarray(bits, dtype=np.uint8).reshape(1, n, len(bit_names)))}
-    reals = np.asarray(reals, dtype=np.float64).reshape(n, len(real_names))
-    for k, name in enumerate(real_names):
-        posterior[variable_name(name)] = (("chain", "draw"), reals[None, :, k])
-    sample_stats = {
-        "weight": (("chain", "draw"), np.asarray(weight, dtype=np.float64)[None]),
-        "log_weight": (("chain", "draw"), np.asarray(log_weight, dtype=np.float64)[None]),
-        "distance": (("chain", "draw", "component"),
-                     np.asarray(distance, dtype=np.float64).reshape(1, n, len(components))),
-        "particle_index": (("chain", "draw"), np.asarray(index, dtype=np.int64)[None]),
-    }
+    d, r = len(bit_names), len(real_names)
     measured_position = np.asarray(measured_position, dtype=np.float64)
     measured_value = np.asarray(measured_value, dtype=np.float64)
+    output_position = np.asarray(output_position, dtype=np.float64)
     units = {"units": position_unit or "m"}
-    stats_coords = {**draws, "component": list(components)}
     named = named_experiments(experiments)
-    if named is None:
-        position = xr.Variable("position", measured_position, attrs=units)
-        observed = {"measured": ("position", measured_value)}
-        observed_coords = {"position": position}
+    layout = named or [{"name": "", "first_measured": 0, "measured": len(measured_position),
+                        "first_component": 0, "components": len(components),
+                        "first_output": 0, "outputs": None}]
+
+    def draws(n):
+        return {"chain": np.array([0]), "draw": np.arange(n)}
+
+    def parameters(bits, reals):
+        n = len(bits)
+        group = {"bits": (("chain", "draw", "bit"),
+                          np.asarray(bits, dtype=np.uint8).reshape(1, n, d))}
+        reals = np.asarray(reals, dtype=np.float64).reshape(n, r)
+        for k, name in enumerate(real_names):
+            group[variable_name(name)] = (("chain", "draw"), reals[None, :, k])
+        return xr.Dataset(group, coords={**draws(n), "bit": list(bit_names)}, attrs=attrs)
+
+    def resampled(wave):
+        weight = np.asarray(wave["weight"], dtype=np.float64)
+        distance = np.asarray(wave["distance"], dtype=np.float64).reshape(len(weight),
+                                                                          len(components))
+        uniform = estimator == "paper"
+        rows = resample(np.ones_like(weight) if uniform else weight, seed, wave["number"])
+        n = len(rows)
+        stats = {
+            "weight": (("chain", "draw"), weight[rows][None]),
+            "log_weight": (("chain", "draw"), np.asarray(wave["log_weight"])[rows][None]),
+            "distance": (("chain", "draw", "component"), distance[rows][None]),
+            "particle_index": (("chain", "draw"), np.asarray(wave["index"],
+                                                             dtype=np.int64)[rows][None]),
+        }
+        coords = {**draws(n), "component": list(components)}
+        if named is not None:
+            owner = [""] * len(components)
+            for x in named:
+                first = x.get("first_component", 0)
+                for k in range(first, min(first + x.get("components", 0), len(owner))):
+                    owner[k] = x["name"]
+            coords["component_experiment"] = ("component", owner)
+        stats_attrs = {**attrs, "wave": wave["number"], "resampling": "systematic",
+                       "resampling_weights": "equal" if uniform else "weight"}
+        posterior = parameters(np.asarray(wave["bits"])[rows], np.asarray(
+            wave["reals"], dtype=np.float64).reshape(len(weight), r)[rows])
+        posterior.attrs = stats_attrs
+        return rows, posterior, xr.Dataset(stats, coords=coords, attrs=stats_attrs)
+
+    observed, observed_coords = {}, {}
+    for x in layout:
+        suffix = f"_{variable_name(x['name'])}" if named else ""
+        rows = slice(x["first_measured"], x["first_measured"] + x["measured"])
+        dim = f"position{suffix}"
+        observed_coords[dim] = xr.Variable(dim, measured_position[rows], attrs=units)
+        observed[f"measured{suffix}"] = xr.Variable(
+            dim, measured_value[rows],
+            attrs={"experiment": x["name"], "description": x.get("description", "")}
+            if named else {})
+
+    final = waves[-1]
+    rows, posterior, sample_stats = resampled(final)
+    groups = {"posterior": posterior, "sample_stats": sample_stats}
+
+    first = waves[0]
+    if first["number"] == 1 and len(first["thresholds"]) and \
+            np.all(np.isinf(np.asarray(first["thresholds"], dtype=np.float64))):
+        prior = parameters(first["bits"], first["reals"])
+        prior.attrs = {**attrs, "source": "wave 1 (infinite thresholds: prior draws)"}
     else:
-        # One observed variable per experiment, on its own positions (experiments may scan the
-        # same stretch, or lines of different lengths): what ArviZ gets from a model with one
-        # likelihood per data set.
-        observed, observed_coords = {}, {}
-        owner = [""] * len(components)
-        for x in named:
-            name = variable_name(x["name"])
-            rows = slice(x["first_measured"], x["first_measured"] + x["measured"])
-            dim = f"position_{name}"
-            observed_coords[dim] = xr.Variable(dim, measured_position[rows], attrs=units)
-            observed[f"measured_{name}"] = xr.Variable(
-                dim, measured_value[rows],
-                attrs={"experiment": x["name"], "description": x.get("description", "")})
-            first = x.get("first_component", 0)
-            for k in range(first, min(first + x.get("components", 0), len(owner))):
-                owner[k] = x["name"]
-        stats_coords["component_experiment"] = ("component", owner)
-    return {
-        "posterior": xr.Dataset(posterior, coords={**draws, "bit": list(bit_names)}, attrs=attrs),
-        "sample_stats": xr.Dataset(sample_stats, coords=stats_coords, attrs=attrs),
-        "observed_data": xr.Dataset(observed, coords=observed_coords, attrs=attrs),
-    }
+        prior = parameters(*prior_draws(len(rows), bit_prior_one, d, real_priors, seed))
+        prior.attrs = {**attrs, "source": "stated prior"}
+    groups["prior"] = prior
+
+    output = np.asarray(final.get("output", np.zeros((0, 0))), dtype=np.float64)
+    if output.ndim == 2 and output.shape[1] and len(rows):
+        curves = output[rows]
+        predictive, predictive_coords = {}, {}
+        for x in layout:
+            suffix = f"_{variable_name(x['name'])}" if named else ""
+            count = x["outputs"] if x["outputs"] is not None else output.shape[1]
+            columns = slice(x["first_output"], x["first_output"] + count)
+            at = output_position[columns] if len(output_position) else \
+                measured_position[x["first_measured"]:x["first_measured"] + x["measured"]]
+            measured_at = observed_coords[f"position{suffix}"].values
+            if len(at) == len(measured_at) and np.array_equal(at, measured_at):
+                name, dim = f"measured{suffix}", f"position{suffix}"
+                predictive_coords[dim] = observed_coords[dim]
+            else:
+                name, dim = f"simulated{suffix}", f"output_position{suffix}"
+                predictive_coords[dim] = xr.Variable(dim, at, attrs=units)
+            predictive[name] = (("chain", "draw", dim), curves[None, :, columns])
+        groups["posterior_predictive"] = xr.Dataset(
+            predictive, coords={**draws(len(rows)), **predictive_coords},
+            attrs={**attrs, "resampling": "systematic"})
+    groups["observed_data"] = xr.Dataset(observed, coords=observed_coords, attrs=attrs)
+    if all_waves:
+        for wave in waves:
+            _, posterior, stats = resampled(wave)
+            groups[f"posterior_wave_{wave['number']}"] = posterior
+            groups[f"sample_stats_wave_{wave['number']}"] = stats
+    return groups
 
 
 def write_netcdf(groups, path):
@@ -114,8 +227,10 @@ def write_netcdf(groups, path):
         mode = "a"
 
 
-def from_export(particles_csv, measured_csv, summary_json):
-    """The builder's arguments from an export's files: the final wave's particles."""
+def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, positions_csv=None,
+                all_waves=False):
+    """The builder's arguments from an export's files (curves.csv and positions.csv when the run
+    kept its outputs): the final wave, or every wave."""
     import numpy as np
     import pandas as pd
 
@@ -125,29 +240,49 @@ def from_export(particles_csv, measured_csv, summary_json):
     bit_names = summary["bit_names"]
     real_names = [r["name"] for r in summary["reals"]]
     components = [c["name"] for c in summary["distance_components"]]
-    wave = summary["waves"][-1]["wave"] if summary["waves"] else 0
     table = pd.read_csv(particles_csv, dtype={"bits": str}, float_precision="round_trip")
-    table = table[table["wave"] == wave]
     weight_at = list(table.columns).index("weight")
     distance_columns = list(table.columns[weight_at + 1:])
     if len(distance_columns) != len(components):
         components = [c[2:] for c in distance_columns]  # an older file: the export's names
+    curves = None
+    if curves_csv and os.path.isfile(curves_csv):
+        curves = pd.read_csv(curves_csv, float_precision="round_trip")
+    output_position = np.zeros(0)
+    if positions_csv and os.path.isfile(positions_csv):
+        output_position = pd.read_csv(positions_csv, float_precision="round_trip").iloc[:, 1]
+    stats = summary["waves"] if summary["waves"] else [{"wave": 0, "thresholds": []}]
+    waves = []
+    for w in stats if all_waves else stats[:1] + stats[-1:] if len(stats) > 1 else stats:
+        rows = table[table["wave"] == w["wave"]]
+        wave = {"number": w["wave"],
+                # null: a non-finite threshold (summary.json), the first wave's infinite ones
+                "thresholds": [np.inf if t is None else t for t in w.get("thresholds", [])],
+                "bits": rows[bit_names].to_numpy(dtype=np.uint8),
+                "reals": rows[real_names].to_numpy(dtype=np.float64),
+                "log_weight": rows["log_weight"].to_numpy(), "weight": rows["weight"].to_numpy(),
+                "distance": rows[distance_columns].to_numpy(dtype=np.float64),
+                "index": rows["index"].to_numpy(dtype=np.int64), "output": np.zeros((0, 0))}
+        if curves is not None:
+            by_index = curves[curves["wave"] == w["wave"]].drop(columns="wave").set_index("index")
+            if set(wave["index"]) <= set(by_index.index):
+                wave["output"] = by_index.loc[wave["index"]].to_numpy(dtype=np.float64)
+        waves.append(wave)
     measured = pd.read_csv(measured_csv, float_precision="round_trip")
     unit = measured.columns[0][len("position_"):]
     attrs = {"inference_library_version": run["combabc_version"], "seed": run["seed"],
-             "wave": wave, "termination": run["termination"], "status": run["status"],
-             "estimator": run["estimator"], "created_at": run["end_time"],
-             "config_path": run["config_path"], "config_text": summary["config_text"]}
+             "wave": waves[-1]["number"], "termination": run["termination"],
+             "status": run["status"], "estimator": run["estimator"],
+             "created_at": run["end_time"], "config_path": run["config_path"],
+             "config_text": summary["config_text"]}
     return dict(
-        bits=table[[f"bit_{k}" for k in range(len(bit_names))]].to_numpy(dtype=np.uint8),
-        reals=table[real_names].to_numpy(dtype=np.float64),
-        log_weight=table["log_weight"].to_numpy(), weight=table["weight"].to_numpy(),
-        distance=table[distance_columns].to_numpy(dtype=np.float64),
-        index=table["index"].to_numpy(dtype=np.int64), bit_names=bit_names,
-        real_names=real_names, components=components,
+        waves=waves, bit_names=bit_names, real_names=real_names, components=components,
         measured_position=measured.iloc[:, 0].to_numpy(),
         measured_value=measured.iloc[:, 1].to_numpy(), position_unit=unit, attrs=attrs,
-        experiments=summary.get("experiments"))
+        estimator=run["estimator"], seed=run["seed"], bit_prior_one=summary["bit_prior_one"],
+        real_priors=[r["prior"] for r in summary["reals"]],
+        output_position=np.asarray(output_position, dtype=np.float64),
+        experiments=summary.get("experiments"), all_waves=all_waves)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -160,6 +295,10 @@ def main(argv=None):
     parser = OneLineParser(description="A combabc export as NetCDF (ArviZ InferenceData).")
     for name in ("particles", "measured", "summary", "out"):
         parser.add_argument(f"--{name}", required=True)
+    parser.add_argument("--curves", help="curves.csv, when the run kept its outputs")
+    parser.add_argument("--positions", help="positions.csv (the outputs' x)")
+    parser.add_argument("--all-waves", action="store_true",
+                        help="also every wave's resampled posterior and sample_stats")
     args = parser.parse_args(argv)
     try:
         import netCDF4  # noqa: F401  (xarray's engine; imported here to name it when missing)
@@ -169,7 +308,8 @@ def main(argv=None):
               file=sys.stderr)
         return EX_UNAVAILABLE
     try:
-        write_netcdf(inference_data(**from_export(args.particles, args.measured, args.summary)),
+        write_netcdf(inference_data(**from_export(args.particles, args.measured, args.summary,
+                                                  args.curves, args.positions, args.all_waves)),
                      args.out)
     except (KeyError, ValueError, json.JSONDecodeError) as error:
         print(f"combabc_netcdf: unreadable export: {type(error).__name__}: {error}",

@@ -296,6 +296,13 @@ std::ostream& OutputDirectory::Add(const std::string& name) {
   return staged_.back().second->out();
 }
 
+bool OutputDirectory::Has(const std::string& name) const {
+  for (const auto& entry : staged_) {
+    if (entry.first == name) return true;
+  }
+  return false;
+}
+
 std::string OutputDirectory::StagedPath(const std::string& name) {
   for (const auto& [staged, file] : staged_) {
     if (staged == name) {

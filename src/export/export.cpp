@@ -89,6 +89,12 @@ std::string Identifier(const std::string& name) {
   return out;
 }
 
+// A bit's name (RunMetadata::bit_names), or "bit k" counted from 1 when the run named none: the
+// particles.csv column and summary.json's bit_names, so that readers find one by the other.
+std::string BitName(const RunMetadata& m, std::size_t b) {
+  return b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
+}
+
 }  // namespace
 
 std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t count) {
@@ -203,11 +209,10 @@ void WriteMarginals(OutputDirectory& dir, const RunMetadata& m, const RunHistory
   out << "wave,bit,name,prob_paper,prob_importance\n";
   for (const WaveRecord& w : h.waves) {
     for (std::size_t b = 0; b < w.marginals_paper.size(); ++b) {
-      const std::string name =
-          b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
+      const std::string name = BitName(m, b);
       const double importance =
           b < w.marginals_importance.size() ? w.marginals_importance[b] : std::nan("");
-      out << WaveNumber(w) << ',' << b << ',' << CsvField(name) << ','
+      out << WaveNumber(w) << ',' << b + 1 << ',' << CsvField(name) << ','
           << Number(w.marginals_paper[b]) << ',' << Number(importance) << '\n';
     }
   }
@@ -217,9 +222,7 @@ void WriteMarginals(OutputDirectory& dir, const RunMetadata& m, const RunHistory
 void WritePairCorrelations(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
   std::ostream& out = dir.Add("pair_correlations.csv");
   out << "wave,bit_i,name_i,bit_j,name_j,correlation\n";
-  auto name = [&](std::size_t b) {
-    return CsvField(b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1));
-  };
+  auto name = [&](std::size_t b) { return CsvField(BitName(m, b)); };
   for (const WaveRecord& w : h.waves) {
     // PairCorrelations(w.particles): none beyond kMaxPairCorrelationBits bits.
     const std::size_t d = w.particles.empty() || w.pair_correlations.empty()
@@ -228,8 +231,8 @@ void WritePairCorrelations(OutputDirectory& dir, const RunMetadata& m, const Run
     COMBABC_CHECK(w.pair_correlations.size() == d * d);
     for (std::size_t i = 0; i < d; ++i) {
       for (std::size_t j = i + 1; j < d; ++j) {
-        out << WaveNumber(w) << ',' << i << ',' << name(i) << ',' << j << ',' << name(j) << ','
-            << Number(w.pair_correlations[i * d + j]) << '\n';
+        out << WaveNumber(w) << ',' << i + 1 << ',' << name(i) << ',' << j + 1 << ',' << name(j)
+            << ',' << Number(w.pair_correlations[i * d + j]) << '\n';
       }
     }
   }
@@ -242,7 +245,10 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
     if (!w.particles.empty()) components = w.particles.front().distance.size();
   }
   out << "wave,index,bits";
-  for (int b = 0; b < m.dimension; ++b) out << ",bit_" << b;
+  // One column per bit, named as summary.json's bit_names (docs/history.md, "Numbering").
+  for (std::size_t b = 0; b < static_cast<std::size_t>(m.dimension); ++b) {
+    out << ',' << CsvField(BitName(m, b));
+  }
   // theta is the bits and then the reals, one column each, named by the parameter.
   for (const ContinuousParameter& r : m.reals) out << ',' << CsvField(r.name);
   out << ",log_weight,weight";
@@ -359,8 +365,8 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
   out << "    \"wall_seconds\": " << JsonNumber(h.summary.wall_seconds) << "\n  },\n";
   out << "  \"config_text\": " << JsonString(m.config_text) << ",\n";
   out << "  \"bit_names\": [";
-  for (std::size_t b = 0; b < m.bit_names.size(); ++b) {
-    out << (b ? ", " : "") << JsonString(m.bit_names[b]);
+  for (std::size_t b = 0; b < static_cast<std::size_t>(m.dimension); ++b) {
+    out << (b ? ", " : "") << JsonString(BitName(m, b));
   }
   out << "],\n  \"bit_prior_one\": " << JsonArray(m.bit_prior_one);
   out << ",\n  \"distance_components\": [";

@@ -88,7 +88,7 @@ void WriteEnumerationFiles(OutputDirectory& dir, const RunMetadata& m, const Enu
   std::ostream& marginals = dir.Add("marginals.csv");
   marginals << "bit,name,prior,posterior\n";
   for (std::size_t k = 0; k < d && !r.marginals.empty(); ++k) {
-    marginals << k << ',' << Field(m.bit_names[k]) << ',' << Num(m.bit_prior_one[k]) << ','
+    marginals << k + 1 << ',' << Field(m.bit_names[k]) << ',' << Num(m.bit_prior_one[k]) << ','
               << Num(r.marginals[k]) << '\n';
   }
 }

@@ -27,7 +27,8 @@ constexpr const char* kNetcdfNeeds =
 // scripts/report/combabc_netcdf.py from the staged CSV and JSON files, so that its values are
 // theirs. Without the script's Python packages the export goes on without it and says why in
 // outcome.note; any other failure of the script fails the export (nothing is written).
-void AddNetcdf(OutputDirectory& dir, ExportOutcome& outcome) {
+// all_waves: also every wave's resampled posterior (--all-waves).
+void AddNetcdf(OutputDirectory& dir, bool all_waves, ExportOutcome& outcome) {
   PythonScript tools;
   try {
     tools = FindPythonScript("combabc_netcdf.py", "COMBABC_NETCDF_SCRIPT", kNetcdfNeeds);
@@ -36,16 +37,23 @@ void AddNetcdf(OutputDirectory& dir, ExportOutcome& outcome) {
     return;
   }
   dir.Add(kNetcdfFile);
-  const std::vector<std::string> args = {tools.python,
-                                         tools.script,
-                                         "--particles",
-                                         dir.StagedPath("particles.csv"),
-                                         "--measured",
-                                         dir.StagedPath("measured.csv"),
-                                         "--summary",
-                                         dir.StagedPath("summary.json"),
-                                         "--out",
-                                         dir.StagedPath(kNetcdfFile)};
+  std::vector<std::string> args = {tools.python,
+                                   tools.script,
+                                   "--particles",
+                                   dir.StagedPath("particles.csv"),
+                                   "--measured",
+                                   dir.StagedPath("measured.csv"),
+                                   "--summary",
+                                   dir.StagedPath("summary.json"),
+                                   "--out",
+                                   dir.StagedPath(kNetcdfFile),
+                                   "--positions",
+                                   dir.StagedPath("positions.csv")};
+  // The posterior predictive group needs the curves, written when the run kept its outputs.
+  if (dir.Has("curves.csv")) {
+    args.insert(args.end(), {"--curves", dir.StagedPath("curves.csv")});
+  }
+  if (all_waves) args.emplace_back("--all-waves");
   const ProcessResult result = RunProcess(args, kNetcdfNeeds);
   constexpr int kUnavailable = 69;  // EX_UNAVAILABLE: xarray or netCDF4 missing
   if (result.status == kUnavailable) {
@@ -92,13 +100,14 @@ VerifyOutcome VerifyHistory(const std::string& history_path) {
 ExportOutcome ExportHistory(const std::string& history_path,
                             const std::string& directory,
                             bool overwrite,
-                            bool netcdf) {
+                            bool netcdf,
+                            bool all_waves) {
   ExportOutcome outcome;
   outcome.directory = directory.empty() ? Sibling(history_path, "export") : directory;
   ExportOptions options;
   options.overwrite = overwrite;
   if (netcdf) {
-    options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, outcome); };
+    options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, all_waves, outcome); };
   }
   ExportRun(history_path, outcome.directory, options);
   return outcome;

@@ -224,6 +224,14 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
                     "); nothing to resume. Use 'combabc report' or 'combabc export'",
                 history_path);
   }
+  if (metadata.config_text.empty()) {
+    // A run of a Python problem (combabc.run(problem, output_directory=...)): no config to
+    // rebuild it from; Python passes its simulator again.
+    throw Error(ErrorKind::kUsage,
+                "the run's simulator is written in Python: resume it from Python, "
+                "combabc.resume(path, problem, options)",
+                history_path);
+  }
   Problem p;
   p.config = ParseConfig(metadata.config_text, metadata.config_path);
   if (request.threads >= 0) p.config.smc.threads = request.threads;

@@ -128,7 +128,10 @@ TEST_F(OutputFilesTest, StagedFilesCanBeReadAndWrittenByPathAndDiscarded) {
     directory.Add("b.nc");
     Write(directory.StagedPath("b.nc"), "written by another process");
     directory.Add("c.nc");
+    EXPECT_TRUE(directory.Has("c.nc"));
     directory.Discard("c.nc");
+    EXPECT_FALSE(directory.Has("c.nc"));  // what the export asks before naming curves.csv
+    EXPECT_FALSE(directory.Has("never.csv"));
     EXPECT_EQ(KindOf([&] { directory.StagedPath("c.nc"); }), ErrorKind::kSoftware);
     EXPECT_FALSE(fs::exists(out / "a.csv"));  // nothing appears before Commit
     directory.Commit();

@@ -69,8 +69,7 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   const auto marginals = Lines(out / "marginals.csv");
   EXPECT_EQ(marginals[0], "wave,bit,name,prob_paper,prob_importance");
   EXPECT_EQ(marginals.size(), 1u + 2u * 6u);
-  EXPECT_EQ(marginals[1].rfind("1,0,clamp 1,", 0), 0u)
-      << "waves from 1, bits from 0: " << marginals[1];
+  EXPECT_EQ(marginals[1].rfind("1,1,clamp 1,", 0), 0u) << "waves and bits from 1: " << marginals[1];
 
   const auto pairs = Lines(out / "pair_correlations.csv");
   EXPECT_EQ(pairs[0], "wave,bit_i,name_i,bit_j,name_j,correlation");
@@ -78,7 +77,7 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
 
   const auto particles = Lines(out / "particles.csv");
   EXPECT_EQ(particles[0],
-            "wave,index,bits,bit_0,bit_1,bit_2,bit_3,bit_4,bit_5,log_weight,weight,"
+            "wave,index,bits,clamp 1,clamp 2,clamp 3,clamp 4,clamp 5,clamp 6,log_weight,weight,"
             "d_least_squares,d_secondary_peak");
   EXPECT_EQ(particles.size(), 1u + 2u * 5u);
   EXPECT_EQ(Fields(particles[1]), Fields(particles[0]));
@@ -131,10 +130,10 @@ TEST_F(ExportTest, PairCorrelationsAreEachWavesOneRowAPair) {
     ASSERT_EQ(w.pair_correlations.size(), 36u);
     for (std::size_t i = 0; i < 6; ++i) {
       for (std::size_t j = i + 1; j < 6; ++j, ++row) {
-        // Waves from 1, bits from 0 with their names, as in marginals.csv.
-        const std::string key = std::to_string(w.wave + 1) + "," + std::to_string(i) + ",clamp " +
-                                std::to_string(i + 1) + "," + std::to_string(j) + ",clamp " +
-                                std::to_string(j + 1) + ",";
+        // Waves and bits from 1, the bits with their names, as in marginals.csv.
+        const std::string key = std::to_string(w.wave + 1) + "," + std::to_string(i + 1) +
+                                ",clamp " + std::to_string(i + 1) + "," + std::to_string(j + 1) +
+                                ",clamp " + std::to_string(j + 1) + ",";
         ASSERT_EQ(rows[row].rfind(key, 0), 0u) << rows[row];
         // Shortest round-trip text: the history's value exactly.
         const double r = std::strtod(rows[row].c_str() + key.size(), nullptr);
@@ -167,9 +166,10 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
   EXPECT_EQ(pairs.size(), 1u + 2u * 15u);  // 6 bits: 15 pairs a wave
 
   const auto particles = Lines(out / "particles.csv");
-  EXPECT_EQ(particles[0],
-            "wave,index,bits,bit_0,bit_1,bit_2,bit_3,bit_4,bit_5,stiffness_1,stiffness_2,"
-            "log_weight,weight,d_least_squares,d_secondary_peak");
+  EXPECT_EQ(
+      particles[0],
+      "wave,index,bits,clamp 1,clamp 2,clamp 3,clamp 4,clamp 5,clamp 6,stiffness_1,stiffness_2,"
+      "log_weight,weight,d_least_squares,d_secondary_peak");
   ASSERT_EQ(particles.size(), 1u + 2u * 5u);
   auto field = [](const std::string& line, int n) {
     std::stringstream in(line);

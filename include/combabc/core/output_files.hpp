@@ -105,6 +105,8 @@ class OutputDirectory {
   // a helper process reads a staged file there or writes an added, empty one (the NetCDF export).
   // It is renamed into place at Commit() with the others.
   std::string StagedPath(const std::string& name);
+  // Whether `name` is staged (added and not discarded).
+  bool Has(const std::string& name) const;
   // Unstages `name` (a file a helper process could not write); its temporary is removed.
   void Discard(const std::string& name);
   void Commit();

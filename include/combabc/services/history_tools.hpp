@@ -25,10 +25,12 @@ struct ExportOutcome {
 // rules as for the report (`overwrite`: write into a directory combabc did not write). With
 // `netcdf`, also inference_data.nc (ArviZ's InferenceData layout) by
 // scripts/report/combabc_netcdf.py when $COMBABC_PYTHON (default /usr/bin/python3) has xarray and
-// netCDF4; without them the rest is written and `note` says so.
+// netCDF4; without them the rest is written and `note` says so. `all_waves` adds every wave's
+// resampled posterior to it (`combabc export --all-waves`).
 ExportOutcome ExportHistory(const std::string& history_path,
                             const std::string& directory = {},
                             bool overwrite = false,
-                            bool netcdf = true);
+                            bool netcdf = true,
+                            bool all_waves = false);
 
 }  // namespace combabc::services

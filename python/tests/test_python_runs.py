@@ -1,0 +1,126 @@
+"""Runs of a Problem (a simulator written in Python) that write a history: the file, its export,
+resume with the same problem after a failure (the uninterrupted run's history), and the user's own
+exception reaching the caller as theirs."""
+
+import os
+import subprocess
+import traceback
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import combabc
+from test_smc import OBSERVED, options, per_sample, problem
+
+CLI = os.environ.get("COMBABC_CLI")
+
+
+class Flaky:
+    """per_sample, raising the user's own error at call number `fail_at` (None: never)."""
+
+    def __init__(self, fail_at=None):
+        self.calls = 0
+        self.fail_at = fail_at
+
+    def __call__(self, bits):
+        self.calls += 1
+        if self.calls == self.fail_at:
+            raise LookupError(f"sensor unplugged at call {self.calls}")
+        return per_sample(bits)
+
+
+def test_a_problem_run_writes_its_history(tmp_path):
+    history = combabc.run(problem(), options(accepted_per_wave=100), output_directory=tmp_path)
+    assert history.path == os.path.join(str(tmp_path), "history.sqlite")
+    assert os.path.isfile(history.path) and history.status == "finished"
+    loaded = combabc.load_history(history.path)
+    pd.testing.assert_frame_equal(loaded.particles(), history.particles(), check_exact=True)
+    in_memory = combabc.run(problem(), options(accepted_per_wave=100))
+    assert in_memory.path is None
+    pd.testing.assert_frame_equal(in_memory.particles(), history.particles(), check_exact=True)
+    # The outputs' and the data's positions: the index (unit "index"), one experiment.
+    np.testing.assert_array_equal(history.output_position, np.arange(len(OBSERVED)))
+    np.testing.assert_array_equal(in_memory.output_position, np.arange(len(OBSERVED)))
+    np.testing.assert_array_equal(history.measured_value, OBSERVED)
+    assert history.position_unit == "index" and len(history.experiments) == 1
+    # Refused again without overwrite, replaced with it.
+    with pytest.raises(combabc.Error):
+        combabc.run(problem(), options(accepted_per_wave=100), output_directory=tmp_path)
+    combabc.run(problem(), options(accepted_per_wave=100), output_directory=tmp_path,
+                overwrite=True)
+
+
+def test_export_takes_the_path_or_the_history(tmp_path):
+    history = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path)
+    out = combabc.export(history.path, tmp_path / "e1", netcdf=False)
+    particles = pd.read_csv(os.path.join(out, "particles.csv"), dtype={"bits": str})
+    assert list(particles.columns[3:11]) == history.bit_names
+    assert combabc.export(history, tmp_path / "e2", netcdf=False) == str(tmp_path / "e2")
+    with pytest.raises(ValueError, match="output_directory"):
+        combabc.export(combabc.run(problem(), options(accepted_per_wave=50)))
+
+
+def test_resume_after_the_simulator_failed_equals_the_uninterrupted_run(tmp_path):
+    whole = combabc.run(problem(), options(accepted_per_wave=200),
+                        output_directory=tmp_path / "whole")
+    simulator = Flaky(fail_at=int(whole.summary["simulations"]) // 2)
+    flaky = problem(simulator)
+    with pytest.raises(LookupError, match="sensor unplugged"):
+        combabc.run(flaky, options(accepted_per_wave=200), output_directory=tmp_path / "cut")
+    path = tmp_path / "cut" / "history.sqlite"
+    assert combabc.load_history(path).status == "failed"
+    # Other options are refused (threads may change).
+    with pytest.raises(combabc.Error, match="options differ"):
+        combabc.resume(path, flaky, options(accepted_per_wave=200, seed=12))
+    with pytest.raises(combabc.Error, match="written in Python"):
+        combabc.resume(path)
+    resumed = combabc.resume(path, flaky, options(accepted_per_wave=200), threads=2)
+    assert resumed.status == "finished" and resumed.path == str(path)
+    pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)
+    with pytest.raises(combabc.Error, match="already finished"):
+        combabc.resume(path, flaky, options(accepted_per_wave=200))
+
+
+@pytest.mark.skipif(not CLI, reason="COMBABC_CLI not set (run through ctest)")
+def test_the_cli_refuses_to_resume_a_python_run(tmp_path):
+    simulator = Flaky(fail_at=50)
+    with pytest.raises(LookupError):
+        combabc.run(problem(simulator), options(accepted_per_wave=100), output_directory=tmp_path)
+    done = subprocess.run([CLI, "resume", str(tmp_path / "history.sqlite")], capture_output=True,
+                          text=True)
+    assert done.returncode == 64, done.stderr
+    assert "combabc.resume(path, problem, options)" in done.stderr
+
+
+def test_the_users_exception_is_reported_as_theirs(tmp_path):
+    with pytest.raises(LookupError) as raised:
+        combabc.run(problem(Flaky(fail_at=3)), options(accepted_per_wave=100))
+    notes = " ".join(getattr(raised.value, "__notes__", []))
+    assert "internal error" not in notes and "candidate" in notes
+    # The traceback ends in the user's function.
+    frames = traceback.extract_tb(raised.value.__traceback__)
+    assert frames[-1].name == "__call__" and frames[-1].filename == __file__
+
+
+def test_a_problem_run_draws_its_report(tmp_path):
+    pytest.importorskip("matplotlib")
+    history = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path,
+                          report=True)
+    assert os.path.isfile(os.path.join(history.report_directory, "index.html"))
+
+
+def test_a_run_stopped_on_its_budget_resumes_with_a_raised_limit(tmp_path):
+    whole = combabc.run(problem(), options(accepted_per_wave=200),
+                        output_directory=tmp_path / "whole")
+    total = int(whole.summary["simulations"])
+    stopped = combabc.run(problem(), options(accepted_per_wave=200, max_simulations=total // 2),
+                          output_directory=tmp_path / "stopped")
+    assert stopped.termination == "budget_exhausted"
+    with pytest.raises(combabc.Error, match="max_simulations="):  # it would stop again at once
+        combabc.resume(stopped, problem(), options(accepted_per_wave=200,
+                                                   max_simulations=total // 2))
+    resumed = combabc.resume(stopped, problem(), options(accepted_per_wave=200),
+                             max_simulations=total + 1000)
+    assert resumed.termination == whole.termination
+    pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)
