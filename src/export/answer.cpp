@@ -122,9 +122,10 @@ Answer SummariseAnswer(const RunMetadata& m,
     bit.number = static_cast<int>(b) + 1;
     bit.name = b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
     if (b < positions.size()) bit.position = positions[b];
-    bit.p_one = p[b];
-    bit.mc_se = StandardError(p[b], a.effective_size);
-    bit.verdict = VerdictOf(p[b], a.verdict_level);
+    // A sum of weights may pass 1 by a rounding error (1.0000000000000007): a probability.
+    bit.p_one = std::clamp(p[b], 0.0, 1.0);
+    bit.mc_se = StandardError(bit.p_one, a.effective_size);
+    bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
     a.bits.push_back(std::move(bit));
   }
   a.top_configurations = TopConfigurations(*w, m.bit_names, a.effective_size, a.exact);
@@ -229,8 +230,9 @@ void BitLines(const Answer& a, std::string& out) {
   // Thousands of bits do not fit a screen: the first ones, and where the rest are.
   constexpr std::size_t kMaxLines = 60;
   std::size_t width = 4;
-  for (const AnswerBit& b : a.bits)
+  for (const AnswerBit& b : a.bits) {
     width = std::max(width, std::min<std::size_t>(b.name.size(), 24));
+  }
   out += " " + Pad("bit", width) + "  P(bit = 1)  verdict\n";
   for (std::size_t k = 0; k < a.bits.size() && k < kMaxLines; ++k) {
     const AnswerBit& b = a.bits[k];
@@ -342,13 +344,17 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
   } else {
     BitLines(a, out);
   }
-  const std::size_t shown = std::min(configurations, a.top_configurations.size());
-  if (shown > 0) {
+  // Every particle a configuration of its own: their equal masses single none out, and listing
+  // them would read as if they did.
+  const bool all_distinct = !a.exact && a.particles > 1 && a.distinct == a.particles;
+  const std::size_t shown =
+      all_distinct ? 0 : std::min(configurations, a.top_configurations.size());
+  if (all_distinct) {
+    out += "most probable configurations: none stands out (" + std::to_string(a.particles) +
+           " particles, all distinct)\n";
+  } else if (shown > 0) {
     out += "most probable configurations (" + std::string(sensor ? "1 = fixed" : "bit 1 first") +
            "), posterior mass" + (a.exact ? " (exact)" : " ± standard error") + ":\n";
-  }
-  if (shown > 0 && !a.exact && a.distinct == a.particles) {
-    out += " all distinct: no configuration stands out; the table above is the answer\n";
   }
   for (std::size_t k = 0; k < shown; ++k) {
     const AnswerConfiguration& c = a.top_configurations[k];
