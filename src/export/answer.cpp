@@ -311,15 +311,14 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
     out += line;
   }
   if (!a.complete) {
-    out += "  no complete wave: the numbers are those of the incomplete last wave\n";
+    out += " no complete wave: the numbers are those of the incomplete last wave\n";
   } else if (a.wave < a.waves) {
-    std::snprintf(
-        line,
-        sizeof line,
-        "  wave %d is incomplete (%s): the numbers are wave %d's, the last complete one\n",
-        a.waves,
-        a.termination.empty() ? "stopped" : a.termination.c_str(),
-        a.wave);
+    std::snprintf(line,
+                  sizeof line,
+                  " the numbers are wave %d's: wave %d is incomplete (%s)\n",
+                  a.wave,
+                  a.waves,
+                  a.termination.empty() ? "stopped" : a.termination.c_str());
     out += line;
   }
   const std::string what = sensor ? "P(fixed)" : "P(bit = 1)";

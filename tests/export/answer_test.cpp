@@ -101,6 +101,7 @@ TEST(Answer, OfAnEnumerationIsTheExactPosteriorOfABruteForce) {
   EXPECT_EQ(a.bits[0].verdict, Verdict::kFixed);
   // The ten largest masses, largest first, exact (no standard error).
   std::vector<std::pair<double, std::string>> sorted;
+  sorted.reserve(mass.size());
   for (const auto& [bits, p] : mass) sorted.emplace_back(p / z, bits);
   std::sort(
       sorted.begin(), sorted.end(), [](const auto& l, const auto& r) { return l.first > r.first; });
@@ -217,7 +218,8 @@ TEST(Answer, OfARunStoppedMidWaveIsTheLastCompleteWave) {
   EXPECT_EQ(a.waves, options.waves);
   EXPECT_TRUE(a.complete);
   EXPECT_EQ(a.bits[0].p_one, h.waves[options.waves - 2].marginals_paper[0]);
-  EXPECT_NE(AnswerText(a).find("wave 3 is incomplete"), std::string::npos) << AnswerText(a);
+  EXPECT_NE(AnswerText(a).find("the numbers are wave 2's: wave 3 is incomplete"), std::string::npos)
+      << AnswerText(a);
 
   h.waves.erase(h.waves.begin(), h.waves.end() - 1);
   a = SummariseAnswer(m, h);
