@@ -294,11 +294,8 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
   const bool sensor = SideBySide(a);
   char line[256];
   if (a.exact) {
-    std::snprintf(line,
-                  sizeof line,
-                  "answer: exact (enumeration, %lld accepted configurations)\n",
-                  static_cast<long long>(a.particles));
-    out += line;
+    out += "answer: exact (enumeration, " + std::to_string(a.particles) +
+           " accepted configuration" + (a.particles == 1 ? "" : "s") + ")\n";
   } else {
     std::snprintf(line,
                   sizeof line,
