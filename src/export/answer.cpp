@@ -25,9 +25,14 @@ std::string Centimetres(double metres) {
   return s == "-0" ? "0" : s;
 }
 
-std::string Format(const char* format, double a, double b) {
+// `value` with `digits` decimals, and "±" its standard error when it has one: "0.44±0.02".
+std::string Estimate(double value, std::optional<double> se, int digits) {
   char text[64];
-  std::snprintf(text, sizeof text, format, a, b);
+  if (se) {
+    std::snprintf(text, sizeof text, "%.*f±%.*f", digits, value, digits, *se);
+  } else {
+    std::snprintf(text, sizeof text, "%.*f", digits, value);
+  }
   return text;
 }
 
@@ -189,7 +194,7 @@ std::string Pad(const std::string& text, std::size_t width) {
 
 // "0.44±0.02", or "1.00" when exact.
 std::string Probability(const AnswerBit& b, bool exact) {
-  return exact ? Format("%.2f", b.p_one, 0.0) : Format("%.2f±%.2f", b.p_one, b.mc_se);
+  return Estimate(b.p_one, exact ? std::nullopt : std::optional<double>(b.mc_se), 2);
 }
 
 // The sensor's clamps, one table per edge side by side: every bit has a position on edge 1 or 2.
@@ -354,8 +359,7 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
   }
   for (std::size_t k = 0; k < shown; ++k) {
     const AnswerConfiguration& c = a.top_configurations[k];
-    const std::string mass =
-        c.mass_se ? Format("%.3f±%.3f", c.mass, *c.mass_se) : Format("%.3f", c.mass, 0.0);
+    const std::string mass = Estimate(c.mass, c.mass_se, 3);
     out +=
         " " + std::to_string(k + 1) + ". " + Pad(mass, 11) + "  " + Bits(a, c.bits, sensor) + "\n";
   }
