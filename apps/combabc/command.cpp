@@ -13,6 +13,8 @@
 #include <string>
 
 #include "combabc/core/error.hpp"
+#include "combabc/export/answer.hpp"
+#include "combabc/services/history_tools.hpp"
 #include "interrupt.hpp"
 #include "progress_display.hpp"
 
@@ -38,6 +40,15 @@ int Guarded(const Session& session, bool quiet, const std::function<int(SmcObser
     progress.Clear();
     std::cerr << "combabc: internal error: " << Printable(e.what(), 400) << "\n";
     return kExitSoftware;
+  }
+}
+
+void PrintAnswer(const Session& session, bool quiet, const std::string& history_path) {
+  if (quiet || !session.primary()) return;
+  try {
+    std::cout << "\n" << AnswerText(services::ReadAnswer(history_path));
+  } catch (const Error& e) {
+    std::cerr << "combabc: the answer could not be read back: " << e.what() << "\n";
   }
 }
 

@@ -40,6 +40,7 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
     if (!outcome.report_directory.empty()) {
       std::cout << "report:  " << outcome.report_directory << "/index.html\n";
     }
+    PrintAnswer(session, args.quiet, outcome.history_path);
     return 0;
   });
 }
@@ -57,7 +58,10 @@ Command AddEnumerateCommand(CLI::App& app) {
                    request.thresholds,
                    "One per threshold component (default: the config's final thresholds)")
       ->check(RealIn(0.0, std::numeric_limits<double>::infinity()));
-  enumerate->add_option("-o,--output", request.output_directory, "Output directory");
+  enumerate->add_option("-o,--output",
+                        request.output_directory,
+                        "Folder of its history, tables and report (default: enumeration/ in the "
+                        "[output] directory, apart from run's)");
   enumerate
       ->add_option("-j,--threads", request.threads, "Threads, 0 = all cores (overrides [sampler])")
       ->check(CLI::Range(0, kMaxThreads));
@@ -66,7 +70,7 @@ Command AddEnumerateCommand(CLI::App& app) {
   enumerate->add_option("--top", request.top, "Configurations in top_configurations.csv")
       ->check(CLI::Range(1, 1000000));
   enumerate->add_flag("--no-report", args->no_report, "Do not write figures at the end");
-  enumerate->add_flag("-q,--quiet", args->quiet, "No progress display");
+  enumerate->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*enumerate);
   return {enumerate, [args](const Session& session) { return EnumerateCommand(*args, session); }};
 }

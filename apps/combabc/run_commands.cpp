@@ -88,7 +88,10 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
   request.report = !args.no_report;
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
-    return Conclude(services::RunCalibration(request, observer));
+    const auto outcome = services::RunCalibration(request, observer);
+    const int code = Conclude(outcome);
+    PrintAnswer(session, args.quiet, outcome.history_path);
+    return code;
   });
 }
 
@@ -107,7 +110,10 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
-    return Conclude(services::ResumeCalibration(request, observer));
+    const auto outcome = services::ResumeCalibration(request, observer);
+    const int code = Conclude(outcome);
+    PrintAnswer(session, args.quiet, outcome.history_path);
+    return code;
   });
 }
 
@@ -124,7 +130,7 @@ Command AddRunCommand(CLI::App& app) {
       ->check(CLI::Range(0, kMaxThreads));
   run->add_flag("--overwrite", request.overwrite, "Replace an existing history file");
   run->add_flag("--no-report", args->no_report, "Do not write figures at the end");
-  run->add_flag("-q,--quiet", args->quiet, "No progress display");
+  run->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*run);
   return {run, [args](const Session& session) { return RunCommand(*args, session); }};
 }
@@ -164,7 +170,7 @@ Command AddResumeCommand(CLI::App& app) {
                        "Failed simulations tolerated, as a fraction; 1 = never stop")
           ->check(RealIn(0.0, 1.0));
   resume->add_flag("--no-report", args->no_report, "Do not write figures at the end");
-  resume->add_flag("-q,--quiet", args->quiet, "No progress display");
+  resume->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*resume);
   return {resume, [args](const Session& session) { return ResumeCommand(*args, session); }};
 }

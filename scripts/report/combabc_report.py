@@ -900,7 +900,9 @@ def publish(staging, out, previous, overwrite):
         if not os.path.lexists(target):
             continue
         if os.path.isdir(target) and not os.path.islink(target):
-            raise ReportError(f"{target}: is a directory (refusing to replace it)", EX_CANTCREAT)
+            raise ReportError(f"{target}: is a directory (refusing to replace it; move it away "
+                              "or write the report elsewhere: combabc report -o DIR)",
+                              EX_CANTCREAT)
         ours = name in previous and os.path.isfile(target) and not os.path.islink(target)
         if not (ours or overwrite):
             raise ReportError(f"{target}: file exists and was not written by combabc (refusing to "

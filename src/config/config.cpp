@@ -34,11 +34,15 @@ void ParseOutput(TableReader& root, CalibrationConfig* c) {
     t->Fail("database", "must be a file name (it is created inside output.directory)");
   }
   // The folders a run writes beside its history (services: report/, export/, and from the
-  // history's stem <stem>.work/ for an external simulator, <stem>.enumeration/ for enumerate): a
-  // history of one of their names would be found to collide only after sampling.
+  // history's stem <stem>.work/ for an external simulator, <stem>.enumeration/ for enumerate), and
+  // enumerate's own folder: a history of one of their names would be found to collide only after
+  // sampling.
   const std::string stem = std::filesystem::path(o.database).stem().string();
-  for (const std::string& folder :
-       {std::string("report"), std::string("export"), stem + ".work", stem + ".enumeration"}) {
+  for (const std::string& folder : {std::string("report"),
+                                    std::string("export"),
+                                    stem + ".work",
+                                    stem + ".enumeration",
+                                    std::string(kEnumerationFolder)}) {
     if (o.database == folder) {
       t->Fail("database",
               Excerpt(o.database) + " is the name of the folder the run writes beside its " +

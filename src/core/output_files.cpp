@@ -59,7 +59,9 @@ void SyncDirectory(const fs::path& dir) {
 }
 
 [[noreturn]] void ThrowIsADirectory(const std::string& path) {
-  throw Error(ErrorKind::kCantCreate, "is a directory (refusing to replace it)", path);
+  throw Error(ErrorKind::kCantCreate,
+              "is a directory (refusing to replace it; move it away or choose another path)",
+              path);
 }
 
 // What is at an output directory's path now; throws for what can never be used.
@@ -286,7 +288,8 @@ std::ostream& OutputDirectory::Add(const std::string& name) {
   const std::string entry = (WithoutTrailingSlash(path_) / name).string();
   if (ClassifyOutputPath(entry) == OutputPathKind::kStream) {
     throw Error(ErrorKind::kCantCreate,
-                "is a device or FIFO (refusing to write combabc's " + name + " into it)",
+                "is a device or FIFO (refusing to write combabc's " + name +
+                    " into it; choose another directory)",
                 entry);
   }
   // combabc's own files (listed in the manifest) may be replaced; others only with overwrite.
@@ -327,8 +330,10 @@ void OutputDirectory::Commit() {
     if (Lstat(dir / name, &st)) {
       if (S_ISDIR(st.st_mode)) ThrowIsADirectory(file->path());
       if (ClassifyOutputPath(file->path()) != OutputPathKind::kRegularFile) {
-        throw Error(
-            ErrorKind::kCantCreate, "is not a regular file (refusing to replace it)", file->path());
+        throw Error(ErrorKind::kCantCreate,
+                    "is not a regular file (refusing to replace it; move it away or choose another "
+                    "directory)",
+                    file->path());
       }
       if (!overwrite_ && !(previous_.count(name) != 0 && S_ISREG(st.st_mode))) {
         throw Error(ErrorKind::kCantCreate,

@@ -2,28 +2,21 @@
 #include "combabc/export/export.hpp"
 
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <cstdio>
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "combabc/export/answer.hpp"
+#include "export/json_text.hpp"
 
 namespace combabc {
 namespace {
 
-// Shortest text that reads back to the same double; Inf / -Inf / NaN as pandas and MATLAB read
-// them.
-std::string Number(double value) {
-  if (std::isnan(value)) return "NaN";
-  if (std::isinf(value)) return value > 0 ? "Inf" : "-Inf";
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text, value);
-  return std::string(text, result.ptr);
-}
-
-std::string JsonNumber(double value) { return std::isfinite(value) ? Number(value) : "null"; }
+using export_text::JsonArray;
+using export_text::JsonNumber;
+using export_text::JsonString;
+using export_text::Number;
 
 // Quoted only when needed (RFC 4180), so plain names stay plain for MATLAB.
 std::string CsvField(const std::string& text) {
@@ -34,44 +27,6 @@ std::string CsvField(const std::string& text) {
     out += c;
   }
   return out + "\"";
-}
-
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char escaped[8];
-          std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
-          out += escaped;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
-std::string JsonArray(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + JsonNumber(values[i]);
-  return out + "]";
 }
 
 // A column-name-safe version of a component name: "least squares" -> "least_squares".
@@ -339,7 +294,10 @@ void WriteExperiments(OutputDirectory& dir, const RunMetadata& m) {
   }
 }
 
-void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
+void WriteSummary(OutputDirectory& dir,
+                  const RunMetadata& m,
+                  const RunHistory& h,
+                  const std::vector<std::optional<BitPosition>>& positions) {
   std::ostream& out = dir.Add("summary.json");
   out << "{\n  \"format\": \"combabc-export\",\n  \"schema_version\": " << m.schema_version
       << ",\n";
@@ -430,7 +388,7 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
         << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
   }
-  out << "\n  ]\n}\n";
+  out << "\n  ],\n  \"answer\": " << AnswerJson(SummariseAnswer(m, h, positions)) << "\n}\n";
 }
 
 void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptions& options) {
@@ -445,7 +403,7 @@ void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptio
     WriteMeasured(dir, m);
     WriteExperiments(dir, m);
   }
-  if (options.json) WriteSummary(dir, m, h);
+  if (options.json) WriteSummary(dir, m, h, options.bit_positions);
 }
 
 }  // namespace

@@ -18,6 +18,12 @@
 namespace combabc {
 namespace {
 
+// What to do instead is named: the CLI's and the Python module's run and enumerate take the flag
+// (--overwrite / overwrite=True) and the folder (-o DIR / output_directory=).
+constexpr const char* kExistsMessage =
+    "cannot create run history: file exists (refusing to replace it; use --overwrite to replace "
+    "it, or write elsewhere with -o DIR)";
+
 namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
@@ -392,9 +398,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
                 path);
   }
   if (fs::exists(target, ec) && !overwrite) {
-    throw Error(ErrorKind::kCantCreate,
-                "cannot create run history: file exists (refusing to overwrite)",
-                path);
+    throw Error(ErrorKind::kCantCreate, kExistsMessage, path);
   }
   // Built under a temporary name and moved into place complete: a process killed while creating
   // never leaves a half-made RUN.sqlite (at worst a stray .creating file).
@@ -438,9 +442,7 @@ HistoryStore HistoryStore::Create(const std::string& path,
       // link() fails if the name was taken meanwhile: two runs cannot both claim one file.
       const int error = errno;
       if (error == EEXIST) {
-        throw Error(ErrorKind::kCantCreate,
-                    "cannot create run history: file exists (refusing to overwrite)",
-                    path);
+        throw Error(ErrorKind::kCantCreate, kExistsMessage, path);
       }
       fs::rename(temp, target);  // a file system without hard links
     }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <ostream>
 
+#include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
@@ -93,6 +94,20 @@ void WriteEnumerationFiles(OutputDirectory& dir, const RunMetadata& m, const Enu
   }
 }
 
+// Where the enumeration writes its history (and beside it its tables and report): -o DIR as given,
+// else the folder enumeration/ inside the config's [output] directory, so that it never meets the
+// history and report of `combabc run` on the same config.
+std::string EnumerationDirectory(const EnumerateRequest& request, const Problem& p) {
+  if (!request.output_directory.empty()) return request.output_directory;
+  return (fs::path(ResolvePath(p.config.directory, p.config.output.directory)) / kEnumerationFolder)
+      .string();
+}
+
+// The tables beside the history: <stem>.enumeration/.
+std::string TablesDirectory(const fs::path& history) {
+  return (history.parent_path() / (history.stem().string() + ".enumeration")).string();
+}
+
 // Enumeration visits 2^(free bits) configurations; beyond kMaxEnumerationBits that is refused
 // at the config key that sets the bits, before the model is built (Enumerate checks it again for
 // library callers, without a file to name).
@@ -117,12 +132,8 @@ void WriteEnumeration(const EnumerateRequest& request,
                       const EnumerationOptions& options,
                       const EnumerationResult& result,
                       EnumerateOutcome& outcome) {
-  const std::string directory = request.output_directory.empty()
-                                    ? ResolvePath(p.config.directory, p.config.output.directory)
-                                    : request.output_directory;
-  const fs::path history = fs::path(directory) / p.config.output.database;
-  const std::string files_directory =
-      (history.parent_path() / (history.stem().string() + ".enumeration")).string();
+  const fs::path history = fs::path(EnumerationDirectory(request, p)) / p.config.output.database;
+  const std::string files_directory = TablesDirectory(history);
   RunMetadata metadata = Describe(p);
   // The stored particles carry exact posterior masses, so both marginals are the exact ones; the
   // importance estimator is the one whose weights they are (termination "enumerated" tells).
@@ -211,18 +222,16 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   options.keep_outputs = p.config.smc.keep_outputs;
   options.seed = p.config.smc.seed;
 
-  const std::string directory = request.output_directory.empty()
-                                    ? ResolvePath(p.config.directory, p.config.output.directory)
-                                    : request.output_directory;
+  const std::string directory = EnumerationDirectory(request, p);
   const fs::path history = fs::path(directory) / p.config.output.database;
-  const std::string files_directory =
-      (history.parent_path() / (history.stem().string() + ".enumeration")).string();
+  const std::string files_directory = TablesDirectory(history);
   // Everything that would refuse the results at the end is refused now, before hours of work.
   OnPrimary(executor, [&] {
     std::error_code ec;
     if (!request.overwrite && fs::exists(fs::symlink_status(history, ec))) {
       throw Error(ErrorKind::kCantCreate,
-                  "a run history already exists there (use --overwrite to replace it)",
+                  "an enumeration's history already exists there (use --overwrite to replace it, "
+                  "or -o DIR to enumerate into another folder)",
                   history.string());
     }
     if (request.report) CheckReportPossible(ReportDirectory(history.string()));

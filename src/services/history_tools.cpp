@@ -3,8 +3,10 @@
 
 #include <filesystem>
 
+#include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "combabc/export/answer.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "services/python_script.hpp"
@@ -70,7 +72,37 @@ void AddNetcdf(OutputDirectory& dir, bool all_waves, ExportOutcome& outcome) {
   outcome.netcdf_path = (fs::path(dir.path()) / kNetcdfFile).string();
 }
 
+// Where each bit acts, from the run's config: the sensor's clamp k (from 1) is section k of edge 1
+// (y = 0) for k <= clamps_per_edge, else section k - clamps_per_edge of edge 2, its sections
+// splitting the length equally from x = 0 (plate::SensorOptions). Other simulators: none. A
+// config this version no longer reads (an older history) has none either: positions only label
+// the answer, which stands without them.
+std::vector<std::optional<BitPosition>> BitPositions(const RunMetadata& metadata) {
+  CalibrationConfig config;
+  try {
+    config = ParseConfig(metadata.config_text, metadata.config_path);
+  } catch (const Error&) {
+    return {};
+  }
+  if (config.simulator.kind != SimulatorKind::kSensor) return {};
+  const int n = config.model.clamps_per_edge;
+  const double length = config.model.length;
+  std::vector<std::optional<BitPosition>> positions;
+  for (int k = 0; k < 2 * n; ++k) {
+    const int section = k % n;
+    positions.push_back(
+        BitPosition{k < n ? 1 : 2, length * section / n, length * (section + 1) / n});
+  }
+  return positions;
+}
+
 }  // namespace
+
+Answer ReadAnswer(const std::string& history_path) {
+  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
+  const RunMetadata metadata = store.LoadMetadata();
+  return SummariseAnswer(metadata, store.LoadHistory(), BitPositions(metadata));
+}
 
 VerifyOutcome VerifyHistory(const std::string& history_path) {
   const HistoryCheck check = HistoryStore::Verify(history_path);
@@ -109,7 +141,9 @@ ExportOutcome ExportHistory(const std::string& history_path,
   if (netcdf) {
     options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, all_waves, outcome); };
   }
-  ExportRun(history_path, outcome.directory, options);
+  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
+  options.bit_positions = BitPositions(store.LoadMetadata());
+  ExportRun(store, outcome.directory, options);
   return outcome;
 }
 

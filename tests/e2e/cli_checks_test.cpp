@@ -135,7 +135,7 @@ TEST_F(CliChecks, ResumeChecksTheLockBeforeBuildingTheModel) {
 // (78, file, line and key), before anything is built or created.
 TEST_F(CliChecks, AHistoryNamedLikeAnOutputFolderIsAConfigError) {
   WriteTinySensorData(dir_.path());
-  for (const char* name : {"report", "export", "run.work", "run.enumeration"}) {
+  for (const char* name : {"report", "export", "run.work", "run.enumeration", "enumeration"}) {
     SCOPED_TRACE(name);
     std::ofstream(dir_ / "run.toml") << TinySensorConfig(
         "seed = 3\nwaves = 1\naccepted_per_wave = 5\n",

@@ -43,25 +43,29 @@ TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
   auto r = RunCli({"enumerate", dir / "list.toml", "--no-report", "-q", "--top", "7"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("enumerated 1024 configurations"), std::string::npos) << r.out;
-  const std::string history = dir / "out/history.sqlite";
+  EXPECT_EQ(r.out.find("answer:"), std::string::npos) << "-q keeps the answer quiet: " << r.out;
+  // In its own folder inside [output] directory, apart from `combabc run`'s history.
+  const std::string history = dir / "out/enumeration/history.sqlite";
   ASSERT_TRUE(fs::exists(history)) << r.out;
 
   r = RunCli({"verify", history}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   r = RunCli({"export", history}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string waves = ReadFile(dir.path() / "out/export/waves.csv");
+  const std::string waves = ReadFile(dir.path() / "out/enumeration/export/waves.csv");
   // One wave at the list's last threshold, every configuration a candidate.
   ASSERT_EQ(Lines(waves), 2) << waves;
   EXPECT_EQ(waves.find("\n1,0.3,0,1024,"), waves.find('\n')) << waves;
-  const std::string summary = ReadFile(dir.path() / "out/export/summary.json");
+  const std::string summary = ReadFile(dir.path() / "out/enumeration/export/summary.json");
   EXPECT_NE(summary.find("\"termination\": \"enumerated\""), std::string::npos);
-  const std::string marginals = ReadFile(dir.path() / "out/export/marginals.csv");
+  const std::string marginals = ReadFile(dir.path() / "out/enumeration/export/marginals.csv");
   EXPECT_EQ(Lines(marginals), 11);
 
-  const std::string top = ReadFile(dir.path() / "out/history.enumeration/top_configurations.csv");
+  const std::string top =
+      ReadFile(dir.path() / "out/enumeration/history.enumeration/top_configurations.csv");
   EXPECT_EQ(Lines(top), 8) << top;
-  const std::string corr = ReadFile(dir.path() / "out/history.enumeration/pair_correlations.csv");
+  const std::string corr =
+      ReadFile(dir.path() / "out/enumeration/history.enumeration/pair_correlations.csv");
   EXPECT_EQ(Lines(corr), 11) << corr;
   EXPECT_EQ(corr.find("nan"), std::string::npos) << corr;
 
@@ -71,6 +75,9 @@ TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
   r = RunCli({"enumerate", dir / "list.toml", "--no-report", "-q"}, dir.path());
   EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
   EXPECT_EQ(Lines(r.err), 1) << r.err;
+  // The refusal says what to do instead (issue 22, item 8).
+  EXPECT_NE(r.err.find("use --overwrite"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-o DIR"), std::string::npos) << r.err;
   r = RunCli(
       {"enumerate", dir / "list.toml", "--no-report", "-q", "--overwrite", "--threshold", "0.2"},
       dir.path());
@@ -79,7 +86,7 @@ TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
   if (std::system("/usr/bin/python3 -c 'import numpy, matplotlib' > /dev/null 2>&1") == 0) {
     r = RunCli({"report", history}, dir.path());
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_TRUE(fs::exists(dir.path() / "out/report/index.html"));
+    EXPECT_TRUE(fs::exists(dir.path() / "out/enumeration/report/index.html"));
   }
 }
 
@@ -91,7 +98,49 @@ TEST(Enumerate, WithoutAFinalThresholdAsksForOne) {
   EXPECT_EQ(r.exit_code, kUsage) << r.err;
   EXPECT_EQ(Lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("--threshold"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir.path() / "out/history.sqlite"));
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+// Regression (issue 22, item 8): `run` then `enumerate` on one config, without flags, wrote the
+// same history (the second refused; its suggested --overwrite would have replaced the run). Each
+// keeps its own history now, and both stay readable.
+TEST(Enumerate, AfterARunOnTheSameConfigKeepsBothHistories) {
+  TempFolder dir("enumerate-after-run");
+  fs::copy_file(fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm/data.csv", dir / "data.csv");
+  std::string text = Config("threshold = [0.5, 0.3]");
+  Replace(text, "accepted_per_wave =", "accepted_per_wave = 20");
+  std::ofstream(dir / "list.toml") << text;
+  // Without -q each ends with the answer on stdout (issue 22, item 1): the clamps of both edges
+  // side by side, clamp 1 and clamp 6 (5 per edge over 90 cm) on the first row, 0-18 cm.
+  auto r = RunCli({"run", dir / "list.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\nanswer: wave 2 of 2, paper estimator, 20 particles"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find(" edge 1 (y = 0)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n     1  0-18  0."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("      6  0-18  0."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("most probable configurations"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" simulations"), std::string::npos) << r.out;
+  // A second run refuses to replace the history, and says how to (item 8).
+  r = RunCli({"run", dir / "list.toml", "--no-report", "-q"}, dir.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+  EXPECT_NE(r.err.find("use --overwrite"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-o DIR"), std::string::npos) << r.err;
+  r = RunCli({"enumerate", dir / "list.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("history: " + dir / "out/enumeration/history.sqlite"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("\nanswer: exact (enumeration, "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" P(fixed) exact (no Monte-Carlo error)"), std::string::npos) << r.out;
+  for (const char* history : {"out/history.sqlite", "out/enumeration/history.sqlite"}) {
+    SCOPED_TRACE(history);
+    r = RunCli({"verify", dir / history}, dir.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+  }
+  r = RunCli({"export", dir / "out/history.sqlite", "--no-netcdf"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string summary = ReadFile(dir.path() / "out/export/summary.json");
+  EXPECT_EQ(summary.find("\"termination\": \"enumerated\""), std::string::npos) << summary;
 }
 
 // Regression (issue 20, D15): more than 2^24 configurations were refused naming an internal

@@ -30,9 +30,8 @@ class RaisedLimits : public ::testing::Test {
     std::string config = kConfig;
     config.replace(config.find("LIMITS"), 6, limits);
     std::ofstream(dir_ / (name + ".toml")) << config;
-    const auto r =
-        RunCli({"run", dir_ / (name + ".toml"), "-o", dir_ / name, "--no-report"}, dir_.path());
-    EXPECT_EQ(r.exit_code, expect_exit) << r.err;
+    last_ = RunCli({"run", dir_ / (name + ".toml"), "-o", dir_ / name, "--no-report"}, dir_.path());
+    EXPECT_EQ(last_.exit_code, expect_exit) << last_.err;
     return (dir_.path() / name / "history.sqlite").string();
   }
 
@@ -59,6 +58,7 @@ class RaisedLimits : public ::testing::Test {
   }
 
   TempFolder dir_;
+  CliResult last_;  // of the last Run
 };
 
 // The budget stops the run candidate-exactly; a resume with a larger budget continues from that
@@ -73,6 +73,12 @@ TEST_F(RaisedLimits, ABudgetStopResumesWithALargerBudgetToTheUninterruptedRun) {
 
   const std::string stopped = Run("stopped", "max_simulations = " + std::to_string(total - 7));
   ASSERT_EQ(Metadata(stopped).termination, "budget_exhausted");
+  // Its answer (issue 22, item 1) is the last complete wave's, and says so.
+  EXPECT_NE(last_.out.find("\nanswer: wave 2 of 3, importance estimator"), std::string::npos)
+      << last_.out;
+  EXPECT_NE(last_.out.find("the numbers are wave 2's: wave 3 is incomplete (budget_exhausted)"),
+            std::string::npos)
+      << last_.out;
 
   // Without a raised limit: refused, one line, nothing rewritten.
   const auto again = RunCli({"resume", stopped, "--no-report"}, dir_.path());
@@ -94,6 +100,7 @@ TEST_F(RaisedLimits, ABudgetStopResumesWithALargerBudgetToTheUninterruptedRun) {
   const auto resumed =
       RunCli({"resume", stopped, "--no-report", "--max-simulations", "100000"}, dir_.path());
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.out.find("\nanswer: wave 3 of 3, "), std::string::npos) << resumed.out;
   const RunMetadata after = Metadata(stopped);
   EXPECT_EQ(after.termination, "max_waves");
   EXPECT_EQ(after.resume_count, 1);

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "combabc/core/error.hpp"
+#include "combabc/export/answer.hpp"
 #include "history/fake_run.hpp"
 #include "support/test_support.hpp"
 
@@ -108,6 +109,17 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   EXPECT_NE(text.str().find("\"marginals_importance\""), std::string::npos);
   EXPECT_NE(text.str().find("{\"wave\": 1,"), std::string::npos) << "waves from 1";
   EXPECT_EQ(text.str().find("{\"wave\": 0,"), std::string::npos);
+  // The answer (issue 22): the numbers the terminal shows, from the same function of the history.
+  const HistoryStore store = HistoryStore::Open(db, true);
+  const std::string answer = AnswerJson(SummariseAnswer(store.LoadMetadata(), store.LoadHistory()));
+  EXPECT_NE(text.str().find("\"answer\": " + answer + "\n}"), std::string::npos) << text.str();
+  EXPECT_NE(answer.find("\"wave\": 2,\n    \"complete\": true"), std::string::npos) << answer;
+  EXPECT_NE(answer.find("\"verdict_level\": 0.95"), std::string::npos) << answer;
+  EXPECT_NE(answer.find("{\"number\": 1, \"name\": \"clamp 1\", \"position\": null"),
+            std::string::npos)
+      << answer;
+  EXPECT_NE(answer.find("\"per_wave\": [\n      {\"wave\": 1, \"ess\": "), std::string::npos)
+      << answer;
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
         << "temporary directory left behind";
@@ -278,6 +290,13 @@ TEST_F(ExportTest, KilledRunExportsItsPartialWave) {
   EXPECT_EQ(waves[2].back(), '0') << "the cut wave is exported as incomplete: " << waves[2];
   EXPECT_EQ(waves[1].rfind("1,", 0), 0u) << "waves are numbered from 1, as users see them";
   EXPECT_EQ(waves[2].rfind("2,", 0), 0u);
+  // The answer is the last complete wave's.
+  std::ifstream json(out / "summary.json");
+  std::stringstream text;
+  text << json.rdbuf();
+  EXPECT_NE(text.str().find("\"answer\": {\n    \"wave\": 1,\n    \"complete\": true"),
+            std::string::npos)
+      << text.str();
 }
 
 TEST_F(ExportTest, RunWithoutOutputsHasNoCurves) {

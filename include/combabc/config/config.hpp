@@ -23,6 +23,10 @@
 
 namespace combabc {
 
+// The folder inside OutputConfig::directory where `combabc enumerate` writes its history, tables
+// and report, apart from the run's (services/enumerate.cpp).
+inline constexpr const char* kEnumerationFolder = "enumeration";
+
 struct OutputConfig {
   // Where the run writes; relative paths are resolved against the config file's directory.
   std::string directory = "results";

@@ -3,22 +3,27 @@
 // plus summary.json. Files and columns are documented in docs/history.md.
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "combabc/core/output_files.hpp"
+#include "combabc/export/answer.hpp"
 #include "combabc/history/history_store.hpp"
 
 namespace combabc {
 
 struct ExportOptions {
   bool csv = true;        // the CSV files: waves, marginals, pair correlations, particles, ...
-  bool json = true;       // summary.json: metadata and per-wave statistics
+  bool json = true;       // summary.json: metadata, per-wave statistics and the answer
   bool particles = true;  // particles.csv (one row per accepted particle, can be large)
   bool curves = true;     // curves.csv + positions.csv, when the run stored outputs
   // Write into an existing out_dir that combabc did not write (no manifest), replacing only the
   // files of the same names; nothing else in it is ever removed.
   bool overwrite = false;
+  // Where each bit acts, for summary.json's "answer" (export/answer.hpp): one per bit, or empty
+  // (positions null). The services layer derives them from the run's config.
+  std::vector<std::optional<BitPosition>> bit_positions;
   // Called with the CSV and JSON files staged, before anything is committed: adds files made
   // from them (the NetCDF file, written by a script: services/history_tools.cpp). Empty: none.
   std::function<void(OutputDirectory&)> add_files;

@@ -12,7 +12,9 @@ namespace combabc::services {
 
 struct EnumerateRequest {
   std::string config_path;
-  std::string output_directory;    // overrides [output] directory when not empty
+  // The folder of the enumeration's history, tables and report when not empty; by default the
+  // folder enumeration/ inside [output] directory (beside, never on, `combabc run`'s history).
+  std::string output_directory;
   int threads = -1;                // overrides [sampler] threads when >= 0
   bool overwrite = false;          // replace an existing history file
   bool report = true;              // write the report (report/ beside the history) when it ends
@@ -24,7 +26,7 @@ struct EnumerateRequest {
 
 struct EnumerateOutcome {
   std::string history_path;           // empty when interrupted (nothing is written)
-  std::string enumeration_directory;  // RUN.enumeration/ beside the history
+  std::string enumeration_directory;  // the tables: RUN.enumeration/ beside the history
   std::string report_directory;       // empty when no report was written
   std::int64_t configurations = 0;
   std::int64_t enumerated = 0;

@@ -1,7 +1,10 @@
 #pragma once
-// The tools that read a finished (or any) history: `combabc verify` and `combabc export`.
+// The tools that read a finished (or any) history: `combabc verify` and `combabc export`, and the
+// answer that run, resume and enumerate print at their end.
 #include <string>
 #include <vector>
+
+#include "combabc/export/answer.hpp"
 
 namespace combabc::services {
 
@@ -14,6 +17,11 @@ struct VerifyOutcome {
 // Checks a history end to end (SQLite integrity_check, metadata, every wave's vectors and
 // checksums; docs/history.md, "Integrity"). Throws only for a file that is not a readable history.
 VerifyOutcome VerifyHistory(const std::string& history_path);
+
+// The answer of a history in numbers (export/answer.hpp), the sensor's clamps placed by the run's
+// config: what `combabc run`, `resume` and `enumerate` print at their end, and summary.json's
+// "answer" (ExportHistory). Errors as HistoryStore::Open.
+Answer ReadAnswer(const std::string& history_path);
 
 struct ExportOutcome {
   std::string directory;

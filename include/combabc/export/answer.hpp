@@ -1,0 +1,105 @@
+#pragma once
+// The answer of a run or an enumeration, in numbers: per bit P(bit = 1) with its Monte-Carlo
+// standard error and a verdict, the most probable configurations with their posterior mass, and
+// each wave's ESS and simulations. One pure function of a loaded history computes it, for the
+// terminal at the end of `combabc run` / `resume` / `enumerate` (AnswerText) and for summary.json's
+// "answer" (AnswerJson), so that both show the same numbers (docs/history.md, "The answer").
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "combabc/core/enum_names.hpp"
+#include "combabc/history/history_store.hpp"
+
+namespace combabc {
+
+// A bit's verdict at kVerdictLevel: fixed (bit = 1) if P >= level, free (bit = 0) if
+// P <= 1 - level, else not determined. For simulators other than the sensor "fixed" reads
+// "bit = 1" and "free" "bit = 0".
+enum class Verdict { kFixed, kFree, kNotDetermined };
+template <>
+struct EnumNames<Verdict> {
+  static constexpr std::pair<Verdict, const char*> kNames[] = {
+      {Verdict::kFixed, "fixed"},
+      {Verdict::kFree, "free"},
+      {Verdict::kNotDetermined, "not determined"},
+  };
+};
+
+// The verdicts' level. The verdict reads the estimate P alone: the level is a statement about the
+// posterior probability, and the standard error printed beside P says how far the estimate may be
+// off (a verdict made stricter by it would change with the run's size, not with the evidence).
+inline constexpr double kVerdictLevel = 0.95;
+Verdict VerdictOf(double p_one, double level = kVerdictLevel);
+
+// Where a bit acts on the structure: for the built-in sensor a clamp's edge (1: y = 0, 2: y =
+// width) and its span along x in metres. Other simulators' bits have none.
+struct BitPosition {
+  int edge = 0;
+  double start_m = 0.0;
+  double end_m = 0.0;
+  // "edge 1, 0-5 cm".
+  std::string Text() const;
+};
+
+struct AnswerBit {
+  int number = 0;  // from 1
+  std::string name;
+  std::optional<BitPosition> position;
+  double p_one = 0.0;  // P(bit = 1) under the estimator (the sensor: P(fixed))
+  double mc_se = 0.0;  // its Monte-Carlo standard error; 0 when exact (enumerated)
+  Verdict verdict = Verdict::kNotDetermined;
+};
+
+struct AnswerConfiguration {
+  std::string bits;                // "0110...", bit 1 first
+  double mass = 0.0;               // posterior mass
+  std::optional<double> mass_se;   // none when exact
+  std::vector<std::string> fixed;  // the names of its bits set to 1
+};
+
+struct WaveEffort {
+  int wave = 0;  // from 1
+  double ess = 0.0;
+  std::int64_t simulations = 0;
+  bool complete = false;
+};
+
+inline constexpr std::size_t kAnswerConfigurations = 10;
+
+struct Answer {
+  int wave = 0;           // from 1, the wave the numbers are taken from; 0: no wave has particles
+  int waves = 0;          // waves in the history, the incomplete last one included
+  bool complete = false;  // false only when no wave is complete (then the last wave's numbers)
+  bool exact = false;     // an enumeration: exact marginals and masses
+  std::string estimator;  // "paper" or "importance": the run's, which the report shows too
+  double verdict_level = kVerdictLevel;
+  std::int64_t particles = 0;   // the wave's accepted particles (configurations when enumerated)
+  std::int64_t distinct = 0;    // distinct configurations among them
+  double effective_size = 0.0;  // the sample size the standard errors assume (infinite if exact)
+  std::string termination;      // the run's (metadata), e.g. "budget_exhausted"
+  std::vector<AnswerBit> bits;
+  std::vector<AnswerConfiguration> top_configurations;  // most probable first, at most 10
+  std::vector<WaveEffort> per_wave;
+};
+
+// The answer of a loaded history: the last complete wave (or, when no wave is complete, the last
+// wave with particles), under the run's estimator. Standard errors: sqrt(p (1 - p) / n) with n the
+// estimator's effective sample size (the paper estimator's equal weights: the particles; the
+// importance estimator: the wave's ESS, 1 / sum w^2), which assumes independent draws; an
+// enumeration's numbers are exact (SE 0, mass_se none). `positions`: one per bit, or empty.
+Answer SummariseAnswer(const RunMetadata& metadata,
+                       const RunHistory& history,
+                       const std::vector<std::optional<BitPosition>>& positions = {});
+
+// The answer as summary.json's "answer" object (docs/history.md), indented by `indent` spaces
+// after its first line.
+std::string AnswerJson(const Answer& answer, int indent = 2);
+
+// The answer for a terminal: one screen (the sensor's clamps as one table per edge, side by side),
+// then the `configurations` most probable configurations and each wave's ESS and simulations.
+std::string AnswerText(const Answer& answer, std::size_t configurations = 5);
+
+}  // namespace combabc

@@ -1,0 +1,370 @@
+// The answer of a history in numbers (docs/history.md, "The answer").
+#include "combabc/export/answer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+
+#include "export/json_text.hpp"
+
+namespace combabc {
+namespace {
+
+using export_text::JsonNumber;
+using export_text::JsonString;
+
+// Centimetres to 0.01 cm, without trailing zeros: 0.15000000000000002 m -> "15".
+std::string Centimetres(double metres) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f", metres * 100.0);
+  std::string s = text;
+  while (!s.empty() && s.back() == '0') s.pop_back();
+  if (!s.empty() && s.back() == '.') s.pop_back();
+  return s == "-0" ? "0" : s;
+}
+
+// `value` with `digits` decimals, and "±" its standard error when it has one: "0.44±0.02".
+std::string Estimate(double value, std::optional<double> se, int digits) {
+  char text[64];
+  if (se) {
+    std::snprintf(text, sizeof text, "%.*f±%.*f", digits, value, digits, *se);
+  } else {
+    std::snprintf(text, sizeof text, "%.*f", digits, value);
+  }
+  return text;
+}
+
+// sqrt(p (1 - p) / n): the standard error of a proportion estimated from n independent draws.
+double StandardError(double p, double n) {
+  if (!(n > 0) || std::isinf(n)) return 0.0;
+  return std::sqrt(std::max(0.0, p * (1.0 - p)) / n);
+}
+
+// The wave the answer is taken from: the last complete one, else the last with particles.
+const WaveRecord* AnswerWave(const RunHistory& h) {
+  for (auto it = h.waves.rbegin(); it != h.waves.rend(); ++it) {
+    if (it->complete && !it->particles.empty()) return &*it;
+  }
+  for (auto it = h.waves.rbegin(); it != h.waves.rend(); ++it) {
+    if (!it->particles.empty()) return &*it;
+  }
+  return nullptr;
+}
+
+std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
+                                                   const std::vector<std::string>& names,
+                                                   double effective_size,
+                                                   bool exact) {
+  std::map<std::string, double> mass;
+  double total = 0.0;
+  for (const Particle& p : w.particles) {
+    std::string bits;
+    for (std::uint8_t b : p.theta.bits) bits += b ? '1' : '0';
+    mass[bits] += p.weight;
+    total += p.weight;
+  }
+  std::vector<AnswerConfiguration> top;
+  for (const auto& [bits, m] : mass) {
+    AnswerConfiguration c;
+    c.bits = bits;
+    c.mass = total > 0 ? m / total : 0.0;
+    if (!exact) c.mass_se = StandardError(c.mass, effective_size);
+    for (std::size_t b = 0; b < bits.size(); ++b) {
+      if (bits[b] == '1') c.fixed.push_back(b < names.size() ? names[b] : std::to_string(b + 1));
+    }
+    top.push_back(std::move(c));
+  }
+  // Most probable first; equal masses in bit-string order, so the list never depends on the
+  // particles' order.
+  std::stable_sort(
+      top.begin(), top.end(), [](const auto& a, const auto& b) { return a.mass > b.mass; });
+  if (top.size() > kAnswerConfigurations) top.resize(kAnswerConfigurations);
+  return top;
+}
+
+}  // namespace
+
+Verdict VerdictOf(double p_one, double level) {
+  if (p_one >= level) return Verdict::kFixed;
+  if (p_one <= 1.0 - level) return Verdict::kFree;
+  return Verdict::kNotDetermined;
+}
+
+std::string BitPosition::Text() const {
+  return "edge " + std::to_string(edge) + ", " + Centimetres(start_m) + "-" + Centimetres(end_m) +
+         " cm";
+}
+
+Answer SummariseAnswer(const RunMetadata& m,
+                       const RunHistory& h,
+                       const std::vector<std::optional<BitPosition>>& positions) {
+  Answer a;
+  a.termination = m.termination;
+  a.exact = m.termination == ToString(Termination::kEnumerated);
+  const Estimator estimator = ParseEnum<Estimator>(m.estimator).value_or(Estimator::kPaper);
+  a.estimator = ToString(estimator);
+  a.waves = static_cast<int>(h.waves.size());
+  for (const WaveRecord& w : h.waves) {
+    a.per_wave.push_back({w.wave + 1, w.ess, w.candidates, w.complete});
+  }
+  const WaveRecord* w = AnswerWave(h);
+  if (w == nullptr) return a;
+  a.wave = w->wave + 1;
+  a.complete = w->complete;
+  // An enumeration's wave counts every accepted configuration, also those it did not keep.
+  a.particles = std::max(w->accepted, static_cast<std::int64_t>(w->particles.size()));
+  a.distinct = w->distinct;
+  // The paper estimator weighs every particle alike; the importance estimator's weights count
+  // as their ESS.
+  a.effective_size = a.exact                          ? std::numeric_limits<double>::infinity()
+                     : estimator == Estimator::kPaper ? static_cast<double>(a.particles)
+                                                      : w->ess;
+  const std::vector<double>& p = w->marginals(estimator);
+  for (std::size_t b = 0; b < p.size(); ++b) {
+    AnswerBit bit;
+    bit.number = static_cast<int>(b) + 1;
+    bit.name = b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
+    if (b < positions.size()) bit.position = positions[b];
+    // A sum of weights may pass 1 by a rounding error (1.0000000000000007): a probability.
+    bit.p_one = std::clamp(p[b], 0.0, 1.0);
+    bit.mc_se = StandardError(bit.p_one, a.effective_size);
+    bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
+    a.bits.push_back(std::move(bit));
+  }
+  a.top_configurations = TopConfigurations(*w, m.bit_names, a.effective_size, a.exact);
+  return a;
+}
+
+std::string AnswerJson(const Answer& a, int indent) {
+  const std::string in(static_cast<std::size_t>(indent), ' ');
+  const std::string in2 = in + "  ";
+  std::string out = "{\n";
+  out += in2 + "\"wave\": " + std::to_string(a.wave) + ",\n";
+  out += in2 + "\"complete\": " + (a.complete ? "true" : "false") + ",\n";
+  out += in2 + "\"estimator\": " + JsonString(a.estimator) + ",\n";
+  out += in2 + "\"verdict_level\": " + JsonNumber(a.verdict_level) + ",\n";
+  out += in2 + "\"bits\": [";
+  for (std::size_t b = 0; b < a.bits.size(); ++b) {
+    const AnswerBit& x = a.bits[b];
+    const auto& at = x.position;
+    out += std::string(b ? "," : "") + "\n" + in2 + "  {\"number\": " + std::to_string(x.number) +
+           ", \"name\": " + JsonString(x.name) +
+           ", \"position\": " + (at ? JsonString(at->Text()) : "null") +
+           ", \"edge\": " + (at ? std::to_string(at->edge) : "null") +
+           ", \"start_m\": " + (at ? JsonNumber(at->start_m) : "null") +
+           ", \"end_m\": " + (at ? JsonNumber(at->end_m) : "null") +
+           ", \"p_one\": " + JsonNumber(x.p_one) + ", \"mc_se\": " + JsonNumber(x.mc_se) +
+           ", \"verdict\": " + JsonString(ToString(x.verdict)) + "}";
+  }
+  out += std::string(a.bits.empty() ? "" : "\n" + in2) + "],\n";
+  out += in2 + "\"top_configurations\": [";
+  for (std::size_t k = 0; k < a.top_configurations.size(); ++k) {
+    const AnswerConfiguration& c = a.top_configurations[k];
+    out += std::string(k ? "," : "") + "\n" + in2 + "  {\"bits\": " + JsonString(c.bits) +
+           ", \"mass\": " + JsonNumber(c.mass) +
+           ", \"mass_se\": " + (c.mass_se ? JsonNumber(*c.mass_se) : "null") + ", \"fixed\": [";
+    for (std::size_t i = 0; i < c.fixed.size(); ++i) {
+      out += (i ? ", " : "") + JsonString(c.fixed[i]);
+    }
+    out += "]}";
+  }
+  out += std::string(a.top_configurations.empty() ? "" : "\n" + in2) + "],\n";
+  out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
+  out += in2 + "\"per_wave\": [";
+  for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
+    const WaveEffort& e = a.per_wave[t];
+    out += std::string(t ? "," : "") + "\n" + in2 + "  {\"wave\": " + std::to_string(e.wave) +
+           ", \"ess\": " + JsonNumber(e.ess) +
+           ", \"simulations\": " + std::to_string(e.simulations) + "}";
+  }
+  out += std::string(a.per_wave.empty() ? "" : "\n" + in2) + "]\n" + in + "}";
+  return out;
+}
+
+namespace {
+
+// `text` padded with spaces to `width` characters (UTF-8: "±" is one).
+std::string Pad(const std::string& text, std::size_t width) {
+  std::size_t chars = 0;
+  for (char c : text) chars += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  return text + std::string(chars < width ? width - chars : 0, ' ');
+}
+
+// "0.44±0.02", or "1.00" when exact.
+std::string Probability(const AnswerBit& b, bool exact) {
+  return Estimate(b.p_one, exact ? std::nullopt : std::optional<double>(b.mc_se), 2);
+}
+
+// The sensor's clamps, one table per edge side by side: every bit has a position on edge 1 or 2.
+bool SideBySide(const Answer& a) {
+  return !a.bits.empty() && std::all_of(a.bits.begin(), a.bits.end(), [](const AnswerBit& b) {
+    return b.position && (b.position->edge == 1 || b.position->edge == 2);
+  });
+}
+
+void ClampTables(const Answer& a, std::string& out) {
+  std::vector<const AnswerBit*> edges[2];
+  for (const AnswerBit& b : a.bits) edges[b.position->edge - 1].push_back(&b);
+  const std::string header = "clamp    cm  " + Pad("P(fixed)", 9) + "  verdict";
+  out += " " + Pad("edge 1 (y = 0)", 40) + "edge 2 (y = width)\n";
+  out += " " + Pad(header, 40) + header + "\n";
+  const std::size_t rows = std::max(edges[0].size(), edges[1].size());
+  for (std::size_t r = 0; r < rows; ++r) {
+    std::string line;
+    for (const auto& edge : edges) {
+      if (r < edge.size()) {
+        char cell[32];
+        const AnswerBit& b = *edge[r];
+        const std::string cm =
+            Centimetres(b.position->start_m) + "-" + Centimetres(b.position->end_m);
+        std::snprintf(cell, sizeof cell, "%5d %5s  ", b.number, cm.c_str());
+        line += " " + std::string(cell) + Pad(Probability(b, a.exact), 9) + "  " +
+                Pad(ToString(b.verdict), 14) + " ";
+      } else {
+        line += std::string(40, ' ');
+      }
+    }
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    out += line + "\n";
+  }
+}
+
+void BitLines(const Answer& a, std::string& out) {
+  // Thousands of bits do not fit a screen: the first ones, and where the rest are.
+  constexpr std::size_t kMaxLines = 60;
+  std::size_t width = 4;
+  for (const AnswerBit& b : a.bits) {
+    width = std::max(width, std::min<std::size_t>(b.name.size(), 24));
+  }
+  out += " " + Pad("bit", width) + "  P(bit = 1)  verdict\n";
+  for (std::size_t k = 0; k < a.bits.size() && k < kMaxLines; ++k) {
+    const AnswerBit& b = a.bits[k];
+    std::string line = " " + Pad(b.name, width) + "  " + Pad(Probability(b, a.exact), 10) + "  " +
+                       ToString(b.verdict);
+    if (b.position) line += "  (" + b.position->Text() + ")";
+    out += line + "\n";
+  }
+  if (a.bits.size() > kMaxLines) {
+    out += " ... " + std::to_string(a.bits.size() - kMaxLines) +
+           " more bits in summary.json's \"answer\" (combabc export)\n";
+  }
+}
+
+// A configuration's bits, the sensor's edges apart.
+std::string Bits(const Answer& a, const std::string& bits, bool side_by_side) {
+  constexpr std::size_t kMaxBits = 72;
+  if (bits.size() > kMaxBits) return bits.substr(0, kMaxBits) + "...";
+  if (!side_by_side) return bits;
+  std::string out;
+  for (std::size_t b = 0; b < bits.size(); ++b) {
+    if (b > 0 && a.bits[b].position->edge != a.bits[b - 1].position->edge) out += ' ';
+    out += bits[b];
+  }
+  return out;
+}
+
+void EffortTable(const Answer& a, std::string& out) {
+  constexpr std::size_t kPerRow = 8;
+  bool incomplete = false;
+  for (std::size_t first = 0; first < a.per_wave.size(); first += kPerRow) {
+    std::string waves = " wave       ", ess = " ESS        ", sims = " simulations";
+    for (std::size_t t = first; t < a.per_wave.size() && t < first + kPerRow; ++t) {
+      const WaveEffort& e = a.per_wave[t];
+      char cell[32];
+      std::snprintf(cell, sizeof cell, "%8d%s", e.wave, e.complete ? " " : "*");
+      waves += cell;
+      std::snprintf(cell, sizeof cell, "%8.0f ", e.ess);
+      ess += cell;
+      std::snprintf(cell, sizeof cell, "%8lld ", static_cast<long long>(e.simulations));
+      sims += cell;
+      incomplete = incomplete || !e.complete;
+    }
+    for (std::string* row : {&waves, &ess, &sims}) {
+      while (!row->empty() && row->back() == ' ') row->pop_back();
+      out += *row + "\n";
+    }
+  }
+  if (incomplete) out += " * incomplete wave (fewer particles than accepted_per_wave)\n";
+}
+
+}  // namespace
+
+std::string AnswerText(const Answer& a, std::size_t configurations) {
+  std::string out;
+  if (a.wave == 0) {
+    return "answer: none yet (no wave accepted a particle)\n";
+  }
+  const bool sensor = SideBySide(a);
+  char line[256];
+  if (a.exact) {
+    out += "answer: exact (enumeration, " + std::to_string(a.particles) +
+           " accepted configuration" + (a.particles == 1 ? "" : "s") + ")\n";
+  } else {
+    std::snprintf(line,
+                  sizeof line,
+                  "answer: wave %d of %d, %s estimator, %lld particles (%lld distinct)\n",
+                  a.wave,
+                  a.waves,
+                  a.estimator.c_str(),
+                  static_cast<long long>(a.particles),
+                  static_cast<long long>(a.distinct));
+    out += line;
+  }
+  if (!a.complete) {
+    out += " no complete wave: the numbers are those of the incomplete last wave\n";
+  } else if (a.wave < a.waves) {
+    std::snprintf(line,
+                  sizeof line,
+                  " the numbers are wave %d's: wave %d is incomplete (%s)\n",
+                  a.wave,
+                  a.waves,
+                  a.termination.empty() ? "stopped" : a.termination.c_str());
+    out += line;
+  }
+  const std::string what = sensor ? "P(fixed)" : "P(bit = 1)";
+  if (a.exact) {
+    out += " " + what + " exact (no Monte-Carlo error)\n";
+  } else {
+    std::snprintf(line,
+                  sizeof line,
+                  " %s ± its Monte-Carlo standard error (n = %.0f)\n",
+                  what.c_str(),
+                  a.effective_size);
+    out += line;
+  }
+  std::snprintf(line,
+                sizeof line,
+                " verdict: fixed if P >= %.2f, free if P <= %.2f, else not determined\n",
+                a.verdict_level,
+                1.0 - a.verdict_level);
+  out += line;
+  if (sensor) {
+    ClampTables(a, out);
+  } else {
+    BitLines(a, out);
+  }
+  // Every particle a configuration of its own: their equal masses single none out, and listing
+  // them would read as if they did.
+  const bool all_distinct = !a.exact && a.particles > 1 && a.distinct == a.particles;
+  const std::size_t shown =
+      all_distinct ? 0 : std::min(configurations, a.top_configurations.size());
+  if (all_distinct) {
+    out += "most probable configurations: none stands out (" + std::to_string(a.particles) +
+           " particles, all distinct)\n";
+  } else if (shown > 0) {
+    out += "most probable configurations (" + std::string(sensor ? "1 = fixed" : "bit 1 first") +
+           "), posterior mass" + (a.exact ? " (exact)" : " ± standard error") + ":\n";
+  }
+  for (std::size_t k = 0; k < shown; ++k) {
+    const AnswerConfiguration& c = a.top_configurations[k];
+    const std::string mass = Estimate(c.mass, c.mass_se, 3);
+    out +=
+        " " + std::to_string(k + 1) + ". " + Pad(mass, 11) + "  " + Bits(a, c.bits, sensor) + "\n";
+  }
+  EffortTable(a, out);
+  return out;
+}
+
+}  // namespace combabc

@@ -1,0 +1,290 @@
+// The answer in numbers (export/answer.hpp): against a brute force on an enumerable toy, against
+// the estimators' formulas written here on a sampled run, the verdict thresholds, the wave an
+// early stop leaves, the terminal layout, and the sensor's clamp positions from a run's config.
+#include "combabc/export/answer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "combabc/samplers/enumeration.hpp"
+#include "combabc/services/history_tools.hpp"
+#include "history/fake_run.hpp"
+#include "samplers/toy_models.hpp"
+#include "support/test_support.hpp"
+
+namespace combabc {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kBits = 6;
+constexpr double kEps = 2.0;
+
+std::string BitString(int c, int bits) {
+  std::string s;
+  for (int k = 0; k < bits; ++k) s += (c >> k) & 1 ? '1' : '0';
+  return s;
+}
+
+// An enumeration's history: every accepted configuration of a 6-bit toy, as combabc enumerate
+// stores it (services/enumerate.cpp).
+struct EnumeratedToy {
+  std::vector<double> prior = {0.5, 0.3, 0.6, 0.5, 0.8, 0.2};
+  testing::WeightedL1Distance distance{{1, 0, 1, 1, 0, 0}, {3, 1, 1, 1, 0.5, 0.5}, 1, 2, 0.5};
+  testing::IdentitySimulator simulator{kBits};
+  ParameterSpace space = [this] {
+    BinarySpaceOptions o;
+    o.dimension = kBits;
+    o.prior_one = prior;
+    return ParameterSpace(BinarySpace(o));
+  }();
+  RunMetadata metadata;
+  RunHistory history;
+
+  EnumeratedToy() {
+    EnumerationOptions options;
+    options.thresholds = {kEps};
+    options.threads = 1;
+    const EnumerationResult r = Enumerate({&space, &simulator, &distance}, options);
+    history.waves.push_back(r.Wave(options.thresholds, prior));
+    history.summary.termination = Termination::kEnumerated;
+    metadata.termination = ToString(Termination::kEnumerated);
+    metadata.estimator = "importance";
+    metadata.dimension = kBits;
+    for (int k = 1; k <= kBits; ++k) metadata.bit_names.push_back("b" + std::to_string(k));
+  }
+};
+
+TEST(Answer, OfAnEnumerationIsTheExactPosteriorOfABruteForce) {
+  const EnumeratedToy toy;
+  // Brute force, independently of Enumerate: every configuration's prior mass, kept if accepted.
+  std::map<std::string, double> mass;
+  std::vector<double> ones(kBits, 0.0);
+  double z = 0.0;
+  std::vector<double> y(kBits);
+  for (int c = 0; c < (1 << kBits); ++c) {
+    double p = 1.0;
+    for (int k = 0; k < kBits; ++k) {
+      y[k] = (c >> k) & 1;
+      p *= y[k] != 0.0 ? toy.prior[k] : 1.0 - toy.prior[k];
+    }
+    double d = 0.0;
+    toy.distance.Evaluate(y, std::span(&d, 1));
+    if (d > kEps) continue;
+    mass[BitString(c, kBits)] = p;
+    z += p;
+    for (int k = 0; k < kBits; ++k) ones[k] += p * y[k];
+  }
+  ASSERT_GT(mass.size(), 10u);  // more accepted configurations than the answer lists
+
+  const Answer a = SummariseAnswer(toy.metadata, toy.history);
+  EXPECT_TRUE(a.exact);
+  EXPECT_TRUE(a.complete);
+  EXPECT_EQ(a.wave, 1);
+  EXPECT_EQ(a.particles, static_cast<std::int64_t>(mass.size()));
+  ASSERT_EQ(a.bits.size(), static_cast<std::size_t>(kBits));
+  for (int k = 0; k < kBits; ++k) {
+    const AnswerBit& b = a.bits[k];
+    EXPECT_EQ(b.number, k + 1);
+    EXPECT_EQ(b.name, "b" + std::to_string(k + 1));
+    EXPECT_FALSE(b.position);
+    EXPECT_NEAR(b.p_one, ones[k] / z, 1e-12) << b.name;
+    EXPECT_EQ(b.mc_se, 0.0);  // exact
+    EXPECT_EQ(b.verdict, VerdictOf(ones[k] / z));
+  }
+  // Bit 1 weighs 3 > eps away from its target 1: fixed with certainty.
+  EXPECT_EQ(a.bits[0].verdict, Verdict::kFixed);
+  // The ten largest masses, largest first, exact (no standard error).
+  std::vector<std::pair<double, std::string>> sorted;
+  sorted.reserve(mass.size());
+  for (const auto& [bits, p] : mass) sorted.emplace_back(p / z, bits);
+  std::sort(
+      sorted.begin(), sorted.end(), [](const auto& l, const auto& r) { return l.first > r.first; });
+  ASSERT_EQ(a.top_configurations.size(), kAnswerConfigurations);
+  for (std::size_t i = 0; i < kAnswerConfigurations; ++i) {
+    const AnswerConfiguration& c = a.top_configurations[i];
+    EXPECT_NEAR(c.mass, sorted[i].first, 1e-12) << i;
+    EXPECT_NEAR(c.mass, mass.at(c.bits) / z, 1e-12) << c.bits;
+    EXPECT_FALSE(c.mass_se);
+    for (const std::string& name : c.fixed) {
+      EXPECT_EQ(c.bits[static_cast<std::size_t>(std::stoi(name.substr(1)) - 1)], '1') << name;
+    }
+  }
+  ASSERT_EQ(a.per_wave.size(), 1u);
+  EXPECT_EQ(a.per_wave[0].simulations, 1 << kBits);
+
+  const std::string json = AnswerJson(a);
+  EXPECT_NE(json.find("\"exact\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"mass_se\": null"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"position\": null"), std::string::npos) << json;
+  const std::string text = AnswerText(a);
+  EXPECT_NE(text.find("answer: exact"), std::string::npos) << text;
+  EXPECT_NE(text.find(" b1    1.00        fixed"), std::string::npos) << text;
+}
+
+// A sampled run (the fake 36-clamp run, three complete waves): each estimator's marginals and
+// configuration masses from the particles, with sqrt(p (1 - p) / n) standard errors, n the
+// particles for the paper estimator and the weights' ESS for the importance estimator.
+TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
+  testing::FakeRunOptions options;
+  options.per_wave = 40;
+  const RunMetadata paper_metadata = testing::MakeFakeMetadata(options);
+  for (const char* estimator : {"paper", "importance"}) {
+    SCOPED_TRACE(estimator);
+    RunMetadata m = paper_metadata;
+    m.estimator = estimator;
+    RunHistory h = testing::MakeFakeHistory(options);
+    const bool paper = m.estimator == "paper";
+    for (WaveRecord& w : h.waves) {
+      ComputeWaveStatistics(w, paper ? Estimator::kPaper : Estimator::kImportance);
+    }
+    const WaveRecord& last = h.waves.back();
+    const auto n = last.particles.size();
+    std::vector<double> weight(n, 1.0);
+    if (!paper) {
+      for (std::size_t i = 0; i < n; ++i) weight[i] = std::exp(last.particles[i].log_weight);
+    }
+    double sum = 0.0, sum_sq = 0.0;
+    for (double w : weight) {
+      sum += w;
+      sum_sq += w * w;
+    }
+    const double ess = sum * sum / sum_sq;
+    std::map<std::string, double> mass;
+    std::vector<double> ones(options.dimension, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::string bits;
+      for (std::size_t k = 0; k < last.particles[i].theta.bits.size(); ++k) {
+        bits += last.particles[i].theta.bits[k] ? '1' : '0';
+        ones[k] += last.particles[i].theta.bits[k] * weight[i] / sum;
+      }
+      mass[bits] += weight[i] / sum;
+    }
+
+    const Answer a = SummariseAnswer(m, h);
+    EXPECT_FALSE(a.exact);
+    EXPECT_EQ(a.wave, options.waves);
+    EXPECT_EQ(a.estimator, m.estimator);
+    EXPECT_NEAR(a.effective_size, paper ? static_cast<double>(n) : ess, 1e-9);
+    ASSERT_EQ(a.bits.size(), ones.size());
+    for (std::size_t k = 0; k < ones.size(); ++k) {
+      EXPECT_NEAR(a.bits[k].p_one, ones[k], 1e-12) << k;
+      EXPECT_NEAR(a.bits[k].mc_se, std::sqrt(ones[k] * (1 - ones[k]) / a.effective_size), 1e-12);
+    }
+    ASSERT_FALSE(a.top_configurations.empty());
+    for (const AnswerConfiguration& c : a.top_configurations) {
+      EXPECT_NEAR(c.mass, mass.at(c.bits), 1e-12);
+      ASSERT_TRUE(c.mass_se);
+      EXPECT_NEAR(*c.mass_se, std::sqrt(c.mass * (1 - c.mass) / a.effective_size), 1e-12);
+    }
+    ASSERT_EQ(a.per_wave.size(), static_cast<std::size_t>(options.waves));
+    for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
+      EXPECT_EQ(a.per_wave[t].wave, static_cast<int>(t) + 1);
+      EXPECT_EQ(a.per_wave[t].simulations, h.waves[t].candidates);
+      EXPECT_DOUBLE_EQ(a.per_wave[t].ess, h.waves[t].ess);
+    }
+  }
+}
+
+TEST(Answer, VerdictsAreFixedAtTheLevelAndFreeAtOneMinusIt) {
+  EXPECT_EQ(kVerdictLevel, 0.95);
+  EXPECT_EQ(VerdictOf(1.0), Verdict::kFixed);
+  EXPECT_EQ(VerdictOf(0.95), Verdict::kFixed);
+  EXPECT_EQ(VerdictOf(0.9499), Verdict::kNotDetermined);
+  EXPECT_EQ(VerdictOf(0.5), Verdict::kNotDetermined);
+  EXPECT_EQ(VerdictOf(0.0501), Verdict::kNotDetermined);
+  EXPECT_EQ(VerdictOf(0.05), Verdict::kFree);
+  EXPECT_EQ(VerdictOf(0.0), Verdict::kFree);
+  EXPECT_EQ(VerdictOf(0.85, 0.8), Verdict::kFixed);
+  EXPECT_STREQ(ToString(Verdict::kNotDetermined), "not determined");
+}
+
+// A run stopped during a wave: the answer is the last complete wave's and says so; with no
+// complete wave at all, the incomplete one's, marked incomplete.
+TEST(Answer, OfARunStoppedMidWaveIsTheLastCompleteWave) {
+  testing::FakeRunOptions options;
+  const RunMetadata m = testing::MakeFakeMetadata(options);
+  RunHistory h = testing::MakeFakeHistory(options);
+  h.waves.back().complete = false;
+  h.waves.back().particles.resize(3);
+  ComputeWaveStatistics(h.waves.back(), Estimator::kPaper);
+  Answer a = SummariseAnswer(m, h);
+  EXPECT_EQ(a.wave, options.waves - 1);
+  EXPECT_EQ(a.waves, options.waves);
+  EXPECT_TRUE(a.complete);
+  EXPECT_EQ(a.bits[0].p_one, h.waves[options.waves - 2].marginals_paper[0]);
+  EXPECT_NE(AnswerText(a).find("the numbers are wave 2's: wave 3 is incomplete"), std::string::npos)
+      << AnswerText(a);
+
+  h.waves.erase(h.waves.begin(), h.waves.end() - 1);
+  a = SummariseAnswer(m, h);
+  EXPECT_FALSE(a.complete);
+  EXPECT_EQ(a.particles, 3);
+  EXPECT_NE(AnswerJson(a).find("\"complete\": false"), std::string::npos);
+
+  h.waves.clear();
+  a = SummariseAnswer(m, h);
+  EXPECT_EQ(a.wave, 0);
+  EXPECT_TRUE(a.bits.empty());
+  EXPECT_NE(AnswerText(a).find("none yet"), std::string::npos);
+}
+
+// The sensor's clamps: 18 per edge over 90 cm (the 45 cm example's config); clamp 1 is the first
+// 5 cm of edge 1, clamp 19 the first 5 cm of edge 2 (config_simulator.cpp names them in that
+// order). The terminal shows the two edges side by side, within 80 columns.
+TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
+  testing::TempFolder dir("answer-positions");
+  testing::FakeRunOptions options;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  const fs::path example = fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm";
+  std::ifstream in(example / "least_squares.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  m.config_text = text.str();
+  m.config_path = (example / "least_squares.toml").string();
+  const std::string path = dir / "RUN.db";
+  {
+    HistoryStore store = HistoryStore::Create(path, m);
+    const RunHistory h = testing::MakeFakeHistory(options);
+    for (const WaveRecord& wave : h.waves) testing::RecordWave(store, wave, 10);
+    store.Finish(h.summary);
+  }
+  const Answer a = services::ReadAnswer(path);
+  ASSERT_EQ(a.bits.size(), 36u);
+  const auto expect = [&](int number, int edge, double start, double end, const char* shown_as) {
+    const AnswerBit& b = a.bits[static_cast<std::size_t>(number - 1)];
+    EXPECT_EQ(b.name, "clamp " + std::to_string(number));
+    ASSERT_TRUE(b.position) << number;
+    EXPECT_EQ(b.position->edge, edge) << number;
+    EXPECT_NEAR(b.position->start_m, start, 1e-12) << number;
+    EXPECT_NEAR(b.position->end_m, end, 1e-12) << number;
+    EXPECT_EQ(b.position->Text(), shown_as);
+  };
+  expect(1, 1, 0.0, 0.05, "edge 1, 0-5 cm");
+  expect(10, 1, 0.45, 0.50, "edge 1, 45-50 cm");
+  expect(18, 1, 0.85, 0.90, "edge 1, 85-90 cm");
+  expect(19, 2, 0.0, 0.05, "edge 2, 0-5 cm");
+  expect(36, 2, 0.85, 0.90, "edge 2, 85-90 cm");
+
+  const std::string shown = AnswerText(a);
+  EXPECT_NE(shown.find("edge 1 (y = 0)"), std::string::npos) << shown;
+  std::istringstream lines(shown);
+  int rows = 0;
+  for (std::string line; std::getline(lines, line); ++rows) {
+    std::size_t chars = 0;
+    for (char c : line) chars += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+    EXPECT_LE(chars, 80u) << line;
+  }
+  EXPECT_LE(rows, 40) << shown;  // one screen
+  // Clamp 1 and clamp 19 share the first row of the table.
+  EXPECT_NE(shown.find("\n     1   0-5  "), std::string::npos) << shown;
+  EXPECT_NE(shown.find("   19   0-5  "), std::string::npos) << shown;
+}
+
+}  // namespace
+}  // namespace combabc
