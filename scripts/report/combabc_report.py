@@ -168,8 +168,9 @@ def load_curves(path, waves, points):
             w.curves = mine[:, 2:]
 
 
-def load_export(folder):
-    """The run (a dict) and its waves (list of Wave) from an export folder."""
+def load_export(folder, history=None):
+    """The run (a dict) and its waves (list of Wave) from an export folder; history names the
+    run in messages."""
     summary_path = os.path.join(folder, "summary.json")
     if not os.path.isfile(summary_path):
         raise ReportError(f"{folder}: no summary.json (not a combabc export)", EX_NOINPUT)
@@ -200,7 +201,7 @@ def load_export(folder):
     run["config"] = run_config(run)
     waves = [Wave(entry) for entry in summary.get("waves", [])]
     if not waves:
-        raise ReportError("the run has no committed wave yet")
+        raise ReportError(f"{history or folder}: the run has no committed wave yet")
     load_particles(os.path.join(folder, "particles.csv"), waves, run["bit_names"],
                    [r[0] for r in run["reals"]])
     load_curves(os.path.join(folder, "curves.csv"), waves, run["x_cm"].size)
@@ -337,7 +338,7 @@ def predictive_checks(run, waves):
 # --- main -----------------------------------------------------------------------------------------
 
 def make_report(export, out, estimator=None, formats=None, history=None):
-    run, waves = load_export(export)
+    run, waves = load_export(export, history)
     if any(w.curves is not None and w.curves.shape[1] != run["x_cm"].size for w in waves):
         # Curves that are not one value per output position cannot be cut by experiment.
         run["experiments"], run["named"] = one_experiment(run), False

@@ -69,8 +69,12 @@ class StagingFolder {
 // The script's files into the report directory, all together, under OutputDirectory's rules.
 void Publish(const fs::path& drawn, const std::string& out, bool overwrite) {
   std::vector<std::string> names;
-  for (const auto& entry : fs::directory_iterator(drawn)) {
-    if (entry.is_regular_file()) names.push_back(entry.path().filename().string());
+  std::error_code ec;
+  for (fs::directory_iterator it(drawn, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_regular_file(ec)) names.push_back(it->path().filename().string());
+  }
+  if (ec || names.empty()) {
+    throw Error(ErrorKind::kSoftware, "report: the script drew nothing", drawn.string());
   }
   std::sort(names.begin(), names.end());
   OutputDirectory directory(out, overwrite);
@@ -119,13 +123,14 @@ void CheckReportPossible(const std::string& directory) {
 std::string WriteReport(const std::string& history_path,
                         const std::string& directory,
                         bool overwrite) {
-  const std::string out = directory.empty() ? ReportDirectory(history_path) : directory;
+  // The usual one-line errors for a missing, foreign or corrupt history (a corrupt wave: when the
+  // export reads it).
+  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
+  std::string out = directory.empty() ? ReportDirectory(history_path) : directory;
   // Refused before any work; the directory itself is made only when the report is published, so
   // that an interrupted report leaves nothing there.
   OutputDirectory::Check(out, overwrite);
   const PythonScript tools = FindReportTools();
-  // The usual one-line errors for a missing, foreign or corrupt history.
-  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
   const StagingFolder staging;
   const fs::path exported = staging.path() / "export";
   const fs::path drawn = staging.path() / "report";
@@ -136,7 +141,8 @@ std::string WriteReport(const std::string& history_path,
                                    drawn.string(),
                                    "--history",
                                    fs::absolute(history_path).string(),
-                                   // "--": an export folder is never an option.
+                                   // "--": the staged export is never an option, whatever
+                                   // TMPDIR is.
                                    "--",
                                    exported.string()};
   ProcessResult result;
