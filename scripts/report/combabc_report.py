@@ -45,6 +45,10 @@ import os
 import sys
 import tomllib
 
+# The modules beside this script are imported from where it is installed (share/combabc/report/,
+# owned by the package): no __pycache__ is written there.
+sys.dont_write_bytecode = True
+
 # sysexits.h, as combabc uses them (combabc maps the script's status to its own error kinds).
 EX_USAGE, EX_DATAERR, EX_NOINPUT, EX_UNAVAILABLE, EX_SOFTWARE, EX_CANTCREAT, EX_IOERR = (
     64, 65, 66, 69, 70, 73, 74)
