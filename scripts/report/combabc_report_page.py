@@ -55,7 +55,7 @@ def answer_html(summary, sensor=True):
         return ""
     p = "P(fixed)" if sensor else "P(bit = 1)"
     level = answer.get("verdict_level")
-    source = (f"from the enumeration (exact)" if answer.get("exact")
+    source = ("from the enumeration (exact)" if answer.get("exact")
               else f"from wave {answer.get('wave')}"
               + ("" if answer.get("complete", True) else " (no complete wave: incomplete)"))
     parts = [f"<h2>Answer</h2>\n<p>{e(source)}, {e(str(answer.get('estimator', '')))} "
