@@ -19,8 +19,8 @@ missing; refused unless empty), in each format of the run's [output] figures (de
   wave_<k>_marginals.<fmt>      P(bit = 1) per bit: for the sensor, each clamp being fixed, one
                                 panel per edge (paper Figures 4, 6, 9, 11); otherwise one bar per
                                 bit, labelled with its name
-  overview.<fmt>                one row per wave: curves (a column per named experiment) and
-                                marginals side by side
+  overview.<fmt>                one row per wave: curves (a column per named experiment, and its
+                                zoom on the measured window when needed) and marginals side by side
   summary.<fmt>                 thresholds, acceptance rate and simulations per wave
   predictive.<fmt>              posterior predictive check, a column per experiment: the 5-95 %
                                 band of the final complete wave's accepted curves at the measured

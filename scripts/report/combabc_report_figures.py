@@ -125,26 +125,32 @@ def experiment_data(w, run, experiment):
     return x, curves, measured_x, measured_y
 
 
-def zoom_window(w, run, experiment):
-    """The measured window (x range, y range) to zoom on when the accepted curves' peak lies
-    outside it (rises above the window's values by more than ZOOM_FACTOR), else None."""
+def window_limits(w, run, experiment):
+    """(x range, y range) of the experiment's measured window with the wave's curves there, and
+    whether the curves' peak lies outside it (they rise above the window's values by more than
+    ZOOM_FACTOR); None without a window to show."""
     x, curves, mx, my = experiment_data(w, run, experiment)
     if mx.size < 2 or not x.size or not len(curves):
         return None
     lo, hi = float(np.min(mx)), float(np.max(mx))
-    inside = (x >= lo) & (x <= hi)
     at_data = np.array([np.interp(mx, x, c) for c in curves])
     window_top = max(float(np.nanmax(np.abs(at_data))), float(np.nanmax(np.abs(my))))
-    if not inside.any() or window_top <= 0:
+    if not ((x >= lo) & (x <= hi)).any() or window_top <= 0:
         return None
-    if float(np.nanmax(curves)) <= ZOOM_FACTOR * window_top:
-        return None
+    outside = float(np.nanmax(curves)) > ZOOM_FACTOR * window_top
     pad = 0.04 * (hi - lo)
     # The window's data and the middle 98 % of the curves there (a stray curve does not set it).
     values = np.concatenate([my, np.percentile(at_data, [1, 99], axis=0).ravel()])
     bottom, top = min(0.0, float(np.min(values))), float(np.max(values))
     span = (top - bottom) or 1.0
-    return (lo - pad, hi + pad), (bottom - 0.05 * span, top + 0.08 * span)
+    return (lo - pad, hi + pad), (bottom - 0.05 * span, top + 0.08 * span), outside
+
+
+def zoom_window(w, run, experiment):
+    """The measured window (x range, y range) to zoom on when the accepted curves' peak lies
+    outside it, else None."""
+    limits = window_limits(w, run, experiment)
+    return limits[:2] if limits is not None and limits[2] else None
 
 
 def draw_curves(ax, w, run, experiment=None, zoom=None):
@@ -356,15 +362,25 @@ def reals_figure(waves, run, estimator, out):
 # --- overview and summary -------------------------------------------------------------------------
 
 def overview_figure(waves, run, estimator, out):
-    """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side."""
+    """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side; an
+    experiment whose curves peak outside its measured window in some wave gets a second column,
+    zoomed on that window."""
     panels, _ = edges(run)
     has_curves = any(w.curves is not None and w.curves.size for w in waves)
-    # A curve column per experiment when they are named, else one holding every curve.
+    # A curve column per experiment when they are named, else one holding every curve; each
+    # followed by its zoom column where needed.
     experiments = run["experiments"] if run["named"] else [None]
-    curve_columns = len(experiments) if has_curves else 0
+    columns_of = []  # (experiment, zoomed) per curve column
+    if has_curves:
+        for x in experiments:
+            columns_of.append((x, False))
+            if any(w.curves is not None and w.curves.size and zoom_window(w, run, x) is not None
+                   for w in waves):
+                columns_of.append((x, True))
+    curve_columns = len(columns_of)
     columns = len(panels) + curve_columns
     bar_width = 1.0 if len(panels) > 1 else max(1.0, run["dimension"] / 18)
-    widths = [1.3] * curve_columns + [bar_width] * len(panels)
+    widths = [1.0 if zoomed else 1.3 for _, zoomed in columns_of] + [bar_width] * len(panels)
     # Shared x per column: one set of tick labels at the bottom keeps the grid legible (and fast).
     fig, axes = plt.subplots(len(waves), columns,
                              figsize=(4.2 * sum(widths), 2.6 * len(waves) + 0.5),
@@ -372,16 +388,22 @@ def overview_figure(waves, run, estimator, out):
     tick_step = 2 if max(len(bits) for _, bits in panels) > 12 else 1
     for row, w in enumerate(waves):
         label = f"({'abcdefghijklmnopqrstuvwxyz'[row % 26]}) {wave_label(w)}"
-        for column, experiment in enumerate(experiments[:curve_columns]):
+        for column, (experiment, zoomed) in enumerate(columns_of):
             ax = axes[row][column]
-            if w.curves is not None and w.curves.size:
-                draw_curves(ax, w, run, experiment)
-            else:
+            limits = (window_limits(w, run, experiment)
+                      if zoomed and w.curves is not None and w.curves.size else None)
+            if w.curves is None or not w.curves.size:
                 ax.text(0.5, 0.5, "no curves stored", ha="center", va="center",
                         transform=ax.transAxes)
+            elif zoomed and limits is None:
+                ax.axis("off")
+            else:
+                draw_curves(ax, w, run, experiment, zoom=limits[:2] if zoomed else None)
+            if zoomed and row != 0:
+                ax.set_title("", loc="left")  # said once, at the top
             if column == 0:
                 ax.set_title(f"{label}{thresholds_text(w, run, compact=True)}", loc="left")
-            if experiment is not None:
+            if experiment is not None and not zoomed:
                 ax.set_title(experiment["name"], loc="right", fontsize=9)
         bar_axes = axes[row][curve_columns:]
         # Without a curve column the wave label takes the left of the first title line.

@@ -154,6 +154,10 @@ class ReportScript(unittest.TestCase):
         self.assertEqual(axes_in(os.path.join(self.peaked, "wave_2_curves.svg")), 2)
         self.assertIn("Zoom on the measured window", svg)
         self.assertEqual(axes_in(os.path.join(self.plain, "wave_2_curves.svg")), 1)
+        # The overview: per wave the curves, their zoom, the marginals; without the zoom column
+        # when the peak is inside the window.
+        self.assertEqual(axes_in(os.path.join(self.peaked, "overview.svg")), 2 * 3)
+        self.assertEqual(axes_in(os.path.join(self.plain, "overview.svg")), 2 * 2)
 
     def test_predictive_band_from_the_curves(self):
         svg = read(os.path.join(self.peaked, "predictive.svg"))
