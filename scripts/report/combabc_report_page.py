@@ -55,8 +55,8 @@ def answer_html(summary, sensor=True):
         return ""
     p = "P(fixed)" if sensor else "P(bit = 1)"
     level = answer.get("verdict_level")
-    source = ("from the enumeration (exact)" if answer.get("exact")
-              else f"from wave {answer.get('wave')}"
+    source = ("From the enumeration (exact)" if answer.get("exact")
+              else f"From wave {answer.get('wave')}"
               + ("" if answer.get("complete", True) else " (no complete wave: incomplete)"))
     parts = [f"<h2>Answer</h2>\n<p>{e(source)}, {e(str(answer.get('estimator', '')))} "
              f"estimator."]

@@ -35,7 +35,7 @@ class AnswerTables(unittest.TestCase):
     def test_every_bit_with_its_position_probability_and_verdict(self):
         html = compact(page.answer_html(fixture()))
         self.assertIn("<h2>Answer</h2>", html)
-        self.assertIn("from wave 2, importance estimator", html)
+        self.assertIn("From wave 2, importance estimator", html)
         self.assertIn("Verdict at level 0.95", html)
         self.assertIn('<tr class="fixed"><td class="number">1</td><td>clamp 1</td>'
                       '<td>edge 1, 0-5 cm</td><td class="number">0.983 &plusmn; 0.006</td>'
@@ -58,7 +58,7 @@ class AnswerTables(unittest.TestCase):
         summary = fixture()
         summary["answer"]["exact"] = True
         html = compact(page.answer_html(summary, sensor=False))
-        self.assertIn("from the enumeration (exact)", html)
+        self.assertIn("From the enumeration (exact)", html)
         self.assertIn("P(bit = 1) ± SE", html)
 
     def test_no_answer_no_section(self):
