@@ -271,8 +271,9 @@ def draw_marginals(axes, w, run, estimator, tick_step=1, titles=True, title_loc=
         ax.bar(positions, values, width=0.75, color=BAR_COLOUR, edgecolor="none")
         # A bar at P = 0 has no height: a short thick line on the axis shows it is there.
         low = np.isfinite(values) & (values < 0.01)
-        ax.hlines(np.zeros(int(low.sum())), positions[low] - 0.375, positions[low] + 0.375,
-                  colors=BAR_COLOUR, linewidth=2.5, zorder=4)
+        if low.any():
+            ax.hlines(np.zeros(int(low.sum())), positions[low] - 0.375, positions[low] + 0.375,
+                      colors=BAR_COLOUR, linewidth=2.5, zorder=4)
         if uniform_prior(run) is not None:
             ax.axhline(uniform_prior(run), color="black", linestyle="--", linewidth=0.9, zorder=3)
         else:
@@ -383,7 +384,8 @@ def overview_figure(waves, run, estimator, out):
     widths = [1.0 if zoomed else 1.3 for _, zoomed in columns_of] + [bar_width] * len(panels)
     # Shared x per column: one set of tick labels at the bottom keeps the grid legible (and fast).
     fig, axes = plt.subplots(len(waves), columns,
-                             figsize=(4.2 * sum(widths), 2.6 * len(waves) + 0.5),
+                             figsize=(4.2 * (curve_columns + bar_width * len(panels)),
+                                      2.6 * len(waves) + 0.5),
                              squeeze=False, sharex="col", gridspec_kw={"width_ratios": widths})
     tick_step = 2 if max(len(bits) for _, bits in panels) > 12 else 1
     for row, w in enumerate(waves):
@@ -583,7 +585,12 @@ def render_all(waves, run, estimator, out, formats):
     _JOB.update(waves=waves, run=run, estimator=estimator, out=out, formats=formats)
     workers = min(len(tasks), os.cpu_count() or 1, 8)
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-        # Longest first (the overview) so that the pool finishes together; results keep task order.
+        # Longest first (the overview) so that the pool finishes together; names in task order.
+        order = sorted(range(len(tasks)), key=lambda i: tasks[i][0] != "overview")
         with multiprocessing.get_context("fork").Pool(workers) as pool:
-            return pool.map(_render, tasks, chunksize=1)
+            drawn = pool.map(_render, [tasks[i] for i in order], chunksize=1)
+        names = [""] * len(tasks)
+        for i, name in zip(order, drawn):
+            names[i] = name
+        return names
     return [_render(task) for task in tasks]
