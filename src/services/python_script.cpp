@@ -26,8 +26,8 @@ namespace {
 
 // The most of a script's stderr kept: its message is the last line.
 constexpr std::size_t kMaxScriptStderrBytes = std::size_t{64} << 10;
-// How long a script interrupted by SIGINT gets to clean up (the report removes its staging
-// directory) before its process group is killed.
+// How long a script interrupted by SIGINT gets to stop (on KeyboardInterrupt; what it wrote is in
+// a staging folder the caller removes) before its process group is killed.
 constexpr std::chrono::seconds kInterruptGrace{5};
 
 std::atomic<int> interrupt_signal{0};
