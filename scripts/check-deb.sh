@@ -25,7 +25,7 @@ trap 'rm -rf "$tmp"; DEBIAN_FRONTEND=noninteractive apt-get remove -y -qq combab
 # The demo (the 45 cm example, 5 waves x 500), by the installed CLI, into a directory of its own.
 [ "$(command -v combabc)" = /usr/bin/combabc ] || { echo "FAIL: combabc is not /usr/bin/combabc"; exit 1; }
 /usr/bin/combabc run examples/sensor-45cm/least_squares.toml -q -o "$tmp/demo"
-for f in index.html overview.png summary.png; do
+for f in index.html overview.png summary.png predictive.png wave_5_marginals.png; do
   [ -s "$tmp/demo/report/$f" ] || { echo "FAIL: the installed combabc drew no report/$f"; exit 1; }
 done
 

@@ -26,8 +26,8 @@ namespace {
 
 // The most of a script's stderr kept: its message is the last line.
 constexpr std::size_t kMaxScriptStderrBytes = std::size_t{64} << 10;
-// How long a script interrupted by SIGINT gets to clean up (the report removes its staging
-// directory) before its process group is killed.
+// How long a script interrupted by SIGINT gets to stop (on KeyboardInterrupt; what it wrote is in
+// a staging folder the caller removes) before its process group is killed.
 constexpr std::chrono::seconds kInterruptGrace{5};
 
 std::atomic<int> interrupt_signal{0};
@@ -152,7 +152,9 @@ std::string ScriptMessage(const std::string& err, int status, const std::string&
   return line;
 }
 
-ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs) {
+ProcessResult RunProcess(std::vector<std::string> args,
+                         const std::string& needs,
+                         const std::function<void()>& before_signal) {
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
@@ -235,6 +237,7 @@ ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs
     // The script is gone; the signal now takes the course it would have taken (for the CLI:
     // ending combabc by it, exit status 130 for SIGINT). A handler that returns gets an error.
     guard.reset();
+    if (before_signal) before_signal();
     ::raise(signal_number);
     throw Error(ErrorKind::kSoftware, "interrupted (the script was stopped)");
   }

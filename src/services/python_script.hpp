@@ -1,6 +1,7 @@
 #pragma once
 // The Python scripts combabc runs (scripts/report/: the report, the NetCDF export): where the
 // interpreter and a script are, running one, and turning its failure into one combabc::Error line.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,9 +31,13 @@ struct ProcessResult {
 // Runs args[0] in a process group of its own with stdout discarded and stderr captured (its last
 // 64 KiB or more); kCantCreate (with `needs`) when it cannot start. A SIGINT or SIGTERM that
 // arrives meanwhile (not ignored) interrupts the script (SIGINT to its group, SIGKILL 5 s later)
-// and is waited for; then the signal takes its course with combabc's own handlers (for the CLI:
-// combabc ends by it), and if that handler returns, Error(kSoftware) "interrupted".
-ProcessResult RunProcess(std::vector<std::string> args, const std::string& needs);
+// and is waited for; then `before_signal` runs (the report removes its staging folder there: the
+// signal may end combabc without unwinding), the signal takes its course with combabc's own
+// handlers (for the CLI: combabc ends by it), and if that handler returns, Error(kSoftware)
+// "interrupted".
+ProcessResult RunProcess(std::vector<std::string> args,
+                         const std::string& needs,
+                         const std::function<void()>& before_signal = {});
 
 // The names among `modules` that `python` cannot import, found without importing them (one
 // interpreter start). Empty when all are there, or when the check itself could not run (the

@@ -1,10 +1,20 @@
-// The report: runs scripts/report/combabc_report.py on a history and turns its failure into one
-// combabc::Error line. The script itself applies the output-directory rules of OutputDirectory.
+// The report: stages the run's export, runs scripts/report/combabc_report.py on it (it draws the
+// figures and index.html into a staging folder; a failure is one combabc::Error line) and publishes
+// what it drew under the output-directory rules of OutputDirectory.
+#include <stdlib.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <vector>
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/report.hpp"
 #include "services/python_script.hpp"
@@ -24,6 +34,59 @@ PythonScript FindReportTools() {
   } catch (const Error& e) {
     throw Error(e.kind(), "report: " + e.message(), e.file());
   }
+}
+
+// A private folder (mode 0700) under the system's temporary directory, removed with everything in
+// it when the report is done: the export is staged there and the script draws there.
+class StagingFolder {
+ public:
+  StagingFolder() {
+    std::error_code ec;
+    const fs::path base = fs::temp_directory_path(ec);
+    std::string pattern = ((ec ? fs::path("/tmp") : base) / "combabc-report-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      throw Error(ErrorKind::kCantCreate,
+                  "report: cannot create a staging folder: " + std::string(std::strerror(errno)),
+                  pattern);
+    }
+    path_ = pattern;
+  }
+  StagingFolder(const StagingFolder&) = delete;
+  StagingFolder& operator=(const StagingFolder&) = delete;
+  ~StagingFolder() { Remove(); }
+  const fs::path& path() const { return path_; }
+  // Also called on an interrupt, before the signal ends combabc. Only this object's folder, made
+  // by mkdtemp above, is removed.
+  void Remove() const {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+
+ private:
+  fs::path path_;
+};
+
+// The script's files into the report directory, all together, under OutputDirectory's rules.
+void Publish(const fs::path& drawn, const std::string& out, bool overwrite) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (fs::directory_iterator it(drawn, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_regular_file(ec)) names.push_back(it->path().filename().string());
+  }
+  if (ec || names.empty()) {
+    throw Error(ErrorKind::kSoftware, "report: the script drew nothing", drawn.string());
+  }
+  std::sort(names.begin(), names.end());
+  OutputDirectory directory(out, overwrite);
+  for (const std::string& name : names) {
+    std::ifstream in(drawn / name, std::ios::binary);
+    const std::string content{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    if (in.bad()) {
+      throw Error(ErrorKind::kIo, "report: cannot read the drawn " + name, (drawn / name).string());
+    }
+    directory.Add(name).write(content.data(), static_cast<std::streamsize>(content.size()));
+  }
+  directory.Commit();
 }
 
 }  // namespace
@@ -60,18 +123,31 @@ void CheckReportPossible(const std::string& directory) {
 std::string WriteReport(const std::string& history_path,
                         const std::string& directory,
                         bool overwrite) {
-  // Reading it all first gives the usual one-line errors for a missing, foreign or corrupt file
-  // (the script itself trusts what it reads).
-  { HistoryStore::Open(history_path, /*read_only=*/true).LoadHistory(); }
+  // The usual one-line errors for a missing, foreign or corrupt history (a corrupt wave: when the
+  // export reads it).
+  const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
   std::string out = directory.empty() ? ReportDirectory(history_path) : directory;
+  // Refused before any work; the directory itself is made only when the report is published, so
+  // that an interrupted report leaves nothing there.
+  OutputDirectory::Check(out, overwrite);
   const PythonScript tools = FindReportTools();
-  std::vector<std::string> args = {tools.python, tools.script, "--out", out};
-  if (overwrite) args.push_back("--overwrite");
-  // "--": a history file whose name starts with '-' is still the history.
-  args.insert(args.end(), {"--", history_path});
+  const StagingFolder staging;
+  const fs::path exported = staging.path() / "export";
+  const fs::path drawn = staging.path() / "report";
+  ExportRun(store, exported.string());
+  std::vector<std::string> args = {tools.python,
+                                   tools.script,
+                                   "--out",
+                                   drawn.string(),
+                                   "--history",
+                                   fs::absolute(history_path).string(),
+                                   // "--": the staged export is never an option, whatever
+                                   // TMPDIR is.
+                                   "--",
+                                   exported.string()};
   ProcessResult result;
   try {
-    result = RunProcess(args, kReportNeeds);
+    result = RunProcess(args, kReportNeeds, [&] { staging.Remove(); });
   } catch (const Error& e) {
     throw Error(e.kind(), "report: " + e.message(), e.file());
   }
@@ -79,6 +155,7 @@ std::string WriteReport(const std::string& history_path,
     throw Error(KindOfScriptStatus(result.status),
                 ScriptMessage(result.err, result.status, "combabc_report"));
   }
+  Publish(drawn, out, overwrite);
   return out;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -213,6 +214,9 @@ TEST_F(Report, EveryExperimentGetsItsCurvePanel) {
       EXPECT_NE(figure.find(title), std::string::npos) << title << " in " << wave;
     }
   }
+  // The posterior predictive check: band and residuals per experiment.
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "one" / "predictive.svg")), 2);
+  EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "two" / "predictive.svg")), 2 * 2);
   // Per wave: a curve column per experiment, then the two edges' marginals.
   EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "two" / "overview.svg")), 2 * (2 + 2));
   EXPECT_EQ(SvgAxes(ReadFile(dir_.path() / "two" / "wave_1_marginals.svg")), 2);
@@ -257,22 +261,60 @@ TEST_F(Report, FailuresAreOneLineAndLeaveNothingBehind) {
   }
 }
 
+// One reader of the history (issue 22): the script is given the export that combabc staged (a
+// folder with summary.json, particles.csv, curves.csv ...), never the history, and what it draws
+// is published into the report directory with combabc's manifest; the staging folder under TMPDIR
+// is removed. A stand-in script checks its arguments; needs no plotting packages.
+TEST(ReportStaging, TheScriptReadsTheStagedExportAndCombabcPublishes) {
+  TempFolder dir("report-staging");
+  const std::string db = MakeHistory(dir.path() / "RUN.db");
+  const std::string script = dir / "check_args.py";
+  std::ofstream(script) << R"(import os, sys
+out = sys.argv[sys.argv.index("--out") + 1]
+export = sys.argv[-1]
+assert sys.argv[-2] == "--", sys.argv
+for name in ("summary.json", "particles.csv", "curves.csv", "positions.csv", "measured.csv"):
+    assert os.path.isfile(os.path.join(export, name)), name
+history = sys.argv[sys.argv.index("--history") + 1]
+assert history.endswith("RUN.db") and os.path.isabs(history), history
+assert all(not a.endswith("RUN.db") for a in sys.argv[1:] if a != history), sys.argv
+os.makedirs(out)
+with open(os.path.join(out, "index.html"), "w") as f:
+    f.write("drawn from " + export)
+)";
+  ScopedEnv use("COMBABC_REPORT_SCRIPT", script);
+  fs::create_directories(dir.path() / "tmp");
+  ScopedEnv tmp("TMPDIR", dir / "tmp");
+  const auto r = RunCli({"report", db}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "report" / "index.html").rfind("drawn from " + (dir / "tmp"), 0),
+            0u);
+  EXPECT_NE(ReadFile(dir.path() / "report" / ".combabc-manifest").find("index.html"),
+            std::string::npos);
+  EXPECT_EQ(Listing(dir.path() / "report"),
+            (std::set<std::string>{".combabc-manifest", "index.html"}));
+  EXPECT_TRUE(Listing(dir.path() / "tmp").empty()) << "the staging folder was left behind";
+}
+
 // Regression (issue 20, D20): SIGINT to combabc during the report ended combabc alone; the report
-// script went on and published later. Now the script (a stand-in that would publish after 30 s,
-// and cleans up on KeyboardInterrupt) is interrupted and waited for, nothing is published, and
-// combabc ends by the signal (exit status 130). Needs no plotting packages.
+// script went on and published later. Now the script (a stand-in that would draw after 30 s, and
+// cleans up on KeyboardInterrupt) is interrupted and waited for, nothing is published, the staging
+// folder (export and drawing, under TMPDIR) is removed, and combabc ends by the signal (exit
+// status 130). Needs no plotting packages.
 TEST(ReportInterrupt, SigintStopsTheScriptAndNothingIsPublished) {
   TempFolder dir("report-interrupt");
   const std::string db = MakeHistory(dir.path() / "RUN.db");
+  const std::string mark = dir / "script";
   const std::string script = dir / "slow_report.py";
   std::ofstream(script) << R"(import os, sys, time
+mark = ")" << mark << R"("
 out = sys.argv[sys.argv.index("--out") + 1]
-with open(out + ".pid", "w") as f:
+with open(mark + ".pid", "w") as f:
     f.write(str(os.getpid()))
 try:
     time.sleep(30)
 except KeyboardInterrupt:
-    with open(out + ".interrupted", "w") as f:
+    with open(mark + ".interrupted", "w") as f:
         f.write("cleaned up")
     sys.exit(130)
 os.makedirs(out)
@@ -280,6 +322,8 @@ with open(os.path.join(out, "index.html"), "w") as f:
     f.write("published")
 )";
   ScopedEnv use("COMBABC_REPORT_SCRIPT", script);
+  fs::create_directories(dir.path() / "tmp");
+  ScopedEnv tmp("TMPDIR", dir / "tmp");
   const std::string out = dir / "report";
   const pid_t cli = SpawnCli({"report", db, "-o", out}, dir.path());
   ASSERT_GT(cli, 0);
@@ -287,7 +331,7 @@ with open(os.path.join(out, "index.html"), "w") as f:
   std::string pid_text;
   while (pid_text.empty() && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    pid_text = ReadFile(out + ".pid");  // empty until the script has written it
+    pid_text = ReadFile(mark + ".pid");  // empty until the script has written it
   }
   ASSERT_FALSE(pid_text.empty()) << "the report script did not start";
   const pid_t script_pid = std::stoi(pid_text);
@@ -295,9 +339,10 @@ with open(os.path.join(out, "index.html"), "w") as f:
   const auto r = WaitCli(cli, dir.path());
   EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.err;
   // The script was interrupted (it cleaned up) and reaped before combabc ended.
-  EXPECT_TRUE(fs::exists(out + ".interrupted"));
+  EXPECT_TRUE(fs::exists(mark + ".interrupted"));
   EXPECT_NE(::kill(script_pid, 0), 0) << "the report script outlived combabc";
   EXPECT_FALSE(fs::exists(out));
+  EXPECT_TRUE(Listing(dir.path() / "tmp").empty()) << "the staging folder was left behind";
 }
 
 }  // namespace

@@ -4,8 +4,9 @@
 // --overwrite, and then only that path (docs/history.md, "Output files").
 //
 // Single files (simulate's CSV) go through AtomicFile; directories of results (export, and the
-// report, whose Python script implements the same rules) through OutputDirectory, which records
-// what combabc wrote in a manifest so that a later run replaces only those files.
+// report, whose Python script draws into a private folder that WriteReport then publishes) through
+// OutputDirectory, which records what combabc wrote in a manifest so that a later run replaces
+// only those files.
 #include <memory>
 #include <set>
 #include <sstream>
@@ -79,8 +80,8 @@ void WriteFileAtomically(const std::string& path, std::string_view text, bool ov
 class OutputDirectory {
  public:
   static constexpr const char* kManifest = ".combabc-manifest";
-  // Every temporary combabc makes (AtomicFile's, the report script's staging directory) starts
-  // with this. A directory holding nothing else (left by a killed command) counts as empty.
+  // Every temporary combabc makes in an output directory (AtomicFile's) starts with this. A
+  // directory holding nothing else (left by a killed command) counts as empty.
   static constexpr const char* kTemporaryPrefix = ".combabc-tmp-";
 
   // What a refusal of a foreign directory suggests (the report of `run` has no --overwrite).

@@ -1,0 +1,208 @@
+"""The report's index.html (combabc_report.py reads the export; this module writes the page).
+
+Python's standard library only, so that the page's tables can be tested without the plotting
+packages. The answer and the checks come from summary.json's "answer" and "checks" (docs/history.md,
+"Export") and are shown only when the export has them.
+"""
+
+import html
+import math
+import os
+
+e = html.escape
+
+STYLE = """
+body { font-family: sans-serif; margin: 2em; max-width: 1400px; }
+table { border-collapse: collapse; margin-bottom: 1.5em; }
+th, td { border: 1px solid #ccc; padding: 3px 8px; text-align: left; font-size: 0.9em; }
+td.number { text-align: right; font-variant-numeric: tabular-nums; }
+tr.fixed td { background: #e7f3e9; }
+tr.free td { background: #f4f4f4; }
+li.warning { color: #8a3b00; }
+figure { display: inline-block; margin: 0.5em; vertical-align: top; }
+img { max-width: 680px; border: 1px solid #eee; }
+pre { background: #f6f6f6; padding: 1em; overflow-x: auto; }
+"""
+
+
+def fmt(value, spec=".4g"):
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return "" if math.isnan(value) else format(value, spec)
+    return str(value)
+
+
+def table(head, rows, numeric=()):
+    """An HTML table: head, a list of column titles; rows, lists of (already escaped) cells, or
+    (cells, class) pairs; numeric, the columns aligned right."""
+    out = ["<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in head) + "</tr>"]
+    for row in rows:
+        cells, css = row if isinstance(row, tuple) else (row, "")
+        attribute = f' class="{e(css)}"' if css else ""
+        out.append(f"<tr{attribute}>" + "".join(
+            f'<td class="number">{c}</td>' if k in numeric else f"<td>{c}</td>"
+            for k, c in enumerate(cells)) + "</tr>")
+    return "\n".join(out) + "</table>\n"
+
+
+def answer_html(summary, sensor=True):
+    """summary.json's "answer" as tables: per bit its name, position, P(fixed) +- its Monte-Carlo
+    SE and verdict; the most probable configurations with their mass; ESS and simulations per
+    wave. Empty when the export has no answer."""
+    answer = summary.get("answer")
+    if not answer:
+        return ""
+    p = "P(fixed)" if sensor else "P(bit = 1)"
+    level = answer.get("verdict_level")
+    source = ("From the enumeration (exact)" if answer.get("exact")
+              else f"From wave {answer.get('wave')}"
+              + ("" if answer.get("complete", True) else " (no complete wave: incomplete)"))
+    parts = [f"<h2>Answer</h2>\n<p>{e(source)}, {e(str(answer.get('estimator', '')))} "
+             f"estimator."]
+    if level is not None:
+        parts.append(f" Verdict at level {fmt(float(level), 'g')}: fixed if {e(p)} &ge; "
+                     f"{fmt(float(level), 'g')}, free if {e(p)} &le; {fmt(1 - float(level), 'g')}, "
+                     "else not determined.")
+    parts.append("</p>\n")
+    rows = []
+    for bit in answer.get("bits", []):
+        verdict = str(bit.get("verdict", ""))
+        p_one, se = bit.get("p_one"), bit.get("mc_se")
+        shown = fmt(p_one, ".3f") if p_one is not None else "—"
+        if se is not None:
+            shown += f" &plusmn; {fmt(se, '.3f')}"
+        rows.append(([e(fmt(bit.get("number"))), e(str(bit.get("name", ""))),
+                      e(str(bit.get("position") or "—")), shown, e(verdict)],
+                     {"fixed": "fixed", "free": "free"}.get(verdict, "")))
+    parts.append(table(["#", "Name", "Position", f"{p} ± SE", "Verdict"], rows, numeric=(0, 3)))
+    configurations = answer.get("top_configurations") or []
+    if configurations:
+        rows = []
+        for rank, c in enumerate(configurations, 1):
+            mass = fmt(c.get("mass"), ".4f")
+            if c.get("mass_se") is not None:
+                mass += f" &plusmn; {fmt(c['mass_se'], '.4f')}"
+            fixed = ", ".join(str(n) for n in c.get("fixed") or []) or "none"
+            rows.append([str(rank), mass, e(fixed), f"<code>{e(str(c.get('bits', '')))}</code>"])
+        title = "fixed" if sensor else "= 1"
+        parts.append("<h3>Most probable configurations</h3>\n" + table(
+            ["Rank", "Posterior mass", f"Bits {title}", "Bits"], rows, numeric=(0, 1)))
+    per_wave = answer.get("per_wave") or []
+    if per_wave:
+        rows = [[e(fmt(w.get("wave"))), e(fmt(w.get("ess"), ".1f")), e(fmt(w.get("simulations")))]
+                for w in per_wave]
+        parts.append("<h3>ESS and simulations per wave</h3>\n" +
+                     table(["Wave", "ESS", "Simulations"], rows, numeric=(0, 1, 2)))
+    return "".join(parts)
+
+
+def _findings(title, items):
+    if not items:
+        return f"<h3>{e(title)}</h3>\n<p>No warnings.</p>\n"
+    lines = "\n".join(
+        f'<li class="{e(str(i.get("severity", "")))}"><b>{e(str(i.get("severity", "")))}</b> '
+        f'[{e(str(i.get("code", "")))}]: {e(str(i.get("message", "")))}</li>' for i in items)
+    return f"<h3>{e(title)}</h3>\n<ul>\n{lines}\n</ul>\n"
+
+
+def checks_html(summary):
+    """summary.json's "checks": the warnings before and after sampling, the noise level and the
+    fit verdict per experiment. Empty when the export has no checks."""
+    checks = summary.get("checks")
+    if not checks:
+        return ""
+    parts = ["<h2>Checks</h2>\n",
+             _findings("Before sampling: the model and the data", checks.get("before") or []),
+             _findings("After sampling: the fit", checks.get("after") or [])]
+    fits = checks.get("fit") or []
+    if fits:
+        rows = [([e(str(f.get("experiment") or "—")), e(fmt(f.get("best_rms"))),
+                  e(fmt(f.get("noise_sigma"))), e(fmt(f.get("ratio"), ".3g")),
+                  e(str(f.get("verdict", "")))],
+                 "fixed" if f.get("verdict") == "good" else "")
+                for f in fits]
+        parts.append("<h3>Goodness of fit</h3>\n" + table(
+            ["Experiment", "Best accepted RMS", "Noise sigma", "Ratio", "Verdict"], rows,
+            numeric=(1, 2, 3)))
+    noise = checks.get("noise_sigma") or []
+    if isinstance(noise, dict):
+        noise = [noise]
+    if noise:
+        rows = [[e(str(n.get("experiment") or "—")), e(fmt(n.get("value"))),
+                 e(str(n.get("method", "")))] for n in noise]
+        parts.append("<h3>Noise level of the data</h3>\n" +
+                     table(["Experiment", "Sigma", "Method"], rows, numeric=(1,)))
+    return "".join(parts)
+
+
+def figure_html(name, formats):
+    """A figure shown as PNG (or SVG, which browsers also draw inline), linked in every format."""
+    links = ", ".join(f'<a href="{e(name)}.{f}">{f.upper()}</a>' for f in formats)
+    shown = next((f for f in ("png", "svg") if f in formats), None)
+    image = (f'<a href="{e(name)}.{shown}"><img src="{e(name)}.{shown}" alt="{e(name)}"></a>'
+             if shown else "")
+    return f"<figure>{image}<figcaption>{e(name)} ({links})</figcaption></figure>"
+
+
+def page_html(waves, run, estimator, written, formats, history):
+    """The whole page."""
+    provenance = [
+        ("Run history", history), ("Status", run.get("status")),
+        ("Termination", run.get("termination") or "—"), ("Message", run.get("message") or "—"),
+        ("Config", run.get("config_path") or "—"), ("Seed", run.get("seed")),
+        ("Threads", run.get("threads")), ("Estimator", run.get("estimator")),
+        ("Estimator shown", estimator), ("Dimension", run.get("dimension")),
+        ("Simulations", run["simulations"] if run.get("simulations") is not None
+         else sum(w.candidates for w in waves)),
+        ("Failed simulations", sum(w.failures for w in waves)),
+        ("Wall time (s)", fmt(run.get("wall_seconds"), ".1f")),
+        ("Started", run.get("start_time")), ("Ended", run.get("end_time") or "—"),
+        ("Resumed", f"{run.get('resume_count', 0)} times"),
+        ("Stop limits set on resume", ", ".join(f"{k} = {v}" for k, v in run["stop_limits"])
+         or "—"),
+        ("combabc", f"{run.get('combabc_version', '')} {run.get('git_hash', '')}".strip()),
+    ]
+    rows = "\n".join(f"<tr><th>{e(str(k))}</th><td>{e(str(v))}</td></tr>" for k, v in provenance)
+    head = ("<tr><th>Wave</th><th>Thresholds</th><th>Candidates</th><th>Failed</th><th>Accepted</th>"
+            "<th>Acceptance rate</th><th>ESS</th><th>Distinct</th><th>Wall time (s)</th>"
+            "<th>Complete</th></tr>")
+    body = "\n".join(
+        f"<tr><td>{w.number}</td><td>{e(', '.join(format(x, '.4g') for x in w.thresholds))}</td>"
+        f"<td>{w.candidates}</td><td>{w.failures}</td><td>{w.accepted}</td>"
+        f"<td>{fmt(float(w.acceptance_rate))}</td>"
+        f"<td>{fmt(float(w.ess), '.1f')}</td><td>{w.distinct}</td>"
+        f"<td>{fmt(float(w.wall_seconds), '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
+        for w in waves)
+    figures = "\n".join(figure_html(n, formats) for n in written)
+    experiments = ""
+    if run["named"]:  # a single unnamed experiment's page is as it was before experiments
+        listed = "\n".join(
+            f"<tr><td>{e(x['name'])}</td><td>{e(x['description'])}</td>"
+            f"<td>{x['outputs'].stop - x['outputs'].start}</td>"
+            f"<td>{x['measured'].stop - x['measured'].start}</td>"
+            f"<td>{e(', '.join(name for name, _ in run['components'][x['components']]))}</td></tr>"
+            for x in run["experiments"])
+        experiments = ("<h2>Experiments</h2><table><tr><th>Experiment</th><th>Description</th>"
+                       "<th>Outputs</th><th>Measured points</th><th>Distance components</th></tr>"
+                       f"\n{listed}</table>\n")
+    note = ("" if any(w.curves is not None for w in waves)
+            else "<p>This run did not keep simulated outputs: no curve figures.</p>")
+    summary = run["summary"]
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>combabc report</title>
+<style>{STYLE}</style></head><body>
+<h1>combabc run report</h1>
+<h2>Run</h2><table>{rows}</table>
+{answer_html(summary, run.get("sensor", True))}{checks_html(summary)}{experiments}<h2>Waves</h2><table>{head}{body}</table>
+{note}
+<h2>Figures</h2>
+{figures}
+<h2>Configuration</h2><pre>{e(run.get("config_text") or "")}</pre>
+</body></html>
+"""
+
+
+def write_index(waves, run, estimator, out, written, formats, history):
+    with open(os.path.join(out, "index.html"), "w", encoding="utf-8") as f:
+        f.write(page_html(waves, run, estimator, written, formats, history))

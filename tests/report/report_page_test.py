@@ -1,0 +1,107 @@
+#!/usr/bin/python3
+"""The report page's answer and checks tables (scripts/report/combabc_report_page.py), rendered
+from a hand-made summary.json holding summary.json's "answer" and "checks" (docs/history.md,
+"Export"). Standard library only: the page module needs no plotting packages.
+
+    report_page_test.py SCRIPTS_REPORT_DIR
+"""
+
+import json
+import os
+import sys
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, sys.argv.pop(1) if len(sys.argv) > 1 else
+                os.path.join(HERE, "..", "..", "scripts", "report"))
+import combabc_report_page as page  # noqa: E402
+
+
+def fixture():
+    with open(os.path.join(HERE, "data", "summary_answer_checks.json"), encoding="utf-8") as f:
+        return json.load(f)
+
+
+def compact(text):
+    return " ".join(text.split())
+
+
+class Wave:
+    number, thresholds, candidates, failures, accepted = 2, [0.01], 700, 0, 500
+    acceptance_rate, ess, distinct, wall_seconds, complete, curves = 0.7, 433.5, 90, 0.5, True, None
+
+
+class AnswerTables(unittest.TestCase):
+    def test_every_bit_with_its_position_probability_and_verdict(self):
+        html = compact(page.answer_html(fixture()))
+        self.assertIn("<h2>Answer</h2>", html)
+        self.assertIn("From wave 2, importance estimator", html)
+        self.assertIn("Verdict at level 0.95", html)
+        self.assertIn('<tr class="fixed"><td class="number">1</td><td>clamp 1</td>'
+                      '<td>edge 1, 0-5 cm</td><td class="number">0.983 &plusmn; 0.006</td>'
+                      '<td>fixed</td></tr>', html)
+        self.assertIn('<tr class="free"><td class="number">2</td><td>clamp 2</td>', html)
+        # A name is text, escaped; a bit without a position gets a dash.
+        self.assertIn("<td>clamp &lt;3&gt;</td><td>—</td><td class=\"number\">0.610 &plusmn; "
+                      "0.030</td><td>not determined</td>", html)
+
+    def test_top_configurations_and_per_wave_numbers(self):
+        html = compact(page.answer_html(fixture()))
+        self.assertIn("<h3>Most probable configurations</h3>", html)
+        self.assertIn('<td class="number">1</td><td class="number">0.5875 &plusmn; 0.0210</td>'
+                      "<td>clamp 1, clamp &lt;3&gt;</td><td><code>101</code></td>", html)
+        self.assertIn('<td class="number">0.3751</td><td>clamp 1</td>', html)  # no SE: none shown
+        self.assertIn('<td class="number">1</td><td class="number">812.2</td>'
+                      '<td class="number">1000</td>', html)
+
+    def test_exact_answers_and_other_simulators_say_so(self):
+        summary = fixture()
+        summary["answer"]["exact"] = True
+        html = compact(page.answer_html(summary, sensor=False))
+        self.assertIn("From the enumeration (exact)", html)
+        self.assertIn("P(bit = 1) ± SE", html)
+
+    def test_no_answer_no_section(self):
+        summary = fixture()
+        del summary["answer"]
+        self.assertEqual(page.answer_html(summary), "")
+
+
+class CheckLists(unittest.TestCase):
+    def test_warnings_before_and_after_and_the_fit_verdict(self):
+        html = compact(page.checks_html(fixture()))
+        self.assertIn("<h2>Checks</h2>", html)
+        self.assertIn('<li class="warning"><b>warning</b> [units_mismatch]: the data&#x27;s peak '
+                      "(2.1e4) is 1e4 times the prior predictive&#x27;s &lt;range&gt;</li>", html)
+        self.assertIn("[threshold_below_noise]", html)
+        self.assertIn("<h3>Goodness of fit</h3>", html)
+        self.assertIn('<td class="number">0.0123</td><td class="number">0.0101</td>'
+                      '<td class="number">1.22</td><td>good</td>', html)
+        self.assertIn("<td>best-fit residuals</td>", html)
+
+    def test_no_warnings_is_said(self):
+        summary = fixture()
+        summary["checks"]["after"] = []
+        self.assertIn("<p>No warnings.</p>", page.checks_html(summary))
+
+    def test_no_checks_no_section(self):
+        summary = fixture()
+        del summary["checks"]
+        self.assertEqual(page.checks_html(summary), "")
+
+
+class WholePage(unittest.TestCase):
+    def test_answer_and_checks_come_before_the_waves(self):
+        summary = fixture()
+        run = dict(summary["run"], summary=summary, config_text=summary["config_text"],
+                   stop_limits=[], named=False, experiments=[], components=[], sensor=True)
+        html = page.page_html([Wave()], run, "importance", ["summary"], ["png"], "/r/RUN.sqlite")
+        self.assertLess(html.index("<h2>Run</h2>"), html.index("<h2>Answer</h2>"))
+        self.assertLess(html.index("<h2>Answer</h2>"), html.index("<h2>Checks</h2>"))
+        self.assertLess(html.index("<h2>Checks</h2>"), html.index("<h2>Waves</h2>"))
+        self.assertIn('<img src="summary.png"', html)
+        self.assertIn("<td>/r/RUN.sqlite</td>", html)
+
+
+if __name__ == "__main__":
+    unittest.main()
