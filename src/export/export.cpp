@@ -1,5 +1,6 @@
 // Export of a run history to CSV + JSON (files and columns: docs/history.md, "Export").
 #include "combabc/export/export.hpp"
+#include "combabc/export/fit_checks.hpp"
 
 #include <cctype>
 #include <charconv>
@@ -9,21 +10,15 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "export/json_text.hpp"
 
 namespace combabc {
 namespace {
 
-// Shortest text that reads back to the same double; Inf / -Inf / NaN as pandas and MATLAB read
-// them.
-std::string Number(double value) {
-  if (std::isnan(value)) return "NaN";
-  if (std::isinf(value)) return value > 0 ? "Inf" : "-Inf";
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text, value);
-  return std::string(text, result.ptr);
-}
-
-std::string JsonNumber(double value) { return std::isfinite(value) ? Number(value) : "null"; }
+using export_internal::JsonArray;
+using export_internal::JsonNumber;
+using export_internal::JsonString;
+using export_internal::Number;
 
 // Quoted only when needed (RFC 4180), so plain names stay plain for MATLAB.
 std::string CsvField(const std::string& text) {
@@ -34,44 +29,6 @@ std::string CsvField(const std::string& text) {
     out += c;
   }
   return out + "\"";
-}
-
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char escaped[8];
-          std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
-          out += escaped;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
-std::string JsonArray(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + JsonNumber(values[i]);
-  return out + "]";
 }
 
 // A column-name-safe version of a component name: "least squares" -> "least_squares".
@@ -424,7 +381,7 @@ void WriteSummary(OutputDirectory& dir, const RunMetadata& m, const RunHistory& 
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
         << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
   }
-  out << "\n  ]\n}\n";
+  out << "\n  ],\n  \"checks\": " << FitChecksJson(ComputeFitChecks(m, h), 2) << "\n}\n";
 }
 
 void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptions& options) {

@@ -109,6 +109,8 @@ RunOutcome Execute(Problem& problem,
   }
   OnPrimary(executor, [&] {
     store->Finish(outcome.history.summary);
+    // From the stored history: a resumed run's earlier waves count too.
+    outcome.checks = ComputeFitChecks(store->LoadMetadata(), store->LoadHistory());
     if (!report) return;
     try {
       outcome.report_directory = WriteReport(store->path(), ReportDirectory(store->path()));
