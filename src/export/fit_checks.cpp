@@ -21,7 +21,7 @@ using export_internal::JsonString;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Slack (metres) when placing a measured point among the output positions, as the distance's.
-constexpr double kPositionTolerance = 1e-9;
+constexpr double kPositionSlack = 1e-9;
 const char* const kNoiseMethod =
     "fifth divided differences of the measured points: MAD, then the RMS within 3 MADs "
     "(EstimateNoiseSigma)";
@@ -66,7 +66,7 @@ ExperimentView ViewOf(const RunMetadata& m, const ExperimentSlice& slice) {
   const double hi = *(out_end - 1);
   for (std::size_t i = 0; i < slice.measured; ++i) {
     const double x = m.measured.positions[slice.first_measured + i];
-    if (x < lo - kPositionTolerance || x > hi + kPositionTolerance) continue;
+    if (x < lo - kPositionSlack || x > hi + kPositionSlack) continue;
     v.x.push_back(x);
     v.y.push_back(m.measured.values[slice.first_measured + i]);
     if (slice.outputs == 1) {
