@@ -1,11 +1,14 @@
 // The fit and sanity checks on the 45 cm example, in short runs (3 waves of 100): the issue's two
 // unit mistakes (`length = 90`, cm typed for m; `normalise = false` with the data in µm and the
 // unit left at m), a zero load and signed data warn, naming the key; the example as shipped does
-// not. (The shipped examples at full length: tests/examples/posterior_test.cpp.)
+// not. (The shipped examples at full length: tests/examples/posterior_test.cpp.) And the issue's
+// overconfident case: a full-length scan calibrated with plain thresholds for 8 waves warns of
+// the threshold below the noise; the noise-aware acceptance on the same data does not.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -14,7 +17,10 @@
 #include <string>
 #include <vector>
 
+#include "combabc/config/config.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/plate/sensor_model.hpp"
+#include "combabc/rng/random_stream.hpp"
 #include "combabc/services/run.hpp"
 #include "support/test_support.hpp"
 
@@ -145,6 +151,65 @@ TEST(FitChecksOnTheExample, SignedDataWarn) {
       scratch, "signed data", [](std::string&) {}, scratch.path() / "signed.csv");
   EXPECT_TRUE(Mentions(checks, "negative_data", "displacement_column"))
       << FormatFitChecks(checks, "m");
+}
+
+// The 45 cm example's truth, scanned 0-89 cm, from a finer mesh with a 20 % stiffer foundation,
+// normalised, plus noise of 1 % of the peak; written as position_cm,w.
+void WriteFullLengthScan(const fs::path& csv) {
+  const CalibrationConfig base = LoadConfig((kExample / "least_squares.toml").string());
+  plate::SensorOptions o = base.model;
+  o.elements_per_section *= 2;
+  o.elements_across_width = 2 * o.ElementsAcrossWidth();
+  o.foundation_stiffness *= 1.2;
+  o.normalise = true;
+  o.load_cases.resize(1);
+  o.load_cases[0].output_positions.clear();
+  for (int cm = 0; cm <= 89; ++cm) o.load_cases[0].output_positions.push_back(cm * 0.01);
+  const plate::SensorModel model(o);
+  const std::string truth = "101101010001101001011011010001101100";  // examples/sensor-45cm
+  std::vector<std::uint8_t> clamps;
+  clamps.reserve(truth.size());
+  for (char c : truth) clamps.push_back(c == '1');
+  std::vector<double> w(o.load_cases[0].output_positions.size());
+  model.Profile(clamps, w);
+  RandomStream rng(7, 0, 0);
+  std::ofstream out(csv);
+  out << "position_cm,w\n";
+  for (std::size_t i = 0; i < w.size(); ++i) out << i << ',' << w[i] + 0.01 * rng.Normal() << '\n';
+}
+
+FitChecks FullLengthChecks(const TempFolder& scratch,
+                           const std::string& name,
+                           const std::string& metric,
+                           int waves) {
+  std::string text = ExampleText();
+  text = text.substr(0, text.find("[data]"));
+  text += "[data]\ncsv = \"" + (scratch.path() / "scan.csv").string() +
+          "\"\nposition_column = \"position_cm\"\ndisplacement_column = \"w\"\n"
+          "position_unit = \"cm\"\ndisplacement_unit = \"um\"\nnormalise = true\n\n" +
+          metric + "\n[[metric.component]]\ntype = \"least_squares\"\nwindow = [0, 89]\n\n" +
+          "[sampler]\nwaves = " + std::to_string(waves) +
+          "\naccepted_per_wave = 500\nestimator = \"importance\"\nseed = 2024\nthreads = 2\n";
+  const fs::path dir = scratch.path() / name;
+  fs::create_directories(dir);
+  { std::ofstream(dir / "run.toml") << text; }
+  services::RunRequest request;
+  request.config_path = (dir / "run.toml").string();
+  request.report = false;
+  const services::RunOutcome outcome = services::RunCalibration(request);
+  std::cout << name << ":\n" << FormatFitChecks(outcome.checks, "m");
+  return outcome.checks;
+}
+
+TEST(FitChecksOnTheExample, FullLengthScanWithPlainThresholdsWarnsOfOverconfidence) {
+  const TempFolder scratch("fit-checks-full-length");
+  WriteFullLengthScan(scratch.path() / "scan.csv");
+  const FitChecks plain = FullLengthChecks(scratch, "plain", "[metric]\nquantile = 0.3\n", 8);
+  EXPECT_TRUE(Mentions(plain, "threshold_below_noise", "noise = \"gaussian\""))
+      << FormatFitChecks(plain, "m");
+  const FitChecks aware = FullLengthChecks(
+      scratch, "noise-aware", "[metric]\nquantile = 0.3\nnoise = \"gaussian\"\ntarget = 1\n", 30);
+  EXPECT_TRUE(Warnings(aware).empty()) << FormatFitChecks(aware, "m");
 }
 
 }  // namespace
