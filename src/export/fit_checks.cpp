@@ -3,9 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <set>
 #include <sstream>
+#include <utility>
 
 #include "combabc/core/check.hpp"
 #include "combabc/export/export.hpp"
@@ -400,6 +403,8 @@ void CheckAfter(const RunMetadata& m,
     const double best_ss = n * best_rms * best_rms;
     const double worst_ss = n * worst_rms * worst_rms;
     const double band = (worst_ss - best_ss) / unit;
+    std::set<std::pair<std::vector<std::uint8_t>, std::vector<double>>> accepted;
+    for (const Particle& q : final_wave->particles) accepted.emplace(q.theta.bits, q.theta.reals);
     std::size_t dropped = 0;
     for (const WaveRecord& w : h.waves) {
       if (&w == final_wave) continue;
@@ -408,10 +413,10 @@ void CheckAfter(const RunMetadata& m,
         if (curve.empty()) continue;
         const double rms = Rms(curve, v.y);
         const double ss = n * rms * rms;
-        const bool kept = std::any_of(final_wave->particles.begin(),
-                                      final_wave->particles.end(),
-                                      [&](const Particle& q) { return q.theta == p.theta; });
-        if (ss > worst_ss && ss <= best_ss + options.overfit_loglik * unit && !kept) ++dropped;
+        if (ss > worst_ss && ss <= best_ss + options.overfit_loglik * unit &&
+            accepted.count({p.theta.bits, p.theta.reals}) == 0) {
+          ++dropped;
+        }
       }
     }
     if (band < options.overfit_loglik && dropped > 0) {
