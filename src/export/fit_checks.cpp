@@ -213,7 +213,9 @@ void CheckBefore(const ExperimentView& v,
              "position_unit against the model's (m)");
     return;
   }
-  if (first != nullptr && first->particles.empty() && first->candidates > 0) {
+  // The run's, not an experiment's: said once, with the first experiment.
+  if (first != nullptr && first->particles.empty() && first->candidates > 0 &&
+      checks.overview.size() == 1) {
     Warn(checks.before,
          "nothing_accepted",
          "the first wave accepted none of its " + std::to_string(first->candidates) +
