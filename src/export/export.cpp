@@ -1,24 +1,22 @@
 // Export of a run history to CSV + JSON (files and columns: docs/history.md, "Export").
 #include "combabc/export/export.hpp"
-#include "combabc/export/fit_checks.hpp"
 
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <cstdio>
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "combabc/export/fit_checks.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
 namespace {
 
-using export_internal::JsonArray;
-using export_internal::JsonNumber;
-using export_internal::JsonString;
-using export_internal::Number;
+using export_text::JsonArray;
+using export_text::JsonNumber;
+using export_text::JsonString;
+using export_text::Number;
 
 // Quoted only when needed (RFC 4180), so plain names stay plain for MATLAB.
 std::string CsvField(const std::string& text) {

@@ -18,9 +18,9 @@
 namespace combabc {
 namespace {
 
-using export_internal::JsonArray;
-using export_internal::JsonNumber;
-using export_internal::JsonString;
+using export_text::JsonArray;
+using export_text::JsonNumber;
+using export_text::JsonString;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Slack (metres) when placing a measured point among the output positions, as the distance's.

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace combabc::export_internal {
+namespace combabc::export_text {
 
 // Shortest text that reads back to the same double; Inf / -Inf / NaN as pandas and MATLAB read
 // them.
@@ -61,4 +61,4 @@ inline std::string JsonArray(const std::vector<double>& values) {
   return out + "]";
 }
 
-}  // namespace combabc::export_internal
+}  // namespace combabc::export_text
