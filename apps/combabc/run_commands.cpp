@@ -39,6 +39,8 @@ struct ResumeArgs {
 
 void PrintOutcome(const services::RunOutcome& outcome) {
   const RunSummary& summary = outcome.history.summary;
+  // The fit and sanity checks: warnings, on stderr, never an error.
+  std::cerr << FormatFitChecks(outcome.checks, "m");
   std::cout << summary.BriefReport() << "\n"
             << "history: " << outcome.history_path << "\n";
   if (!outcome.report_directory.empty()) {

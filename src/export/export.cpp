@@ -8,6 +8,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/export/fit_checks.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
@@ -388,7 +389,8 @@ void WriteSummary(OutputDirectory& dir,
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
         << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
   }
-  out << "\n  ],\n  \"answer\": " << AnswerJson(SummariseAnswer(m, h, positions)) << "\n}\n";
+  out << "\n  ],\n  \"answer\": " << AnswerJson(SummariseAnswer(m, h, positions))
+      << ",\n  \"checks\": " << FitChecksJson(ComputeFitChecks(m, h), 2) << "\n}\n";
 }
 
 void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptions& options) {

@@ -1,6 +1,7 @@
 #pragma once
-// The text of numbers and strings in the export's files (CSV and JSON), shared by export.cpp and
-// answer.cpp. Private to src/export.
+// The text of numbers and strings in the export's files (CSV and JSON), shared by export.cpp,
+// answer.cpp and fit_checks.cpp, so that summary.json has one spelling of a number. Private to
+// src/export.
 #include <charconv>
 #include <cmath>
 #include <cstdio>

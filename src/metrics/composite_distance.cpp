@@ -261,14 +261,48 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
 
 double EstimateNoiseSigma(std::span<const double> x, std::span<const double> y) {
   COMBABC_CHECK(x.size() == y.size() && x.size() >= 3);
-  double sum = 0.0;
-  for (std::size_t i = 1; i + 1 < x.size(); ++i) {
-    const double a = (x[i + 1] - x[i]) / (x[i + 1] - x[i - 1]);
-    const double b = (x[i] - x[i - 1]) / (x[i + 1] - x[i - 1]);
-    const double e = a * y[i - 1] + b * y[i + 1] - y[i];
-    sum += e * e / (a * a + b * b + 1.0);
+  const std::size_t k = std::min<std::size_t>(5, x.size() - 1);
+  std::vector<double> e;
+  e.reserve(x.size() - k);
+  for (std::size_t i = 0; i + k < x.size(); ++i) {
+    double sum = 0.0;
+    double norm = 0.0;
+    for (std::size_t j = 0; j <= k; ++j) {
+      double c = 1.0;
+      for (std::size_t m = 0; m <= k; ++m) {
+        if (m != j) c /= x[i + j] - x[i + m];
+      }
+      sum += c * y[i + j];
+      norm += c * c;
+    }
+    e.push_back(std::abs(sum) / std::sqrt(norm));
   }
-  return std::sqrt(sum / static_cast<double>(x.size() - 2));
+  std::vector<double> sorted = e;
+  const std::size_t half = sorted.size() / 2;
+  std::nth_element(
+      sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(half), sorted.end());
+  double median = sorted[half];
+  if (sorted.size() % 2 == 0) {
+    median = 0.5 * (median + *std::max_element(sorted.begin(),
+                                               sorted.begin() + static_cast<std::ptrdiff_t>(half)));
+  }
+  // 1.4826 = 1 / Phi^-1(3/4): the MAD of N(0, sigma^2) is sigma / 1.4826.
+  const double cut = 3.0 * 1.482602218505602 * median;
+  double squares = 0.0;
+  std::size_t kept = 0;
+  for (double v : e) {
+    if (v <= cut) {
+      squares += v * v;
+      ++kept;
+    }
+  }
+  // E[e^2 | |e| <= 3 sigma] = sigma^2 (1 - 6 phi(3) / (2 Phi(3) - 1)) = 0.973336 sigma^2.
+  constexpr double kCutVariance = 0.9733369246625415;
+  const double sigma = std::sqrt(squares / (static_cast<double>(kept) * kCutVariance));
+  // Rounding in the differences, not noise: exactly polynomial data read 0.
+  double scale = 0.0;
+  for (double v : y) scale = std::max(scale, std::abs(v));
+  return sigma <= 64.0 * std::numeric_limits<double>::epsilon() * scale ? 0.0 : sigma;
 }
 
 }  // namespace combabc

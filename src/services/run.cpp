@@ -109,6 +109,16 @@ RunOutcome Execute(Problem& problem,
   }
   OnPrimary(executor, [&] {
     store->Finish(outcome.history.summary);
+    // From the stored history: a resumed run's earlier waves count too. Warnings, never an error:
+    // a history that cannot be read back here is for verify to judge.
+    try {
+      outcome.checks = ComputeFitChecks(store->LoadMetadata(), store->LoadHistory());
+    } catch (const Error& e) {
+      outcome.checks.after.push_back(
+          {"note",
+           "checks_failed",
+           std::string("the fit checks could not read the history: ") + e.what()});
+    }
     if (!report) return;
     try {
       outcome.report_directory = WriteReport(store->path(), ReportDirectory(store->path()));

@@ -2,6 +2,7 @@
 // confidently wrong: no clamp may end with |P(fixed) - 0.5| > 0.4 on the wrong side of the ground
 // truth its data were generated from. The truth is read from the data file's header, which
 // examples/generate_data.py writes ("# truth <one 0/1 per clamp> ..."), so it is stated once.
+// And no example may draw a warning from the fit and sanity checks.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -17,6 +18,7 @@
 
 #include "combabc/config/config.hpp"
 #include "combabc/data/measured_data.hpp"
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/services/run.hpp"
 #include "support/test_support.hpp"
 
@@ -118,6 +120,14 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
     EXPECT_TRUE(wrong.empty()) << "confidently wrong about clamps " << List(wrong);
     // And not merely uninformative: each example identifies the clamps next to its load.
     EXPECT_GE(recovered.size(), 2u) << "recovered only " << List(recovered);
+    // Nor do the fit and sanity checks (docs/history.md, "Checks") find fault with an example.
+    const std::string checks = FormatFitChecks(outcome.checks, "m");
+    std::cout << checks;
+    for (const auto* list : {&outcome.checks.before, &outcome.checks.after}) {
+      for (const CheckMessage& m : *list) {
+        EXPECT_NE(m.severity, "warning") << m.code << ": " << m.message;
+      }
+    }
   }
 }
 

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/services/executor_factory.hpp"
@@ -31,6 +32,7 @@ struct RunOutcome {
   std::string history_path;
   std::string report_directory;  // empty when no report was written
   RunHistory history;
+  FitChecks checks;  // the fit and sanity checks (docs/history.md, "Checks"); primary only
 };
 
 // `progress` sees every wave start, batch and wave end (the CLI's progress bar) and may interrupt.

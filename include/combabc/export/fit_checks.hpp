@@ -1,0 +1,117 @@
+#pragma once
+// Fit and sanity checks of a run (docs/history.md, "Checks"): pure functions of its history (the
+// measured data, the stored curves, the thresholds), so that run and resume print them, export
+// writes them into summary.json and tests call them without the CLI. Each warning is one line
+// naming the likely cause and the config key; none stops a run.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "combabc/history/history_store.hpp"
+
+namespace combabc {
+
+// The documented levels of the checks (docs/history.md, "Checks").
+struct FitCheckOptions {
+  // units_mismatch: the data's peak and the median peak of the first wave's curves at the
+  // measured positions differ by more than this factor (1.5 orders of magnitude).
+  double scale_factor = 31.6;
+  // negative_data: a measured value below -max(4 noise sigmas, this fraction of the data's peak)
+  // (noise on an amplitude near zero makes small negative values).
+  double negative_fraction = 0.05;
+  // poor_fit: the best accepted curve's RMS residual exceeds this many noise sigmas.
+  double poor_fit_ratio = 3.0;
+  // threshold_stalled: the last `stall_waves` complete waves cut a plain threshold by less than
+  // this fraction in all.
+  double stall_reduction = 0.1;
+  int stall_waves = 2;
+  // threshold_below_noise (plain thresholds only): the final wave's accepted curves lie within
+  // `overfit_loglik` units of Gaussian log-likelihood of the best of them (n (worst RMS^2 -
+  // best RMS^2) / (2 sigma^2) below it), and earlier waves hold particles within as much of the
+  // best that the final wave no longer accepts: the threshold rejects what the noise cannot tell
+  // apart.
+  double overfit_loglik = 1.0;
+  // noise_unresolved: the best curve, noise-free, reads more than this fraction of the data's
+  // noise estimate (the profile's own detail, not noise): threshold_below_noise is not checked.
+  double shape_fraction = 0.5;
+  // The predictive band: these quantiles of the final wave's accepted curves.
+  double band_low = 0.05;
+  double band_high = 0.95;
+  bool IsValid(std::string* why) const;
+};
+
+struct CheckMessage {
+  std::string severity;  // "warning" or "note"
+  std::string code;      // e.g. "units_mismatch"
+  std::string message;   // one line: what, the likely cause, the config key
+};
+
+// Before sampling: the data against the first wave's curves (the prior predictive when its
+// thresholds were infinite, as by default).
+struct ExperimentOverview {
+  std::string experiment;
+  std::size_t points = 0;  // measured points
+  double position_low = 0.0;
+  double position_high = 0.0;
+  double data_low = 0.0;   // smallest measured value
+  double data_peak = 0.0;  // largest |measured value|
+  // 5 % and 95 % quantiles of the first wave's curves' peaks |Y*| at the measured positions (as
+  // the distance compares them: scaled to peak 1 when the data are normalised); NaN without curves.
+  double simulated_peak_low = 0.0;
+  double simulated_peak_high = 0.0;
+  bool prior_predictive = false;  // the first wave accepted every draw (infinite thresholds)
+};
+
+struct NoiseLevel {
+  std::string experiment;
+  double value = 0.0;  // EstimateNoiseSigma of the measured points
+  std::string method;
+  // The same estimate of the best accepted curve (noise-free): what the profile itself reads;
+  // NaN without curves.
+  double shape = 0.0;
+};
+
+struct FitVerdict {
+  std::string experiment;
+  double best_rms = 0.0;     // the best accepted curve's RMS residual at the measured positions
+  double noise_sigma = 0.0;  // NoiseLevel::value
+  double ratio = 0.0;        // best_rms / noise_sigma
+  std::string verdict;       // "good" or "poor" (ratio > FitCheckOptions::poor_fit_ratio)
+};
+
+// The posterior predictive check of one experiment: the final complete wave's accepted curves at
+// the measured positions (in range of the outputs), weighted as the run's estimator weighs them.
+struct PredictiveCheck {
+  std::string experiment;
+  int wave = 0;  // 1-based
+  std::vector<double> positions;
+  std::vector<double> measured;
+  std::vector<double> band_low;
+  std::vector<double> band_high;
+  std::vector<double> median;
+  std::vector<double> best;       // the accepted curve with the smallest RMS residual
+  std::vector<double> residuals;  // measured - best
+};
+
+struct FitChecks {
+  std::vector<ExperimentOverview> overview;
+  std::vector<CheckMessage> before;
+  std::vector<CheckMessage> after;
+  std::vector<NoiseLevel> noise;
+  std::vector<FitVerdict> fit;
+  std::vector<PredictiveCheck> predictive;
+};
+
+FitChecks ComputeFitChecks(const RunMetadata& metadata,
+                           const RunHistory& history,
+                           const FitCheckOptions& options = {});
+
+// What run and resume print (on stderr): a line per experiment (range, data against the first
+// wave's curves, noise, fit), then every warning and note on one line each.
+std::string FormatFitChecks(const FitChecks& checks, const std::string& position_unit);
+
+// summary.json's "checks" object (docs/history.md), indented by `indent` spaces after its first
+// line.
+std::string FitChecksJson(const FitChecks& checks, int indent);
+
+}  // namespace combabc

@@ -1,0 +1,560 @@
+// Fit and sanity checks of a run from its history (docs/history.md, "Checks").
+#include "combabc/export/fit_checks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "combabc/core/check.hpp"
+#include "combabc/export/export.hpp"
+#include "combabc/metrics/composite_distance.hpp"
+#include "export/json_text.hpp"
+
+namespace combabc {
+namespace {
+
+using export_text::JsonArray;
+using export_text::JsonNumber;
+using export_text::JsonString;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Slack (metres) when placing a measured point among the output positions, as the distance's.
+constexpr double kPositionSlack = 1e-9;
+const char* const kNoiseMethod =
+    "fifth divided differences of the measured points: MAD, then the RMS within 3 MADs "
+    "(EstimateNoiseSigma)";
+
+std::string Short(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// "experiment \"45 cm\": " for a named experiment, "" for the single unnamed one.
+std::string Prefix(const std::string& name) {
+  return name.empty() ? std::string() : "experiment \"" + name + "\": ";
+}
+
+// One experiment's measured points that lie within its output positions, and where each is read
+// from the simulated outputs (linear interpolation, as the distance reads them).
+struct ExperimentView {
+  ExperimentSlice slice;
+  std::vector<double> x;
+  std::vector<double> y;
+  std::vector<std::size_t> index;  // absolute output index of the left neighbour
+  std::vector<double> weight;      // of the right neighbour
+  // The data are normalised (DataConfig::normalise makes max |y| exactly 1): the distance divides
+  // each curve by its largest |Y*| at the measured positions, and so do the checks.
+  bool normalised = false;
+};
+
+ExperimentView ViewOf(const RunMetadata& m, const ExperimentSlice& slice) {
+  ExperimentView v;
+  v.slice = slice;
+  const auto out_begin =
+      m.output_positions.begin() + static_cast<std::ptrdiff_t>(slice.first_output);
+  const auto out_end = out_begin + static_cast<std::ptrdiff_t>(slice.outputs);
+  double peak = 0.0;
+  for (std::size_t i = 0; i < slice.measured; ++i) {
+    peak = std::max(peak, std::abs(m.measured.values[slice.first_measured + i]));
+  }
+  v.normalised = peak == 1.0;
+  if (slice.outputs == 0) return v;
+  const double lo = *out_begin;
+  const double hi = *(out_end - 1);
+  for (std::size_t i = 0; i < slice.measured; ++i) {
+    const double x = m.measured.positions[slice.first_measured + i];
+    if (x < lo - kPositionSlack || x > hi + kPositionSlack) continue;
+    v.x.push_back(x);
+    v.y.push_back(m.measured.values[slice.first_measured + i]);
+    if (slice.outputs == 1) {
+      v.index.push_back(slice.first_output);
+      v.weight.push_back(0.0);
+      continue;
+    }
+    const auto upper = std::upper_bound(out_begin, out_end, x);
+    std::size_t left = static_cast<std::size_t>(upper - out_begin);
+    left = std::min(left == 0 ? 0 : left - 1, slice.outputs - 2);
+    const double x0 = *(out_begin + static_cast<std::ptrdiff_t>(left));
+    const double x1 = *(out_begin + static_cast<std::ptrdiff_t>(left + 1));
+    v.index.push_back(slice.first_output + left);
+    v.weight.push_back(std::clamp((x - x0) / (x1 - x0), 0.0, 1.0));
+  }
+  return v;
+}
+
+// A particle's curve at the view's measured points, scaled as the distance scales it; empty when
+// the particle holds no output. `raw`: unscaled.
+std::vector<double> CurveAt(const ExperimentView& v, const Particle& p, bool raw = false) {
+  std::vector<double> out;
+  if (p.output.empty() || v.x.empty()) return out;
+  out.reserve(v.x.size());
+  double peak = 0.0;
+  for (std::size_t j = 0; j < v.x.size(); ++j) {
+    const std::size_t i = v.index[j];
+    const double w = v.weight[j];
+    const double y0 = i < p.output.size() ? p.output[i] : kNaN;
+    const double y1 = w > 0.0 && i + 1 < p.output.size() ? p.output[i + 1] : y0;
+    out.push_back((1.0 - w) * y0 + w * y1);
+    peak = std::max(peak, std::abs(out.back()));
+  }
+  if (v.normalised && !raw && peak > 0.0) {
+    for (double& y : out) y /= peak;
+  }
+  return out;
+}
+
+double Rms(const std::vector<double>& curve, const std::vector<double>& y) {
+  double sum = 0.0;
+  for (std::size_t j = 0; j < y.size(); ++j) sum += (y[j] - curve[j]) * (y[j] - curve[j]);
+  return std::sqrt(sum / static_cast<double>(y.size()));
+}
+
+// The q-quantile of values under weights (the first value whose cumulative weight reaches q of
+// the total; equal weights when they sum to zero).
+double WeightedQuantile(std::vector<std::pair<double, double>> values, double q) {
+  std::sort(values.begin(), values.end());
+  double total = 0.0;
+  for (const auto& [value, weight] : values) total += weight;
+  const bool equal = !(total > 0.0);
+  if (equal) total = static_cast<double>(values.size());
+  double sum = 0.0;
+  for (const auto& [value, weight] : values) {
+    sum += equal ? 1.0 : weight;
+    if (sum >= q * total) return value;
+  }
+  return values.empty() ? kNaN : values.back().first;
+}
+
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const double at = q * static_cast<double>(values.size() - 1);
+  const auto i = static_cast<std::size_t>(at);
+  if (i + 1 >= values.size()) return values.back();
+  return values[i] + (at - static_cast<double>(i)) * (values[i + 1] - values[i]);
+}
+
+const WaveRecord* FinalWave(const RunHistory& h) {
+  for (auto it = h.waves.rbegin(); it != h.waves.rend(); ++it) {
+    if (it->complete) return &*it;
+  }
+  return h.waves.empty() || h.waves.back().particles.empty() ? nullptr : &h.waves.back();
+}
+
+void Warn(std::vector<CheckMessage>& to, const char* code, const std::string& message) {
+  to.push_back({"warning", code, message});
+}
+
+void Note(std::vector<CheckMessage>& to, const char* code, const std::string& message) {
+  to.push_back({"note", code, message});
+}
+
+// Before sampling: the data against the first wave's curves.
+void CheckBefore(const ExperimentView& v,
+                 const RunHistory& h,
+                 const FitCheckOptions& options,
+                 FitChecks& checks) {
+  ExperimentOverview o;
+  o.experiment = v.slice.name;
+  o.points = v.slice.measured;
+  o.simulated_peak_low = kNaN;
+  o.simulated_peak_high = kNaN;
+  const std::string prefix = Prefix(v.slice.name);
+  // Negative beyond what noise on an amplitude near zero gives: 4 sigma and 5 % of the peak.
+  const double noise = v.y.size() >= 3 ? EstimateNoiseSigma(v.x, v.y) : 0.0;
+  double below = 0.0;
+  for (double y : v.y) below = std::max(below, std::abs(y));
+  below = -std::max(4.0 * noise, options.negative_fraction * below);
+  std::size_t negative = 0;
+  for (std::size_t i = 0; i < v.y.size(); ++i) {
+    if (i == 0) {
+      o.position_low = v.x[i];
+      o.data_low = v.y[i];
+    }
+    o.position_high = v.x[i];
+    o.data_low = std::min(o.data_low, v.y[i]);
+    o.data_peak = std::max(o.data_peak, std::abs(v.y[i]));
+    if (v.y[i] < below) ++negative;
+  }
+  const WaveRecord* first = h.waves.empty() ? nullptr : &h.waves.front();
+  std::vector<double> peaks;
+  double lowest = std::numeric_limits<double>::infinity();
+  if (first != nullptr) {
+    o.prior_predictive = std::all_of(first->thresholds.begin(),
+                                     first->thresholds.end(),
+                                     [](double e) { return std::isinf(e) && e > 0; });
+    for (const Particle& p : first->particles) {
+      const std::vector<double> raw = CurveAt(v, p, /*raw=*/true);
+      if (raw.empty()) continue;
+      double peak = 0.0;
+      for (double y : raw) {
+        peak = std::max(peak, std::abs(y));
+        lowest = std::min(lowest, y);
+      }
+      peaks.push_back(v.normalised && peak > 0.0 ? 1.0 : peak);
+    }
+  }
+  if (!peaks.empty()) {
+    o.simulated_peak_low = Quantile(peaks, 0.05);
+    o.simulated_peak_high = Quantile(peaks, 0.95);
+  }
+  checks.overview.push_back(o);
+  if (v.y.empty()) {
+    Warn(checks.before,
+         "no_data_in_range",
+         prefix +
+             "no measured point lies within the simulated positions: check [data] "
+             "position_unit against the model's (m)");
+    return;
+  }
+  // The run's, not an experiment's: said once, with the first experiment.
+  if (first != nullptr && first->particles.empty() && first->candidates > 0 &&
+      checks.overview.size() == 1) {
+    Warn(checks.before,
+         "nothing_accepted",
+         "the first wave accepted none of its " + std::to_string(first->candidates) +
+             " candidates: every distance was infinite or above the first threshold; a model "
+             "whose outputs are all zero ([model.load] amplitude = 0?) cannot be compared");
+  }
+  if (!peaks.empty() && std::all_of(peaks.begin(), peaks.end(), [](double p) { return p == 0; })) {
+    Warn(checks.before,
+         "zero_outputs",
+         prefix +
+             "every simulated curve of the first wave is zero at the measured positions "
+             "(every distance is infinite): the model is not loaded; check [model.load] "
+             "amplitude");
+    return;
+  }
+  if (negative > 0 && !peaks.empty() && lowest >= 0.0) {
+    Warn(checks.before,
+         "negative_data",
+         prefix + std::to_string(negative) + " of " + std::to_string(v.y.size()) +
+             " measured values are below " + Short(below) +
+             ", beyond the noise, but the model's outputs are amplitudes (|w| >= 0): "
+             "give amplitudes in [data] displacement_column (the data may hold signed "
+             "displacements)");
+  }
+  if (!v.normalised && !peaks.empty() && o.data_peak > 0.0) {
+    const double typical = Quantile(peaks, 0.5);
+    const double ratio = typical > 0.0 ? o.data_peak / typical : kNaN;
+    if (ratio > options.scale_factor || ratio < 1.0 / options.scale_factor) {
+      Warn(checks.before,
+           "units_mismatch",
+           prefix + "the measured peak (" + Short(o.data_peak) + ") is " + Short(ratio) +
+               " times the simulated peaks at the measured positions (median " + Short(typical) +
+               "): the data and the model are in different units; check [data] "
+               "displacement_unit against the model's output (m), or set [data] normalise = "
+               "true");
+    }
+  }
+}
+
+// The plain (kThreshold) components of the slice as (threshold slot, name): the slots count
+// every non-indicator component of the run in order.
+std::vector<std::pair<std::size_t, std::string>> PlainSlots(const RunMetadata& m,
+                                                            const ExperimentSlice& slice,
+                                                            bool* noise_aware) {
+  std::vector<std::pair<std::size_t, std::string>> out;
+  std::size_t slot = 0;
+  *noise_aware = false;
+  for (std::size_t c = 0; c < m.distance_components.size(); ++c) {
+    const DistanceComponent& dc = m.distance_components[c];
+    if (dc.kind == ComponentKind::kIndicator) continue;
+    const bool mine = c >= slice.first_component && c < slice.first_component + slice.components;
+    if (mine && dc.kind == ComponentKind::kThreshold) out.emplace_back(slot, dc.name);
+    if (mine && dc.kind == ComponentKind::kNegLogLikelihood) *noise_aware = true;
+    ++slot;
+  }
+  return out;
+}
+
+// After sampling: the final complete wave's curves against the data and the noise.
+void CheckAfter(const RunMetadata& m,
+                const ExperimentView& v,
+                const RunHistory& h,
+                const FitCheckOptions& options,
+                FitChecks& checks) {
+  const std::string prefix = Prefix(v.slice.name);
+  NoiseLevel noise{v.slice.name, kNaN, kNoiseMethod, kNaN};
+  if (v.y.size() >= 3) noise.value = EstimateNoiseSigma(v.x, v.y);
+  checks.noise.push_back(noise);
+
+  bool noise_aware = false;
+  const auto plain = PlainSlots(m, v.slice, &noise_aware);
+  // threshold_stalled: the last complete waves barely cut a plain threshold.
+  std::vector<const WaveRecord*> complete;
+  for (const WaveRecord& w : h.waves) {
+    if (w.complete) complete.push_back(&w);
+  }
+  const auto back = static_cast<std::size_t>(options.stall_waves);
+  if (h.summary.termination != Termination::kTargetReached && complete.size() > back) {
+    for (const auto& [slot, name] : plain) {
+      const WaveRecord& before = *complete[complete.size() - 1 - back];
+      const WaveRecord& last = *complete.back();
+      if (slot >= before.thresholds.size() || slot >= last.thresholds.size()) continue;
+      const double a = before.thresholds[slot];
+      const double b = last.thresholds[slot];
+      if (std::isfinite(a) && std::isfinite(b) && a > 0.0 &&
+          b > (1.0 - options.stall_reduction) * a) {
+        std::ostringstream message;
+        message << prefix << "the threshold of \"" << name << "\" fell only from " << Short(a)
+                << " to " << Short(b) << " over the last " << back
+                << " complete waves: the sampler gets no closer to the data; likely causes: the "
+                   "model cannot reproduce the data (units: [model] length, [data] "
+                   "position_unit, displacement_unit, normalise; the load: [model.load]), or the "
+                   "threshold has reached the noise (then more waves add nothing: [sampler] "
+                   "waves)";
+        Warn(checks.after, "threshold_stalled", message.str());
+      }
+    }
+  }
+
+  const WaveRecord* final_wave = FinalWave(h);
+  if (final_wave == nullptr || v.y.empty()) return;
+  std::vector<std::vector<double>> curves;
+  std::vector<double> weights;
+  for (const Particle& p : final_wave->particles) {
+    std::vector<double> curve = CurveAt(v, p);
+    if (curve.empty()) continue;
+    curves.push_back(std::move(curve));
+    weights.push_back(p.weight);
+  }
+  if (curves.empty()) {
+    Note(checks.after,
+         "no_curves",
+         prefix +
+             "the history keeps no simulated curves, so the fit is not checked ([output] "
+             "keep_simulated_curves = true keeps them)");
+    return;
+  }
+  PredictiveCheck pc;
+  pc.experiment = v.slice.name;
+  pc.wave = final_wave->wave + 1;
+  pc.positions = v.x;
+  pc.measured = v.y;
+  std::size_t best = 0;
+  double best_rms = std::numeric_limits<double>::infinity();
+  double worst_rms = 0.0;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    const double rms = Rms(curves[i], v.y);
+    if (rms < best_rms) {
+      best_rms = rms;
+      best = i;
+    }
+    worst_rms =
+        std::max(worst_rms, std::isnan(rms) ? std::numeric_limits<double>::infinity() : rms);
+  }
+  std::vector<std::pair<double, double>> column(curves.size());
+  for (std::size_t j = 0; j < v.x.size(); ++j) {
+    for (std::size_t i = 0; i < curves.size(); ++i) column[i] = {curves[i][j], weights[i]};
+    pc.band_low.push_back(WeightedQuantile(column, options.band_low));
+    pc.median.push_back(WeightedQuantile(column, 0.5));
+    pc.band_high.push_back(WeightedQuantile(column, options.band_high));
+    pc.best.push_back(curves[best][j]);
+    pc.residuals.push_back(v.y[j] - curves[best][j]);
+  }
+  checks.predictive.push_back(std::move(pc));
+
+  if (!(noise.value >= 0.0) || !std::isfinite(best_rms)) return;
+  // The estimate assumes a profile smooth at the spacing of the measured points; the best curve,
+  // noise-free, says how much the profile itself reads.
+  const double shape = EstimateNoiseSigma(v.x, curves[best]);
+  checks.noise.back().shape = shape;
+  const bool resolved = shape <= options.shape_fraction * noise.value;
+  if (!resolved) {
+    Note(checks.after,
+         "noise_unresolved",
+         prefix + "the noise estimated from the data (" + Short(noise.value) +
+             ") may be the profile's own detail: the best curve, noise-free, reads " +
+             Short(shape) +
+             " by the same estimate (too few measured points per feature of the profile); the "
+             "fit is judged against it all the same and threshold_below_noise is not checked; "
+             "give [metric] sigma_noise if the noise is known");
+  }
+  FitVerdict fit;
+  fit.experiment = v.slice.name;
+  fit.best_rms = best_rms;
+  fit.noise_sigma = noise.value;
+  fit.ratio = noise.value > 0.0 ? best_rms / noise.value
+                                : (best_rms > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+  fit.verdict = fit.ratio > options.poor_fit_ratio ? "poor" : "good";
+  checks.fit.push_back(fit);
+  if (fit.verdict == "poor") {
+    Warn(checks.after,
+         "poor_fit",
+         prefix + "the best accepted curve misses the data by RMS " + Short(best_rms) + ", " +
+             Short(fit.ratio) + " times the noise estimated from the data (" + Short(noise.value) +
+             "): the model cannot reproduce the data; likely causes: units ([model] length, [data] "
+             "position_unit, displacement_unit, normalise), the load ([model.load] x, "
+             "amplitude), the measured window ([data] window), or too few waves");
+  }
+  // threshold_below_noise: the final wave's curves all fit within L log-likelihood units of the
+  // best of them (sums of squares within 2 sigma^2 L), and earlier waves hold curves just as good
+  // that it no longer accepts: the threshold rejects what the noise cannot tell apart. Not with a
+  // poor fit (then the model, not the noise, is what the threshold meets), nor when the noise is
+  // not resolved (its estimate may be too high).
+  if (!noise_aware && !plain.empty() && noise.value > 0.0 && resolved && fit.verdict == "good") {
+    const auto n = static_cast<double>(v.y.size());
+    const double unit = 2.0 * noise.value * noise.value;
+    const double best_ss = n * best_rms * best_rms;
+    const double worst_ss = n * worst_rms * worst_rms;
+    const double band = (worst_ss - best_ss) / unit;
+    std::set<std::pair<std::vector<std::uint8_t>, std::vector<double>>> accepted;
+    for (const Particle& q : final_wave->particles) accepted.emplace(q.theta.bits, q.theta.reals);
+    std::size_t dropped = 0;
+    for (const WaveRecord& w : h.waves) {
+      if (&w == final_wave) continue;
+      for (const Particle& p : w.particles) {
+        const std::vector<double> curve = CurveAt(v, p);
+        if (curve.empty()) continue;
+        const double rms = Rms(curve, v.y);
+        const double ss = n * rms * rms;
+        if (ss > worst_ss && ss <= best_ss + options.overfit_loglik * unit &&
+            accepted.count({p.theta.bits, p.theta.reals}) == 0) {
+          ++dropped;
+        }
+      }
+    }
+    if (band < options.overfit_loglik && dropped > 0) {
+      Warn(checks.after,
+           "threshold_below_noise",
+           prefix + "the plain threshold has fallen below the noise: the final wave's curves fit " +
+               "the data within " + Short(band) + " log-likelihood units of the best (RMS " +
+               Short(best_rms) + " to " + Short(worst_rms) + ", sigma " + Short(noise.value) +
+               " estimated from the data) and it rejects " + std::to_string(dropped) +
+               " earlier particles the noise cannot tell from them, so the posterior is "
+               "overconfident; use [metric] noise = \"gaussian\" (the noise-aware acceptance) or "
+               "fewer [sampler] waves");
+    }
+  }
+}
+
+void MessagesJson(std::ostream& out,
+                  const std::vector<CheckMessage>& messages,
+                  const std::string& pad) {
+  out << "[";
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    out << (i ? "," : "") << "\n"
+        << pad << "  {\"severity\": " << JsonString(messages[i].severity)
+        << ", \"code\": " << JsonString(messages[i].code)
+        << ", \"message\": " << JsonString(messages[i].message) << "}";
+  }
+  if (!messages.empty()) out << "\n" << pad;
+  out << "]";
+}
+
+}  // namespace
+
+bool FitCheckOptions::IsValid(std::string* why) const {
+  auto fail = [why](const char* field) {
+    if (why != nullptr) *why = field;
+    return false;
+  };
+  if (!(scale_factor > 1.0)) return fail("scale_factor must be > 1");
+  if (!(poor_fit_ratio > 0.0)) return fail("poor_fit_ratio must be > 0");
+  if (!(stall_reduction > 0.0 && stall_reduction < 1.0)) {
+    return fail("stall_reduction must lie in (0, 1)");
+  }
+  if (stall_waves < 1) return fail("stall_waves must be >= 1");
+  if (!(negative_fraction >= 0.0 && negative_fraction < 1.0)) {
+    return fail("negative_fraction must lie in [0, 1)");
+  }
+  if (!(shape_fraction > 0.0)) return fail("shape_fraction must be > 0");
+  if (!(overfit_loglik >= 0.0)) return fail("overfit_loglik must be >= 0");
+  if (!(band_low >= 0.0 && band_low < band_high && band_high <= 1.0)) {
+    return fail("band_low < band_high must lie in [0, 1]");
+  }
+  return true;
+}
+
+FitChecks ComputeFitChecks(const RunMetadata& metadata,
+                           const RunHistory& history,
+                           const FitCheckOptions& options) {
+  std::string why;
+  COMBABC_CHECK(options.IsValid(&why));
+  FitChecks checks;
+  for (const ExperimentSlice& slice : ExperimentSlices(metadata)) {
+    const ExperimentView view = ViewOf(metadata, slice);
+    CheckBefore(view, history, options, checks);
+    CheckAfter(metadata, view, history, options, checks);
+  }
+  return checks;
+}
+
+std::string FormatFitChecks(const FitChecks& checks, const std::string& position_unit) {
+  std::ostringstream out;
+  for (std::size_t e = 0; e < checks.overview.size(); ++e) {
+    const ExperimentOverview& o = checks.overview[e];
+    out << "checks: " << Prefix(o.experiment) << o.points << " measured points at "
+        << Short(o.position_low) << "-" << Short(o.position_high) << " " << position_unit
+        << ", values " << Short(o.data_low) << " to " << Short(o.data_peak) << " (peak); ";
+    if (std::isnan(o.simulated_peak_low)) {
+      out << "no simulated curves stored";
+    } else {
+      out << (o.prior_predictive ? "prior predictive" : "first wave's") << " peaks "
+          << Short(o.simulated_peak_low) << "-" << Short(o.simulated_peak_high) << " (5-95 %)";
+    }
+    for (const FitVerdict& f : checks.fit) {
+      if (f.experiment != o.experiment) continue;
+      out << "; noise sigma " << Short(f.noise_sigma) << " (estimated), best fit RMS "
+          << Short(f.best_rms) << " = " << Short(f.ratio) << " sigma: " << f.verdict;
+    }
+    out << "\n";
+  }
+  for (const auto* list : {&checks.before, &checks.after}) {
+    for (const CheckMessage& m : *list) {
+      out << m.severity << " [" << m.code << "]: " << m.message << "\n";
+    }
+  }
+  return out.str();
+}
+
+std::string FitChecksJson(const FitChecks& checks, int indent) {
+  const std::string pad(static_cast<std::size_t>(indent), ' ');
+  const std::string in = pad + "  ";
+  std::ostringstream out;
+  out << "{\n" << in << "\"before\": ";
+  MessagesJson(out, checks.before, in);
+  out << ",\n" << in << "\"after\": ";
+  MessagesJson(out, checks.after, in);
+  out << ",\n" << in << "\"noise_sigma\": [";
+  for (std::size_t i = 0; i < checks.noise.size(); ++i) {
+    const NoiseLevel& n = checks.noise[i];
+    out << (i ? ", " : "") << "{\"experiment\": " << JsonString(n.experiment)
+        << ", \"value\": " << JsonNumber(n.value) << ", \"method\": " << JsonString(n.method)
+        << ", \"shape\": " << JsonNumber(n.shape) << "}";
+  }
+  out << "],\n" << in << "\"fit\": [";
+  for (std::size_t i = 0; i < checks.fit.size(); ++i) {
+    const FitVerdict& f = checks.fit[i];
+    out << (i ? ", " : "") << "{\"experiment\": " << JsonString(f.experiment)
+        << ", \"best_rms\": " << JsonNumber(f.best_rms)
+        << ", \"noise_sigma\": " << JsonNumber(f.noise_sigma)
+        << ", \"ratio\": " << JsonNumber(f.ratio) << ", \"verdict\": " << JsonString(f.verdict)
+        << "}";
+  }
+  out << "],\n" << in << "\"predictive\": [";
+  for (std::size_t i = 0; i < checks.predictive.size(); ++i) {
+    const PredictiveCheck& p = checks.predictive[i];
+    const std::string row = ",\n" + in + "   ";
+    out << (i ? "," : "") << "\n"
+        << in << "  {\"experiment\": " << JsonString(p.experiment) << ", \"wave\": " << p.wave
+        << row << "\"positions_m\": " << JsonArray(p.positions) << row
+        << "\"measured\": " << JsonArray(p.measured) << row
+        << "\"band_low\": " << JsonArray(p.band_low) << row
+        << "\"band_high\": " << JsonArray(p.band_high) << row
+        << "\"median\": " << JsonArray(p.median) << row << "\"best\": " << JsonArray(p.best) << row
+        << "\"residuals\": " << JsonArray(p.residuals) << "}";
+  }
+  if (!checks.predictive.empty()) out << "\n" << in;
+  out << "]\n" << pad << "}";
+  return out.str();
+}
+
+}  // namespace combabc

@@ -1,0 +1,276 @@
+// The fit and sanity checks (export/fit_checks.hpp) on hand-built histories: each warning fires on
+// the case it is for and stays silent on a sound run.
+#include "combabc/export/fit_checks.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "combabc/rng/random_stream.hpp"
+
+namespace combabc {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The sensor's decay away from the load, every 1 cm over 0.48-0.80 m.
+std::vector<double> Positions() {
+  std::vector<double> x;
+  for (int cm = 48; cm <= 80; ++cm) x.push_back(cm * 0.01);
+  return x;
+}
+
+double Shape(double x) {
+  const double u = 21.4 * (x - 0.45);
+  return std::exp(-u) * (std::cos(u) + std::sin(u)) / 0.74;
+}
+
+// A one-experiment run: measured `data` at Positions(), simulated at the same positions, one plain
+// threshold component (or a noise-aware one).
+RunMetadata Metadata(const std::vector<double>& data, bool noise_aware = false) {
+  RunMetadata m;
+  m.output_positions = Positions();
+  m.measured.positions = Positions();
+  m.measured.values = data;
+  DistanceComponent c;
+  c.name = "least squares";
+  c.kind = noise_aware ? ComponentKind::kNegLogLikelihood : ComponentKind::kThreshold;
+  m.distance_components = {c};
+  return m;
+}
+
+// A wave whose particles hold `curves`, equally weighted, with threshold `eps`.
+WaveRecord Wave(int number, double eps, const std::vector<std::vector<double>>& curves) {
+  WaveRecord w;
+  w.wave = number - 1;
+  w.thresholds = {eps};
+  w.complete = true;
+  w.candidates = static_cast<std::int64_t>(curves.size());
+  w.accepted = w.candidates;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    Particle p;
+    p.theta.reals = {1000.0 * number + static_cast<double>(i)};  // every particle its own
+    p.output = curves[i];
+    p.weight = 1.0 / static_cast<double>(curves.size());
+    w.particles.push_back(p);
+  }
+  return w;
+}
+
+// `count` smooth curves, as a model gives: the shape scaled by `scale`, each with its own
+// amplitude error and offset of relative size `spread`.
+std::vector<std::vector<double>> Curves(int count,
+                                        double scale,
+                                        double spread,
+                                        std::uint64_t seed) {
+  std::vector<std::vector<double>> out;
+  for (int i = 0; i < count; ++i) {
+    RandomStream rng(seed, 0, static_cast<std::uint64_t>(i));
+    const double amplitude = 1.0 + spread * rng.Normal();
+    const double offset = spread * rng.Normal();
+    std::vector<double> curve;
+    for (double x : Positions()) curve.push_back(scale * (amplitude * Shape(x) + offset));
+    out.push_back(curve);
+  }
+  return out;
+}
+
+// The data: the shape (peak normalised to exactly 1, as data.normalise does) plus 1 % noise.
+std::vector<double> NoisyData(double sigma = 0.01) {
+  RandomStream rng(7, 0, 0);
+  std::vector<double> y;
+  for (double x : Positions()) y.push_back(Shape(x) + sigma * rng.Normal());
+  const double peak = std::abs(*std::max_element(
+      y.begin(), y.end(), [](double a, double b) { return std::abs(a) < std::abs(b); }));
+  for (double& v : y) v /= peak;
+  return y;
+}
+
+std::vector<std::string> Codes(const std::vector<CheckMessage>& messages) {
+  std::vector<std::string> codes;
+  codes.reserve(messages.size());
+  for (const CheckMessage& m : messages) codes.push_back(m.code);
+  return codes;
+}
+
+bool Has(const std::vector<CheckMessage>& messages, const std::string& code) {
+  const auto codes = Codes(messages);
+  return std::find(codes.begin(), codes.end(), code) != codes.end();
+}
+
+// A sound run: prior curves around the data, final curves as close as the noise allows.
+RunHistory SoundHistory() {
+  RunHistory h;
+  h.waves.push_back(Wave(1, kInf, Curves(50, 1.0, 0.3, 1)));
+  h.waves.push_back(Wave(2, 2.0, Curves(50, 1.0, 0.05, 2)));
+  h.waves.push_back(Wave(3, 0.5, Curves(50, 1.0, 0.01, 3)));
+  h.summary.termination = Termination::kMaxWaves;
+  return h;
+}
+
+TEST(FitChecks, ASoundRunWarnsNothingAndReportsItsFit) {
+  const std::vector<double> data = NoisyData();
+  const FitChecks checks = ComputeFitChecks(Metadata(data), SoundHistory());
+  EXPECT_TRUE(checks.before.empty()) << FormatFitChecks(checks, "m");
+  EXPECT_TRUE(checks.after.empty()) << FormatFitChecks(checks, "m");
+  ASSERT_EQ(checks.overview.size(), 1u);
+  EXPECT_TRUE(checks.overview[0].prior_predictive);
+  EXPECT_EQ(checks.overview[0].points, data.size());
+  ASSERT_EQ(checks.fit.size(), 1u);
+  EXPECT_EQ(checks.fit[0].verdict, "good");
+  EXPECT_GT(checks.fit[0].noise_sigma, 0.005);
+  EXPECT_LT(checks.fit[0].noise_sigma, 0.02);
+  ASSERT_EQ(checks.predictive.size(), 1u);
+  const PredictiveCheck& p = checks.predictive[0];
+  EXPECT_EQ(p.wave, 3);
+  ASSERT_EQ(p.positions.size(), data.size());
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    EXPECT_LE(p.band_low[j], p.median[j]);
+    EXPECT_LE(p.median[j], p.band_high[j]);
+    EXPECT_DOUBLE_EQ(p.residuals[j], data[j] - p.best[j]);
+  }
+  // The JSON carries every part under the conventions' names.
+  const std::string json = FitChecksJson(checks, 2);
+  for (const char* key : {"\"before\"",
+                          "\"after\"",
+                          "\"noise_sigma\"",
+                          "\"fit\"",
+                          "\"predictive\"",
+                          "\"band_low\"",
+                          "\"residuals\"",
+                          "\"positions_m\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+}
+
+TEST(FitChecks, DataInMicrometresAgainstAModelInMetresWarnOfUnits) {
+  // Not normalised: data peak 73 (µm read as m) against simulated peaks near 7e-5 m.
+  std::vector<double> data = NoisyData();
+  for (double& y : data) y *= 73.0;
+  RunHistory h;
+  h.waves.push_back(Wave(1, kInf, Curves(50, 7e-5, 0.1, 1)));
+  h.waves.push_back(Wave(2, 1e4, Curves(50, 7e-5, 0.1, 2)));
+  const FitChecks checks = ComputeFitChecks(Metadata(data), h);
+  EXPECT_TRUE(Has(checks.before, "units_mismatch")) << FormatFitChecks(checks, "m");
+  EXPECT_TRUE(Has(checks.after, "poor_fit")) << FormatFitChecks(checks, "m");
+  EXPECT_NE(checks.before[0].message.find("displacement_unit"), std::string::npos);
+  // The same numbers on the same scale do not.
+  std::vector<double> metres = data;
+  for (double& y : metres) y *= 1e-6;
+  EXPECT_FALSE(Has(ComputeFitChecks(Metadata(metres), h).before, "units_mismatch"));
+}
+
+TEST(FitChecks, NegativeDataAgainstAmplitudesWarn) {
+  // Signed displacements: a lobe of the profile below zero.
+  std::vector<double> data = NoisyData();
+  for (std::size_t j = 3; j < 7; ++j) data[j] = -data[j];
+  RunHistory h = SoundHistory();  // its curves are amplitudes, >= 0
+  for (WaveRecord& w : h.waves) {
+    for (Particle& p : w.particles) {
+      for (double& y : p.output) y = std::abs(y);
+    }
+  }
+  EXPECT_TRUE(Has(ComputeFitChecks(Metadata(data), h).before, "negative_data"));
+  // Noise on an amplitude near zero (small negative values) does not.
+  std::vector<double> noisy;
+  RandomStream rng(8, 0, 0);
+  for (double x : Positions()) noisy.push_back(std::abs(Shape(x)) + 0.01 * rng.Normal());
+  ASSERT_LT(*std::min_element(noisy.begin(), noisy.end()), 0.0);
+  EXPECT_FALSE(Has(ComputeFitChecks(Metadata(noisy), h).before, "negative_data"));
+}
+
+TEST(FitChecks, ZeroOutputsAndNothingAcceptedWarnOfTheLoad) {
+  const std::vector<double> data = NoisyData();
+  RunHistory zero;
+  zero.waves.push_back(Wave(1, kInf, Curves(20, 0.0, 0.0, 1)));
+  const FitChecks a = ComputeFitChecks(Metadata(data), zero);
+  ASSERT_TRUE(Has(a.before, "zero_outputs")) << FormatFitChecks(a, "m");
+  EXPECT_NE(a.before[0].message.find("amplitude"), std::string::npos);
+  RunHistory none;
+  none.waves.push_back(Wave(1, kInf, {}));
+  none.waves[0].candidates = 1000;
+  none.waves[0].complete = false;
+  const FitChecks b = ComputeFitChecks(Metadata(data), none);
+  EXPECT_TRUE(Has(b.before, "nothing_accepted")) << FormatFitChecks(b, "m");
+}
+
+TEST(FitChecks, PlainThresholdBelowTheNoiseWarnsOfOverconfidence) {
+  // The final wave holds curves within a hair of each other, and the wave before held others as
+  // close to the data that it rejects: their fits differ by less than the noise can tell apart
+  // (the plain threshold has collapsed onto the best fit).
+  const std::vector<double> data = NoisyData();
+  RunHistory h = SoundHistory();
+  h.waves.push_back(Wave(4, 0.004, Curves(50, 1.0, 0.001, 4)));
+  h.waves.push_back(Wave(5, 0.0035, Curves(50, 1.0, 0.0001, 5)));
+  const FitChecks checks = ComputeFitChecks(Metadata(data), h);
+  ASSERT_TRUE(Has(checks.after, "threshold_below_noise")) << FormatFitChecks(checks, "m");
+  for (const CheckMessage& m : checks.after) {
+    if (m.code == "threshold_below_noise") {
+      EXPECT_NE(m.message.find("noise = \"gaussian\""), std::string::npos);
+    }
+  }
+  // A noise-aware run is judged by its likelihood, not by this check.
+  EXPECT_FALSE(Has(ComputeFitChecks(Metadata(data, true), h).after, "threshold_below_noise"));
+  // Nor does the sound run warn (its final curves spread over many noise levels).
+  EXPECT_FALSE(
+      Has(ComputeFitChecks(Metadata(data), SoundHistory()).after, "threshold_below_noise"));
+  // Nor a run whose final wave is one configuration because every other fits far worse.
+  std::vector<std::vector<double>> worse = Curves(50, 1.0, 0.01, 2);
+  for (auto& curve : worse) {
+    for (double& y : curve) y += 0.1;  // 0.1 off the data everywhere: 10 sigma
+  }
+  RunHistory certain;
+  certain.waves.push_back(Wave(1, kInf, worse));
+  certain.waves.push_back(Wave(2, 0.0035, Curves(50, 1.0, 0.0, 3)));
+  const FitChecks sure = ComputeFitChecks(Metadata(data), certain);
+  EXPECT_FALSE(Has(sure.after, "threshold_below_noise")) << FormatFitChecks(sure, "m");
+}
+
+TEST(FitChecks, RoughCurvesLeaveTheNoiseUnresolved) {
+  // Curves with detail at the spacing of the points (here: noise of their own): the estimate
+  // cannot tell the data's noise from the profile's detail, says so, and does not judge the
+  // threshold against it.
+  const std::vector<double> data = NoisyData();
+  RunHistory h = SoundHistory();
+  std::vector<std::vector<double>> rough;
+  rough.reserve(50);
+  for (int i = 0; i < 50; ++i) {
+    RandomStream rng(12, 0, static_cast<std::uint64_t>(i));
+    std::vector<double> curve;
+    curve.reserve(data.size());
+    for (double y : data) curve.push_back(y + 0.0001 * rng.Normal());
+    rough.push_back(curve);
+  }
+  h.waves.push_back(Wave(4, 0.0001, rough));
+  const FitChecks checks = ComputeFitChecks(Metadata(data), h);
+  EXPECT_TRUE(Has(checks.after, "noise_unresolved")) << FormatFitChecks(checks, "m");
+  EXPECT_FALSE(Has(checks.after, "threshold_below_noise"));
+  EXPECT_GT(checks.noise[0].shape, 0.5 * checks.noise[0].value);
+}
+
+TEST(FitChecks, AStalledThresholdWarns) {
+  RunHistory h = SoundHistory();
+  h.waves.push_back(Wave(4, 0.49, Curves(50, 1.0, 0.01, 4)));
+  h.waves.push_back(Wave(5, 0.48, Curves(50, 1.0, 0.01, 5)));
+  const FitChecks checks = ComputeFitChecks(Metadata(NoisyData()), h);
+  EXPECT_TRUE(Has(checks.after, "threshold_stalled")) << FormatFitChecks(checks, "m");
+  // A run that reached its target has not stalled.
+  h.summary.termination = Termination::kTargetReached;
+  EXPECT_FALSE(Has(ComputeFitChecks(Metadata(NoisyData()), h).after, "threshold_stalled"));
+}
+
+TEST(FitChecks, OptionsAreChecked) {
+  std::string why;
+  EXPECT_TRUE(FitCheckOptions{}.IsValid(&why));
+  FitCheckOptions bad;
+  bad.band_low = 0.96;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("band_low"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace combabc
