@@ -46,11 +46,23 @@ class SingularSystem : public Error {
   double amplification_;
 };
 
-// A solution (in Jacobi-scaled units, where the system's entries are at most about 2) more than
+// The fast paths' test (block_ldlt.hpp; their unknowns are the condensed cross-sections): a
+// solution (in Jacobi-scaled units, where the system's entries are at most about 2) more than
 // this many times larger than its load proves a condition number above it: SingularSystem. A
 // rigid-body motion left free gives 8e9 to 1e14 on the meshes and theories of the tests; the
 // weakest support that holds, one 5 cm clamp under a static load, at most 7e5.
 inline constexpr double kMaxAmplification = 1e8;
+
+// The full sparse solve's test (Plate::SolveHarmonic): a residual, after iterative refinement,
+// above this fraction of the load (largest Jacobi-scaled entries) is SingularSystem. A singular
+// system's load has a part that no solution reaches (the resultant, against a free rigid-body
+// motion), which stays in the residual: 1e-2 to 5e-1 of the load on 10 x 6 to 40 x 24 elements
+// per section, Kirchhoff and RZT. A regular system reaches round-off times its amplification,
+// which that full system's mesh drives, unlike the condensed one's: Kirchhoff's graded width
+// (an 11.6 um edge element at 24 across) takes the scaled system with every clamp free to a
+// condition number about 1e13, its solution to 2e8 to 8e8 times the load and its residual to
+// 3e-7 at 40 x 24 (docs/model.md, "Singular configurations").
+inline constexpr double kMaxResidual = 1e-4;
 
 enum class Support {
   kFree,             // no constraint
