@@ -69,20 +69,27 @@ def answer_html(summary, sensor=True):
     for bit in answer.get("bits", []):
         verdict = str(bit.get("verdict", ""))
         p_one, se = bit.get("p_one"), bit.get("mc_se")
-        shown = fmt(p_one, ".3f") if p_one is not None else "—"
+        shown = fmt(float(p_one), ".3f") if p_one is not None else "—"
         if se is not None:
-            shown += f" &plusmn; {fmt(se, '.3f')}"
+            shown += f" &plusmn; {fmt(float(se), '.3f')}"
         rows.append(([e(fmt(bit.get("number"))), e(str(bit.get("name", ""))),
                       e(str(bit.get("position") or "—")), shown, e(verdict)],
                      {"fixed": "fixed", "free": "free"}.get(verdict, "")))
     parts.append(table(["#", "Name", "Position", f"{p} ± SE", "Verdict"], rows, numeric=(0, 3)))
     configurations = answer.get("top_configurations") or []
-    if configurations:
+    particles, distinct = answer.get("particles"), answer.get("distinct")
+    if not answer.get("exact") and particles and particles > 1 and distinct == particles:
+        # Every particle its own configuration: their masses are single particles' weights, which
+        # say nothing of a configuration's probability (the terminal says the same).
+        parts.append("<h3>Most probable configurations</h3>\n<p>None stands out: the "
+                     f"{particles} particles are {particles} distinct configurations; read the "
+                     "clamps above.</p>\n")
+    elif configurations:
         rows = []
         for rank, c in enumerate(configurations, 1):
-            mass = fmt(c.get("mass"), ".4f")
+            mass = fmt(float(c.get("mass", math.nan)), ".4f")
             if c.get("mass_se") is not None:
-                mass += f" &plusmn; {fmt(c['mass_se'], '.4f')}"
+                mass += f" &plusmn; {fmt(float(c['mass_se']), '.4f')}"
             fixed = ", ".join(str(n) for n in c.get("fixed") or []) or "none"
             rows.append([str(rank), mass, e(fixed), f"<code>{e(str(c.get('bits', '')))}</code>"])
         title = "fixed" if sensor else "= 1"

@@ -172,6 +172,8 @@ std::string AnswerJson(const Answer& a, int indent) {
   }
   out += std::string(a.top_configurations.empty() ? "" : "\n" + in2) + "],\n";
   out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
+  out += in2 + "\"particles\": " + std::to_string(a.particles) + ",\n";
+  out += in2 + "\"distinct\": " + std::to_string(a.distinct) + ",\n";
   out += in2 + "\"per_wave\": [";
   for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
     const WaveEffort& e = a.per_wave[t];

@@ -17,6 +17,7 @@
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/report.hpp"
+#include "services/bit_positions.hpp"
 #include "services/python_script.hpp"
 #include "services/report_checks.hpp"
 
@@ -134,7 +135,9 @@ std::string WriteReport(const std::string& history_path,
   const StagingFolder staging;
   const fs::path exported = staging.path() / "export";
   const fs::path drawn = staging.path() / "report";
-  ExportRun(store, exported.string());
+  ExportOptions export_options;
+  export_options.bit_positions = BitPositions(store.LoadMetadata());
+  ExportRun(store, exported.string(), export_options);
   std::vector<std::string> args = {tools.python,
                                    tools.script,
                                    "--out",

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <thread>
 
 #include "cli_runner.hpp"
@@ -119,6 +120,13 @@ TEST(Calibration, RunReportExportAndPosteriorNearTheLoad) {
   EXPECT_TRUE(fs::exists(out / "report" / "wave_10_marginals.png")) << r.out;
   EXPECT_TRUE(fs::exists(out / "report" / "wave_10_curves.png")) << r.out;  // figures = png
   EXPECT_TRUE(fs::exists(out / "report" / "overview.png")) << r.out;
+  // The report's answer places each clamp, as the terminal and summary.json do (its export is
+  // staged with the clamps' positions).
+  std::ifstream page_file(out / "report" / "index.html");
+  const std::string page((std::istreambuf_iterator<char>(page_file)), {});
+  EXPECT_NE(page.find("<h2>Answer</h2>"), std::string::npos);
+  EXPECT_NE(page.find("<td>edge 1, 0-5 cm</td>"), std::string::npos);
+  EXPECT_NE(page.find("<td>edge 2, 85-90 cm</td>"), std::string::npos);
 
   const auto e = RunCli({"export", (out / "history.sqlite").string()}, dir.path());
   ASSERT_EQ(e.exit_code, 0) << e.err;

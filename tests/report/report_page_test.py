@@ -61,6 +61,23 @@ class AnswerTables(unittest.TestCase):
         self.assertIn("From the enumeration (exact)", html)
         self.assertIn("P(bit = 1) ± SE", html)
 
+    def test_all_distinct_particles_list_no_configuration(self):
+        # As on the terminal: 500 particles, 500 configurations, so each "mass" would be one
+        # particle's weight; the page says that none stands out instead.
+        summary = fixture()
+        summary["answer"].update(particles=500, distinct=500)
+        html = compact(page.answer_html(summary))
+        self.assertIn("None stands out: the 500 particles are 500 distinct configurations", html)
+        self.assertNotIn("<code>101</code>", html)
+        summary["answer"].update(distinct=90)
+        self.assertIn("<code>101</code>", compact(page.answer_html(summary)))
+
+    def test_whole_probabilities_keep_three_decimals(self):
+        # JSON writes 1.0 as 1: read back as an int, it is still shown as 1.000 +- 0.000.
+        summary = fixture()
+        summary["answer"]["bits"][0].update(p_one=1, mc_se=0)
+        self.assertIn("1.000 &plusmn; 0.000", compact(page.answer_html(summary)))
+
     def test_no_answer_no_section(self):
         summary = fixture()
         del summary["answer"]
