@@ -223,7 +223,7 @@ void CheckBefore(const ExperimentView& v,
              "whose outputs are all zero ([model.load] amplitude = 0?) cannot be compared");
   }
   // The scale and sign of the curves say something about the model only when nothing selected
-  // them: a first wave with finite thresholds (an enumeration, a finite [schedule] initial) holds
+  // them: a first wave with finite thresholds (an enumeration, a finite [metric] initial) holds
   // the curves nearest the data, not the prior predictive.
   if (!o.prior_predictive) return;
   if (!peaks.empty() && std::all_of(peaks.begin(), peaks.end(), [](double p) { return p == 0; })) {
