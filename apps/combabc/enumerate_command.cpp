@@ -32,6 +32,8 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
                 << " configurations; nothing written (an enumeration cannot be resumed)\n";
       return kExitInterrupted;
     }
+    // The fit and sanity checks: warnings, on stderr, never an error.
+    std::cerr << FormatFitChecks(outcome.checks, "m");
     std::cout << "enumerated " << outcome.configurations << " configurations: " << outcome.accepted
               << " accepted, evidence " << outcome.evidence << " (" << outcome.wall_seconds
               << " s)\n"

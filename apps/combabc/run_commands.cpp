@@ -1,5 +1,6 @@
 // `combabc run` and `combabc resume`.
 #include <cstdint>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -37,10 +38,30 @@ struct ResumeArgs {
   bool quiet = false;
 };
 
-void PrintOutcome(const services::RunOutcome& outcome) {
+// The checks before sampling go to stderr when the first wave ends (after its progress line,
+// before the next wave's), once per process: the end prints them only if this process did not see
+// the first wave end (a resume after it).
+class ChecksPrinter {
+ public:
+  std::function<void(const FitChecks&)> Callback() {
+    return [this](const FitChecks& checks) {
+      std::cerr << FormatBeforeChecks(checks, "m") << std::flush;
+      before_printed_ = true;
+    };
+  }
+  // The fit and sanity checks at the end: warnings, on stderr, never an error.
+  void AtEnd(const FitChecks& checks) const {
+    if (!before_printed_) std::cerr << FormatBeforeChecks(checks, "m");
+    std::cerr << FormatAfterChecks(checks);
+  }
+
+ private:
+  bool before_printed_ = false;
+};
+
+void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& checks) {
   const RunSummary& summary = outcome.history.summary;
-  // The fit and sanity checks: warnings, on stderr, never an error.
-  std::cerr << FormatFitChecks(outcome.checks, "m");
+  checks.AtEnd(outcome.checks);
   std::cout << summary.BriefReport() << "\n"
             << "history: " << outcome.history_path << "\n";
   if (!outcome.report_directory.empty()) {
@@ -63,8 +84,8 @@ void PrintOutcome(const services::RunOutcome& outcome) {
 }
 
 // The outcome of a run or a resume, printed; its exit code.
-int Conclude(const services::RunOutcome& outcome) {
-  PrintOutcome(outcome);
+int Conclude(const services::RunOutcome& outcome, const ChecksPrinter& checks) {
+  PrintOutcome(outcome, checks);
   const bool interrupted = outcome.history.summary.termination == Termination::kInterrupted;
   if (interrupted) {
     std::cerr << "interrupted; continue with: combabc resume " << outcome.history_path << "\n";
@@ -89,9 +110,11 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.executor = session.executor();
   request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
   request.report = !args.no_report;
+  ChecksPrinter checks;
+  request.on_checks_before = checks.Callback();
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
     const auto outcome = services::RunCalibration(request, observer);
-    const int code = Conclude(outcome);
+    const int code = Conclude(outcome, checks);
     PrintAnswer(session, args.quiet, outcome.history_path);
     return code;
   });
@@ -111,9 +134,11 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   if (args.max_failure_fraction_option->count() > 0) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
+  ChecksPrinter checks;
+  request.on_checks_before = checks.Callback();
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
     const auto outcome = services::ResumeCalibration(request, observer);
-    const int code = Conclude(outcome);
+    const int code = Conclude(outcome, checks);
     PrintAnswer(session, args.quiet, outcome.history_path);
     return code;
   });

@@ -81,9 +81,7 @@ class PythonSignals final : public SmcObserver {
 HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
   HistoryNames names;
   for (int k = 0; k < metadata.dimension; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    names.bits.push_back(i < metadata.bit_names.size() ? metadata.bit_names[i]
-                                                       : "bit " + std::to_string(k + 1));
+    names.bits.push_back(BitName(metadata, static_cast<std::size_t>(k)));
   }
   for (const ContinuousParameter& p : metadata.reals) names.reals.push_back(p.name);
   for (const DistanceComponent& c : metadata.distance_components) {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "combabc/export/export.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
@@ -54,7 +55,7 @@ const WaveRecord* AnswerWave(const RunHistory& h) {
 }
 
 std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
-                                                   const std::vector<std::string>& names,
+                                                   const RunMetadata& metadata,
                                                    double effective_size,
                                                    bool exact) {
   std::map<std::string, double> mass;
@@ -72,7 +73,7 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
     c.mass = total > 0 ? m / total : 0.0;
     if (!exact) c.mass_se = StandardError(c.mass, effective_size);
     for (std::size_t b = 0; b < bits.size(); ++b) {
-      if (bits[b] == '1') c.fixed.push_back(b < names.size() ? names[b] : std::to_string(b + 1));
+      if (bits[b] == '1') c.fixed.push_back(BitName(metadata, b));
     }
     top.push_back(std::move(c));
   }
@@ -125,7 +126,7 @@ Answer SummariseAnswer(const RunMetadata& m,
   for (std::size_t b = 0; b < p.size(); ++b) {
     AnswerBit bit;
     bit.number = static_cast<int>(b) + 1;
-    bit.name = b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
+    bit.name = BitName(m, b);
     if (b < positions.size()) bit.position = positions[b];
     // A sum of weights may pass 1 by a rounding error (1.0000000000000007): a probability.
     bit.p_one = std::clamp(p[b], 0.0, 1.0);
@@ -133,7 +134,7 @@ Answer SummariseAnswer(const RunMetadata& m,
     bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
     a.bits.push_back(std::move(bit));
   }
-  a.top_configurations = TopConfigurations(*w, m.bit_names, a.effective_size, a.exact);
+  a.top_configurations = TopConfigurations(*w, m, a.effective_size, a.exact);
   return a;
 }
 

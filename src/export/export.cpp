@@ -45,13 +45,11 @@ std::string Identifier(const std::string& name) {
   return out;
 }
 
-// A bit's name (RunMetadata::bit_names), or "bit k" counted from 1 when the run named none: the
-// particles.csv column and summary.json's bit_names, so that readers find one by the other.
+}  // namespace
+
 std::string BitName(const RunMetadata& m, std::size_t b) {
   return b < m.bit_names.size() ? m.bit_names[b] : "bit " + std::to_string(b + 1);
 }
-
-}  // namespace
 
 std::vector<std::string> ThresholdColumns(const RunMetadata& m, std::size_t count) {
   std::vector<std::string> names;

@@ -157,12 +157,13 @@ void Note(std::vector<CheckMessage>& to, const char* code, const std::string& me
 
 // Before sampling: the data against the first wave's curves.
 void CheckBefore(const ExperimentView& v,
-                 const RunHistory& h,
+                 const WaveRecord* first,
                  const FitCheckOptions& options,
                  FitChecks& checks) {
   ExperimentOverview o;
   o.experiment = v.slice.name;
   o.points = v.slice.measured;
+  o.normalised = v.normalised;
   o.simulated_peak_low = kNaN;
   o.simulated_peak_high = kNaN;
   const std::string prefix = Prefix(v.slice.name);
@@ -182,7 +183,6 @@ void CheckBefore(const ExperimentView& v,
     o.data_peak = std::max(o.data_peak, std::abs(v.y[i]));
     if (v.y[i] < below) ++negative;
   }
-  const WaveRecord* first = h.waves.empty() ? nullptr : &h.waves.front();
   std::vector<double> peaks;
   double lowest = std::numeric_limits<double>::infinity();
   if (first != nullptr) {
@@ -222,6 +222,10 @@ void CheckBefore(const ExperimentView& v,
              " candidates: every distance was infinite or above the first threshold; a model "
              "whose outputs are all zero ([model.load] amplitude = 0?) cannot be compared");
   }
+  // The scale and sign of the curves say something about the model only when nothing selected
+  // them: a first wave with finite thresholds (an enumeration, a finite [metric] initial) holds
+  // the curves nearest the data, not the prior predictive.
+  if (!o.prior_predictive) return;
   if (!peaks.empty() && std::all_of(peaks.begin(), peaks.end(), [](double p) { return p == 0; })) {
     Warn(checks.before,
          "zero_outputs",
@@ -473,46 +477,68 @@ bool FitCheckOptions::IsValid(std::string* why) const {
   return true;
 }
 
-FitChecks ComputeFitChecks(const RunMetadata& metadata,
-                           const RunHistory& history,
-                           const FitCheckOptions& options) {
+FitChecks ComputeBeforeChecks(const RunMetadata& metadata,
+                              const WaveRecord* first_wave,
+                              const FitCheckOptions& options) {
   std::string why;
   COMBABC_CHECK(options.IsValid(&why));
   FitChecks checks;
   for (const ExperimentSlice& slice : ExperimentSlices(metadata)) {
-    const ExperimentView view = ViewOf(metadata, slice);
-    CheckBefore(view, history, options, checks);
-    CheckAfter(metadata, view, history, options, checks);
+    CheckBefore(ViewOf(metadata, slice), first_wave, options, checks);
   }
   return checks;
 }
 
-std::string FormatFitChecks(const FitChecks& checks, const std::string& position_unit) {
+FitChecks ComputeFitChecks(const RunMetadata& metadata,
+                           const RunHistory& history,
+                           const FitCheckOptions& options) {
+  FitChecks checks = ComputeBeforeChecks(
+      metadata, history.waves.empty() ? nullptr : &history.waves.front(), options);
+  for (const ExperimentSlice& slice : ExperimentSlices(metadata)) {
+    CheckAfter(metadata, ViewOf(metadata, slice), history, options, checks);
+  }
+  return checks;
+}
+
+std::string FormatBeforeChecks(const FitChecks& checks, const std::string& position_unit) {
   std::ostringstream out;
-  for (std::size_t e = 0; e < checks.overview.size(); ++e) {
-    const ExperimentOverview& o = checks.overview[e];
+  for (const ExperimentOverview& o : checks.overview) {
     out << "checks: " << Prefix(o.experiment) << o.points << " measured points at "
         << Short(o.position_low) << "-" << Short(o.position_high) << " " << position_unit
         << ", values " << Short(o.data_low) << " to " << Short(o.data_peak) << " (peak); ";
+    const char* curves = o.prior_predictive ? "prior predictive" : "first wave's accepted";
     if (std::isnan(o.simulated_peak_low)) {
       out << "no simulated curves stored";
+    } else if (o.normalised) {
+      // Every peak is 1 by construction: a range would say nothing.
+      out << "data and " << curves << " curves compared normalised to peak 1";
     } else {
-      out << (o.prior_predictive ? "prior predictive" : "first wave's") << " peaks "
-          << Short(o.simulated_peak_low) << "-" << Short(o.simulated_peak_high) << " (5-95 %)";
-    }
-    for (const FitVerdict& f : checks.fit) {
-      if (f.experiment != o.experiment) continue;
-      out << "; noise sigma " << Short(f.noise_sigma) << " (estimated), best fit RMS "
-          << Short(f.best_rms) << " = " << Short(f.ratio) << " sigma: " << f.verdict;
+      out << curves << " peaks " << Short(o.simulated_peak_low) << "-"
+          << Short(o.simulated_peak_high) << " (5-95 %)";
     }
     out << "\n";
   }
-  for (const auto* list : {&checks.before, &checks.after}) {
-    for (const CheckMessage& m : *list) {
-      out << m.severity << " [" << m.code << "]: " << m.message << "\n";
-    }
+  for (const CheckMessage& m : checks.before) {
+    out << m.severity << " [" << m.code << "]: " << m.message << "\n";
   }
   return out.str();
+}
+
+std::string FormatAfterChecks(const FitChecks& checks) {
+  std::ostringstream out;
+  for (const FitVerdict& f : checks.fit) {
+    out << "checks: " << Prefix(f.experiment) << "noise sigma " << Short(f.noise_sigma)
+        << " (estimated), best fit RMS " << Short(f.best_rms) << " = " << Short(f.ratio)
+        << " sigma: " << f.verdict << "\n";
+  }
+  for (const CheckMessage& m : checks.after) {
+    out << m.severity << " [" << m.code << "]: " << m.message << "\n";
+  }
+  return out.str();
+}
+
+std::string FormatFitChecks(const FitChecks& checks, const std::string& position_unit) {
+  return FormatBeforeChecks(checks, position_unit) + FormatAfterChecks(checks);
 }
 
 std::string FitChecksJson(const FitChecks& checks, int indent) {

@@ -171,6 +171,15 @@ void WriteEnumeration(const EnumerateRequest& request,
     }
     throw;
   }
+  // As run's: warnings from the history as stored, never an error.
+  try {
+    outcome.checks = ComputeFitChecks(store.LoadMetadata(), store.LoadHistory());
+  } catch (const Error& e) {
+    outcome.checks.after.push_back(
+        {"note",
+         "checks_failed",
+         std::string("the fit checks could not read the history: ") + e.what()});
+  }
   OutputDirectory files(files_directory, request.overwrite);
   WriteEnumerationFiles(files, metadata, result);
   files.Commit();

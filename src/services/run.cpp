@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <utility>
 
@@ -78,6 +79,35 @@ class PrimaryStore : public SmcObserver {
   HistoryStore* store_;
 };
 
+// On the primary, when the first wave has ended (after the store checkpointed it and the progress
+// display printed its line): the checks before sampling, from the wave as stored, so that they
+// are the numbers the end of the run and the export compute.
+class BeforeChecks : public SmcObserver {
+ public:
+  BeforeChecks(HistoryStore* store, std::function<void(const FitChecks&)> report)
+      : store_(store), report_(std::move(report)) {}
+  void OnWaveEnd(const WaveRecord& wave) override {
+    if (store_ == nullptr || !report_ || wave.wave != 0) return;
+    FitChecks checks;
+    try {
+      const RunHistory stored = store_->LoadHistory();
+      checks = ComputeBeforeChecks(store_->LoadMetadata(),
+                                   stored.waves.empty() ? nullptr : &stored.waves.front());
+    } catch (const Error& e) {
+      // Warnings, never an error: the end of the run says it again.
+      checks.before.push_back(
+          {"note",
+           "checks_failed",
+           std::string("the checks before sampling could not read the history: ") + e.what()});
+    }
+    report_(checks);
+  }
+
+ private:
+  HistoryStore* store_;
+  std::function<void(const FitChecks&)> report_;
+};
+
 // The same parts with the same digests, in any order (the history stores them sorted).
 bool SameFingerprint(Fingerprint a, Fingerprint b) {
   std::sort(a.begin(), a.end());
@@ -91,10 +121,12 @@ RunOutcome Execute(Problem& problem,
                    const std::string& history_path,
                    const ResumePoint* resume,
                    bool report,
-                   SmcObserver* progress) {
+                   SmcObserver* progress,
+                   const std::function<void(const FitChecks&)>& on_checks_before) {
   Executor& executor = *problem.executor;
   PrimaryStore stored(executor, store);
-  FanOutObserver observer({&stored, progress});
+  BeforeChecks before(store, on_checks_before);
+  FanOutObserver observer({&stored, progress, &before});
   RunOutcome outcome;
   outcome.history_path = history_path;
   try {
@@ -206,7 +238,13 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
     store.emplace(HistoryStore::Create(history_path, Describe(p), request.overwrite));
     folders.Keep();
   });
-  return Execute(p, store ? &*store : nullptr, history_path, nullptr, request.report, progress);
+  return Execute(p,
+                 store ? &*store : nullptr,
+                 history_path,
+                 nullptr,
+                 request.report,
+                 progress,
+                 request.on_checks_before);
 }
 
 std::string LimitOption(Termination stop) {
@@ -320,7 +358,13 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
     }
   }
   p.executor->Join(error);
-  return Execute(p, store ? &*store : nullptr, history_path, &resume, report, progress);
+  return Execute(p,
+                 store ? &*store : nullptr,
+                 history_path,
+                 &resume,
+                 report,
+                 progress,
+                 request.on_checks_before);
 }
 
 }  // namespace combabc::services

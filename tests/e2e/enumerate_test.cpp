@@ -44,6 +44,12 @@ TEST(Enumerate, WritesAHistoryThatVerifyExportAndReportRead) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("enumerated 1024 configurations"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("answer:"), std::string::npos) << "-q keeps the answer quiet: " << r.out;
+  // The checks on stderr (issue 22, item 2): the data, then the fit of the accepted
+  // configurations against the noise; no warning of the prior predictive's (finite thresholds).
+  EXPECT_NE(r.err.find("checks: 33 measured points"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("first wave's accepted curves"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("best fit RMS"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
   // In its own folder inside [output] directory, apart from `combabc run`'s history.
   const std::string history = dir / "out/enumeration/history.sqlite";
   ASSERT_TRUE(fs::exists(history)) << r.out;

@@ -2,6 +2,7 @@
 // the estimators' formulas written here on a sampled run, the verdict thresholds, the wave an
 // early stop leaves, the terminal layout, and the sensor's clamp positions from a run's config.
 #include "combabc/export/answer.hpp"
+#include "combabc/export/export.hpp"
 
 #include <gtest/gtest.h>
 
@@ -125,6 +126,26 @@ TEST(Answer, OfAnEnumerationIsTheExactPosteriorOfABruteForce) {
   const std::string text = AnswerText(a);
   EXPECT_NE(text.find("answer: exact"), std::string::npos) << text;
   EXPECT_NE(text.find(" b1    1.00        fixed"), std::string::npos) << text;
+}
+
+// A run that named no bits: the answer names them as the export's particles.csv columns do
+// (BitName, "bit k" from 1), in the bits and in the most probable configurations alike.
+TEST(Answer, UnnamedBitsAreNamedAsTheExportNamesThem) {
+  EnumeratedToy toy;
+  toy.metadata.bit_names.clear();
+  const Answer a = SummariseAnswer(toy.metadata, toy.history);
+  ASSERT_EQ(a.bits.size(), static_cast<std::size_t>(kBits));
+  for (std::size_t k = 0; k < a.bits.size(); ++k) {
+    EXPECT_EQ(a.bits[k].name, BitName(toy.metadata, k));
+    EXPECT_EQ(a.bits[k].name, "bit " + std::to_string(k + 1));
+  }
+  ASSERT_FALSE(a.top_configurations.empty());
+  for (const AnswerConfiguration& c : a.top_configurations) {
+    for (const std::string& name : c.fixed) {
+      ASSERT_EQ(name.rfind("bit ", 0), 0u) << name;
+      EXPECT_EQ(c.bits[static_cast<std::size_t>(std::stoi(name.substr(4)) - 1)], '1') << name;
+    }
+  }
 }
 
 // A sampled run (the fake 36-clamp run, three complete waves): each estimator's marginals and

@@ -164,6 +164,55 @@ TEST(FitChecks, DataInMicrometresAgainstAModelInMetresWarnOfUnits) {
   EXPECT_FALSE(Has(ComputeFitChecks(Metadata(metres), h).before, "units_mismatch"));
 }
 
+// Run and resume print the checks before sampling when the first wave ends, from that wave alone:
+// the same numbers and messages as the whole history's, and printed apart from the fit.
+TEST(FitChecks, TheChecksBeforeSamplingNeedOnlyTheFirstWave) {
+  std::vector<double> data = NoisyData();
+  for (double& y : data) y *= 73.0;
+  RunHistory h;
+  h.waves.push_back(Wave(1, kInf, Curves(50, 7e-5, 0.1, 1)));
+  h.waves.push_back(Wave(2, 1e4, Curves(50, 7e-5, 0.1, 2)));
+  const FitChecks all = ComputeFitChecks(Metadata(data), h);
+  const FitChecks before = ComputeBeforeChecks(Metadata(data), &h.waves.front());
+  EXPECT_EQ(FormatBeforeChecks(before, "m"), FormatBeforeChecks(all, "m"));
+  EXPECT_TRUE(before.after.empty());
+  EXPECT_TRUE(before.fit.empty());
+  ASSERT_TRUE(Has(before.before, "units_mismatch"));
+  EXPECT_NE(FormatBeforeChecks(before, "m").find("prior predictive peaks "), std::string::npos);
+  EXPECT_EQ(FormatBeforeChecks(all, "m").find("poor_fit"), std::string::npos);
+  EXPECT_EQ(FormatAfterChecks(all).find("units_mismatch"), std::string::npos);
+  EXPECT_NE(FormatAfterChecks(all).find("best fit RMS"), std::string::npos);
+  EXPECT_EQ(FormatFitChecks(all, "m"), FormatBeforeChecks(all, "m") + FormatAfterChecks(all));
+  // Without a first wave only the data are summarised.
+  const FitChecks none = ComputeBeforeChecks(Metadata(data), nullptr);
+  EXPECT_TRUE(none.before.empty());
+  EXPECT_NE(FormatBeforeChecks(none, "m").find("no simulated curves"), std::string::npos);
+}
+
+// Normalised data and curves all peak at 1: the summary says so instead of a range "1-1".
+TEST(FitChecks, NormalisedDataAreSummarisedWithoutAPeakRange) {
+  const std::string text = FormatBeforeChecks(
+      ComputeBeforeChecks(Metadata(NoisyData()), &SoundHistory().waves.front()), "m");
+  EXPECT_NE(text.find("data and prior predictive curves compared normalised to peak 1"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("1-1"), std::string::npos) << text;
+}
+
+// A first wave of finite thresholds (an enumeration, a finite initial threshold) holds the curves
+// nearest the data, not the prior predictive: the scale and sign of its curves judge nothing.
+TEST(FitChecks, AFirstWaveOfFiniteThresholdsIsNotThePriorPredictive) {
+  std::vector<double> data = NoisyData();
+  for (double& y : data) y *= 73.0;
+  RunHistory h;
+  h.waves.push_back(Wave(1, 5.0, Curves(50, 7e-5, 0.1, 1)));
+  const FitChecks checks = ComputeFitChecks(Metadata(data), h);
+  EXPECT_FALSE(checks.overview[0].prior_predictive);
+  EXPECT_TRUE(checks.before.empty()) << FormatFitChecks(checks, "m");
+  EXPECT_TRUE(Has(checks.after, "poor_fit")) << FormatFitChecks(checks, "m");
+  EXPECT_NE(FormatBeforeChecks(checks, "m").find("first wave's accepted peaks"), std::string::npos);
+}
+
 TEST(FitChecks, NegativeDataAgainstAmplitudesWarn) {
   // Signed displacements: a lobe of the profile below zero.
   std::vector<double> data = NoisyData();

@@ -42,6 +42,11 @@ void ExportRun(const std::string& history_path,
                const std::string& out_dir,
                const ExportOptions& options = {});
 
+// Bit b's name (from 0): RunMetadata::bit_names[b], or "bit k" counted from 1 when the run named
+// none. The one name of a bit wherever the export layer writes one (particles.csv's columns,
+// summary.json's bit_names, the answer), so that readers find one by the other.
+std::string BitName(const RunMetadata& metadata, std::size_t b);
+
 // The export's column names (docs/history.md, "Export"), shared with the Python module's
 // DataFrames: eps_<component> (T_<component> for a likelihood component's temperature) per
 // threshold slot, d_<component> per distance component, each name made column-safe ("least

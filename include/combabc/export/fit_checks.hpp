@@ -60,6 +60,7 @@ struct ExperimentOverview {
   double simulated_peak_low = 0.0;
   double simulated_peak_high = 0.0;
   bool prior_predictive = false;  // the first wave accepted every draw (infinite thresholds)
+  bool normalised = false;        // the data's peak is exactly 1 ([data] normalise)
 };
 
 struct NoiseLevel {
@@ -102,12 +103,25 @@ struct FitChecks {
   std::vector<PredictiveCheck> predictive;
 };
 
+// The checks before sampling alone (`overview` and `before`): the data against `first_wave`
+// (null: none yet). Its curve-based warnings (units_mismatch, negative_data, zero_outputs) need
+// the prior predictive, a first wave of infinite thresholds. Run and resume print them as soon as
+// the first wave has ended, from the wave as stored, so they equal ComputeFitChecks' own.
+FitChecks ComputeBeforeChecks(const RunMetadata& metadata,
+                              const WaveRecord* first_wave,
+                              const FitCheckOptions& options = {});
+
+// Every check: ComputeBeforeChecks of the history's first wave, then those after sampling
+// (`noise`, `fit`, `predictive`, `after`) from its final complete wave.
 FitChecks ComputeFitChecks(const RunMetadata& metadata,
                            const RunHistory& history,
                            const FitCheckOptions& options = {});
 
-// What run and resume print (on stderr): a line per experiment (range, data against the first
-// wave's curves, noise, fit), then every warning and note on one line each.
+// What the CLI prints on stderr, one line each. Before: per experiment its measured points, range
+// and peak against the first wave's curves, then the before warnings. After: per experiment the
+// noise and the best fit's verdict, then the after warnings and notes. FormatFitChecks: both.
+std::string FormatBeforeChecks(const FitChecks& checks, const std::string& position_unit);
+std::string FormatAfterChecks(const FitChecks& checks);
 std::string FormatFitChecks(const FitChecks& checks, const std::string& position_unit);
 
 // summary.json's "checks" object (docs/history.md), indented by `indent` spaces after its first

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/services/executor_factory.hpp"
 
@@ -34,6 +35,8 @@ struct EnumerateOutcome {
   double evidence = 0.0;
   double wall_seconds = 0.0;
   bool interrupted = false;
+  // The fit and sanity checks of its one-wave history (docs/history.md, "Checks"); primary only.
+  FitChecks checks;
 };
 
 // Exact ABC posterior of the config's problem at the given (or the config's final) thresholds by

@@ -26,6 +26,10 @@ struct RunRequest {
   // Called with the history's path once it is known, before the history is created (the CLI
   // prepares the line it prints if mpirun ends the job; docs/mpi.md). May be empty.
   std::function<void(const std::string&)> on_history_path;
+  // Called on the primary once the first wave has ended and is stored, before the next wave
+  // starts, with the checks before sampling (ComputeBeforeChecks of the stored wave: the same
+  // numbers as RunOutcome::checks). May be empty.
+  std::function<void(const FitChecks&)> on_checks_before;
 };
 
 struct RunOutcome {
@@ -53,6 +57,8 @@ struct ResumeRequest {
   bool report = true;        // write the report (report/ beside the history) when it ends
   StopLimits limits;         // recorded in the history; later resumes keep them
   ExecutorFactory executor;  // empty: threads on this machine
+  // As RunRequest's, when the first wave ends during this resume (a run killed in it).
+  std::function<void(const FitChecks&)> on_checks_before;
 };
 
 // Continues an interrupted or killed run, or one that stopped on a limit (budget, wall time,
