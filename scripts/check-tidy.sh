@@ -41,9 +41,12 @@ common=(-p "$build" -j "$(nproc)" -quiet -extra-arg=-Wno-unknown-warning-option)
 if [ "$unity" -gt 0 ]; then
   # A batch's sources are "headers" to clang-tidy: the filter names them; the configuration is
   # the repository's (the batches sit in the build tree, which need not be inside it).
+  # run-clang-tidy echoes each command, the configuration's lines with it (the last one ending in
+  # the batch's name): those are dropped.
   "$tidy" "${common[@]}" -config="$(cat .clang-tidy)" -checks=-bugprone-suspicious-include \
     -header-filter='/(include/combabc|src)/.*\.(hpp|cpp)$' "$batches" 2>&1 |
-    sed -r 's/\x1b\[[0-9;]*m//g' >>"$log" || status=$?
+    sed -r 's/\x1b\[[0-9;]*m//g' | { grep -vxF -f .clang-tidy | grep -vE '_cxx\.cxx$' || true; } \
+    >>"$log" || status=$?
 fi
 "$tidy" "${common[@]}" "$files" 2>&1 | sed -r 's/\x1b\[[0-9;]*m//g' >>"$log" || status=$?
 # clang-tidy prints one "N warnings generated" line per file, mostly for suppressed headers.
