@@ -14,7 +14,6 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/export/answer.hpp"
-#include "combabc/services/history_tools.hpp"
 #include "interrupt.hpp"
 #include "progress_display.hpp"
 
@@ -43,12 +42,12 @@ int Guarded(const Session& session, bool quiet, const std::function<int(SmcObser
   }
 }
 
-void PrintAnswer(const Session& session, bool quiet, const std::string& history_path) {
+void PrintAnswer(const Session& session, bool quiet, const std::optional<Answer>& answer) {
   if (quiet || !session.primary()) return;
-  try {
-    std::cout << "\n" << AnswerText(services::ReadAnswer(history_path));
-  } catch (const Error& e) {
-    std::cerr << "combabc: the answer could not be read back: " << e.what() << "\n";
+  if (answer) {
+    std::cout << "\n" << AnswerText(*answer);
+  } else {
+    std::cerr << "combabc: the answer could not be read back (see the checks above)\n";
   }
 }
 

@@ -3,8 +3,10 @@
 // ends (a failure is one line and an exit code) and the option checks the subcommands share.
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
 #include <string>
 
+#include "combabc/export/answer.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "session.hpp"
 
@@ -34,10 +36,10 @@ int Guarded(const Session& session, bool quiet, const std::function<int(SmcObser
 // Guarded, for a command that writes or prints only: rank 0 does it, the others wait for its code.
 int PrimaryOnly(const Session& session, const std::function<int()>& job);
 
-// The answer in numbers (services::ReadAnswer) of the history at `history_path`, on stdout: at the
-// end of run, resume and enumerate, on rank 0, unless `quiet`. A history that cannot be read back
-// is said on stderr; the command's exit code stays the job's.
-void PrintAnswer(const Session& session, bool quiet, const std::string& history_path);
+// The answer in numbers of the job's outcome (read back with its checks), on stdout: at the end of
+// run, resume and enumerate, on rank 0, unless `quiet`. A history that could not be read back is
+// said on stderr; the command's exit code stays the job's.
+void PrintAnswer(const Session& session, bool quiet, const std::optional<Answer>& answer);
 
 // --no-cache, for the commands that build the sensor: its precomputed pieces are built afresh and
 // not stored (docs/model.md, "Start-up and the precompute cache"). It empties COMBABC_CACHE_DIR

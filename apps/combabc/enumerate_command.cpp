@@ -42,7 +42,7 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
     if (!outcome.report_directory.empty()) {
       std::cout << "report:  " << outcome.report_directory << "/index.html\n";
     }
-    PrintAnswer(session, args.quiet, outcome.history_path);
+    PrintAnswer(session, args.quiet, outcome.answer);
     return 0;
   });
 }

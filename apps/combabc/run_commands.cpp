@@ -115,7 +115,7 @@ int RunCommand(RunArgs& args, const Session& session) {
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
     const auto outcome = services::RunCalibration(request, observer);
     const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.history_path);
+    PrintAnswer(session, args.quiet, outcome.answer);
     return code;
   });
 }
@@ -139,7 +139,7 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   return Guarded(session, args.quiet, [&](SmcObserver* observer) {
     const auto outcome = services::ResumeCalibration(request, observer);
     const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.history_path);
+    PrintAnswer(session, args.quiet, outcome.answer);
     return code;
   });
 }

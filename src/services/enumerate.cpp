@@ -14,6 +14,7 @@
 #include "combabc/services/report.hpp"
 #include "services/output_folders.hpp"
 #include "services/problem.hpp"
+#include "services/read_back.hpp"
 #include "services/report_checks.hpp"
 #include "services/worker_steps.hpp"
 
@@ -171,15 +172,10 @@ void WriteEnumeration(const EnumerateRequest& request,
     }
     throw;
   }
-  // As run's: warnings from the history as stored, never an error.
-  try {
-    outcome.checks = ComputeFitChecks(store.LoadMetadata(), store.LoadHistory());
-  } catch (const Error& e) {
-    outcome.checks.after.push_back(
-        {"note",
-         "checks_failed",
-         std::string("the fit checks could not read the history: ") + e.what()});
-  }
+  // As run's: from the history as stored.
+  ReadBack back = ReadBackHistory(store);
+  outcome.checks = std::move(back.checks);
+  outcome.answer = std::move(back.answer);
   OutputDirectory files(files_directory, request.overwrite);
   WriteEnumerationFiles(files, metadata, result);
   files.Commit();

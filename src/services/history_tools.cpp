@@ -9,8 +9,8 @@
 #include "combabc/export/answer.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
-#include "services/bit_positions.hpp"
 #include "services/python_script.hpp"
+#include "services/read_back.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

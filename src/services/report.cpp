@@ -17,8 +17,8 @@
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/report.hpp"
-#include "services/bit_positions.hpp"
 #include "services/python_script.hpp"
+#include "services/read_back.hpp"
 #include "services/report_checks.hpp"
 
 namespace combabc::services {

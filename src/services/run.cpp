@@ -16,6 +16,7 @@
 #include "services/fan_out_observer.hpp"
 #include "services/output_folders.hpp"
 #include "services/problem.hpp"
+#include "services/read_back.hpp"
 #include "services/report_checks.hpp"
 #include "services/run_fingerprint.hpp"
 #include "services/worker_steps.hpp"
@@ -141,16 +142,10 @@ RunOutcome Execute(Problem& problem,
   }
   OnPrimary(executor, [&] {
     store->Finish(outcome.history.summary);
-    // From the stored history: a resumed run's earlier waves count too. Warnings, never an error:
-    // a history that cannot be read back here is for verify to judge.
-    try {
-      outcome.checks = ComputeFitChecks(store->LoadMetadata(), store->LoadHistory());
-    } catch (const Error& e) {
-      outcome.checks.after.push_back(
-          {"note",
-           "checks_failed",
-           std::string("the fit checks could not read the history: ") + e.what()});
-    }
+    // From the stored history: a resumed run's earlier waves count too.
+    ReadBack back = ReadBackHistory(*store);
+    outcome.checks = std::move(back.checks);
+    outcome.answer = std::move(back.answer);
     if (!report) return;
     try {
       outcome.report_directory = WriteReport(store->path(), ReportDirectory(store->path()));

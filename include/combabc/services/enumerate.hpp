@@ -2,9 +2,11 @@
 // `combabc enumerate`: the exact ABC posterior of a config's problem by simulating every
 // configuration of its free bits.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/services/executor_factory.hpp"
@@ -37,6 +39,8 @@ struct EnumerateOutcome {
   bool interrupted = false;
   // The fit and sanity checks of its one-wave history (docs/history.md, "Checks"); primary only.
   FitChecks checks;
+  // The answer in numbers, exact (docs/history.md, "The answer"); as RunOutcome::answer.
+  std::optional<Answer> answer;
 };
 
 // Exact ABC posterior of the config's problem at the given (or the config's final) thresholds by

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
@@ -37,6 +38,9 @@ struct RunOutcome {
   std::string report_directory;  // empty when no report was written
   RunHistory history;
   FitChecks checks;  // the fit and sanity checks (docs/history.md, "Checks"); primary only
+  // The answer in numbers (docs/history.md, "The answer"); primary only, absent when the history
+  // could not be read back (checks says why).
+  std::optional<Answer> answer;
 };
 
 // `progress` sees every wave start, batch and wave end (the CLI's progress bar) and may interrupt.

@@ -1,12 +1,15 @@
 #pragma once
-// Private to src/services: where each bit acts, for the answer's positions, shared by every job
-// that summarises or exports a history (history_tools.cpp, report.cpp).
+// Private to src/services: what the jobs read back from a history they wrote or export: where
+// each bit acts (the answer's positions; history_tools.cpp, report.cpp), and the fit checks with
+// the answer at the end of run, resume and enumerate (run.cpp, enumerate.cpp).
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/history/history_store.hpp"
 
 namespace combabc::services {
@@ -33,6 +36,29 @@ inline std::vector<std::optional<BitPosition>> BitPositions(const RunMetadata& m
         BitPosition{k < n ? 1 : 2, length * section / n, length * (section + 1) / n});
   }
   return positions;
+}
+
+// The fit checks and the answer of a finished job's history, from one read of it. Warnings, never
+// an error: a history that cannot be read back is for verify to judge; the checks then carry a
+// note and the answer is absent.
+struct ReadBack {
+  FitChecks checks;
+  std::optional<Answer> answer;
+};
+inline ReadBack ReadBackHistory(const HistoryStore& store) {
+  ReadBack back;
+  try {
+    const RunMetadata metadata = store.LoadMetadata();
+    const RunHistory history = store.LoadHistory();
+    back.checks = ComputeFitChecks(metadata, history);
+    back.answer = SummariseAnswer(metadata, history, BitPositions(metadata));
+  } catch (const Error& e) {
+    back.checks.after.push_back(
+        {"note",
+         "checks_failed",
+         std::string("the fit checks could not read the history: ") + e.what()});
+  }
+  return back;
 }
 
 }  // namespace combabc::services
