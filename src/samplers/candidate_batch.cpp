@@ -14,10 +14,12 @@ CandidateBatch::CandidateBatch(const ParameterSpace& space,
                                const Simulator& simulator,
                                const Distance& distance,
                                std::size_t num_components,
-                               bool draw_uniform)
+                               bool draw_uniform,
+                               const LowFidelityStage* low_fidelity)
     : space_(space),
       simulator_(simulator),
       distance_(distance),
+      low_fidelity_(low_fidelity),
       d_(static_cast<std::size_t>(space.num_bits())),
       f_(static_cast<std::size_t>(space.num_free_bits())),
       r_(static_cast<std::size_t>(space.num_reals())),
@@ -37,6 +39,8 @@ void CandidateBatch::Evaluate(Executor& executor,
   reals_.resize(n * r_);
   outputs_.resize(n * m_);
   distances_.resize(n * c_);
+  low_distances_.assign(n * c_, std::numeric_limits<double>::quiet_NaN());
+  fidelity_.assign(n, 0);
   log_weights_.resize(n);
   uniforms_.resize(n);
   status_.assign(n, 0);
@@ -57,7 +61,9 @@ std::vector<BatchTask::Buffer> CandidateBatch::Results() {
           {log_weights_.data(), sizeof(double)},
           {uniforms_.data(), sizeof(double)},
           {status_.data(), 1},
-          {reasons_.data(), kFailureReasonBytes}};
+          {reasons_.data(), kFailureReasonBytes},
+          {low_distances_.data(), c_ * sizeof(double)},
+          {fidelity_.data(), 1}};
 }
 
 std::string_view CandidateBatch::reason(std::int64_t i) const {
@@ -102,51 +108,66 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
     }
     log_weights_[i] = log_weight;
   }
+  const std::size_t count = end - begin;
+  const ParameterBatch batch{count,
+                             d_,
+                             r_,
+                             std::span<const std::uint8_t>(bits_.data() + begin * d_, count * d_),
+                             std::span<const double>(reals_.data() + begin * r_, count * r_)};
+  auto failures = BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, count);
+  // The cheap simulator first when there is one: every candidate runs it.
+  SimulateAndMeasure(low_fidelity_ ? *low_fidelity_->simulator : simulator_,
+                     batch,
+                     std::span(rngs_.data() + begin, count),
+                     std::span(outputs_.data() + begin * m_, count * m_),
+                     std::span(distances_.data() + begin * c_, count * c_),
+                     failures,
+                     which);
+  for (std::size_t i = begin; i < end; ++i) {
+    // After the simulator's draws, so that they do not depend on whether it is drawn.
+    uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
+  }
+  if (low_fidelity_) ContinueWithExpensive(begin, end, which);
+}
+
+void CandidateBatch::SimulateAndMeasure(const Simulator& simulator,
+                                        const ParameterBatch& batch,
+                                        std::span<RandomStream> rngs,
+                                        std::span<double> outputs,
+                                        std::span<double> distances,
+                                        BatchFailures& failures,
+                                        const std::string& which) const {
+  const std::size_t n = batch.count;
+  auto fail = [&](std::size_t i, std::string_view reason) {
+    if (!failures.failed(i)) failures.Fail(i, reason);
+  };
   try {
-    const ParameterBatch batch{
-        end - begin,
-        d_,
-        r_,
-        std::span<const std::uint8_t>(bits_.data() + begin * d_, (end - begin) * d_),
-        std::span<const double>(reals_.data() + begin * r_, (end - begin) * r_)};
-    BatchFailures failures =
-        BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, end - begin);
-    simulator_.SimulateBatch(batch,
-                             std::span(rngs_.data() + begin, end - begin),
-                             std::span(outputs_.data() + begin * m_, (end - begin) * m_),
-                             failures);
+    simulator.SimulateBatch(batch, rngs, outputs, failures);
   } catch (const std::exception& e) {
     // Not a SimulationFailed of one candidate (SimulateBatch handles those): a defect.
     throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
   }
-  for (std::size_t i = begin; i < end; ++i) {
-    // After the simulator's draws, so that they do not depend on whether it is drawn.
-    uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
-    if (status_[i] != 0) continue;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (failures.failed(i)) continue;
     // A NaN output is the simulation's failure (a diverged solve, an unreadable value), not the
     // run's: the candidate is recorded as failed and the run goes on.
-    const auto output = span_of(outputs_, i, m_);
+    const auto output = outputs.subspan(i * m_, m_);
     const auto nan =
         std::find_if(output.begin(), output.end(), [](double v) { return std::isnan(v); });
     if (nan != output.end()) {
-      Fail(i, "output holds NaN at index " + std::to_string(nan - output.begin()));
+      fail(i, "output holds NaN at index " + std::to_string(nan - output.begin()));
     }
   }
   // One call for the batch's candidates still standing (a distance written in Python pays per
   // call); it skips the failed ones and may fail some itself.
   try {
-    BatchFailures failures =
-        BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, end - begin);
-    distance_.EvaluateBatch(
-        std::span<const double>(outputs_.data() + begin * m_, (end - begin) * m_),
-        std::span(distances_.data() + begin * c_, (end - begin) * c_),
-        failures);
+    distance_.EvaluateBatch(outputs, distances, failures);
   } catch (const std::exception& e) {
     throw Error(ErrorKind::kSoftware, std::string("distance failed: ") + e.what(), "", 0, which);
   }
-  for (std::size_t i = begin; i < end; ++i) {
-    auto out = span_of(distances_, i, c_);
-    if (status_[i] != 0) {
+  for (std::size_t i = 0; i < n; ++i) {
+    auto out = distances.subspan(i * c_, c_);
+    if (failures.failed(i)) {
       // Never accepted: no distance is kept from outputs the simulator did not produce or the
       // distance could not measure.
       std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
@@ -154,10 +175,71 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
     }
     for (std::size_t k = 0; k < c_; ++k) {
       if (std::isnan(out[k])) {
-        Fail(i, "distance component " + std::to_string(k) + " is NaN");
+        fail(i, "distance component " + std::to_string(k) + " is NaN");
         break;
       }
     }
+  }
+}
+
+void CandidateBatch::ContinueWithExpensive(std::size_t begin,
+                                           std::size_t end,
+                                           const std::string& which) {
+  const MultiFidelityOptions& options = low_fidelity_->options;
+  std::vector<std::size_t> continued;
+  for (std::size_t i = begin; i < end; ++i) {
+    std::copy_n(distances_.begin() + static_cast<std::ptrdiff_t>(i * c_),
+                c_,
+                low_distances_.begin() + static_cast<std::ptrdiff_t>(i * c_));
+    // Drawn for every candidate, failed or not, after the acceptance uniform: the candidate's
+    // own stream, so that whether it continues does not depend on threads or batches.
+    const double v = rngs_[i].Uniform();
+    fidelity_[i] = 0;
+    if (status_[i] != 0) continue;
+    const bool cheap_accepted =
+        low_fidelity_->accept(distance(static_cast<std::int64_t>(i)), uniforms_[i]);
+    const double eta = cheap_accepted ? options.continue_if_accepted : options.continue_if_rejected;
+    fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (v < eta ? kContinued : 0);
+    if (v < eta) continued.push_back(i);
+  }
+  if (continued.empty()) return;
+  // The continued candidates, gathered: the expensive simulator sees one dense batch, and each
+  // candidate goes on drawing from its own stream.
+  const std::size_t n = continued.size();
+  std::vector<std::uint8_t> bits(n * d_), status(n, 0);
+  std::vector<double> reals(n * r_), outputs(n * m_), distances(n * c_);
+  std::vector<char> reasons(n * kFailureReasonBytes, '\0');
+  std::vector<RandomStream> rngs;
+  rngs.reserve(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t i = continued[j];
+    std::copy_n(bits_.begin() + static_cast<std::ptrdiff_t>(i * d_),
+                d_,
+                bits.begin() + static_cast<std::ptrdiff_t>(j * d_));
+    std::copy_n(reals_.begin() + static_cast<std::ptrdiff_t>(i * r_),
+                r_,
+                reals.begin() + static_cast<std::ptrdiff_t>(j * r_));
+    rngs.push_back(rngs_[i]);
+  }
+  const ParameterBatch batch{n, d_, r_, bits, reals};
+  auto failures = BatchFailures(std::span(status), std::span(reasons));
+  SimulateAndMeasure(simulator_, batch, rngs, outputs, distances, failures, which);
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t i = continued[j];
+    if (failures.failed(j)) {
+      // The candidate's expensive simulation is its simulation: a failure fails the candidate.
+      Fail(i, failures.reason(j));
+      std::fill_n(distances_.begin() + static_cast<std::ptrdiff_t>(i * c_),
+                  c_,
+                  std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    std::copy_n(outputs.begin() + static_cast<std::ptrdiff_t>(j * m_),
+                m_,
+                outputs_.begin() + static_cast<std::ptrdiff_t>(i * m_));
+    std::copy_n(distances.begin() + static_cast<std::ptrdiff_t>(j * c_),
+                c_,
+                distances_.begin() + static_cast<std::ptrdiff_t>(i * c_));
   }
 }
 

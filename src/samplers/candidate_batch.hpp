@@ -2,9 +2,13 @@
 // A batch of consecutive candidates of one wave, evaluated by an Executor into flat buffers (no
 // allocation per candidate). Candidate i's randomness is RandomStream(seed, wave, first + i):
 // the binary proposal draws first, then the continuous one, then whatever a stochastic
-// simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance.
+// simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance. With a
+// low-fidelity stage, the simulator that draws is the cheap one, and after the acceptance
+// uniform come the continuation uniform and then the expensive simulator's draws.
 #include <cstdint>
+#include <functional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -12,6 +16,7 @@
 #include "combabc/distances/distance.hpp"
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/proposals/proposal.hpp"
+#include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/samplers/simulator.hpp"
 
@@ -24,13 +29,25 @@ struct WaveProposal {
   bool from_prior = false;
 };
 
+// What a multi-fidelity batch needs besides the expensive simulator: the cheap one, the
+// continuation probabilities, and the wave's acceptance of a distance (with the candidate's
+// acceptance uniform), which decides which continuation probability applies. `accept` is
+// called from the executor's workers: it must be thread-safe.
+struct LowFidelityStage {
+  const Simulator* simulator = nullptr;
+  MultiFidelityOptions options;
+  std::function<bool(std::span<const double> distance, double uniform)> accept;
+};
+
 class CandidateBatch : public BatchTask {
  public:
+  // low_fidelity: null for a single-fidelity run.
   CandidateBatch(const ParameterSpace& space,
                  const Simulator& simulator,
                  const Distance& distance,
                  std::size_t num_components,
-                 bool draw_uniform = false);
+                 bool draw_uniform = false,
+                 const LowFidelityStage* low_fidelity = nullptr);
 
   // Proposes, simulates and measures candidates [first, first + count) of `wave` (the simulator
   // and the distance called once per range of candidates). A candidate whose simulation failed
@@ -47,6 +64,18 @@ class CandidateBatch : public BatchTask {
   std::span<const double> distance(std::int64_t i) const {
     return {distances_.data() + i * c_, c_};
   }
+  // With a low-fidelity stage: the cheap model's distance, whether the wave's rule accepted it,
+  // and whether the expensive simulator ran (then distance() and the output are its own; else
+  // they are the cheap model's).
+  std::span<const double> low_distance(std::int64_t i) const {
+    return {low_distances_.data() + i * c_, c_};
+  }
+  bool cheap_accepted(std::int64_t i) const {
+    return (fidelity_[static_cast<std::size_t>(i)] & kCheapAccepted) != 0;
+  }
+  bool continued(std::int64_t i) const {
+    return (fidelity_[static_cast<std::size_t>(i)] & kContinued) != 0;
+  }
   // The candidate's acceptance uniform on [0, 1) (0 unless draw_uniform).
   double uniform(std::int64_t i) const { return uniforms_[static_cast<std::size_t>(i)]; }
   bool failed(std::int64_t i) const { return status_[static_cast<std::size_t>(i)] != 0; }
@@ -56,16 +85,36 @@ class CandidateBatch : public BatchTask {
   void EvaluateRange(std::size_t begin, std::size_t end) override;
   // Per candidate, in this order: bits (d bytes), reals (r doubles), outputs (m doubles),
   // distances (c doubles), log weight (1 double), uniform (1 double), status (1 byte: 0 =
-  // simulated, 1 = failed), reason (kFailureReasonBytes, NUL-padded). docs/algorithm.md.
+  // simulated, 1 = failed), reason (kFailureReasonBytes, NUL-padded), low-fidelity distances (c
+  // doubles, NaN without a low-fidelity stage), fidelity flags (1 byte: kCheapAccepted |
+  // kContinued). docs/algorithm.md.
   std::vector<Buffer> Results() override;
 
  private:
+  static constexpr std::uint8_t kCheapAccepted = 1;
+  static constexpr std::uint8_t kContinued = 2;
+
   // Marks candidate i failed unless it already is (the first reason wins).
   void Fail(std::size_t i, std::string_view reason);
+  // Runs `simulator` on `batch` and measures the outputs: rows of m_ outputs and c_ distances; a
+  // candidate whose simulation or distance failed is marked in `failures` (the first reason wins)
+  // and its distances are NaN. Any other exception throws Error(kSoftware) naming `which`.
+  void SimulateAndMeasure(const Simulator& simulator,
+                          const ParameterBatch& batch,
+                          std::span<RandomStream> rngs,
+                          std::span<double> outputs,
+                          std::span<double> distances,
+                          BatchFailures& failures,
+                          const std::string& which) const;
+  // Candidates [begin, end), measured by the cheap simulator: draws each one's continuation and
+  // runs the expensive simulator on those that continue, whose outputs and distances replace
+  // the cheap ones.
+  void ContinueWithExpensive(std::size_t begin, std::size_t end, const std::string& which);
 
   const ParameterSpace& space_;
   const Simulator& simulator_;
   const Distance& distance_;
+  const LowFidelityStage* low_fidelity_;
   std::size_t d_, f_, r_, m_, c_;
   bool draw_uniform_;
   // The batch Evaluate is running.
@@ -73,9 +122,9 @@ class CandidateBatch : public BatchTask {
   int wave_ = 0;
   std::int64_t first_ = 0;
   WaveProposal proposal_;
-  std::vector<std::uint8_t> free_, bits_, status_;
+  std::vector<std::uint8_t> free_, bits_, status_, fidelity_;
   std::vector<char> reasons_;
-  std::vector<double> reals_, outputs_, distances_, log_weights_, uniforms_;
+  std::vector<double> reals_, outputs_, distances_, low_distances_, log_weights_, uniforms_;
   std::vector<RandomStream> rngs_;
 };
 

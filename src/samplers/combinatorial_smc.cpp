@@ -84,6 +84,7 @@ class SmcRun {
   SmcRun(const SmcProblem& problem, const SmcOptions& options, SmcObserver* observer)
       : space_(*problem.space),
         simulator_(*problem.simulator),
+        low_fidelity_(problem.low_fidelity),
         distance_(*problem.distance),
         options_(options),
         observer_(observer),
@@ -157,6 +158,15 @@ class SmcRun {
     }
     if (simulator_.output_size() < 0) {
       throw Error(ErrorKind::kConfig, "simulator output_size() is negative");
+    }
+    if (low_fidelity_ && low_fidelity_->output_size() != simulator_.output_size()) {
+      throw Error(ErrorKind::kConfig,
+                  "has " + std::to_string(low_fidelity_->output_size()) +
+                      " outputs; the simulator has " + std::to_string(simulator_.output_size()) +
+                      " (the one distance measures both)",
+                  "",
+                  0,
+                  "SmcProblem::low_fidelity");
     }
   }
 
@@ -288,6 +298,18 @@ class SmcRun {
       pop.weights.push_back(p.weight);
       pop.within_next.push_back(Within(p.distance, thresholds) ? 1 : 0);
     }
+    // A multi-fidelity wave may hold negative weights, which no proposal can take as
+    // probabilities: the kernels fit the positive part, renormalised, as Prescott & Baker (2021,
+    // arXiv:2001.06256) build the next importance distribution. The proposal only has to cover
+    // the posterior; the importance weights p/q of the next wave correct for whichever it is.
+    if (std::any_of(pop.weights.begin(), pop.weights.end(), [](double w) { return w < 0; })) {
+      double sum = 0.0;
+      for (auto& w : pop.weights) {
+        w = std::max(w, 0.0);
+        sum += w;
+      }
+      for (auto& w : pop.weights) w /= sum;
+    }
     return pop;
   }
 
@@ -315,6 +337,21 @@ class SmcRun {
       }
     }
     return !stochastic_ || u < std::exp(log_accept);
+  }
+
+  // Candidate i's weight multiplier: without a low-fidelity simulator 1 if accepted, 0 if not;
+  // with one, MultiFidelityMultiplier of its cheap and (if continued) expensive acceptance. A
+  // wave keeps every candidate whose multiplier is not 0 as a particle: the first n of them in
+  // index order are n independent draws given a non-zero multiplier, over which the weighted
+  // estimates are the same ratios as over all candidates.
+  double Multiplier(const CandidateBatch& batch,
+                    std::int64_t i,
+                    const std::vector<double>& eps) const {
+    if (!low_fidelity_) return Accept(batch.distance(i), eps, batch.uniform(i)) ? 1.0 : 0.0;
+    const bool continued = batch.continued(i);
+    const bool expensive_accepted = continued && Accept(batch.distance(i), eps, batch.uniform(i));
+    return MultiFidelityMultiplier(
+        options_.multi_fidelity, batch.cheap_accepted(i), continued, expensive_accepted);
   }
 
   // The deterministic version for the kernels (OLCM's "still within the next thresholds"): a
@@ -396,7 +433,22 @@ class SmcRun {
     const int n = options_.accepted_per_wave;
     const double prior_rate = last_rate_;
     Stop stop;
-    CandidateBatch batch(space_, simulator_, distance_, components_.size(), stochastic_);
+    // With a low-fidelity simulator, the batch decides which candidates continue to the
+    // expensive one by this wave's acceptance of their cheap distances.
+    LowFidelityStage stage;
+    if (low_fidelity_) {
+      stage.simulator = low_fidelity_;
+      stage.options = options_.multi_fidelity;
+      stage.accept = [this, &wave](std::span<const double> d, double u) {
+        return Accept(d, wave.thresholds, u);
+      };
+    }
+    CandidateBatch batch(space_,
+                         simulator_,
+                         distance_,
+                         components_.size(),
+                         stochastic_,
+                         low_fidelity_ ? &stage : nullptr);
     while (static_cast<int>(wave.particles.size()) < n) {
       std::int64_t size = BatchSize(wave, next_index, prior_rate);
       if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
@@ -417,8 +469,10 @@ class SmcRun {
           wave.failures.push_back({next_index + i, std::string(batch.reason(i))});
           ++failures_;
           last_failure_ = Describe(wave.wave, wave.failures.back());
-        } else if (Accept(batch.distance(i), wave.thresholds, batch.uniform(i))) {
+        } else if (const double multiplier = Multiplier(batch, i, wave.thresholds);
+                   multiplier != 0.0) {
           wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
+          wave.particles.back().multiplier = multiplier;
           if (static_cast<int>(wave.particles.size()) == n) {
             consumed = i + 1;
             break;
@@ -492,6 +546,7 @@ class SmcRun {
 
   const ParameterSpace& space_;
   const Simulator& simulator_;
+  const Simulator* low_fidelity_;  // null: single fidelity
   const Distance& distance_;
   const SmcOptions& options_;
   SmcObserver* observer_;

@@ -76,9 +76,12 @@ std::vector<double> BitMoments::Correlations() const {
   const std::vector<double> m = Marginals();
   std::vector<double> r(d_ * d_, 0.0);
   // A bit is constant exactly when its sum is 0 or, summed over the same weights in the same
-  // order, equal to the total.
+  // order, equal to the total. Signed (multi-fidelity) weights can put a marginal at or beyond
+  // 0 or 1 without that: such a bit has no variance to correlate either.
   std::vector<bool> constant(d_);
-  for (std::size_t k = 0; k < d_; ++k) constant[k] = ones_[k] == 0.0 || ones_[k] == total_;
+  for (std::size_t k = 0; k < d_; ++k) {
+    constant[k] = ones_[k] == 0.0 || ones_[k] == total_ || !(m[k] > 0.0 && m[k] < 1.0);
+  }
   for (std::size_t i = 0; i < d_; ++i) {
     if (constant[i]) continue;
     r[i * d_ + i] = 1.0;
@@ -118,32 +121,60 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
     wave.pair_correlations.clear();
     return;
   }
-  // Self-normalised importance weights w_i ∝ p(theta_i)/q(theta_i), in log space for range.
+  // Self-normalised weights: w_i ∝ m_i p(theta_i)/q(theta_i) (importance, in log space for
+  // range) or w_i ∝ m_i (paper), m_i the multi-fidelity multiplier (1 without a low-fidelity
+  // simulator). Multi-fidelity weights may be negative: they are normalised by their signed sum,
+  // as Prescott & Baker (2021, arXiv:2001.06256) normalise their estimators, so that every
+  // estimate below stays the unbiased-ratio estimate of the expensive model's ABC posterior. A
+  // wave whose signed sum is not positive (possible only with many negative weights) has no such
+  // estimate; it is normalised by the sum of |w_i| instead, so that its statistics stay finite.
   double max_lw = -INFINITY;
   for (const auto& p : wave.particles) max_lw = std::max(max_lw, p.log_weight);
   std::vector<double> w(n);
-  double sum = 0.0;
+  std::vector<double> paper(n);
   for (std::size_t i = 0; i < n; ++i) {
-    w[i] = std::exp(wave.particles[i].log_weight - max_lw);
-    sum += w[i];
+    const auto& p = wave.particles[i];
+    w[i] = p.multiplier * std::exp(p.log_weight - max_lw);
+    paper[i] = p.multiplier;
   }
+  auto normalise = [](std::vector<double>& v) {
+    double sum = 0.0;
+    double sum_abs = 0.0;
+    for (double x : v) {
+      sum += x;
+      sum_abs += std::abs(x);
+    }
+    const double norm = sum > 0.0 ? sum : sum_abs;
+    for (auto& x : v) x /= norm;
+  };
+  normalise(w);
+  normalise(paper);
   double sum_sq = 0.0;
-  for (auto& x : w) {
-    x /= sum;
-    sum_sq += x * x;
-  }
+  for (double x : w) sum_sq += x * x;
+  // (sum w)^2 / sum w^2 with the normalised weights; with negative weights it is Prescott &
+  // Baker's effective sample size of a signed estimator.
   wave.ess = 1.0 / sum_sq;
-  const double uniform = 1.0 / static_cast<double>(n);
   for (std::size_t i = 0; i < n; ++i) {
     auto& p = wave.particles[i];
-    p.weight = estimator == Estimator::kPaper ? uniform : w[i];
+    p.weight = estimator == Estimator::kPaper ? paper[i] : w[i];
     for (std::size_t k = 0; k < d; ++k) {
       if (p.theta.bits[k]) {
-        wave.marginals_paper[k] += uniform;
+        wave.marginals_paper[k] += paper[i];
         wave.marginals_importance[k] += w[i];
       }
     }
     for (std::size_t k = 0; k < r; ++k) wave.reals_mean[k] += p.weight * p.theta.reals[k];
+  }
+  // Signed weights can put an estimate just outside its range (a probability below 0 or above
+  // 1, a negative variance): clamped, which only moves an estimate that is already at the edge.
+  // Only then, so that a wave of positive weights keeps its sums bit for bit.
+  const bool signed_weights = std::any_of(wave.particles.begin(),
+                                          wave.particles.end(),
+                                          [](const Particle& p) { return p.multiplier < 0; });
+  if (signed_weights) {
+    for (auto* marginals : {&wave.marginals_paper, &wave.marginals_importance}) {
+      for (auto& m : *marginals) m = std::clamp(m, 0.0, 1.0);
+    }
   }
   for (const auto& p : wave.particles) {
     for (std::size_t k = 0; k < r; ++k) {
@@ -151,6 +182,7 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
       wave.reals_sd[k] += p.weight * dev * dev;
     }
   }
+  for (auto& v : wave.reals_sd) v = std::max(v, 0.0);
   for (auto& v : wave.reals_sd) v = std::sqrt(v);
   wave.pair_correlations = PairCorrelations(wave.particles);
   // Distinct bit configurations (the reals of a continuous kernel are almost surely all distinct).
@@ -206,6 +238,7 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
           Differ(p.theta.reals, q.theta.reals, pi + "reals", where) ||
           Differ(p.log_weight, q.log_weight, pi + "log_weight", where) ||
           Differ(p.weight, q.weight, pi + "weight", where) ||
+          Differ(p.multiplier, q.multiplier, pi + "multiplier", where) ||
           Differ(p.distance, q.distance, pi + "distance", where) ||
           Differ(p.output, q.output, pi + "output", where)) {
         return false;

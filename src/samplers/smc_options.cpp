@@ -59,6 +59,10 @@ bool SmcOptions::IsValid(std::string* why) const {
   if (batch_size < 0) {
     return fail("batch_size = " + std::to_string(batch_size) + "; must be >= 0 (0 = automatic)");
   }
+  if (!multi_fidelity.IsValid(why)) {
+    if (why) *why = "SmcOptions::multi_fidelity." + why->substr(why->find("::") + 2);
+    return false;
+  }
   return true;
 }
 

@@ -41,6 +41,10 @@ struct SmcProblem {
   const BinaryKernel* binary_kernel = nullptr;
   const ContinuousKernel* continuous_kernel = nullptr;
   Executor* executor = nullptr;
+  // Optional: a cheap simulator with the same outputs as `simulator`. Set, every candidate runs
+  // it and the expensive `simulator` runs only with SmcOptions::multi_fidelity's continuation
+  // probabilities (docs/algorithm.md, "Multi-fidelity sampling").
+  const Simulator* low_fidelity = nullptr;
 };
 
 // Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the kernels fitted

@@ -16,10 +16,13 @@
 namespace combabc {
 
 struct Particle {
-  std::int64_t index = 0;        // candidate index within its wave
-  ParameterValue theta;          // full bit vector (0/1) and the reals
-  double log_weight = 0.0;       // log p(theta)/q(theta), unnormalised
-  double weight = 0.0;           // normalised weight under the run's estimator
+  std::int64_t index = 0;   // candidate index within its wave
+  ParameterValue theta;     // full bit vector (0/1) and the reals
+  double log_weight = 0.0;  // log p(theta)/q(theta), unnormalised
+  double weight = 0.0;      // normalised weight under the run's estimator (may be < 0)
+  // The multi-fidelity multiplier (MultiFidelityMultiplier; 1 without a low-fidelity simulator):
+  // the weight is proportional to it. Not yet stored in the history files.
+  double multiplier = 1.0;
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
 };

@@ -8,6 +8,7 @@
 #include "combabc/core/enum_names.hpp"
 
 #include "combabc/proposals/proposal_options.hpp"
+#include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/schedules/tempering_schedule.hpp"
 #include "combabc/schedules/threshold_schedule.hpp"
 
@@ -65,6 +66,9 @@ struct SmcOptions {
   int batch_size = 0;
   // Keep each accepted particle's simulated output in the history.
   bool keep_outputs = true;
+  // The continuation probabilities of a run with a low-fidelity simulator
+  // (SmcProblem::low_fidelity); unused without one. Fixed for every wave.
+  MultiFidelityOptions multi_fidelity;
 
   bool IsValid(std::string* why) const;
 };

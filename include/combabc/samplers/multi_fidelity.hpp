@@ -1,0 +1,36 @@
+#pragma once
+// Multi-fidelity ABC-SMC (Prescott & Baker, "Multifidelity approximate Bayesian computation with
+// sequential Monte Carlo parameter sampling", SIAM/ASA JUQ 2021, arXiv:2001.06256): every
+// candidate runs a cheap (low-fidelity) simulator; the expensive one runs only with a
+// continuation probability that depends on whether the cheap distance accepted. docs/algorithm.md,
+// "Multi-fidelity sampling".
+#include <string>
+
+namespace combabc {
+
+struct MultiFidelityOptions {
+  // eta_1: the probability of running the expensive simulator on a candidate the cheap one
+  // accepted. 1 (the default) never lets a false positive of the cheap model through unchecked,
+  // so that no weight is negative.
+  double continue_if_accepted = 1.0;
+  // eta_2: the same for a candidate the cheap one rejected (a false negative is found with this
+  // probability and then weighs 1 / eta_2).
+  double continue_if_rejected = 0.1;
+
+  // Both in (0, 1]: a continuation probability of 0 would leave the estimator biased (the
+  // weight divides by it).
+  bool IsValid(std::string* why) const;
+};
+
+// The candidate's multi-fidelity weight multiplier (Prescott & Baker 2020, JUQ 8(1)):
+// 1(cheap accepted) + 1(continued) / eta * [1(expensive accepted) - 1(cheap accepted)], with
+// eta the continuation probability of the cheap outcome. Its expectation over the continuation is
+// 1(expensive accepted), so weighting a candidate by it (times the usual importance weight)
+// estimates the expensive model's ABC posterior. It is negative for a cheap acceptance that the
+// expensive model rejected when continue_if_accepted < 1; 0 means the candidate carries no weight.
+double MultiFidelityMultiplier(const MultiFidelityOptions& options,
+                               bool cheap_accepted,
+                               bool continued,
+                               bool expensive_accepted);
+
+}  // namespace combabc
