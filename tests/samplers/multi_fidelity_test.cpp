@@ -222,5 +222,34 @@ TEST(MultiFidelity, LowFidelityOutputsMustMatch) {
   }
 }
 
+// Fails every candidate with bit 1 set.
+class FailingSimulator : public Simulator {
+ public:
+  int output_size() const override { return kBits; }
+  void Simulate(const ParameterView& theta,
+                RandomStream& /*rng*/,
+                std::span<double> out) const override {
+    if (theta.bits[1] != 0) throw SimulationFailed("bit 1 breaks the solver");
+    for (int k = 0; k < kBits; ++k) out[k] = theta.bits[k];
+  }
+};
+
+TEST(MultiFidelity, AFailedExpensiveSimulationFailsTheCandidate) {
+  Toy toy;
+  const FailingSimulator expensive;
+  SmcProblem problem{&toy.space, &expensive, &toy.dist};
+  problem.low_fidelity = &toy.expensive;    // never fails
+  auto options = toy.Options(1.0, 1.0, 2);  // every candidate continues
+  options.num_waves = 1;
+  options.thresholds[0].values = {kFinalEps};
+  options.accepted_per_wave = 200;
+  options.max_failure_fraction = 1.0;
+  const auto history = RunCombinatorialSmc(problem, options);
+  const auto& wave = history.waves.front();
+  ASSERT_FALSE(wave.failures.empty());
+  EXPECT_EQ(wave.failures.front().reason, "bit 1 breaks the solver");
+  for (const auto& p : wave.particles) EXPECT_EQ(p.theta.bits[1], 0);
+}
+
 }  // namespace
 }  // namespace combabc
