@@ -258,6 +258,11 @@ Particle CandidateBatch::MakeParticle(std::int64_t i, std::int64_t index, bool k
     p.output.assign(outputs_.begin() + static_cast<std::ptrdiff_t>(u * m_),
                     outputs_.begin() + static_cast<std::ptrdiff_t>((u + 1) * m_));
   }
+  if (low_fidelity_) {
+    const auto low = low_distance(i);
+    p.low_distance.assign(low.begin(), low.end());
+    p.confirmed = continued(i);
+  }
   return p;
 }
 

@@ -28,6 +28,9 @@ struct ResumePoint {
   std::vector<Particle> partial_accepted;
   std::int64_t partial_discarded = 0;               // BatchProgress::discarded of the partial wave
   std::vector<SimulationFailure> partial_failures;  // its failed simulations below next_index
+  // Its continuation probabilities and costs so far (multi-fidelity runs): a resumed wave goes on
+  // with the probabilities it started with.
+  std::optional<WaveFidelity> partial_fidelity;
 };
 
 // What a run infers and with what. The sampler knows kernels, executors and simulators only

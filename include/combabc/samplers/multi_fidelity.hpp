@@ -16,6 +16,15 @@ struct MultiFidelityOptions {
   // eta_2: the same for a candidate the cheap one rejected (a false negative is found with this
   // probability and then weighs 1 / eta_2).
   double continue_if_rejected = 0.1;
+  // Tune both, each wave after the first, from the previous wave to maximise the effective sample
+  // size per unit cost (the two values above are then the first wave's only).
+  bool adapt = true;
+  // The least continuation probability tuning may choose, in (0, 1]: it bounds the multiplier of
+  // a confirmed candidate by 1 / floor.
+  double floor = 0.01;
+  // The cost of one expensive simulation over one cheap one, > 0; 0: measured, from the previous
+  // waves' summed call times (not deterministic: set it for bit-for-bit reproducible runs).
+  double cost_ratio = 0.0;
 
   // Both in (0, 1]: a continuation probability of 0 would leave the estimator biased (the
   // weight divides by it).

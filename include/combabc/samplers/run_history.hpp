@@ -20,9 +20,14 @@ struct Particle {
   ParameterValue theta;     // full bit vector (0/1) and the reals
   double log_weight = 0.0;  // log p(theta)/q(theta), unnormalised
   double weight = 0.0;      // normalised weight under the run's estimator (may be < 0)
-  // The multi-fidelity multiplier (MultiFidelityMultiplier; 1 without a low-fidelity simulator):
-  // the weight is proportional to it. Not yet stored in the history files.
+  // Multi-fidelity runs only (SmcProblem::low_fidelity); else 1, empty and false.
+  //  - multiplier: MultiFidelityMultiplier of the candidate; the weight is proportional to it.
+  //  - low_distance: the cheap simulator's distance, one value per component.
+  //  - confirmed: the expensive simulator ran, so `distance` and `output` are its own (else they
+  //    are the cheap simulator's).
   double multiplier = 1.0;
+  std::vector<double> low_distance;
+  bool confirmed = false;
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
 };
@@ -33,6 +38,20 @@ struct SimulationFailure {
   std::int64_t index = 0;  // candidate index within its wave
   std::string reason;      // at most kFailureReasonBytes - 1 bytes
   bool operator==(const SimulationFailure&) const = default;
+};
+
+// A multi-fidelity wave's continuation probabilities and costs (docs/algorithm.md,
+// "Multi-fidelity sampling").
+struct WaveFidelity {
+  double continue_if_accepted = 1.0;  // eta_1 this wave used
+  double continue_if_rejected = 1.0;  // eta_2 this wave used
+  // Expensive simulations among the wave's `candidates` (each of which ran the cheap simulator).
+  std::int64_t expensive_simulations = 0;
+  // Wall time of the cheap and expensive simulator calls, summed over the wave's candidates (a
+  // batch call's time shared equally among its candidates); not deterministic, excluded from
+  // SameHistory.
+  double cheap_seconds = 0.0;
+  double expensive_seconds = 0.0;
 };
 
 struct WaveRecord {
@@ -57,7 +76,8 @@ struct WaveRecord {
   std::int64_t discarded = 0;  // simulated past the last acceptance (parallel overshoot)
   // The failed simulations among `candidates`, in candidate order.
   std::vector<SimulationFailure> failures;
-  double wall_seconds = 0.0;  // not deterministic; excluded from SameHistory
+  double wall_seconds = 0.0;                   // not deterministic; excluded from SameHistory
+  std::optional<WaveFidelity> multi_fidelity;  // set in a multi-fidelity run only
   std::vector<Particle> particles;
 
   // The estimator's marginals (what the run reports and proposes from).
