@@ -2,6 +2,7 @@
 // Callbacks through which a run reports progress and checkpoints (the CLI's progress bar and the
 // SQLite history use them). All are called on the thread that called Run(), never concurrently.
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include "combabc/samplers/run_history.hpp"
@@ -18,12 +19,16 @@ struct BatchProgress {
   double elapsed_seconds = 0.0;
   std::int64_t failures = 0;                  // failed simulations among [0, next_index)
   std::span<const SimulationFailure> failed;  // those this batch added, in candidate order
+  // Multi-fidelity runs: the wave's continuation probabilities, and its expensive simulations and
+  // call times over candidates [0, next_index) (what a resumed wave starts from).
+  std::optional<WaveFidelity> fidelity;
 };
 
 class SmcObserver {
  public:
   virtual ~SmcObserver() = default;
-  // A wave starts: its thresholds, phi and proposal are in `wave` (no particles yet).
+  // A wave starts: its thresholds, phi and proposal are in `wave` (no particles yet), and in a
+  // multi-fidelity run its continuation probabilities (wave.multi_fidelity, costs still 0).
   virtual void OnWaveStart(const WaveRecord& /*wave*/) {}
   // A batch is done; `accepted` are its newly accepted particles (weights not yet normalised).
   // After this returns, a resumed run may restart from progress.next_index.
