@@ -52,6 +52,12 @@ struct WaveFidelity {
   // SameHistory.
   double cheap_seconds = 0.0;
   double expensive_seconds = 0.0;
+  // Set when the wave ends (complete): the continuation probabilities tuned for the next wave
+  // (MultiFidelityOptions::adapt; else the fixed ones) and the expensive-to-cheap cost ratio the
+  // tuning assumed. Stored with this wave so that a run resumed between waves goes on with them.
+  double next_continue_if_accepted = 1.0;
+  double next_continue_if_rejected = 1.0;
+  double cost_ratio = 0.0;
 };
 
 struct WaveRecord {
