@@ -198,8 +198,9 @@ class SmcRun {
       if (resume && resume->has_partial && resume->partial_wave == t) {
         // Its continuation probabilities and costs so far: the wave goes on with the
         // probabilities it started with.
-        if (low_fidelity_ && resume->partial_fidelity)
+        if (low_fidelity_ && resume->partial_fidelity) {
           wave.multi_fidelity = resume->partial_fidelity;
+        }
         wave.particles = resume->partial_accepted;
         next_index = resume->partial_next_index;
         // Killed after the wave's last batch but before it ended: its overshoot still counts.
