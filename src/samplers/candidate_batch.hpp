@@ -85,6 +85,8 @@ class CandidateBatch : public BatchTask {
   }
   // The candidate's acceptance uniform on [0, 1) (0 unless draw_uniform).
   double uniform(std::int64_t i) const { return uniforms_[static_cast<std::size_t>(i)]; }
+  // The candidate's log p / q (its importance weight before the multiplier).
+  double log_weight(std::int64_t i) const { return log_weights_[static_cast<std::size_t>(i)]; }
   bool failed(std::int64_t i) const { return status_[static_cast<std::size_t>(i)] != 0; }
   std::string_view reason(std::int64_t i) const;
   Particle MakeParticle(std::int64_t i, std::int64_t index, bool keep_output) const;

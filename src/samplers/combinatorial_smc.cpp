@@ -16,6 +16,13 @@
 namespace combabc {
 namespace {
 
+// log(exp(a) + exp(b)) without overflow; -inf + -inf stays -inf.
+double LogAddExp(double a, double b) {
+  const double hi = std::max(a, b);
+  if (hi == -std::numeric_limits<double>::infinity()) return hi;
+  return hi + std::log1p(std::exp(std::min(a, b) - hi));
+}
+
 using Clock = std::chrono::steady_clock;
 
 // A quantile temperature schedule falls at least by this factor per wave (docs/algorithm.md).
@@ -549,6 +556,12 @@ class SmcRun {
             consumed = i + 1;
             break;
           }
+        } else if (low_fidelity_ && batch.continued(i) && batch.cheap_accepted(i)) {
+          // A false positive weighing 0 (eta_1 = 1): no particle, but the tuning needs it.
+          auto& fidelity = *wave.multi_fidelity;
+          ++fidelity.unkept_false_positives;
+          fidelity.unkept_false_positive_log_w2 =
+              LogAddExp(fidelity.unkept_false_positive_log_w2, 2.0 * batch.log_weight(i));
         }
         stop = CheckCandidate(wave, next_index + i);
         if (stop) {
@@ -663,6 +676,13 @@ class SmcRun {
       statistics.w_false_positive += w * w * std::max(cheap - expensive, 0.0) * inverse_alpha;
       statistics.w_false_negative += w * w * std::max(expensive - cheap, 0.0) * inverse_alpha;
     }
+    // The false positives that weigh 0 are no particles (eta_1 = 1): counted as still accepted
+    // by the cheap model and rejected by the expensive one at the next thresholds, an upper
+    // bound that errs toward confirming more (they add nothing to W: their expensive outcome
+    // is a rejection).
+    const auto& unkept = *wave.multi_fidelity;
+    cheap_accepted += static_cast<double>(unkept.unkept_false_positives);
+    statistics.w_false_positive += std::exp(unkept.unkept_false_positive_log_w2 - 2.0 * max_lw);
     statistics.cheap_accepted = std::min(cheap_accepted / static_cast<double>(candidates), 1.0);
     const auto eta = OptimalContinuation(statistics, mf.floor);
     fidelity.next_continue_if_accepted = eta.continue_if_accepted;

@@ -247,7 +247,15 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
               f.next_continue_if_accepted, g.next_continue_if_accepted, w + "next eta_1", where) ||
           Differ(
               f.next_continue_if_rejected, g.next_continue_if_rejected, w + "next eta_2", where) ||
-          Differ(f.cost_ratio, g.cost_ratio, w + "cost_ratio", where)) {
+          Differ(f.cost_ratio, g.cost_ratio, w + "cost_ratio", where) ||
+          Differ(f.unkept_false_positives,
+                 g.unkept_false_positives,
+                 w + "unkept_false_positives",
+                 where) ||
+          Differ(f.unkept_false_positive_log_w2,
+                 g.unkept_false_positive_log_w2,
+                 w + "unkept_false_positive_log_w2",
+                 where)) {
         return false;
       }
     }

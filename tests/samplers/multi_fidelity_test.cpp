@@ -65,6 +65,21 @@ class ToySimulator : public Simulator {
   mutable std::atomic<std::int64_t> calls_{0};
 };
 
+// A cheap model blind to bits 0 and 3: it reports their observed values whatever they are, so
+// it accepts every candidate the expensive model accepts and more (false positives, no false
+// negatives).
+class BlindSimulator : public Simulator {
+ public:
+  int output_size() const override { return kBits; }
+  void Simulate(const ParameterView& theta,
+                RandomStream& /*rng*/,
+                std::span<double> out) const override {
+    for (int k = 0; k < kBits; ++k) out[k] = theta.bits[k];
+    out[0] = 1.0;
+    out[3] = 1.0;
+  }
+};
+
 struct Toy {
   std::vector<double> prior = {0.5, 0.3, 0.6, 0.5, 0.4, 0.7, 0.5, 0.35};
   // Bit 7 weighs 0: its posterior is its prior.
@@ -202,6 +217,33 @@ INSTANTIATE_TEST_SUITE_P(
              (test.param.cheap == CheapKind::kBiased ? "Biased" : "Noisy") +
              (test.param.adapt ? "Tuned" : "Fixed");
     });
+
+// From the default start (eta_1 = 1) every false positive weighs 0 and is no particle: the
+// tuning still sees them (WaveFidelity::unkept_false_positives), so a cheap model that is often
+// wrong does not get its acceptances left unchecked in wave 2.
+TEST(MultiFidelity, TuningSeesTheFalsePositivesThatWeighNothing) {
+  Toy toy;
+  const BlindSimulator cheap;
+  SmcProblem problem{&toy.space, &toy.expensive, &toy.dist};
+  problem.low_fidelity = &cheap;
+  const MultiFidelityOptions defaults;
+  auto options = toy.Options(defaults.continue_if_accepted, defaults.continue_if_rejected, 1);
+  const auto history = RunCombinatorialSmc(problem, options);
+  ASSERT_GE(history.waves.size(), 2U);
+  const auto& first = *history.waves[0].multi_fidelity;
+  EXPECT_GT(first.unkept_false_positives, 100);
+  for (const auto& p : history.waves[0].particles) EXPECT_NE(p.multiplier, 0.0);
+  // Without them the tuning saw no false positive in wave 1 and lowered eta_1 (0.376), whose
+  // confirmed false positives then weighed 1 - 1 / eta_1, and the ESS fell to 446 of 2000 in
+  // wave 2 and to 9 in wave 4; with them eta_1 stays 1 and every wave keeps an ESS above 1700.
+  EXPECT_GT(history.waves[1].multi_fidelity->continue_if_accepted, 0.9);
+  for (const auto& w : history.waves) EXPECT_GT(w.ess, 1000.0) << "wave " << w.wave + 1;
+  const auto exact = toy.ExactMarginals(toy.expensive);
+  const auto& last = history.waves.back();
+  for (int k = 0; k < kBits; ++k) {
+    EXPECT_NEAR(last.marginals_importance[k], exact[k], Bound(last, k)) << "bit " << k;
+  }
+}
 
 TEST(MultiFidelity, PerfectCheapModelRarelyCallsTheExpensiveOne) {
   Toy toy;
