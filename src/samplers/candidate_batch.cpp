@@ -212,8 +212,9 @@ void CandidateBatch::ContinueWithExpensive(std::size_t begin,
     const bool cheap_accepted =
         low_fidelity_->accept(distance(static_cast<std::int64_t>(i)), uniforms_[i]);
     const double eta = cheap_accepted ? options.continue_if_accepted : options.continue_if_rejected;
-    fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (v < eta ? kContinued : 0);
-    if (v < eta) continued.push_back(i);
+    const bool continues = low_fidelity_->confirm && v < eta;
+    fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (continues ? kContinued : 0);
+    if (continues) continued.push_back(i);
   }
   if (continued.empty()) return;
   // The continued candidates, gathered: the expensive simulator sees one dense batch, and each

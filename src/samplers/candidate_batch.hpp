@@ -37,6 +37,9 @@ struct LowFidelityStage {
   const Simulator* simulator = nullptr;
   MultiFidelityOptions options;
   std::function<bool(std::span<const double> distance, double uniform)> accept;
+  // False: no candidate continues (a wave whose every threshold is infinite accepts whatever
+  // either simulator says, so the expensive one could not change a weight).
+  bool confirm = true;
 };
 
 class CandidateBatch : public BatchTask {

@@ -23,6 +23,27 @@ double LogAddExp(double a, double b) {
   return hi + std::log1p(std::exp(std::min(a, b) - hi));
 }
 
+// A wave's effective number of accepted candidates, (sum m)^2 / sum m^2 over its particles'
+// multipliers m (docs/algorithm.md, "Multi-fidelity sampling"): a wave ends when it reaches
+// accepted_per_wave. In a single-fidelity run every m is 1 and it is exactly the particle count
+// (k^2 / k in floating point), so the rule is "n accepted"; the signed and 1/eta multipliers of a
+// multi-fidelity run count for less, so that its wave ends at the Monte-Carlo accuracy of n
+// expensive acceptances (Prescott & Baker also end a generation on an ESS).
+class EffectiveCount {
+ public:
+  void Add(double m) {
+    sum_ += m;
+    sum_sq_ += m * m;
+  }
+  // A sum <= 0 (more false-positive weight than agreement so far) is not there yet.
+  bool Reached(int n) const { return sum_ > 0.0 && sum_ * sum_ >= n * sum_sq_; }
+  double value() const { return sum_ > 0.0 ? sum_ * sum_ / sum_sq_ : 0.0; }
+
+ private:
+  double sum_ = 0.0;
+  double sum_sq_ = 0.0;
+};
+
 using Clock = std::chrono::steady_clock;
 
 // A quantile temperature schedule falls at least by this factor per wave (docs/algorithm.md).
@@ -445,22 +466,24 @@ class SmcRun {
   // expected to still need, within bounds set by the measured cost of a simulation. Only how many
   // candidates past the wave's last acceptance get simulated (and discarded) depends on it, never
   // the history: candidates are accepted in index order.
-  std::int64_t BatchSize(const WaveRecord& wave, std::int64_t next_index, double prior_rate) const {
+  // `effective`: the wave's EffectiveCount so far (its particle count in a single-fidelity run).
+  std::int64_t BatchSize(const WaveRecord& wave,
+                         std::int64_t next_index,
+                         double prior_rate,
+                         double effective) const {
     if (options_.batch_size > 0) return options_.batch_size;
     const std::int64_t workers = executor_->concurrency();
     // Cost unknown (the run's first batch, or a resume's): one candidate per worker measures it.
     if (!(cost_s_ > 0.0)) return workers;
-    const auto needed =
-        options_.accepted_per_wave - static_cast<std::int64_t>(wave.particles.size());
+    const double needed =
+        std::max(static_cast<double>(options_.accepted_per_wave) - effective, 1.0);
     // The wave's own rate once it has a few acceptances; before, the previous wave's, which may
     // be far off (thresholds and proposal changed): then only half the candidates it predicts,
     // and the wave's own rate sizes the rest.
     const bool own_rate = wave.particles.size() >= kOwnRateAfter;
     const double rate = std::max(
-        own_rate ? static_cast<double>(wave.particles.size()) / static_cast<double>(next_index)
-                 : prior_rate,
-        1e-4);
-    const auto expected = static_cast<std::int64_t>(std::ceil(static_cast<double>(needed) / rate));
+        own_rate ? std::max(effective, 1.0) / static_cast<double>(next_index) : prior_rate, 1e-4);
+    const auto expected = static_cast<std::int64_t>(std::ceil(needed / rate));
     const std::int64_t wanted = own_rate ? expected + expected / 16 : (expected + 1) / 2;
     // At least kMinBatchSeconds of work per worker, so that the fixed cost of a batch (the
     // checkpoint, about 2 ms, and the executor's synchronisation) stays small: 32 candidates per
@@ -515,6 +538,9 @@ class SmcRun {
       stage.accept = [this, &wave](std::span<const double> d, double u) {
         return Accept(d, wave.thresholds, u);
       };
+      stage.confirm = !std::all_of(wave.thresholds.begin(), wave.thresholds.end(), [](double e) {
+        return e == std::numeric_limits<double>::infinity();
+      });
     }
     CandidateBatch batch(space_,
                          simulator_,
@@ -522,8 +548,10 @@ class SmcRun {
                          components_.size(),
                          stochastic_,
                          low_fidelity_ ? &stage : nullptr);
-    while (static_cast<int>(wave.particles.size()) < n) {
-      std::int64_t size = BatchSize(wave, next_index, prior_rate);
+    EffectiveCount effective;
+    for (const auto& p : wave.particles) effective.Add(p.multiplier);  // a resumed wave's
+    while (!effective.Reached(n)) {
+      std::int64_t size = BatchSize(wave, next_index, prior_rate, effective.value());
       if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
       if (size <= 0) {
         stop = Stop({Termination::kBudgetExhausted, BudgetMessage(options_, wave.wave)});
@@ -552,7 +580,8 @@ class SmcRun {
         } else if (const double multiplier = Multiplier(batch, i, wave); multiplier != 0.0) {
           wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
           wave.particles.back().multiplier = multiplier;
-          if (static_cast<int>(wave.particles.size()) == n) {
+          effective.Add(multiplier);
+          if (effective.Reached(n)) {
             consumed = i + 1;
             break;
           }
@@ -589,7 +618,7 @@ class SmcRun {
       }
       // A candidate's stop (budget, floor, failures) is decided from the gathered result rows,
       // which every worker of a distributed executor holds: all stop after the same batch.
-      if (stop || static_cast<int>(wave.particles.size()) >= n) break;
+      if (stop || effective.Reached(n)) break;
       // The primary's clock and signals decide, so that every worker of a distributed executor
       // stops after the same batch.
       if (executor_->FromPrimary(options_.max_wall_time_s > 0 &&
@@ -605,7 +634,7 @@ class SmcRun {
       }
     }
     wave.candidates = next_index;
-    wave.complete = static_cast<int>(wave.particles.size()) == n;
+    wave.complete = effective.Reached(n);
     ComputeWaveStatistics(wave, options_.estimator);
     if (low_fidelity_) ChooseNextContinuation(wave, done);
     wave.wall_seconds = Seconds(wave_start);
@@ -650,7 +679,10 @@ class SmcRun {
     const auto candidates = wave.candidates - static_cast<std::int64_t>(wave.failures.size());
     // No next wave (the last, or the target reached): nothing to tune for.
     const bool last = wave.wave + 1 >= options_.num_waves || AllFinal(wave);
-    if (!mf.adapt || !wave.complete || last || !(fidelity.cost_ratio > 0.0) || candidates <= 0) {
+    // Nothing confirmed (a wave of infinite thresholds): no error of the cheap model was seen,
+    // nothing to tune from.
+    if (!mf.adapt || !wave.complete || last || !(fidelity.cost_ratio > 0.0) || candidates <= 0 ||
+        fidelity.expensive_simulations == 0) {
       return;
     }
     // The next wave's thresholds, exactly as StartWave will compute them.

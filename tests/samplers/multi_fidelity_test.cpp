@@ -245,6 +245,34 @@ TEST(MultiFidelity, TuningSeesTheFalsePositivesThatWeighNothing) {
   }
 }
 
+// A wave whose every threshold is infinite accepts whatever either model says: the expensive
+// one is never called there, and the next wave keeps the starting probabilities (no error of the
+// cheap model was seen to tune from).
+TEST(MultiFidelity, AnInfiniteThresholdWaveCallsOnlyTheCheapModel) {
+  Toy toy;
+  const ToySimulator cheap({2, 5}, 0.3);
+  SmcProblem problem{&toy.space, &toy.expensive, &toy.dist};
+  problem.low_fidelity = &cheap;
+  auto options = toy.Options(1.0, 0.1, 1);
+  options.thresholds[0].values = {std::numeric_limits<double>::infinity(), 5, 3.5, kFinalEps};
+  const auto history = RunCombinatorialSmc(problem, options);
+  ASSERT_EQ(history.summary.termination, Termination::kTargetReached);
+  const auto& first = *history.waves[0].multi_fidelity;
+  EXPECT_EQ(first.expensive_simulations, 0);
+  EXPECT_EQ(first.next_continue_if_accepted, 1.0);
+  EXPECT_EQ(first.next_continue_if_rejected, 0.1);
+  for (const auto& p : history.waves[0].particles) {
+    EXPECT_FALSE(p.confirmed);
+    EXPECT_EQ(p.multiplier, 1.0);
+  }
+  EXPECT_GT(history.waves[1].multi_fidelity->expensive_simulations, 0);
+  const auto exact = toy.ExactMarginals(toy.expensive);
+  const auto& last = history.waves.back();
+  for (int k = 0; k < kBits; ++k) {
+    EXPECT_NEAR(last.marginals_importance[k], exact[k], Bound(last, k)) << "bit " << k;
+  }
+}
+
 TEST(MultiFidelity, PerfectCheapModelRarelyCallsTheExpensiveOne) {
   Toy toy;
   const ToySimulator cheap;  // the expensive model itself: never wrong
