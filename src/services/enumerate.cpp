@@ -160,7 +160,8 @@ void WriteEnumeration(const EnumerateRequest& request,
                              result.enumerated,
                              result.wall_seconds,
                              0,
-                             {}};
+                             {},
+                             std::nullopt};
     store.OnBatch(done, wave.particles);
     store.OnWaveEnd(wave);
     store.Finish(summary);
