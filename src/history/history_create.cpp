@@ -101,6 +101,8 @@ CREATE TABLE wave (
   expensive_simulations INTEGER,
   cheap_seconds REAL,
   expensive_seconds REAL,
+  unkept_false_positives INTEGER,
+  unkept_false_positive_log_w2 REAL,
   next_continue_if_accepted REAL,
   next_continue_if_rejected REAL,
   cost_ratio REAL
@@ -180,6 +182,8 @@ ALTER TABLE wave ADD COLUMN continue_if_rejected REAL;
 ALTER TABLE wave ADD COLUMN expensive_simulations INTEGER;
 ALTER TABLE wave ADD COLUMN cheap_seconds REAL;
 ALTER TABLE wave ADD COLUMN expensive_seconds REAL;
+ALTER TABLE wave ADD COLUMN unkept_false_positives INTEGER;
+ALTER TABLE wave ADD COLUMN unkept_false_positive_log_w2 REAL;
 ALTER TABLE wave ADD COLUMN next_continue_if_accepted REAL;
 ALTER TABLE wave ADD COLUMN next_continue_if_rejected REAL;
 ALTER TABLE wave ADD COLUMN cost_ratio REAL;

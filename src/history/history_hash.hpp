@@ -57,13 +57,14 @@ inline constexpr const char* kWaveColumns =
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
     "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash, "
     "reals_mean, reals_sd, failures, continue_if_accepted, continue_if_rejected, "
-    "expensive_simulations, cheap_seconds, expensive_seconds, next_continue_if_accepted, "
+    "expensive_simulations, cheap_seconds, expensive_seconds, unkept_false_positives, "
+    "unkept_false_positive_log_w2, next_continue_if_accepted, "
     "next_continue_if_rejected, cost_ratio";
 inline constexpr int kWaveHashedColumnCount = 21;
 inline constexpr int kWaveRealsColumn = 22;     // reals_mean, then reals_sd (hashed from v3)
 inline constexpr int kWaveFailuresColumn = 24;  // hashed from v4
-inline constexpr int kWaveFidelityColumn = 25;  // the 8 multi-fidelity columns (hashed from v7)
-inline constexpr int kWaveFidelityColumnCount = 8;
+inline constexpr int kWaveFidelityColumn = 25;  // the 10 multi-fidelity columns (hashed from v7)
+inline constexpr int kWaveFidelityColumnCount = 10;
 
 // The failure rows of one wave, fed in candidate order after its particles (schema v4).
 inline constexpr const char* kFailureColumns = "candidate, reason";

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "combabc/core/error.hpp"
 #include "combabc/samplers/multi_fidelity.hpp"
@@ -45,6 +46,8 @@ enum WaveColumn {
   kExpensiveSimulations,
   kCheapSeconds,
   kExpensiveSeconds,
+  kUnkeptFalsePositives,
+  kUnkeptFalsePositiveLogW2,
   kNextContinueIfAccepted,
   kNextContinueIfRejected,
   kCostRatio,
@@ -187,6 +190,27 @@ std::optional<WaveFidelity> ReadFidelity(const WaveReader& check,
   f.cheap_seconds = check.Real(row, kCheapSeconds, "cheap_seconds", IsNonNegative, kSeconds);
   f.expensive_seconds =
       check.Real(row, kExpensiveSeconds, "expensive_seconds", IsNonNegative, kSeconds);
+  f.unkept_false_positives = check.Count(row, kUnkeptFalsePositives, "unkept_false_positives");
+  if (f.unkept_false_positives > f.expensive_simulations) {
+    check.Corrupt("unkept_false_positives",
+                  "counts " + std::to_string(f.unkept_false_positives) +
+                      " false positives, more than the wave's " +
+                      std::to_string(f.expensive_simulations) + " expensive simulations");
+  }
+  // log sum of squared weights: -inf exactly when there is none.
+  const int type = row.IsNull(kUnkeptFalsePositiveLogW2) ? SQLITE_NULL
+                                                          : row.Type(kUnkeptFalsePositiveLogW2);
+  f.unkept_false_positive_log_w2 =
+      type == SQLITE_NULL ? 0.0 : row.Real(kUnkeptFalsePositiveLogW2);
+  const bool none = f.unkept_false_positives == 0;
+  if ((type != SQLITE_FLOAT && type != SQLITE_INTEGER) ||
+      none != (f.unkept_false_positive_log_w2 == -std::numeric_limits<double>::infinity()) ||
+      std::isnan(f.unkept_false_positive_log_w2) ||
+      f.unkept_false_positive_log_w2 == std::numeric_limits<double>::infinity()) {
+    check.Corrupt("unkept_false_positive_log_w2",
+                  "is '" + row.Text(kUnkeptFalsePositiveLogW2) +
+                      "', not -Inf for no false positive or a finite log sum for some");
+  }
   if (ended && !row.IsNull(kNextContinueIfAccepted)) {
     f.next_continue_if_accepted = check.Real(
         row, kNextContinueIfAccepted, "next_continue_if_accepted", IsProbability, kProbability);
@@ -251,7 +275,7 @@ std::string HistoryStore::Impl::WaveSelect() const {
   const std::size_t fidelity = columns.find(", continue_if_accepted");
   const std::string tail = has_multi_fidelity()
                                ? columns.substr(fidelity)
-                               : ", NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL";
+                               : ", NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL";
   columns.erase(fidelity);
   if (!checksummed()) {
     // Version 1 had neither column: no overshoot recorded, no checksum; nor any reals.

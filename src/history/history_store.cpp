@@ -17,8 +17,9 @@ using history::Transaction;
 // (resume, OnWaveEnd), it keeps the costs its batches recorded.
 constexpr const char* kUpsertWave = R"sql(
 INSERT INTO wave (wave, thresholds, phi, proposal, started_at, continue_if_accepted,
-  continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)
+  continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
+  unkept_false_positives, unkept_false_positive_log_w2)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)
 ON CONFLICT (wave) DO UPDATE SET
   thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal,
   continue_if_accepted = excluded.continue_if_accepted,
@@ -47,7 +48,9 @@ UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
   continue_if_rejected = COALESCE(?9, continue_if_rejected),
   expensive_simulations = COALESCE(?10, expensive_simulations),
   cheap_seconds = COALESCE(?11, cheap_seconds),
-  expensive_seconds = COALESCE(?12, expensive_seconds)
+  expensive_seconds = COALESCE(?12, expensive_seconds),
+  unkept_false_positives = COALESCE(?13, unkept_false_positives),
+  unkept_false_positive_log_w2 = COALESCE(?14, unkept_false_positive_log_w2)
 WHERE wave = ?1
 )sql";
 
@@ -81,15 +84,17 @@ void BindFidelity(Statement& s, int first, const std::optional<WaveFidelity>& f,
         .Bind(first + 1, f->continue_if_rejected)
         .Bind(first + 2, f->expensive_simulations)
         .Bind(first + 3, f->cheap_seconds)
-        .Bind(first + 4, f->expensive_seconds);
+        .Bind(first + 4, f->expensive_seconds)
+        .Bind(first + 5, f->unkept_false_positives)
+        .Bind(first + 6, f->unkept_false_positive_log_w2);
     if (ended) {
-      s.Bind(first + 5, f->next_continue_if_accepted)
-          .Bind(first + 6, f->next_continue_if_rejected)
-          .Bind(first + 7, f->cost_ratio);
+      s.Bind(first + 7, f->next_continue_if_accepted)
+          .Bind(first + 8, f->next_continue_if_rejected)
+          .Bind(first + 9, f->cost_ratio);
     }
     return;
   }
-  for (int c = first; c < first + (ended ? 8 : 5); ++c) s.BindNull(c);
+  for (int c = first; c < first + (ended ? 10 : 7); ++c) s.BindNull(c);
 }
 
 // A wrong bit or real count would only surface when the run is read back; refuse it when written.
@@ -237,7 +242,8 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
       distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12, reals_mean = ?13,
       reals_sd = ?14, failures = ?15, continue_if_accepted = ?16, continue_if_rejected = ?17,
       expensive_simulations = ?18, cheap_seconds = ?19, expensive_seconds = ?20,
-      next_continue_if_accepted = ?21, next_continue_if_rejected = ?22, cost_ratio = ?23
+      unkept_false_positives = ?21, unkept_false_positive_log_w2 = ?22,
+      next_continue_if_accepted = ?23, next_continue_if_rejected = ?24, cost_ratio = ?25
     WHERE wave = ?1)sql");
   end.Bind(1, wave.wave)
       .Bind(2, wave.complete ? 1 : 0)
