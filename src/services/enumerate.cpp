@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <ostream>
 
 #include "combabc/config/config.hpp"
@@ -160,7 +161,8 @@ void WriteEnumeration(const EnumerateRequest& request,
                              result.enumerated,
                              result.wall_seconds,
                              0,
-                             {}};
+                             {},
+                             std::nullopt};
     store.OnBatch(done, wave.particles);
     store.OnWaveEnd(wave);
     store.Finish(summary);
