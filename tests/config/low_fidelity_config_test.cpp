@@ -157,10 +157,14 @@ TEST(LowFidelityConfig, MistakesAreLocatedAtTheirKey) {
   for (const std::string bad :
        {"continue_if_accepted = 0", "continue_if_rejected = 1.5", "floor = 0", "floor = -0.1"}) {
     const std::string key = bad.substr(0, bad.find(' '));
-    EXPECT_EQ(
-        ErrorOf(low + "[sampler.multi_fidelity]\n" + bad + "\n" + kRest)
-            .rfind("dir/run.toml:3: sampler.multi_fidelity." + key + ": must be in (0, 1]", 0),
-        0u)
+    std::string text = low;
+    text += "[sampler.multi_fidelity]\n";
+    text += bad;
+    text += "\n";
+    text += kRest;
+    EXPECT_EQ(ErrorOf(text).rfind(
+                  "dir/run.toml:3: sampler.multi_fidelity." + key + ": must be in (0, 1]", 0),
+              0u)
         << bad;
   }
   EXPECT_EQ(

@@ -57,7 +57,7 @@ class MultiFidelityRun : public ::testing::Test {
   std::string Started(const std::string& name, const std::string& config_text) {
     RunMetadata m = finished_;
     m.config_text = config_text;
-    const std::string path = dir_ / name;
+    std::string path = dir_ / name;
     HistoryStore::Create(path, m);
     return path;
   }
