@@ -63,20 +63,6 @@ void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& chec
   const RunSummary& summary = outcome.history.summary;
   checks.AtEnd(outcome.checks);
   std::cout << summary.BriefReport() << "\n";
-  // A multi-fidelity run: how many candidates the expensive simulator decided.
-  std::int64_t expensive = 0;
-  std::int64_t candidates = 0;
-  bool multi_fidelity = false;
-  for (const WaveRecord& w : outcome.history.waves) {
-    if (!w.multi_fidelity) continue;
-    multi_fidelity = true;
-    expensive += w.multi_fidelity->expensive_simulations;
-    candidates += w.candidates;
-  }
-  if (multi_fidelity) {
-    std::cout << "expensive simulations: " << expensive << " of " << candidates
-              << " candidates (each ran the cheap simulator)\n";
-  }
   std::cout << "history: " << outcome.history_path << "\n";
   if (!outcome.report_directory.empty()) {
     std::cout << "report:  " << outcome.report_directory << "/index.html\n";
