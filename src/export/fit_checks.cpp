@@ -327,7 +327,9 @@ void CheckAfter(const RunMetadata& m,
     std::vector<double> curve = CurveAt(v, p);
     if (curve.empty()) continue;
     curves.push_back(std::move(curve));
-    weights.push_back(p.weight);
+    // A multi-fidelity wave's signed weights: their positive part, as its posterior draws use
+    // (a quantile needs a distribution; docs/history.md, "Checks").
+    weights.push_back(std::max(p.weight, 0.0));
   }
   if (curves.empty()) {
     Note(checks.after,
