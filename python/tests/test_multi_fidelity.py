@@ -46,7 +46,8 @@ def test_a_multi_fidelity_run_goes_through_the_cheap_model(tmp_path):
     p = combabc.Problem(space, counted_expensive, OBSERVED, low_fidelity=counted_cheap)
     history = combabc.run(p, options(), output_directory=tmp_path)
     assert len(history.waves) == 3
-    assert all(w.accepted == 40 for w in history.waves)
+    # A multi-fidelity wave ends at 40 effective acceptances: it may hold more particles.
+    assert all(w.complete and w.accepted >= 40 for w in history.waves)
     # Every candidate ran the cheap model; the expensive one only the continued ones.
     assert calls["cheap"] > 0
     assert 0 < calls["expensive"] < calls["cheap"]
@@ -59,7 +60,8 @@ def test_a_resume_without_the_cheap_model_is_another_problem(tmp_path):
     with pytest.raises(combabc.Error, match="the problem"):
         combabc.resume(history.path, problem(), options())
     resumed = combabc.resume(history.path, problem(low_fidelity=cheap), options())
-    assert [w.accepted for w in resumed.waves] == [40, 40, 40]
+    assert len(resumed.waves) == 3
+    assert all(w.complete and w.accepted >= 40 for w in resumed.waves)
 
 
 def test_options_and_errors_name_their_argument():

@@ -211,8 +211,10 @@ void CandidateBatch::ContinueWithExpensive(std::size_t begin,
     if (status_[i] != 0) continue;
     const bool cheap_accepted =
         low_fidelity_->accept(distance(static_cast<std::int64_t>(i)), uniforms_[i]);
-    const double eta = cheap_accepted ? options.continue_if_accepted : options.continue_if_rejected;
-    const bool continues = low_fidelity_->confirm && v < eta;
+    const double eta = cheap_accepted && !low_fidelity_->infinite_thresholds
+                           ? options.continue_if_accepted
+                           : options.continue_if_rejected;
+    const bool continues = v < eta;
     fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (continues ? kContinued : 0);
     if (continues) continued.push_back(i);
   }

@@ -37,9 +37,11 @@ struct LowFidelityStage {
   const Simulator* simulator = nullptr;
   MultiFidelityOptions options;
   std::function<bool(std::span<const double> distance, double uniform)> accept;
-  // False: no candidate continues (a wave whose every threshold is infinite accepts whatever
-  // either simulator says, so the expensive one could not change a weight).
-  bool confirm = true;
+  // A wave whose every threshold is infinite accepts whatever either simulator says, so the
+  // expensive one cannot change a weight there: it runs on a random share continue_if_rejected
+  // of the candidates, whatever the cheap outcome, for what the next wave learns from it (its
+  // threshold and continuation probabilities).
+  bool infinite_thresholds = false;
 };
 
 class CandidateBatch : public BatchTask {

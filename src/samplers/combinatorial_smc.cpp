@@ -288,10 +288,18 @@ class SmcRun {
       }
       column.clear();
       if (previous) {
-        // A multi-fidelity wave's particles with a positive multiplier: the population the
-        // kernels fit (docs/algorithm.md, "Multi-fidelity sampling"); all of them otherwise.
+        // A multi-fidelity wave: the expensive distances of its confirmed particles with a
+        // positive multiplier (the thresholds are the expensive model's; a cheap model far from
+        // it would otherwise set one the expensive model never meets), or, with none confirmed,
+        // every particle with a positive multiplier (docs/algorithm.md, "Multi-fidelity
+        // sampling"); a single-fidelity wave: all of them.
+        const bool confirmed = std::any_of(previous->particles.begin(),
+                                           previous->particles.end(),
+                                           [](const Particle& p) { return p.confirmed; });
         for (const auto& p : previous->particles) {
-          if (p.multiplier > 0.0) column.push_back(p.distance[k] - offsets[s]);
+          if (p.multiplier > 0.0 && (p.confirmed || !confirmed)) {
+            column.push_back(p.distance[k] - offsets[s]);
+          }
         }
       }
       double eps = schedules_[s].ThresholdFor(t, column);
@@ -538,9 +546,7 @@ class SmcRun {
       stage.accept = [this, &wave](std::span<const double> d, double u) {
         return Accept(d, wave.thresholds, u);
       };
-      stage.confirm = !std::all_of(wave.thresholds.begin(), wave.thresholds.end(), [](double e) {
-        return e == std::numeric_limits<double>::infinity();
-      });
+      stage.infinite_thresholds = InfiniteThresholds(wave);
     }
     CandidateBatch batch(space_,
                          simulator_,
@@ -721,6 +727,13 @@ class SmcRun {
     fidelity.next_continue_if_rejected = eta.continue_if_rejected;
   }
 
+  // Every threshold of the wave is infinite (the first wave of an adaptive schedule).
+  static bool InfiniteThresholds(const WaveRecord& wave) {
+    return std::all_of(wave.thresholds.begin(), wave.thresholds.end(), [](double e) {
+      return e == std::numeric_limits<double>::infinity();
+    });
+  }
+
   // 1 / the probability with which confirmed particle p of `wave` continued: eta_1 if the cheap
   // model accepted it, eta_2 if not. Its multiplier tells (1 - 1 / eta_1 < 0: a false positive;
   // 1: accepted by both; 1 / eta_2: a false negative) unless eta_2 = 1, where both acceptances
@@ -729,6 +742,7 @@ class SmcRun {
   double InverseContinuation(const Particle& p, const WaveRecord& wave) const {
     const double eta_1 = wave.multi_fidelity->continue_if_accepted;
     const double eta_2 = wave.multi_fidelity->continue_if_rejected;
+    if (InfiniteThresholds(wave)) return 1.0 / eta_2;  // every candidate continued with eta_2
     if (p.multiplier < 0.0 || eta_1 == eta_2) return 1.0 / eta_1;
     if (eta_2 != 1.0) return p.multiplier == 1.0 ? 1.0 / eta_1 : 1.0 / eta_2;
     const double accepted = AcceptanceProbability(p.low_distance, wave.thresholds, offsets_);

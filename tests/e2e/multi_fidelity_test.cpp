@@ -68,8 +68,13 @@ class MultiFidelityRun : public ::testing::Test {
 
 TEST_F(MultiFidelityRun, RunsAndFingerprintsTheCheapModel) {
   const RunHistory h = HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadHistory();
-  ASSERT_EQ(h.waves.size(), 3u);
-  for (const WaveRecord& w : h.waves) EXPECT_EQ(w.particles.size(), 20u);
+  // Three waves, or two when the target is reached first; a multi-fidelity wave ends at 20
+  // effective acceptances, so it may hold more particles (docs/algorithm.md).
+  ASSERT_GE(h.waves.size(), 2u) << h.summary.message;
+  for (const WaveRecord& w : h.waves) {
+    EXPECT_TRUE(w.complete) << h.summary.message << " " << w.candidates;
+    EXPECT_GE(w.particles.size(), 20u);
+  }
   bool stored = false;
   for (const auto& [part, digest] : finished_.fingerprint) stored |= part == "low_fidelity";
   EXPECT_TRUE(stored) << "no fingerprint_low_fidelity";

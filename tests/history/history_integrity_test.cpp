@@ -91,6 +91,8 @@ void DowngradeToV6(const std::string& path) {
                              "expensive_simulations",
                              "cheap_seconds",
                              "expensive_seconds",
+                             "unkept_false_positives",
+                             "unkept_false_positive_log_w2",
                              "next_continue_if_accepted",
                              "next_continue_if_rejected",
                              "cost_ratio"}) {
