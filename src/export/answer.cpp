@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "combabc/export/export.hpp"
 #include "export/json_text.hpp"
@@ -43,6 +45,28 @@ double StandardError(double p, double n) {
   return std::sqrt(std::max(0.0, p * (1.0 - p)) / n);
 }
 
+// A wave with signed (multi-fidelity) weights: the delta-method standard error of the
+// self-normalised estimate p = sum w x / sum w, sqrt(sum w^2 (x - p)^2) / sum w, with x = 1 for
+// the particles `counts` selects. sqrt(p (1 - p) / ESS) assumes weights of one sign and
+// understates it when some are negative. Empty without a negative weight.
+std::optional<double> SignedWeightsError(const WaveRecord& w,
+                                         double p,
+                                         const std::function<bool(const Particle&)>& counts) {
+  if (std::none_of(w.particles.begin(), w.particles.end(), [](const Particle& q) {
+        return q.weight < 0.0;
+      })) {
+    return std::nullopt;
+  }
+  double sum = 0.0;
+  double squares = 0.0;
+  for (const Particle& q : w.particles) {
+    const double deviation = (counts(q) ? 1.0 : 0.0) - p;
+    sum += q.weight;
+    squares += q.weight * q.weight * deviation * deviation;
+  }
+  return sum > 0.0 ? std::sqrt(squares) / sum : std::numeric_limits<double>::infinity();
+}
+
 // The wave the answer is taken from: the last complete one, else the last with particles.
 const WaveRecord* AnswerWave(const RunHistory& h) {
   for (auto it = h.waves.rbegin(); it != h.waves.rend(); ++it) {
@@ -71,7 +95,14 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
     AnswerConfiguration c;
     c.bits = bits;
     c.mass = total > 0 ? m / total : 0.0;
-    if (!exact) c.mass_se = StandardError(c.mass, effective_size);
+    if (!exact) {
+      c.mass_se = SignedWeightsError(w, c.mass, [&bits](const Particle& q) {
+                    for (std::size_t b = 0; b < bits.size(); ++b) {
+                      if ((bits[b] == '1') != (q.theta.bits[b] != 0)) return false;
+                    }
+                    return true;
+                  }).value_or(StandardError(c.mass, effective_size));
+    }
     for (std::size_t b = 0; b < bits.size(); ++b) {
       if (bits[b] == '1') c.fixed.push_back(BitName(metadata, b));
     }
@@ -135,7 +166,9 @@ Answer SummariseAnswer(const RunMetadata& m,
     if (b < positions.size()) bit.position = positions[b];
     // A sum of weights may pass 1 by a rounding error (1.0000000000000007): a probability.
     bit.p_one = std::clamp(p[b], 0.0, 1.0);
-    bit.mc_se = StandardError(bit.p_one, a.effective_size);
+    bit.mc_se = SignedWeightsError(*w, bit.p_one, [b](const Particle& q) {
+                  return q.theta.bits[b] != 0;
+                }).value_or(StandardError(bit.p_one, a.effective_size));
     bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
     a.bits.push_back(std::move(bit));
   }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -209,6 +210,53 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
       EXPECT_EQ(a.per_wave[t].simulations, h.waves[t].candidates);
       EXPECT_DOUBLE_EQ(a.per_wave[t].ess, h.waves[t].ess);
     }
+  }
+}
+
+// Signed (multi-fidelity) weights: every standard error is the delta-method one of the
+// self-normalised estimate, sqrt(sum w^2 (x - p)^2) / sum w, computed here from the particles;
+// sqrt(p (1 - p) / ESS) would understate it.
+TEST(Answer, SignedWeightsGetTheSelfNormalisedError) {
+  testing::FakeRunOptions options;
+  options.per_wave = 40;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  m.estimator = "importance";
+  RunHistory h = testing::MakeFakeHistory(options);
+  WaveRecord& last = h.waves.back();
+  // A few false positives (1 - 1 / 0.5 = -1) and false negatives (1 / 0.25 = 4).
+  for (std::size_t i = 0; i < last.particles.size(); ++i) {
+    last.particles[i].multiplier = i % 7 == 0 ? -1.0 : (i % 5 == 0 ? 4.0 : 1.0);
+  }
+  for (WaveRecord& w : h.waves) ComputeWaveStatistics(w, Estimator::kImportance);
+  double sum = 0.0;
+  for (const Particle& q : last.particles) sum += q.weight;
+  auto error = [&](double p, const std::function<bool(const Particle&)>& counts) {
+    double squares = 0.0;
+    for (const Particle& q : last.particles) {
+      const double x = counts(q) ? 1.0 : 0.0;
+      squares += q.weight * q.weight * (x - p) * (x - p);
+    }
+    return std::sqrt(squares) / sum;
+  };
+  const Answer a = SummariseAnswer(m, h);
+  bool differs = false;
+  for (std::size_t k = 0; k < a.bits.size(); ++k) {
+    const double expected =
+        error(a.bits[k].p_one, [k](const Particle& q) { return q.theta.bits[k] != 0; });
+    EXPECT_NEAR(a.bits[k].mc_se, expected, 1e-12) << k;
+    const double naive = std::sqrt(a.bits[k].p_one * (1 - a.bits[k].p_one) / a.effective_size);
+    differs |= std::abs(expected - naive) > 1e-3;
+  }
+  EXPECT_TRUE(differs);
+  for (const AnswerConfiguration& c : a.top_configurations) {
+    ASSERT_TRUE(c.mass_se);
+    const double expected = error(c.mass, [&c](const Particle& q) {
+      for (std::size_t b = 0; b < c.bits.size(); ++b) {
+        if ((c.bits[b] == '1') != (q.theta.bits[b] != 0)) return false;
+      }
+      return true;
+    });
+    EXPECT_NEAR(*c.mass_se, expected, 1e-12) << c.bits;
   }
 }
 
