@@ -517,8 +517,11 @@ def predictive_figure(waves, run, estimator, out):
         title = check.get("experiment") or ""
         fit = fit_of(run, check.get("experiment", ""))
         if fit is not None:
+            # summary.json writes a non-finite ratio (a noise estimate of 0) as null.
+            ratio = fit.get("ratio")
+            ratio = float("nan") if ratio is None else ratio
             title += (" — " if title else "") + (
-                f"fit {fit.get('verdict', '?')}: best RMS / noise = {fit.get('ratio', float('nan')):.3g}")
+                f"fit {fit.get('verdict', '?')}: best RMS / noise = {ratio:.3g}")
         if title:
             ax.set_title(title, fontsize=10)
         ax.set_ylabel(ylabel)

@@ -171,6 +171,12 @@ class ReportScript(unittest.TestCase):
         self.assertNotIn("(wave ", svg)  # not the script's own computation
         self.assertIn("<h2>Checks</h2>", read(os.path.join(self.plain, "index.html")))
 
+    def test_a_noise_estimate_of_zero_draws(self):
+        # summary.json writes the fit's non-finite ratio (noise 0: noise-free data) as null.
+        checks = {**CHECKS, "fit": [{**CHECKS["fit"][0], "noise_sigma": 0.0, "ratio": None}]}
+        out = draw("noise_free", peak=0.0, checks=checks)
+        self.assertIn("best RMS / noise = nan", read(os.path.join(out, "predictive.svg")))
+
     def test_refuses_a_folder_with_files_and_needs_an_export(self):
         result = report(os.path.join(WORKDIR, "plain", "export"), self.plain)
         self.assertEqual(result.returncode, 73, result.stderr)
