@@ -4,11 +4,9 @@
 // examples/generate_data.py writes ("# truth <one 0/1 per clamp> ..."), so it is stated once.
 // And no example may draw a warning from the fit and sanity checks.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -20,6 +18,7 @@
 #include "combabc/data/measured_data.hpp"
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/services/run.hpp"
+#include "examples/calculix_support.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc::testing {
@@ -34,12 +33,7 @@ constexpr double kConfident = 0.4;
 // on PATH (a machine set up otherwise) the example is skipped, saying so.
 std::string MissingProgram(const std::string& example) {
   if (example != "sensor-calculix") return {};
-  const char* path = std::getenv("PATH");
-  std::stringstream dirs(path == nullptr ? "" : path);
-  for (std::string dir; std::getline(dirs, dir, ':');) {
-    if (!dir.empty() && ::access((fs::path(dir) / "ccx").c_str(), X_OK) == 0) return {};
-  }
-  return "ccx";
+  return ProgramOnPath("ccx") ? "" : "ccx";
 }
 
 std::vector<fs::path> ExampleConfigs() {
