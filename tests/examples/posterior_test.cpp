@@ -37,7 +37,7 @@ std::string MissingProgram(const std::string& example) {
   return ProgramOnPath("ccx") ? "" : "ccx";
 }
 
-// Examples too slow to run as shipped here (config.toml: about 1,200 CalculiX runs); each runs
+// Examples too slow to run as shipped here (config.toml: about 1,300 CalculiX runs); each runs
 // reduced in a test of its own, named here.
 std::string OwnReducedTest(const std::string& example) {
   if (example == "sensor-multifidelity") return "tests/examples/sensor_multifidelity_test.cpp";
