@@ -36,8 +36,12 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
     std::cerr << FormatFitChecks(outcome.checks, "m");
     std::cout << "enumerated " << outcome.configurations << " configurations: " << outcome.accepted
               << " accepted, evidence " << outcome.evidence << " (" << outcome.wall_seconds
-              << " s)\n"
-              << "history: " << outcome.history_path << "\n"
+              << " s)\n";
+    if (outcome.low_fidelity_ignored) {
+      std::cout << "(the expensive simulator's exact posterior: [simulator.low_fidelity] is not "
+                   "used)\n";
+    }
+    std::cout << "history: " << outcome.history_path << "\n"
               << "tables:  " << outcome.enumeration_directory << "\n";
     if (!outcome.report_directory.empty()) {
       std::cout << "report:  " << outcome.report_directory << "/index.html\n";

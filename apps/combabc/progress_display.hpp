@@ -59,6 +59,10 @@ class ProgressDisplay : public SmcObserver {
                    elapsed,
                    eta);
       if (p.failures > 0) std::fprintf(stderr, "%lld failed  ", static_cast<long long>(p.failures));
+      if (p.fidelity) {
+        std::fprintf(
+            stderr, "%lld expensive  ", static_cast<long long>(p.fidelity->expensive_simulations));
+      }
     }
     std::fflush(stderr);
     dirty_ = true;
@@ -80,6 +84,16 @@ class ProgressDisplay : public SmcObserver {
         w.ess,
         w.wall_seconds,
         w.complete ? "" : "  (incomplete)");
+    if (w.multi_fidelity) {
+      // Multi-fidelity: every candidate ran the cheap simulator, these the expensive one too.
+      std::fprintf(
+          stderr,
+          "        %lld expensive of %lld  (continue if accepted %.3g, if rejected %.3g)\n",
+          static_cast<long long>(w.multi_fidelity->expensive_simulations),
+          static_cast<long long>(w.candidates),
+          w.multi_fidelity->continue_if_accepted,
+          w.multi_fidelity->continue_if_rejected);
+    }
   }
 
   void Clear() {

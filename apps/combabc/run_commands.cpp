@@ -62,8 +62,8 @@ class ChecksPrinter {
 void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& checks) {
   const RunSummary& summary = outcome.history.summary;
   checks.AtEnd(outcome.checks);
-  std::cout << summary.BriefReport() << "\n"
-            << "history: " << outcome.history_path << "\n";
+  std::cout << summary.BriefReport() << "\n";
+  std::cout << "history: " << outcome.history_path << "\n";
   if (!outcome.report_directory.empty()) {
     std::cout << "report:  " << outcome.report_directory << "/index.html\n";
   }

@@ -14,11 +14,13 @@ struct SimulateArgs {
   std::string clamps;
   std::string output = "profile.csv";
   bool overwrite = false;
+  bool low_fidelity = false;
 };
 
 int SimulateCommand(const SimulateArgs& args, const Session& session) {
   return PrimaryOnly(session, [&] {
-    services::SimulateConfiguration(args.config, args.clamps, args.output, args.overwrite);
+    services::SimulateConfiguration(
+        args.config, args.clamps, args.output, args.overwrite, args.low_fidelity);
     std::cout << "wrote " << args.output << "\n";
     return 0;
   });
@@ -37,6 +39,10 @@ Command AddSimulateCommand(CLI::App& app) {
       ->required();
   simulate->add_option("-o,--output", args->output, "CSV to write (default profile.csv)");
   simulate->add_flag("--overwrite", args->overwrite, "Replace an existing CSV at that path");
+  simulate->add_flag("--low-fidelity",
+                     args->low_fidelity,
+                     "Simulate the cheap model of [simulator.low_fidelity] instead, at the "
+                     "expensive simulator's output coordinates");
   AddNoCacheFlag(*simulate);
   return {simulate, [args](const Session& session) { return SimulateCommand(*args, session); }};
 }

@@ -24,14 +24,14 @@ import numpy as np
 
 from . import _core
 from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
-                    ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
-                    ThresholdSchedule)
+                    MultiFidelityOptions, ProposalOptions, SimulationFailed, SmcOptions,
+                    TemperingSchedule, ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
-           "LogisticKernelOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
+           "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
            "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
            "load_history", "make_options", "plot", "resume", "run"]
 
@@ -54,10 +54,15 @@ class Problem:
     component. distance_batch (default: batch): d(outputs float64[n, m], observed) -> float64[n]
     (or [n, k]). A NaN distance or combabc.SimulationFailed fails the candidate, as for the
     simulator.
+
+    low_fidelity: None, or a cheap simulator for a multi-fidelity run (docs/python.md): called
+    as `simulator` is (the same batch and rng), its m outputs standing for the simulator's. Every
+    candidate runs it; the simulator runs only with the continuation probabilities of
+    options.multi_fidelity (a MultiFidelityOptions), and the posterior is the simulator's.
     """
 
     def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
-                 distance=None, components=None, distance_batch=None):
+                 distance=None, components=None, distance_batch=None, low_fidelity=None):
         self.space = space
         self.simulator = simulator
         self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
@@ -71,13 +76,18 @@ class Problem:
         if components is not None and not self.components:
             raise ValueError("components: name at least one distance component")
         self.distance_batch = self.batch if distance_batch is None else bool(distance_batch)
+        if low_fidelity is not None and not callable(low_fidelity):
+            raise TypeError("low_fidelity must be callable (a cheap simulator) or None, not "
+                            f"{type(low_fidelity).__name__}")
+        self.low_fidelity = low_fidelity
 
 
 def make_options(**fields):
     """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
     may be a list of ThresholdSchedule or, for one threshold component, a list of numbers (one
     per wave). proposal=ProposalOptions(...) picks the kernels, tempering=TemperingSchedule(...)
-    tempers the binary proposal toward the prior (paper Eq. 3)."""
+    tempers the binary proposal toward the prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...)
+    sets a multi-fidelity run's continuation probabilities (with Problem(low_fidelity=...))."""
     options = SmcOptions()
     thresholds = fields.pop("thresholds", None)
     if thresholds is not None:
@@ -96,7 +106,7 @@ def _smc_request(problem, options):
         space=problem.space, reals=problem.reals, simulator=problem.simulator,
         batch=problem.batch, rng=problem.rng, observed=problem.observed, options=options,
         distance=problem.distance, distance_batch=problem.distance_batch,
-        components=problem.components)
+        components=problem.components, low_fidelity=problem.low_fidelity)
 
 
 def _problem_history(data, problem):

@@ -20,7 +20,12 @@ class Wave:
     and j under the particles' weights, 0 for a bit constant among them; 0 x 0 without
     particles); per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
     log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
-    run kept no outputs); failure_index int64[f] and failure_reason (list of str).
+    run kept no outputs); failure_index int64[f] and failure_reason (list of str). A
+    multi-fidelity run's wave also has multi_fidelity (a dict: continue_if_accepted,
+    continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
+    next_continue_if_accepted, next_continue_if_rejected, cost_ratio) and per particle multiplier
+    float64[n], confirmed bool[n] and low_distance float64[n, k]; each is None in a
+    single-fidelity run.
     """
 
     def __init__(self, record, estimator):
@@ -75,6 +80,25 @@ def _slice(record, first, count):
     return slice(int(record[first]), int(record[first]) + int(record[count]))
 
 
+_WAVE_FIDELITY_COLUMNS = ("continue_if_accepted", "continue_if_rejected", "expensive_simulations",
+                          "cheap_seconds", "expensive_seconds", "next_continue_if_accepted",
+                          "next_continue_if_rejected", "cost_ratio")
+
+
+def _fidelity_columns(w, distance_columns):
+    """A wave's multi-fidelity particle columns, as export's particles.csv names them."""
+    n = len(w.index)
+    if w.multiplier is None:
+        columns = {"multiplier": np.ones(n), "confirmed": np.zeros(n, dtype=np.int64)}
+        low = np.full((n, len(distance_columns)), np.nan)
+    else:
+        columns = {"multiplier": w.multiplier, "confirmed": w.confirmed.astype(np.int64)}
+        low = w.low_distance
+    for k, name in enumerate(distance_columns):
+        columns["low_distance_" + name[2:]] = low[:, k]
+    return columns
+
+
 class History:
     """A run's waves and summary. `waves` is a list of Wave; the methods return DataFrames."""
 
@@ -112,6 +136,11 @@ class History:
                             enumerate(data.get("experiments") or [{}])]
         self._provenance = {key: data.get(key) or "" for key in
                             ("combabc_version", "config_path", "config_text", "end_time")}
+
+    @property
+    def multi_fidelity(self):
+        """Whether the run had a low-fidelity simulator (its waves carry multi_fidelity)."""
+        return any(w.multi_fidelity is not None for w in self.waves)
 
     @property
     def dimension(self):
@@ -168,7 +197,8 @@ class History:
         """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
         one column per bit named by its name (bit_names), one column per continuous parameter,
         log_weight, weight and d_<component> (component names made column-safe, as in the
-        export). wave: a wave's number (from 1), or None for every wave."""
+        export), and for a multi-fidelity run multiplier, confirmed (0/1) and
+        low_distance_<component>. wave: a wave's number (from 1), or None for every wave."""
         import pandas as pd
         frames = []
         for w in self._selected(wave):
@@ -183,6 +213,8 @@ class History:
             columns["weight"] = w.weight
             for k, name in enumerate(self._distance_columns):
                 columns[name] = w.distance[:, k]
+            if self.multi_fidelity:
+                columns.update(_fidelity_columns(w, self._distance_columns))
             frames.append(pd.DataFrame(columns))
         return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -216,7 +248,10 @@ class History:
     def wave_table(self):
         """One row per wave: wave (from 1), eps_<component> (T_<component> for a likelihood
         component) per threshold, phi, candidates,
-        accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures."""
+        accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures, and for a
+        multi-fidelity run continue_if_accepted, continue_if_rejected, expensive_simulations,
+        cheap_seconds, expensive_seconds, next_continue_if_accepted, next_continue_if_rejected
+        and cost_ratio."""
         import pandas as pd
         rows = []
         for w in self.waves:
@@ -227,6 +262,9 @@ class History:
                        acceptance_rate=w.acceptance_rate, ess=w.ess, distinct=w.distinct,
                        wall_seconds=w.wall_seconds, complete=int(w.complete),
                        failures=len(w.failure_index))
+            if self.multi_fidelity:
+                row.update({key: (w.multi_fidelity or {}).get(key, np.nan)
+                            for key in _WAVE_FIDELITY_COLUMNS})
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -251,7 +289,9 @@ class History:
         return _netcdf.inference_data(
             waves=[{"number": x.number, "thresholds": x.thresholds, "bits": x.bits,
                     "reals": x.reals, "log_weight": x.log_weight, "weight": x.weight,
-                    "distance": x.distance, "index": x.index, "output": x.output}
+                    "distance": x.distance, "index": x.index, "output": x.output,
+                    "multiplier": x.multiplier,
+                    "confirmed": None if x.confirmed is None else x.confirmed.astype(np.uint8)}
                    for x in waves],
             bit_names=self.bit_names, real_names=self.real_names, components=self.components,
             measured_position=self.measured_position, measured_value=self.measured_value,

@@ -17,6 +17,48 @@ py::array_t<double> Vector(const std::vector<double>& v) {
   return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
 }
 
+// A multi-fidelity wave's continuation probabilities and costs ("multi_fidelity", a dict) and its
+// particles' multiplier float64[n], confirmed bool[n] and low_distance float64[n, k]; None for
+// each in a single-fidelity run.
+void AddFidelity(const WaveRecord& wave, py::ssize_t num_components, py::dict& d) {
+  if (!wave.multi_fidelity) {
+    for (const char* key : {"multi_fidelity", "multiplier", "confirmed", "low_distance"}) {
+      d[key] = py::none();
+    }
+    return;
+  }
+  const WaveFidelity& f = *wave.multi_fidelity;
+  py::dict fidelity;
+  fidelity["continue_if_accepted"] = f.continue_if_accepted;
+  fidelity["continue_if_rejected"] = f.continue_if_rejected;
+  fidelity["expensive_simulations"] = f.expensive_simulations;
+  fidelity["cheap_seconds"] = f.cheap_seconds;
+  fidelity["expensive_seconds"] = f.expensive_seconds;
+  fidelity["next_continue_if_accepted"] = f.next_continue_if_accepted;
+  fidelity["next_continue_if_rejected"] = f.next_continue_if_rejected;
+  fidelity["cost_ratio"] = f.cost_ratio;
+  d["multi_fidelity"] = fidelity;
+  const auto n = static_cast<py::ssize_t>(wave.particles.size());
+  py::array_t<double> multiplier(n);
+  py::array_t<bool> confirmed(n);
+  py::array_t<double> low_distance({n, num_components});
+  auto multiplier_w = multiplier.mutable_unchecked<1>();
+  auto confirmed_w = confirmed.mutable_unchecked<1>();
+  auto low_w = low_distance.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const Particle& p = wave.particles[static_cast<std::size_t>(i)];
+    multiplier_w(i) = p.multiplier;
+    confirmed_w(i) = p.confirmed;
+    for (py::ssize_t k = 0; k < num_components; ++k) {
+      const auto j = static_cast<std::size_t>(k);
+      low_w(i, k) = j < p.low_distance.size() ? p.low_distance[j] : std::nan("");
+    }
+  }
+  d["multiplier"] = multiplier;
+  d["confirmed"] = confirmed;
+  d["low_distance"] = low_distance;
+}
+
 py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   py::dict d;
   d["number"] = wave.wave + 1;  // waves count from 1 wherever a user sees them
@@ -99,6 +141,7 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   }
   d["failure_index"] = failure_index;
   d["failure_reason"] = failure_reason;
+  AddFidelity(wave, num_components, d);
   return d;
 }
 

@@ -26,8 +26,10 @@ struct HistoryNames {
 // "summary" (termination, message, waves completed, simulations, discarded, failures, wall seconds)
 // and "waves", a list of dicts, one per wave: its statistics (wave is 0-based), then the particles'
 // index int64[n], bits uint8[n, d], reals float64[n, r], log_weight and weight float64[n], distance
-// float64[n, k], output float64[n, m] (m = 0 without kept outputs), and failure_index /
-// failure_reason.
+// float64[n, k], output float64[n, m] (m = 0 without kept outputs), failure_index /
+// failure_reason, and for a multi-fidelity wave "multi_fidelity" (a dict of WaveFidelity's
+// fields) and the particles' multiplier float64[n], confirmed bool[n] and low_distance
+// float64[n, k] (None each in a single-fidelity run).
 pybind11::dict HistoryToDict(const RunHistory& history, const HistoryNames& names);
 
 // The run's experiments (ExperimentSlices in export/export.hpp: one unnamed experiment holding

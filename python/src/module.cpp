@@ -296,7 +296,27 @@ struct SmcRequest {
   py::object distance;
   bool distance_batch = false;
   std::vector<std::string> components;
+  // None, or a multi-fidelity run's cheap simulator (SmcProblem::low_fidelity): called like
+  // `simulator` (the same batch and rng), m outputs standing for its m.
+  py::object low_fidelity;
 };
+
+// MultiFidelityOptions as its keywords name them: ValueError naming the argument.
+void CheckMultiFidelity(const MultiFidelityOptions& o) {
+  auto probability = [](const char* name, double value) {
+    if (!(value > 0.0 && value <= 1.0)) {
+      throw py::value_error(std::string("MultiFidelityOptions: ") + name + " = " +
+                            std::to_string(value) + "; must be in (0, 1]");
+    }
+  };
+  probability("continue_if_accepted", o.continue_if_accepted);
+  probability("continue_if_rejected", o.continue_if_rejected);
+  probability("floor", o.floor);
+  if (!(o.cost_ratio >= 0.0) || !std::isfinite(o.cost_ratio)) {
+    throw py::value_error("MultiFidelityOptions: cost_ratio = " + std::to_string(o.cost_ratio) +
+                          "; must be > 0 (0: measured)");
+  }
+}
 
 // The history of a Python run, opened to continue it: refused (kUsage) for a config run's history,
 // a run that has finished (not on a limit), and a problem or options other than the run's.
@@ -430,10 +450,22 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                   simulation_failed,
                                   request.rng,
                                   first_error);
+  std::optional<PythonSimulator> cheap;
+  if (!request.low_fidelity.is_none()) {
+    CheckMultiFidelity(request.options.multi_fidelity);
+    cheap.emplace(request.low_fidelity,
+                  request.batch,
+                  static_cast<int>(request.observed.size()),
+                  space.num_reals(),
+                  simulation_failed,
+                  request.rng,
+                  first_error);
+  }
   SmcProblem problem;
   problem.space = &space;
   problem.simulator = &simulator;
   problem.distance = distance.get();
+  problem.low_fidelity = cheap ? &*cheap : nullptr;
   const PythonProblem described{.space = &request.space,
                                 .reals = &request.reals,
                                 .observed = &request.observed,
@@ -441,7 +473,8 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                 .batch = request.batch,
                                 .rng = request.rng,
                                 .python_distance = !request.distance.is_none(),
-                                .distance_batch = request.distance_batch};
+                                .distance_batch = request.distance_batch,
+                                .low_fidelity = !request.low_fidelity.is_none()};
   std::optional<HistoryStore> store;
   std::optional<ResumePoint> resume;
   if (!file.history_path.empty()) {
@@ -755,6 +788,32 @@ void BindTypes(py::module_& m) {
 
   BindProposalTypes(m);
 
+  // SmcOptions::multi_fidelity ([sampler.multi_fidelity] in a config): used with
+  // Problem(low_fidelity=...).
+  const MultiFidelityOptions multi_fidelity_defaults;
+  py::class_<MultiFidelityOptions>(m, "MultiFidelityOptions")
+      .def(py::init([](double continue_if_accepted,
+                       double continue_if_rejected,
+                       bool adapt,
+                       double floor,
+                       double cost_ratio) {
+             const MultiFidelityOptions o{
+                 continue_if_accepted, continue_if_rejected, adapt, floor, cost_ratio};
+             CheckMultiFidelity(o);
+             return o;
+           }),
+           py::kw_only(),
+           py::arg("continue_if_accepted") = multi_fidelity_defaults.continue_if_accepted,
+           py::arg("continue_if_rejected") = multi_fidelity_defaults.continue_if_rejected,
+           py::arg("adapt") = multi_fidelity_defaults.adapt,
+           py::arg("floor") = multi_fidelity_defaults.floor,
+           py::arg("cost_ratio") = multi_fidelity_defaults.cost_ratio)
+      .def_readwrite("continue_if_accepted", &MultiFidelityOptions::continue_if_accepted)
+      .def_readwrite("continue_if_rejected", &MultiFidelityOptions::continue_if_rejected)
+      .def_readwrite("adapt", &MultiFidelityOptions::adapt)
+      .def_readwrite("floor", &MultiFidelityOptions::floor)
+      .def_readwrite("cost_ratio", &MultiFidelityOptions::cost_ratio);
+
   py::class_<SmcOptions>(m, "SmcOptions")
       .def(py::init<>())
       .def_readwrite("num_waves", &SmcOptions::num_waves)
@@ -778,6 +837,7 @@ void BindTypes(py::module_& m) {
       .def_readwrite("max_wall_time_s", &SmcOptions::max_wall_time_s)
       .def_readwrite("batch_size", &SmcOptions::batch_size)
       .def_readwrite("keep_outputs", &SmcOptions::keep_outputs)
+      .def_readwrite("multi_fidelity", &SmcOptions::multi_fidelity)
       .def("is_valid", [](const SmcOptions& o) {
         std::string why;
         const bool ok = o.IsValid(&why);
@@ -871,7 +931,8 @@ PYBIND11_MODULE(_core, m) {
                        const SmcOptions& options,
                        py::object distance,
                        bool distance_batch,
-                       std::vector<std::string> components) {
+                       std::vector<std::string> components,
+                       py::object low_fidelity) {
              return SmcRequest{.space = space,
                                .reals = std::move(reals),
                                .simulator = std::move(simulator),
@@ -881,7 +942,8 @@ PYBIND11_MODULE(_core, m) {
                                .options = options,
                                .distance = std::move(distance),
                                .distance_batch = distance_batch,
-                               .components = std::move(components)};
+                               .components = std::move(components),
+                               .low_fidelity = std::move(low_fidelity)};
            }),
            py::kw_only(),
            py::arg("space"),
@@ -893,7 +955,8 @@ PYBIND11_MODULE(_core, m) {
            py::arg("options"),
            py::arg("distance") = py::none(),
            py::arg("distance_batch") = false,
-           py::arg("components") = std::vector<std::string>{});
+           py::arg("components") = std::vector<std::string>{},
+           py::arg("low_fidelity") = py::none());
   m.def(
       "run_smc",
       [](const SmcRequest& request,

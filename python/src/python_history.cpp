@@ -97,6 +97,13 @@ std::vector<std::pair<std::string, std::string>> PythonRunFingerprint(const Pyth
     << q.logistic.clip << std::string(ToString(q.continuous)) << q.scale;
   o << std::string(ToString(options.estimator)) << std::to_string(options.seed)
     << std::int64_t{options.batch_size} << std::int64_t{options.keep_outputs};
+  // Multi-fidelity runs only, so that single-fidelity fingerprints are what they were.
+  if (problem.low_fidelity) {
+    const MultiFidelityOptions& mf = options.multi_fidelity;
+    p << std::string("low_fidelity");
+    o << mf.continue_if_accepted << mf.continue_if_rejected << std::int64_t{mf.adapt} << mf.floor
+      << mf.cost_ratio;
+  }
   return {{kPythonFingerprintPart, p.Digest()}, {"python_options", o.Digest()}};
 }
 

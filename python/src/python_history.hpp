@@ -26,6 +26,7 @@ struct PythonProblem {
   bool rng = false;              // the simulator takes rng=
   bool python_distance = false;  // the distance is a Python function (else Euclidean)
   bool distance_batch = false;
+  bool low_fidelity = false;  // a multi-fidelity run (a cheap simulator; options.multi_fidelity)
 };
 
 // The fingerprint part every Python run's history has, and no config run's: how a resume tells

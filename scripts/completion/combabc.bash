@@ -27,7 +27,7 @@ _combabc() {
     design)
       opts="-h --help --posterior -o --output -j --threads --overwrite --no-figure --no-cache"
       files=toml ;;
-    simulate) opts="-h --help --clamps -o --output --overwrite --no-cache"; files=toml ;;
+    simulate) opts="-h --help --clamps -o --output --overwrite --low-fidelity --no-cache"; files=toml ;;
     report) opts="-h --help -o --output --overwrite"; files=sqlite ;;
     export) opts="-h --help -o --output --overwrite --no-netcdf --all-waves"; files=sqlite ;;
     verify) opts="-h --help"; files=sqlite ;;

@@ -17,7 +17,10 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
   error, and the file is reproducible. `bits` (chain, draw, bit; uint8, the bit coordinate holds
   the bit / clamp names) and one variable per continuous parameter (chain, draw);
 - sample_stats, per draw, of the particle it was drawn from: `weight` and `log_weight`,
-  `distance` (chain, draw, component) and `particle_index` (its candidate index in the wave);
+  `distance` (chain, draw, component) and `particle_index` (its candidate index in the wave); in a
+  multi-fidelity run also `multiplier` and `confirmed` (0/1). Such a run's draws are resampled
+  from its particles' weights (which hold the multipliers) under either estimator, from their
+  positive part when some are negative (attribute `resampling_weights` says so);
 - prior: wave 1's particles when its thresholds are all infinite (prior draws), else as many
   draws from the stated prior (independent bits at bit_prior_one, the continuous priors);
   attribute `source` says which;
@@ -104,7 +107,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
     (at least the final one, last), each a dict: number (from 1), thresholds, and its particles as
     NumPy arrays (n particles): bits uint8[n, d], reals float64[n, r], log_weight, weight
     float64[n], distance float64[n, k], index int64[n], output float64[n, m] (m = 0 without
-    outputs). experiments: the run's experiments as dicts (name, description, first_measured,
+    outputs), and in a multi-fidelity run multiplier float64[n] and confirmed uint8[n].
+    experiments: the run's experiments as dicts (name, description, first_measured,
     measured, first_component, components, first_output, outputs: summary.json's
     "experiments"), or None for one holding everything. real_priors: per continuous parameter its
     prior as a dict (kind, low, high, mean, sd)."""
@@ -139,8 +143,11 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
         weight = np.asarray(wave["weight"], dtype=np.float64)
         distance = np.asarray(wave["distance"], dtype=np.float64).reshape(len(weight),
                                                                           len(components))
-        uniform = estimator == "paper"
-        rows = resample(np.ones_like(weight) if uniform else weight, seed, wave["number"])
+        uniform = estimator == "paper" and wave.get("multiplier") is None
+        # Signed (multi-fidelity) weights: the draws come from their positive part.
+        signed = bool(np.any(weight < 0))
+        rows = resample(np.ones_like(weight) if uniform else np.clip(weight, 0.0, None), seed,
+                        wave["number"])
         n = len(rows)
         stats = {
             "weight": (("chain", "draw"), weight[rows][None]),
@@ -149,6 +156,13 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
             "particle_index": (("chain", "draw"), np.asarray(wave["index"],
                                                              dtype=np.int64)[rows][None]),
         }
+        # A multi-fidelity run: each draw's particle's multiplier and whether the expensive
+        # simulator confirmed it.
+        if wave.get("multiplier") is not None:
+            stats["multiplier"] = (("chain", "draw"),
+                                   np.asarray(wave["multiplier"], dtype=np.float64)[rows][None])
+            stats["confirmed"] = (("chain", "draw"),
+                                  np.asarray(wave["confirmed"], dtype=np.uint8)[rows][None])
         coords = {**draws(n), "component": list(components)}
         if named is not None:
             owner = [""] * len(components)
@@ -158,7 +172,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
                     owner[k] = x["name"]
             coords["component_experiment"] = ("component", owner)
         stats_attrs = {**attrs, "wave": wave["number"], "resampling": "systematic",
-                       "resampling_weights": "equal" if uniform else "weight"}
+                       "resampling_weights": "equal" if uniform else
+                       "weight (its positive part)" if signed else "weight"}
         posterior = parameters(np.asarray(wave["bits"])[rows], np.asarray(
             wave["reals"], dtype=np.float64).reshape(len(weight), r)[rows])
         posterior.attrs = stats_attrs
@@ -241,8 +256,11 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
     real_names = [r["name"] for r in summary["reals"]]
     components = [c["name"] for c in summary["distance_components"]]
     table = pd.read_csv(particles_csv, dtype={"bits": str}, float_precision="round_trip")
-    weight_at = list(table.columns).index("weight")
-    distance_columns = list(table.columns[weight_at + 1:])
+    columns = list(table.columns)
+    weight_at = columns.index("weight")
+    # A multi-fidelity run's columns follow the distances (multiplier, confirmed, low_distance_*).
+    fidelity = "multiplier" in columns
+    distance_columns = columns[weight_at + 1:columns.index("multiplier") if fidelity else None]
     if len(distance_columns) != len(components):
         components = [c[2:] for c in distance_columns]  # an older file: the export's names
     curves = None
@@ -263,6 +281,9 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
                 "log_weight": rows["log_weight"].to_numpy(), "weight": rows["weight"].to_numpy(),
                 "distance": rows[distance_columns].to_numpy(dtype=np.float64),
                 "index": rows["index"].to_numpy(dtype=np.int64), "output": np.zeros((0, 0))}
+        if fidelity:
+            wave["multiplier"] = rows["multiplier"].to_numpy(dtype=np.float64)
+            wave["confirmed"] = rows["confirmed"].to_numpy(dtype=np.uint8)
         if curves is not None:
             by_index = curves[curves["wave"] == w["wave"]].drop(columns="wave").set_index("index")
             if set(wave["index"]) <= set(by_index.index):

@@ -28,6 +28,9 @@ missing; refused unless empty), in each format of the run's [output] figures (de
   reals.<fmt>                   runs with continuous parameters only: each parameter's accepted
                                 values per wave (weighted histograms under the estimator) over
                                 its prior's range
+  fidelity.<fmt>                multi-fidelity runs only: cheap and expensive simulations and
+                                seconds per wave, the continuation probabilities each wave used,
+                                and its ESS per second (summary.json's "multi_fidelity")
   index.html                    all of the above with the run's provenance, the answer and the
                                 checks of summary.json, and the per-wave table
 
@@ -101,6 +104,7 @@ class Wave:
         self.curves = None    # (n, points) float, or None without stored outputs
         self.reals = None     # (n, r) float: each particle's continuous parameters
         self.log_w = np.zeros(0)
+        self.multiplier = None      # (n,) float: multi-fidelity runs' weight multipliers
         self.weights = np.zeros(0)  # the particles' weights under the estimator shown
 
 
@@ -141,6 +145,8 @@ def load_particles(path, waves, bit_names, real_names):
     except ValueError as error:
         raise ReportError(f"{path}: {error}") from None
     at_bits = bit_columns(header, bit_names, path)
+    # A multi-fidelity run's multipliers (docs/history.md): the weights are proportional to them.
+    at_multiplier = header.index("multiplier") if "multiplier" in header else None
     by_wave = {w.number: [] for w in waves}
     for row in rows:
         if row:
@@ -150,6 +156,8 @@ def load_particles(path, waves, bit_names, real_names):
         n = len(mine)
         w.index = np.array([int(r[at_index]) for r in mine], dtype=np.int64)
         w.log_w = np.array([float(r[at_log_w]) for r in mine], dtype=float)
+        if at_multiplier is not None:
+            w.multiplier = np.array([float(r[at_multiplier]) for r in mine], dtype=float)
         w.bits = np.array([[int(r[k]) for k in at_bits] for r in mine],
                           dtype=np.uint8).reshape(n, len(at_bits))
         if real_names:
@@ -203,6 +211,10 @@ def load_export(folder, history=None):
     run["experiments"] = experiments_of(summary, run)
     run["named"] = any(x["name"] for x in run["experiments"])
     run["config"] = run_config(run)
+    # A multi-fidelity run's costs and continuation probabilities per wave, and their total.
+    fidelity = summary.get("multi_fidelity") or {}
+    run["multi_fidelity"] = list(fidelity.get("waves") or ())
+    run["multi_fidelity_total"] = fidelity.get("total")
     waves = [Wave(entry) for entry in summary.get("waves", [])]
     if not waves:
         raise ReportError(f"{history or folder}: the run has no committed wave yet")
@@ -288,16 +300,26 @@ def scale_like_the_metric(run, waves):
 
 def estimator_weights(w, estimator):
     """The accepted particles' weights under the estimator, as the engine's statistics use them:
-    equal (paper), or p/q self-normalised (importance)."""
+    equal (paper), or p/q self-normalised (importance); in a multi-fidelity run times each
+    particle's multiplier, normalised by their signed sum (by the sum of |w| when that is not
+    positive), so that some may be negative."""
     n = w.log_w.size
     if estimator == "paper" or n == 0 or not np.isfinite(np.max(w.log_w)):
-        return np.full(n, 1.0 / max(n, 1))
-    weights = np.exp(w.log_w - np.max(w.log_w))
-    return weights / weights.sum()
+        weights = np.ones(n)
+    else:
+        weights = np.exp(w.log_w - np.max(w.log_w))
+    if w.multiplier is not None and w.multiplier.size == n:
+        weights = weights * w.multiplier
+    total = weights.sum()
+    if not total > 0:
+        total = np.abs(weights).sum()
+    return weights / total if total > 0 else np.full(n, 1.0 / max(n, 1))
 
 
 def weighted_quantiles(values, weights, qs):
     """Per column of values (n, m): the weighted quantiles qs (in [0, 1]), shape (len(qs), m)."""
+    # A band is drawn from the positive part of signed (multi-fidelity) weights.
+    weights = np.clip(weights, 0.0, None)
     order = np.argsort(values, axis=0)
     sorted_values = np.take_along_axis(values, order, axis=0)
     cumulative = np.cumsum(weights[order], axis=0)

@@ -545,6 +545,50 @@ def predictive_figure(waves, run, estimator, out):
 _JOB = {}  # what the forked workers render from (inherited, not pickled)
 
 
+def fidelity_figure(waves, run, estimator, out):
+    """A multi-fidelity run's cost split per wave: cheap and expensive simulations, the seconds
+    each took, the continuation probabilities the wave used and its ESS per second."""
+    mf = run["multi_fidelity"]
+    numbers = np.array([int(x["wave"]) for x in mf], dtype=float)
+    fig, axes = plt.subplots(1, 4, figsize=(15.0, 3.4))
+    width = 0.38
+
+    def bars(ax, cheap, expensive, label):
+        ax.bar(numbers - width / 2, cheap, width, color="#8fb3d9", label="cheap")
+        ax.bar(numbers + width / 2, expensive, width, color="#c0504d", label="expensive")
+        ax.set_ylabel(label)
+        ax.legend(frameon=False)
+
+    bars(axes[0], [x["cheap_simulations"] for x in mf], [x["expensive_simulations"] for x in mf],
+         "Simulations")
+    axes[0].set_title("Simulations per wave")
+    bars(axes[1], [number(x.get("cheap_seconds")) for x in mf],
+         [number(x.get("expensive_seconds")) for x in mf], "Seconds (summed call time)")
+    axes[1].set_title("Simulation time per wave")
+    ax = axes[2]
+    ax.plot(numbers, [number(x.get("continue_if_accepted")) for x in mf], marker="o",
+            label="η₁ (cheap accepted)")
+    ax.plot(numbers, [number(x.get("continue_if_rejected")) for x in mf], marker="s",
+            label="η₂ (cheap rejected)")
+    ax.set_ylim(0.0, 1.05)
+    ax.set_ylabel("Continuation probability")
+    ax.set_title("Continuation probabilities")
+    ax.legend(frameon=False)
+    ax = axes[3]
+    ax.plot(numbers, [number(x.get("ess_per_second")) for x in mf], marker="o", color="black")
+    ax.set_ylabel("ESS / second")
+    ax.set_title("ESS per unit cost")
+    for ax in axes:
+        ax.set_xlabel("Wave")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    fig.tight_layout()
+    return save(fig, out, "fidelity")
+
+
+def number(value):
+    return float("nan") if value is None else float(value)
+
+
 def save(fig, out, name):
     for fmt in _JOB["formats"]:
         # compress_level 3: PNGs a little larger than the default 6, written in a fraction of the
@@ -556,7 +600,7 @@ def save(fig, out, name):
 
 
 _WHOLE_RUN = {"overview": overview_figure, "summary": summary_figure, "reals": reals_figure,
-              "predictive": predictive_figure}
+              "predictive": predictive_figure, "fidelity": fidelity_figure}
 _PER_WAVE = {"curves": curves_figure, "marginals": marginals_figure}
 
 
@@ -574,6 +618,8 @@ def render_all(waves, run, estimator, out, formats):
     they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
     single-threaded and dominate the time)."""
     tasks = [("summary", None), ("overview", None)]
+    if run["multi_fidelity"]:
+        tasks.append(("fidelity", None))
     if run["predictive"]:
         tasks.append(("predictive", None))
     if run["reals"] and any(w.reals is not None and w.reals.shape[0] for w in waves):

@@ -152,6 +152,38 @@ def figure_html(name, formats):
     return f"<figure>{image}<figcaption>{e(name)} ({links})</figcaption></figure>"
 
 
+def fidelity_html(run):
+    """A multi-fidelity run's cost split per wave and in total (summary.json's "multi_fidelity");
+    nothing for a single-fidelity run."""
+    if not run.get("multi_fidelity"):
+        return ""
+    head = ("<tr><th>Wave</th><th>Cheap simulations</th><th>Expensive simulations</th>"
+            "<th>Cheap seconds</th><th>Expensive seconds</th><th>η₁ (cheap accepted)</th>"
+            "<th>η₂ (cheap rejected)</th><th>ESS per second</th><th>Next η₁, η₂</th>"
+            "<th>Cost ratio</th></tr>")
+
+    def row(x, label):
+        return (f"<tr><td>{e(str(label))}</td><td>{x['cheap_simulations']}</td>"
+                f"<td>{x['expensive_simulations']}</td><td>{fmt(x.get('cheap_seconds'), '.3g')}</td>"
+                f"<td>{fmt(x.get('expensive_seconds'), '.3g')}</td>")
+
+    body = "\n".join(
+        row(x, x["wave"]) + f"<td>{fmt(x.get('continue_if_accepted'))}</td>"
+        f"<td>{fmt(x.get('continue_if_rejected'))}</td><td>{fmt(x.get('ess_per_second'))}</td>"
+        f"<td>{fmt(x.get('next_continue_if_accepted'))}, "
+        f"{fmt(x.get('next_continue_if_rejected'))}</td><td>{fmt(x.get('cost_ratio'))}</td></tr>"
+        for x in run["multi_fidelity"])
+    total = run.get("multi_fidelity_total")
+    if total:
+        body += "\n" + row(total, "total") + (
+            f"<td>—</td><td>—</td><td>{fmt(total.get('ess_per_second'))}</td><td>—</td>"
+            "<td>—</td></tr>")
+    return ("<h2>Multi-fidelity</h2><p>Every candidate ran the cheap simulator; the expensive "
+            "one ran with probability η₁ or η₂ after the cheap one accepted or rejected it. "
+            "ESS per second: the wave's effective sample size over its simulation seconds (the "
+            f"total: the answer's wave's over the run's).</p><table>{head}{body}</table>\n")
+
+
 def page_html(waves, run, estimator, written, formats, history):
     """The whole page."""
     provenance = [
@@ -193,6 +225,7 @@ def page_html(waves, run, estimator, written, formats, history):
         experiments = ("<h2>Experiments</h2><table><tr><th>Experiment</th><th>Description</th>"
                        "<th>Outputs</th><th>Measured points</th><th>Distance components</th></tr>"
                        f"\n{listed}</table>\n")
+    fidelity = fidelity_html(run)
     note = ("" if any(w.curves is not None for w in waves)
             else "<p>This run did not keep simulated outputs: no curve figures.</p>")
     summary = run["summary"]
@@ -202,7 +235,7 @@ def page_html(waves, run, estimator, written, formats, history):
 <h1>combabc run report</h1>
 <h2>Run</h2><table>{rows}</table>
 {answer_html(summary, run.get("sensor", True))}{checks_html(summary)}{experiments}<h2>Waves</h2><table>{head}{body}</table>
-{note}
+{fidelity}{note}
 <h2>Figures</h2>
 {figures}
 <h2>Configuration</h2><pre>{e(run.get("config_text") or "")}</pre>

@@ -77,6 +77,7 @@ std::string SamplerKeyOf(const std::string& field) {
       {"max_wall_time_s", "sampler.max_wall_time"},
       {"batch_size", "sampler.batch_size"},
       {"tempering", "sampler.tempering"},
+      {"multi_fidelity", "sampler.multi_fidelity"},
       {"thresholds", "metric"},
       {"default_prior_one", "sampler.prior"},
       {"prior_one", "sampler.prior"},
@@ -179,6 +180,12 @@ void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
       }
     }
   }
+  // A cheap sensor of a multi-fidelity run is built beside the run's simulator.
+  if (c.low_fidelity && c.low_fidelity->simulator.kind == SimulatorKind::kSensor) {
+    for (const SensorModelPlan& plan : LowFidelitySensorModels(c)) {
+      model += plan.options.EstimatedMemoryBytes();
+    }
+  }
   const SamplerMemory sampler = EstimateSamplerMemory(c);
   const double total = model + sampler.batch + sampler.particles;
   if (total <= c.model.memory_limit_bytes) return;
@@ -243,6 +250,14 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   // Sets the thresholds (one schedule per threshold or likelihood component, experiment by
   // experiment), the simulator's outputs and model.normalise.
   config_internal::ParseExperiments(root, &c, model_sources);
+  config_internal::ParseLowFidelitySection(root, &c);
+  if (sources.multi_fidelity && !c.low_fidelity) {
+    throw Error(ErrorKind::kConfig,
+                "multi-fidelity options need a cheap simulator: add [simulator.low_fidelity]",
+                c.path,
+                sources.multi_fidelity->line,
+                sources.multi_fidelity->key);
+  }
   ParseOutput(root, &c);
   config_internal::ParseDesignSection(root, &c);
   root.Finish();

@@ -17,7 +17,12 @@ std::string ExperimentConfig::Key(std::size_t index, const std::string& table) c
   return "experiment[" + std::to_string(index) + "]" + (table.empty() ? "" : "." + table);
 }
 
-std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config) {
+namespace {
+
+// One plan per distinct frequency; each load case scans the experiment's output coordinates (for
+// the run's own sensor, its [model.output] positions).
+std::vector<SensorModelPlan> Plans(const CalibrationConfig& config,
+                                   const plate::SensorOptions& model) {
   std::vector<SensorModelPlan> plans;
   for (std::size_t e = 0; e < config.experiments.size(); ++e) {
     const ExperimentConfig& x = config.experiments[e];
@@ -25,16 +30,28 @@ std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config) {
     auto it = std::find_if(plans.begin(), plans.end(), same);
     if (it == plans.end()) {
       SensorModelPlan plan;
-      plan.options = config.model;
+      plan.options = model;
       plan.options.frequency_hz = x.frequency_hz;
       plan.options.load_cases.clear();
       plans.push_back(std::move(plan));
       it = plans.end() - 1;
     }
-    it->options.load_cases.push_back(x.load);
+    plate::LoadCase load = x.load;
+    load.output_positions = x.output_coordinates;
+    it->options.load_cases.push_back(std::move(load));
     it->experiments.push_back(e);
   }
   return plans;
+}
+
+}  // namespace
+
+std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config) {
+  return Plans(config, config.model);
+}
+
+std::vector<SensorModelPlan> LowFidelitySensorModels(const CalibrationConfig& config) {
+  return Plans(config, config.low_fidelity.value().model);
 }
 
 namespace config_internal {
@@ -136,6 +153,24 @@ void ParseOne(TableReader& t,
 
 }  // namespace
 
+void RefuseExperimentPlaceholders(const std::vector<std::string>& argv,
+                                  int line,
+                                  const std::string& key,
+                                  const std::string& path) {
+  for (const std::string& arg : argv) {
+    for (const char* placeholder : kExperimentPlaceholders) {
+      if (arg.find(placeholder) != std::string::npos) {
+        throw Error(ErrorKind::kConfig,
+                    std::string("uses ") + placeholder +
+                        ", which only [[experiment]] tables fill in (docs/simulators.md)",
+                    path,
+                    line,
+                    key);
+      }
+    }
+  }
+}
+
 void ParseDataTable(TableReader& t, std::optional<double> impact_default, DataConfig* data) {
   DataConfig& d = *data;
   const auto csv = t.String("csv");
@@ -194,18 +229,8 @@ void ParseExperiments(TableReader& root,
   if (tables.empty()) {
     // The shorthand: one experiment, unnamed, from the top-level tables. An external program
     // told about experiments it does not have would read the placeholders literally.
-    for (const std::string& arg : c->simulator.external.argv) {
-      for (const char* placeholder : kExperimentPlaceholders) {
-        if (arg.find(placeholder) != std::string::npos) {
-          throw Error(ErrorKind::kConfig,
-                      std::string("uses ") + placeholder +
-                          ", which only [[experiment]] tables fill in (docs/simulators.md)",
-                      c->path,
-                      c->simulator.argv_line,
-                      "simulator.argv");
-        }
-      }
-    }
+    RefuseExperimentPlaceholders(
+        c->simulator.external.argv, c->simulator.argv_line, "simulator.argv", c->path);
     ExperimentConfig x = defaults;
     ParseOne(root, 0, c, &x, model_sources);
     c->experiments.push_back(std::move(x));

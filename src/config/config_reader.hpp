@@ -115,9 +115,10 @@ struct Source {
 };
 
 struct Sources {
-  std::map<std::string, Source> smc;    // SmcOptions field ("num_waves", "tempering") -> key
-  std::map<std::string, Source> space;  // BinarySpaceOptions field -> key
-  Source sampler;                       // fallback: the [sampler] table
+  std::map<std::string, Source> smc;     // SmcOptions field ("num_waves", "tempering") -> key
+  std::map<std::string, Source> space;   // BinarySpaceOptions field -> key
+  Source sampler;                        // fallback: the [sampler] table
+  std::optional<Source> multi_fidelity;  // the [sampler.multi_fidelity] table, when given
 };
 
 // Records that `field` was set by key `key` of `t` (if present).
@@ -159,6 +160,15 @@ void ParseExperiments(TableReader& root,
 // [simulator] (config_simulator.cpp): after [model]; sets the simulator's outputs and the bit
 // names (config->space.names).
 void ParseSimulatorSection(TableReader& root, CalibrationConfig* config);
+// [simulator.low_fidelity] (config_simulator.cpp): after the experiments and [parameters]; sets
+// config->low_fidelity (its outputs mapped onto the expensive simulator's).
+void ParseLowFidelitySection(TableReader& root, CalibrationConfig* config);
+// Refuses an argv that uses an experiment placeholder ({experiment}, ...) where the config has no
+// [[experiment]] tables (config_experiment.cpp); key: the argv key, at `line`.
+void RefuseExperimentPlaceholders(const std::vector<std::string>& argv,
+                                  int line,
+                                  const std::string& key,
+                                  const std::string& path);
 // [sampler] (config_sampler.cpp): needs the bit names (config->space.names) for prior arrays
 // and tie numbers.
 void ParseSamplerSection(TableReader& root, CalibrationConfig* config, Sources* sources);

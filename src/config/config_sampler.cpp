@@ -33,6 +33,30 @@ void ParseTempering(TableReader& s, SmcOptions* smc, Sources* sources) {
   t->Finish();
 }
 
+// [sampler.multi_fidelity]: MultiFidelityOptions (a run with [simulator.low_fidelity] only).
+void ParseMultiFidelity(TableReader& s, MultiFidelityOptions* mf, Sources* sources) {
+  auto t = s.Table("multi_fidelity");
+  if (!t) return;
+  sources->multi_fidelity = Source{t->prefix(), t->line()};
+  auto probability = [&](const char* key, double* value) {
+    if (const auto v = t->Number(key)) {
+      if (!(*v > 0.0 && *v <= 1.0)) t->Fail(key, "must be in (0, 1]");
+      *value = *v;
+    }
+  };
+  probability("continue_if_accepted", &mf->continue_if_accepted);
+  probability("continue_if_rejected", &mf->continue_if_rejected);
+  mf->adapt = t->Bool("adapt").value_or(mf->adapt);
+  probability("floor", &mf->floor);
+  if (const auto ratio = t->Number("cost_ratio")) {
+    if (!(*ratio > 0.0) || !std::isfinite(*ratio)) {
+      t->Fail("cost_ratio", "must be finite and > 0 (leave it out to measure the ratio)");
+    }
+    mf->cost_ratio = *ratio;
+  }
+  t->Finish();
+}
+
 void ParseTies(TableReader& s, int dimension, BinarySpaceOptions* space) {
   const toml::node* node = s.Raw("tie");
   if (!node) return;
@@ -121,6 +145,7 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sourc
   smc.batch_size = t->IntegerIn("batch_size", smc.batch_size, 0, 1000000000);
   Note(sources->smc, "batch_size", *t, "batch_size");
   ParseTempering(*t, &smc, sources);
+  ParseMultiFidelity(*t, &smc.multi_fidelity, sources);
 
   if (const toml::node* prior = t->Raw("prior")) {
     const std::string key = t->Key("prior");

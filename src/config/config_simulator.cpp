@@ -1,8 +1,10 @@
 // [simulator]: which simulator the run calibrates. "sensor" (the default) is the built-in plate
 // configured by [model]; "command" and "worker" are external programs (docs/simulators.md) that
 // declare their binary parameters ([simulator.bits]) and outputs ([simulator.outputs]) here.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <string>
@@ -53,10 +55,12 @@ std::vector<double> ReadCoordinatesCsv(const std::string& path) {
   return values;
 }
 
-void ParseOutputs(TableReader& s, CalibrationConfig* c) {
+void ParseOutputs(TableReader& s, const std::string& directory, SimulatorOutputs* outputs) {
   auto o = s.Table("outputs");
-  if (!o) s.Fail("outputs", "missing required table [simulator.outputs] (name and coordinates)");
-  SimulatorOutputs& out = c->simulator.outputs;
+  if (!o) {
+    s.Fail("outputs", "missing required table [" + s.Key("outputs") + "] (name and coordinates)");
+  }
+  SimulatorOutputs& out = *outputs;
   out.name = o->String("name").value_or(out.name);
   if (out.name.empty()) o->Fail("name", "must not be empty");
   const bool listed = o->Has("coordinates");
@@ -70,7 +74,7 @@ void ParseOutputs(TableReader& s, CalibrationConfig* c) {
     key = "coordinates_csv";
     const std::string file = *o->String("coordinates_csv");
     if (file.empty()) o->Fail(key, "must not be empty");
-    out.coordinates = ReadCoordinatesCsv(ResolvePath(c->directory, file));
+    out.coordinates = ReadCoordinatesCsv(ResolvePath(directory, file));
   }
   if (out.coordinates.empty()) o->Fail(key, "must hold at least one coordinate");
   if (out.size() > kMaxOutputs) {
@@ -87,9 +91,10 @@ void ParseOutputs(TableReader& s, CalibrationConfig* c) {
   o->Finish();
 }
 
-void ParseBits(TableReader& s, CalibrationConfig* c) {
+// The bit names of [<simulator>.bits]; where their number is set: *key and *line.
+std::vector<std::string> ParseBits(TableReader& s, std::string* key, int* line) {
   auto b = s.Table("bits");
-  if (!b) s.Fail("bits", "missing required table [simulator.bits] (count or names)");
+  if (!b) s.Fail("bits", "missing required table [" + s.Key("bits") + "] (count or names)");
   std::vector<std::string> names = b->Strings("names").value_or(std::vector<std::string>{});
   const auto count = b->Integer("count");
   if (!count && names.empty()) b->Fail("count", "missing required key (or give names)");
@@ -110,15 +115,61 @@ void ParseBits(TableReader& s, CalibrationConfig* c) {
     if (n.empty()) b->Fail("names", "a name is empty");
     if (!seen.insert(n).second) b->Fail("names", Excerpt(n) + " appears twice");
   }
-  c->space.names = names;
   const std::string_view bits_key = count ? "count" : "names";
-  c->bits_key = b->Key(bits_key);
-  c->bits_line = b->Line(bits_key);
+  *key = b->Key(bits_key);
+  *line = b->Line(bits_key);
   b->Finish();
+  return names;
 }
 
 double Seconds(TableReader& s, std::string_view key, double fallback) {
   return s.NumberIn(key, fallback, 0.0, 1e7);
+}
+
+// A command's or worker's program and hand-over ([simulator] or [simulator.low_fidelity]).
+void ParseExternal(TableReader& s, const std::string& directory, SimulatorConfig* sim) {
+  ExternalSimulatorOptions& e = sim->external;
+  const auto argv = s.Strings("argv");
+  if (!argv || argv->empty() || argv->front().empty()) {
+    s.Fail("argv",
+           "missing required key: the program and its arguments, e.g. "
+           "[\"python3\", \"{config_dir}/model.py\", \"{params}\"]");
+  }
+  e.argv = *argv;
+  sim->argv_line = s.Line("argv");
+  e.timeout_s = Seconds(s, "timeout", e.timeout_s);
+  e.retries = s.IntegerIn("retries", e.retries, 0, 100);
+  if (sim->kind == SimulatorKind::kCommand) {
+    e.params = s.Choice<Transport>("params", "parameter hand-over").value_or(e.params);
+    if (e.params == Transport::kStdout) s.Fail("params", "must be \"file\" or \"stdin\"");
+    e.params_format = s.Choice<DataFormat>("params_format", "format").value_or(e.params_format);
+    e.results = s.Choice<Transport>("results", "result hand-over").value_or(e.results);
+    if (e.results == Transport::kStdin) s.Fail("results", "must be \"stdout\" or \"file\"");
+    e.results_format = s.Choice<DataFormat>("results_format", "format").value_or(e.results_format);
+  } else {
+    e.startup_timeout_s = Seconds(s, "startup_timeout", e.startup_timeout_s);
+  }
+  e.config_directory = directory;
+}
+
+// The options the program is called with once its bits and outputs are known, checked.
+void FinishExternal(TableReader& s,
+                    const std::vector<std::string>& bit_names,
+                    SimulatorConfig* sim) {
+  ExternalSimulatorOptions& e = sim->external;
+  e.bit_names = bit_names;
+  e.output_size = sim->outputs.size();
+  // The work folder is the run's (set by the services layer); a placeholder passes IsValid here.
+  e.work_directory = ".";
+  std::string why;
+  if (!e.IsValid(sim->kind, &why)) {
+    const std::string text = why.substr(why.find("::") + 2);
+    const std::string field = text.substr(0, text.find_first_of(" ="));
+    const std::map<std::string, std::string> keys = {
+        {"argv", "argv"}, {"params", "params"}, {"results", "results"}};
+    const auto it = keys.find(field);
+    s.Fail(it != keys.end() ? it->second : "kind", text);
+  }
 }
 
 }  // namespace
@@ -136,53 +187,160 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
     for (int k = 1; k <= 2 * c->model.clamps_per_edge; ++k) {
       c->space.names.push_back("clamp " + std::to_string(k));
     }
-    if (s) s->Finish();  // any other key is for external simulators: reported as unknown
+    if (s) {
+      s->Raw("low_fidelity");  // ParseLowFidelitySection's, once the experiments are known
+      s->Finish();             // any other key is for external simulators: reported as unknown
+    }
     return;
   }
-  if (root.Has("model")) {
+  // [model] configures a cheap sensor too (whatever the expensive simulator is).
+  auto low = s->Table("low_fidelity");
+  const bool cheap_sensor =
+      low &&
+      low->Choice<SimulatorKind>("kind", "simulator kind").value_or(SimulatorKind::kSensor) ==
+          SimulatorKind::kSensor;
+  if (root.Has("model") && !cheap_sensor) {
     root.Fail("model",
               "[model] configures the built-in sensor; a simulator of kind = \"" +
                   std::string(ToString(sim.kind)) +
-                  "\" declares its bits and outputs in [simulator.bits] and [simulator.outputs]");
+                  "\" declares its bits and outputs in [simulator.bits] and [simulator.outputs] "
+                  "([model] is for the built-in sensor, the run's or [simulator.low_fidelity]'s)");
   }
-  ExternalSimulatorOptions& e = sim.external;
-  const auto argv = s->Strings("argv");
-  if (!argv || argv->empty() || argv->front().empty()) {
-    s->Fail("argv",
-            "missing required key: the program and its arguments, e.g. "
-            "[\"python3\", \"{config_dir}/model.py\", \"{params}\"]");
-  }
-  e.argv = *argv;
-  sim.argv_line = s->Line("argv");
-  e.timeout_s = Seconds(*s, "timeout", e.timeout_s);
-  e.retries = s->IntegerIn("retries", e.retries, 0, 100);
-  if (sim.kind == SimulatorKind::kCommand) {
-    e.params = s->Choice<Transport>("params", "parameter hand-over").value_or(e.params);
-    if (e.params == Transport::kStdout) s->Fail("params", "must be \"file\" or \"stdin\"");
-    e.params_format = s->Choice<DataFormat>("params_format", "format").value_or(e.params_format);
-    e.results = s->Choice<Transport>("results", "result hand-over").value_or(e.results);
-    if (e.results == Transport::kStdin) s->Fail("results", "must be \"stdout\" or \"file\"");
-    e.results_format = s->Choice<DataFormat>("results_format", "format").value_or(e.results_format);
-  } else {
-    e.startup_timeout_s = Seconds(*s, "startup_timeout", e.startup_timeout_s);
-  }
-  ParseBits(*s, c);
-  ParseOutputs(*s, c);
-  e.bit_names = c->space.names;
-  e.output_size = sim.outputs.size();
-  e.config_directory = c->directory;
-  // The work folder is the run's (set by the services layer); a placeholder passes IsValid here.
-  e.work_directory = ".";
-  std::string why;
-  if (!e.IsValid(sim.kind, &why)) {
-    const std::string text = why.substr(why.find("::") + 2);
-    const std::string field = text.substr(0, text.find_first_of(" ="));
-    const std::map<std::string, std::string> keys = {
-        {"argv", "argv"}, {"params", "params"}, {"results", "results"}};
-    const auto it = keys.find(field);
-    s->Fail(it != keys.end() ? it->second : "kind", text);
-  }
+  ParseExternal(*s, c->directory, &sim);
+  c->space.names = ParseBits(*s, &c->bits_key, &c->bits_line);
+  ParseOutputs(*s, c->directory, &sim.outputs);
+  FinishExternal(*s, c->space.names, &sim);
   s->Finish();
+}
+
+namespace {
+
+std::string Metres(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g m", x);
+  return text;
+}
+
+// The cheap sensor: [model] with [simulator.low_fidelity.model] over it, on the run's bits,
+// reals and experiments. Returns each experiment's output coordinates (the expensive ones').
+std::vector<std::vector<double>> ParseCheapSensor(TableReader& t, CalibrationConfig* c) {
+  LowFidelityConfig& low = *c->low_fidelity;
+  if (t.Has("memory_limit_gb")) {
+    t.Fail("memory_limit_gb", "is a top-level key: it bounds the whole run, both models");
+  }
+  if (auto m = t.Table("model")) {
+    for (const char* key : {"load", "output"}) {
+      if (m->Has(key)) {
+        m->Fail(key,
+                "the cheap sensor simulates the run's experiments: their loads, at the expensive "
+                "simulator's output coordinates");
+      }
+    }
+  }
+  // ParseModelSection reads [simulator.low_fidelity.model] over a copy of the run's [model].
+  CalibrationConfig over;
+  over.path = c->path;
+  over.model = c->model;
+  std::map<std::string, Source> sources;
+  ParseModelSection(t, &over, &sources);
+  low.model = over.model;
+  low.model.normalise = c->model.normalise;
+  low.simulator.outputs.name = c->simulator.outputs.name;
+  const int clamps = 2 * low.model.clamps_per_edge;
+  if (clamps != c->space.dimension) {
+    const auto set = sources.find("clamps_per_edge");
+    throw Error(ErrorKind::kConfig,
+                "the cheap sensor has " + std::to_string(clamps) +
+                    " clamps (2 x clamps per edge); the run has " +
+                    std::to_string(c->space.dimension) +
+                    " bits: the cheap simulator takes the same bits",
+                c->path,
+                set != sources.end() ? set->second.line : t.line(),
+                set != sources.end() ? set->second.key : t.prefix());
+  }
+  for (const ContinuousParameter& r : c->reals) {
+    if (!plate::FindSensorVariationField(r.name)) {
+      t.Fail("kind",
+             "the cheap sensor has no continuous parameter " + Excerpt(r.name) + " ([parameters." +
+                 r.name + "]): the cheap simulator takes the run's reals");
+    }
+  }
+  std::vector<std::vector<double>> coordinates;
+  for (const ExperimentConfig& x : c->experiments) {
+    for (double y : x.output_coordinates) {
+      if (!(y >= 0.0 && y <= low.model.length)) {
+        t.Fail("kind",
+               "the expensive simulator's output at " + Metres(y) +
+                   " lies off the cheap sensor's plate (0 to " + Metres(low.model.length) + ")");
+      }
+    }
+    coordinates.push_back(x.output_coordinates);
+  }
+  for (const SensorModelPlan& plan : LowFidelitySensorModels(*c)) {
+    std::string why;
+    if (!plan.options.IsValid(&why)) ThrowModelError(why, sources, t.line(), c->path);
+  }
+  return coordinates;
+}
+
+}  // namespace
+
+void ParseLowFidelitySection(TableReader& root, CalibrationConfig* c) {
+  auto s = root.Table("simulator");
+  auto t = s ? s->Table("low_fidelity") : std::nullopt;
+  if (!t) return;
+  c->low_fidelity.emplace();
+  LowFidelityConfig& low = *c->low_fidelity;
+  low.line = t->line();
+  SimulatorConfig& sim = low.simulator;
+  sim.kind = t->Choice<SimulatorKind>("kind", "simulator kind").value_or(SimulatorKind::kSensor);
+  std::vector<std::vector<double>> cheap;  // each experiment's cheap output coordinates
+  std::string outputs_key = "kind";
+  if (sim.kind == SimulatorKind::kSensor) {
+    cheap = ParseCheapSensor(*t, c);
+  } else {
+    ParseExternal(*t, c->directory, &sim);
+    std::string bits_key;
+    int bits_line = 0;
+    const std::vector<std::string> names = ParseBits(*t, &bits_key, &bits_line);
+    if (static_cast<int>(names.size()) != c->space.dimension) {
+      throw Error(ErrorKind::kConfig,
+                  "declares " + std::to_string(names.size()) + " bits; the run has " +
+                      std::to_string(c->space.dimension) +
+                      ": the cheap simulator takes the same bits",
+                  c->path,
+                  bits_line,
+                  bits_key);
+    }
+    ParseOutputs(*t, c->directory, &sim.outputs);
+    FinishExternal(*t, names, &sim);
+    for (const ContinuousParameter& r : c->reals) sim.external.real_names.push_back(r.name);
+    if (c->experiments.front().line == 0) {
+      RefuseExperimentPlaceholders(sim.external.argv, sim.argv_line, t->Key("argv"), c->path);
+    }
+    cheap.assign(c->experiments.size(), sim.outputs.coordinates);
+    outputs_key = "outputs";
+  }
+  // Every expensive output stands for the cheap output of its experiment at its coordinate.
+  constexpr double kTolerance = 1e-9;  // metres
+  int offset = 0;
+  for (std::size_t e = 0; e < c->experiments.size(); ++e) {
+    const ExperimentConfig& x = c->experiments[e];
+    const std::vector<double>& mine = cheap[e];
+    for (double y : x.output_coordinates) {
+      auto it = std::lower_bound(mine.begin(), mine.end(), y - kTolerance);
+      if (it == mine.end() || *it > y + kTolerance) {
+        t->Fail(outputs_key,
+                "has no output at " + Metres(y) +
+                    (x.name.empty() ? "" : " (experiment " + Excerpt(x.name) + ")") +
+                    ", where the expensive simulator has one: every expensive output coordinate "
+                    "must be among the cheap simulator's (to 1e-9 m)");
+      }
+      low.output_map.push_back(offset + static_cast<int>(it - mine.begin()));
+    }
+    offset += static_cast<int>(mine.size());
+  }
+  t->Finish();
 }
 
 }  // namespace combabc::config_internal

@@ -109,6 +109,11 @@ Answer SummariseAnswer(const RunMetadata& m,
   a.waves = static_cast<int>(h.waves.size());
   for (const WaveRecord& w : h.waves) {
     a.per_wave.push_back({w.wave + 1, w.ess, w.candidates, w.complete});
+    a.simulations += w.candidates;
+    if (w.multi_fidelity) {
+      a.expensive_simulations =
+          a.expensive_simulations.value_or(0) + w.multi_fidelity->expensive_simulations;
+    }
   }
   const WaveRecord* w = AnswerWave(h);
   if (w == nullptr) return a;
@@ -175,6 +180,9 @@ std::string AnswerJson(const Answer& a, int indent) {
   out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
   out += in2 + "\"particles\": " + std::to_string(a.particles) + ",\n";
   out += in2 + "\"distinct\": " + std::to_string(a.distinct) + ",\n";
+  if (a.expensive_simulations) {
+    out += in2 + "\"expensive_simulations\": " + std::to_string(*a.expensive_simulations) + ",\n";
+  }
   out += in2 + "\"per_wave\": [";
   for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
     const WaveEffort& e = a.per_wave[t];
@@ -367,6 +375,19 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
         " " + std::to_string(k + 1) + ". " + Pad(mass, 11) + "  " + Bits(a, c.bits, sensor) + "\n";
   }
   EffortTable(a, out);
+  if (a.expensive_simulations) {
+    const double share = a.simulations > 0 ? 100.0 * static_cast<double>(*a.expensive_simulations) /
+                                                 static_cast<double>(a.simulations)
+                                           : 0.0;
+    std::snprintf(line,
+                  sizeof line,
+                  " multi-fidelity: %lld expensive simulations for %lld candidates (%.1f %%), "
+                  "each of which ran the cheap simulator\n",
+                  static_cast<long long>(*a.expensive_simulations),
+                  static_cast<long long>(a.simulations),
+                  share);
+    out += line;
+  }
   return out;
 }
 

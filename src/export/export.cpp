@@ -1,6 +1,7 @@
 // Export of a run history to CSV + JSON (files and columns: docs/history.md, "Export").
 #include "combabc/export/export.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
@@ -126,6 +127,13 @@ std::vector<std::string> ExperimentOfEach(const std::vector<ExperimentSlice>& sl
   return names;
 }
 
+// A multi-fidelity run: one of its waves ran a low-fidelity simulator. Only then do the exported
+// files have the multi-fidelity columns and summary.json its "multi_fidelity" block.
+bool MultiFidelity(const RunHistory& h) {
+  return std::any_of(
+      h.waves.begin(), h.waves.end(), [](const WaveRecord& w) { return w.multi_fidelity; });
+}
+
 // Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
 // database keeps the engine's 0-based numbers).
 int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
@@ -140,6 +148,12 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
   for (const ContinuousParameter& r : m.reals) {
     out << ',' << CsvField(r.name + "_mean") << ',' << CsvField(r.name + "_sd");
   }
+  // A multi-fidelity run's continuation probabilities and costs, after everything else.
+  const bool fidelity = MultiFidelity(h);
+  if (fidelity) {
+    out << ",continue_if_accepted,continue_if_rejected,expensive_simulations,cheap_seconds,"
+           "expensive_seconds,next_continue_if_accepted,next_continue_if_rejected,cost_ratio";
+  }
   out << '\n';
   for (const WaveRecord& w : h.waves) {
     out << WaveNumber(w);
@@ -153,6 +167,13 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
       // A wave that accepted nothing has no estimates.
       out << ',' << (i < w.reals_mean.size() ? Number(w.reals_mean[i]) : "NaN") << ','
           << (i < w.reals_sd.size() ? Number(w.reals_sd[i]) : "NaN");
+    }
+    if (fidelity) {
+      const WaveFidelity f = w.multi_fidelity.value_or(WaveFidelity{});
+      out << ',' << Number(f.continue_if_accepted) << ',' << Number(f.continue_if_rejected) << ','
+          << f.expensive_simulations << ',' << Number(f.cheap_seconds) << ','
+          << Number(f.expensive_seconds) << ',' << Number(f.next_continue_if_accepted) << ','
+          << Number(f.next_continue_if_rejected) << ',' << Number(f.cost_ratio);
     }
     out << '\n';
   }
@@ -206,7 +227,15 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
   // theta is the bits and then the reals, one column each, named by the parameter.
   for (const ContinuousParameter& r : m.reals) out << ',' << CsvField(r.name);
   out << ",log_weight,weight";
-  for (const std::string& name : DistanceColumns(m, components)) out << ',' << name;
+  const std::vector<std::string> distance_columns = DistanceColumns(m, components);
+  for (const std::string& name : distance_columns) out << ',' << name;
+  // A multi-fidelity run's multiplier, confirmed (0/1) and cheap distances (low_distance_<c>),
+  // last: a single-fidelity run's file keeps its columns.
+  const bool fidelity = MultiFidelity(h);
+  if (fidelity) {
+    out << ",multiplier,confirmed";
+    for (const std::string& name : distance_columns) out << ",low_distance_" << name.substr(2);
+  }
   out << '\n';
   std::string bits;
   for (const WaveRecord& w : h.waves) {
@@ -221,6 +250,12 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
       out << ',' << Number(p.log_weight) << ',' << Number(p.weight);
       for (std::size_t c = 0; c < components; ++c) {
         out << ',' << (c < p.distance.size() ? Number(p.distance[c]) : "NaN");
+      }
+      if (fidelity) {
+        out << ',' << Number(p.multiplier) << ',' << (p.confirmed ? 1 : 0);
+        for (std::size_t c = 0; c < components; ++c) {
+          out << ',' << (c < p.low_distance.size() ? Number(p.low_distance[c]) : "NaN");
+        }
       }
       out << '\n';
     }
@@ -291,6 +326,46 @@ void WriteExperiments(OutputDirectory& dir, const RunMetadata& m) {
         << x.measured << ',' << x.components << ',' << x.first_output << ',' << x.first_measured
         << '\n';
   }
+}
+
+// summary.json's "multi_fidelity": per wave and in total the cheap simulations (every candidate
+// ran the cheap simulator), the expensive ones, the seconds each took, and ESS per second of both;
+// per wave its continuation probabilities, those tuned for the next wave and the cost ratio
+// assumed. The total's ESS per second is the answer's wave's (answer_wave, from 1) over the whole
+// run's seconds.
+std::string MultiFidelityJson(const RunHistory& h, int answer_wave) {
+  std::string out = "{\"waves\": [";
+  WaveFidelity total;
+  std::int64_t cheap = 0;
+  for (std::size_t t = 0; t < h.waves.size(); ++t) {
+    const WaveRecord& w = h.waves[t];
+    const WaveFidelity f = w.multi_fidelity.value_or(WaveFidelity{});
+    cheap += w.candidates;
+    total.expensive_simulations += f.expensive_simulations;
+    total.cheap_seconds += f.cheap_seconds;
+    total.expensive_seconds += f.expensive_seconds;
+    out += std::string(t ? "," : "") + "\n    {\"wave\": " + std::to_string(WaveNumber(w)) +
+           ", \"continue_if_accepted\": " + JsonNumber(f.continue_if_accepted) +
+           ", \"continue_if_rejected\": " + JsonNumber(f.continue_if_rejected) +
+           ", \"cheap_simulations\": " + std::to_string(w.candidates) +
+           ", \"expensive_simulations\": " + std::to_string(f.expensive_simulations) +
+           ", \"cheap_seconds\": " + JsonNumber(f.cheap_seconds) +
+           ", \"expensive_seconds\": " + JsonNumber(f.expensive_seconds) +
+           ", \"ess_per_second\": " + JsonNumber(w.ess / (f.cheap_seconds + f.expensive_seconds)) +
+           ",\n     \"next_continue_if_accepted\": " + JsonNumber(f.next_continue_if_accepted) +
+           ", \"next_continue_if_rejected\": " + JsonNumber(f.next_continue_if_rejected) +
+           ", \"cost_ratio\": " + JsonNumber(f.cost_ratio) + "}";
+  }
+  double ess = 0.0;
+  for (const WaveRecord& w : h.waves) ess = WaveNumber(w) == answer_wave ? w.ess : ess;
+  out +=
+      "\n  ], \"total\": {\"cheap_simulations\": " + std::to_string(cheap) +
+      ", \"expensive_simulations\": " + std::to_string(total.expensive_simulations) +
+      ", \"cheap_seconds\": " + JsonNumber(total.cheap_seconds) +
+      ", \"expensive_seconds\": " + JsonNumber(total.expensive_seconds) +
+      ", \"ess_per_second\": " + JsonNumber(ess / (total.cheap_seconds + total.expensive_seconds)) +
+      "}}";
+  return out;
 }
 
 void WriteSummary(OutputDirectory& dir,
@@ -387,7 +462,12 @@ void WriteSummary(OutputDirectory& dir,
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
         << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
   }
-  out << "\n  ],\n  \"answer\": " << AnswerJson(SummariseAnswer(m, h, positions))
+  const Answer answer = SummariseAnswer(m, h, positions);
+  out << "\n  ],";
+  if (MultiFidelity(h)) {
+    out << "\n  \"multi_fidelity\": " << MultiFidelityJson(h, answer.wave) << ',';
+  }
+  out << "\n  \"answer\": " << AnswerJson(answer)
       << ",\n  \"checks\": " << FitChecksJson(ComputeFitChecks(m, h), 2) << "\n}\n";
 }
 

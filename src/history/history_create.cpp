@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 6).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 7).
 #include <unistd.h>
 
 #include <cerrno>
@@ -28,11 +28,12 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 6 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// Version 7 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
 // meta; version 2 the tables real and proposal, the reals columns and the fingerprint; version 3
 // the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
 // wave_count, which adds no table; version 5 the table experiment, created apart as
-// kSchemaV6Tables). Every table and index here is listed in ExpectedObjects
+// kSchemaV6Tables; version 6 the multi-fidelity columns, added to an older file by
+// kSchemaV7Columns). Every table and index here is listed in ExpectedObjects
 // (history_verify.cpp), which refuses any other schema object in a history. Vectors of
 // doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
 // and JSON would not guarantee); bits are packed.
@@ -94,7 +95,17 @@ CREATE TABLE wave (
   content_hash TEXT,
   reals_mean BLOB,
   reals_sd BLOB,
-  failures INTEGER NOT NULL DEFAULT 0
+  failures INTEGER NOT NULL DEFAULT 0,
+  continue_if_accepted REAL,
+  continue_if_rejected REAL,
+  expensive_simulations INTEGER,
+  cheap_seconds REAL,
+  expensive_seconds REAL,
+  unkept_false_positives INTEGER,
+  unkept_false_positive_log_w2 REAL,
+  next_continue_if_accepted REAL,
+  next_continue_if_rejected REAL,
+  cost_ratio REAL
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -105,6 +116,9 @@ CREATE TABLE particle (
   distance BLOB,
   output BLOB,
   reals BLOB,
+  multiplier REAL,
+  confirmed INTEGER,
+  low_distance BLOB,
   PRIMARY KEY (wave, candidate)
 );
 )sql";
@@ -158,6 +172,24 @@ CREATE TABLE experiment (
   measured INTEGER NOT NULL,
   components INTEGER NOT NULL
 );
+)sql";
+
+// Added by version 7 to an older file (a new one has them in kSchema): the multi-fidelity columns,
+// NULL in a single-fidelity run (docs/history.md, "Multi-fidelity runs").
+constexpr const char* kSchemaV7Columns = R"sql(
+ALTER TABLE wave ADD COLUMN continue_if_accepted REAL;
+ALTER TABLE wave ADD COLUMN continue_if_rejected REAL;
+ALTER TABLE wave ADD COLUMN expensive_simulations INTEGER;
+ALTER TABLE wave ADD COLUMN cheap_seconds REAL;
+ALTER TABLE wave ADD COLUMN expensive_seconds REAL;
+ALTER TABLE wave ADD COLUMN unkept_false_positives INTEGER;
+ALTER TABLE wave ADD COLUMN unkept_false_positive_log_w2 REAL;
+ALTER TABLE wave ADD COLUMN next_continue_if_accepted REAL;
+ALTER TABLE wave ADD COLUMN next_continue_if_rejected REAL;
+ALTER TABLE wave ADD COLUMN cost_ratio REAL;
+ALTER TABLE particle ADD COLUMN multiplier REAL;
+ALTER TABLE particle ADD COLUMN confirmed INTEGER;
+ALTER TABLE particle ADD COLUMN low_distance BLOB;
 )sql";
 
 // What an older file upgraded to v6 (and a RunMetadata without experiments) holds: one unnamed
@@ -527,7 +559,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // on open; the new checksums protect it from here on. A v1 run's earlier waves did not record
   // their overshoot (0). An older run has no reals, ran the default (independent) kernels, and
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
-  // nor (before v4) any failed simulation; and (before v6) it had a single, unnamed experiment.
+  // nor (before v4) any failed simulation; (before v6) it had a single, unnamed experiment; and
+  // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL).
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {
@@ -554,12 +587,14 @@ void HistoryStore::Impl::MigrateToCurrent() {
     db.Exec(kSchemaV6Tables);
     db.Exec(kInsertSingleExperiment);
   }
+  if (schema_version < 7) db.Exec(kSchemaV7Columns);
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))
               .c_str());
   schema_version = kHistorySchemaVersion;
-  // A wave's checksum changed form up to v4; a v4 wave's stands (it is checked when read).
+  // A wave's checksum changed form up to v4; a v4 wave's stands (it is checked when read), and so
+  // does it in v7, whose checksums skip multi-fidelity columns that are all NULL.
   if (from < 4) {
     std::vector<int> waves;
     Statement rows(db, "SELECT wave FROM wave ORDER BY wave");

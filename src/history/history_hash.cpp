@@ -21,6 +21,16 @@ void AddRows(Fnv1a64& hash, Database& db, const char* sql, int columns) {
   hash.AddInt(count);
 }
 
+// Columns [first, first + count) of `row` are all NULL: the multi-fidelity columns of a
+// single-fidelity run (schema v7), which its checksums skip, so that the checksum of a wave written
+// before v7 stands after the file is upgraded.
+bool AllNull(const Statement& row, int first, int count) {
+  for (int c = first; c < first + count; ++c) {
+    if (!row.IsNull(c)) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 void Fnv1a64::Add(const void* data, std::size_t size) {
@@ -154,7 +164,11 @@ std::uint64_t RunStateHash(Database& db, int schema_version) {
 }
 
 void WaveHasher::AddParticle(const Statement& particle_row) {
-  hash_.AddColumns(particle_row, 0, v3_ ? kParticleColumnCount : kParticleColumnCountV2);
+  const int columns = v3_ ? kParticleColumnCountV3 : kParticleColumnCountV2;
+  hash_.AddColumns(particle_row, 0, columns);
+  if (v7_ && !AllNull(particle_row, columns, kParticleColumnCount - columns)) {
+    hash_.AddColumns(particle_row, columns, kParticleColumnCount - columns);
+  }
   ++count_;
 }
 
@@ -172,6 +186,9 @@ std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
     hash.AddColumn(wave_row, kWaveFailuresColumn);
     hash.AddInt(static_cast<std::int64_t>(failure_hash_.value()));
     hash.AddInt(failures_);
+  }
+  if (v7_ && !AllNull(wave_row, kWaveFidelityColumn, kWaveFidelityColumnCount)) {
+    hash.AddColumns(wave_row, kWaveFidelityColumn, kWaveFidelityColumnCount);
   }
   return hash.value();
 }

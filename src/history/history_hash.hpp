@@ -39,22 +39,32 @@ std::uint64_t MetadataHash(Database& db, int schema_version);
 std::uint64_t RunStateHash(Database& db, int schema_version);
 
 // The particle rows of one wave, fed in candidate order (the state a wave's checksum starts from).
-// Schema v3 added `reals`, last, so that a v2 checksum is the same hash over the first six.
+// Schema v3 added `reals`, last, so that a v2 checksum is the same hash over the first six; v7
+// the multi-fidelity columns after it (NULL in a single-fidelity run, and then not hashed),
+// likewise.
 inline constexpr const char* kParticleColumns =
-    "candidate, bits, log_weight, weight, distance, output, reals";
+    "candidate, bits, log_weight, weight, distance, output, reals, multiplier, confirmed, "
+    "low_distance";
 inline constexpr int kParticleColumnCountV2 = 6;
-inline constexpr int kParticleColumnCount = 7;
+inline constexpr int kParticleColumnCountV3 = 7;
+inline constexpr int kParticleColumnCount = 10;
 // The wave row's columns in checksum order: the first 21, then (v3) reals_mean and reals_sd after
-// content_hash, which is not hashed itself, then (v4) the failure count. Older files select
+// content_hash, which is not hashed itself, then (v4) the failure count, then (v7) the
+// multi-fidelity columns (NULL in a single-fidelity run, and then not hashed). Older files select
 // constants in their place.
 inline constexpr const char* kWaveColumns =
     "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
     "marginals_importance, ess, distinct_count, wall_seconds, ended_at, discarded, content_hash, "
-    "reals_mean, reals_sd, failures";
+    "reals_mean, reals_sd, failures, continue_if_accepted, continue_if_rejected, "
+    "expensive_simulations, cheap_seconds, expensive_seconds, unkept_false_positives, "
+    "unkept_false_positive_log_w2, next_continue_if_accepted, "
+    "next_continue_if_rejected, cost_ratio";
 inline constexpr int kWaveHashedColumnCount = 21;
 inline constexpr int kWaveRealsColumn = 22;     // reals_mean, then reals_sd (hashed from v3)
 inline constexpr int kWaveFailuresColumn = 24;  // hashed from v4
+inline constexpr int kWaveFidelityColumn = 25;  // the 10 multi-fidelity columns (hashed from v7)
+inline constexpr int kWaveFidelityColumnCount = 10;
 
 // The failure rows of one wave, fed in candidate order after its particles (schema v4).
 inline constexpr const char* kFailureColumns = "candidate, reason";
@@ -65,7 +75,8 @@ inline constexpr int kFailureColumnCount = 2;
 class WaveHasher {
  public:
   WaveHasher() = default;  // the current schema: what writers produce
-  explicit WaveHasher(int schema_version) : v3_(schema_version >= 3), v4_(schema_version >= 4) {}
+  explicit WaveHasher(int schema_version)
+      : v3_(schema_version >= 3), v4_(schema_version >= 4), v7_(schema_version >= 7) {}
   void AddParticle(const Statement& particle_row);
   // v4: after every particle; failures are hashed apart so that the two can be fed in turn.
   void AddFailure(const Statement& failure_row);
@@ -79,6 +90,7 @@ class WaveHasher {
   std::int64_t failures_ = 0;
   bool v3_ = true;
   bool v4_ = true;
+  bool v7_ = true;
 };
 
 }  // namespace combabc::history

@@ -3,8 +3,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "combabc/core/error.hpp"
+#include "combabc/samplers/multi_fidelity.hpp"
 #include "history/history_impl.hpp"
 
 namespace combabc {
@@ -39,10 +41,31 @@ enum WaveColumn {
   kRealsMean,
   kRealsSd,
   kFailures,
+  kContinueIfAccepted,
+  kContinueIfRejected,
+  kExpensiveSimulations,
+  kCheapSeconds,
+  kExpensiveSeconds,
+  kUnkeptFalsePositives,
+  kUnkeptFalsePositiveLogW2,
+  kNextContinueIfAccepted,
+  kNextContinueIfRejected,
+  kCostRatio,
 };
 
 // Columns of history::kParticleColumns.
-enum ParticleColumn { kCandidate, kBits, kLogWeight, kWeight, kDistance, kOutput, kReals };
+enum ParticleColumn {
+  kCandidate,
+  kBits,
+  kLogWeight,
+  kWeight,
+  kDistance,
+  kOutput,
+  kReals,
+  kMultiplier,
+  kConfirmed,
+  kLowDistance,
+};
 
 // Reads one wave's fields, each checked against what the run's metadata say it must measure.
 // Errors name the file, the wave (numbered from 1, as users see it) and the field.
@@ -67,6 +90,23 @@ class WaveReader {
     const std::int64_t value = row.Int(column);
     if (value < 0) Corrupt(field, "is negative (" + std::to_string(value) + ")");
     if (value > kMaxCount) Corrupt(field, "is implausibly large (" + std::to_string(value) + ")");
+    return value;
+  }
+
+  // A finite number that `valid` accepts (NULL is corrupt); `expected` says what it must be.
+  template <typename Valid>
+  double Real(const Statement& row,
+              int column,
+              const char* field,
+              Valid valid,
+              const char* expected) const {
+    if (row.IsNull(column)) Corrupt(field, "is NULL");
+    const int type = row.Type(column);
+    const double value = row.Real(column);
+    if ((type != SQLITE_FLOAT && type != SQLITE_INTEGER) || !std::isfinite(value) ||
+        !valid(value)) {
+      Corrupt(field, "is '" + row.Text(column) + "', not " + expected);
+    }
     return value;
   }
 
@@ -115,10 +155,128 @@ class WaveReader {
   int wave_;
 };
 
+bool IsProbability(double value) { return value > 0.0 && value <= 1.0; }
+bool IsNonNegative(double value) { return value >= 0.0; }
+
+// A wave's multi-fidelity columns (schema v7): nullopt when they are NULL (a single-fidelity run).
+// Its next_* and cost_ratio are recorded when the wave ends; a wave not ended keeps the defaults.
+std::optional<WaveFidelity> ReadFidelity(const WaveReader& check,
+                                         const Statement& row,
+                                         std::int64_t candidates,
+                                         bool ended) {
+  if (row.IsNull(kContinueIfAccepted)) {
+    for (int c = kContinueIfRejected; c <= kCostRatio; ++c) {
+      if (!row.IsNull(c)) {
+        check.Corrupt("continue_if_accepted",
+                      "is NULL, but the wave's other multi-fidelity columns are not");
+      }
+    }
+    return std::nullopt;
+  }
+  constexpr const char* kProbability = "a probability in (0, 1]";
+  constexpr const char* kSeconds = "a number of seconds >= 0";
+  WaveFidelity f;
+  f.continue_if_accepted =
+      check.Real(row, kContinueIfAccepted, "continue_if_accepted", IsProbability, kProbability);
+  f.continue_if_rejected =
+      check.Real(row, kContinueIfRejected, "continue_if_rejected", IsProbability, kProbability);
+  f.expensive_simulations = check.Count(row, kExpensiveSimulations, "expensive_simulations");
+  if (f.expensive_simulations > candidates) {
+    check.Corrupt("expensive_simulations",
+                  "counts " + std::to_string(f.expensive_simulations) +
+                      " expensive simulations, more than the wave's " + std::to_string(candidates) +
+                      " candidates");
+  }
+  f.cheap_seconds = check.Real(row, kCheapSeconds, "cheap_seconds", IsNonNegative, kSeconds);
+  f.expensive_seconds =
+      check.Real(row, kExpensiveSeconds, "expensive_seconds", IsNonNegative, kSeconds);
+  f.unkept_false_positives = check.Count(row, kUnkeptFalsePositives, "unkept_false_positives");
+  if (f.unkept_false_positives > f.expensive_simulations) {
+    check.Corrupt("unkept_false_positives",
+                  "counts " + std::to_string(f.unkept_false_positives) +
+                      " false positives, more than the wave's " +
+                      std::to_string(f.expensive_simulations) + " expensive simulations");
+  }
+  // log sum of squared weights: -inf exactly when there is none.
+  const int type = row.IsNull(kUnkeptFalsePositiveLogW2) ? SQLITE_NULL
+                                                          : row.Type(kUnkeptFalsePositiveLogW2);
+  f.unkept_false_positive_log_w2 =
+      type == SQLITE_NULL ? 0.0 : row.Real(kUnkeptFalsePositiveLogW2);
+  const bool none = f.unkept_false_positives == 0;
+  if ((type != SQLITE_FLOAT && type != SQLITE_INTEGER) ||
+      none != (f.unkept_false_positive_log_w2 == -std::numeric_limits<double>::infinity()) ||
+      std::isnan(f.unkept_false_positive_log_w2) ||
+      f.unkept_false_positive_log_w2 == std::numeric_limits<double>::infinity()) {
+    check.Corrupt("unkept_false_positive_log_w2",
+                  "is '" + row.Text(kUnkeptFalsePositiveLogW2) +
+                      "', not -Inf for no false positive or a finite log sum for some");
+  }
+  if (ended && !row.IsNull(kNextContinueIfAccepted)) {
+    f.next_continue_if_accepted = check.Real(
+        row, kNextContinueIfAccepted, "next_continue_if_accepted", IsProbability, kProbability);
+    f.next_continue_if_rejected = check.Real(
+        row, kNextContinueIfRejected, "next_continue_if_rejected", IsProbability, kProbability);
+    f.cost_ratio =
+        check.Real(row, kCostRatio, "cost_ratio", IsNonNegative, "a cost ratio >= 0 (0: measured)");
+  }
+  return f;
+}
+
+// A particle's multi-fidelity columns: all NULL in a single-fidelity wave; in a multi-fidelity one
+// its cheap distance (one value per component), whether it was confirmed, and a multiplier that
+// MultiFidelityMultiplier gives under the wave's continuation probabilities: 1 unconfirmed, else
+// 1 (both accepted), 1 - 1/eta_1 (the expensive model rejected a cheap acceptance) or 1/eta_2
+// (it accepted a cheap rejection).
+void ReadParticleFidelity(const WaveReader& check,
+                          const Statement& row,
+                          const std::optional<WaveFidelity>& fidelity,
+                          const std::string& who,
+                          std::size_t components,
+                          Particle& p) {
+  if (!fidelity) {
+    if (!row.IsNull(kMultiplier) || !row.IsNull(kConfirmed) || !row.IsNull(kLowDistance)) {
+      check.Corrupt(who + " multiplier",
+                    "has multi-fidelity columns in a wave without continuation probabilities");
+    }
+    return;
+  }
+  const std::string per_component = std::to_string(components) + " (one per distance component)";
+  p.low_distance = check.Doubles(
+      row, kLowDistance, components, components, who + " low_distance", per_component);
+  if (row.Type(kConfirmed) != SQLITE_INTEGER ||
+      (row.Int(kConfirmed) != 0 && row.Int(kConfirmed) != 1)) {
+    check.Corrupt(who + " confirmed", "is '" + row.Text(kConfirmed) + "', not 0 or 1");
+  }
+  p.confirmed = row.Int(kConfirmed) != 0;
+  const std::string field = who + " multiplier";
+  p.multiplier = check.Real(
+      row, kMultiplier, field.c_str(), [](double) { return true; }, "a finite number");
+  MultiFidelityOptions etas;
+  etas.continue_if_accepted = fidelity->continue_if_accepted;
+  etas.continue_if_rejected = fidelity->continue_if_rejected;
+  const bool consistent =
+      p.confirmed ? p.multiplier == MultiFidelityMultiplier(etas, true, true, true) ||
+                        p.multiplier == MultiFidelityMultiplier(etas, true, true, false) ||
+                        p.multiplier == MultiFidelityMultiplier(etas, false, true, true)
+                  : p.multiplier == 1.0;
+  if (!consistent || p.multiplier == 0.0) {
+    check.Corrupt(field,
+                  "is " + row.Text(kMultiplier) + ", which no " +
+                      (p.confirmed ? "confirmed" : "unconfirmed") +
+                      " particle has under the wave's continuation probabilities");
+  }
+}
+
 }  // namespace
 
 std::string HistoryStore::Impl::WaveSelect() const {
   std::string columns = history::kWaveColumns;
+  // Before version 7 no run had a low-fidelity simulator: its multi-fidelity columns are NULL.
+  const std::size_t fidelity = columns.find(", continue_if_accepted");
+  const std::string tail = has_multi_fidelity()
+                               ? columns.substr(fidelity)
+                               : ", NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL";
+  columns.erase(fidelity);
   if (!checksummed()) {
     // Version 1 had neither column: no overshoot recorded, no checksum; nor any reals.
     columns.replace(
@@ -128,13 +286,16 @@ std::string HistoryStore::Impl::WaveSelect() const {
   } else if (!has_failures()) {
     columns.replace(columns.rfind("failures"), std::string::npos, "0");  // none recorded
   }
-  return "SELECT " + columns + " FROM wave";
+  return "SELECT " + columns + tail + " FROM wave";
 }
 
 std::string HistoryStore::Impl::ParticleSelect() const {
   std::string columns = history::kParticleColumns;
-  // Before version 3 a particle had no reals.
-  if (!has_reals()) columns.replace(columns.find("reals"), std::string::npos, "NULL");
+  // Before version 7 a particle had no multi-fidelity columns, and before version 3 no reals.
+  if (!has_multi_fidelity()) {
+    columns.replace(columns.find("multiplier"), std::string::npos, "NULL, NULL, NULL");
+  }
+  if (!has_reals()) columns.replace(columns.find("reals"), 5, "NULL");
   return "SELECT " + columns + " FROM particle";
 }
 
@@ -211,6 +372,8 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
                                                : 0.0;
   }
 
+  wave.multi_fidelity = ReadFidelity(check, row, wave.candidates, ended);
+
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);
   history::WaveHasher hasher(schema_version);
@@ -218,6 +381,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
       std::to_string(shape.components) + " (one per distance component)";
   const std::string output_count =
       "0 or " + std::to_string(shape.outputs) + " (one per output position)";
+  std::int64_t confirmed = 0;
   while (particles.Step()) {
     hasher.AddParticle(particles);
     Particle p;
@@ -253,7 +417,16 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
         check.Corrupt(who + " reals", "value " + std::to_string(i + 1) + " is not finite");
       }
     }
+    ReadParticleFidelity(check, particles, wave.multi_fidelity, who, shape.components, p);
+    confirmed += p.confirmed ? 1 : 0;
     wave.particles.push_back(std::move(p));
+  }
+  // Each confirmed particle ran the expensive simulator.
+  if (wave.multi_fidelity && confirmed > wave.multi_fidelity->expensive_simulations) {
+    check.Corrupt("expensive_simulations",
+                  "counts " + std::to_string(wave.multi_fidelity->expensive_simulations) +
+                      " expensive simulations, fewer than the wave's " + std::to_string(confirmed) +
+                      " confirmed particles");
   }
   // Not stored: recomputed from the stored bits and weights as the run computed them, so a loaded
   // wave's equal the run's.
@@ -426,6 +599,7 @@ ResumePoint HistoryStore::LoadResumePoint() const {
       point.partial_accepted = std::move(partial.particles);
       point.partial_discarded = partial.discarded;
       point.partial_failures = std::move(partial.failures);
+      point.partial_fidelity = partial.multi_fidelity;
     }
     rows.Reset();
     break;
@@ -525,12 +699,14 @@ ResumePoint HistoryStore::BeginResume(
         Statement beyond_failures(impl.db,
                                   "DELETE FROM failure WHERE wave = ?1 AND candidate >= ?2");
         beyond_failures.Bind(1, partial->wave).Bind(2, partial->next_index).Run();
-        // Its end-of-wave statistics (an interrupted wave) are rewritten when it really ends.
+        // Its end-of-wave statistics (an interrupted wave) are rewritten when it really ends; its
+        // multi-fidelity costs are its last batch's (the wave ended where that batch did).
         Statement reopen(impl.db, R"sql(
           UPDATE wave SET ended = 0, complete = 0, candidates = NULL, accepted = NULL,
             acceptance_rate = NULL, marginals_paper = NULL, marginals_importance = NULL,
             ess = NULL, distinct_count = NULL, wall_seconds = NULL, ended_at = NULL,
-            reals_mean = NULL, reals_sd = NULL
+            reals_mean = NULL, reals_sd = NULL, next_continue_if_accepted = NULL,
+            next_continue_if_rejected = NULL, cost_ratio = NULL
           WHERE wave = ?1)sql");
         reopen.Bind(1, partial->wave).Run();
         impl.chain.wave = -1;

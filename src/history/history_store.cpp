@@ -13,32 +13,53 @@ using history::PackDoubles;
 using history::Statement;
 using history::Transaction;
 
+// A multi-fidelity wave starts with its continuation probabilities and no cost; recorded again
+// (resume, OnWaveEnd), it keeps the costs its batches recorded.
 constexpr const char* kUpsertWave = R"sql(
-INSERT INTO wave (wave, thresholds, phi, proposal, started_at) VALUES (?1, ?2, ?3, ?4, ?5)
+INSERT INTO wave (wave, thresholds, phi, proposal, started_at, continue_if_accepted,
+  continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
+  unkept_false_positives, unkept_false_positive_log_w2)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)
 ON CONFLICT (wave) DO UPDATE SET
-  thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal
+  thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal,
+  continue_if_accepted = excluded.continue_if_accepted,
+  continue_if_rejected = excluded.continue_if_rejected
 )sql";
 
 // Re-sending a particle (OnWaveEnd's normalised weights) replaces it, but an output already stored
 // is kept when the new record carries none.
 constexpr const char* kUpsertParticle = R"sql(
-INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output, reals)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)
+INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output, reals,
+  multiplier, confirmed, low_distance)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)
 ON CONFLICT (wave, candidate) DO UPDATE SET
   bits = excluded.bits, log_weight = excluded.log_weight, weight = excluded.weight,
   distance = excluded.distance, output = COALESCE(excluded.output, particle.output),
-  reals = excluded.reals
+  reals = excluded.reals, multiplier = excluded.multiplier, confirmed = excluded.confirmed,
+  low_distance = excluded.low_distance
 )sql";
 
+// A multi-fidelity batch also records the wave's costs so far (BatchProgress::fidelity); a
+// single-fidelity one binds NULL there and leaves the columns as they are.
 constexpr const char* kUpdateProgress = R"sql(
 UPDATE wave SET next_index = ?2, accepted_so_far = ?3, accepted_needed = ?4,
-  total_simulations = ?5, discarded = ?6, failures = ?7 WHERE wave = ?1
+  total_simulations = ?5, discarded = ?6, failures = ?7,
+  continue_if_accepted = COALESCE(?8, continue_if_accepted),
+  continue_if_rejected = COALESCE(?9, continue_if_rejected),
+  expensive_simulations = COALESCE(?10, expensive_simulations),
+  cheap_seconds = COALESCE(?11, cheap_seconds),
+  expensive_seconds = COALESCE(?12, expensive_seconds),
+  unkept_false_positives = COALESCE(?13, unkept_false_positives),
+  unkept_false_positive_log_w2 = COALESCE(?14, unkept_false_positive_log_w2)
+WHERE wave = ?1
 )sql";
 
 constexpr const char* kUpsertFailure = R"sql(
 INSERT OR REPLACE INTO failure (wave, candidate, reason) VALUES (?1, ?2, ?3)
 )sql";
 
+// A particle of a multi-fidelity run has a cheap distance; in a single-fidelity run its
+// multi-fidelity columns are NULL.
 void BindParticle(Statement& s, int wave, const Particle& p) {
   s.Bind(1, wave)
       .Bind(2, p.index)
@@ -48,6 +69,32 @@ void BindParticle(Statement& s, int wave, const Particle& p) {
       .BindBlob(6, PackDoubles(p.distance))
       .BindBlob(7, PackDoubles(p.output))
       .BindBlob(8, PackDoubles(p.theta.reals));
+  if (!p.low_distance.empty()) {
+    s.Bind(9, p.multiplier).Bind(10, p.confirmed ? 1 : 0).BindBlob(11, PackDoubles(p.low_distance));
+  } else {
+    s.BindNull(9).BindNull(10).BindNull(11);
+  }
+}
+
+// The multi-fidelity columns from `first` on: the continuation probabilities, the expensive count
+// and the two costs, then (`ended`) the next wave's probabilities and the cost ratio; NULL without.
+void BindFidelity(Statement& s, int first, const std::optional<WaveFidelity>& f, bool ended) {
+  if (f) {
+    s.Bind(first, f->continue_if_accepted)
+        .Bind(first + 1, f->continue_if_rejected)
+        .Bind(first + 2, f->expensive_simulations)
+        .Bind(first + 3, f->cheap_seconds)
+        .Bind(first + 4, f->expensive_seconds)
+        .Bind(first + 5, f->unkept_false_positives)
+        .Bind(first + 6, f->unkept_false_positive_log_w2);
+    if (ended) {
+      s.Bind(first + 7, f->next_continue_if_accepted)
+          .Bind(first + 8, f->next_continue_if_rejected)
+          .Bind(first + 9, f->cost_ratio);
+    }
+    return;
+  }
+  for (int c = first; c < first + (ended ? 10 : 7); ++c) s.BindNull(c);
 }
 
 // A wrong bit or real count would only surface when the run is read back; refuse it when written.
@@ -73,8 +120,9 @@ void UpsertWave(history::Database& db, const WaveRecord& wave) {
       .BindBlob(2, PackDoubles(wave.thresholds))
       .Bind(3, wave.phi)
       .BindBlob(4, PackDoubles(wave.proposal))
-      .Bind(5, history::UtcNow())
-      .Run();
+      .Bind(5, history::UtcNow());
+  BindFidelity(s, 6, wave.multi_fidelity, /*ended=*/false);
+  s.Run();
 }
 
 }  // namespace
@@ -160,8 +208,9 @@ void HistoryStore::OnBatch(const BatchProgress& progress, std::span<const Partic
       .Bind(4, progress.accepted_needed)
       .Bind(5, progress.total_simulations)
       .Bind(6, progress.discarded)
-      .Bind(7, progress.failures)
-      .Run();
+      .Bind(7, progress.failures);
+  BindFidelity(*impl.update_progress, 8, progress.fidelity, /*ended=*/false);
+  impl.update_progress->Run();
   if (impl.db.Changes() == 0) {
     throw Error(ErrorKind::kSoftware,
                 "batch for wave " + std::to_string(progress.wave) + " before its OnWaveStart",
@@ -191,7 +240,10 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
     UPDATE wave SET ended = 1, complete = ?2, candidates = ?3, accepted = ?4,
       acceptance_rate = ?5, marginals_paper = ?6, marginals_importance = ?7, ess = ?8,
       distinct_count = ?9, wall_seconds = ?10, ended_at = ?11, discarded = ?12, reals_mean = ?13,
-      reals_sd = ?14, failures = ?15
+      reals_sd = ?14, failures = ?15, continue_if_accepted = ?16, continue_if_rejected = ?17,
+      expensive_simulations = ?18, cheap_seconds = ?19, expensive_seconds = ?20,
+      unkept_false_positives = ?21, unkept_false_positive_log_w2 = ?22,
+      next_continue_if_accepted = ?23, next_continue_if_rejected = ?24, cost_ratio = ?25
     WHERE wave = ?1)sql");
   end.Bind(1, wave.wave)
       .Bind(2, wave.complete ? 1 : 0)
@@ -207,8 +259,9 @@ void HistoryStore::OnWaveEnd(const WaveRecord& wave) {
       .Bind(12, wave.discarded)
       .BindBlob(13, PackDoubles(wave.reals_mean))
       .BindBlob(14, PackDoubles(wave.reals_sd))
-      .Bind(15, static_cast<std::int64_t>(wave.failures.size()))
-      .Run();
+      .Bind(15, static_cast<std::int64_t>(wave.failures.size()));
+  BindFidelity(end, 16, wave.multi_fidelity, /*ended=*/true);
+  end.Run();
   impl.InsertFailures(wave.wave, wave.failures);
   // Like its particles, the wave's final list of failures is the truth.
   Statement beyond(impl.db, "DELETE FROM failure WHERE wave = ?1 AND candidate >= ?2");

@@ -1,6 +1,7 @@
 #include "samplers/candidate_batch.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -41,6 +42,7 @@ void CandidateBatch::Evaluate(Executor& executor,
   distances_.resize(n * c_);
   low_distances_.assign(n * c_, std::numeric_limits<double>::quiet_NaN());
   fidelity_.assign(n, 0);
+  seconds_.assign(n * 2, 0.0);
   log_weights_.resize(n);
   uniforms_.resize(n);
   status_.assign(n, 0);
@@ -62,8 +64,10 @@ std::vector<BatchTask::Buffer> CandidateBatch::Results() {
           {uniforms_.data(), sizeof(double)},
           {status_.data(), 1},
           {reasons_.data(), kFailureReasonBytes},
-          {low_distances_.data(), c_ * sizeof(double)},
-          {fidelity_.data(), 1}};
+          // Multi-fidelity only: without a low-fidelity stage they hold nothing to gather.
+          {low_distances_.data(), low_fidelity_ ? c_ * sizeof(double) : 0},
+          {fidelity_.data(), low_fidelity_ ? 1U : 0U},
+          {seconds_.data(), low_fidelity_ ? 2 * sizeof(double) : 0}};
 }
 
 std::string_view CandidateBatch::reason(std::int64_t i) const {
@@ -116,13 +120,18 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
                              std::span<const double>(reals_.data() + begin * r_, count * r_)};
   auto failures = BatchFailures(std::span(status_), std::span(reasons_)).Sub(begin, count);
   // The cheap simulator first when there is one: every candidate runs it.
-  SimulateAndMeasure(low_fidelity_ ? *low_fidelity_->simulator : simulator_,
-                     batch,
-                     std::span(rngs_.data() + begin, count),
-                     std::span(outputs_.data() + begin * m_, count * m_),
-                     std::span(distances_.data() + begin * c_, count * c_),
-                     failures,
-                     which);
+  const double seconds = SimulateAndMeasure(low_fidelity_ ? *low_fidelity_->simulator : simulator_,
+                                            batch,
+                                            std::span(rngs_.data() + begin, count),
+                                            std::span(outputs_.data() + begin * m_, count * m_),
+                                            std::span(distances_.data() + begin * c_, count * c_),
+                                            failures,
+                                            which);
+  if (low_fidelity_) {
+    for (std::size_t i = begin; i < end; ++i) {
+      seconds_[i * 2] = seconds / static_cast<double>(count);
+    }
+  }
   for (std::size_t i = begin; i < end; ++i) {
     // After the simulator's draws, so that they do not depend on whether it is drawn.
     uniforms_[i] = draw_uniform_ ? rngs_[i].Uniform() : 0.0;
@@ -130,23 +139,26 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
   if (low_fidelity_) ContinueWithExpensive(begin, end, which);
 }
 
-void CandidateBatch::SimulateAndMeasure(const Simulator& simulator,
-                                        const ParameterBatch& batch,
-                                        std::span<RandomStream> rngs,
-                                        std::span<double> outputs,
-                                        std::span<double> distances,
-                                        BatchFailures& failures,
-                                        const std::string& which) const {
+double CandidateBatch::SimulateAndMeasure(const Simulator& simulator,
+                                          const ParameterBatch& batch,
+                                          std::span<RandomStream> rngs,
+                                          std::span<double> outputs,
+                                          std::span<double> distances,
+                                          BatchFailures& failures,
+                                          const std::string& which) const {
   const std::size_t n = batch.count;
   auto fail = [&](std::size_t i, std::string_view reason) {
     if (!failures.failed(i)) failures.Fail(i, reason);
   };
+  const auto start = std::chrono::steady_clock::now();
   try {
     simulator.SimulateBatch(batch, rngs, outputs, failures);
   } catch (const std::exception& e) {
     // Not a SimulationFailed of one candidate (SimulateBatch handles those): a defect.
     throw Error(ErrorKind::kSoftware, std::string("simulator failed: ") + e.what(), "", 0, which);
   }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (std::size_t i = 0; i < n; ++i) {
     if (failures.failed(i)) continue;
     // A NaN output is the simulation's failure (a diverged solve, an unreadable value), not the
@@ -180,6 +192,7 @@ void CandidateBatch::SimulateAndMeasure(const Simulator& simulator,
       }
     }
   }
+  return seconds;
 }
 
 void CandidateBatch::ContinueWithExpensive(std::size_t begin,
@@ -199,8 +212,9 @@ void CandidateBatch::ContinueWithExpensive(std::size_t begin,
     const bool cheap_accepted =
         low_fidelity_->accept(distance(static_cast<std::int64_t>(i)), uniforms_[i]);
     const double eta = cheap_accepted ? options.continue_if_accepted : options.continue_if_rejected;
-    fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (v < eta ? kContinued : 0);
-    if (v < eta) continued.push_back(i);
+    const bool continues = low_fidelity_->confirm && v < eta;
+    fidelity_[i] = (cheap_accepted ? kCheapAccepted : 0) | (continues ? kContinued : 0);
+    if (continues) continued.push_back(i);
   }
   if (continued.empty()) return;
   // The continued candidates, gathered: the expensive simulator sees one dense batch, and each
@@ -223,9 +237,11 @@ void CandidateBatch::ContinueWithExpensive(std::size_t begin,
   }
   const ParameterBatch batch{n, d_, r_, bits, reals};
   auto failures = BatchFailures(std::span(status), std::span(reasons));
-  SimulateAndMeasure(simulator_, batch, rngs, outputs, distances, failures, which);
+  const double seconds =
+      SimulateAndMeasure(simulator_, batch, rngs, outputs, distances, failures, which);
   for (std::size_t j = 0; j < n; ++j) {
     const std::size_t i = continued[j];
+    seconds_[i * 2 + 1] = seconds / static_cast<double>(n);
     if (failures.failed(j)) {
       // The candidate's expensive simulation is its simulation: a failure fails the candidate.
       Fail(i, failures.reason(j));

@@ -37,6 +37,9 @@ struct LowFidelityStage {
   const Simulator* simulator = nullptr;
   MultiFidelityOptions options;
   std::function<bool(std::span<const double> distance, double uniform)> accept;
+  // False: no candidate continues (a wave whose every threshold is infinite accepts whatever
+  // either simulator says, so the expensive one could not change a weight).
+  bool confirm = true;
 };
 
 class CandidateBatch : public BatchTask {
@@ -76,8 +79,17 @@ class CandidateBatch : public BatchTask {
   bool continued(std::int64_t i) const {
     return (fidelity_[static_cast<std::size_t>(i)] & kContinued) != 0;
   }
+  // With a low-fidelity stage: the candidate's share of the wall time of the cheap and of the
+  // expensive simulator call that ran it (a call's time shared equally among its candidates; 0
+  // for a candidate the expensive simulator did not run). Not deterministic.
+  double cheap_seconds(std::int64_t i) const { return seconds_[static_cast<std::size_t>(i) * 2]; }
+  double expensive_seconds(std::int64_t i) const {
+    return seconds_[static_cast<std::size_t>(i) * 2 + 1];
+  }
   // The candidate's acceptance uniform on [0, 1) (0 unless draw_uniform).
   double uniform(std::int64_t i) const { return uniforms_[static_cast<std::size_t>(i)]; }
+  // The candidate's log p / q (its importance weight before the multiplier).
+  double log_weight(std::int64_t i) const { return log_weights_[static_cast<std::size_t>(i)]; }
   bool failed(std::int64_t i) const { return status_[static_cast<std::size_t>(i)] != 0; }
   std::string_view reason(std::int64_t i) const;
   Particle MakeParticle(std::int64_t i, std::int64_t index, bool keep_output) const;
@@ -86,8 +98,9 @@ class CandidateBatch : public BatchTask {
   // Per candidate, in this order: bits (d bytes), reals (r doubles), outputs (m doubles),
   // distances (c doubles), log weight (1 double), uniform (1 double), status (1 byte: 0 =
   // simulated, 1 = failed), reason (kFailureReasonBytes, NUL-padded), low-fidelity distances (c
-  // doubles, NaN without a low-fidelity stage), fidelity flags (1 byte: kCheapAccepted |
-  // kContinued). docs/algorithm.md.
+  // doubles), fidelity flags (1 byte: kCheapAccepted | kContinued), simulator seconds (2
+  // doubles: cheap, expensive); the last three are empty rows (0 bytes) without a low-fidelity
+  // stage. docs/algorithm.md.
   std::vector<Buffer> Results() override;
 
  private:
@@ -99,13 +112,14 @@ class CandidateBatch : public BatchTask {
   // Runs `simulator` on `batch` and measures the outputs: rows of m_ outputs and c_ distances; a
   // candidate whose simulation or distance failed is marked in `failures` (the first reason wins)
   // and its distances are NaN. Any other exception throws Error(kSoftware) naming `which`.
-  void SimulateAndMeasure(const Simulator& simulator,
-                          const ParameterBatch& batch,
-                          std::span<RandomStream> rngs,
-                          std::span<double> outputs,
-                          std::span<double> distances,
-                          BatchFailures& failures,
-                          const std::string& which) const;
+  // Returns the wall time of the simulator call, in seconds.
+  double SimulateAndMeasure(const Simulator& simulator,
+                            const ParameterBatch& batch,
+                            std::span<RandomStream> rngs,
+                            std::span<double> outputs,
+                            std::span<double> distances,
+                            BatchFailures& failures,
+                            const std::string& which) const;
   // Candidates [begin, end), measured by the cheap simulator: draws each one's continuation and
   // runs the expensive simulator on those that continue, whose outputs and distances replace
   // the cheap ones.
@@ -124,7 +138,8 @@ class CandidateBatch : public BatchTask {
   WaveProposal proposal_;
   std::vector<std::uint8_t> free_, bits_, status_, fidelity_;
   std::vector<char> reasons_;
-  std::vector<double> reals_, outputs_, distances_, low_distances_, log_weights_, uniforms_;
+  std::vector<double> reals_, outputs_, distances_, low_distances_, log_weights_, uniforms_,
+      seconds_;
   std::vector<RandomStream> rngs_;
 };
 

@@ -11,9 +11,38 @@
 #include "combabc/core/error.hpp"
 #include "combabc/proposals/proposal_options.hpp"
 #include "samplers/candidate_batch.hpp"
+#include "samplers/continuation_tuning.hpp"
 
 namespace combabc {
 namespace {
+
+// log(exp(a) + exp(b)) without overflow; -inf + -inf stays -inf.
+double LogAddExp(double a, double b) {
+  const double hi = std::max(a, b);
+  if (hi == -std::numeric_limits<double>::infinity()) return hi;
+  return hi + std::log1p(std::exp(std::min(a, b) - hi));
+}
+
+// A wave's effective number of accepted candidates, (sum m)^2 / sum m^2 over its particles'
+// multipliers m (docs/algorithm.md, "Multi-fidelity sampling"): a wave ends when it reaches
+// accepted_per_wave. In a single-fidelity run every m is 1 and it is exactly the particle count
+// (k^2 / k in floating point), so the rule is "n accepted"; the signed and 1/eta multipliers of a
+// multi-fidelity run count for less, so that its wave ends at the Monte-Carlo accuracy of n
+// expensive acceptances (Prescott & Baker also end a generation on an ESS).
+class EffectiveCount {
+ public:
+  void Add(double m) {
+    sum_ += m;
+    sum_sq_ += m * m;
+  }
+  // A sum <= 0 (more false-positive weight than agreement so far) is not there yet.
+  bool Reached(int n) const { return sum_ > 0.0 && sum_ * sum_ >= n * sum_sq_; }
+  double value() const { return sum_ > 0.0 ? sum_ * sum_ / sum_sq_ : 0.0; }
+
+ private:
+  double sum_ = 0.0;
+  double sum_sq_ = 0.0;
+};
 
 using Clock = std::chrono::steady_clock;
 
@@ -195,6 +224,11 @@ class SmcRun {
       WaveRecord wave = StartWave(t, previous, history.waves);
       std::int64_t next_index = 0;
       if (resume && resume->has_partial && resume->partial_wave == t) {
+        // Its continuation probabilities and costs so far: the wave goes on with the
+        // probabilities it started with.
+        if (low_fidelity_ && resume->partial_fidelity) {
+          wave.multi_fidelity = resume->partial_fidelity;
+        }
         wave.particles = resume->partial_accepted;
         next_index = resume->partial_next_index;
         // Killed after the wave's last batch but before it ended: its overshoot still counts.
@@ -205,7 +239,7 @@ class SmcRun {
         failures_ += static_cast<std::int64_t>(wave.failures.size());
         if (!wave.failures.empty()) last_failure_ = Describe(t, wave.failures.back());
       }
-      const auto stop = RunWave(wave, next_index);
+      const auto stop = RunWave(wave, next_index, history.waves);
       history.waves.push_back(std::move(wave));
       if (stop) return Finish(std::move(history), stop->first, stop->second);
       if (AllFinal(history.waves.back())) {
@@ -229,25 +263,36 @@ class SmcRun {
     return components_[threshold_components_[s]].kind == ComponentKind::kNegLogLikelihood;
   }
 
-  WaveRecord StartWave(int t, const WaveRecord* previous, const std::vector<WaveRecord>& done) {
-    WaveRecord wave;
-    wave.wave = t;
+  // Wave t's thresholds, and into `offsets` its m_k per schedule slot, from the waves before it:
+  // `previous` (wave t - 1, null for wave 0) and the `earlier` ones. The one rule for starting a
+  // wave and for tuning the previous wave's continuation probabilities for it.
+  std::vector<double> Thresholds(int t,
+                                 const WaveRecord* previous,
+                                 std::span<const WaveRecord> earlier,
+                                 std::vector<double>& offsets) const {
+    std::vector<double> thresholds;
     std::vector<double> column;
-    offsets_.assign(schedules_.size(), 0.0);
+    offsets.assign(schedules_.size(), 0.0);
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
       const std::size_t k = threshold_components_[s];
       if (IsLikelihood(s)) {
         // m_k: the best likelihood found so far stands in for the unknown max over theta
         // (pyABC's pdf_norm_max_found), so that acceptance at T = 1 is not astronomically rare.
         double best = std::numeric_limits<double>::infinity();
-        for (const auto& w : done) {
+        auto scan = [&](const WaveRecord& w) {
           for (const auto& p : w.particles) best = std::min(best, p.distance[k]);
-        }
-        if (std::isfinite(best)) offsets_[s] = best;
+        };
+        for (const auto& w : earlier) scan(w);
+        if (previous) scan(*previous);
+        if (std::isfinite(best)) offsets[s] = best;
       }
       column.clear();
       if (previous) {
-        for (const auto& p : previous->particles) column.push_back(p.distance[k] - offsets_[s]);
+        // A multi-fidelity wave's particles with a positive multiplier: the population the
+        // kernels fit (docs/algorithm.md, "Multi-fidelity sampling"); all of them otherwise.
+        for (const auto& p : previous->particles) {
+          if (p.multiplier > 0.0) column.push_back(p.distance[k] - offsets[s]);
+        }
       }
       double eps = schedules_[s].ThresholdFor(t, column);
       if (IsLikelihood(s) && schedules_[s].kind == ThresholdKind::kQuantile && previous) {
@@ -256,7 +301,28 @@ class SmcRun {
         eps = std::max(schedules_[s].target,
                        std::min(eps, kMaxTemperatureRatio * previous->thresholds[s]));
       }
-      wave.thresholds.push_back(eps);
+      thresholds.push_back(eps);
+    }
+    return thresholds;
+  }
+
+  WaveRecord StartWave(int t, const WaveRecord* previous, const std::vector<WaveRecord>& done) {
+    WaveRecord wave;
+    wave.wave = t;
+    // `previous` is done's last wave.
+    const std::span<const WaveRecord> earlier(done.data(), previous ? done.size() - 1 : 0);
+    wave.thresholds = Thresholds(t, previous, earlier, offsets_);
+    if (low_fidelity_) {
+      // Wave 0 continues with the options' probabilities, every later wave with those its
+      // previous wave chose for it (stored with it, so that a resumed run needs no recomputing).
+      WaveFidelity fidelity;
+      fidelity.continue_if_accepted = options_.multi_fidelity.continue_if_accepted;
+      fidelity.continue_if_rejected = options_.multi_fidelity.continue_if_rejected;
+      if (previous && previous->multi_fidelity) {
+        fidelity.continue_if_accepted = previous->multi_fidelity->next_continue_if_accepted;
+        fidelity.continue_if_rejected = previous->multi_fidelity->next_continue_if_rejected;
+      }
+      wave.multi_fidelity = fidelity;
     }
     const auto& prior = space_.binary().free_prior_one();
     wave.phi = options_.tempering.Phi(t, options_.num_waves);
@@ -316,27 +382,47 @@ class SmcRun {
   // Whether candidate distances d pass the thresholds eps; likelihood components pass with
   // probability exp(-sum_k (d_k - m_k) / T_k), decided by the candidate's uniform u.
   bool Accept(std::span<const double> d, const std::vector<double>& eps, double u) const {
+    const double log_accept = LogAcceptance(d, eps, offsets_);
+    if (log_accept == -std::numeric_limits<double>::infinity()) return false;
+    return !stochastic_ || u < std::exp(log_accept);
+  }
+
+  // The probability that Accept(d, eps, u) holds for u uniform, with `offsets` the m_k.
+  double AcceptanceProbability(std::span<const double> d,
+                               const std::vector<double>& eps,
+                               const std::vector<double>& offsets) const {
+    const double log_accept = LogAcceptance(d, eps, offsets);
+    if (log_accept == -std::numeric_limits<double>::infinity()) return 0.0;
+    return stochastic_ ? std::exp(log_accept) : 1.0;
+  }
+
+  // -inf when a threshold or indicator component rejects d; else the log of the likelihood
+  // components' acceptance probability (0 without any).
+  double LogAcceptance(std::span<const double> d,
+                       const std::vector<double>& eps,
+                       const std::vector<double>& offsets) const {
+    constexpr double kReject = -std::numeric_limits<double>::infinity();
     double log_accept = 0.0;
     std::size_t s = 0;
     for (std::size_t k = 0; k < components_.size(); ++k) {
       switch (components_[k].kind) {
         case ComponentKind::kThreshold:
-          if (!(d[k] <= eps[s++])) return false;
+          if (!(d[k] <= eps[s++])) return kReject;
           break;
         case ComponentKind::kIndicator:
-          if (d[k] != components_[k].required) return false;
+          if (d[k] != components_[k].required) return kReject;
           break;
         case ComponentKind::kNegLogLikelihood: {
           const double temperature = eps[s];
-          const double excess = d[k] - offsets_[s++];
+          const double excess = d[k] - offsets[s++];
           if (std::isinf(temperature)) break;  // T = inf: the prior's wave accepts all
-          if (!(excess < std::numeric_limits<double>::infinity())) return false;
+          if (!(excess < std::numeric_limits<double>::infinity())) return kReject;
           log_accept -= std::max(excess, 0.0) / temperature;
           break;
         }
       }
     }
-    return !stochastic_ || u < std::exp(log_accept);
+    return log_accept;
   }
 
   // Candidate i's weight multiplier: without a low-fidelity simulator 1 if accepted, 0 if not;
@@ -344,14 +430,21 @@ class SmcRun {
   // wave keeps every candidate whose multiplier is not 0 as a particle: the first n of them in
   // index order are n independent draws given a non-zero multiplier, over which the weighted
   // estimates are the same ratios as over all candidates.
-  double Multiplier(const CandidateBatch& batch,
-                    std::int64_t i,
-                    const std::vector<double>& eps) const {
+  double Multiplier(const CandidateBatch& batch, std::int64_t i, const WaveRecord& wave) const {
+    const auto& eps = wave.thresholds;
     if (!low_fidelity_) return Accept(batch.distance(i), eps, batch.uniform(i)) ? 1.0 : 0.0;
     const bool continued = batch.continued(i);
     const bool expensive_accepted = continued && Accept(batch.distance(i), eps, batch.uniform(i));
     return MultiFidelityMultiplier(
-        options_.multi_fidelity, batch.cheap_accepted(i), continued, expensive_accepted);
+        Continuation(wave), batch.cheap_accepted(i), continued, expensive_accepted);
+  }
+
+  // The multi-fidelity options with the continuation probabilities of `wave`.
+  MultiFidelityOptions Continuation(const WaveRecord& wave) const {
+    MultiFidelityOptions o = options_.multi_fidelity;
+    o.continue_if_accepted = wave.multi_fidelity->continue_if_accepted;
+    o.continue_if_rejected = wave.multi_fidelity->continue_if_rejected;
+    return o;
   }
 
   // The deterministic version for the kernels (OLCM's "still within the next thresholds"): a
@@ -373,22 +466,24 @@ class SmcRun {
   // expected to still need, within bounds set by the measured cost of a simulation. Only how many
   // candidates past the wave's last acceptance get simulated (and discarded) depends on it, never
   // the history: candidates are accepted in index order.
-  std::int64_t BatchSize(const WaveRecord& wave, std::int64_t next_index, double prior_rate) const {
+  // `effective`: the wave's EffectiveCount so far (its particle count in a single-fidelity run).
+  std::int64_t BatchSize(const WaveRecord& wave,
+                         std::int64_t next_index,
+                         double prior_rate,
+                         double effective) const {
     if (options_.batch_size > 0) return options_.batch_size;
     const std::int64_t workers = executor_->concurrency();
     // Cost unknown (the run's first batch, or a resume's): one candidate per worker measures it.
     if (!(cost_s_ > 0.0)) return workers;
-    const auto needed =
-        options_.accepted_per_wave - static_cast<std::int64_t>(wave.particles.size());
+    const double needed =
+        std::max(static_cast<double>(options_.accepted_per_wave) - effective, 1.0);
     // The wave's own rate once it has a few acceptances; before, the previous wave's, which may
     // be far off (thresholds and proposal changed): then only half the candidates it predicts,
     // and the wave's own rate sizes the rest.
     const bool own_rate = wave.particles.size() >= kOwnRateAfter;
     const double rate = std::max(
-        own_rate ? static_cast<double>(wave.particles.size()) / static_cast<double>(next_index)
-                 : prior_rate,
-        1e-4);
-    const auto expected = static_cast<std::int64_t>(std::ceil(static_cast<double>(needed) / rate));
+        own_rate ? std::max(effective, 1.0) / static_cast<double>(next_index) : prior_rate, 1e-4);
+    const auto expected = static_cast<std::int64_t>(std::ceil(needed / rate));
     const std::int64_t wanted = own_rate ? expected + expected / 16 : (expected + 1) / 2;
     // At least kMinBatchSeconds of work per worker, so that the fixed cost of a batch (the
     // checkpoint, about 2 ms, and the executor's synchronisation) stays small: 32 candidates per
@@ -426,8 +521,9 @@ class SmcRun {
                               static_cast<std::int64_t>(wave.particles.size()));
   }
 
-  // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires.
-  Stop RunWave(WaveRecord& wave, std::int64_t next_index) {
+  // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires;
+  // `done` are the waves before it.
+  Stop RunWave(WaveRecord& wave, std::int64_t next_index, std::span<const WaveRecord> done) {
     const auto wave_start = Clock::now();
     const WaveProposal proposal{bit_proposal_.get(), real_proposal_.get(), from_prior_};
     const int n = options_.accepted_per_wave;
@@ -438,10 +534,13 @@ class SmcRun {
     LowFidelityStage stage;
     if (low_fidelity_) {
       stage.simulator = low_fidelity_;
-      stage.options = options_.multi_fidelity;
+      stage.options = Continuation(wave);
       stage.accept = [this, &wave](std::span<const double> d, double u) {
         return Accept(d, wave.thresholds, u);
       };
+      stage.confirm = !std::all_of(wave.thresholds.begin(), wave.thresholds.end(), [](double e) {
+        return e == std::numeric_limits<double>::infinity();
+      });
     }
     CandidateBatch batch(space_,
                          simulator_,
@@ -449,8 +548,10 @@ class SmcRun {
                          components_.size(),
                          stochastic_,
                          low_fidelity_ ? &stage : nullptr);
-    while (static_cast<int>(wave.particles.size()) < n) {
-      std::int64_t size = BatchSize(wave, next_index, prior_rate);
+    EffectiveCount effective;
+    for (const auto& p : wave.particles) effective.Add(p.multiplier);  // a resumed wave's
+    while (!effective.Reached(n)) {
+      std::int64_t size = BatchSize(wave, next_index, prior_rate, effective.value());
       if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
       if (size <= 0) {
         stop = Stop({Termination::kBudgetExhausted, BudgetMessage(options_, wave.wave)});
@@ -465,18 +566,31 @@ class SmcRun {
       std::int64_t consumed = size;
       for (std::int64_t i = 0; i < size; ++i) {
         ++total_;
+        if (low_fidelity_) {
+          // Every candidate ran the cheap simulator (its call time counts, failed or not).
+          auto& fidelity = *wave.multi_fidelity;
+          fidelity.expensive_simulations += batch.continued(i) ? 1 : 0;
+          fidelity.cheap_seconds += batch.cheap_seconds(i);
+          fidelity.expensive_seconds += batch.expensive_seconds(i);
+        }
         if (batch.failed(i)) {
           wave.failures.push_back({next_index + i, std::string(batch.reason(i))});
           ++failures_;
           last_failure_ = Describe(wave.wave, wave.failures.back());
-        } else if (const double multiplier = Multiplier(batch, i, wave.thresholds);
-                   multiplier != 0.0) {
+        } else if (const double multiplier = Multiplier(batch, i, wave); multiplier != 0.0) {
           wave.particles.push_back(batch.MakeParticle(i, next_index + i, options_.keep_outputs));
           wave.particles.back().multiplier = multiplier;
-          if (static_cast<int>(wave.particles.size()) == n) {
+          effective.Add(multiplier);
+          if (effective.Reached(n)) {
             consumed = i + 1;
             break;
           }
+        } else if (low_fidelity_ && batch.continued(i) && batch.cheap_accepted(i)) {
+          // A false positive weighing 0 (eta_1 = 1): no particle, but the tuning needs it.
+          auto& fidelity = *wave.multi_fidelity;
+          ++fidelity.unkept_false_positives;
+          fidelity.unkept_false_positive_log_w2 =
+              LogAddExp(fidelity.unkept_false_positive_log_w2, 2.0 * batch.log_weight(i));
         }
         stop = CheckCandidate(wave, next_index + i);
         if (stop) {
@@ -498,12 +612,13 @@ class SmcRun {
             total_,
             Seconds(start_),
             static_cast<std::int64_t>(wave.failures.size()),
-            std::span<const SimulationFailure>(wave.failures).subspan(failures_before)};
+            std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
+            wave.multi_fidelity};
         observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
       }
       // A candidate's stop (budget, floor, failures) is decided from the gathered result rows,
       // which every worker of a distributed executor holds: all stop after the same batch.
-      if (stop || static_cast<int>(wave.particles.size()) >= n) break;
+      if (stop || effective.Reached(n)) break;
       // The primary's clock and signals decide, so that every worker of a distributed executor
       // stops after the same batch.
       if (executor_->FromPrimary(options_.max_wall_time_s > 0 &&
@@ -519,12 +634,105 @@ class SmcRun {
       }
     }
     wave.candidates = next_index;
-    wave.complete = static_cast<int>(wave.particles.size()) == n;
+    wave.complete = effective.Reached(n);
     ComputeWaveStatistics(wave, options_.estimator);
+    if (low_fidelity_) ChooseNextContinuation(wave, done);
     wave.wall_seconds = Seconds(wave_start);
     last_rate_ = wave.acceptance_rate;
     if (observer_) observer_->OnWaveEnd(wave);
     return stop;
+  }
+
+  // The expensive-to-cheap cost ratio: the options' when set, else measured over the waves
+  // `done` and `wave` (summed call seconds per simulation); 0 when it cannot be measured yet.
+  double CostRatio(const WaveRecord& wave, std::span<const WaveRecord> done) const {
+    if (options_.multi_fidelity.cost_ratio > 0.0) return options_.multi_fidelity.cost_ratio;
+    double cheap_seconds = 0.0;
+    double expensive_seconds = 0.0;
+    double cheap = 0.0;
+    double expensive = 0.0;
+    auto add = [&](const WaveRecord& w) {
+      if (!w.multi_fidelity) return;
+      cheap_seconds += w.multi_fidelity->cheap_seconds;
+      expensive_seconds += w.multi_fidelity->expensive_seconds;
+      cheap += static_cast<double>(w.candidates);
+      expensive += static_cast<double>(w.multi_fidelity->expensive_simulations);
+    };
+    for (const auto& w : done) add(w);
+    add(wave);
+    const double ratio = (expensive_seconds / expensive) / (cheap_seconds / cheap);
+    return std::isfinite(ratio) && ratio > 0.0 ? ratio : 0.0;
+  }
+
+  // Sets wave.multi_fidelity's cost ratio and the continuation probabilities of the next wave
+  // (docs/algorithm.md, "Multi-fidelity sampling"): with adapt, for a complete wave whose cost
+  // ratio is known, Prescott & Baker's optimum estimated from this wave's particles classified
+  // by the next wave's thresholds; else the options' fixed probabilities.
+  void ChooseNextContinuation(WaveRecord& wave, std::span<const WaveRecord> done) const {
+    auto& fidelity = *wave.multi_fidelity;
+    const auto& mf = options_.multi_fidelity;
+    fidelity.cost_ratio = CostRatio(wave, done);
+    fidelity.next_continue_if_accepted =
+        mf.adapt ? fidelity.continue_if_accepted : mf.continue_if_accepted;
+    fidelity.next_continue_if_rejected =
+        mf.adapt ? fidelity.continue_if_rejected : mf.continue_if_rejected;
+    const auto candidates = wave.candidates - static_cast<std::int64_t>(wave.failures.size());
+    // No next wave (the last, or the target reached): nothing to tune for.
+    const bool last = wave.wave + 1 >= options_.num_waves || AllFinal(wave);
+    // Nothing confirmed (a wave of infinite thresholds): no error of the cheap model was seen,
+    // nothing to tune from.
+    if (!mf.adapt || !wave.complete || last || !(fidelity.cost_ratio > 0.0) || candidates <= 0 ||
+        fidelity.expensive_simulations == 0) {
+      return;
+    }
+    // The next wave's thresholds, exactly as StartWave will compute them.
+    std::vector<double> offsets;
+    const auto eps = Thresholds(wave.wave + 1, &wave, done, offsets);
+    ContinuationStatistics statistics;
+    statistics.cost_ratio = fidelity.cost_ratio;
+    double max_lw = -INFINITY;
+    for (const auto& p : wave.particles) max_lw = std::max(max_lw, p.log_weight);
+    double cheap_accepted = 0.0;
+    for (const auto& p : wave.particles) {
+      // The paper's eq. 17 with q = this wave's proposal: w = p / q, outcomes by the next
+      // thresholds, an outcome's indicator replaced by its probability over the acceptance
+      // uniform (the two models share it), a confirmed particle counted 1 / alpha times.
+      const double w = std::exp(p.log_weight - max_lw);
+      const double cheap = AcceptanceProbability(p.low_distance, eps, offsets);
+      cheap_accepted += cheap;
+      statistics.w += w * w * cheap;
+      if (!p.confirmed) continue;
+      const double expensive = AcceptanceProbability(p.distance, eps, offsets);
+      const double inverse_alpha = InverseContinuation(p, wave);
+      statistics.w += w * w * (expensive - cheap) * inverse_alpha;
+      statistics.w_false_positive += w * w * std::max(cheap - expensive, 0.0) * inverse_alpha;
+      statistics.w_false_negative += w * w * std::max(expensive - cheap, 0.0) * inverse_alpha;
+    }
+    // The false positives that weigh 0 are no particles (eta_1 = 1): counted as still accepted
+    // by the cheap model and rejected by the expensive one at the next thresholds, an upper
+    // bound that errs toward confirming more (they add nothing to W: their expensive outcome
+    // is a rejection).
+    const auto& unkept = *wave.multi_fidelity;
+    cheap_accepted += static_cast<double>(unkept.unkept_false_positives);
+    statistics.w_false_positive += std::exp(unkept.unkept_false_positive_log_w2 - 2.0 * max_lw);
+    statistics.cheap_accepted = std::min(cheap_accepted / static_cast<double>(candidates), 1.0);
+    const auto eta = OptimalContinuation(statistics, mf.floor);
+    fidelity.next_continue_if_accepted = eta.continue_if_accepted;
+    fidelity.next_continue_if_rejected = eta.continue_if_rejected;
+  }
+
+  // 1 / the probability with which confirmed particle p of `wave` continued: eta_1 if the cheap
+  // model accepted it, eta_2 if not. Its multiplier tells (1 - 1 / eta_1 < 0: a false positive;
+  // 1: accepted by both; 1 / eta_2: a false negative) unless eta_2 = 1, where both acceptances
+  // give 1: then the cheap distance's acceptance probability at the wave's thresholds weighs
+  // the two (exact for threshold components; the uniform of a likelihood one is not stored).
+  double InverseContinuation(const Particle& p, const WaveRecord& wave) const {
+    const double eta_1 = wave.multi_fidelity->continue_if_accepted;
+    const double eta_2 = wave.multi_fidelity->continue_if_rejected;
+    if (p.multiplier < 0.0 || eta_1 == eta_2) return 1.0 / eta_1;
+    if (eta_2 != 1.0) return p.multiplier == 1.0 ? 1.0 / eta_1 : 1.0 / eta_2;
+    const double accepted = AcceptanceProbability(p.low_distance, wave.thresholds, offsets_);
+    return accepted / eta_1 + (1.0 - accepted) / eta_2;
   }
 
   RunHistory Finish(RunHistory history, Termination termination, std::string message) {

@@ -343,7 +343,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     result.enumerated = next;
     if (observer) {
       const BatchProgress progress{
-          0, next, result.accepted, 0, 0, next, SecondsSince(start), 0, {}};
+          0, next, result.accepted, 0, 0, next, SecondsSince(start), 0, {}, std::nullopt};
       observer->OnBatch(progress, {});
     }
     // The primary's signals decide, so that every worker of a distributed executor stops alike.

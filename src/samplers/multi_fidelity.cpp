@@ -1,5 +1,7 @@
 #include "combabc/samplers/multi_fidelity.hpp"
 
+#include <cmath>
+
 namespace combabc {
 
 bool MultiFidelityOptions::IsValid(std::string* why) const {
@@ -11,8 +13,16 @@ bool MultiFidelityOptions::IsValid(std::string* why) const {
     }
     return false;
   };
-  return probability("continue_if_accepted", continue_if_accepted) &&
-         probability("continue_if_rejected", continue_if_rejected);
+  if (!probability("continue_if_accepted", continue_if_accepted) ||
+      !probability("continue_if_rejected", continue_if_rejected) || !probability("floor", floor)) {
+    return false;
+  }
+  if (cost_ratio >= 0.0 && std::isfinite(cost_ratio)) return true;
+  if (why) {
+    *why = "MultiFidelityOptions::cost_ratio = " + std::to_string(cost_ratio) +
+           "; must be > 0, or 0 to measure it";
+  }
+  return false;
 }
 
 double MultiFidelityMultiplier(const MultiFidelityOptions& options,

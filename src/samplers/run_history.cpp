@@ -137,6 +137,7 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
     w[i] = p.multiplier * std::exp(p.log_weight - max_lw);
     paper[i] = p.multiplier;
   }
+  // Returns whether the signed sum was positive.
   auto normalise = [](std::vector<double>& v) {
     double sum = 0.0;
     double sum_abs = 0.0;
@@ -146,14 +147,16 @@ void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator) {
     }
     const double norm = sum > 0.0 ? sum : sum_abs;
     for (auto& x : v) x /= norm;
+    return sum > 0.0;
   };
-  normalise(w);
+  const bool positive_sum = normalise(w);
   normalise(paper);
   double sum_sq = 0.0;
   for (double x : w) sum_sq += x * x;
   // (sum w)^2 / sum w^2 with the normalised weights; with negative weights it is Prescott &
-  // Baker's effective sample size of a signed estimator.
-  wave.ess = 1.0 / sum_sq;
+  // Baker's effective sample size of a signed estimator (Def. 3), 0 like theirs when the signed
+  // sum is not positive.
+  wave.ess = positive_sum ? 1.0 / sum_sq : 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     auto& p = wave.particles[i];
     p.weight = estimator == Estimator::kPaper ? paper[i] : w[i];
@@ -226,8 +229,35 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
         Differ(x.pair_correlations, y.pair_correlations, w + "pair_correlations", where) ||
         Differ(x.failures, y.failures, w + "failures", where) ||
+        Differ(x.multi_fidelity.has_value(), y.multi_fidelity.has_value(), w + "fidelity", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;
+    }
+    if (x.multi_fidelity) {
+      // Not the call seconds: they are not deterministic.
+      const auto& f = *x.multi_fidelity;
+      const auto& g = *y.multi_fidelity;
+      if (Differ(f.continue_if_accepted, g.continue_if_accepted, w + "eta_1", where) ||
+          Differ(f.continue_if_rejected, g.continue_if_rejected, w + "eta_2", where) ||
+          Differ(f.expensive_simulations,
+                 g.expensive_simulations,
+                 w + "expensive_simulations",
+                 where) ||
+          Differ(
+              f.next_continue_if_accepted, g.next_continue_if_accepted, w + "next eta_1", where) ||
+          Differ(
+              f.next_continue_if_rejected, g.next_continue_if_rejected, w + "next eta_2", where) ||
+          Differ(f.cost_ratio, g.cost_ratio, w + "cost_ratio", where) ||
+          Differ(f.unkept_false_positives,
+                 g.unkept_false_positives,
+                 w + "unkept_false_positives",
+                 where) ||
+          Differ(f.unkept_false_positive_log_w2,
+                 g.unkept_false_positive_log_w2,
+                 w + "unkept_false_positive_log_w2",
+                 where)) {
+        return false;
+      }
     }
     for (std::size_t i = 0; i < x.particles.size(); ++i) {
       const auto& p = x.particles[i];
@@ -239,6 +269,8 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
           Differ(p.log_weight, q.log_weight, pi + "log_weight", where) ||
           Differ(p.weight, q.weight, pi + "weight", where) ||
           Differ(p.multiplier, q.multiplier, pi + "multiplier", where) ||
+          Differ(p.low_distance, q.low_distance, pi + "low_distance", where) ||
+          Differ(p.confirmed, q.confirmed, pi + "confirmed", where) ||
           Differ(p.distance, q.distance, pi + "distance", where) ||
           Differ(p.output, q.output, pi + "output", where)) {
         return false;

@@ -278,6 +278,8 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                     std::string(ToString(c.simulator.kind)),
                 c.path);
   }
+  // A cheap simulator ([simulator.low_fidelity]) is not used: design simulates [model]'s sensor
+  // (docs/config.md, "Multi-fidelity").
   if (!c.reals.empty()) {
     throw Error(ErrorKind::kUsage,
                 "design ranks experiments by what they tell about the bits; remove [parameters] "

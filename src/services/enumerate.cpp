@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <ostream>
 
 #include "combabc/config/config.hpp"
@@ -160,7 +161,8 @@ void WriteEnumeration(const EnumerateRequest& request,
                              result.enumerated,
                              result.wall_seconds,
                              0,
-                             {}};
+                             {},
+                             std::nullopt};
     store.OnBatch(done, wave.particles);
     store.OnWaveEnd(wave);
     store.Finish(summary);
@@ -198,6 +200,11 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   Problem p;
   LoadProblem(request.config_path, request.threads, p);
   CheckEnumerable(p.config);
+  // The exact posterior is the expensive simulator's: a cheap one ([simulator.low_fidelity]) is
+  // neither built nor used.
+  EnumerateOutcome outcome;
+  outcome.low_fidelity_ignored = p.config.low_fidelity.has_value();
+  p.config.low_fidelity.reset();
   MakeExecutor(p, request.executor);
   Executor& executor = *p.executor;
 
@@ -245,7 +252,6 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   });
   BuildModelIn(p, history.string());
 
-  EnumerateOutcome outcome;
   const EnumerationResult result = Enumerate(p.view(), options, progress);
   outcome.configurations = result.configurations;
   outcome.enumerated = result.enumerated;

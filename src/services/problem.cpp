@@ -66,6 +66,8 @@ void BuildModel(Problem& p, const std::string& history_path) {
   // output coordinates and the data before the model is built or anything simulated or stored.
   if (!p.distance) p.distance = MakeDistance(p.config, p.data);
   p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
+  p.low_fidelity =
+      MakeLowFidelitySimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
   p.space.emplace(BinarySpace(p.config.space), p.config.reals);
 }
 
@@ -81,6 +83,7 @@ Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config) {
   inputs.components = p.distance->components();
   inputs.version = COMBABC_VERSION;
   inputs.handshake = p.simulator.handshake;
+  inputs.low_fidelity_handshake = p.low_fidelity.handshake;
   return ComputeFingerprint(inputs);
 }
 

@@ -28,11 +28,14 @@ struct Problem {
   std::unique_ptr<JointDistance> distance;
   std::optional<ParameterSpace> space;
   std::unique_ptr<Executor> executor;
-  BuiltSimulator simulator;  // last: external processes end before anything else goes
+  // Last: external processes end before anything else goes.
+  BuiltSimulator low_fidelity;  // a multi-fidelity run's cheap simulator, else none
+  BuiltSimulator simulator;
 
   SmcProblem view() const {
     SmcProblem v{&*space, simulator.simulator.get(), distance.get()};
     v.executor = executor.get();
+    v.low_fidelity = low_fidelity.simulator.get();
     return v;
   }
 };

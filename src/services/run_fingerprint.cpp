@@ -146,8 +146,7 @@ std::string MetricPart(const CalibrationConfig& config,
 
 // The built-in sensor simulator: every SensorOptions key that changes its output.
 // memory_limit_bytes only decides whether the model may be built.
-std::string SimulatorPart(const CalibrationConfig& config) {
-  const plate::SensorOptions& s = config.model;
+std::string SimulatorPart(const CalibrationConfig& config, const plate::SensorOptions& s) {
   Canonical c;
   c.Add("simulator", "combabc sensor plate");
   c.Add("length", s.length).Add("width", s.width);
@@ -193,8 +192,7 @@ std::string SimulatorPart(const CalibrationConfig& config) {
 
 // An external simulator: what the config says about the program and how it is called (the
 // timeout and retries decide which candidates fail, so they decide the history too).
-std::string ExternalPart(const CalibrationConfig& config) {
-  const SimulatorConfig& s = config.simulator;
+std::string ExternalPart(const CalibrationConfig& config, const SimulatorConfig& s) {
   const ExternalSimulatorOptions& e = s.external;
   Canonical c;
   // Named experiments tell the program their loads: those decide its outputs too.
@@ -225,6 +223,28 @@ std::string OutputsPart(const SimulatorOutputs& o) {
   return c.Digest();
 }
 
+// A multi-fidelity run's cheap simulator (as the parts above describe the expensive one), the
+// outputs it stands for, and the multi-fidelity options. Absent from single-fidelity runs, so
+// their fingerprints are what they were.
+std::string LowFidelityPart(const CalibrationConfig& config, const std::string& handshake) {
+  const LowFidelityConfig& low = *config.low_fidelity;
+  const bool sensor = low.simulator.kind == SimulatorKind::kSensor;
+  Canonical c;
+  c.Add("simulator",
+        sensor ? SimulatorPart(config, low.model) : ExternalPart(config, low.simulator));
+  if (!sensor) c.Add("outputs", OutputsPart(low.simulator.outputs));
+  if (low.simulator.kind == SimulatorKind::kWorker) c.Add("handshake", handshake);
+  c.Add("output_map", static_cast<long long>(low.output_map.size()));
+  for (int k : low.output_map) c.Add("pick", k);
+  const MultiFidelityOptions& mf = config.smc.multi_fidelity;
+  c.Add("continue_if_accepted", mf.continue_if_accepted)
+      .Add("continue_if_rejected", mf.continue_if_rejected)
+      .Add("adapt", mf.adapt)
+      .Add("floor", mf.floor)
+      .Add("cost_ratio", mf.cost_ratio);
+  return c.Digest();
+}
+
 }  // namespace
 
 Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
@@ -237,11 +257,15 @@ Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
       {"space", SpacePart(*in.space)},
       {"data", DataPart(*in.config, in.data)},
       {"metric", MetricPart(*in.config, in.components)},
-      {"simulator", sensor ? SimulatorPart(*in.config) : ExternalPart(*in.config)},
+      {"simulator",
+       sensor ? SimulatorPart(*in.config, in.config->model) : ExternalPart(*in.config, simulator)},
   };
   if (!sensor) parts.emplace_back("simulator_outputs", OutputsPart(simulator.outputs));
   if (simulator.kind == SimulatorKind::kWorker) {
     parts.emplace_back("simulator_handshake", Canonical().Add("handshake", in.handshake).Digest());
+  }
+  if (in.config->low_fidelity) {
+    parts.emplace_back("low_fidelity", LowFidelityPart(*in.config, in.low_fidelity_handshake));
   }
   parts.emplace_back("version", Canonical().Add("combabc", in.version).Digest());
   Canonical combined;
@@ -268,6 +292,11 @@ void CheckResumeFingerprint(const Fingerprint& stored,
       changed.emplace_back("simulator");
       break;
     }
+  }
+  // A cheap simulator added to a single-fidelity run or taken from a multi-fidelity one.
+  if (!before.empty() && before.count("low_fidelity") != current.count("low_fidelity") &&
+      before.count("simulator") != 0) {
+    changed.emplace_back("low_fidelity");
   }
   for (const auto& [part, digest] : stored) {
     const auto found = current.find(part);
@@ -303,6 +332,10 @@ void CheckResumeFingerprint(const Fingerprint& stored,
          "the simulator (its kind, and [model] for the sensor or the program, argv, hand-over, "
          "timeout and retries in [simulator])"},
         {"simulator_outputs", "the simulator's declared outputs ([simulator.outputs])"},
+        {"low_fidelity",
+         "the multi-fidelity set-up (the cheap simulator of [simulator.low_fidelity], whether "
+         "there "
+         "is one, and [sampler.multi_fidelity])"},
     };
     const auto named = what.find(part);
     message = (named != what.end() ? named->second : "the run's " + part) +

@@ -26,10 +26,12 @@ struct FingerprintInputs {
   std::vector<DistanceComponent> components;  // the metric as built
   std::string version;                        // combabc version
   std::string handshake;                      // a worker simulator's handshake line, else empty
+  std::string low_fidelity_handshake;         // the same for a cheap worker simulator
 };
 
 // Parts "sampler", "space", "data", "metric", "simulator", "version", then "combined"; an external
-// simulator adds "simulator_outputs" (its declared outputs) and a worker "simulator_handshake".
+// simulator adds "simulator_outputs" (its declared outputs) and a worker "simulator_handshake"; a
+// multi-fidelity run adds "low_fidelity" (its cheap simulator and [sampler.multi_fidelity]).
 Fingerprint ComputeFingerprint(const FingerprintInputs& inputs);
 
 // Throws combabc::Error(kConfig), one line naming the history file and what changed, when a part

@@ -12,9 +12,28 @@
 namespace combabc::services {
 namespace fs = std::filesystem;
 
-NominalSimulator::NominalSimulator(CalibrationConfig config, const std::string& work_directory)
-    : config_(std::move(config)) {
-  const bool sensor = config_.simulator.kind == SimulatorKind::kSensor;
+namespace {
+
+// Whether the simulator `combabc simulate` runs is the sensor; a config without the cheap
+// simulator asked for is refused (kUsage, naming --low-fidelity).
+bool RunsSensor(const CalibrationConfig& config, bool low_fidelity) {
+  if (low_fidelity && !config.low_fidelity) {
+    throw Error(ErrorKind::kUsage,
+                "--low-fidelity: the config has no cheap simulator ([simulator.low_fidelity])",
+                config.path);
+  }
+  const SimulatorKind kind =
+      low_fidelity ? config.low_fidelity->simulator.kind : config.simulator.kind;
+  return kind == SimulatorKind::kSensor;
+}
+
+}  // namespace
+
+NominalSimulator::NominalSimulator(CalibrationConfig config,
+                                   const std::string& work_directory,
+                                   bool low_fidelity)
+    : config_(std::move(config)), sensor_(RunsSensor(config_, low_fidelity)) {
+  const bool sensor = sensor_;
   // The nominal model: the sensor at its [model] values; an external simulator would need values
   // for its continuous parameters, which are not given here.
   if (!config_.reals.empty() && !sensor) {
@@ -26,7 +45,11 @@ NominalSimulator::NominalSimulator(CalibrationConfig config, const std::string& 
   config_.reals.clear();
   // The sensor's raw amplitude in metres.
   config_.model.normalise = false;
-  simulator_ = MakeSimulator(config_, work_directory).simulator;
+  if (config_.low_fidelity) config_.low_fidelity->model.normalise = false;
+  // The cheap simulator's outputs are those that stand for the expensive one's: the same
+  // coordinates.
+  simulator_ = low_fidelity ? MakeLowFidelitySimulator(config_, work_directory).simulator
+                            : MakeSimulator(config_, work_directory).simulator;
 }
 
 NominalSimulator::~NominalSimulator() = default;
@@ -39,9 +62,7 @@ const std::vector<double>& NominalSimulator::positions() const {
 
 const std::string& NominalSimulator::output_name() const { return config_.simulator.outputs.name; }
 
-bool NominalSimulator::is_sensor() const {
-  return config_.simulator.kind == SimulatorKind::kSensor;
-}
+bool NominalSimulator::is_sensor() const { return sensor_; }
 
 std::vector<std::uint8_t> NominalSimulator::ParseBits(const CalibrationConfig& config,
                                                       const std::string& clamps) {
@@ -98,9 +119,10 @@ std::vector<double> NominalSimulator::Simulate(std::span<const std::uint8_t> bit
 void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
                            const std::string& output_csv,
-                           bool overwrite) {
+                           bool overwrite,
+                           bool low_fidelity) {
   CalibrationConfig config = LoadConfig(config_path);
-  const bool sensor = config.simulator.kind == SimulatorKind::kSensor;
+  const bool sensor = RunsSensor(config, low_fidelity);
   // Checked before the costly precompute.
   if (!config.reals.empty() && !sensor) {
     throw Error(ErrorKind::kUsage,
@@ -114,7 +136,9 @@ void SimulateConfiguration(const std::string& config_path,
   AtomicFile out(output_csv, overwrite);
   const fs::path csv(output_csv);
   const NominalSimulator simulator(
-      std::move(config), (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string());
+      std::move(config),
+      (csv.parent_path() / (csv.stem().string() + ".simulate.work")).string(),
+      low_fidelity);
   const std::vector<double> w = simulator.Simulate(bits);
   const std::vector<double>& x = simulator.positions();
   const std::vector<ExperimentConfig>& experiments = simulator.config().experiments;

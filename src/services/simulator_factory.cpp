@@ -7,6 +7,7 @@
 #include "combabc/simulators/command_simulator.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
 #include "services/experiments_simulator.hpp"
+#include "services/selected_outputs.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -16,31 +17,37 @@ std::string WorkDirectoryOf(const std::string& history_path) {
   return (history.parent_path() / (history.stem().string() + ".work")).string();
 }
 
-BuiltSimulator MakeSimulator(const CalibrationConfig& config,
-                             const std::string& work_directory,
-                             ThreadPool* threads) {
-  BuiltSimulator built;
-  if (config.simulator.kind == SimulatorKind::kSensor) {
-    std::vector<std::string> real_names;
-    for (const auto& r : config.reals) real_names.push_back(r.name);
-    plate::PrecomputeOptions precompute;
-    precompute.pool = threads;
-    precompute.cache_directory = plate::DefaultPrecomputeCache();
-    auto sensor =
-        std::make_unique<SensorSimulator>(SensorModels(config), std::move(real_names), precompute);
-    const int clamps = sensor->num_clamps();
-    if (config.space.dimension != clamps) {
-      throw Error(ErrorKind::kConfig,
-                  "the sampler has " + std::to_string(config.space.dimension) +
-                      " bits; the model has " + std::to_string(clamps) + " clamps",
-                  config.path,
-                  0,
-                  "model");
-    }
-    built.simulator = std::move(sensor);
-    return built;
+namespace {
+
+std::unique_ptr<Simulator> MakeSensor(const CalibrationConfig& config,
+                                      const std::vector<SensorModelPlan>& plans,
+                                      const std::string& key,
+                                      ThreadPool* threads) {
+  std::vector<std::string> real_names;
+  for (const auto& r : config.reals) real_names.push_back(r.name);
+  plate::PrecomputeOptions precompute;
+  precompute.pool = threads;
+  precompute.cache_directory = plate::DefaultPrecomputeCache();
+  auto sensor = std::make_unique<SensorSimulator>(plans, std::move(real_names), precompute);
+  const int clamps = sensor->num_clamps();
+  if (config.space.dimension != clamps) {
+    throw Error(ErrorKind::kConfig,
+                "the sampler has " + std::to_string(config.space.dimension) +
+                    " bits; the model has " + std::to_string(clamps) + " clamps",
+                config.path,
+                0,
+                key);
   }
-  ExternalSimulatorOptions options = config.simulator.external;
+  return sensor;
+}
+
+// A command or worker simulator (`simulator`: the config's [simulator] or its cheap one), one
+// per experiment when the config has [[experiment]] tables.
+BuiltSimulator MakeExternal(const CalibrationConfig& config,
+                            const SimulatorConfig& simulator,
+                            const std::string& work_directory) {
+  BuiltSimulator built;
+  ExternalSimulatorOptions options = simulator.external;
   // The program runs in its own folder: no path handed to it may be relative to combabc's.
   std::error_code ec;
   options.work_directory = fs::absolute(work_directory, ec).lexically_normal().string();
@@ -59,7 +66,7 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config,
         one.experiment = SimulatorExperiment{
             x.name, x.load.load_x, x.load.load_y_fraction, x.load.load_force, x.frequency_hz};
       }
-      if (config.simulator.kind == SimulatorKind::kCommand) {
+      if (simulator.kind == SimulatorKind::kCommand) {
         parts.push_back(std::make_unique<CommandSimulator>(std::move(one)));
       } else {
         auto worker = std::make_unique<WorkerSimulator>(std::move(one));
@@ -76,8 +83,49 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config,
   } catch (const Error& e) {
     if (!e.file().empty()) throw;
     // The program itself (missing, or a worker that does not start) is the argv key's problem.
-    const int line = e.field() == "simulator.argv" ? config.simulator.argv_line : 0;
-    throw Error(e.kind(), e.message(), config.path, line, e.field());
+    const bool cheap = &simulator != &config.simulator;
+    const int line = e.field() == "simulator.argv" ? simulator.argv_line : 0;
+    const std::string field = cheap && e.field() == "simulator.argv"
+                                  ? std::string("simulator.low_fidelity.argv")
+                                  : e.field();
+    throw Error(e.kind(), e.message(), config.path, line, field);
+  }
+  return built;
+}
+
+}  // namespace
+
+BuiltSimulator MakeSimulator(const CalibrationConfig& config,
+                             const std::string& work_directory,
+                             ThreadPool* threads) {
+  if (config.simulator.kind == SimulatorKind::kSensor) {
+    BuiltSimulator built;
+    built.simulator = MakeSensor(config, SensorModels(config), "model", threads);
+    return built;
+  }
+  return MakeExternal(config, config.simulator, work_directory);
+}
+
+BuiltSimulator MakeLowFidelitySimulator(const CalibrationConfig& config,
+                                        const std::string& work_directory,
+                                        ThreadPool* threads) {
+  BuiltSimulator built;
+  if (!config.low_fidelity) return built;
+  const LowFidelityConfig& low = *config.low_fidelity;
+  if (low.simulator.kind == SimulatorKind::kSensor) {
+    built.simulator =
+        MakeSensor(config, LowFidelitySensorModels(config), "simulator.low_fidelity", threads);
+  } else {
+    // Its own folder inside the run's: its calls' folders must not meet the expensive ones'.
+    built =
+        MakeExternal(config, low.simulator, (fs::path(work_directory) / "low_fidelity").string());
+  }
+  bool identity = static_cast<int>(low.output_map.size()) == built.simulator->output_size();
+  for (std::size_t k = 0; identity && k < low.output_map.size(); ++k) {
+    identity = low.output_map[k] == static_cast<int>(k);
+  }
+  if (!identity) {
+    built.simulator = std::make_unique<SelectedOutputs>(std::move(built.simulator), low.output_map);
   }
   return built;
 }

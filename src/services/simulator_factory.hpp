@@ -27,6 +27,13 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config,
                              const std::string& work_directory,
                              ThreadPool* threads = nullptr);
 
+// A multi-fidelity run's cheap simulator ([simulator.low_fidelity]; none without one), its outputs
+// those that stand for the expensive simulator's. An external one works in
+// "<work_directory>/low_fidelity".
+BuiltSimulator MakeLowFidelitySimulator(const CalibrationConfig& config,
+                                        const std::string& work_directory,
+                                        ThreadPool* threads = nullptr);
+
 // The work folder of the run whose history is `history_path`: "<history stem>.work" beside it.
 std::string WorkDirectoryOf(const std::string& history_path);
 

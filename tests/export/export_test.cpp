@@ -11,6 +11,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/export/answer.hpp"
+#include "export/json_text.hpp"
 #include "history/fake_run.hpp"
 #include "support/test_support.hpp"
 
@@ -109,6 +110,8 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   EXPECT_NE(text.str().find("\"marginals_importance\""), std::string::npos);
   EXPECT_NE(text.str().find("{\"wave\": 1,"), std::string::npos) << "waves from 1";
   EXPECT_EQ(text.str().find("{\"wave\": 0,"), std::string::npos);
+  EXPECT_EQ(text.str().find("multi_fidelity"), std::string::npos) << "a single-fidelity run";
+  EXPECT_EQ(text.str().find("expensive"), std::string::npos);
   // The answer (issue 22): the numbers the terminal shows, from the same function of the history.
   const HistoryStore store = HistoryStore::Open(db, true);
   const std::string answer = AnswerJson(SummariseAnswer(store.LoadMetadata(), store.LoadHistory()));
@@ -125,6 +128,85 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
         << "temporary directory left behind";
   }
+}
+
+// A multi-fidelity run: particles.csv gains multiplier, confirmed and low_distance_<component>,
+// waves.csv the continuation probabilities and costs, summary.json its "multi_fidelity" block, and
+// the answer the expensive simulations.
+TEST_F(ExportTest, AMultiFidelityRunGetsItsColumnsAndBlock) {
+  options_.multi_fidelity = true;
+  options_.per_wave = 9;
+  const std::string db = WriteRun(/*outputs=*/false);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+  const HistoryStore store = HistoryStore::Open(db, true);
+  const RunHistory history = store.LoadHistory();
+
+  const auto particles = Lines(out / "particles.csv");
+  EXPECT_EQ(particles[0],
+            "wave,index,bits,clamp 1,clamp 2,clamp 3,clamp 4,clamp 5,clamp 6,log_weight,weight,"
+            "d_least_squares,d_secondary_peak,multiplier,confirmed,low_distance_least_squares,"
+            "low_distance_secondary_peak");
+  ASSERT_EQ(particles.size(), 1u + 2u * 9u);
+  EXPECT_EQ(Fields(particles[1]), Fields(particles[0]));
+  // Particle 1 of wave 1 is confirmed with multiplier 1, particle 4 with 1 / eta_2 = 4.
+  EXPECT_NE(particles[1].find(",1,1,"), std::string::npos) << particles[1];
+  EXPECT_NE(particles[4].find(",4,1,"), std::string::npos) << particles[4];
+  EXPECT_NE(particles[2].find(",1,0,"), std::string::npos) << particles[2];
+
+  const auto waves = Lines(out / "waves.csv");
+  ASSERT_EQ(waves.size(), 3u);
+  EXPECT_EQ(waves[0],
+            "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
+            "wall_seconds,complete,continue_if_accepted,continue_if_rejected,"
+            "expensive_simulations,cheap_seconds,expensive_seconds,next_continue_if_accepted,"
+            "next_continue_if_rejected,cost_ratio");
+  const WaveFidelity& f = *history.waves[0].multi_fidelity;
+  EXPECT_NE(waves[1].find(",0.8,0.25," + std::to_string(f.expensive_simulations) + ","),
+            std::string::npos)
+      << waves[1];
+  EXPECT_EQ(waves[1].substr(waves[1].size() - 11), ",0.9,0.2,50") << waves[1];
+
+  std::ifstream json(out / "summary.json");
+  std::stringstream read;
+  read << json.rdbuf();
+  const std::string text = read.str();
+  const std::int64_t expensive = history.waves[0].multi_fidelity->expensive_simulations +
+                                 history.waves[1].multi_fidelity->expensive_simulations;
+  EXPECT_NE(text.find("\"multi_fidelity\": {\"waves\": [\n    {\"wave\": 1, "
+                      "\"continue_if_accepted\": 0.8, \"continue_if_rejected\": 0.25, "
+                      "\"cheap_simulations\": " +
+                      std::to_string(history.waves[0].candidates) +
+                      ", \"expensive_simulations\": " + std::to_string(f.expensive_simulations)),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("\"total\": {\"cheap_simulations\": " +
+                      std::to_string(history.summary.simulations) +
+                      ", \"expensive_simulations\": " + std::to_string(expensive)),
+            std::string::npos)
+      << text;
+  const double seconds = f.cheap_seconds + f.expensive_seconds;
+  EXPECT_NE(text.find("\"ess_per_second\": " + export_text::Number(history.waves[0].ess / seconds)),
+            std::string::npos);
+  EXPECT_NE(text.find("\"expensive_simulations\": " + std::to_string(expensive) + ",\n"),
+            std::string::npos)
+      << "the answer's count";
+
+  const Answer answer = SummariseAnswer(store.LoadMetadata(), history);
+  ASSERT_TRUE(answer.expensive_simulations.has_value());
+  EXPECT_EQ(*answer.expensive_simulations, expensive);
+  const std::string terminal = AnswerText(answer);
+  EXPECT_NE(terminal.find(" multi-fidelity: " + std::to_string(expensive) +
+                          " expensive simulations for " +
+                          std::to_string(history.summary.simulations) + " candidates ("),
+            std::string::npos)
+      << terminal;
+  options_.multi_fidelity = false;
+  const std::string single = WriteRun(/*outputs=*/false, "single.db");
+  const HistoryStore single_store = HistoryStore::Open(single, true);
+  const std::string plain =
+      AnswerText(SummariseAnswer(single_store.LoadMetadata(), single_store.LoadHistory()));
+  EXPECT_EQ(plain.find("multi-fidelity"), std::string::npos) << plain;
 }
 
 // A run with continuous parameters: a column per real in particles.csv (after the bits), its mean

@@ -170,12 +170,34 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
       std::vector<double> curve = Curve(p.theta.bits, metadata.output_positions);
       p.distance = {distance(curve), 1.0};
       if (p.distance[0] > threshold) continue;
+      if (options.multi_fidelity) {
+        p.low_distance = {1.1 * p.distance[0], 1.0};
+        const auto k = wave.particles.size();
+        p.confirmed = k % 3 == 0;
+        const double confirmed_multipliers[] = {
+            1.0, 1.0 / kFakeContinueIfRejected, 1.0 - 1.0 / kFakeContinueIfAccepted};
+        p.multiplier = p.confirmed ? confirmed_multipliers[(k / 3) % 3] : 1.0;
+      }
       if (options.outputs) p.output = std::move(curve);
       wave.particles.push_back(std::move(p));
     }
     wave.candidates = index;
     wave.complete = static_cast<int>(wave.particles.size()) == options.per_wave;
     wave.wall_seconds = 0.01 * static_cast<double>(index);
+    if (options.multi_fidelity) {
+      WaveFidelity f;
+      f.continue_if_accepted = kFakeContinueIfAccepted;
+      f.continue_if_rejected = kFakeContinueIfRejected;
+      // The confirmed particles and about one in ten of the other candidates.
+      f.expensive_simulations = static_cast<std::int64_t>((wave.particles.size() + 2) / 3) +
+                                (index - static_cast<std::int64_t>(wave.particles.size())) / 10;
+      f.cheap_seconds = 0.002 * static_cast<double>(index);
+      f.expensive_seconds = 0.1 * static_cast<double>(f.expensive_simulations);
+      f.next_continue_if_accepted = 0.9;
+      f.next_continue_if_rejected = 0.2;
+      f.cost_ratio = 50.0;
+      wave.multi_fidelity = f;
+    }
     ComputeWaveStatistics(wave, Estimator::kPaper);
     simulations += wave.candidates;
     std::vector<double> distances;
@@ -202,9 +224,16 @@ void RecordWave(SmcObserver& observer,
                 int stop_after_batches) {
   WaveRecord start = wave;
   start.particles.clear();
+  if (start.multi_fidelity) {
+    WaveFidelity etas;
+    etas.continue_if_accepted = wave.multi_fidelity->continue_if_accepted;
+    etas.continue_if_rejected = wave.multi_fidelity->continue_if_rejected;
+    start.multi_fidelity = etas;
+  }
   observer.OnWaveStart(start);
   std::size_t next = 0;
   std::int64_t accepted = 0;
+  std::int64_t confirmed = 0;
   int batches = 0;
   for (std::int64_t begin = 0; begin < wave.candidates; begin += batch) {
     if (stop_after_batches >= 0 && batches == stop_after_batches) return;
@@ -214,12 +243,25 @@ void RecordWave(SmcObserver& observer,
       in_batch.push_back(wave.particles[next++]);
     }
     accepted += static_cast<std::int64_t>(in_batch.size());
+    for (const Particle& p : in_batch) confirmed += p.confirmed ? 1 : 0;
     BatchProgress progress;
     progress.wave = wave.wave;
     progress.next_index = end;
     progress.accepted = accepted;
     progress.accepted_needed = static_cast<int>(wave.particles.size());
     progress.total_simulations = end;
+    if (wave.multi_fidelity) {
+      // The wave's costs in proportion to its candidates done; at its end, all of them.
+      WaveFidelity f = *start.multi_fidelity;
+      const double done = static_cast<double>(end) / static_cast<double>(wave.candidates);
+      f.expensive_simulations = std::max(
+          confirmed,
+          static_cast<std::int64_t>(
+              std::ceil(done * static_cast<double>(wave.multi_fidelity->expensive_simulations))));
+      f.cheap_seconds = done * wave.multi_fidelity->cheap_seconds;
+      f.expensive_seconds = done * wave.multi_fidelity->expensive_seconds;
+      progress.fidelity = f;
+    }
     observer.OnBatch(progress, in_batch);
     ++batches;
   }

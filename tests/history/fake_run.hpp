@@ -20,8 +20,16 @@ struct FakeRunOptions {
   // Continuous parameters ("stiffness_1", ...: uniform priors on [1e4, 1e5]) drawn per particle;
   // they do not change the curves, only what is stored and exported.
   int reals = 0;
+  // A multi-fidelity run: every third particle confirmed (multiplier 1, 1/eta_2 or 1 - 1/eta_1
+  // in turn), the others not (1); cheap distances 10 % above the expensive ones; each wave's
+  // continuation probabilities (kFakeFidelity) and made-up costs.
+  bool multi_fidelity = false;
   std::uint64_t seed = 7;
 };
+
+// The continuation probabilities of a multi-fidelity fake run's waves: eta_1 = 0.8, eta_2 = 0.25.
+inline constexpr double kFakeContinueIfAccepted = 0.8;
+inline constexpr double kFakeContinueIfRejected = 0.25;
 
 RunMetadata MakeFakeMetadata(const FakeRunOptions& options);
 // Complete waves with statistics from ComputeWaveStatistics (paper estimator).
@@ -29,7 +37,8 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options);
 
 // Feeds `wave` to the observer as the engine would: OnWaveStart, then OnBatch per `batch`
 // candidates (particles grouped by candidate index), then OnWaveEnd unless stop_after_batches >= 0,
-// in which case it stops (as if killed) after that many batches.
+// in which case it stops (as if killed) after that many batches. A multi-fidelity wave's batches
+// carry its costs in proportion to the candidates done (BatchProgress::fidelity).
 void RecordWave(SmcObserver& observer,
                 const WaveRecord& wave,
                 std::int64_t batch,

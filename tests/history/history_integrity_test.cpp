@@ -80,9 +80,36 @@ void RehashMetadataAndRunState(history::Database& db, int version) {
       .Run();
 }
 
+// What a v6 file (before multi-fidelity runs) looks like, made from a v7 one of a single-fidelity
+// run: no multi-fidelity columns (all NULL there), and its checksums as combabc computed them for
+// v6.
+void DowngradeToV6(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  for (const char* column : {"continue_if_accepted",
+                             "continue_if_rejected",
+                             "expensive_simulations",
+                             "cheap_seconds",
+                             "expensive_seconds",
+                             "next_continue_if_accepted",
+                             "next_continue_if_rejected",
+                             "cost_ratio"}) {
+    db.Exec((std::string("ALTER TABLE wave DROP COLUMN ") + column).c_str());
+  }
+  db.Exec(R"sql(
+    ALTER TABLE particle DROP COLUMN multiplier;
+    ALTER TABLE particle DROP COLUMN confirmed;
+    ALTER TABLE particle DROP COLUMN low_distance;
+    UPDATE meta SET value = '6' WHERE key = 'schema_version';
+    PRAGMA user_version = 6;)sql");
+  RehashMetadataAndRunState(db, 6);
+  transaction.Commit();
+}
+
 // What a v5 file (before the experiments were recorded) looks like, made from a v6 one: no table
 // experiment, and its checksums as combabc computed them for v5.
 void DowngradeToV5(const std::string& path) {
+  DowngradeToV6(path);
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
   db.Exec(R"sql(
@@ -164,10 +191,12 @@ void DowngradeToV3(const std::string& path) {
   history::Statement waves(db, ("SELECT " + columns + " FROM wave ORDER BY wave").c_str());
   while (waves.Step()) {
     history::WaveHasher hasher(3);
-    history::Statement particles(db,
-                                 (std::string("SELECT ") + history::kParticleColumns +
-                                  " FROM particle WHERE wave = ?1 ORDER BY candidate")
-                                     .c_str());
+    std::string particle_columns = history::kParticleColumns;
+    particle_columns.erase(particle_columns.find(", multiplier"));  // v7
+    history::Statement particles(
+        db,
+        ("SELECT " + particle_columns + " FROM particle WHERE wave = ?1 ORDER BY candidate")
+            .c_str());
     particles.Bind(1, waves.Int(0));
     while (particles.Step()) hasher.AddParticle(particles);
     digests.emplace_back(waves.Int(0), history::HexDigest(hasher.Finish(waves)));
@@ -674,6 +703,46 @@ TEST_F(HistoryIntegrityTest, ANonFiniteRealIsADataErrorNamingTheParticle) {
     EXPECT_NE(std::string(error.what()).find("is not finite"), std::string::npos) << error.what();
     fs::remove(path);
   }
+}
+
+// A v6 file (before multi-fidelity runs) reads as a single-fidelity run; resuming it upgrades it
+// to v7 without touching its waves' checksums (NULL multi-fidelity columns are not hashed).
+TEST_F(HistoryIntegrityTest, AV6RunReadsAsSingleFidelityAndIsUpgradedToV7OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  const RunHistory before = HistoryStore::Open(path, true).LoadHistory();
+  DowngradeToV6(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 6);
+  const RunHistory v6 = HistoryStore::Open(path, true).LoadHistory();
+  std::string where;
+  EXPECT_TRUE(SameHistory(before, v6, &where)) << where;
+  for (const WaveRecord& wave : v6.waves) {
+    EXPECT_FALSE(wave.multi_fidelity.has_value());
+    for (const Particle& p : wave.particles) EXPECT_TRUE(p.low_distance.empty());
+  }
+  std::string hashes;
+  {
+    history::Database db(path, /*create=*/false, /*read_only=*/true);
+    history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+    rows.Step();
+    hashes = rows.Text(0);
+    rows.Reset();
+  }
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    const ResumePoint point = store.BeginResume();
+    ASSERT_TRUE(point.has_partial);
+    EXPECT_FALSE(point.partial_fidelity.has_value());
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  history::Database db(path, /*create=*/false, /*read_only=*/true);
+  history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+  rows.Step();
+  EXPECT_EQ(rows.Text(0), hashes) << "the complete wave's checksum stands";
+  rows.Reset();
 }
 
 // A v2 file (combabc before continuous parameters) reads as a run without reals that ran the

@@ -211,7 +211,7 @@ TEST_F(HistoryStoreTest, ExperimentsRoundTrip) {
     RecordWave(store, MakeFakeHistory(SmallRun()).waves[0], kBatch);
   }
   const RunMetadata read = HistoryStore::Open(path, /*read_only=*/true).LoadMetadata();
-  EXPECT_EQ(read.schema_version, 6);
+  EXPECT_EQ(read.schema_version, kHistorySchemaVersion);
   ExpectSameExperiments(written.experiments, read.experiments);
   EXPECT_EQ(read.output_positions, written.output_positions) << "still concatenated";
   EXPECT_EQ(read.measured.positions, written.measured.positions);

@@ -54,6 +54,22 @@ struct SimulatorConfig {
   int argv_line = 0;  // the line of simulator.argv, for errors found when the program is started
 };
 
+// [simulator.low_fidelity] (docs/config.md, "Multi-fidelity"): the cheap simulator of a
+// multi-fidelity run (SmcProblem::low_fidelity). It takes the run's bits (the same count) and
+// reals (by name); its outputs stand for the expensive simulator's by coordinate.
+struct LowFidelityConfig {
+  // Its kind and, for command / worker, its program and [simulator.low_fidelity.outputs] (the
+  // coordinates of one experiment, as [simulator.outputs]).
+  SimulatorConfig simulator;
+  // kind = "sensor": [model] with [simulator.low_fidelity.model] over it. It simulates the run's
+  // experiments (their loads) at the expensive simulator's output coordinates.
+  plate::SensorOptions model;
+  // For each output of the expensive simulator, in order, the cheap simulator's output at the
+  // same coordinate (within 1e-9 m) of the same experiment; the cheap one's others are dropped.
+  std::vector<int> output_map;
+  int line = 0;  // the [simulator.low_fidelity] table's line
+};
+
 // One experiment (docs/config.md, "Experiments"): a load and scan of the sensor, its measured data
 // and its metric. A config's [[experiment]] tables list several; the single-experiment keys
 // ([model.load], [model.output], [data], [metric]) are the shorthand for one, named "". The bits
@@ -101,6 +117,9 @@ struct CalibrationConfig {
   std::string description;  // free text, top-level `description`
 
   SimulatorConfig simulator;
+  // A multi-fidelity run's cheap simulator; its options are smc.multi_fidelity
+  // ([sampler.multi_fidelity]).
+  std::optional<LowFidelityConfig> low_fidelity;
   // The sensor simulator, from [model] (kind = "sensor" only); every key not given keeps
   // SensorOptions' default, and model.normalise mirrors data.normalise so Y and Y* are scaled
   // alike. Its one load case and frequency are [model.load] and [model.output]: the shorthand
@@ -135,6 +154,9 @@ struct SensorModelPlan {
   std::vector<std::size_t> experiments;  // the experiment of each load case
 };
 std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config);
+// The same for the cheap sensor of [simulator.low_fidelity] (kind = "sensor"): its model, the
+// experiments' loads, the expensive simulator's output coordinates.
+std::vector<SensorModelPlan> LowFidelitySensorModels(const CalibrationConfig& config);
 
 // Largest config file accepted (docs/config.md, "Limits"): a real config is a few KiB.
 inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;  // 1 MiB

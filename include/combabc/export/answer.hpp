@@ -83,6 +83,10 @@ struct Answer {
   std::vector<AnswerBit> bits;
   std::vector<AnswerConfiguration> top_configurations;  // most probable first, at most 10
   std::vector<WaveEffort> per_wave;
+  // Multi-fidelity runs only (a wave with WaveRecord::multi_fidelity): the expensive simulations
+  // of all waves, among `simulations` candidates, each of which ran the cheap simulator.
+  std::optional<std::int64_t> expensive_simulations;
+  std::int64_t simulations = 0;  // candidates of all waves
 };
 
 // The answer of a loaded history: the last complete wave (or, when no wave is complete, the last
@@ -99,7 +103,8 @@ Answer SummariseAnswer(const RunMetadata& metadata,
 std::string AnswerJson(const Answer& answer, int indent = 2);
 
 // The answer for a terminal: one screen (the sensor's clamps as one table per edge, side by side),
-// then the `configurations` most probable configurations and each wave's ESS and simulations.
+// then the `configurations` most probable configurations and each wave's ESS and simulations, and
+// for a multi-fidelity run one line with its expensive simulations.
 std::string AnswerText(const Answer& answer, std::size_t configurations = 5);
 
 }  // namespace combabc

@@ -25,9 +25,11 @@ namespace combabc {
 // priors, each particle's values, each wave's means and sds), the proposal options and the run's
 // fingerprint; version 4 the failed simulations (table failure, each wave's failure count);
 // version 5 the number of wave rows (meta row wave_count, under the run state's checksum);
-// version 6 the experiments (table experiment). An older file written to (resume) is upgraded to
-// this version.
-inline constexpr int kHistorySchemaVersion = 6;
+// version 6 the experiments (table experiment); version 7 the multi-fidelity columns (each
+// particle's multiplier, confirmed and low_distance, each wave's continuation probabilities and
+// costs), NULL in a single-fidelity run. An older file written to (resume) is upgraded to this
+// version.
+inline constexpr int kHistorySchemaVersion = 7;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise

@@ -26,8 +26,8 @@ struct MultiFidelityOptions {
   // waves' summed call times (not deterministic: set it for bit-for-bit reproducible runs).
   double cost_ratio = 0.0;
 
-  // Both in (0, 1]: a continuation probability of 0 would leave the estimator biased (the
-  // weight divides by it).
+  // The continuation probabilities and the floor in (0, 1] (a continuation probability of 0
+  // would leave the estimator biased: the weight divides by it); cost_ratio finite and >= 0.
   bool IsValid(std::string* why) const;
 };
 

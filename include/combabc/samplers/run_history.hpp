@@ -3,6 +3,7 @@
 // Everything except wall times is a deterministic function of (options, seed): that is the
 // determinism and resume contract (see SameHistory).
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -52,6 +53,12 @@ struct WaveFidelity {
   // SameHistory.
   double cheap_seconds = 0.0;
   double expensive_seconds = 0.0;
+  // The false positives (the cheap simulator accepts, the expensive one rejects) among the
+  // wave's candidates that are not particles because their multiplier is 0 (eta_1 = 1): how many,
+  // and log sum exp(2 log_weight) over them (-inf for none). The tuning of the next wave's eta_1
+  // needs them, and a resumed wave must see the same.
+  std::int64_t unkept_false_positives = 0;
+  double unkept_false_positive_log_w2 = -std::numeric_limits<double>::infinity();
   // Set when the wave ends (complete): the continuation probabilities tuned for the next wave
   // (MultiFidelityOptions::adapt; else the fixed ones) and the expensive-to-cheap cost ratio the
   // tuning assumed. Stored with this wave so that a run resumed between waves goes on with them.

@@ -67,7 +67,7 @@ struct SmcOptions {
   // Keep each accepted particle's simulated output in the history.
   bool keep_outputs = true;
   // The continuation probabilities of a run with a low-fidelity simulator
-  // (SmcProblem::low_fidelity); unused without one. Fixed for every wave.
+  // (SmcProblem::low_fidelity), their tuning, floor and cost ratio; unused without one.
   MultiFidelityOptions multi_fidelity;
 
   bool IsValid(std::string* why) const;

@@ -37,6 +37,9 @@ struct EnumerateOutcome {
   double evidence = 0.0;
   double wall_seconds = 0.0;
   bool interrupted = false;
+  // The config has a cheap simulator ([simulator.low_fidelity]): the enumeration left it out
+  // (it enumerates the expensive simulator).
+  bool low_fidelity_ignored = false;
   // The fit and sanity checks of its one-wave history (docs/history.md, "Checks"); primary only.
   FitChecks checks;
   // The answer in numbers, exact (docs/history.md, "The answer"); as RunOutcome::answer.

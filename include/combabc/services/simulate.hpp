@@ -19,8 +19,12 @@ namespace combabc::services {
 class NominalSimulator {
  public:
   // work_directory: where an external simulator makes its folders. A config whose external
-  // simulator has continuous parameters is refused (kUsage).
-  NominalSimulator(CalibrationConfig config, const std::string& work_directory);
+  // simulator has continuous parameters is refused (kUsage). low_fidelity: the config's cheap
+  // simulator ([simulator.low_fidelity]) instead, at the expensive one's output coordinates (a
+  // config without one is refused, kUsage).
+  NominalSimulator(CalibrationConfig config,
+                   const std::string& work_directory,
+                   bool low_fidelity = false);
   ~NominalSimulator();
   NominalSimulator(const NominalSimulator&) = delete;
   NominalSimulator& operator=(const NominalSimulator&) = delete;
@@ -44,6 +48,7 @@ class NominalSimulator {
 
  private:
   CalibrationConfig config_;
+  bool sensor_ = true;  // the simulator run is the built-in sensor
   std::unique_ptr<Simulator> simulator_;
 };
 
@@ -54,10 +59,11 @@ class NominalSimulator {
 // experiment's profile, each normalised by its own peak, after a column naming the experiment. An
 // external simulator works in
 // "<csv stem>.simulate.work" beside the CSV. An existing output_csv is refused (kCantCreate)
-// unless `overwrite`.
+// unless `overwrite`. low_fidelity: the config's cheap simulator instead (NominalSimulator).
 void SimulateConfiguration(const std::string& config_path,
                            const std::string& clamps,
                            const std::string& output_csv,
-                           bool overwrite = false);
+                           bool overwrite = false,
+                           bool low_fidelity = false);
 
 }  // namespace combabc::services
