@@ -37,8 +37,8 @@ std::string MissingProgram(const std::string& example) {
   return ProgramOnPath("ccx") ? "" : "ccx";
 }
 
-// Examples too slow to run as shipped here (config.toml: about 1,300 CalculiX runs); each runs
-// reduced in a test of its own, named here.
+// Examples too slow to run as shipped here (sensor-multifidelity: about 1,300 CalculiX runs alone,
+// 450-700 multi-fidelity); each runs reduced in a test of its own, named here.
 std::string OwnReducedTest(const std::string& example) {
   if (example == "sensor-multifidelity") return "tests/examples/sensor_multifidelity_test.cpp";
   return {};
