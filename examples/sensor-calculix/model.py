@@ -7,9 +7,11 @@ simulator (docs/simulators.md, "Command simulator").
     python3 model.py --clamps BITS36    # the same for a full 36-clamp configuration
                                         # ('1' = clamp k fixed), for comparisons
 
-The bits of the calibration are two tied clamp pairs: clamp 9 with its facing clamp 27 (40-45 cm)
-and clamp 10 with clamp 28 (45-50 cm), the sections on either side of the load. Every other
-clamp is FIXED_OTHERS (free: the strip is held only by its bed and the two pairs).
+The bits of this example's calibration are two tied clamp pairs: clamp 9 with its facing clamp 27
+(40-45 cm) and clamp 10 with clamp 28 (45-50 cm), the sections on either side of the load. Every
+other clamp is FIXED_OTHERS (free: the strip is held only by its bed and the two pairs). A
+PARAMS.json with 36 bits is read as every clamp's state instead, as the built-in sensor reads its
+bits (examples/sensor-multifidelity: the same bit vector for both models, ties in the config).
 
 Model (each choice mirrors the built-in model's defaults, docs/model.md):
 * 0.90 m x 0.04 m strip, S4 shells (ccx expands them to C3D8I bricks), 0.5 cm x 0.5 cm elements
@@ -76,6 +78,11 @@ def node(i, j):
 
 
 def clamps_from_bits(bits):
+    if len(bits) == 2 * CLAMPS_PER_EDGE:
+        return list(bits)  # every clamp's state, clamp 1 first
+    if len(bits) != len(FREE_BITS):
+        sys.exit(f"PARAMS.json: {len(bits)} bits; expected {len(FREE_BITS)} (the tied pairs) "
+                 f"or {2 * CLAMPS_PER_EDGE} (every clamp)")
     clamps = [1 if FIXED_OTHERS else 0] * (2 * CLAMPS_PER_EDGE)
     for bit, pair in zip(bits, FREE_BITS):
         for k in pair:

@@ -4,17 +4,15 @@
 // 10: clamps 9 + 27 fixed, 10 + 28 free; generate_data.py). Skipped only when `ccx` is not on
 // PATH (scripts/setup.sh installs calculix-ccx, so CI runs it).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "e2e/cli_runner.hpp"
+#include "examples/calculix_support.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -23,33 +21,12 @@ namespace fs = std::filesystem;
 
 const fs::path kExample = fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-calculix";
 
-bool CcxOnPath() {
-  const char* path = std::getenv("PATH");
-  std::stringstream dirs(path == nullptr ? "" : path);
-  for (std::string dir; std::getline(dirs, dir, ':');) {
-    if (!dir.empty() && ::access((fs::path(dir) / "ccx").c_str(), X_OK) == 0) return true;
-  }
-  return false;
-}
-
-std::vector<std::vector<std::string>> ReadCsv(const fs::path& path) {
-  std::vector<std::vector<std::string>> rows;
-  std::ifstream in(path);
-  for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> cells;
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
-}
-
 class SensorCalculix : public ::testing::Test {
  protected:
   SensorCalculix() : dir_("sensor-calculix") {}
 
   void SetUp() override {
-    if (!CcxOnPath()) {
+    if (!ProgramOnPath("ccx")) {
       GTEST_SKIP() << "ccx (CalculiX) is not on PATH; scripts/setup.sh installs calculix-ccx";
     }
     for (const char* file : {"config.toml", "model.py", "data.csv"}) {
