@@ -2,6 +2,7 @@
 determinism across thread counts, and errors raised in Python reaching the caller."""
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -315,3 +316,35 @@ def test_ctrl_c_stops_a_python_run_with_keyboard_interrupt(threads):
         combabc.run(problem(interrupted_once), options(accepted_per_wave=3000), threads=threads)
     # Stopped soon after, not at the end of the run (which takes several thousand calls).
     assert len(calls) < 2000
+
+
+def test_a_budget_stopped_runs_posterior_is_its_last_complete_wave():
+    whole = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a finished run's posterior warns nothing
+        np.testing.assert_array_equal(whole.posterior, whole.waves[-1].marginals)
+    assert whole.posterior_note == "" and whole.posterior_wave is whole.waves[-1]
+    # Stopped halfway through wave 3: waves 1 and 2 complete, wave 3 kept, incomplete.
+    first_two = sum(w.candidates for w in whole.waves[:2])
+    budget = first_two + whole.waves[2].candidates // 2
+    stopped = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50,
+                                             max_simulations=budget))
+    assert stopped.termination == "budget_exhausted"
+    assert [w.complete for w in stopped.waves] == [True, True, False]
+    assert 0 < stopped.waves[2].accepted < 300
+    assert stopped.posterior_wave is stopped.waves[1]
+    assert stopped.wave() is stopped.waves[1]
+    assert stopped.posterior_note == \
+        "the numbers are wave 2's: wave 3 is incomplete (budget_exhausted)"
+    with pytest.warns(UserWarning, match=r"wave 2's: wave 3 is incomplete \(budget_exhausted\)"):
+        posterior = stopped.posterior
+    np.testing.assert_array_equal(posterior, whole.waves[1].marginals)
+    np.testing.assert_array_equal(stopped.curves(), stopped.waves[1].output)
+    assert set(stopped.particles(wave=None)["wave"]) == {1, 2, 3}  # every wave, as recorded
+    # No wave complete: the incomplete first wave answers, and says so.
+    early = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50,
+                                           max_simulations=whole.waves[0].candidates // 2))
+    assert [w.complete for w in early.waves] == [False]
+    assert early.posterior_wave is early.waves[0]
+    with pytest.warns(UserWarning, match="no complete wave"):
+        np.testing.assert_array_equal(early.posterior, early.waves[0].marginals)
