@@ -220,7 +220,9 @@ def enumerate(config, *, thresholds=None, threads=None, output_directory=None, o
     `combabc enumerate` (thresholds: one per threshold component; default the config's final
     ones). Returns the History of its one wave; History.enumeration holds directory (the
     tables), configurations, accepted, evidence and wall_seconds."""
-    data = _core.enumerate(os.fspath(config), [float(t) for t in (thresholds or [])],
+    # Not `thresholds or []`: a NumPy array has no truth value.
+    thresholds = [] if thresholds is None else [float(t) for t in thresholds]
+    data = _core.enumerate(os.fspath(config), thresholds,
                            -1 if threads is None else threads, os.fspath(output_directory or ""),
                            overwrite, report, top, max_particles)
     return History(data)

@@ -567,9 +567,11 @@ int TiedBit(const py::handle& bit, int dimension, const std::vector<std::string>
     }
     return static_cast<int>(found - names.begin());
   }
-  if (!py::isinstance<py::int_>(bit) || py::isinstance<py::bool_>(bit)) {
-    throw py::type_error("BinarySpace: tied holds bit names or numbers (from 1), not " +
-                         std::string(py::str(py::type::of(bit).attr("__name__"))));
+  // An integer is anything with __index__ (Python's int, NumPy's integer scalars) but a bool:
+  // Python's, or NumPy's bool_, whose __index__ NumPy deprecates.
+  const std::string type_name = py::str(py::type::of(bit).attr("__name__"));
+  if (PyIndex_Check(bit.ptr()) == 0 || py::isinstance<py::bool_>(bit) || type_name == "bool_") {
+    throw py::type_error("BinarySpace: tied holds bit names or numbers (from 1), not " + type_name);
   }
   const auto number = bit.cast<long long>();
   if (number < 1 || number > dimension) {

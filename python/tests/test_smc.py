@@ -266,6 +266,11 @@ def test_numpy_scalars_are_numbers_everywhere():
     same_history(numpy_run, python_run)
     assert combabc.BinarySpace(dimension=2, prior_one=[np.float32(0.25), np.int64(1)]) \
         .bit_prior_one == [0.25, 1.0]
+    tied = combabc.BinarySpace(dimension=4, tied=[[np.int64(1), np.uint8(4)]])
+    assert tied.num_free == combabc.BinarySpace(dimension=4, tied=[[1, 4]]).num_free == 3
+    for not_a_bit in (True, np.bool_(True), np.float64(1.0)):  # numbers from 1, not bools or reals
+        with pytest.raises(TypeError, match="tied holds bit names or numbers"):
+            combabc.BinarySpace(dimension=4, tied=[[not_a_bit, 2]])
     real = combabc.ContinuousParameter("k", kind="normal", mean=np.int64(1), sd=np.float32(0.5))
     assert (real.mean, real.sd) == (1.0, 0.5)
     schedule = combabc.ThresholdSchedule(kind="quantile", quantile=np.float32(0.5),
