@@ -140,8 +140,9 @@ class History:
         if not w.complete:
             return "no complete wave: the numbers are those of the incomplete last wave"
         if w is not self.waves[-1]:
+            # A failed or killed run has no termination (""): "stopped", as the CLI says.
             return (f"the numbers are wave {w.number}'s: wave {self.waves[-1].number} is "
-                    f"incomplete ({self.termination})")
+                    f"incomplete ({self.termination or 'stopped'})")
         return ""
 
     @property

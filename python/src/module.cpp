@@ -178,6 +178,9 @@ py::dict LoadHistory(const std::string& path) {
   }
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["status"] = std::string(ToString(metadata.status));
+  // The file's termination, empty until the run ended by a criterion (a failed or killed run):
+  // the loaded summary's enum cannot say "none" and would read max_waves.
+  result["summary"].cast<py::dict>()["termination"] = metadata.termination;
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["real_priors"] = RealPriors(metadata.reals);
   result["seed"] = metadata.seed;
