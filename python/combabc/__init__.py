@@ -17,6 +17,7 @@
 See docs/python.md.
 """
 
+import numbers
 import os
 import warnings
 
@@ -85,13 +86,15 @@ class Problem:
 def make_options(**fields):
     """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
     may be a list of ThresholdSchedule or, for one threshold component, a list of numbers (one
-    per wave). proposal=ProposalOptions(...) picks the kernels, tempering=TemperingSchedule(...)
-    tempers the binary proposal toward the prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...)
-    sets a multi-fidelity run's continuation probabilities (with Problem(low_fidelity=...))."""
+    per wave; Python's or NumPy's scalars, or a NumPy array). proposal=ProposalOptions(...)
+    picks the kernels, tempering=TemperingSchedule(...) tempers the binary proposal toward the
+    prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...) sets a multi-fidelity run's
+    continuation probabilities (with Problem(low_fidelity=...))."""
     options = SmcOptions()
     thresholds = fields.pop("thresholds", None)
     if thresholds is not None:
-        if all(isinstance(t, (int, float)) for t in thresholds):
+        # Numbers of any kind: Python's, NumPy's scalars (numpy.int64 is no int) or an array.
+        if all(_is_number(t) for t in thresholds):
             thresholds = [ThresholdSchedule(kind="list", values=[float(t) for t in thresholds])]
         options.thresholds = list(thresholds)
     for name, value in fields.items():
@@ -99,6 +102,11 @@ def make_options(**fields):
             raise TypeError(f"SmcOptions has no field {name!r}")
         setattr(options, name, value)
     return options
+
+
+def _is_number(value):
+    """A real number: int, float, a NumPy integer or floating scalar; not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _smc_request(problem, options):
@@ -222,7 +230,9 @@ def enumerate(config, *, thresholds=None, threads=None, output_directory=None, o
     `combabc enumerate` (thresholds: one per threshold component; default the config's final
     ones). Returns the History of its one wave; History.enumeration holds directory (the
     tables), configurations, accepted, evidence and wall_seconds."""
-    data = _core.enumerate(os.fspath(config), [float(t) for t in (thresholds or [])],
+    # Not `thresholds or []`: a NumPy array has no truth value.
+    thresholds = [] if thresholds is None else [float(t) for t in thresholds]
+    data = _core.enumerate(os.fspath(config), thresholds,
                            -1 if threads is None else threads, os.fspath(output_directory or ""),
                            overwrite, report, top, max_particles)
     return History(data)

@@ -7,6 +7,7 @@ The column names follow `combabc export` (docs/history.md, "Export"). Numbering 
 """
 
 import os
+import warnings
 
 import numpy as np
 
@@ -147,9 +148,40 @@ class History:
         return len(self.bit_names)
 
     @property
+    def posterior_wave(self):
+        """The Wave the run's answer is taken from, as the CLI's answer (docs/history.md,
+        "Answer"): the last complete wave with particles; when none is complete, the last wave
+        with particles. A run stopped during a wave (budget, wall time, Ctrl-C) answers from the
+        wave before: posterior_note says so."""
+        for w in reversed(self.waves):
+            if w.complete and len(w.index):
+                return w
+        for w in reversed(self.waves):
+            if len(w.index):
+                return w
+        return self.waves[-1]
+
+    @property
+    def posterior_note(self):
+        """Why the posterior is not the last wave's, in the CLI's words ("the numbers are wave
+        4's: wave 5 is incomplete (budget_exhausted)"), or "" when it is the last complete wave."""
+        w = self.posterior_wave
+        if not w.complete:
+            return "no complete wave: the numbers are those of the incomplete last wave"
+        if w is not self.waves[-1]:
+            # A failed or killed run has no termination (""): "stopped", as the CLI says.
+            return (f"the numbers are wave {w.number}'s: wave {self.waves[-1].number} is "
+                    f"incomplete ({self.termination or 'stopped'})")
+        return ""
+
+    @property
     def posterior(self):
-        """The last wave's per-bit marginals under the run's estimator."""
-        return self.waves[-1].marginals
+        """posterior_wave's per-bit marginals under the run's estimator; a UserWarning carries
+        posterior_note when that is not the last wave or not complete."""
+        note = self.posterior_note
+        if note:
+            warnings.warn(note, stacklevel=2)
+        return self.posterior_wave.marginals
 
     def experiment(self, which):
         """An experiment by name or index."""
@@ -164,9 +196,9 @@ class History:
         return self.experiments[which]
 
     def wave(self, number=None):
-        """A Wave by its number (from 1), or the last wave for None."""
+        """A Wave by its number (from 1), or posterior_wave for None (the last complete wave)."""
         if number is None:
-            return self.waves[-1]
+            return self.posterior_wave
         if isinstance(number, bool) or not isinstance(number, (int, np.integer)) or \
                 not 1 <= number <= len(self.waves):
             raise IndexError(f"wave={number!r}: waves are numbered 1 to {len(self.waves)}")
@@ -187,7 +219,8 @@ class History:
     def curves(self, wave=None, experiment=None):
         """A wave's accepted simulated outputs, float64[n, m]: every output, or one experiment's
         (its name, index or Experiment; columns at that experiment's output_position). wave: its
-        number (from 1; default the last). Empty (n x 0) when the run kept no outputs."""
+        number (from 1; default posterior_wave, the last complete one). Empty (n x 0) when the run
+        kept no outputs."""
         output = self.wave(wave).output
         if experiment is None or not output.shape[1]:
             return output

@@ -3,13 +3,14 @@ pyABC's visualisation: the caller shows or saves them (fig.savefig("marginals.pn
 
     import combabc.plot
     combabc.plot.marginals(history)          # P(bit = 1) per bit, every wave
-    combabc.plot.curves(history)             # the final wave's accepted curves and the data
+    combabc.plot.curves(history)             # the posterior wave's accepted curves and the data
     combabc.plot.thresholds(history)         # thresholds and acceptance rate per wave
     combabc.plot.predictive_band(history)    # the posterior predictive band and the data
 
-Waves are numbered from 1 (wave=None: every wave, or the final one where one is drawn), bits are
-labelled by their names; experiments by name or index. Needs matplotlib (python3-matplotlib);
-nothing here picks a backend.
+Waves are numbered from 1 (wave=None: every wave in marginals; in curves and predictive_band
+History.posterior_wave, the last complete one), bits are labelled by their names;
+experiments by name or index. Needs matplotlib (python3-matplotlib); nothing here picks a
+backend.
 """
 
 import numpy as np
@@ -65,7 +66,7 @@ def marginals(history, wave=None):
 
 
 def curves(history, wave=None, experiment=None, max_curves=200):
-    """The accepted simulated curves of a wave (default the final one; at most max_curves, the
+    """The accepted simulated curves of a wave (default posterior_wave; at most max_curves, the
     heaviest) with the measured data, one panel per experiment (or the one named)."""
     w = history.wave(wave)
     chosen = _experiments(history, experiment)
@@ -120,7 +121,7 @@ def _weighted_quantiles(values, weights, qs):
 
 
 def predictive_band(history, wave=None, experiment=None, level=0.9):
-    """The posterior predictive band of a wave (default the final one): per experiment, the
+    """The posterior predictive band of a wave (default posterior_wave): per experiment, the
     weighted central `level` band of the accepted curves (fill), their weighted median (line)
     and the measured data (points). Band and median use the run's estimator's weights."""
     w = history.wave(wave)

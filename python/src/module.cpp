@@ -98,6 +98,60 @@ HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
   return names;
 }
 
+// The arguments a prior kind takes, as the config's [parameters.<name>] table (docs/config.md).
+bool UsesBounds(PriorKind kind) {
+  return kind == PriorKind::kUniform || kind == PriorKind::kTruncatedNormal;
+}
+bool UsesNormal(PriorKind kind) { return kind != PriorKind::kUniform; }
+
+// ContinuousParameter(name, kind, low, high, mean, sd): an argument the kind does not use is
+// refused rather than ignored, one it uses and was not given keeps ContinuousPrior's default, and
+// the prior is checked here, so a bad one fails at construction, naming the parameter, not when
+// the run starts.
+ContinuousParameter MakeContinuousParameter(std::string name,
+                                            const std::string& kind,
+                                            std::optional<double> low,
+                                            std::optional<double> high,
+                                            std::optional<double> mean,
+                                            std::optional<double> sd) {
+  const std::string where = "ContinuousParameter(" + Excerpt(name) + ")";
+  ContinuousParameter p;
+  p.name = std::move(name);
+  p.prior.kind = Parse<PriorKind>(kind, where + ".kind");
+  const std::string kind_text(ToString(p.prior.kind));
+  auto take = [&](const char* key, const std::optional<double>& value, bool used, double& field) {
+    if (!value) return;
+    if (!used) {
+      throw Error(ErrorKind::kConfig,
+                  "not used by kind = \"" + kind_text + "\" (it takes " +
+                      (UsesBounds(p.prior.kind) ? "low and high" : "mean and sd") + ")",
+                  {},
+                  0,
+                  where + "." + key);
+    }
+    field = *value;
+  };
+  take("low", low, UsesBounds(p.prior.kind), p.prior.low);
+  take("high", high, UsesBounds(p.prior.kind), p.prior.high);
+  take("mean", mean, UsesNormal(p.prior.kind), p.prior.mean);
+  take("sd", sd, UsesNormal(p.prior.kind), p.prior.sd);
+  std::string why;
+  if (!p.prior.IsValid(&why)) throw Error(ErrorKind::kConfig, why, {}, 0, where);
+  return p;
+}
+
+// ContinuousParameter('k', kind='uniform', low=0.5, high=2.0): the arguments its kind uses.
+std::string ContinuousParameterRepr(const ContinuousParameter& p) {
+  auto arg = [](const char* key, double value) {
+    return std::string(", ") + key + "=" + py::repr(py::float_(value)).cast<std::string>();
+  };
+  std::string text = "ContinuousParameter(" + py::repr(py::str(p.name)).cast<std::string>() +
+                     ", kind='" + std::string(ToString(p.prior.kind)) + "'";
+  if (UsesBounds(p.prior.kind)) text += arg("low", p.prior.low) + arg("high", p.prior.high);
+  if (UsesNormal(p.prior.kind)) text += arg("mean", p.prior.mean) + arg("sd", p.prior.sd);
+  return text + ")";
+}
+
 // Each continuous parameter's prior as summary.json's "reals" give it (History.real_priors).
 py::list RealPriors(const std::vector<ContinuousParameter>& reals) {
   py::list priors;
@@ -124,6 +178,9 @@ py::dict LoadHistory(const std::string& path) {
   }
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
   result["status"] = std::string(ToString(metadata.status));
+  // The file's termination, empty until the run ended by a criterion (a failed or killed run):
+  // the loaded summary's enum cannot say "none" and would read max_waves.
+  result["summary"].cast<py::dict>()["termination"] = metadata.termination;
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["real_priors"] = RealPriors(metadata.reals);
   result["seed"] = metadata.seed;
@@ -546,9 +603,11 @@ int TiedBit(const py::handle& bit, int dimension, const std::vector<std::string>
     }
     return static_cast<int>(found - names.begin());
   }
-  if (!py::isinstance<py::int_>(bit) || py::isinstance<py::bool_>(bit)) {
-    throw py::type_error("BinarySpace: tied holds bit names or numbers (from 1), not " +
-                         std::string(py::str(py::type::of(bit).attr("__name__"))));
+  // An integer is anything with __index__ (Python's int, NumPy's integer scalars) but a bool:
+  // Python's, or NumPy's bool_, whose __index__ NumPy deprecates.
+  const std::string type_name = py::str(py::type::of(bit).attr("__name__"));
+  if (PyIndex_Check(bit.ptr()) == 0 || py::isinstance<py::bool_>(bit) || type_name == "bool_") {
+    throw py::type_error("BinarySpace: tied holds bit names or numbers (from 1), not " + type_name);
   }
   const auto number = bit.cast<long long>();
   if (number < 1 || number > dimension) {
@@ -736,30 +795,21 @@ void BindTypes(py::module_& m) {
       });
 
   py::class_<ContinuousParameter>(m, "ContinuousParameter")
-      .def(py::init([](std::string name,
-                       const std::string& kind,
-                       double low,
-                       double high,
-                       double mean,
-                       double sd) {
-             ContinuousParameter p;
-             p.name = std::move(name);
-             p.prior.kind = Parse<PriorKind>(kind, "kind");
-             p.prior.low = low;
-             p.prior.high = high;
-             p.prior.mean = mean;
-             p.prior.sd = sd;
-             return p;
-           }),
+      .def(py::init(&MakeContinuousParameter),
            py::arg("name"),
            py::arg("kind") = "uniform",
-           py::arg("low") = 0.0,
-           py::arg("high") = 1.0,
-           py::arg("mean") = 0.0,
-           py::arg("sd") = 1.0)
+           py::arg("low") = py::none(),
+           py::arg("high") = py::none(),
+           py::arg("mean") = py::none(),
+           py::arg("sd") = py::none())
       .def_readonly("name", &ContinuousParameter::name)
       .def_property_readonly("kind",
-                             [](const ContinuousParameter& p) { return ToString(p.prior.kind); });
+                             [](const ContinuousParameter& p) { return ToString(p.prior.kind); })
+      .def_property_readonly("low", [](const ContinuousParameter& p) { return p.prior.low; })
+      .def_property_readonly("high", [](const ContinuousParameter& p) { return p.prior.high; })
+      .def_property_readonly("mean", [](const ContinuousParameter& p) { return p.prior.mean; })
+      .def_property_readonly("sd", [](const ContinuousParameter& p) { return p.prior.sd; })
+      .def("__repr__", &ContinuousParameterRepr);
 
   py::class_<ThresholdSchedule>(m, "ThresholdSchedule")
       .def(py::init([](const std::string& kind,

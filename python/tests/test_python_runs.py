@@ -69,7 +69,11 @@ def test_resume_after_the_simulator_failed_equals_the_uninterrupted_run(tmp_path
     with pytest.raises(LookupError, match="sensor unplugged"):
         combabc.run(flaky, options(accepted_per_wave=200), output_directory=tmp_path / "cut")
     path = tmp_path / "cut" / "history.sqlite"
-    assert combabc.load_history(path).status == "failed"
+    cut = combabc.load_history(path)
+    assert cut.status == "failed"
+    # Failed during wave 2: no termination criterion, and its answer is wave 1's, as the CLI's.
+    assert cut.termination == "" and [w.complete for w in cut.waves] == [True, False]
+    assert cut.posterior_note == "the numbers are wave 1's: wave 2 is incomplete (stopped)"
     # Other options are refused (threads may change).
     with pytest.raises(combabc.Error, match="options differ"):
         combabc.resume(path, flaky, options(accepted_per_wave=200, seed=12))

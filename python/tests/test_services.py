@@ -108,6 +108,11 @@ def test_enumerate_equals_combabc_enumerate(tmp_path):
     # At another threshold: fewer accepted.
     strict = combabc.enumerate(config, thresholds=[0.2], output_directory=tmp_path / "strict")
     assert 0 < strict.enumeration["accepted"] < history.enumeration["accepted"]
+    # The threshold as a NumPy array or scalar: the same enumeration.
+    for thresholds in (np.array([0.2]), [np.float32(0.2)]):
+        again = combabc.enumerate(config, thresholds=thresholds, output_directory=tmp_path / "np",
+                                  overwrite=True)
+        assert again.enumeration["accepted"] == strict.enumeration["accepted"]
 
 
 def test_resume_of_a_finished_run_is_a_usage_error(tmp_path):

@@ -2,6 +2,7 @@
 determinism across thread counts, and errors raised in Python reaching the caller."""
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -212,6 +213,73 @@ def test_invalid_prior_raises():
         combabc.ContinuousParameter("x", kind="uniformm")
 
 
+@pytest.mark.parametrize("arguments, message", [
+    (dict(kind="uniform", mean=0.5), r"ContinuousParameter\('x'\)\.mean: not used by kind = "
+                                      r'"uniform" \(it takes low and high\)'),
+    (dict(kind="normal", low=0.0), r"ContinuousParameter\('x'\)\.low: not used by kind = "
+                                    r'"normal" \(it takes mean and sd\)'),
+    (dict(kind="lognormal", high=2.0), r"ContinuousParameter\('x'\)\.high: not used"),
+    (dict(low=2.0, high=1.0), r"ContinuousParameter\('x'\): low = 2 >= high = 1"),
+    (dict(low=1.0, high=1.0), r"ContinuousParameter\('x'\): low = 1 >= high = 1"),
+    (dict(kind="normal", sd=0.0), r"ContinuousParameter\('x'\): sd = 0; must be > 0"),
+    (dict(kind="truncated_normal", low=50.0, high=60.0),
+     r"ContinuousParameter\('x'\): low = 50, high = 60; N\(mean = 0, sd = 1\) has mass 0"),
+])
+def test_a_continuous_parameter_refuses_what_its_prior_does_not_take(arguments, message):
+    # At construction, with one line naming the parameter (config error, as a TOML file's).
+    with pytest.raises(combabc.Error, match="^config error: " + message) as raised:
+        combabc.ContinuousParameter("x", **arguments)
+    assert "\n" not in str(raised.value)
+    assert raised.value.exit_code == 78
+
+
+def test_a_continuous_parameter_shows_its_prior():
+    uniform = combabc.ContinuousParameter("k", low=-1.5, high=2)
+    assert repr(uniform) == "ContinuousParameter('k', kind='uniform', low=-1.5, high=2.0)"
+    assert (uniform.low, uniform.high) == (-1.5, 2.0)
+    assert repr(combabc.ContinuousParameter("s", kind="lognormal", sd=0.5)) == \
+        "ContinuousParameter('s', kind='lognormal', mean=0.0, sd=0.5)"
+    truncated = combabc.ContinuousParameter("t", kind="truncated_normal", low=0, high=3, mean=1,
+                                            sd=2)
+    assert repr(truncated) == ("ContinuousParameter('t', kind='truncated_normal', low=0.0, "
+                               "high=3.0, mean=1.0, sd=2.0)")
+    assert truncated.kind == "truncated_normal" and truncated.name == "t"
+
+
+def test_numpy_scalars_are_numbers_everywhere():
+    # numpy.int64 is no Python int (numpy.float64 is a float): thresholds, counts, seeds and
+    # priors given as NumPy scalars or arrays run as the same numbers given as Python's.
+    numpy_options = combabc.make_options(
+        num_waves=np.int64(3), accepted_per_wave=np.int32(300), seed=np.uint64(11),
+        threads=np.int8(1), thresholds=np.array([6, 4, 3]), estimator="importance",
+        max_simulations=np.int64(10**6), max_wall_time_s=np.float32(600),
+        min_acceptance_rate=np.float32(0.0), batch_size=np.int64(64))
+    assert [t.values for t in numpy_options.thresholds] == [[6.0, 4.0, 3.0]]
+    for thresholds in ([np.int64(6), np.int64(4), np.int64(3)],
+                       [np.float32(6), np.float64(4), 3]):
+        assert combabc.make_options(thresholds=thresholds).thresholds[0].values == [6.0, 4.0, 3.0]
+    space = combabc.BinarySpace(dimension=np.int64(8), prior_one=np.array(PRIOR),
+                                default_prior_one=np.float64(0.5))
+    numpy_run = combabc.run(combabc.Problem(space, per_sample, OBSERVED), numpy_options)
+    python_run = combabc.run(problem(), options(accepted_per_wave=300, thresholds=[6, 4, 3],
+                                                batch_size=64))
+    same_history(numpy_run, python_run)
+    assert combabc.BinarySpace(dimension=2, prior_one=[np.float32(0.25), np.int64(1)]) \
+        .bit_prior_one == [0.25, 1.0]
+    tied = combabc.BinarySpace(dimension=4, tied=[[np.int64(1), np.uint8(4)]])
+    assert tied.num_free == combabc.BinarySpace(dimension=4, tied=[[1, 4]]).num_free == 3
+    for not_a_bit in (True, np.bool_(True), np.float64(1.0)):  # numbers from 1, not bools or reals
+        with pytest.raises(TypeError, match="tied holds bit names or numbers"):
+            combabc.BinarySpace(dimension=4, tied=[[not_a_bit, 2]])
+    real = combabc.ContinuousParameter("k", kind="normal", mean=np.int64(1), sd=np.float32(0.5))
+    assert (real.mean, real.sd) == (1.0, 0.5)
+    schedule = combabc.ThresholdSchedule(kind="quantile", quantile=np.float32(0.5),
+                                         initial=np.int64(10), target=np.float64(1))
+    assert (schedule.quantile, schedule.initial, schedule.target) == (0.5, 10.0, 1.0)
+    assert combabc.ProposalOptions(scale=np.int64(2)).scale == 2.0
+    assert combabc.TemperingSchedule(phi0=np.float32(0.5)).phi(np.int64(1), np.int64(3)) >= 0.0
+
+
 def noisy(bits, rng):
     return W @ bits + rng.normal(0.0, 0.5, size=3)
 
@@ -253,3 +321,35 @@ def test_ctrl_c_stops_a_python_run_with_keyboard_interrupt(threads):
         combabc.run(problem(interrupted_once), options(accepted_per_wave=3000), threads=threads)
     # Stopped soon after, not at the end of the run (which takes several thousand calls).
     assert len(calls) < 2000
+
+
+def test_a_budget_stopped_runs_posterior_is_its_last_complete_wave():
+    whole = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a finished run's posterior warns nothing
+        np.testing.assert_array_equal(whole.posterior, whole.waves[-1].marginals)
+    assert whole.posterior_note == "" and whole.posterior_wave is whole.waves[-1]
+    # Stopped halfway through wave 3: waves 1 and 2 complete, wave 3 kept, incomplete.
+    first_two = sum(w.candidates for w in whole.waves[:2])
+    budget = first_two + whole.waves[2].candidates // 2
+    stopped = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50,
+                                             max_simulations=budget))
+    assert stopped.termination == "budget_exhausted"
+    assert [w.complete for w in stopped.waves] == [True, True, False]
+    assert 0 < stopped.waves[2].accepted < 300
+    assert stopped.posterior_wave is stopped.waves[1]
+    assert stopped.wave() is stopped.waves[1]
+    assert stopped.posterior_note == \
+        "the numbers are wave 2's: wave 3 is incomplete (budget_exhausted)"
+    with pytest.warns(UserWarning, match=r"wave 2's: wave 3 is incomplete \(budget_exhausted\)"):
+        posterior = stopped.posterior
+    np.testing.assert_array_equal(posterior, whole.waves[1].marginals)
+    np.testing.assert_array_equal(stopped.curves(), stopped.waves[1].output)
+    assert set(stopped.particles(wave=None)["wave"]) == {1, 2, 3}  # every wave, as recorded
+    # No wave complete: the incomplete first wave answers, and says so.
+    early = combabc.run(problem(), options(accepted_per_wave=300, batch_size=50,
+                                           max_simulations=whole.waves[0].candidates // 2))
+    assert [w.complete for w in early.waves] == [False]
+    assert early.posterior_wave is early.waves[0]
+    with pytest.warns(UserWarning, match="no complete wave"):
+        np.testing.assert_array_equal(early.posterior, early.waves[0].marginals)
