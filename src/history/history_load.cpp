@@ -198,10 +198,9 @@ std::optional<WaveFidelity> ReadFidelity(const WaveReader& check,
                       std::to_string(f.expensive_simulations) + " expensive simulations");
   }
   // log sum of squared weights: -inf exactly when there is none.
-  const int type = row.IsNull(kUnkeptFalsePositiveLogW2) ? SQLITE_NULL
-                                                          : row.Type(kUnkeptFalsePositiveLogW2);
-  f.unkept_false_positive_log_w2 =
-      type == SQLITE_NULL ? 0.0 : row.Real(kUnkeptFalsePositiveLogW2);
+  const int type =
+      row.IsNull(kUnkeptFalsePositiveLogW2) ? SQLITE_NULL : row.Type(kUnkeptFalsePositiveLogW2);
+  f.unkept_false_positive_log_w2 = type == SQLITE_NULL ? 0.0 : row.Real(kUnkeptFalsePositiveLogW2);
   const bool none = f.unkept_false_positives == 0;
   if ((type != SQLITE_FLOAT && type != SQLITE_INTEGER) ||
       none != (f.unkept_false_positive_log_w2 == -std::numeric_limits<double>::infinity()) ||
@@ -326,10 +325,11 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   wave.phi = row.Real(kPhi);
   if (expected_wave == 0) shape.free_parameters = 0;
   const std::size_t f = shape.free_parameters;
+  // A continuous-only run (d = 0) has no binary proposal.
   wave.proposal = f == 0
                       ? check.Doubles(row,
                                       kProposal,
-                                      1,
+                                      std::min<std::size_t>(1, d),
                                       d,
                                       "proposal",
                                       "1 to " + std::to_string(d) + " (one per free parameter)")

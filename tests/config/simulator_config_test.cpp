@@ -98,8 +98,9 @@ TEST(SimulatorConfig, ASimulatorWithoutBitsCalibratesItsRealParameters) {
     std::string why;
     EXPECT_TRUE(c.space.IsValid(&why)) << why;
   }
-  EXPECT_EQ(ErrorOf(head + kRest).find("dir/run.toml:1: simulator.bits: the simulator has no "
-                                       "parameters to calibrate"),
+  EXPECT_EQ(ErrorOf(head + kRest)
+                .find("dir/run.toml:1: simulator.bits: the simulator has no "
+                      "parameters to calibrate"),
             0u)
       << ErrorOf(head + kRest);
   EXPECT_NE(ErrorOf(head + "[simulator.bits]\ncount = -1\n" + kRest + real)

@@ -150,16 +150,17 @@ TEST_P(ContinuousExactness, GaussianModelMatchesItsAbcPosterior) {
     ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
     const auto& last = h.waves.back();
     const auto got = RealMoments(last);
-    std::printf("%s x %s: mean %.4f (exact %.4f), var %.4f (exact %.4f), ESS %.0f, %lld "
-                "simulations\n",
-                ToString(binary),
-                ToString(GetParam()),
-                got.mean,
-                exact.mean,
-                got.var,
-                exact.var,
-                last.ess,
-                static_cast<long long>(h.summary.simulations));
+    std::printf(
+        "%s x %s: mean %.4f (exact %.4f), var %.4f (exact %.4f), ESS %.0f, %lld "
+        "simulations\n",
+        ToString(binary),
+        ToString(GetParam()),
+        got.mean,
+        exact.mean,
+        got.var,
+        exact.var,
+        last.ess,
+        static_cast<long long>(h.summary.simulations));
     ASSERT_GT(last.ess, 500.0);
     EXPECT_TRUE(last.marginals_importance.empty());
     for (const auto& p : last.particles) EXPECT_TRUE(p.theta.bits.empty());
