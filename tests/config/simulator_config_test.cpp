@@ -90,7 +90,11 @@ TEST(SimulatorConfig, ASimulatorWithoutBitsCalibratesItsRealParameters) {
       "[sampler]\nestimator = \"importance\"\n"
       "[parameters.mu]\nprior = \"normal\"\nmean = 0.0\nsd = 1.0\n";
   for (const std::string& bits : {std::string(), std::string("[simulator.bits]\ncount = 0\n")}) {
-    const CalibrationConfig c = ParseConfig(head + bits + kRest + real, "dir/run.toml");
+    std::string text = head;
+    text += bits;
+    text += kRest;
+    text += real;
+    const CalibrationConfig c = ParseConfig(text, "dir/run.toml");
     EXPECT_EQ(c.space.dimension, 0);
     EXPECT_TRUE(c.space.names.empty());
     EXPECT_TRUE(c.simulator.external.bit_names.empty());
