@@ -146,6 +146,32 @@ def test_continuous_parameters_reach_the_simulator():
     assert "offset" in history.particles().columns
 
 
+@pytest.mark.parametrize("batch", [False, True])
+def test_a_continuous_only_space_matches_its_analytic_posterior(batch):
+    # mu ~ N(0, 1), y = mu + N(0, 0.5^2) observed 1.0; a small final eps: the ABC posterior is
+    # close to the exact N(0.8, 0.2) (variance 1 / (1 + 4)).
+    def simulate(bits, reals, rng):
+        assert bits.shape == ((len(reals), 0) if batch else (0,))
+        if batch:
+            return np.array([[r[0] + 0.5 * g.standard_normal()] for r, g in zip(reals, rng)])
+        return np.array([reals[0] + 0.5 * rng.standard_normal()])
+
+    space = combabc.BinarySpace(dimension=0)
+    reals = [combabc.ContinuousParameter("mu", kind="normal", mean=0.0, sd=1.0)]
+    p = combabc.Problem(space, simulate, [1.0], reals=reals, batch=batch, rng=True)
+    history = combabc.run(p, combabc.make_options(num_waves=4, accepted_per_wave=1000, seed=5,
+                                                  thresholds=[2.0, 1.0, 0.3, 0.05]))
+    last = history.waves[-1]
+    assert last.bits.shape == (1000, 0)
+    w = last.weight / last.weight.sum()
+    mean = float(w @ last.reals[:, 0])
+    var = float(w @ (last.reals[:, 0] - mean) ** 2)
+    ess = 1.0 / float(w @ w)
+    assert abs(mean - 0.8) < 5.0 * np.sqrt(0.2 / ess) + 0.01
+    assert abs(var - 0.2) < 5.0 * 0.2 * np.sqrt(2.0 / ess) + 0.01
+    assert list(history.particles().columns[:4]) == ["wave", "index", "bits", "mu"]
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 @pytest.mark.parametrize("batch", [False, True])
 def test_python_exception_reaches_the_caller(threads, batch):

@@ -366,7 +366,8 @@ def overview_figure(waves, run, estimator, out):
     """One row per wave, like the (a)-(e) panels of the paper's Figures 3-6 side by side; an
     experiment whose curves peak outside its measured window in some wave gets a second column,
     zoomed on that window."""
-    panels, _ = edges(run)
+    # A continuous-only run has no bits: curve columns alone.
+    panels = edges(run)[0] if run["dimension"] else []
     has_curves = any(w.curves is not None and w.curves.size for w in waves)
     # A curve column per experiment when they are named, else one holding every curve; each
     # followed by its zoom column where needed.
@@ -387,7 +388,7 @@ def overview_figure(waves, run, estimator, out):
                              figsize=(4.2 * (curve_columns + bar_width * len(panels)),
                                       2.6 * len(waves) + 0.5),
                              squeeze=False, sharex="col", gridspec_kw={"width_ratios": widths})
-    tick_step = 2 if max(len(bits) for _, bits in panels) > 12 else 1
+    tick_step = 2 if max((len(bits) for _, bits in panels), default=0) > 12 else 1
     for row, w in enumerate(waves):
         label = f"({'abcdefghijklmnopqrstuvwxyz'[row % 26]}) {wave_label(w)}"
         for column, (experiment, zoomed) in enumerate(columns_of):
@@ -408,6 +409,8 @@ def overview_figure(waves, run, estimator, out):
             if experiment is not None and not zoomed:
                 ax.set_title(experiment["name"], loc="right", fontsize=9)
         bar_axes = axes[row][curve_columns:]
+        if not panels:
+            continue
         # Without a curve column the wave label takes the left of the first title line.
         draw_marginals(bar_axes, w, run, estimator, tick_step=tick_step, titles=row == 0,
                        title_loc="center" if has_curves else "right")
@@ -416,7 +419,8 @@ def overview_figure(waves, run, estimator, out):
         if row != len(waves) - 1:
             for ax in axes[row]:
                 ax.set_xlabel("")
-    handles = (curve_handles(0, run) if has_curves else []) + marginal_handles(run)
+    handles = ((curve_handles(0, run) if has_curves else []) +
+               (marginal_handles(run) if panels else []))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.45 / fig.get_figheight()))
     return save(fig, out, "overview")
@@ -620,7 +624,10 @@ def render_all(waves, run, estimator, out, formats):
     """Renders every figure; returns their names in display order. Figures are independent, so
     they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
     single-threaded and dominate the time)."""
-    tasks = [("summary", None), ("overview", None)]
+    tasks = [("summary", None)]
+    # The overview draws curves and marginals: a continuous-only run without curves has neither.
+    if run["dimension"] or any(w.curves is not None and w.curves.size for w in waves):
+        tasks.append(("overview", None))
     if run["multi_fidelity"]:
         tasks.append(("fidelity", None))
     if run["predictive"]:
@@ -630,7 +637,8 @@ def render_all(waves, run, estimator, out, formats):
     for i, w in enumerate(waves):
         if w.curves is not None and w.curves.size:
             tasks.append(("curves", i))
-        tasks.append(("marginals", i))
+        if run["dimension"]:  # a continuous-only run has no marginals to draw
+            tasks.append(("marginals", i))
     _JOB.update(waves=waves, run=run, estimator=estimator, out=out, formats=formats)
     workers = min(len(tasks), os.cpu_count() or 1, 8)
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():

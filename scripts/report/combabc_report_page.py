@@ -58,15 +58,17 @@ def answer_html(summary, sensor=True):
     source = ("From the enumeration (exact)" if answer.get("exact")
               else f"From wave {answer.get('wave')}"
               + ("" if answer.get("complete", True) else " (no complete wave: incomplete)"))
+    bits = answer.get("bits") or []
     parts = [f"<h2>Answer</h2>\n<p>{e(source)}, {e(str(answer.get('estimator', '')))} "
              f"estimator."]
-    if level is not None:
+    # A continuous-only run has no bits: no verdicts, bit table or configurations.
+    if level is not None and bits:
         parts.append(f" Verdict at level {fmt(float(level), 'g')}: fixed if {e(p)} &ge; "
                      f"{fmt(float(level), 'g')}, free if {e(p)} &le; {fmt(1 - float(level), 'g')}, "
                      "else not determined.")
     parts.append("</p>\n")
     rows = []
-    for bit in answer.get("bits", []):
+    for bit in bits:
         verdict = str(bit.get("verdict", ""))
         p_one, se = bit.get("p_one"), bit.get("mc_se")
         shown = fmt(float(p_one), ".3f") if p_one is not None else "—"
@@ -75,10 +77,25 @@ def answer_html(summary, sensor=True):
         rows.append(([e(fmt(bit.get("number"))), e(str(bit.get("name", ""))),
                       e(str(bit.get("position") or "—")), shown, e(verdict)],
                      {"fixed": "fixed", "free": "free"}.get(verdict, "")))
-    parts.append(table(["#", "Name", "Position", f"{p} ± SE", "Verdict"], rows, numeric=(0, 3)))
+    if bits:
+        parts.append(table(["#", "Name", "Position", f"{p} ± SE", "Verdict"], rows,
+                           numeric=(0, 3)))
+    reals = answer.get("reals") or []
+    if reals:
+        rows = []
+        for r in reals:
+            mean = fmt(float(r.get("mean", math.nan)), ".4g")
+            if r.get("mc_se") is not None and not answer.get("exact"):
+                mean += f" &plusmn; {fmt(float(r['mc_se']), '.2g')}"
+            rows.append([e(str(r.get("name", ""))), mean,
+                         e(fmt(float(r.get("sd", math.nan)), ".4g"))])
+        parts.append("<h3>Continuous parameters</h3>\n" + table(
+            ["Name", "Posterior mean ± SE", "Posterior sd"], rows, numeric=(1, 2)))
     configurations = answer.get("top_configurations") or []
     particles, distinct = answer.get("particles"), answer.get("distinct")
-    if not answer.get("exact") and particles and particles > 1 and distinct == particles:
+    if not bits:
+        pass
+    elif not answer.get("exact") and particles and particles > 1 and distinct == particles:
         # Every particle its own configuration: their masses are single particles' weights, which
         # say nothing of a configuration's probability (the terminal says the same).
         parts.append("<h3>Most probable configurations</h3>\n<p>None stands out: the "

@@ -247,6 +247,14 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
+  if (c.space.dimension == 0 && c.reals.empty()) {
+    throw Error(ErrorKind::kConfig,
+                "the simulator has no parameters to calibrate: declare bits in [simulator.bits] "
+                "or continuous parameters in [parameters.<name>]",
+                c.path,
+                c.bits_line,
+                c.bits_key);
+  }
   // Sets the thresholds (one schedule per threshold or likelihood component, experiment by
   // experiment), the simulator's outputs and model.normalise.
   config_internal::ParseExperiments(root, &c, model_sources);

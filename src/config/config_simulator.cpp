@@ -91,15 +91,21 @@ void ParseOutputs(TableReader& s, const std::string& directory, SimulatorOutputs
   o->Finish();
 }
 
-// The bit names of [<simulator>.bits]; where their number is set: *key and *line.
+// The bit names of [<simulator>.bits]; where their number is set: *key and *line. No table (or
+// count = 0) is a simulator without bits: its parameters are all [parameters.<name>] (ParseConfig
+// checks that it has some).
 std::vector<std::string> ParseBits(TableReader& s, std::string* key, int* line) {
   auto b = s.Table("bits");
-  if (!b) s.Fail("bits", "missing required table [" + s.Key("bits") + "] (count or names)");
+  if (!b) {
+    *key = s.Key("bits");
+    *line = s.line();
+    return {};
+  }
   std::vector<std::string> names = b->Strings("names").value_or(std::vector<std::string>{});
   const auto count = b->Integer("count");
   if (!count && names.empty()) b->Fail("count", "missing required key (or give names)");
-  if (count && (*count < 1 || *count > kMaxBits)) {
-    b->Fail("count", "must be in [1, " + std::to_string(kMaxBits) + "]");
+  if (count && (*count < 0 || *count > kMaxBits)) {
+    b->Fail("count", "must be in [0, " + std::to_string(kMaxBits) + "]");
   }
   if (names.empty()) {
     for (int k = 1; k <= *count; ++k) names.push_back("bit " + std::to_string(k));

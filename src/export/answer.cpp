@@ -172,7 +172,14 @@ Answer SummariseAnswer(const RunMetadata& m,
     bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
     a.bits.push_back(std::move(bit));
   }
-  a.top_configurations = TopConfigurations(*w, m, a.effective_size, a.exact);
+  // Without bits every particle is the one empty configuration: nothing to list.
+  if (!a.bits.empty()) a.top_configurations = TopConfigurations(*w, m, a.effective_size, a.exact);
+  for (std::size_t r = 0; r < m.reals.size() && r < w->reals_mean.size(); ++r) {
+    const double sd = r < w->reals_sd.size() ? w->reals_sd[r] : 0.0;
+    const double n = a.effective_size;
+    a.reals.push_back(
+        {m.reals[r].name, w->reals_mean[r], n > 0 && !std::isinf(n) ? sd / std::sqrt(n) : 0.0, sd});
+  }
   return a;
 }
 
@@ -210,6 +217,16 @@ std::string AnswerJson(const Answer& a, int indent) {
     out += "]}";
   }
   out += std::string(a.top_configurations.empty() ? "" : "\n" + in2) + "],\n";
+  if (!a.reals.empty()) {
+    out += in2 + "\"reals\": [";
+    for (std::size_t r = 0; r < a.reals.size(); ++r) {
+      const AnswerReal& x = a.reals[r];
+      out += std::string(r ? "," : "") + "\n" + in2 + "  {\"name\": " + JsonString(x.name) +
+             ", \"mean\": " + JsonNumber(x.mean) + ", \"mc_se\": " + JsonNumber(x.mc_se) +
+             ", \"sd\": " + JsonNumber(x.sd) + "}";
+    }
+    out += "\n" + in2 + "],\n";
+  }
   out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
   out += in2 + "\"particles\": " + std::to_string(a.particles) + ",\n";
   out += in2 + "\"distinct\": " + std::to_string(a.distinct) + ",\n";
@@ -333,40 +350,10 @@ void EffortTable(const Answer& a, std::string& out) {
   if (incomplete) out += " * incomplete wave (fewer particles than accepted_per_wave)\n";
 }
 
-}  // namespace
-
-std::string AnswerText(const Answer& a, std::size_t configurations) {
-  std::string out;
-  if (a.wave == 0) {
-    return "answer: none yet (no wave accepted a particle)\n";
-  }
+// The bits: P(bit = 1) with verdicts, then the `configurations` most probable configurations.
+void BitsText(const Answer& a, std::size_t configurations, std::string& out) {
   const bool sensor = SideBySide(a);
   char line[256];
-  if (a.exact) {
-    out += "answer: exact (enumeration, " + std::to_string(a.particles) +
-           " accepted configuration" + (a.particles == 1 ? "" : "s") + ")\n";
-  } else {
-    std::snprintf(line,
-                  sizeof line,
-                  "answer: wave %d of %d, %s estimator, %lld particles (%lld distinct)\n",
-                  a.wave,
-                  a.waves,
-                  a.estimator.c_str(),
-                  static_cast<long long>(a.particles),
-                  static_cast<long long>(a.distinct));
-    out += line;
-  }
-  if (!a.complete) {
-    out += " no complete wave: the numbers are those of the incomplete last wave\n";
-  } else if (a.wave < a.waves) {
-    std::snprintf(line,
-                  sizeof line,
-                  " the numbers are wave %d's: wave %d is incomplete (%s)\n",
-                  a.wave,
-                  a.waves,
-                  a.termination.empty() ? "stopped" : a.termination.c_str());
-    out += line;
-  }
   const std::string what = sensor ? "P(fixed)" : "P(bit = 1)";
   if (a.exact) {
     out += " " + what + " exact (no Monte-Carlo error)\n";
@@ -407,6 +394,62 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
     out +=
         " " + std::to_string(k + 1) + ". " + Pad(mass, 11) + "  " + Bits(a, c.bits, sensor) + "\n";
   }
+}
+
+// The continuous parameters: posterior mean ± its Monte-Carlo standard error, and sd.
+void RealLines(const Answer& a, std::string& out) {
+  if (a.reals.empty()) return;
+  std::size_t width = 9;  // "parameter"
+  for (const AnswerReal& r : a.reals) width = std::max(width, r.name.size());
+  out += " " + Pad("parameter", width) + "  posterior mean" + (a.exact ? "" : " ± standard error") +
+         ", sd\n";
+  for (const AnswerReal& r : a.reals) {
+    char text[128];
+    if (a.exact) {
+      std::snprintf(text, sizeof text, "%.6g, sd %.4g", r.mean, r.sd);
+    } else {
+      std::snprintf(text, sizeof text, "%.6g ± %.2g, sd %.4g", r.mean, r.mc_se, r.sd);
+    }
+    out += " " + Pad(r.name, width) + "  " + text + "\n";
+  }
+}
+
+}  // namespace
+
+std::string AnswerText(const Answer& a, std::size_t configurations) {
+  std::string out;
+  if (a.wave == 0) {
+    return "answer: none yet (no wave accepted a particle)\n";
+  }
+  char line[256];
+  if (a.exact) {
+    out += "answer: exact (enumeration, " + std::to_string(a.particles) +
+           " accepted configuration" + (a.particles == 1 ? "" : "s") + ")\n";
+  } else {
+    std::snprintf(line,
+                  sizeof line,
+                  "answer: wave %d of %d, %s estimator, %lld particles",
+                  a.wave,
+                  a.waves,
+                  a.estimator.c_str(),
+                  static_cast<long long>(a.particles));
+    out += line;
+    // Distinct configurations of bits: a continuous-only run has one, the empty one.
+    out += a.bits.empty() ? "\n" : " (" + std::to_string(a.distinct) + " distinct)\n";
+  }
+  if (!a.complete) {
+    out += " no complete wave: the numbers are those of the incomplete last wave\n";
+  } else if (a.wave < a.waves) {
+    std::snprintf(line,
+                  sizeof line,
+                  " the numbers are wave %d's: wave %d is incomplete (%s)\n",
+                  a.wave,
+                  a.waves,
+                  a.termination.empty() ? "stopped" : a.termination.c_str());
+    out += line;
+  }
+  if (!a.bits.empty()) BitsText(a, configurations, out);
+  RealLines(a, out);
   EffortTable(a, out);
   if (a.expensive_simulations) {
     const double share = a.simulations > 0 ? 100.0 * static_cast<double>(*a.expensive_simulations) /

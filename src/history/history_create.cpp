@@ -388,8 +388,11 @@ const std::string& HistoryStore::path() const { return impl_->db.path(); }
 HistoryStore HistoryStore::Create(const std::string& path,
                                   const RunMetadata& metadata,
                                   bool overwrite) {
-  if (metadata.dimension < 1) {
-    throw Error(ErrorKind::kSoftware, "RunMetadata::dimension must be >= 1", path);
+  // Zero bits: a continuous-only run, which has reals.
+  if (metadata.dimension < 0 || (metadata.dimension == 0 && metadata.reals.empty())) {
+    throw Error(ErrorKind::kSoftware,
+                "RunMetadata::dimension must be >= 1, or 0 with continuous parameters",
+                path);
   }
   if (!metadata.bit_prior_one.empty() &&
       metadata.bit_prior_one.size() != static_cast<std::size_t>(metadata.dimension)) {

@@ -325,10 +325,11 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   wave.phi = row.Real(kPhi);
   if (expected_wave == 0) shape.free_parameters = 0;
   const std::size_t f = shape.free_parameters;
+  // A continuous-only run (d = 0) has no binary proposal.
   wave.proposal = f == 0
                       ? check.Doubles(row,
                                       kProposal,
-                                      1,
+                                      std::min<std::size_t>(1, d),
                                       d,
                                       "proposal",
                                       "1 to " + std::to_string(d) + " (one per free parameter)")

@@ -136,6 +136,14 @@ Statement& Statement::BindBlob(int i, std::span<const std::uint8_t> bytes) {
   return *this;
 }
 
+Statement& Statement::BindBytes(int i, std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) {
+    sqlite3_bind_zeroblob(stmt_, i, 0);
+    return *this;
+  }
+  return BindBlob(i, bytes);
+}
+
 Statement& Statement::BindNull(int i) {
   sqlite3_bind_null(stmt_, i);
   return *this;

@@ -27,6 +27,8 @@ class Statement {
   Statement& Bind(int i, double value);
   Statement& Bind(int i, const std::string& value);
   Statement& BindBlob(int i, std::span<const std::uint8_t> bytes);
+  // A blob even when empty (zero bytes, not NULL): a continuous-only run's particle bits.
+  Statement& BindBytes(int i, std::span<const std::uint8_t> bytes);
   Statement& BindNull(int i);
 
   // True while a row is available; false when done. Resets itself after the last row.

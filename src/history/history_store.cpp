@@ -63,7 +63,7 @@ INSERT OR REPLACE INTO failure (wave, candidate, reason) VALUES (?1, ?2, ?3)
 void BindParticle(Statement& s, int wave, const Particle& p) {
   s.Bind(1, wave)
       .Bind(2, p.index)
-      .BindBlob(3, PackBits(p.theta.bits))
+      .BindBytes(3, PackBits(p.theta.bits))
       .Bind(4, p.log_weight)
       .Bind(5, p.weight)
       .BindBlob(6, PackDoubles(p.distance))

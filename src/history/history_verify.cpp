@@ -250,7 +250,8 @@ void HistoryStore::Impl::CheckMetadata() {
   if (!run.Step()) Corrupt(path, "run", "no run row");
   const std::int64_t dimension = run.Int(0);
   run.Reset();
-  if (dimension < 1 || dimension > 1'000'000) {
+  // 0 bits is a continuous-only run (its reals are checked with the run's parameters).
+  if (dimension < 0 || dimension > 1'000'000) {
     Corrupt(path, "run.dimension", "is " + std::to_string(dimension) + ", not a number of bits");
   }
   shape.dimension = static_cast<int>(dimension);

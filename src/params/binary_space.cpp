@@ -13,7 +13,8 @@ bool BinarySpaceOptions::IsValid(std::string* why) const {
     if (why) *why = "BinarySpaceOptions::" + msg;
     return false;
   };
-  if (dimension < 1) return fail("dimension = " + std::to_string(dimension) + "; must be >= 1");
+  // Zero bits is a continuous-only space: the binary part is then one empty configuration.
+  if (dimension < 0) return fail("dimension = " + std::to_string(dimension) + "; must be >= 0");
   if (!prior_one.empty() && static_cast<int>(prior_one.size()) != dimension) {
     return fail("prior_one has " + std::to_string(prior_one.size()) +
                 " entries; must have dimension = " + std::to_string(dimension));

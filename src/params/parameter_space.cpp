@@ -11,6 +11,11 @@ namespace combabc {
 
 ParameterSpace::ParameterSpace(BinarySpace bits, std::vector<ContinuousParameter> reals)
     : bits_(std::move(bits)), reals_(std::move(reals)) {
+  // Zero bits is a continuous-only space; zero of both has nothing to infer.
+  if (bits_.dimension() == 0 && reals_.empty()) {
+    throw Error(ErrorKind::kConfig,
+                "the space has no parameters: declare at least one bit or one real parameter");
+  }
   // Bit names share the namespace: histories, exports and reports name every parameter, so a real
   // called like a bit would make them ambiguous.
   std::set<std::string> bit_names;

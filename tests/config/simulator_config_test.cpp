@@ -77,6 +77,41 @@ TEST(SimulatorConfig, AWorkerDeclaresItsBitsOutputsAndParameters) {
   EXPECT_EQ(e.config_directory, "dir");
 }
 
+// No [simulator.bits] (or count = 0): a continuous-only space, which needs a real parameter.
+TEST(SimulatorConfig, ASimulatorWithoutBitsCalibratesItsRealParameters) {
+  const std::string head =
+      "[simulator]\n"
+      "kind = \"command\"\n"
+      "argv = [\"sh\", \"{config_dir}/m.sh\", \"{params}\"]\n"
+      "[simulator.outputs]\n"
+      "name = \"y\"\n"
+      "coordinates = [0.0, 0.1, 0.2]\n";
+  const std::string real =
+      "[sampler]\nestimator = \"importance\"\n"
+      "[parameters.mu]\nprior = \"normal\"\nmean = 0.0\nsd = 1.0\n";
+  for (const std::string& bits : {std::string(), std::string("[simulator.bits]\ncount = 0\n")}) {
+    std::string text = head;
+    text += bits;
+    text += kRest;
+    text += real;
+    const CalibrationConfig c = ParseConfig(text, "dir/run.toml");
+    EXPECT_EQ(c.space.dimension, 0);
+    EXPECT_TRUE(c.space.names.empty());
+    EXPECT_TRUE(c.simulator.external.bit_names.empty());
+    EXPECT_EQ(c.simulator.external.real_names, std::vector<std::string>{"mu"});
+    std::string why;
+    EXPECT_TRUE(c.space.IsValid(&why)) << why;
+  }
+  EXPECT_EQ(ErrorOf(head + kRest)
+                .find("dir/run.toml:1: simulator.bits: the simulator has no "
+                      "parameters to calibrate"),
+            0u)
+      << ErrorOf(head + kRest);
+  EXPECT_NE(ErrorOf(head + "[simulator.bits]\ncount = -1\n" + kRest + real)
+                .find("simulator.bits.count: must be in [0, 4096]"),
+            std::string::npos);
+}
+
 TEST(SimulatorConfig, CoordinatesFromACsvFile) {
   const testing::TempFolder dir("coords");
   // The data CSV's dialect (issue 20, D8): a quoted coordinate and a comment holding commas.

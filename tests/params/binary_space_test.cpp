@@ -17,6 +17,16 @@ TEST(BinarySpace, IndependentMapsBitsToFreeParameters) {
   }
 }
 
+TEST(BinarySpace, ZeroBitsIsAnEmptySpace) {
+  const auto space = BinarySpace::Independent(0);
+  EXPECT_EQ(space.dimension(), 0);
+  EXPECT_EQ(space.num_free(), 0);
+  EXPECT_TRUE(space.bit_prior_one().empty());
+  std::vector<std::uint8_t> free, bits;
+  space.Expand(free, bits);
+  EXPECT_TRUE(space.Reduce(bits, free));
+}
+
 TEST(BinarySpace, TiedBitsShareOneFreeParameterWithConditionedPrior) {
   BinarySpaceOptions o;
   o.dimension = 5;
@@ -47,7 +57,8 @@ TEST(BinarySpace, InvalidOptionsNameTheField) {
     return why;
   };
   BinarySpaceOptions o;
-  EXPECT_EQ(why_of(o), "BinarySpaceOptions::dimension = 0; must be >= 1");
+  o.dimension = -1;
+  EXPECT_EQ(why_of(o), "BinarySpaceOptions::dimension = -1; must be >= 0");
   o.dimension = 3;
   o.prior_one = {0.5, 0.5};
   EXPECT_NE(why_of(o).find("prior_one has 2 entries"), std::string::npos);

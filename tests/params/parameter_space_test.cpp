@@ -57,6 +57,19 @@ TEST(ParameterSpace, RejectsEmptyDuplicateAndBitClashingNames) {
   EXPECT_NE(e.message().find("bit's name"), std::string::npos) << e.message();
 }
 
+TEST(ParameterSpace, ContinuousOnlyNeedsAReal) {
+  const ParameterSpace space(BinarySpace::Independent(0), {Real("theta", Normal(0.0, 1.0))});
+  EXPECT_EQ(space.num_bits(), 0);
+  EXPECT_EQ(space.num_reals(), 1);
+  EXPECT_DOUBLE_EQ(space.LogPriorBits({}), 0.0);
+  try {
+    const ParameterSpace empty(BinarySpace::Independent(0));
+    ADD_FAILURE() << "a space without parameters was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no parameters"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ParameterSpace, LogPriorBitsSumsTheFreeBitsPriors) {
   BinarySpaceOptions options;
   options.dimension = 3;

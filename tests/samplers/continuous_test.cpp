@@ -132,36 +132,45 @@ Moments RealMoments(const WaveRecord& wave) {
 
 class ContinuousExactness : public ::testing::TestWithParam<ContinuousKernelKind> {};
 
-// theta ~ N(1, 2^2), y* = theta + N(0, 0.5^2), y = 3, eps = 0.2.
+// theta ~ N(1, 2^2), y* = theta + N(0, 0.5^2), y = 3, eps = 0.2: a continuous-only space (no
+// bits), under either binary kernel, which then has nothing to fit.
 TEST_P(ContinuousExactness, GaussianModelMatchesItsAbcPosterior) {
   ContinuousPrior prior;
   prior.kind = PriorKind::kNormal;
   prior.mean = 1.0;
   prior.sd = 2.0;
-  const ParameterSpace space(BinarySpace::Independent(1, 0.0), {{"theta", prior}});
-  const LinearGaussianSimulator sim({0.0}, 0.5);
+  const ParameterSpace space(BinarySpace::Independent(0), {{"theta", prior}});
+  const LinearGaussianSimulator sim({}, 0.5);
   const AbsoluteDistance dist(3.0);
-  const auto h = RunCombinatorialSmc({&space, &sim, &dist},
-                                     ListOptions({2.0, 1.0, 0.5, 0.2}, GetParam(), 3000, 31));
-  ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
-  const auto exact = ExactPosterior({0.0}, {0.0}, prior, 0.5, 3.0, 0.2, -15.0, 17.0);
-  const auto& last = h.waves.back();
-  const auto got = RealMoments(last);
-  std::printf("%s: mean %.4f (exact %.4f), var %.4f (exact %.4f), ESS %.0f, %lld simulations\n",
-              ToString(GetParam()),
-              got.mean,
-              exact.mean,
-              got.var,
-              exact.var,
-              last.ess,
-              static_cast<long long>(h.summary.simulations));
-  ASSERT_GT(last.ess, 500.0);
-  // Standard errors of a mean and of a variance (Gaussian kurtosis) from ESS samples.
-  EXPECT_NEAR(got.mean, exact.mean, 5.0 * std::sqrt(exact.var / last.ess));
-  EXPECT_NEAR(got.var, exact.var, 5.0 * exact.var * std::sqrt(2.0 / last.ess));
-  // The summary statistics the history stores agree with the particles.
-  EXPECT_NEAR(last.reals_mean[0], got.mean, 1e-12);
-  EXPECT_NEAR(last.reals_sd[0], std::sqrt(got.var), 1e-9);
+  const auto exact = ExactPosterior({}, {}, prior, 0.5, 3.0, 0.2, -15.0, 17.0);
+  for (const auto binary : {BinaryKernelKind::kIndependent, BinaryKernelKind::kLogistic}) {
+    auto o = ListOptions({2.0, 1.0, 0.5, 0.2}, GetParam(), 3000, 31);
+    o.proposal.binary = binary;
+    const auto h = RunCombinatorialSmc({&space, &sim, &dist}, o);
+    ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
+    const auto& last = h.waves.back();
+    const auto got = RealMoments(last);
+    std::printf(
+        "%s x %s: mean %.4f (exact %.4f), var %.4f (exact %.4f), ESS %.0f, %lld "
+        "simulations\n",
+        ToString(binary),
+        ToString(GetParam()),
+        got.mean,
+        exact.mean,
+        got.var,
+        exact.var,
+        last.ess,
+        static_cast<long long>(h.summary.simulations));
+    ASSERT_GT(last.ess, 500.0);
+    EXPECT_TRUE(last.marginals_importance.empty());
+    for (const auto& p : last.particles) EXPECT_TRUE(p.theta.bits.empty());
+    // Standard errors of a mean and of a variance (Gaussian kurtosis) from ESS samples.
+    EXPECT_NEAR(got.mean, exact.mean, 5.0 * std::sqrt(exact.var / last.ess));
+    EXPECT_NEAR(got.var, exact.var, 5.0 * exact.var * std::sqrt(2.0 / last.ess));
+    // The summary statistics the history stores agree with the particles.
+    EXPECT_NEAR(last.reals_mean[0], got.mean, 1e-12);
+    EXPECT_NEAR(last.reals_sd[0], std::sqrt(got.var), 1e-9);
+  }
 }
 
 // Bits b1..b3 (weights 1, -0.5, 2) plus theta ~ U(-2, 2); y = 1.7, sigma = 0.3, eps = 0.25.
@@ -228,8 +237,8 @@ TEST(SimulationBasedCalibration, RanksAreUniform) {
   prior.kind = PriorKind::kNormal;
   prior.mean = 0.0;
   prior.sd = 1.0;
-  const ParameterSpace space(BinarySpace::Independent(1, 0.0), {{"theta", prior}});
-  const LinearGaussianSimulator sim({0.0}, 0.5);
+  const ParameterSpace space(BinarySpace::Independent(0), {{"theta", prior}});
+  const LinearGaussianSimulator sim({}, 0.5);
   constexpr int kReplicates = 200, kDraws = 9;
   constexpr double kEps = 0.2;
   std::vector<int> bins(kDraws + 1, 0);

@@ -60,6 +60,15 @@ struct AnswerConfiguration {
   std::vector<std::string> fixed;  // the names of its bits set to 1
 };
 
+// A continuous parameter's posterior mean, its Monte-Carlo standard error (sd / sqrt(n), n the
+// estimator's effective sample size, as for the bits) and its posterior sd.
+struct AnswerReal {
+  std::string name;
+  double mean = 0.0;
+  double mc_se = 0.0;
+  double sd = 0.0;
+};
+
 struct WaveEffort {
   int wave = 0;  // from 1
   double ess = 0.0;
@@ -80,8 +89,10 @@ struct Answer {
   std::int64_t distinct = 0;    // distinct configurations among them
   double effective_size = 0.0;  // the sample size the standard errors assume (infinite if exact)
   std::string termination;      // the run's (metadata), e.g. "budget_exhausted"
-  std::vector<AnswerBit> bits;
-  std::vector<AnswerConfiguration> top_configurations;  // most probable first, at most 10
+  std::vector<AnswerBit> bits;  // none in a continuous-only run
+  std::vector<AnswerConfiguration> top_configurations;  // most probable first, at most 10; none
+                                                        // without bits
+  std::vector<AnswerReal> reals;                        // the run's [parameters.<name>]
   std::vector<WaveEffort> per_wave;
   // Multi-fidelity runs only (a wave with WaveRecord::multi_fidelity): the expensive simulations
   // of all waves, among `simulations` candidates, each of which ran the cheap simulator.
@@ -99,12 +110,13 @@ Answer SummariseAnswer(const RunMetadata& metadata,
                        const std::vector<std::optional<BitPosition>>& positions = {});
 
 // The answer as summary.json's "answer" object (docs/history.md), indented by `indent` spaces
-// after its first line.
+// after its first line; "reals" only for a run with continuous parameters.
 std::string AnswerJson(const Answer& answer, int indent = 2);
 
 // The answer for a terminal: one screen (the sensor's clamps as one table per edge, side by side),
-// then the `configurations` most probable configurations and each wave's ESS and simulations, and
-// for a multi-fidelity run one line with its expensive simulations.
+// then the `configurations` most probable configurations, the continuous parameters' means and sds,
+// each wave's ESS and simulations, and for a multi-fidelity run one line with its expensive
+// simulations. A continuous-only run has no bit lines and no configurations.
 std::string AnswerText(const Answer& answer, std::size_t configurations = 5);
 
 }  // namespace combabc

@@ -14,7 +14,7 @@ namespace combabc {
 inline constexpr int kMaxBits = 4096;
 
 struct BinarySpaceOptions {
-  int dimension = 0;                   // d, number of bits; must be >= 1
+  int dimension = 0;                   // d, number of bits; 0: a continuous-only space
   std::vector<double> prior_one;       // P(bit = 1) per bit; empty = default_prior_one for all
   double default_prior_one = 0.5;      // used when prior_one is empty
   std::vector<std::vector<int>> tied;  // groups of 0-based bit indices constrained equal
