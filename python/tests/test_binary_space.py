@@ -34,6 +34,6 @@ csv = "p.csv"
 type = "least_squares"
 """)
     with pytest.raises(combabc.Error,
-                       match=rf"run.toml:5: simulator.bits.count: must be in \[1, "
+                       match=rf"run.toml:5: simulator.bits.count: must be in \[0, "
                              rf"{combabc.MAX_BITS}\]"):
         combabc.run(config)

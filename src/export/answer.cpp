@@ -96,9 +96,11 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
     c.bits = bits;
     c.mass = total > 0 ? m / total : 0.0;
     if (!exact) {
-      c.mass_se = SignedWeightsError(w, c.mass, [&bits](const Particle& q) {
-                    for (std::size_t b = 0; b < bits.size(); ++b) {
-                      if ((bits[b] == '1') != (q.theta.bits[b] != 0)) return false;
+      // A structured binding cannot be captured (before C++20 as clang 14 reads it): a name.
+      const std::string& pattern = bits;
+      c.mass_se = SignedWeightsError(w, c.mass, [&pattern](const Particle& q) {
+                    for (std::size_t b = 0; b < pattern.size(); ++b) {
+                      if ((pattern[b] == '1') != (q.theta.bits[b] != 0)) return false;
                     }
                     return true;
                   }).value_or(StandardError(c.mass, effective_size));

@@ -148,6 +148,38 @@ TEST_F(MpiRun, AnyThreadsAndRanksGiveTheSameHistory) {
   EXPECT_EQ(Launch(0, {"verify", dir_ / "np3/history.sqlite"}, dir_.path()).exit_code, 0);
 }
 
+// A multi-fidelity run (a coarser tiny sensor as the cheap model, a fixed cost ratio so that the
+// tuning is deterministic): its continuation draws, confirmations and call times cross the ranks
+// with the batch's other results, and the history is the same for any threads and ranks.
+TEST_F(MpiRun, AMultiFidelityRunIsTheSameForAnyThreadsAndRanks) {
+  std::ofstream(dir_ / "mf.toml") << TinySensorConfig(
+      "seed = 3\nwaves = 3\naccepted_per_wave = 30\n",
+      "[sampler.multi_fidelity]\ncontinue_if_rejected = 0.3\ncost_ratio = 10\n"
+      "[simulator.low_fidelity]\nkind = \"sensor\"\n"
+      "[simulator.low_fidelity.model.mesh]\nelements_per_section = 1\n"
+      "elements_across_width = 1\n");
+  const std::string config = dir_ / "mf.toml";
+  auto run = [&](int np, const std::string& threads, const std::string& out) {
+    const CliResult r = Launch(
+        np, {"run", config, "-o", dir_ / out, "-j", threads, "-q", "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 0) << out << ": " << r.err;
+    return Load(dir_ / (out + "/history.sqlite"));
+  };
+  const RunHistory reference = run(0, "1", "mf-threads1");
+  ASSERT_FALSE(reference.waves.empty());
+  std::int64_t expensive = 0;
+  for (const WaveRecord& w : reference.waves) {
+    ASSERT_TRUE(w.multi_fidelity);
+    expensive += w.multi_fidelity->expensive_simulations;
+  }
+  EXPECT_GT(expensive, 0);
+  for (const auto& [np, threads, out] : std::vector<std::tuple<int, std::string, std::string>>{
+           {0, "2", "mf-threads2"}, {2, "1", "mf-np2"}, {3, "1", "mf-np3"}}) {
+    std::string where;
+    EXPECT_TRUE(SameHistory(reference, run(np, threads, out), &where)) << out << ": " << where;
+  }
+}
+
 TEST_F(MpiRun, AFailureOnRankZeroEndsEveryRankWithItsExitCode) {
   WriteConfig("run.toml", 2, 10);
   const std::string config = dir_ / "run.toml";
