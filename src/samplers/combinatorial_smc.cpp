@@ -53,6 +53,9 @@ constexpr double kMinBatchSeconds = 0.05;
 constexpr double kMaxBatchSeconds = 5.0;
 // Acceptances after which a wave's batches are sized from its own acceptance rate.
 constexpr std::size_t kOwnRateAfter = 10;
+// The confirmed candidates of one class (cheap model accepted / rejected) a wave needs before the
+// tuning may lower that class's continuation probability (ChooseNextContinuation).
+constexpr std::int64_t kMinConfirmations = 20;
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -272,6 +275,7 @@ class SmcRun {
                                  std::vector<double>& offsets) const {
     std::vector<double> thresholds;
     std::vector<double> column;
+    std::vector<double> weights;  // a multi-fidelity wave's, for its confirmed distances
     offsets.assign(schedules_.size(), 0.0);
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
       const std::size_t k = threshold_components_[s];
@@ -287,6 +291,7 @@ class SmcRun {
         if (std::isfinite(best)) offsets[s] = best;
       }
       column.clear();
+      weights.clear();
       if (previous) {
         // A multi-fidelity wave: the expensive distances of its confirmed particles with a
         // positive multiplier (the thresholds are the expensive model's; a cheap model far from
@@ -296,13 +301,17 @@ class SmcRun {
         const bool confirmed = std::any_of(previous->particles.begin(),
                                            previous->particles.end(),
                                            [](const Particle& p) { return p.confirmed; });
+        // The confirmed ones count 1 / their continuation probability: they stand for the
+        // particles of their kind that were not confirmed (a quantile over them alone would
+        // lean to the false negatives, confirmed far more often when eta_1 is small).
         for (const auto& p : previous->particles) {
           if (p.multiplier > 0.0 && (p.confirmed || !confirmed)) {
             column.push_back(p.distance[k] - offsets[s]);
+            if (confirmed) weights.push_back(InverseContinuation(p, *previous));
           }
         }
       }
-      double eps = schedules_[s].ThresholdFor(t, column);
+      double eps = schedules_[s].ThresholdFor(t, column, weights);
       if (IsLikelihood(s) && schedules_[s].kind == ThresholdKind::kQuantile && previous) {
         // Near the posterior the quantile of d - m can exceed T (many configurations within a
         // few T): force a geometric decrease so the schedule cannot stall above 1.
@@ -723,8 +732,28 @@ class SmcRun {
     statistics.w_false_positive += std::exp(unkept.unkept_false_positive_log_w2 - 2.0 * max_lw);
     statistics.cheap_accepted = std::min(cheap_accepted / static_cast<double>(candidates), 1.0);
     const auto eta = OptimalContinuation(statistics, mf.floor);
-    fidelity.next_continue_if_accepted = eta.continue_if_accepted;
-    fidelity.next_continue_if_rejected = eta.continue_if_rejected;
+    // The tuning lowers an eta only on the evidence of at least kMinConfirmations confirmed
+    // candidates of its class (the cheap model accepted / rejected them in this wave): from
+    // fewer, "no error seen" is no evidence, and an eta sent to the floor on it would rarely
+    // confirm again, leaving the cheap model's errors in place with weights that show no spread
+    // (the sensor example's seeds 7 and 23: wave 2 tuned from 16-27 confirmations kept the
+    // sensor's answer, P = 0.64 where the truth is 1).
+    std::int64_t accepted_confirmed = unkept.unkept_false_positives;
+    for (const auto& p : wave.particles) {
+      if (p.confirmed && AcceptanceProbability(p.low_distance, wave.thresholds, offsets_) > 0.5) {
+        ++accepted_confirmed;
+      }
+    }
+    const std::int64_t rejected_confirmed =
+        std::max<std::int64_t>(fidelity.expensive_simulations - accepted_confirmed, 0);
+    fidelity.next_continue_if_accepted =
+        accepted_confirmed >= kMinConfirmations
+            ? eta.continue_if_accepted
+            : std::max(eta.continue_if_accepted, fidelity.continue_if_accepted);
+    fidelity.next_continue_if_rejected =
+        rejected_confirmed >= kMinConfirmations
+            ? eta.continue_if_rejected
+            : std::max(eta.continue_if_rejected, fidelity.continue_if_rejected);
   }
 
   // Every threshold of the wave is infinite (the first wave of an adaptive schedule).

@@ -45,10 +45,14 @@ bool ThresholdSchedule::IsValid(const std::string& where, int num_waves, std::st
   return true;
 }
 
-double ThresholdSchedule::ThresholdFor(int wave, std::span<const double> previous_accepted) const {
+double ThresholdSchedule::ThresholdFor(int wave,
+                                       std::span<const double> previous_accepted,
+                                       std::span<const double> weights) const {
   if (kind == ThresholdKind::kList) return values.at(static_cast<std::size_t>(wave));
   if (wave == 0 || previous_accepted.empty()) return std::max(initial, target);
-  return std::max(target, EmpiricalQuantile(previous_accepted, quantile));
+  return std::max(target,
+                  weights.empty() ? EmpiricalQuantile(previous_accepted, quantile)
+                                  : WeightedQuantile(previous_accepted, weights, quantile));
 }
 
 bool ThresholdSchedule::IsFinal(int wave, double eps) const {
@@ -64,6 +68,27 @@ double EmpiricalQuantile(std::span<const double> values, double alpha) {
   rank = std::clamp<std::size_t>(rank, 1, v.size());
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(rank - 1), v.end());
   return v[rank - 1];
+}
+
+double WeightedQuantile(std::span<const double> values,
+                        std::span<const double> weights,
+                        double alpha) {
+  COMBABC_CHECK(!values.empty() && values.size() == weights.size() && alpha > 0.0 && alpha <= 1.0);
+  std::vector<std::size_t> order(values.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  // Ties by index, so that the order (and the cumulative sums) never depend on the sort.
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return values[a] < values[b] || (values[a] == values[b] && a < b);
+  });
+  double total = 0.0;
+  for (double w : weights) total += w;
+  COMBABC_CHECK(total > 0.0);
+  double cumulative = 0.0;
+  for (std::size_t i : order) {
+    cumulative += weights[i];
+    if (cumulative >= alpha * total) return values[i];
+  }
+  return values[order.back()];
 }
 
 }  // namespace combabc

@@ -20,8 +20,11 @@ struct MultiFidelityOptions {
   // size per unit cost (the two values above are then the first wave's only).
   bool adapt = true;
   // The least continuation probability tuning may choose, in (0, 1]: it bounds the multiplier of
-  // a confirmed candidate by 1 / floor.
-  double floor = 0.01;
+  // a confirmed candidate by 1 / floor, and keeps each class of candidates confirmed often
+  // enough that the cheap model's errors are seen. 0.1, not the paper's 0.01: at 0.01 a wave of
+  // a few hundred particles often confirms none of the cheap model's false positives, and its
+  // answer is then the cheap model's (docs/algorithm.md, "Multi-fidelity sampling").
+  double floor = 0.1;
   // The cost of one expensive simulation over one cheap one, > 0; 0: measured, from the previous
   // waves' summed call times (not deterministic: set it for bit-for-bit reproducible runs).
   double cost_ratio = 0.0;

@@ -33,8 +33,11 @@ struct ThresholdSchedule {
   bool IsValid(const std::string& where, int num_waves, std::string* why) const;
 
   // Threshold for wave t given the previous wave's accepted distances for this component
-  // (empty for t = 0).
-  double ThresholdFor(int wave, std::span<const double> previous_accepted) const;
+  // (empty for t = 0), weighted by `weights` when given (one per distance, >= 0; a
+  // multi-fidelity run's confirmed particles counted 1 / their continuation probability).
+  double ThresholdFor(int wave,
+                      std::span<const double> previous_accepted,
+                      std::span<const double> weights = {}) const;
   // True when eps is this schedule's last (target) threshold at this wave.
   bool IsFinal(int wave, double eps) const;
 };
@@ -42,5 +45,10 @@ struct ThresholdSchedule {
 // The alpha-quantile (inverse empirical CDF, no interpolation: the smallest x with F(x) >= alpha)
 // so that at least a fraction alpha of the values lie at or below it. Copies and partially sorts.
 double EmpiricalQuantile(std::span<const double> values, double alpha);
+// The same under weights w_i >= 0 (sum > 0): the smallest x whose values at or below it carry at
+// least a fraction alpha of the total weight.
+double WeightedQuantile(std::span<const double> values,
+                        std::span<const double> weights,
+                        double alpha);
 
 }  // namespace combabc
