@@ -38,8 +38,7 @@ std::string MissingProgram(const std::string& example) {
 }
 
 // Examples too slow to run as shipped here (sensor-multifidelity: about 1,300 CalculiX runs alone,
-// 34-174 multi-fidelity, whose answer depends on the seed); each runs reduced in a test of its own,
-// named here.
+// 310-636 multi-fidelity); each runs reduced in a test of its own, named here.
 std::string OwnReducedTest(const std::string& example) {
   if (example == "sensor-multifidelity") return "tests/examples/sensor_multifidelity_test.cpp";
   return {};
