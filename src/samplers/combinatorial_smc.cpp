@@ -733,14 +733,15 @@ class SmcRun {
     statistics.cheap_accepted = std::min(cheap_accepted / static_cast<double>(candidates), 1.0);
     const auto eta = OptimalContinuation(statistics, mf.floor);
     // The tuning lowers an eta only on the evidence of at least kMinConfirmations confirmed
-    // candidates of its class (the cheap model accepted / rejected them in this wave): from
-    // fewer, "no error seen" is no evidence, and an eta sent to the floor on it would rarely
-    // confirm again, leaving the cheap model's errors in place with weights that show no spread
-    // (the sensor example's seeds 7 and 23: wave 2 tuned from 16-27 confirmations kept the
-    // sensor's answer, P = 0.64 where the truth is 1).
+    // candidates of its class, classed as the tuning classes them, by the next wave's thresholds
+    // (a wave of infinite thresholds would count every confirmation as a cheap acceptance):
+    // from fewer, "no error seen" is no evidence, and an eta sent to the floor on it would
+    // rarely confirm again, leaving the cheap model's errors in place with weights that show no
+    // spread. On the sensor example the default floor (0.1) is what kept every seed right; this
+    // guard keeps the tuning from acting on a handful (docs/algorithm.md, "Tuning").
     std::int64_t accepted_confirmed = unkept.unkept_false_positives;
     for (const auto& p : wave.particles) {
-      if (p.confirmed && AcceptanceProbability(p.low_distance, wave.thresholds, offsets_) > 0.5) {
+      if (p.confirmed && AcceptanceProbability(p.low_distance, eps, offsets) > 0.5) {
         ++accepted_confirmed;
       }
     }
