@@ -38,7 +38,7 @@ std::string MissingProgram(const std::string& example) {
 }
 
 // Examples too slow to run as shipped here (sensor-multifidelity: about 1,300 CalculiX runs alone,
-// 310-636 multi-fidelity); each runs reduced in a test of its own, named here.
+// 491-636 multi-fidelity); each runs reduced in a test of its own, named here.
 std::string OwnReducedTest(const std::string& example) {
   if (example == "sensor-multifidelity") return "tests/examples/sensor_multifidelity_test.cpp";
   return {};

@@ -1,5 +1,5 @@
 // examples/sensor-multifidelity with CalculiX in the loop, reduced (its config.toml as shipped is
-// about 1,300 ccx runs, config-multifidelity.toml 310-636 over three seeds): the expensive model
+// about 1,300 ccx runs, config-multifidelity.toml 491-636 over three seeds): the expensive model
 // alone, on the example's 36 clamp bits with ties and prior-0 clamps, enumerated over three of its
 // five tied pairs (clamps 9 + 27, 10 + 28, 11 + 29; 16 configurations, 8 ccx runs with prior mass),
 // must put all the posterior mass on the truth the data were made from (clamps 9, 11, 27, 29 fixed;
