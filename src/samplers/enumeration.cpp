@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -319,8 +320,12 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     for (std::int64_t i = 0; i < n; ++i) {
       const auto u = static_cast<std::size_t>(i);
       if (!accept(batch.distance(u))) continue;
-      ++result.accepted;
       const double log_prior = batch.log_prior(u);
+      // A configuration of prior mass 0 (a bit or tied group of prior 0 or 1 set the other way)
+      // has no posterior mass: not counted as accepted, not listed (were only such accepted, the
+      // weights below would divide by a zero evidence).
+      if (log_prior == -std::numeric_limits<double>::infinity()) continue;
+      ++result.accepted;
       const double mass = std::exp(log_prior);
       mass_sq_sum += mass * mass;
       const auto bits = batch.bits(u);

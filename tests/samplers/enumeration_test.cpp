@@ -220,6 +220,38 @@ TEST(Enumeration, NothingAcceptedHasNoPosterior) {
   EXPECT_TRUE(none.top.empty());
 }
 
+// A configuration of prior mass 0 (here bit 3, prior 0, set) has no posterior mass: it is not
+// counted as accepted nor listed, and when only such configurations pass the thresholds there is
+// no posterior (not weights divided by a zero evidence).
+TEST(Enumeration, ConfigurationsOfPriorMassZeroAreNotAccepted) {
+  constexpr int d = 4;
+  BinarySpaceOptions o;
+  o.dimension = d;
+  o.prior_one = {0.5, 0.5, 0.5, 0.0};
+  const ParameterSpace space{BinarySpace(o)};
+  testing::IdentitySimulator sim{d};
+  testing::WeightedL1Distance dist{{1, 0, 1, 0}, {1, 1, 1, 0.5}};
+  EnumerationOptions options;
+  options.thresholds = {0.5};
+  options.top = 10;
+  // Distance <= 0.5: the target 1010 and 1011 (bit 3 weighs 0.5); 1011 has prior 0.
+  const auto r = Enumerate({&space, &sim, &dist}, options);
+  EXPECT_EQ(r.configurations, 16);
+  EXPECT_EQ(r.accepted, 1);
+  EXPECT_NEAR(r.evidence, 0.125, 1e-15);
+  ASSERT_EQ(r.top.size(), 1U);
+  EXPECT_EQ(r.top[0].weight, 1.0);
+  EXPECT_EQ(r.marginals[3], 0.0);
+  // Only the prior-0 configuration 1011 within the thresholds: nothing accepted.
+  testing::WeightedL1Distance only_zero{{1, 0, 1, 1}, {1, 1, 1, 0.5}};
+  options.thresholds = {0.0};
+  const auto none = Enumerate({&space, &sim, &only_zero}, options);
+  EXPECT_EQ(none.accepted, 0);
+  EXPECT_EQ(none.evidence, 0.0);
+  EXPECT_TRUE(none.top.empty());
+  EXPECT_TRUE(none.particles.empty());
+}
+
 std::string ErrorOf(const SmcProblem& problem, const EnumerationOptions& options) {
   try {
     Enumerate(problem, options);

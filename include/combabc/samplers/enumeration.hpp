@@ -31,7 +31,7 @@ struct EnumerationOptions {
 struct EnumerationResult {
   std::int64_t configurations = 0;  // 2^free bits
   std::int64_t enumerated = 0;      // < configurations only when interrupted
-  std::int64_t accepted = 0;        // accepted configurations
+  std::int64_t accepted = 0;        // accepted configurations (of prior mass > 0)
   bool interrupted = false;
   double evidence = 0.0;  // prior mass of the accepted configurations, P(accepted)
   // The exact ABC posterior (empty when nothing was accepted).
