@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 
+#include "checkpoints.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "toy_models.hpp"
@@ -502,36 +503,7 @@ TEST(MultiFidelity, SameHistoryForOneAndTwoThreads) {
   EXPECT_NE(one.waves.back().multi_fidelity->continue_if_rejected, 0.3);
 }
 
-// Records the run's state at every checkpoint, as the SQLite history does.
-class Checkpoints : public SmcObserver {
- public:
-  void OnWaveStart(const WaveRecord& w) override { current_.clear(), wave_ = w.wave; }
-  void OnBatch(const BatchProgress& p, std::span<const Particle> accepted) override {
-    current_.insert(current_.end(), accepted.begin(), accepted.end());
-    ResumePoint r;
-    r.completed = completed_;
-    r.has_partial = true;
-    r.partial_wave = wave_;
-    r.partial_next_index = p.next_index;
-    r.partial_accepted = current_;
-    r.partial_discarded = p.discarded;
-    r.partial_fidelity = p.fidelity;
-    points.push_back(std::move(r));
-  }
-  void OnWaveEnd(const WaveRecord& w) override {
-    if (!w.complete) return;
-    completed_.push_back(w);
-    ResumePoint between_waves;  // killed after the wave ended, before the next one's first batch
-    between_waves.completed = completed_;
-    points.push_back(std::move(between_waves));
-  }
-  std::vector<ResumePoint> points;
-
- private:
-  int wave_ = 0;
-  std::vector<Particle> current_;
-  std::vector<WaveRecord> completed_;
-};
+using testing::Checkpoints;
 
 TEST(MultiFidelity, ResumingFromAnyCheckpointReproducesTheUninterruptedRun) {
   Toy toy;
