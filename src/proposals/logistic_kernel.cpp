@@ -11,6 +11,7 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "proposals/log_sum_exp.hpp"
 #include "proposals/weighted_logistic_regression.hpp"
 
 namespace combabc {
@@ -25,13 +26,6 @@ constexpr int kMarginalsDraws = 1024;
 
 // log(p / (1 - p)); -inf at 0 and +inf at 1.
 double Logit(double p) { return std::log(p) - std::log1p(-p); }
-
-// log(e^a + e^b), either of which may be -inf.
-double LogSumExp(double a, double b) {
-  const double high = std::max(a, b);
-  if (high == -std::numeric_limits<double>::infinity()) return high;
-  return high + std::log1p(std::exp(std::min(a, b) - high));
-}
 
 // Independent Bernoulli bits: the prior (wave 0, an empty population, phi = 1).
 class IndependentBernoulliProposal final : public BinaryProposal {

@@ -10,18 +10,12 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/proposals/proposal_options.hpp"
+#include "proposals/log_sum_exp.hpp"
 #include "samplers/candidate_batch.hpp"
 #include "samplers/continuation_tuning.hpp"
 
 namespace combabc {
 namespace {
-
-// log(exp(a) + exp(b)) without overflow; -inf + -inf stays -inf.
-double LogAddExp(double a, double b) {
-  const double hi = std::max(a, b);
-  if (hi == -std::numeric_limits<double>::infinity()) return hi;
-  return hi + std::log1p(std::exp(std::min(a, b) - hi));
-}
 
 // A wave's effective number of accepted candidates, (sum m)^2 / sum m^2 over its particles'
 // multipliers m (docs/algorithm.md, "Multi-fidelity sampling"): a wave ends when it reaches
@@ -605,7 +599,7 @@ class SmcRun {
           auto& fidelity = *wave.multi_fidelity;
           ++fidelity.unkept_false_positives;
           fidelity.unkept_false_positive_log_w2 =
-              LogAddExp(fidelity.unkept_false_positive_log_w2, 2.0 * batch.log_weight(i));
+              LogSumExp(fidelity.unkept_false_positive_log_w2, 2.0 * batch.log_weight(i));
         }
         stop = CheckCandidate(wave, next_index + i);
         if (stop) {
