@@ -7,6 +7,7 @@
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
+#include "config/config_error.hpp"
 
 namespace combabc {
 namespace {
@@ -30,15 +31,7 @@ const std::string kCommand =
     "[simulator.outputs]\n"
     "coordinates = [0.1, 0.2, 0.3]\n";
 
-std::string ErrorOf(const std::string& text) {
-  try {
-    ParseConfig(text, "dir/run.toml");
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
-    return e.what();
-  }
-  return "no error";
-}
+using testing::ConfigErrorOf;
 
 TEST(LowFidelityConfig, ACheapSensorOfTheSensorWithACoarserMeshAndItsOptions) {
   const CalibrationConfig c = ParseConfig(
@@ -109,47 +102,48 @@ TEST(LowFidelityConfig, MistakesAreLocatedAtTheirKey) {
       "[simulator.low_fidelity]\nkind = \"worker\"\nargv = [\"w\"]\n"
       "[simulator.low_fidelity.bits]\ncount = 4\n[simulator.low_fidelity.outputs]\n";
   // Outputs that miss an expensive coordinate.
-  EXPECT_EQ(ErrorOf(kCommand + cheap_worker + "coordinates = [0.1, 0.3]\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf(kCommand + cheap_worker + "coordinates = [0.1, 0.3]\n" + kRest)
                 .rfind("dir/run.toml:13: simulator.low_fidelity.outputs: has no output at 0.2", 0),
             0u);
   // Other bits.
   EXPECT_EQ(
-      ErrorOf(sensor + kCommand +
-              "[simulator.low_fidelity]\n[simulator.low_fidelity.model.clamps]\nper_edge = 3\n" +
-              kRest)
+      ConfigErrorOf(
+          sensor + kCommand +
+          "[simulator.low_fidelity]\n[simulator.low_fidelity.model.clamps]\nper_edge = 3\n" + kRest)
           .rfind("dir/run.toml:12: simulator.low_fidelity.model.clamps.per_edge: the cheap "
                  "sensor has 6 clamps",
                  0),
       0u);
-  EXPECT_EQ(ErrorOf(kCommand +
+  EXPECT_EQ(
+      ConfigErrorOf(kCommand +
                     "[simulator.low_fidelity]\nkind = \"command\"\nargv = [\"c\", \"{params}\"]\n"
                     "[simulator.low_fidelity.bits]\ncount = 5\n"
                     "[simulator.low_fidelity.outputs]\ncoordinates = [0.1, 0.2, 0.3]\n" +
                     kRest)
-                .rfind("dir/run.toml:12: simulator.low_fidelity.bits.count: declares 5 bits; the "
-                       "run has 4",
-                       0),
-            0u);
+          .rfind("dir/run.toml:12: simulator.low_fidelity.bits.count: declares 5 bits; the "
+                 "run has 4",
+                 0),
+      0u);
   // Outputs off the cheap sensor's plate.
   std::string far = kCommand;
   far.replace(far.find("0.3]"), 4, "1.5]");
-  EXPECT_NE(ErrorOf(sensor + far + "[simulator.low_fidelity]\n" + kRest)
+  EXPECT_NE(ConfigErrorOf(sensor + far + "[simulator.low_fidelity]\n" + kRest)
                 .find("dir/run.toml:10: simulator.low_fidelity.kind: the expensive simulator's "
                       "output at 1.5"),
             std::string::npos);
   // Unknown keys, in the table and in its model.
-  EXPECT_EQ(ErrorOf("[simulator.low_fidelity]\nspeed = 2\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf("[simulator.low_fidelity]\nspeed = 2\n" + kRest)
                 .rfind("dir/run.toml:2: simulator.low_fidelity.speed: unknown key", 0),
             0u);
-  EXPECT_EQ(ErrorOf("[simulator.low_fidelity.model]\nlenght = 2\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf("[simulator.low_fidelity.model]\nlenght = 2\n" + kRest)
                 .rfind("dir/run.toml:2: simulator.low_fidelity.model.lenght: unknown key", 0),
             0u);
-  EXPECT_EQ(ErrorOf("[simulator.low_fidelity.model.load]\nx = 0.2\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf("[simulator.low_fidelity.model.load]\nx = 0.2\n" + kRest)
                 .rfind("dir/run.toml:1: simulator.low_fidelity.model.load: the cheap sensor "
                        "simulates the run's experiments",
                        0),
             0u);
-  EXPECT_EQ(ErrorOf(kCommand + "[simulator.low_fidelity]\nkind = \"shell\"\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf(kCommand + "[simulator.low_fidelity]\nkind = \"shell\"\n" + kRest)
                 .rfind("dir/run.toml:9: simulator.low_fidelity.kind: unknown simulator kind", 0),
             0u);
   // [sampler.multi_fidelity]: ranges, and no options without a cheap simulator.
@@ -162,28 +156,28 @@ TEST(LowFidelityConfig, MistakesAreLocatedAtTheirKey) {
     text += bad;
     text += "\n";
     text += kRest;
-    EXPECT_EQ(ErrorOf(text).rfind(
+    EXPECT_EQ(ConfigErrorOf(text).rfind(
                   "dir/run.toml:3: sampler.multi_fidelity." + key + ": must be in (0, 1]", 0),
               0u)
         << bad;
   }
   EXPECT_EQ(
-      ErrorOf(low + "[sampler.multi_fidelity]\ncost_ratio = 0\n" + kRest)
+      ConfigErrorOf(low + "[sampler.multi_fidelity]\ncost_ratio = 0\n" + kRest)
           .rfind("dir/run.toml:3: sampler.multi_fidelity.cost_ratio: must be finite and > 0", 0),
       0u);
-  EXPECT_EQ(ErrorOf(low + "[sampler.multi_fidelity]\nslack = 1\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf(low + "[sampler.multi_fidelity]\nslack = 1\n" + kRest)
                 .rfind("dir/run.toml:3: sampler.multi_fidelity.slack: unknown key", 0),
             0u);
-  EXPECT_EQ(ErrorOf("[sampler.multi_fidelity]\nfloor = 0.1\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf("[sampler.multi_fidelity]\nfloor = 0.1\n" + kRest)
                 .rfind("dir/run.toml:1: sampler.multi_fidelity: multi-fidelity options need a "
                        "cheap simulator: add [simulator.low_fidelity]",
                        0),
             0u);
   // [model] beside an external simulator only configures a cheap sensor.
-  EXPECT_EQ(ErrorOf("[model]\nlength = 1\n" + kCommand + kRest)
+  EXPECT_EQ(ConfigErrorOf("[model]\nlength = 1\n" + kCommand + kRest)
                 .rfind("dir/run.toml:1: model: [model] configures the built-in sensor", 0),
             0u);
-  EXPECT_EQ(ErrorOf("[model]\nlength = 1\n" + sensor + kCommand + low + kRest), "no error");
+  EXPECT_EQ(ConfigErrorOf("[model]\nlength = 1\n" + sensor + kCommand + low + kRest), "no error");
 }
 
 }  // namespace

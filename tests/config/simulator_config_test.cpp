@@ -7,6 +7,7 @@
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
+#include "config/config_error.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc {
@@ -32,15 +33,7 @@ const std::string kWorker =
     "name = \"strain\"\n"
     "coordinates = [0.0, 0.1, 0.2]\n";
 
-std::string ErrorOf(const std::string& text) {
-  try {
-    ParseConfig(text, "dir/run.toml");
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kConfig);
-    return e.what();
-  }
-  return "no error";
-}
+using testing::ConfigErrorOf;
 
 TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   const CalibrationConfig c = ParseConfig("[model.clamps]\nper_edge = 3\n" + kRest, "run.toml");
@@ -51,7 +44,7 @@ TEST(SimulatorConfig, TheSensorIsTheDefaultAndDeclaresItsClampsAndPositions) {
   // Where the bits are set, for refusals of the space's size (enumerate's 2^24).
   EXPECT_EQ(c.bits_key, "model.clamps.per_edge");
   EXPECT_EQ(c.bits_line, 2);
-  EXPECT_EQ(ErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest)
+  EXPECT_EQ(ConfigErrorOf("[simulator]\nkind = \"sensor\"\nargv = [\"x\"]\n" + kRest)
                 .find("dir/run.toml:3: simulator.argv: unknown key"),
             0u);
 }
@@ -102,12 +95,12 @@ TEST(SimulatorConfig, ASimulatorWithoutBitsCalibratesItsRealParameters) {
     std::string why;
     EXPECT_TRUE(c.space.IsValid(&why)) << why;
   }
-  EXPECT_EQ(ErrorOf(head + kRest)
+  EXPECT_EQ(ConfigErrorOf(head + kRest)
                 .find("dir/run.toml:1: simulator.bits: the simulator has no "
                       "parameters to calibrate"),
             0u)
-      << ErrorOf(head + kRest);
-  EXPECT_NE(ErrorOf(head + "[simulator.bits]\ncount = -1\n" + kRest + real)
+      << ConfigErrorOf(head + kRest);
+  EXPECT_NE(ConfigErrorOf(head + "[simulator.bits]\ncount = -1\n" + kRest + real)
                 .find("simulator.bits.count: must be in [0, 4096]"),
             std::string::npos);
 }
@@ -149,31 +142,31 @@ TEST(SimulatorConfig, MistakesAreLocatedAtTheirKey) {
     text.replace(text.find(from), from.size(), to);
     return text + kRest;
   };
-  EXPECT_EQ(ErrorOf("[model]\nlength = 1\n" + kWorker + kRest)
+  EXPECT_EQ(ConfigErrorOf("[model]\nlength = 1\n" + kWorker + kRest)
                 .rfind("dir/run.toml:1: model: [model] configures the built-in sensor", 0),
             0u);
-  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"shell\""))
+  EXPECT_NE(ConfigErrorOf(with("kind = \"worker\"", "kind = \"shell\""))
                 .find("simulator.kind: unknown simulator kind 'shell'; expected one of \"sensor\", "
                       "\"command\", \"worker\""),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("argv = [\"python3\", \"{config_dir}/w.py\"]\n", ""))
+  EXPECT_NE(ConfigErrorOf(with("argv = [\"python3\", \"{config_dir}/w.py\"]\n", ""))
                 .find("simulator.argv: missing required key"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("kind = \"worker\"", "kind = \"command\""))
+  EXPECT_NE(ConfigErrorOf(with("kind = \"worker\"", "kind = \"command\""))
                 .find("simulator.argv: argv has no {params}"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("names = [\"a\", \"b\", \"c\"]", "names = [\"a\", \"a\"]"))
+  EXPECT_NE(ConfigErrorOf(with("names = [\"a\", \"b\", \"c\"]", "names = [\"a\", \"a\"]"))
                 .find("simulator.bits.names: 'a' appears twice"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(with("[0.0, 0.1, 0.2]", "[0.0, 0.2, 0.1]"))
+  EXPECT_NE(ConfigErrorOf(with("[0.0, 0.1, 0.2]", "[0.0, 0.2, 0.1]"))
                 .find("simulator.outputs.coordinates: must be strictly increasing (entry 2)"),
             std::string::npos);
-  EXPECT_NE(
-      ErrorOf(with("timeout = 2.5", "params = \"file\"")).find("simulator.params: unknown key"),
-      std::string::npos)
+  EXPECT_NE(ConfigErrorOf(with("timeout = 2.5", "params = \"file\""))
+                .find("simulator.params: unknown key"),
+            std::string::npos)
       << "params is a command key";
   // The Gaussian extension's default centre is the sensor's load: another simulator must say.
-  EXPECT_NE(ErrorOf(kWorker + kRest + "[data.gaussian_extension]\nfit_points = 3\n")
+  EXPECT_NE(ConfigErrorOf(kWorker + kRest + "[data.gaussian_extension]\nfit_points = 3\n")
                 .find("data.gaussian_extension.impact_position: missing required key"),
             std::string::npos);
 }
