@@ -60,15 +60,27 @@ class Problem:
     as `simulator` is (the same batch and rng), its m outputs standing for the simulator's. Every
     candidate runs it; the simulator runs only with the continuation probabilities of
     options.multi_fidelity (a MultiFidelityOptions), and the posterior is the simulator's.
+
+    parameters: how the simulator (and low_fidelity) receives the parameters. "arrays" (default):
+    f(bits) or f(bits, reals) as above, by position. "dict": f(params), params a dict by name
+    (the bits' names, space.names, then the reals'): {name: int 0/1 or float} per sample,
+    {name: uint8[n] or float64[n]} batched. "pandas": f(params), params a pandas Series of
+    float64 (per sample, bits as 0.0/1.0) or a DataFrame with one row per candidate (batched),
+    columns by name.
     """
 
     def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
-                 distance=None, components=None, distance_batch=None, low_fidelity=None):
+                 distance=None, components=None, distance_batch=None, low_fidelity=None,
+                 parameters="arrays"):
         self.space = space
-        self.simulator = simulator
-        self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.reals = list(reals)
         self.batch = bool(batch)
+        self.parameters = parameters
+        if parameters not in _PARAMETER_STYLES:
+            raise ValueError(f"Problem: parameters = {parameters!r}; expected one of "
+                             + ", ".join(repr(s) for s in _PARAMETER_STYLES))
+        self.simulator = _by_name(simulator, self, "simulator")
+        self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.rng = bool(rng)
         if distance is not None and not callable(distance):
             raise TypeError(f"distance must be callable or None, not {type(distance).__name__}")
@@ -80,7 +92,56 @@ class Problem:
         if low_fidelity is not None and not callable(low_fidelity):
             raise TypeError("low_fidelity must be callable (a cheap simulator) or None, not "
                             f"{type(low_fidelity).__name__}")
-        self.low_fidelity = low_fidelity
+        self.low_fidelity = _by_name(low_fidelity, self, "low_fidelity")
+
+
+_PARAMETER_STYLES = ("arrays", "dict", "pandas")
+
+
+def _by_name(function, problem, what):
+    """The simulator as the engine calls it, f(bits[, reals][, rng=]), for one that takes its
+    parameters by name (Problem(parameters="dict" or "pandas")): a wrapper that builds them."""
+    if function is None or problem.parameters == "arrays":
+        return function
+    bit_names = list(problem.space.names)
+    real_names = [r.name for r in problem.reals]
+    seen = set(bit_names)
+    for name in real_names:
+        if name in seen:
+            raise ValueError(f"Problem: parameters = {problem.parameters!r} needs distinct "
+                             f"names; {name!r} names a bit and a continuous parameter")
+        seen.add(name)
+    empty = np.zeros((0,), dtype=np.float64)
+    if problem.parameters == "dict":
+        if problem.batch:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.T))  # the columns, bit by bit
+                values.update(zip(real_names, reals.T))
+                return values
+        else:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.tolist()))
+                values.update(zip(real_names, reals.tolist()))
+                return values
+    else:
+        import pandas as pd
+        columns = bit_names + real_names
+        if problem.batch:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.T))
+                values.update(zip(real_names, reals.T))
+                return pd.DataFrame(values, columns=columns)
+        else:
+            index = pd.Index(columns)  # made once: a Series costs about 20 us per call
+
+            def build(bits, reals):
+                return pd.Series(np.concatenate([bits, reals]), index=index, copy=False)
+
+    def by_name(bits, reals=empty, **rng):
+        return function(build(bits, reals), **rng)
+
+    by_name.__qualname__ = by_name.__name__ = getattr(function, "__name__", what)
+    return by_name
 
 
 def make_options(**fields):
