@@ -24,17 +24,18 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
-                    MultiFidelityOptions, ProposalOptions, SimulationFailed, SmcOptions,
-                    TemperingSchedule, ThresholdSchedule)
+from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, Error,
+                    LogisticKernelOptions, MultiFidelityOptions, ProposalOptions,
+                    SimulationFailed, SmcOptions, TemperingSchedule, ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
-__all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
-           "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
-           "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
-           "load_history", "make_options", "plot", "resume", "run"]
+__all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "Error", "Experiment",
+           "History", "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions",
+           "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
+           "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
+           "plot", "resume", "run"]
 
 
 class Problem:
@@ -46,8 +47,10 @@ class Problem:
     float64[n, m]. observed: the data y (m values). Raise combabc.SimulationFailed for a
     candidate that failed (a NaN output counts as failed too); any other exception ends the run
     and reaches the caller. rng=True: f also gets the keyword argument rng, a numpy Generator
-    seeded from the candidate's own random stream (batched: a list of n, one per row), so that a
-    stochastic simulator gives the same history for any thread count.
+    seeded from the candidate's own random stream (batched: a combabc.BatchRandom, whose draws
+    are vectorised across the rows, row i from candidate i's stream, and whose items are the
+    rows' numpy Generators), so that a stochastic simulator gives the same history for any thread
+    count and batch size.
 
     distance: None for the Euclidean distance to `observed` (one threshold component named
     "euclidean"), or d(output, observed) -> a number (one component named "distance"); with

@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "batch_random.hpp"
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/distances/euclidean_distance.hpp"
@@ -837,6 +838,7 @@ void BindTypes(py::module_& m) {
       .def_readwrite("target", &ThresholdSchedule::target);
 
   BindProposalTypes(m);
+  BindBatchRandom(m);  // what a batched simulator with rng=True gets
 
   // SmcOptions::multi_fidelity ([sampler.multi_fidelity] in a config): used with
   // Problem(low_fidelity=...).
