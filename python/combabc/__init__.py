@@ -17,7 +17,6 @@
 See docs/python.md.
 """
 
-import numbers
 import os
 import warnings
 
@@ -149,28 +148,18 @@ def _by_name(function, problem, what):
 
 def make_options(**fields):
     """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
-    may be a list of ThresholdSchedule or, for one threshold component, a list of numbers (one
-    per wave; Python's or NumPy's scalars, or a NumPy array). proposal=ProposalOptions(...)
+    (as SmcOptions.thresholds) may be a list of ThresholdSchedule, one per threshold component,
+    or of lists of numbers (one per wave: a "list" schedule), or for one threshold component a
+    list of numbers; numbers are Python's or NumPy's scalars, a list may be a NumPy array. proposal=ProposalOptions(...)
     picks the kernels, tempering=TemperingSchedule(...) tempers the binary proposal toward the
     prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...) sets a multi-fidelity run's
     continuation probabilities (with Problem(low_fidelity=...))."""
     options = SmcOptions()
-    thresholds = fields.pop("thresholds", None)
-    if thresholds is not None:
-        # Numbers of any kind: Python's, NumPy's scalars (numpy.int64 is no int) or an array.
-        if all(_is_number(t) for t in thresholds):
-            thresholds = [ThresholdSchedule(kind="list", values=[float(t) for t in thresholds])]
-        options.thresholds = list(thresholds)
     for name, value in fields.items():
         if not hasattr(options, name):
             raise TypeError(f"SmcOptions has no field {name!r}")
         setattr(options, name, value)
     return options
-
-
-def _is_number(value):
-    """A real number: int, float, a NumPy integer or floating scalar; not a bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _smc_request(problem, options):

@@ -61,12 +61,20 @@ BatchRandom::BatchRandom(std::span<RandomStream> candidates, py::object default_
 std::vector<py::ssize_t> BatchRandom::Shape(const py::object& size, std::size_t& per_row) const {
   std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(seeds_.size())};
   std::vector<py::ssize_t> tail;
-  if (size.is_none()) {
-    // one draw per candidate
-  } else if (PyIndex_Check(size.ptr()) != 0) {
-    tail.push_back(size.cast<py::ssize_t>());
-  } else {
-    for (const py::handle& k : size.cast<py::sequence>()) tail.push_back(k.cast<py::ssize_t>());
+  // An int (Python's, NumPy's, a 0-d array) or a sequence of them (a tuple, a 1-d array).
+  const bool one = py::isinstance<py::array>(size) ? size.cast<py::array>().ndim() == 0
+                                                   : PyIndex_Check(size.ptr()) != 0;
+  try {
+    if (size.is_none()) {
+      // one draw per candidate
+    } else if (one) {
+      tail.push_back(size.cast<py::ssize_t>());
+    } else {
+      for (const py::handle& k : size.cast<py::sequence>()) tail.push_back(k.cast<py::ssize_t>());
+    }
+  } catch (const py::builtin_exception&) {  // cast_error, type_error
+    throw py::type_error("size: None, an int or a tuple of ints, not " +
+                         std::string(py::str(py::type::of(size).attr("__name__"))));
   }
   per_row = 1;
   for (const py::ssize_t k : tail) {
