@@ -23,15 +23,21 @@ def first_three(output, observed):
     return float(np.linalg.norm(output[:3] - observed[:3]))
 
 
-def run(batch_size, threads=1):
-    calls = []
+def noisy_problem(calls):
     space = combabc.BinarySpace(dimension=8, prior_one=PRIOR)
     observed = np.concatenate([OBSERVED, np.zeros(DRAWS)])  # the draws, after the model's
-    problem = combabc.Problem(space, lambda bits, rng: noisy_batch(bits, rng, calls), observed,
-                              batch=True, rng=True, distance=first_three, distance_batch=False)
-    options = combabc.make_options(num_waves=2, accepted_per_wave=200, seed=11, threads=threads,
-                                   thresholds=[6.0, 4.0], batch_size=batch_size)
-    return combabc.run(problem, options), calls
+    return combabc.Problem(space, lambda bits, rng: noisy_batch(bits, rng, calls), observed,
+                           batch=True, rng=True, distance=first_three, distance_batch=False)
+
+
+def noisy_options(batch_size, threads=1, **fields):
+    return combabc.make_options(num_waves=2, accepted_per_wave=200, seed=11, threads=threads,
+                                thresholds=[6.0, 4.0], batch_size=batch_size, **fields)
+
+
+def run(batch_size, threads=1):
+    calls = []
+    return combabc.run(noisy_problem(calls), noisy_options(batch_size, threads)), calls
 
 
 def test_a_batch_of_one_and_of_64_give_each_candidate_the_same_draws():
@@ -86,3 +92,14 @@ def test_the_draws_have_their_distributions_and_shapes():
     np.testing.assert_array_equal(seen["by_row"], np.zeros((n, 2)))
     assert seen["repr"] == f"<combabc.BatchRandom: {n} candidates>"
     assert seen["generators"] == ["Generator"] * n
+
+
+def test_a_resumed_run_draws_what_the_uninterrupted_run_drew(tmp_path):
+    whole, _ = run(batch_size=32)
+    budget = whole.waves[0].candidates + whole.waves[1].candidates // 2
+    stopped = combabc.run(noisy_problem([]), noisy_options(32, max_simulations=budget),
+                          output_directory=tmp_path)
+    assert [w.complete for w in stopped.waves] == [True, False]
+    resumed = combabc.resume(stopped, noisy_problem([]), noisy_options(32),
+                             max_simulations=10 * budget, threads=2)
+    same_history(whole, resumed)
