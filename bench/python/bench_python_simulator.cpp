@@ -3,6 +3,8 @@
 // the simulator is python/src/python_simulator.cpp, as `combabc.run(Problem(...))` uses it, and
 // returns np.zeros, so that what is timed is the engine plus the Python calls. A distance written
 // in Python (python/src/python_simulator.cpp, PythonDistance) is timed the same way: |output[0]|.
+// With rng=True the simulator may draw its noise: batched, vectorised from the BatchRandom
+// (python/src/batch_random.hpp) or candidate by candidate from the numpy Generators it holds.
 #include <benchmark/benchmark.h>
 #include <pybind11/embed.h>
 
@@ -13,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "batch_random.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "python_call.hpp"
 #include "python_distance.hpp"
@@ -39,12 +42,21 @@ class ZeroDistance : public Distance {
   }
 };
 
-// range(0): 0 per sample, 1 vectorised batch; range(1): 1 with an rng (a numpy Generator per
-// candidate); range(2): 1 with the distance written in Python too (per sample or batched as the
-// simulator). One wave that accepts every candidate.
+// The class the simulator hands a batched function with rng=True, registered as combabc._core does.
+PYBIND11_EMBEDDED_MODULE(combabc_bench, m) { combabc::python::BindBatchRandom(m); }
+
+// range(0): 0 per sample, 1 vectorised batch; range(1): 1 with an rng it does not draw from (a
+// numpy Generator per candidate; batched, a BatchRandom), 2 drawing three normal numbers per
+// candidate from it (batched: rng.normal(size=3), vectorised), 3 (batched) drawing them from each
+// candidate's numpy Generator (`for g in rng`); range(2): 1 with the distance written in Python
+// too (per sample or batched as the simulator). One wave that accepts every candidate.
 void BM_PythonSimulatorOverhead(benchmark::State& state) {
   const bool batch = state.range(0) == 1;
-  const bool with_rng = state.range(1) == 1;
+  const bool with_rng = state.range(1) >= 1;
+  const char* const names[2][4] = {{"per_sample", "per_sample", "per_sample_normal", ""},
+                                   {"batched", "batched", "batched_normal", "batched_generators"}};
+  const char* const labels[4] = {"", ", rng", ", rng.normal(size=3)", ", Generator.normal(3) each"};
+  const auto draws = static_cast<std::size_t>(state.range(1));
   const bool python_distance = state.range(2) == 1;
   const ParameterSpace space(BinarySpace::Independent(kBits));
   const ZeroDistance zero;
@@ -65,6 +77,12 @@ def per_sample(bits, rng=None):
     return np.zeros(3)
 def batched(bits, rng=None):
     return np.zeros((bits.shape[0], 3))
+def per_sample_normal(bits, rng):
+    return rng.normal(size=3)
+def batched_normal(bits, rng):
+    return rng.normal(size=3)
+def batched_generators(bits, rng):
+    return np.stack([g.normal(size=3) for g in rng])
 def distance(output, observed):
     return abs(output[0])
 def distance_batch(outputs, observed):
@@ -81,7 +99,7 @@ class SimulationFailed(Exception):
                         scope["SimulationFailed"],
                         first_error);
     }
-    simulator.emplace(scope[batch ? "batched" : "per_sample"],
+    simulator.emplace(scope[names[batch ? 1 : 0][draws]],
                       batch,
                       kOutputs,
                       0,
@@ -90,7 +108,7 @@ class SimulationFailed(Exception):
                       first_error);
   }
   const Distance& distance = in_python ? static_cast<const Distance&>(*in_python) : zero;
-  state.SetLabel(std::string(batch ? "batch" : "per sample") + (with_rng ? ", rng" : "") +
+  state.SetLabel(std::string(batch ? "batch" : "per sample") + labels[draws] +
                  (python_distance ? ", Python distance" : ""));
   std::int64_t simulations = 0;
   for (auto _ : state) {
@@ -109,6 +127,9 @@ BENCHMARK(BM_PythonSimulatorOverhead)
     ->Args({1, 0, 0})
     ->Args({0, 1, 0})
     ->Args({1, 1, 0})
+    ->Args({0, 2, 0})
+    ->Args({1, 2, 0})
+    ->Args({1, 3, 0})
     ->Args({0, 0, 1})
     ->Args({1, 0, 1})
     ->Unit(benchmark::kMillisecond)
@@ -119,6 +140,7 @@ BENCHMARK(BM_PythonSimulatorOverhead)
 int main(int argc, char** argv) {
   try {
     const py::scoped_interpreter interpreter;
+    py::module_::import("combabc_bench");  // registers BatchRandom
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::RunSpecifiedBenchmarks();

@@ -17,24 +17,24 @@
 See docs/python.md.
 """
 
-import numbers
 import os
 import warnings
 
 import numpy as np
 
 from . import _core
-from ._core import (MAX_BITS, BinarySpace, ContinuousParameter, Error, LogisticKernelOptions,
-                    MultiFidelityOptions, ProposalOptions, SimulationFailed, SmcOptions,
-                    TemperingSchedule, ThresholdSchedule)
+from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, Error,
+                    LogisticKernelOptions, MultiFidelityOptions, ProposalOptions,
+                    SimulationFailed, SmcOptions, TemperingSchedule, ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
-__all__ = ["MAX_BITS", "BinarySpace", "ContinuousParameter", "Error", "Experiment", "History",
-           "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions", "SensorModel", "SimulationFailed", "SmcOptions",
-           "TemperingSchedule", "ThresholdSchedule", "Wave", "enumerate", "export",
-           "load_history", "make_options", "plot", "resume", "run"]
+__all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "Error", "Experiment",
+           "History", "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions",
+           "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
+           "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
+           "plot", "resume", "run"]
 
 
 class Problem:
@@ -46,8 +46,10 @@ class Problem:
     float64[n, m]. observed: the data y (m values). Raise combabc.SimulationFailed for a
     candidate that failed (a NaN output counts as failed too); any other exception ends the run
     and reaches the caller. rng=True: f also gets the keyword argument rng, a numpy Generator
-    seeded from the candidate's own random stream (batched: a list of n, one per row), so that a
-    stochastic simulator gives the same history for any thread count.
+    seeded from the candidate's own random stream (batched: a combabc.BatchRandom, whose draws
+    are vectorised across the rows, row i from candidate i's stream, and whose items are the
+    rows' numpy Generators), so that a stochastic simulator gives the same history for any thread
+    count and batch size.
 
     distance: None for the Euclidean distance to `observed` (one threshold component named
     "euclidean"), or d(output, observed) -> a number (one component named "distance"); with
@@ -60,15 +62,27 @@ class Problem:
     as `simulator` is (the same batch and rng), its m outputs standing for the simulator's. Every
     candidate runs it; the simulator runs only with the continuation probabilities of
     options.multi_fidelity (a MultiFidelityOptions), and the posterior is the simulator's.
+
+    parameters: how the simulator (and low_fidelity) receives the parameters. "arrays" (default):
+    f(bits) or f(bits, reals) as above, by position. "dict": f(params), params a dict by name
+    (the bits' names, space.names, then the reals'): {name: int 0/1 or float} per sample,
+    {name: uint8[n] or float64[n]} batched. "pandas": f(params), params a pandas Series of
+    float64 (per sample, bits as 0.0/1.0) or a DataFrame with one row per candidate (batched),
+    columns by name.
     """
 
     def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
-                 distance=None, components=None, distance_batch=None, low_fidelity=None):
+                 distance=None, components=None, distance_batch=None, low_fidelity=None,
+                 parameters="arrays"):
         self.space = space
-        self.simulator = simulator
-        self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.reals = list(reals)
         self.batch = bool(batch)
+        self.parameters = parameters
+        if parameters not in _PARAMETER_STYLES:
+            raise ValueError(f"Problem: parameters = {parameters!r}; expected one of "
+                             + ", ".join(repr(s) for s in _PARAMETER_STYLES))
+        self.simulator = _by_name(simulator, self, "simulator")
+        self.observed = np.ascontiguousarray(observed, dtype=np.float64).ravel()
         self.rng = bool(rng)
         if distance is not None and not callable(distance):
             raise TypeError(f"distance must be callable or None, not {type(distance).__name__}")
@@ -80,33 +94,72 @@ class Problem:
         if low_fidelity is not None and not callable(low_fidelity):
             raise TypeError("low_fidelity must be callable (a cheap simulator) or None, not "
                             f"{type(low_fidelity).__name__}")
-        self.low_fidelity = low_fidelity
+        self.low_fidelity = _by_name(low_fidelity, self, "low_fidelity")
+
+
+_PARAMETER_STYLES = ("arrays", "dict", "pandas")
+
+
+def _by_name(function, problem, what):
+    """The simulator as the engine calls it, f(bits[, reals][, rng=]), for one that takes its
+    parameters by name (Problem(parameters="dict" or "pandas")): a wrapper that builds them."""
+    if function is None or problem.parameters == "arrays":
+        return function
+    bit_names = list(problem.space.names)
+    real_names = [r.name for r in problem.reals]
+    seen = set(bit_names)
+    for name in real_names:
+        if name in seen:
+            raise ValueError(f"Problem: parameters = {problem.parameters!r} needs distinct "
+                             f"names; {name!r} names a bit and a continuous parameter")
+        seen.add(name)
+    empty = np.zeros((0,), dtype=np.float64)
+    if problem.parameters == "dict":
+        if problem.batch:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.T))  # the columns, bit by bit
+                values.update(zip(real_names, reals.T))
+                return values
+        else:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.tolist()))
+                values.update(zip(real_names, reals.tolist()))
+                return values
+    else:
+        import pandas as pd
+        columns = bit_names + real_names
+        if problem.batch:
+            def build(bits, reals):
+                values = dict(zip(bit_names, bits.T))
+                values.update(zip(real_names, reals.T))
+                return pd.DataFrame(values, columns=columns)
+        else:
+            index = pd.Index(columns)  # made once: a Series costs about 20 us per call
+
+            def build(bits, reals):
+                return pd.Series(np.concatenate([bits, reals]), index=index, copy=False)
+
+    def by_name(bits, reals=empty, **rng):
+        return function(build(bits, reals), **rng)
+
+    by_name.__qualname__ = by_name.__name__ = getattr(function, "__name__", what)
+    return by_name
 
 
 def make_options(**fields):
     """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
-    may be a list of ThresholdSchedule or, for one threshold component, a list of numbers (one
-    per wave; Python's or NumPy's scalars, or a NumPy array). proposal=ProposalOptions(...)
+    (as SmcOptions.thresholds) may be a list of ThresholdSchedule, one per threshold component,
+    or of lists of numbers (one per wave: a "list" schedule), or for one threshold component a
+    list of numbers; numbers are Python's or NumPy's scalars, a list may be a NumPy array. proposal=ProposalOptions(...)
     picks the kernels, tempering=TemperingSchedule(...) tempers the binary proposal toward the
     prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...) sets a multi-fidelity run's
     continuation probabilities (with Problem(low_fidelity=...))."""
     options = SmcOptions()
-    thresholds = fields.pop("thresholds", None)
-    if thresholds is not None:
-        # Numbers of any kind: Python's, NumPy's scalars (numpy.int64 is no int) or an array.
-        if all(_is_number(t) for t in thresholds):
-            thresholds = [ThresholdSchedule(kind="list", values=[float(t) for t in thresholds])]
-        options.thresholds = list(thresholds)
     for name, value in fields.items():
         if not hasattr(options, name):
             raise TypeError(f"SmcOptions has no field {name!r}")
         setattr(options, name, value)
     return options
-
-
-def _is_number(value):
-    """A real number: int, float, a NumPy integer or floating scalar; not a bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _smc_request(problem, options):

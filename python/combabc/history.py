@@ -11,6 +11,8 @@ import warnings
 
 import numpy as np
 
+from . import _netcdf
+
 
 class Wave:
     """One wave: its statistics and its accepted particles as NumPy arrays.
@@ -153,26 +155,14 @@ class History:
         "Answer"): the last complete wave with particles; when none is complete, the last wave
         with particles. A run stopped during a wave (budget, wall time, Ctrl-C) answers from the
         wave before: posterior_note says so."""
-        for w in reversed(self.waves):
-            if w.complete and len(w.index):
-                return w
-        for w in reversed(self.waves):
-            if len(w.index):
-                return w
-        return self.waves[-1]
+        return self.waves[_netcdf.answer(self.waves, self.termination)[0]]
 
     @property
     def posterior_note(self):
         """Why the posterior is not the last wave's, in the CLI's words ("the numbers are wave
         4's: wave 5 is incomplete (budget_exhausted)"), or "" when it is the last complete wave."""
-        w = self.posterior_wave
-        if not w.complete:
-            return "no complete wave: the numbers are those of the incomplete last wave"
-        if w is not self.waves[-1]:
-            # A failed or killed run has no termination (""): "stopped", as the CLI says.
-            return (f"the numbers are wave {w.number}'s: wave {self.waves[-1].number} is "
-                    f"incomplete ({self.termination or 'stopped'})")
-        return ""
+        # One rule with the NetCDF export's (its posterior_note attribute).
+        return _netcdf.answer(self.waves, self.termination)[1]
 
     @property
     def posterior(self):
@@ -303,24 +293,26 @@ class History:
 
     def to_inference_data(self, all_waves=False):
         """The run in ArviZ's InferenceData layout: a dict of xarray Datasets, groups posterior
-        (the final wave's particles resampled to equally weighted draws: bits and the continuous
+        (posterior_wave's particles, the last complete wave's, resampled to equally weighted draws
+        (attributes wave, posterior_note and incomplete_wave_left_out say which): bits and the continuous
         parameters; dims chain = 1, draw), sample_stats (per draw its particle's weight,
         log_weight, distance per component, particle_index), prior, posterior_predictive (the
         resampled accepted curves, when the run kept outputs) and observed_data, as
         `combabc export` writes in inference_data.nc (docs/history.md, "NetCDF"); all_waves=True
         adds posterior_wave_<k> and sample_stats_wave_<k> for every wave k. Needs xarray
         (python3-xarray)."""
-        from . import _netcdf
-        w = self.waves[-1]
+        w = self.posterior_wave
         attrs = {"inference_library_version": self._provenance["combabc_version"],
-                 "seed": self.seed if self.seed is not None else "", "wave": w.number,
+                 "seed": self.seed if self.seed is not None else "",
                  "termination": self.termination, "status": self.status or "",
                  "estimator": self.estimator, "created_at": self._provenance["end_time"],
                  "config_path": self._provenance["config_path"],
                  "config_text": self._provenance["config_text"]}
-        waves = self.waves if all_waves else list({id(x): x for x in (self.waves[0], w)}.values())
+        waves = self.waves if all_waves else \
+            list({id(x): x for x in (self.waves[0], w, self.waves[-1])}.values())
         return _netcdf.inference_data(
-            waves=[{"number": x.number, "thresholds": x.thresholds, "bits": x.bits,
+            waves=[{"number": x.number, "complete": x.complete, "thresholds": x.thresholds,
+                    "bits": x.bits,
                     "reals": x.reals, "log_weight": x.log_weight, "weight": x.weight,
                     "distance": x.distance, "index": x.index, "output": x.output,
                     "multiplier": x.multiplier,
@@ -342,8 +334,8 @@ class History:
     def to_netcdf(self, path, all_waves=False):
         """to_inference_data(all_waves) written to `path` (NetCDF-4, one group each;
         arviz.from_netcdf reads it). Needs xarray and netCDF4 (python3-xarray python3-netcdf4)."""
-        from . import _netcdf
         _netcdf.write_netcdf(self.to_inference_data(all_waves), os.fspath(path))
+
     def _selected(self, wave):
         if wave is None:
             return self.waves

@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "batch_random.hpp"
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/distances/euclidean_distance.hpp"
@@ -651,6 +652,56 @@ BinarySpace MakeBinarySpace(int dimension,
   return BinarySpace(options);
 }
 
+// SmcOptions.thresholds as Python sets it: a list with, per threshold component, a
+// ThresholdSchedule or a list of numbers (a kind = "list" schedule, one threshold per wave); or,
+// for one component, a list of numbers. Numbers are Python's or NumPy's (numpy.int64 is no int; an
+// array is a list), not bools. Anything else is a TypeError on one line naming what it got, not
+// pybind11's listing of overloads.
+std::vector<ThresholdSchedule> ThresholdsFrom(const py::handle& value) {
+  const py::object real = py::module_::import("numbers").attr("Real");
+  auto type_name = [](const py::handle& x) {
+    return std::string(py::str(py::type::of(x).attr("__name__")));
+  };
+  auto is_number = [&](const py::handle& x) {
+    return py::isinstance(x, real) && !py::isinstance<py::bool_>(x);
+  };
+  auto is_list = [](const py::handle& x) {
+    return PySequence_Check(x.ptr()) != 0 && !py::isinstance<py::str>(x) &&
+           !py::isinstance<py::bytes>(x);
+  };
+  auto refuse = [&](const std::string& what) {
+    throw py::type_error("SmcOptions.thresholds: " + what +
+                         "; expected a list of ThresholdSchedule (one per threshold component), "
+                         "or of numbers (one per wave) for one component");
+  };
+  auto numbers = [&](const py::handle& list, const std::string& where) {
+    ThresholdSchedule s;
+    s.kind = ThresholdKind::kList;
+    for (const py::handle& x : py::reinterpret_borrow<py::sequence>(list)) {
+      if (!is_number(x)) refuse(where + "holds " + type_name(x) + ", not a number");
+      s.values.push_back(x.cast<double>());
+    }
+    return s;
+  };
+  if (!is_list(value)) refuse("got " + type_name(value));
+  const auto items = py::reinterpret_borrow<py::sequence>(value);
+  bool all_numbers = items.size() > 0;
+  for (const py::handle& x : items) all_numbers = all_numbers && is_number(x);
+  if (all_numbers) return {numbers(value, "")};
+  std::vector<ThresholdSchedule> schedules;
+  for (std::size_t k = 0; k < items.size(); ++k) {
+    const py::object x = items[k];
+    if (py::isinstance<ThresholdSchedule>(x)) {
+      schedules.push_back(x.cast<ThresholdSchedule>());
+    } else if (is_list(x)) {
+      schedules.push_back(numbers(x, "[" + std::to_string(k) + "] "));
+    } else {
+      refuse("[" + std::to_string(k) + "] is " + type_name(x));
+    }
+  }
+  return schedules;
+}
+
 // An options struct made from keywords is checked at once, with the engine's message (its
 // IsValid) as combabc.Error; fields set later are checked when the run starts (SmcOptions).
 void Require(bool valid, const std::string& why) {
@@ -837,6 +888,7 @@ void BindTypes(py::module_& m) {
       .def_readwrite("target", &ThresholdSchedule::target);
 
   BindProposalTypes(m);
+  BindBatchRandom(m);  // what a batched simulator with rng=True gets
 
   // SmcOptions::multi_fidelity ([sampler.multi_fidelity] in a config): used with
   // Problem(low_fidelity=...).
@@ -868,7 +920,10 @@ void BindTypes(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("num_waves", &SmcOptions::num_waves)
       .def_readwrite("accepted_per_wave", &SmcOptions::accepted_per_wave)
-      .def_readwrite("thresholds", &SmcOptions::thresholds)
+      .def_property(
+          "thresholds",
+          [](const SmcOptions& o) { return o.thresholds; },
+          [](SmcOptions& o, const py::object& value) { o.thresholds = ThresholdsFrom(value); })
       .def_readwrite("tempering", &SmcOptions::tempering)
       .def_readwrite("proposal", &SmcOptions::proposal)
       .def_property(

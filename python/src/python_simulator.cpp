@@ -7,6 +7,8 @@
 #include <string>
 #include <utility>
 
+#include "batch_random.hpp"
+
 namespace py = pybind11;
 
 namespace combabc::python {
@@ -28,13 +30,6 @@ PythonSimulator::PythonSimulator(py::object function,
   if (with_rng_) default_rng_ = py::module_::import("numpy.random").attr("default_rng");
 }
 
-py::object PythonSimulator::Generator(RandomStream& rng) const {
-  // Two words: a SeedSequence of 128 bits, so distinct candidates never share a generator.
-  const std::uint64_t a = rng.Next();
-  const std::uint64_t b = rng.Next();
-  return default_rng_(py::make_tuple(a, b));
-}
-
 py::object PythonSimulator::Call(const py::tuple& args, const py::object& rng) const {
   if (!with_rng_) return function_(*args);
   return function_(*args, py::arg("rng") = rng);
@@ -44,7 +39,7 @@ void PythonSimulator::CallOne(const ParameterView& theta,
                               RandomStream& rng,
                               std::span<double> out) const {
   py::array_t<std::uint8_t> bits(static_cast<py::ssize_t>(theta.bits.size()), theta.bits.data());
-  const py::object generator = with_rng_ ? Generator(rng) : py::none();
+  const py::object generator = with_rng_ ? NumpyGenerator(default_rng_, DrawSeed(rng)) : py::none();
   py::object result;
   if (num_reals_ > 0) {
     py::array_t<double> reals(static_cast<py::ssize_t>(theta.reals.size()), theta.reals.data());
@@ -61,21 +56,17 @@ void PythonSimulator::CallBatch(const ParameterBatch& batch,
                                 std::span<RandomStream> rngs,
                                 std::span<double> out) const {
   const auto n = static_cast<py::ssize_t>(batch.count);
-  py::object generators = py::none();
-  if (with_rng_) {
-    py::list list;
-    for (std::size_t i = 0; i < batch.count; ++i) list.append(Generator(rngs[i]));
-    generators = list;
-  }
+  const py::object random =
+      with_rng_ ? py::cast(BatchRandom(rngs.first(batch.count), default_rng_)) : py::none();
   py::array_t<std::uint8_t> bits({n, static_cast<py::ssize_t>(batch.num_bits)});
   std::memcpy(bits.mutable_data(), batch.bits.data(), batch.bits.size_bytes());
   py::object result;
   if (num_reals_ > 0) {
     py::array_t<double> reals({n, static_cast<py::ssize_t>(batch.num_reals)});
     std::memcpy(reals.mutable_data(), batch.reals.data(), batch.reals.size_bytes());
-    result = Call(py::make_tuple(bits, reals), generators);
+    result = Call(py::make_tuple(bits, reals), random);
   } else {
-    result = Call(py::make_tuple(bits), generators);
+    result = Call(py::make_tuple(bits), random);
   }
   const auto m = static_cast<std::size_t>(output_size_);
   const Doubles values = Checked(result, {n, static_cast<py::ssize_t>(m)}, "simulator");

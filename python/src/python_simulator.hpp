@@ -20,9 +20,9 @@ class PythonSimulator final : public Simulator {
   // uint8[n, d], reals float64[n, r], and f returns an [n, m] array. simulation_failed: the Python
   // exception type that marks one candidate failed (combabc.SimulationFailed); any other exception
   // ends the run, kept in `first_error`. with_rng: f also gets the keyword argument rng, a numpy
-  // Generator seeded from the candidate's own RandomStream (batched: a list of n of them), so that
-  // a stochastic simulator gives the same history for any thread count and batch size. Made and
-  // destroyed with the GIL held.
+  // Generator seeded from the candidate's own RandomStream (batched: a BatchRandom over the batch's
+  // candidates, batch_random.hpp), so that a stochastic simulator gives the same history for any
+  // thread count and batch size. Made and destroyed with the GIL held.
   PythonSimulator(pybind11::object function,
                   bool batch,
                   int output_size,
@@ -48,8 +48,6 @@ class PythonSimulator final : public Simulator {
   void CallOne(const ParameterView& theta, RandomStream& rng, std::span<double> out) const;
   // f(args..., rng=...) when with_rng, else f(args...).
   pybind11::object Call(const pybind11::tuple& args, const pybind11::object& rng) const;
-  // A numpy Generator seeded with two 64-bit words drawn from `rng`.
-  pybind11::object Generator(RandomStream& rng) const;
 
   pybind11::object function_;
   bool batch_;

@@ -256,3 +256,40 @@ def test_a_failing_netcdf_script_fails_the_export_and_writes_nothing(exported, t
     assert done.returncode == 65
     assert done.stderr == "combabc: data error: inference_data.nc: broken on purpose\n"
     assert not out.exists()  # no CSV without its NetCDF file, no temporaries
+
+
+def test_a_budget_stopped_runs_posterior_is_its_last_complete_wave_and_says_so(tmp_path):
+    from test_smc import options, problem
+    whole = combabc.run(problem(), options(accepted_per_wave=200, batch_size=50))
+    complete = whole.to_inference_data()
+    for group in complete.values():
+        assert group.attrs["posterior_note"] == "" and group.attrs["incomplete_wave_left_out"] == 0
+    assert complete["posterior"].attrs["wave"] == 3
+    # Stopped halfway through wave 3: the posterior is wave 2's, as history.posterior.
+    budget = sum(w.candidates for w in whole.waves[:2]) + whole.waves[2].candidates // 2
+    stopped = combabc.run(problem(), options(accepted_per_wave=200, batch_size=50,
+                                             max_simulations=budget),
+                          output_directory=tmp_path)
+    assert [w.complete for w in stopped.waves] == [True, True, False]
+    groups = stopped.to_inference_data()
+    for name, group in groups.items():
+        assert group.attrs["wave"] == 2, name
+        assert group.attrs["incomplete_wave_left_out"] == 3, name
+        assert group.attrs["posterior_note"] == stopped.posterior_note == \
+            "the numbers are wave 2's: wave 3 is incomplete (budget_exhausted)", name
+    second = stopped.waves[1]
+    rows = rows_of(groups["sample_stats"], {"index": second.index})
+    np.testing.assert_array_equal(groups["posterior"]["bits"].values[0], second.bits[rows])
+    np.testing.assert_array_equal(groups["posterior_predictive"]["measured"].values[0],
+                                  second.output[rows])
+    assert_means_equal_marginals(groups["posterior"], second.marginals_importance,
+                                 second.accepted)
+    # The export's file (built from its CSVs) says the same.
+    out = combabc.export(stopped, tmp_path / "export")
+    exported = open_groups(os.path.join(out, "inference_data.nc"))
+    for group in GROUPS:
+        xr.testing.assert_identical(exported[group], groups[group])
+    # Every wave, the incomplete one too, with all_waves.
+    every = stopped.to_inference_data(all_waves=True)
+    assert every["posterior_wave_3"].attrs["wave"] == 3
+    xr.testing.assert_identical(every["posterior_wave_2"], groups["posterior"])

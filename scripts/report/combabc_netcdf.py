@@ -10,7 +10,10 @@
 imports the same builder (`inference_data`) for History.to_inference_data(), so both write one
 layout. Waves are numbered from 1 and bits named, as everywhere a user sees them:
 
-- posterior: equally weighted draws of the final wave (one chain, as many draws as particles),
+- posterior: equally weighted draws of the answer's wave (one chain, as many draws as particles):
+  as the CLI's answer and History.posterior_wave, the last complete wave (`answer`), so a run
+  stopped during a wave (budget, wall time, Ctrl-C) leaves that incomplete wave out and says so
+  in the attributes `posterior_note` and `incomplete_wave_left_out` (below),
   resampled from its weighted particles by systematic resampling under the run's estimator's
   weights (importance: the particles' weights; paper: equal), its uniform draw seeded by
   (run seed, wave): so ArviZ's and xarray's means equal combabc's marginals within resampling
@@ -24,7 +27,7 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
 - prior: wave 1's particles when its thresholds are all infinite (prior draws), else as many
   draws from the stated prior (independent bits at bit_prior_one, the continuous priors);
   attribute `source` says which;
-- posterior_predictive (when the run kept its outputs): the accepted curves of the final wave,
+- posterior_predictive (when the run kept its outputs): the accepted curves of the answer's wave,
   resampled as the posterior (the same draws). Per experiment, named as its observed variable on
   the same positions when the outputs lie at the measured positions, else `simulated`
   (`simulated_<name>`) on `output_position` (`output_position_<name>`);
@@ -33,8 +36,11 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
   with its own positions, and sample_stats the coordinate `component_experiment` (component);
 - with --all-waves (History.to_inference_data(all_waves=True)) also `posterior_wave_<k>` and
   `sample_stats_wave_<k>` for every wave k from 1, resampled likewise;
-- attributes of every group: inference_library = combabc, its version, the seed, the wave (from 1),
-  the termination, the config file's path and text.
+- attributes of every group: inference_library = combabc, its version, the seed, the wave (from 1)
+  of the posterior, the termination, the config file's path and text, `posterior_note` (why the
+  posterior is not the last wave's, in the CLI's words: "the numbers are wave 2's: wave 3 is
+  incomplete (budget_exhausted)"; "" when it is the last wave, complete) and
+  `incomplete_wave_left_out` (the number of the incomplete last wave left out; 0 for none).
 
 Exit status (sysexits): 0, 64 usage, 65 unreadable input, 69 xarray or netCDF4 missing, 74 I/O.
 """
@@ -100,11 +106,32 @@ def prior_draws(n, bit_prior_one, dimension, real_priors, seed):
     return bits, reals
 
 
+def answer(waves, termination):
+    """Which wave answers, as the CLI's answer (docs/history.md, "Answer"): the position in
+    `waves` (dicts or objects with `complete`, `number` and their particles' `index`) of the last
+    complete wave with particles; when none is complete, of the last wave with particles. And the
+    note saying why that is not the last wave, complete, in the CLI's words ("" when it is);
+    termination: the run's ("" for a failed or killed run: "stopped")."""
+    def field(wave, key):
+        return wave[key] if isinstance(wave, dict) else getattr(wave, key)
+
+    with_particles = [k for k, w in enumerate(waves) if len(field(w, "index"))]
+    complete = [k for k in with_particles if field(waves[k], "complete")]
+    k = complete[-1] if complete else with_particles[-1] if with_particles else len(waves) - 1
+    if not field(waves[k], "complete"):
+        return k, "no complete wave: the numbers are those of the incomplete last wave"
+    if k != len(waves) - 1:
+        return k, (f"the numbers are wave {field(waves[k], 'number')}'s: wave "
+                   f"{field(waves[-1], 'number')} is incomplete ({termination or 'stopped'})")
+    return k, ""
+
+
 def inference_data(*, waves, bit_names, real_names, components, measured_position,
                    measured_value, position_unit, attrs, estimator, seed, bit_prior_one=(),
                    real_priors=(), output_position=(), experiments=None, all_waves=False):
     """The InferenceData groups (above) as xarray Datasets, a dict by group name. waves: every wave
-    (at least the final one, last), each a dict: number (from 1), thresholds, and its particles as
+    (at least the first, the answer's and the last), each a dict: number (from 1), complete (a
+    wave without it counts as complete), thresholds, and its particles as
     NumPy arrays (n particles): bits uint8[n, d], reals float64[n, r], log_weight, weight
     float64[n], distance float64[n, k], index int64[n], output float64[n, m] (m = 0 without
     outputs), and in a multi-fidelity run multiplier float64[n] and confirmed uint8[n].
@@ -117,6 +144,12 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
 
     attrs = {key: ("" if value is None else value) for key, value in attrs.items()}
     attrs.setdefault("inference_library", "combabc")
+    waves = [{"complete": True, **w} for w in waves]
+    answer_at, note = answer(waves, attrs.get("termination", ""))
+    final = waves[answer_at]
+    attrs["wave"] = final["number"]
+    attrs["posterior_note"] = note
+    attrs["incomplete_wave_left_out"] = waves[-1]["number"] if answer_at != len(waves) - 1 else 0
     d, r = len(bit_names), len(real_names)
     measured_position = np.asarray(measured_position, dtype=np.float64)
     measured_value = np.asarray(measured_value, dtype=np.float64)
@@ -190,7 +223,6 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
             attrs={"experiment": x["name"], "description": x.get("description", "")}
             if named else {})
 
-    final = waves[-1]
     rows, posterior, sample_stats = resampled(final)
     groups = {"posterior": posterior, "sample_stats": sample_stats}
 
@@ -245,7 +277,7 @@ def write_netcdf(groups, path):
 def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, positions_csv=None,
                 all_waves=False):
     """The builder's arguments from an export's files (curves.csv and positions.csv when the run
-    kept its outputs): the final wave, or every wave."""
+    kept its outputs): the first, the answer's and the last wave, or every wave."""
     import numpy as np
     import pandas as pd
 
@@ -270,10 +302,15 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
     if positions_csv and os.path.isfile(positions_csv):
         output_position = pd.read_csv(positions_csv, float_precision="round_trip").iloc[:, 1]
     stats = summary["waves"] if summary["waves"] else [{"wave": 0, "thresholds": []}]
+    if not all_waves:
+        counts = [{"index": table.index[table["wave"] == w["wave"]],
+                   "complete": w.get("complete", True), "number": w["wave"]} for w in stats]
+        at, _ = answer(counts, run["termination"])
+        stats = [stats[k] for k in sorted({0, at, len(stats) - 1})]
     waves = []
-    for w in stats if all_waves else stats[:1] + stats[-1:] if len(stats) > 1 else stats:
+    for w in stats:
         rows = table[table["wave"] == w["wave"]]
-        wave = {"number": w["wave"],
+        wave = {"number": w["wave"], "complete": w.get("complete", True),
                 # null: a non-finite threshold (summary.json), the first wave's infinite ones
                 "thresholds": [np.inf if t is None else t for t in w.get("thresholds", [])],
                 "bits": rows[bit_names].to_numpy(dtype=np.uint8),
@@ -292,7 +329,7 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
     measured = pd.read_csv(measured_csv, float_precision="round_trip")
     unit = measured.columns[0][len("position_"):]
     attrs = {"inference_library_version": run["combabc_version"], "seed": run["seed"],
-             "wave": waves[-1]["number"], "termination": run["termination"],
+             "termination": run["termination"],
              "status": run["status"], "estimator": run["estimator"],
              "created_at": run["end_time"], "config_path": run["config_path"],
              "config_text": summary["config_text"]}
