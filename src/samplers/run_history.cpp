@@ -229,6 +229,7 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
         Differ(x.pair_correlations, y.pair_correlations, w + "pair_correlations", where) ||
         Differ(x.failures, y.failures, w + "failures", where) ||
+        Differ(x.pattern_classes, y.pattern_classes, w + "pattern_classes", where) ||
         Differ(x.multi_fidelity.has_value(), y.multi_fidelity.has_value(), w + "fidelity", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;

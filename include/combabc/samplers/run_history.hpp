@@ -67,6 +67,18 @@ struct WaveFidelity {
   double cost_ratio = 0.0;
 };
 
+// One pattern class of the population a wave's proposal was fitted to: its particles that share
+// a bit configuration (docs/algorithm.md, "Mode loss"). A wave records the classes whose mass
+// reaches ModeLossMinMass, each with the probability its proposal gives the pattern, flagged when
+// that is so small that the wave expects fewer than one particle of it: the class may be lost.
+struct PatternClass {
+  std::vector<std::uint8_t> bits;  // the full bit vector (0/1)
+  double mass = 0.0;               // the population's normalised weight of the class
+  double proposal = 0.0;           // q(bits) under the wave's binary proposal
+  bool flagged = false;            // proposed with negligible probability (mode loss)
+  bool operator==(const PatternClass&) const = default;
+};
+
 struct WaveRecord {
   int wave = 0;
   std::vector<double> thresholds;  // eps_t per threshold component
@@ -91,6 +103,9 @@ struct WaveRecord {
   std::vector<SimulationFailure> failures;
   double wall_seconds = 0.0;                   // not deterministic; excluded from SameHistory
   std::optional<WaveFidelity> multi_fidelity;  // set in a multi-fidelity run only
+  // The previous wave's heavy pattern classes under this wave's proposal (FindPatternClasses), set
+  // when the wave starts; none in wave 0, which proposes from the prior.
+  std::vector<PatternClass> pattern_classes;
   std::vector<Particle> particles;
 
   // The estimator's marginals (what the run reports and proposes from).
