@@ -13,6 +13,7 @@
 #include "combabc/core/check.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/metrics/composite_distance.hpp"
+#include "combabc/samplers/mode_loss.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
@@ -498,6 +499,12 @@ FitChecks ComputeFitChecks(const RunMetadata& metadata,
       metadata, history.waves.empty() ? nullptr : &history.waves.front(), options);
   for (const ExperimentSlice& slice : ExperimentSlices(metadata)) {
     CheckAfter(metadata, ViewOf(metadata, slice), history, options, checks);
+  }
+  // mode_loss: a wave's proposal gave a heavy pattern of the previous wave negligible probability
+  // (docs/algorithm.md, "Mode loss").
+  for (const WaveRecord& w : history.waves) {
+    const std::string warning = ModeLossWarning(w);
+    if (!warning.empty()) Warn(checks.after, "mode_loss", warning);
   }
   return checks;
 }
