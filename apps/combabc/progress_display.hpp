@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <string>
 
-#include "combabc/samplers/mode_loss.hpp"
 #include "combabc/samplers/observer.hpp"
 
 namespace combabc::cli {

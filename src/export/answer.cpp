@@ -10,7 +10,6 @@
 #include <optional>
 
 #include "combabc/export/export.hpp"
-#include "combabc/samplers/mode_loss.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {

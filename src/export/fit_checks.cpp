@@ -13,7 +13,6 @@
 #include "combabc/core/check.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/metrics/composite_distance.hpp"
-#include "combabc/samplers/mode_loss.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {

@@ -33,10 +33,10 @@ using history::Transaction;
 // the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
 // wave_count, which adds no table; version 5 the table experiment, created apart as
 // kSchemaV6Tables; version 6 the multi-fidelity columns, added to an older file by
-// kSchemaV7Columns; version 7 the pattern classes, added by kSchemaV8Columns). Every table and index here is listed in ExpectedObjects
-// (history_verify.cpp), which refuses any other schema object in a history. Vectors of
-// doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
-// and JSON would not guarantee); bits are packed.
+// kSchemaV7Columns; version 7 the pattern classes, added by kSchemaV8Columns). Every table and
+// index here is listed in ExpectedObjects (history_verify.cpp), which refuses any other schema
+// object in a history. Vectors of doubles are BLOBs of little-endian binary64 (exact, and +-inf /
+// NaN survive, which REAL columns and JSON would not guarantee); bits are packed.
 constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE run (

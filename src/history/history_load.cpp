@@ -283,8 +283,7 @@ std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
       check.Doubles(row, kPatternMass, 0, kMaxClasses, "pattern_mass", "at most 128 classes");
   const std::size_t k = mass.size();
   const std::string per_class = std::to_string(k) + " (one per class of pattern_mass)";
-  const auto proposal =
-      check.Doubles(row, kPatternProposal, k, k, "pattern_proposal", per_class);
+  const auto proposal = check.Doubles(row, kPatternProposal, k, k, "pattern_proposal", per_class);
   const auto bytes_per_class = (static_cast<std::size_t>(dimension) + 7) / 8;
   const auto bits = row.Bytes(kPatternBits);
   const auto flagged = row.Bytes(kPatternFlagged);

@@ -15,7 +15,6 @@
 
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/enumeration.hpp"
-#include "combabc/samplers/mode_loss.hpp"
 #include "combabc/services/history_tools.hpp"
 #include "history/fake_run.hpp"
 #include "samplers/toy_models.hpp"

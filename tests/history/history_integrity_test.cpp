@@ -86,7 +86,8 @@ void RehashMetadataAndRunState(history::Database& db, int version) {
 void DowngradeToV7(const std::string& path) {
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
-  for (const char* column : {"pattern_bits", "pattern_mass", "pattern_proposal", "pattern_flagged"}) {
+  for (const char* column :
+       {"pattern_bits", "pattern_mass", "pattern_proposal", "pattern_flagged"}) {
     db.Exec((std::string("ALTER TABLE wave DROP COLUMN ") + column).c_str());
   }
   db.Exec(R"sql(

@@ -130,7 +130,8 @@ std::string AnswerJson(const Answer& answer, int indent = 2);
 // The answer for a terminal: one screen (the sensor's clamps as one table per edge, side by side),
 // then the `configurations` most probable configurations, the continuous parameters' means and sds,
 // each wave's ESS and simulations, for a multi-fidelity run one line with its expensive
-// simulations, and a "warning: " line per wave whose proposal may have lost a mode. A continuous-only run has no bit lines and no configurations.
+// simulations, and a "warning: " line per wave whose proposal may have lost a mode. A
+// continuous-only run has no bit lines and no configurations.
 std::string AnswerText(const Answer& answer, std::size_t configurations = 5);
 
 }  // namespace combabc

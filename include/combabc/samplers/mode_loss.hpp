@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <functional>
 #include <span>
-#include <string>
 #include <vector>
 
 #include "combabc/proposals/proposal.hpp"
@@ -38,14 +37,5 @@ double ModeLossMinMass(int particles);
 std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              const LogBitsDensity& log_q_bits,
                                              int particles);
-
-// The pattern as the answer prints configurations, "0110...", bit 1 first; beyond 64 bits the
-// first 64 and how many of all are set.
-std::string PatternText(const std::vector<std::uint8_t>& bits);
-
-// The warning of a wave with flagged classes, one line without a newline: "wave 3 proposed pattern
-// 0001 (mass 0.076) with probability 2.1e-06 ...; the posterior may have lost a mode" (waves
-// counted from 1, the heaviest flagged class named, the others counted). Empty when none.
-std::string ModeLossWarning(const WaveRecord& wave);
 
 }  // namespace combabc

@@ -156,6 +156,16 @@ struct RunHistory {
   std::string FullReport(Estimator estimator) const;
 };
 
+// A pattern as the answer prints configurations, "0110...", bit 1 first; beyond 64 bits the first
+// 64 and how many of all are set.
+std::string PatternText(const std::vector<std::uint8_t>& bits);
+
+// The mode-loss warning of a wave with flagged pattern classes, one line without a newline: "wave
+// 3 proposed pattern 0001 (mass 0.076) with probability 2.1e-06; the posterior may have lost a
+// mode" (waves counted from 1, the heaviest flagged class named, any others counted). Empty when
+// none is flagged.
+std::string ModeLossWarning(const WaveRecord& wave);
+
 // Weighted sums over a population of bit vectors, from which its marginals and the Pearson
 // correlation of every pair of bits follow (docs/algorithm.md, "Pair correlations"): the one
 // estimator of both, for Enumerate (every accepted configuration, weighted by its prior mass) and
