@@ -299,8 +299,8 @@ std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
   std::vector<PatternClass> classes(k);
   for (std::size_t c = 0; c < k; ++c) {
     const std::string who = "pattern class " + std::to_string(c + 1);
-    if (!(mass[c] > 0.0 && mass[c] <= 1.0 + 1e-9) || !(proposal[c] >= 0.0) ||
-        !(proposal[c] <= 1.0 + 1e-9) || flagged[c] > 1) {
+    if (!(mass[c] > 0.0 && mass[c] <= 1.0 + 1e-9) || !(proposal[c] >= 0.0 && proposal[c] <= 1.0) ||
+        flagged[c] > 1) {
       check.Corrupt(who, "has mass, proposal or flag out of range");
     }
     const auto* first = bits.data() + c * bytes_per_class;

@@ -27,7 +27,10 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
     PatternClass c;
     c.bits = bits;
     c.mass = m;
-    c.proposal = std::exp(log_q_bits(bits));
+    // A normalised density gives at most 1; a kernel's NaN counts as 0 (flagged), so that what
+    // is recorded is always a probability.
+    const double q = std::exp(log_q_bits(bits));
+    c.proposal = std::isnan(q) ? 0.0 : std::min(q, 1.0);
     c.flagged = static_cast<double>(particles) * c.proposal < 1.0;
     classes.push_back(std::move(c));
   }

@@ -103,6 +103,17 @@ TEST(ModeLoss, FlaggedWhenAWaveExpectsLessThanOneParticle) {
   EXPECT_FALSE(classes[2].flagged);  // 11
 }
 
+TEST(ModeLoss, ABrokenDensityIsRecordedAsAProbability) {
+  const Population pop = Crafted({{{0, 0}, 90}, {{1, 1}, 10}});
+  const auto classes = FindPatternClasses(
+      pop, [](std::span<const std::uint8_t> bits) { return bits[0] ? std::nan("") : 0.5; }, 100);
+  ASSERT_EQ(classes.size(), 2u);
+  EXPECT_EQ(classes[0].proposal, 1.0);  // exp(0.5), capped
+  EXPECT_FALSE(classes[0].flagged);
+  EXPECT_EQ(classes[1].proposal, 0.0);  // NaN
+  EXPECT_TRUE(classes[1].flagged);
+}
+
 TEST(ModeLoss, LongPatternsAreShortenedInText) {
   std::vector<std::uint8_t> bits(100, 0);
   bits[3] = bits[70] = 1;

@@ -30,10 +30,11 @@ double ModeLossMinMass(int particles);
 // The pattern classes of `population` (its distinct free-bit patterns, with the sum of their
 // particles' normalised weights as mass) whose mass reaches ModeLossMinMass(particles), heaviest
 // first (equal masses in pattern order), each with its probability exp(log_q_bits(pattern)) under
-// the wave's proposal. A class is flagged when particles * q < 1: a wave of `particles` particles
-// expects fewer than one of the pattern (about particles * q of them, as many as the proposal
-// draws it among its candidates if the pattern is accepted about as often as the others), where
-// the population held at least 5 particles' worth. `bits` are free bits (the caller expands them).
+// the wave's proposal (at most 1; 0 where the density is NaN). A class is flagged when particles *
+// q < 1: a wave of `particles` particles expects fewer than one of the pattern (about particles * q
+// of them, as many as the proposal draws it among its candidates if the pattern is accepted about
+// as often as the others), where the population held at least 5 particles' worth. `bits` are free
+// bits (the caller expands them).
 std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              const LogBitsDensity& log_q_bits,
                                              int particles);
