@@ -93,6 +93,9 @@ void WriteSeedHistory(const std::string& path) {
     store.OnWaveEnd(one);
     // Wave 2: one batch committed, then the "process was killed".
     WaveRecord two = MakeWave(1, 0.3);
+    // Schema v8: two pattern classes of wave 1, the second flagged.
+    two.pattern_classes = {{{1, 0, 1, 0, 1, 0}, 0.6, 0.5, false},
+                           {{0, 1, 1, 0, 0, 1}, 0.3, 1e-4, true}};
     store.OnWaveStart(two);
     store.OnBatch({1, 3, 2, 0, 4, 9, 0.0, 0, {}},
                   std::vector<Particle>{MakeParticle(0, {1, 0, 1, 1, 1, 0}, 0.1),

@@ -94,6 +94,10 @@ class ProgressDisplay : public SmcObserver {
           w.multi_fidelity->continue_if_accepted,
           w.multi_fidelity->continue_if_rejected);
     }
+    // The mode-loss diagnostic (docs/algorithm.md, "Mode loss"): known when the wave started,
+    // said under its line.
+    const std::string mode_loss = ModeLossWarning(w);
+    if (!mode_loss.empty()) std::fprintf(stderr, "warning: %s\n", mode_loss.c_str());
   }
 
   void Clear() {

@@ -23,7 +23,9 @@ class Wave:
     and j under the particles' weights, 0 for a bit constant among them; 0 x 0 without
     particles); per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
     log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
-    run kept no outputs); failure_index int64[f] and failure_reason (list of str). A
+    run kept no outputs); failure_index int64[f] and failure_reason (list of str);
+    pattern_classes, the mode-loss diagnostic's heavy patterns of the previous wave (a list of
+    dicts: bits uint8[d], mass, proposal, flagged; docs/algorithm.md, "Mode loss"). A
     multi-fidelity run's wave also has multi_fidelity (a dict: continue_if_accepted,
     continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
     next_continue_if_accepted, next_continue_if_rejected, cost_ratio) and per particle multiplier

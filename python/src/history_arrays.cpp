@@ -141,6 +141,17 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   }
   d["failure_index"] = failure_index;
   d["failure_reason"] = failure_reason;
+  // The mode-loss diagnostic's classes (docs/algorithm.md, "Mode loss").
+  py::list classes;
+  for (const PatternClass& c : wave.pattern_classes) {
+    py::dict one;
+    one["bits"] = py::array_t<std::uint8_t>(static_cast<py::ssize_t>(c.bits.size()), c.bits.data());
+    one["mass"] = c.mass;
+    one["proposal"] = c.proposal;
+    one["flagged"] = c.flagged;
+    classes.append(one);
+  }
+  d["pattern_classes"] = classes;
   AddFidelity(wave, num_components, d);
   return d;
 }

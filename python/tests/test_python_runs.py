@@ -44,6 +44,11 @@ def test_a_problem_run_writes_its_history(tmp_path):
     np.testing.assert_array_equal(in_memory.output_position, np.arange(len(OBSERVED)))
     np.testing.assert_array_equal(history.measured_value, OBSERVED)
     assert history.position_unit == "index" and len(history.experiments) == 1
+    # The mode-loss diagnostic's classes, stored and read back: none in wave 1 (the prior).
+    assert loaded.waves[0].pattern_classes == []
+    for mine, stored in zip(history.waves, loaded.waves):
+        assert [(c["mass"], c["proposal"], c["flagged"]) for c in mine.pattern_classes] == \
+            [(c["mass"], c["proposal"], c["flagged"]) for c in stored.pattern_classes]
     # Refused again without overwrite, replaced with it.
     with pytest.raises(combabc.Error):
         combabc.run(problem(), options(accepted_per_wave=100), output_directory=tmp_path)

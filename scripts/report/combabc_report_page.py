@@ -118,6 +118,18 @@ def answer_html(summary, sensor=True):
                 for w in per_wave]
         parts.append("<h3>ESS and simulations per wave</h3>\n" +
                      table(["Wave", "ESS", "Simulations"], rows, numeric=(0, 1, 2)))
+    lost = answer.get("mode_loss") or []
+    if lost:
+        # The mode-loss diagnostic (docs/algorithm.md, "Mode loss"): patterns the previous wave
+        # held that a wave's proposal gave negligible probability.
+        rows = [[e(fmt(f.get("wave"))), f"<code>{e(str(f.get('bits', '')))}</code>",
+                 e(fmt(f.get("mass"), ".3g")), e(fmt(f.get("proposal"), ".2g"))] for f in lost]
+        parts.append("<h3>Warning: the posterior may have lost a mode</h3>\n<p>Each wave's "
+                     "proposal gave these patterns, which carried the mass shown in the wave "
+                     "before, so little probability that the wave expected fewer than one "
+                     "particle of them.</p>\n" +
+                     table(["Wave", "Pattern", "Mass before", "Proposal probability"], rows,
+                           numeric=(0, 2, 3)))
     return "".join(parts)
 
 

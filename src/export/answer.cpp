@@ -147,6 +147,11 @@ Answer SummariseAnswer(const RunMetadata& m,
       a.expensive_simulations =
           a.expensive_simulations.value_or(0) + w.multi_fidelity->expensive_simulations;
     }
+    for (const PatternClass& c : w.pattern_classes) {
+      if (c.flagged) a.mode_loss.push_back({w.wave + 1, PatternText(c.bits), c.mass, c.proposal});
+    }
+    const std::string warning = ModeLossWarning(w);
+    if (!warning.empty()) a.mode_loss_warnings.push_back(warning);
   }
   const WaveRecord* w = AnswerWave(h);
   if (w == nullptr) return a;
@@ -229,6 +234,14 @@ std::string AnswerJson(const Answer& a, int indent) {
     }
     out += "\n" + in2 + "],\n";
   }
+  out += in2 + "\"mode_loss\": [";
+  for (std::size_t k = 0; k < a.mode_loss.size(); ++k) {
+    const ModeLossFlag& f = a.mode_loss[k];
+    out += std::string(k ? "," : "") + "\n" + in2 + "  {\"wave\": " + std::to_string(f.wave) +
+           ", \"bits\": " + JsonString(f.bits) + ", \"mass\": " + JsonNumber(f.mass) +
+           ", \"proposal\": " + JsonNumber(f.proposal) + "}";
+  }
+  out += std::string(a.mode_loss.empty() ? "" : "\n" + in2) + "],\n";
   out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
   out += in2 + "\"particles\": " + std::to_string(a.particles) + ",\n";
   out += in2 + "\"distinct\": " + std::to_string(a.distinct) + ",\n";
@@ -466,6 +479,7 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
                   share);
     out += line;
   }
+  for (const std::string& warning : a.mode_loss_warnings) out += "warning: " + warning + "\n";
   return out;
 }
 

@@ -499,6 +499,12 @@ FitChecks ComputeFitChecks(const RunMetadata& metadata,
   for (const ExperimentSlice& slice : ExperimentSlices(metadata)) {
     CheckAfter(metadata, ViewOf(metadata, slice), history, options, checks);
   }
+  // mode_loss: a wave's proposal gave a heavy pattern of the previous wave negligible probability
+  // (docs/algorithm.md, "Mode loss").
+  for (const WaveRecord& w : history.waves) {
+    const std::string warning = ModeLossWarning(w);
+    if (!warning.empty()) Warn(checks.after, "mode_loss", warning);
+  }
   return checks;
 }
 

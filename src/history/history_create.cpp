@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 7).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 8).
 #include <unistd.h>
 
 #include <cerrno>
@@ -33,10 +33,10 @@ using history::Transaction;
 // the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
 // wave_count, which adds no table; version 5 the table experiment, created apart as
 // kSchemaV6Tables; version 6 the multi-fidelity columns, added to an older file by
-// kSchemaV7Columns). Every table and index here is listed in ExpectedObjects
-// (history_verify.cpp), which refuses any other schema object in a history. Vectors of
-// doubles are BLOBs of little-endian binary64 (exact, and +-inf / NaN survive, which REAL columns
-// and JSON would not guarantee); bits are packed.
+// kSchemaV7Columns; version 7 the pattern classes, added by kSchemaV8Columns). Every table and
+// index here is listed in ExpectedObjects (history_verify.cpp), which refuses any other schema
+// object in a history. Vectors of doubles are BLOBs of little-endian binary64 (exact, and +-inf /
+// NaN survive, which REAL columns and JSON would not guarantee); bits are packed.
 constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE run (
@@ -105,7 +105,11 @@ CREATE TABLE wave (
   unkept_false_positive_log_w2 REAL,
   next_continue_if_accepted REAL,
   next_continue_if_rejected REAL,
-  cost_ratio REAL
+  cost_ratio REAL,
+  pattern_bits BLOB,
+  pattern_mass BLOB,
+  pattern_proposal BLOB,
+  pattern_flagged BLOB
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -190,6 +194,15 @@ ALTER TABLE wave ADD COLUMN cost_ratio REAL;
 ALTER TABLE particle ADD COLUMN multiplier REAL;
 ALTER TABLE particle ADD COLUMN confirmed INTEGER;
 ALTER TABLE particle ADD COLUMN low_distance BLOB;
+)sql";
+
+// Added by version 8 to an older file (a new one has them in kSchema): each wave's pattern classes
+// (WaveRecord::pattern_classes; docs/history.md, "Mode loss"), NULL in a wave that has none.
+constexpr const char* kSchemaV8Columns = R"sql(
+ALTER TABLE wave ADD COLUMN pattern_bits BLOB;
+ALTER TABLE wave ADD COLUMN pattern_mass BLOB;
+ALTER TABLE wave ADD COLUMN pattern_proposal BLOB;
+ALTER TABLE wave ADD COLUMN pattern_flagged BLOB;
 )sql";
 
 // What an older file upgraded to v6 (and a RunMetadata without experiments) holds: one unnamed
@@ -563,7 +576,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // their overshoot (0). An older run has no reals, ran the default (independent) kernels, and
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
   // nor (before v4) any failed simulation; (before v6) it had a single, unnamed experiment; and
-  // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL).
+  // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL); and (before v8)
+  // it recorded no pattern classes (the columns stay NULL: none).
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {
@@ -591,6 +605,7 @@ void HistoryStore::Impl::MigrateToCurrent() {
     db.Exec(kInsertSingleExperiment);
   }
   if (schema_version < 7) db.Exec(kSchemaV7Columns);
+  if (schema_version < 8) db.Exec(kSchemaV8Columns);
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))

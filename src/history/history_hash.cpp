@@ -190,6 +190,9 @@ std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
   if (v7_ && !AllNull(wave_row, kWaveFidelityColumn, kWaveFidelityColumnCount)) {
     hash.AddColumns(wave_row, kWaveFidelityColumn, kWaveFidelityColumnCount);
   }
+  if (v8_ && !AllNull(wave_row, kWavePatternColumn, kWavePatternColumnCount)) {
+    hash.AddColumns(wave_row, kWavePatternColumn, kWavePatternColumnCount);
+  }
   return hash.value();
 }
 

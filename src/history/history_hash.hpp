@@ -50,8 +50,9 @@ inline constexpr int kParticleColumnCountV3 = 7;
 inline constexpr int kParticleColumnCount = 10;
 // The wave row's columns in checksum order: the first 21, then (v3) reals_mean and reals_sd after
 // content_hash, which is not hashed itself, then (v4) the failure count, then (v7) the
-// multi-fidelity columns (NULL in a single-fidelity run, and then not hashed). Older files select
-// constants in their place.
+// multi-fidelity columns (NULL in a single-fidelity run, and then not hashed), then (v8) the
+// pattern classes (NULL in a wave without any, and then not hashed). Older files select constants
+// in their place.
 inline constexpr const char* kWaveColumns =
     "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
@@ -59,12 +60,15 @@ inline constexpr const char* kWaveColumns =
     "reals_mean, reals_sd, failures, continue_if_accepted, continue_if_rejected, "
     "expensive_simulations, cheap_seconds, expensive_seconds, unkept_false_positives, "
     "unkept_false_positive_log_w2, next_continue_if_accepted, "
-    "next_continue_if_rejected, cost_ratio";
+    "next_continue_if_rejected, cost_ratio, pattern_bits, pattern_mass, pattern_proposal, "
+    "pattern_flagged";
 inline constexpr int kWaveHashedColumnCount = 21;
 inline constexpr int kWaveRealsColumn = 22;     // reals_mean, then reals_sd (hashed from v3)
 inline constexpr int kWaveFailuresColumn = 24;  // hashed from v4
 inline constexpr int kWaveFidelityColumn = 25;  // the 10 multi-fidelity columns (hashed from v7)
 inline constexpr int kWaveFidelityColumnCount = 10;
+inline constexpr int kWavePatternColumn = 35;  // the 4 pattern-class columns (hashed from v8)
+inline constexpr int kWavePatternColumnCount = 4;
 
 // The failure rows of one wave, fed in candidate order after its particles (schema v4).
 inline constexpr const char* kFailureColumns = "candidate, reason";
@@ -76,7 +80,10 @@ class WaveHasher {
  public:
   WaveHasher() = default;  // the current schema: what writers produce
   explicit WaveHasher(int schema_version)
-      : v3_(schema_version >= 3), v4_(schema_version >= 4), v7_(schema_version >= 7) {}
+      : v3_(schema_version >= 3),
+        v4_(schema_version >= 4),
+        v7_(schema_version >= 7),
+        v8_(schema_version >= 8) {}
   void AddParticle(const Statement& particle_row);
   // v4: after every particle; failures are hashed apart so that the two can be fed in turn.
   void AddFailure(const Statement& failure_row);
@@ -91,6 +98,7 @@ class WaveHasher {
   bool v3_ = true;
   bool v4_ = true;
   bool v7_ = true;
+  bool v8_ = true;
 };
 
 }  // namespace combabc::history

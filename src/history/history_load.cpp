@@ -51,6 +51,10 @@ enum WaveColumn {
   kNextContinueIfAccepted,
   kNextContinueIfRejected,
   kCostRatio,
+  kPatternBits,
+  kPatternMass,
+  kPatternProposal,
+  kPatternFlagged,
 };
 
 // Columns of history::kParticleColumns.
@@ -266,10 +270,58 @@ void ReadParticleFidelity(const WaveReader& check,
   }
 }
 
+// The wave's pattern classes (schema v8; NULL columns: none): pattern_mass and pattern_proposal
+// one double per class, pattern_bits each class's packed bits in turn, pattern_flagged a byte 0/1
+// per class.
+std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
+                                             const Statement& row,
+                                             int dimension,
+                                             const std::string& path) {
+  // Each class holds at least 1 % of a mass of 1 (ModeLossMinMass): at most 100, and rounding.
+  constexpr std::size_t kMaxClasses = 128;
+  const auto mass =
+      check.Doubles(row, kPatternMass, 0, kMaxClasses, "pattern_mass", "at most 128 classes");
+  const std::size_t k = mass.size();
+  const std::string per_class = std::to_string(k) + " (one per class of pattern_mass)";
+  const auto proposal = check.Doubles(row, kPatternProposal, k, k, "pattern_proposal", per_class);
+  const auto bytes_per_class = (static_cast<std::size_t>(dimension) + 7) / 8;
+  const auto bits = row.Bytes(kPatternBits);
+  const auto flagged = row.Bytes(kPatternFlagged);
+  if (bits.size() != k * bytes_per_class || (k > 0 && row.Type(kPatternBits) != SQLITE_BLOB)) {
+    check.Corrupt("pattern_bits",
+                  "has " + std::to_string(bits.size()) + " bytes, expected " +
+                      std::to_string(k * bytes_per_class) + " (" + per_class + ")");
+  }
+  if (flagged.size() != k || (k > 0 && row.Type(kPatternFlagged) != SQLITE_BLOB)) {
+    check.Corrupt("pattern_flagged",
+                  "has " + std::to_string(flagged.size()) + " bytes, expected " + per_class);
+  }
+  std::vector<PatternClass> classes(k);
+  for (std::size_t c = 0; c < k; ++c) {
+    const std::string who = "pattern class " + std::to_string(c + 1);
+    if (!(mass[c] > 0.0 && mass[c] <= 1.0 + 1e-9) || !(proposal[c] >= 0.0 && proposal[c] <= 1.0) ||
+        flagged[c] > 1) {
+      check.Corrupt(who, "has mass, proposal or flag out of range");
+    }
+    const auto* first = bits.data() + c * bytes_per_class;
+    classes[c].bits = history::UnpackBits(
+        std::vector<std::uint8_t>(first, first + bytes_per_class), dimension, path);
+    classes[c].mass = mass[c];
+    classes[c].proposal = proposal[c];
+    classes[c].flagged = flagged[c] != 0;
+  }
+  return classes;
+}
+
 }  // namespace
 
 std::string HistoryStore::Impl::WaveSelect() const {
   std::string columns = history::kWaveColumns;
+  // Before version 8 no wave recorded pattern classes: its columns are NULL (none).
+  const std::size_t patterns = columns.find(", pattern_bits");
+  const std::string pattern_tail =
+      has_pattern_classes() ? columns.substr(patterns) : ", NULL, NULL, NULL, NULL";
+  columns.erase(patterns);
   // Before version 7 no run had a low-fidelity simulator: its multi-fidelity columns are NULL.
   const std::size_t fidelity = columns.find(", continue_if_accepted");
   const std::string tail = has_multi_fidelity()
@@ -285,7 +337,7 @@ std::string HistoryStore::Impl::WaveSelect() const {
   } else if (!has_failures()) {
     columns.replace(columns.rfind("failures"), std::string::npos, "0");  // none recorded
   }
-  return "SELECT " + columns + tail + " FROM wave";
+  return "SELECT " + columns + tail + pattern_tail + " FROM wave";
 }
 
 std::string HistoryStore::Impl::ParticleSelect() const {
@@ -373,6 +425,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   }
 
   wave.multi_fidelity = ReadFidelity(check, row, wave.candidates, ended);
+  wave.pattern_classes = ReadPatternClasses(check, row, shape.dimension, db.path());
 
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);

@@ -18,12 +18,15 @@ using history::Transaction;
 constexpr const char* kUpsertWave = R"sql(
 INSERT INTO wave (wave, thresholds, phi, proposal, started_at, continue_if_accepted,
   continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
-  unkept_false_positives, unkept_false_positive_log_w2)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)
+  unkept_false_positives, unkept_false_positive_log_w2, pattern_bits, pattern_mass,
+  pattern_proposal, pattern_flagged)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)
 ON CONFLICT (wave) DO UPDATE SET
   thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal,
   continue_if_accepted = excluded.continue_if_accepted,
-  continue_if_rejected = excluded.continue_if_rejected
+  continue_if_rejected = excluded.continue_if_rejected, pattern_bits = excluded.pattern_bits,
+  pattern_mass = excluded.pattern_mass, pattern_proposal = excluded.pattern_proposal,
+  pattern_flagged = excluded.pattern_flagged
 )sql";
 
 // Re-sending a particle (OnWaveEnd's normalised weights) replaces it, but an output already stored
@@ -114,6 +117,29 @@ void CheckTheta(const HistoryShape& shape,
   }
 }
 
+// The wave's pattern classes from `first` on (docs/history.md, "Mode loss"); NULL without any.
+void BindPatternClasses(Statement& s, int first, const std::vector<PatternClass>& classes) {
+  if (classes.empty()) {
+    for (int c = first; c < first + 4; ++c) s.BindNull(c);
+    return;
+  }
+  std::vector<std::uint8_t> bits;
+  std::vector<double> mass;
+  std::vector<double> proposal;
+  std::vector<std::uint8_t> flagged;
+  for (const PatternClass& c : classes) {
+    const auto packed = PackBits(c.bits);
+    bits.insert(bits.end(), packed.begin(), packed.end());
+    mass.push_back(c.mass);
+    proposal.push_back(c.proposal);
+    flagged.push_back(c.flagged ? 1 : 0);
+  }
+  s.BindBytes(first, bits)
+      .BindBlob(first + 1, PackDoubles(mass))
+      .BindBlob(first + 2, PackDoubles(proposal))
+      .BindBytes(first + 3, flagged);
+}
+
 void UpsertWave(history::Database& db, const WaveRecord& wave) {
   Statement s(db, kUpsertWave);
   s.Bind(1, wave.wave)
@@ -122,6 +148,7 @@ void UpsertWave(history::Database& db, const WaveRecord& wave) {
       .BindBlob(4, PackDoubles(wave.proposal))
       .Bind(5, history::UtcNow());
   BindFidelity(s, 6, wave.multi_fidelity, /*ended=*/false);
+  BindPatternClasses(s, 13, wave.pattern_classes);
   s.Run();
 }
 

@@ -10,6 +10,7 @@
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/proposals/proposal_options.hpp"
+#include "combabc/samplers/mode_loss.hpp"
 #include "proposals/log_sum_exp.hpp"
 #include "samplers/candidate_batch.hpp"
 #include "samplers/continuation_tuning.hpp"
@@ -350,6 +351,17 @@ class SmcRun {
           binary_kernel_->Fit(population, prior, Tempering{wave.phi, options_.tempering.form});
       if (space_.num_reals() > 0) real_proposal_ = continuous_kernel_->Fit(population, space_);
       from_prior_ = false;
+      if (population.num_free_bits > 0) {
+        wave.pattern_classes = FindPatternClasses(
+            population,
+            [&](std::span<const std::uint8_t> bits) { return bit_proposal_->LogDensity(bits); },
+            options_.accepted_per_wave);
+        for (PatternClass& c : wave.pattern_classes) {
+          std::vector<std::uint8_t> full(static_cast<std::size_t>(space_.binary().dimension()));
+          space_.binary().Expand(c.bits, full);
+          c.bits = std::move(full);
+        }
+      }
     }
     wave.proposal = bit_proposal_->Marginals();
     if (observer_) observer_->OnWaveStart(wave);

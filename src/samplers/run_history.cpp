@@ -208,6 +208,41 @@ bool Differ(const T& a, const T& b, const std::string& what, std::string* where)
 
 }  // namespace
 
+std::string PatternText(const std::vector<std::uint8_t>& bits) {
+  constexpr std::size_t kShown = 64;
+  std::string text;
+  for (std::size_t k = 0; k < std::min(bits.size(), kShown); ++k) text += bits[k] ? '1' : '0';
+  if (bits.size() > kShown) {
+    const auto set = std::count_if(bits.begin(), bits.end(), [](std::uint8_t b) { return b != 0; });
+    text += "... (" + std::to_string(set) + " of " + std::to_string(bits.size()) + " bits set)";
+  }
+  return text;
+}
+
+std::string ModeLossWarning(const WaveRecord& wave) {
+  const PatternClass* first = nullptr;
+  int more = 0;
+  for (const PatternClass& c : wave.pattern_classes) {
+    if (!c.flagged) continue;
+    if (first == nullptr) {
+      first = &c;
+    } else {
+      ++more;
+    }
+  }
+  if (first == nullptr) return "";
+  char numbers[96];
+  std::snprintf(
+      numbers, sizeof numbers, " (mass %.3g) with probability %.2g", first->mass, first->proposal);
+  std::string text = "wave " + std::to_string(wave.wave + 1) + " proposed pattern " +
+                     PatternText(first->bits) + numbers;
+  if (more > 0) {
+    text +=
+        " (and " + std::to_string(more) + " more pattern" + (more > 1 ? "s" : "") + " likewise)";
+  }
+  return text + "; the posterior may have lost a mode";
+}
+
 bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
   if (Differ(a.waves.size(), b.waves.size(), "number of waves", where)) return false;
   for (std::size_t t = 0; t < a.waves.size(); ++t) {
@@ -229,6 +264,7 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.distinct, y.distinct, w + "distinct", where) ||
         Differ(x.pair_correlations, y.pair_correlations, w + "pair_correlations", where) ||
         Differ(x.failures, y.failures, w + "failures", where) ||
+        Differ(x.pattern_classes, y.pattern_classes, w + "pattern_classes", where) ||
         Differ(x.multi_fidelity.has_value(), y.multi_fidelity.has_value(), w + "fidelity", where) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;

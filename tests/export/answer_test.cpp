@@ -13,6 +13,7 @@
 #include <map>
 #include <sstream>
 
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/enumeration.hpp"
 #include "combabc/services/history_tools.hpp"
 #include "history/fake_run.hpp"
@@ -301,6 +302,39 @@ TEST(Answer, OfARunStoppedMidWaveIsTheLastCompleteWave) {
   EXPECT_EQ(a.wave, 0);
   EXPECT_TRUE(a.bits.empty());
   EXPECT_NE(AnswerText(a).find("none yet"), std::string::npos);
+}
+
+// The mode-loss diagnostic's flagged classes (WaveRecord::pattern_classes): in the answer, its
+// JSON, its text (a warning line per wave) and the checks after sampling (summary.json, report).
+TEST(Answer, FlaggedPatternClassesAreWarned) {
+  testing::FakeRunOptions options;
+  options.pattern_classes = true;
+  const RunMetadata m = testing::MakeFakeMetadata(options);
+  const RunHistory h = testing::MakeFakeHistory(options);
+  const Answer a = SummariseAnswer(m, h);
+  ASSERT_EQ(a.mode_loss.size(), 2u);  // waves 2 and 3, one flagged class each
+  EXPECT_EQ(a.mode_loss[0].wave, 2);
+  EXPECT_EQ(a.mode_loss[0].bits, PatternText(h.waves[1].pattern_classes[1].bits));
+  EXPECT_EQ(a.mode_loss[0].mass, 0.05);
+  EXPECT_EQ(a.mode_loss[0].proposal, 1e-6);
+  const std::string text = AnswerText(a);
+  EXPECT_NE(text.find("warning: wave 2 proposed pattern " + a.mode_loss[0].bits +
+                      " (mass 0.05) with probability 1e-06; the posterior may have lost a mode\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("warning: wave 3 proposed pattern"), std::string::npos) << text;
+  EXPECT_NE(AnswerJson(a).find("\"mode_loss\": [\n"), std::string::npos) << AnswerJson(a);
+  EXPECT_NE(AnswerJson(a).find("\"mass\": 0.05, \"proposal\": 1e-06}"), std::string::npos)
+      << AnswerJson(a);
+  const FitChecks checks = ComputeFitChecks(m, h);
+  int warned = 0;
+  for (const CheckMessage& c : checks.after) warned += c.code == "mode_loss" ? 1 : 0;
+  EXPECT_EQ(warned, 2);
+
+  // Without flagged classes: no line, an empty list.
+  const Answer quiet = SummariseAnswer(m, testing::MakeFakeHistory({}));
+  EXPECT_EQ(AnswerText(quiet).find("lost a mode"), std::string::npos);
+  EXPECT_NE(AnswerJson(quiet).find("\"mode_loss\": [],"), std::string::npos);
 }
 
 // The sensor's clamps: 18 per edge over 90 cm (the 45 cm example's config); clamp 1 is the first

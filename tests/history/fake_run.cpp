@@ -148,6 +148,11 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
     wave.thresholds = {threshold};
     wave.phi = 1.0;
     wave.proposal = proposal;
+    if (options.pattern_classes && t > 0 && history.waves.back().particles.size() >= 2) {
+      const auto& previous = history.waves.back().particles;
+      wave.pattern_classes = {{previous[0].theta.bits, 0.6, 0.5, false},
+                              {previous[1].theta.bits, 0.05, 1e-6, true}};
+    }
     const std::int64_t budget = static_cast<std::int64_t>(options.per_wave) * 500;
     std::int64_t index = 0;
     for (; index < budget && static_cast<int>(wave.particles.size()) < options.per_wave; ++index) {

@@ -24,6 +24,10 @@ struct FakeRunOptions {
   // in turn), the others not (1); cheap distances 10 % above the expensive ones; each wave's
   // continuation probabilities (kFakeFidelity) and made-up costs.
   bool multi_fidelity = false;
+  // Each wave after the first records two pattern classes of the previous wave (the mode-loss
+  // diagnostic): its first particle's bits (mass 0.6, proposal 0.5) and its second's (mass 0.05,
+  // proposal 1e-6, flagged).
+  bool pattern_classes = false;
   std::uint64_t seed = 7;
 };
 

@@ -80,10 +80,28 @@ void RehashMetadataAndRunState(history::Database& db, int version) {
       .Run();
 }
 
+// What a v7 file (before pattern classes) looks like, made from a v8 one: no pattern-class
+// columns, and its checksums as combabc computed them for v7. Made from a run without pattern
+// classes: a wave's checksum skips pattern columns that are all NULL, so the waves' stand.
+void DowngradeToV7(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  for (const char* column :
+       {"pattern_bits", "pattern_mass", "pattern_proposal", "pattern_flagged"}) {
+    db.Exec((std::string("ALTER TABLE wave DROP COLUMN ") + column).c_str());
+  }
+  db.Exec(R"sql(
+    UPDATE meta SET value = '7' WHERE key = 'schema_version';
+    PRAGMA user_version = 7;)sql");
+  RehashMetadataAndRunState(db, 7);
+  transaction.Commit();
+}
+
 // What a v6 file (before multi-fidelity runs) looks like, made from a v7 one of a single-fidelity
 // run: no multi-fidelity columns (all NULL there), and its checksums as combabc computed them for
 // v6.
 void DowngradeToV6(const std::string& path) {
+  DowngradeToV7(path);
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
   for (const char* column : {"continue_if_accepted",
@@ -736,6 +754,86 @@ TEST_F(HistoryIntegrityTest, AV6RunReadsAsSingleFidelityAndIsUpgradedToV7OnResum
     const ResumePoint point = store.BeginResume();
     ASSERT_TRUE(point.has_partial);
     EXPECT_FALSE(point.partial_fidelity.has_value());
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  history::Database db(path, /*create=*/false, /*read_only=*/true);
+  history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+  rows.Step();
+  EXPECT_EQ(rows.Text(0), hashes) << "the complete wave's checksum stands";
+  rows.Reset();
+}
+
+// The pattern classes of the mode-loss diagnostic (schema v8) are stored with their wave, read
+// back exactly (SameHistory compares them), survive a resume, and are under the wave's checksum.
+TEST_F(HistoryIntegrityTest, PatternClassesRoundTripAndAreChecksummed) {
+  FakeRunOptions options = SmallRun();
+  options.pattern_classes = true;
+  const RunHistory history = MakeFakeHistory(options);
+  ASSERT_EQ(history.waves[1].pattern_classes.size(), 2u);
+  const std::string path = Path("classes.db");
+  {
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(options));
+    RecordWave(store, history.waves[0], 5);
+    RecordWave(store, history.waves[1], 5);
+    RecordWave(store, history.waves[2], 5, /*stop_after_batches=*/1);
+  }
+  const RunHistory loaded = HistoryStore::Open(path, true).LoadHistory();
+  ASSERT_EQ(loaded.waves.size(), 3u);
+  EXPECT_TRUE(loaded.waves[0].pattern_classes.empty());
+  for (int t = 1; t < 3; ++t) {
+    EXPECT_EQ(loaded.waves[t].pattern_classes, history.waves[t].pattern_classes) << "wave " << t;
+  }
+  const ResumePoint point = HistoryStore::Open(path, true).LoadResumePoint();
+  ASSERT_EQ(point.completed.size(), 2u);
+  EXPECT_EQ(point.completed[1].pattern_classes, history.waves[1].pattern_classes);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+
+  // A changed mass (still a valid number) is caught by the wave's checksum; a malformed flag
+  // column by the reader.
+  for (const char* damage :
+       {"UPDATE wave SET pattern_mass = (SELECT pattern_proposal FROM wave WHERE wave = 1) "
+        "WHERE wave = 1",
+        "UPDATE wave SET pattern_flagged = x'0102' WHERE wave = 1",
+        "UPDATE wave SET pattern_bits = x'00' WHERE wave = 1"}) {
+    SCOPED_TRACE(damage);
+    const std::string damaged = Path("damaged-classes.db");
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(damaged + suffix);
+    fs::copy_file(path, damaged);
+    if (fs::exists(path + "-wal")) fs::copy_file(path + "-wal", damaged + "-wal");
+    Sql(damaged, damage);
+    const Error error = Catch([&] { HistoryStore::Open(damaged, true).LoadHistory(); });
+    EXPECT_EQ(error.kind(), ErrorKind::kData) << error.what();
+    EXPECT_NE(std::string(error.what()).find("wave 2"), std::string::npos) << error.what();
+  }
+}
+
+// A v7 file (before pattern classes) reads as waves without any; resuming it upgrades it to v8
+// without touching its waves' checksums (NULL pattern columns are not hashed).
+TEST_F(HistoryIntegrityTest, AV7RunReadsWithoutPatternClassesAndIsUpgradedToV8OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  const RunHistory before = HistoryStore::Open(path, true).LoadHistory();
+  DowngradeToV7(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 7);
+  const RunHistory v7 = HistoryStore::Open(path, true).LoadHistory();
+  std::string where;
+  EXPECT_TRUE(SameHistory(before, v7, &where)) << where;
+  std::string hashes;
+  {
+    history::Database db(path, /*create=*/false, /*read_only=*/true);
+    history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+    rows.Step();
+    hashes = rows.Text(0);
+    rows.Reset();
+  }
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    const ResumePoint point = store.BeginResume();
+    ASSERT_TRUE(point.has_partial);
   }
   check = HistoryStore::Verify(path);
   EXPECT_EQ(check.schema_version, kHistorySchemaVersion);

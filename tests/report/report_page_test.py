@@ -54,6 +54,17 @@ class AnswerTables(unittest.TestCase):
         self.assertIn('<td class="number">1</td><td class="number">812.2</td>'
                       '<td class="number">1000</td>', html)
 
+    def test_mode_loss_is_a_warning_table_only_when_flagged(self):
+        html = compact(page.answer_html(fixture()))
+        self.assertNotIn("lost a mode", html)
+        summary = fixture()
+        summary["answer"]["mode_loss"] = [
+            {"wave": 2, "bits": "110", "mass": 0.0433, "proposal": 0.00061}]
+        html = compact(page.answer_html(summary))
+        self.assertIn("<h3>Warning: the posterior may have lost a mode</h3>", html)
+        self.assertIn('<td class="number">2</td><td><code>110</code></td>'
+                      '<td class="number">0.0433</td><td class="number">0.00061</td>', html)
+
     def test_exact_answers_and_other_simulators_say_so(self):
         summary = fixture()
         summary["answer"]["exact"] = True

@@ -78,6 +78,16 @@ struct WaveEffort {
 
 inline constexpr std::size_t kAnswerConfigurations = 10;
 
+// A pattern class the mode-loss diagnostic flagged (WaveRecord::pattern_classes, docs/algorithm.md
+// "Mode loss"): a pattern the previous wave held with `mass` that wave `wave` proposed with
+// probability `proposal`.
+struct ModeLossFlag {
+  int wave = 0;      // from 1
+  std::string bits;  // "0110...", bit 1 first
+  double mass = 0.0;
+  double proposal = 0.0;
+};
+
 struct Answer {
   int wave = 0;           // from 1, the wave the numbers are taken from; 0: no wave has particles
   int waves = 0;          // waves in the history, the incomplete last one included
@@ -98,6 +108,10 @@ struct Answer {
   // of all waves, among `simulations` candidates, each of which ran the cheap simulator.
   std::optional<std::int64_t> expensive_simulations;
   std::int64_t simulations = 0;  // candidates of all waves
+  // Every wave's flagged pattern classes, and one warning line per wave with any
+  // (ModeLossWarning): the posterior may have lost a mode.
+  std::vector<ModeLossFlag> mode_loss;
+  std::vector<std::string> mode_loss_warnings;
 };
 
 // The answer of a loaded history: the last complete wave (or, when no wave is complete, the last
@@ -115,8 +129,9 @@ std::string AnswerJson(const Answer& answer, int indent = 2);
 
 // The answer for a terminal: one screen (the sensor's clamps as one table per edge, side by side),
 // then the `configurations` most probable configurations, the continuous parameters' means and sds,
-// each wave's ESS and simulations, and for a multi-fidelity run one line with its expensive
-// simulations. A continuous-only run has no bit lines and no configurations.
+// each wave's ESS and simulations, for a multi-fidelity run one line with its expensive
+// simulations, and a "warning: " line per wave whose proposal may have lost a mode. A
+// continuous-only run has no bit lines and no configurations.
 std::string AnswerText(const Answer& answer, std::size_t configurations = 5);
 
 }  // namespace combabc

@@ -27,9 +27,10 @@ namespace combabc {
 // version 5 the number of wave rows (meta row wave_count, under the run state's checksum);
 // version 6 the experiments (table experiment); version 7 the multi-fidelity columns (each
 // particle's multiplier, confirmed and low_distance, each wave's continuation probabilities and
-// costs), NULL in a single-fidelity run. An older file written to (resume) is upgraded to this
-// version.
-inline constexpr int kHistorySchemaVersion = 7;
+// costs), NULL in a single-fidelity run; version 8 each wave's pattern classes (the mode-loss
+// diagnostic: pattern_bits, pattern_mass, pattern_proposal, pattern_flagged), NULL for none. An
+// older file written to (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 8;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise

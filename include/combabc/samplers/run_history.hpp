@@ -67,6 +67,18 @@ struct WaveFidelity {
   double cost_ratio = 0.0;
 };
 
+// One pattern class of the population a wave's proposal was fitted to: its particles that share
+// a bit configuration (docs/algorithm.md, "Mode loss"). A wave records the classes whose mass
+// reaches ModeLossMinMass, each with the probability its proposal gives the pattern, flagged when
+// that is so small that the wave expects fewer than one particle of it: the class may be lost.
+struct PatternClass {
+  std::vector<std::uint8_t> bits;  // the full bit vector (0/1)
+  double mass = 0.0;               // the population's normalised weight of the class
+  double proposal = 0.0;           // q(bits) under the wave's binary proposal
+  bool flagged = false;            // proposed with negligible probability (mode loss)
+  bool operator==(const PatternClass&) const = default;
+};
+
 struct WaveRecord {
   int wave = 0;
   std::vector<double> thresholds;  // eps_t per threshold component
@@ -91,6 +103,9 @@ struct WaveRecord {
   std::vector<SimulationFailure> failures;
   double wall_seconds = 0.0;                   // not deterministic; excluded from SameHistory
   std::optional<WaveFidelity> multi_fidelity;  // set in a multi-fidelity run only
+  // The previous wave's heavy pattern classes under this wave's proposal (FindPatternClasses), set
+  // when the wave starts; none in wave 0, which proposes from the prior.
+  std::vector<PatternClass> pattern_classes;
   std::vector<Particle> particles;
 
   // The estimator's marginals (what the run reports and proposes from).
@@ -140,6 +155,16 @@ struct RunHistory {
   RunSummary summary;
   std::string FullReport(Estimator estimator) const;
 };
+
+// A pattern as the answer prints configurations, "0110...", bit 1 first; beyond 64 bits the first
+// 64 and how many of all are set.
+std::string PatternText(const std::vector<std::uint8_t>& bits);
+
+// The mode-loss warning of a wave with flagged pattern classes, one line without a newline: "wave
+// 3 proposed pattern 0001 (mass 0.076) with probability 2.1e-06; the posterior may have lost a
+// mode" (waves counted from 1, the heaviest flagged class named, any others counted). Empty when
+// none is flagged.
+std::string ModeLossWarning(const WaveRecord& wave);
 
 // Weighted sums over a population of bit vectors, from which its marginals and the Pearson
 // correlation of every pair of bits follow (docs/algorithm.md, "Pair correlations"): the one
