@@ -111,6 +111,13 @@ std::string SpacePart(const ParameterSpace& space) {
         .Add("real.mean", r.prior.mean)
         .Add("real.sd", r.prior.sd);
   }
+  // Joint priors only when there are any, so that earlier runs keep their digest and resume. A
+  // custom prior's code cannot be hashed: its kJoint reals' sampled moments above stand for it.
+  if (!space.joint_priors().empty()) c.Add("joint", static_cast<int>(space.joint_priors().size()));
+  for (const JointPriorGroup& g : space.joint_priors()) {
+    for (const std::string& name : g.names) c.Add("joint.name", name);
+    c.Add("joint.prior", g.prior->Describe());
+  }
   return c.Digest();
 }
 
