@@ -246,6 +246,7 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   config_internal::ParseSamplerSection(root, &c, &sources);
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
+  config_internal::ParseJointPriorSection(root, &c);
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   if (c.space.dimension == 0 && c.reals.empty()) {
     throw Error(ErrorKind::kConfig,

@@ -235,8 +235,9 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
   for (std::size_t i = 0; i < kDraws; ++i) {
     for (std::size_t k = 0; k < d; ++k) {
       const double a = draws[i * d + k] - moments.mean[k];
-      for (std::size_t j = 0; j < d; ++j)
+      for (std::size_t j = 0; j < d; ++j) {
         cov[k * d + j] += a * (draws[i * d + j] - moments.mean[j]) / n;
+      }
     }
   }
   for (std::size_t k = 0; k < d; ++k) {
