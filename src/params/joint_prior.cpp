@@ -13,8 +13,8 @@
 namespace combabc {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kLogRootTwoPi = 0.91893853320467274178;  // log sqrt(2 pi)
+constexpr double kInfinite = std::numeric_limits<double>::infinity();
+constexpr double kLogSqrtTwoPi = 0.91893853320467274178;  // log sqrt(2 pi)
 
 // CheckJointPrior: draws of the sampler, draws of the reference distribution, and the bound on
 // |sampler estimate - density estimate| in combined standard errors. 6 standard errors over the
@@ -35,7 +35,7 @@ constexpr double kMinReferenceEss = 100.0;
 // The check's own stream: the same draws whatever the run's seed.
 constexpr std::uint64_t kCheckSeed = 0x70A1C4ECBULL;
 
-std::string Num(double x) {
+std::string Shortest(double x) {
   std::array<char, 32> buf{};
   const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), x);
   return {buf.data(), result.ptr};
@@ -90,7 +90,7 @@ class MultivariateNormalPrior final : public JointPrior {
                           std::vector<double> l)
       : mean_(std::move(mean)), covariance_(std::move(covariance)), l_(std::move(l)) {
     const std::size_t d = mean_.size();
-    log_norm_ = -static_cast<double>(d) * kLogRootTwoPi;
+    log_norm_ = -static_cast<double>(d) * kLogSqrtTwoPi;
     for (std::size_t i = 0; i < d; ++i) log_norm_ -= std::log(l_[i * d + i]);
   }
   int dimension() const override { return static_cast<int>(mean_.size()); }
@@ -106,7 +106,7 @@ class MultivariateNormalPrior final : public JointPrior {
       y[i] = s / l_[i * d + i];
       q += y[i] * y[i];
     }
-    return std::isfinite(q) ? log_norm_ - 0.5 * q : -kInf;
+    return std::isfinite(q) ? log_norm_ - 0.5 * q : -kInfinite;
   }
   void Sample(RandomStream& rng, std::span<double> x) const override {
     const std::size_t d = mean_.size();
@@ -121,9 +121,9 @@ class MultivariateNormalPrior final : public JointPrior {
   }
   std::string Describe() const override {
     std::string text = "normal(mean=";
-    for (const double m : mean_) text += Num(m) + ",";
+    for (const double m : mean_) text += Shortest(m) + ",";
     text += " covariance=";
-    for (const double c : covariance_) text += Num(c) + ",";
+    for (const double c : covariance_) text += Shortest(c) + ",";
     return text + ")";
   }
 
@@ -167,18 +167,18 @@ std::shared_ptr<const JointPrior> MakeMultivariateNormalPrior(std::vector<double
   }
   for (std::size_t i = 0; i < d; ++i) {
     if (!std::isfinite(mean[i])) {
-      fail("mean[" + std::to_string(i) + "] = " + Num(mean[i]) + "; must be finite");
+      fail("mean[" + std::to_string(i) + "] = " + Shortest(mean[i]) + "; must be finite");
     }
     for (std::size_t k = 0; k < d; ++k) {
       const double a = covariance[i * d + k], b = covariance[k * d + i];
       if (!std::isfinite(a)) {
-        fail("covariance[" + std::to_string(i) + "][" + std::to_string(k) + "] = " + Num(a) +
+        fail("covariance[" + std::to_string(i) + "][" + std::to_string(k) + "] = " + Shortest(a) +
              "; must be finite");
       }
       if (a != b) {
-        fail("covariance[" + std::to_string(i) + "][" + std::to_string(k) + "] = " + Num(a) +
-             " but covariance[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + Num(b) +
-             "; must be symmetric");
+        fail("covariance[" + std::to_string(i) + "][" + std::to_string(k) + "] = " + Shortest(a) +
+             " but covariance[" + std::to_string(k) + "][" + std::to_string(i) +
+             "] = " + Shortest(b) + "; must be symmetric");
       }
     }
   }
@@ -207,19 +207,19 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     for (std::size_t k = 0; k < d; ++k) {
       if (!(x[k] >= low[k] && x[k] <= high[k]) || !std::isfinite(x[k])) {
         fail(names[k],
-             "the sampler drew " + Num(x[k]) + ", outside the support [" + Num(low[k]) + ", " +
-                 Num(high[k]) + "]");
+             "the sampler drew " + Shortest(x[k]) + ", outside the support [" + Shortest(low[k]) +
+                 ", " + Shortest(high[k]) + "]");
       }
     }
     const double lp = prior.LogDensity(x);
     if (!std::isfinite(lp)) {
       fail(
           Joined(names),
-          "the log density is " + Num(lp) + " at a point the sampler drew (" + Joined(names) +
+          "the log density is " + Shortest(lp) + " at a point the sampler drew (" + Joined(names) +
               " = " +
               [&] {
                 std::string p;
-                for (const double v : x) p += (p.empty() ? "" : ", ") + Num(v);
+                for (const double v : x) p += (p.empty() ? "" : ", ") + Shortest(v);
                 return p;
               }() +
               "); it must be finite wherever the sampler draws");
@@ -244,7 +244,8 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     bool spread = false;
     for (std::size_t i = 1; i < kDraws && !spread; ++i) spread = draws[i * d + k] != draws[k];
     if (!spread) {
-      fail(names[k], "the sampler drew " + Num(draws[k]) + " every time; a prior needs a spread");
+      fail(names[k],
+           "the sampler drew " + Shortest(draws[k]) + " every time; a prior needs a spread");
     }
     moments.sd[k] = std::sqrt(cov[k * d + k]);
   }
@@ -277,15 +278,15 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     // |L^{-1} (y - m)|^2 = scale^2 |z|^2, so each component's quadratic form is known exactly.
     auto log_normal = [&](double c) {
       const double q = z2 * scale * scale / (c * c);
-      return std::log(0.5) - dd * (kLogRootTwoPi + std::log(c)) - log_det_l - 0.5 * q;
+      return std::log(0.5) - dd * (kLogSqrtTwoPi + std::log(c)) - log_det_l - 0.5 * q;
     };
     const double a = log_normal(kNarrowScale), b = log_normal(kWideScale);
     const double log_r = std::max(a, b) + std::log1p(std::exp(-std::fabs(a - b)));
     bool inside = true;
     for (std::size_t k = 0; k < d; ++k) inside = inside && y[k] >= low[k] && y[k] <= high[k];
-    const double lp = inside ? prior.LogDensity(y) : -kInf;
-    if (std::isnan(lp) || lp == kInf) {
-      fail(Joined(names), "the log density is " + Num(lp) + " at a point of the support");
+    const double lp = inside ? prior.LogDensity(y) : -kInfinite;
+    if (std::isnan(lp) || lp == kInfinite) {
+      fail(Joined(names), "the log density is " + Shortest(lp) + " at a point of the support");
     }
     log_w[j] = lp - log_r;
   }

@@ -15,7 +15,7 @@ namespace combabc {
 
 namespace {
 
-std::string Num(double x) {
+std::string Written(double x) {
   std::array<char, 32> buf{};
   const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), x);
   return {buf.data(), result.ptr};
@@ -100,8 +100,8 @@ void RealsPrior::Sample(RandomStream& rng, std::span<double> reals) const {
       const std::size_t j = g.index[i];
       if (!marginals_[j].InSupport(draw[i])) {
         throw Error(ErrorKind::kConfig,
-                    "prior: the sampler drew " + Num(draw[i]) + ", outside the support [" +
-                        Num(marginals_[j].low) + ", " + Num(marginals_[j].high) + "]",
+                    "prior: the sampler drew " + Written(draw[i]) + ", outside the support [" +
+                        Written(marginals_[j].low) + ", " + Written(marginals_[j].high) + "]",
                     "",
                     0,
                     Field(j, names_[j]));

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "checkpoints.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 
 namespace combabc {
@@ -31,12 +32,14 @@ class AbsoluteDistance : public Distance {
   }
 };
 
-RunHistory RunGaussian(const SmcOptions& options) {
+RunHistory RunGaussian(const SmcOptions& options,
+                       SmcObserver* observer = nullptr,
+                       const ResumePoint* resume = nullptr) {
   const ParameterSpace space(BinarySpace::Independent(0),
                              {{"theta", {.kind = PriorKind::kNormal, .mean = 1.0, .sd = 2.0}}});
   const GaussianSimulator sim;
   const AbsoluteDistance dist;
-  return RunCombinatorialSmc({&space, &sim, &dist}, options);
+  return RunCombinatorialSmc({&space, &sim, &dist}, options, observer, resume);
 }
 
 SmcOptions Adaptive(ThresholdSchedule schedule) {
@@ -70,6 +73,22 @@ TEST(ScheduleRuns, PopulationSizePerWave) {
   for (std::size_t t = 0; t < 4; ++t) {
     EXPECT_EQ(static_cast<int>(h.waves[t].particles.size()), o.accepted_by_wave[t]) << t;
     EXPECT_TRUE(h.waves[t].complete);
+  }
+  // Resumed from a checkpoint inside the second wave and between waves: the same history.
+  o.batch_size = 64;
+  testing::Checkpoints checkpoints;
+  const RunHistory whole = RunGaussian(o, &checkpoints);
+  ASSERT_GT(checkpoints.points.size(), 12U);
+  for (const std::size_t i : {std::size_t{11}, checkpoints.points.size() - 2}) {
+    const RunHistory resumed = RunGaussian(o, nullptr, &checkpoints.points[i]);
+    ASSERT_EQ(resumed.waves.size(), whole.waves.size()) << i;
+    for (std::size_t t = 0; t < whole.waves.size(); ++t) {
+      ASSERT_EQ(resumed.waves[t].particles.size(), whole.waves[t].particles.size()) << i;
+      for (std::size_t k = 0; k < whole.waves[t].particles.size(); ++k) {
+        EXPECT_EQ(resumed.waves[t].particles[k].theta.reals,
+                  whole.waves[t].particles[k].theta.reals);
+      }
+    }
   }
   std::string why;
   o.accepted_by_wave = {600, 200};
