@@ -34,6 +34,7 @@
 #include "python_call.hpp"
 #include "python_distance.hpp"
 #include "python_history.hpp"
+#include "python_prior.hpp"
 #include "python_simulator.hpp"
 
 namespace py = pybind11;
@@ -980,6 +981,7 @@ PYBIND11_MODULE(_core, m) {
   static_cast<void>(failed_type);
 
   BindTypes(m);
+  RegisterPriors(m);
   m.def("load_history", &LoadHistory, py::arg("path"));
   m.def("run_config",
         &RunConfig,

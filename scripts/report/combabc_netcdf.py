@@ -97,6 +97,8 @@ def prior_draws(n, bit_prior_one, dimension, real_priors, seed):
             reals[:, k] = rng.normal(prior["mean"], prior["sd"], n)
         elif kind == "lognormal":
             reals[:, k] = np.exp(rng.normal(prior["mean"], prior["sd"], n))
+        elif kind == "joint":  # a joint or custom prior's sampler is code: not drawn here
+            reals[:, k] = np.nan
         else:  # truncated_normal, by rejection
             values = np.empty(0)
             while len(values) < n:

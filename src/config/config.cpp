@@ -136,6 +136,18 @@ double AutomaticBatchBound(const CalibrationConfig& c) {
   return std::max(4096.0, 32.0 * threads);
 }
 
+// The particles the run keeps over all waves, and the most of any wave.
+double TotalAccepted(const SmcOptions& smc) {
+  double total = 0.0;
+  for (int t = 0; t < smc.num_waves; ++t) total += smc.AcceptedIn(t);
+  return total;
+}
+int MostAccepted(const SmcOptions& smc) {
+  int most = 0;
+  for (int t = 0; t < smc.num_waves; ++t) most = std::max(most, smc.AcceptedIn(t));
+  return most;
+}
+
 SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const auto d = static_cast<double>(c.space.dimension);
   const auto m = static_cast<double>(c.simulator.outputs.size());
@@ -148,7 +160,7 @@ SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   SamplerMemory memory;
   memory.batch = batch * (2.0 * d + 8.0 * (m + components) + kOverheadBytes);
   memory.particles =
-      static_cast<double>(c.smc.num_waves) * c.smc.accepted_per_wave *
+      TotalAccepted(c.smc) *
           (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes) +
       (d <= static_cast<double>(kMaxPairCorrelationBits)
            ? static_cast<double>(c.smc.num_waves) * 8.0 * d * d
@@ -191,14 +203,14 @@ void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
   if (total <= c.model.memory_limit_bytes) return;
   std::string field = sampler.batch > sampler.particles ? "batch_size" : "accepted_per_wave";
   if (field == "accepted_per_wave" && sources.smc.count("num_waves") &&
-      c.smc.num_waves > c.smc.accepted_per_wave) {
+      c.smc.num_waves > MostAccepted(c.smc)) {
     field = "num_waves";
   }
   const auto it = sources.smc.find(field);
   const Source source = it != sources.smc.end() ? it->second : sources.sampler;
   const double value = field == "batch_size"  ? c.smc.batch_size
                        : field == "num_waves" ? c.smc.num_waves
-                                              : c.smc.accepted_per_wave;
+                                              : MostAccepted(c.smc);
   // batch_size = 0 is the automatic size: "lower it" would mean nothing there.
   const bool automatic = field == "batch_size" && c.smc.batch_size == 0;
   const std::string advice =
@@ -246,6 +258,7 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   config_internal::ParseSamplerSection(root, &c, &sources);
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
+  config_internal::ParseJointPriorSection(root, &c);
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   if (c.space.dimension == 0 && c.reals.empty()) {
     throw Error(ErrorKind::kConfig,

@@ -1,4 +1,5 @@
 // [metric]: the distance's components (paper Eqs. 4-7) and their threshold schedules (Eq. 1).
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -15,19 +16,30 @@ struct ScheduleSpec {
   Source source;  // where it was written (empty key = defaults)
 };
 
+constexpr std::array<const char*, 7> kScheduleKeys = {
+    "threshold", "quantile", "acceptance_rate", "ess_fraction", "weighted", "initial", "target"};
+
 bool HasScheduleKeys(const TableReader& t) {
-  return t.Has("threshold") || t.Has("quantile") || t.Has("initial") || t.Has("target");
+  for (const char* key : kScheduleKeys) {
+    if (t.Has(key)) return true;
+  }
+  return false;
 }
 
 ScheduleSpec ParseSchedule(TableReader& t, const ScheduleSpec& fallback) {
   // Every key is read (not just the ones present) so that the table's vocabulary is complete.
   const auto list = t.Numbers("threshold");
   const auto quantile = t.Number("quantile");
+  const auto weighted = t.Bool("weighted");
+  const auto rate = t.Number("acceptance_rate");
+  const auto ess = t.Number("ess_fraction");
   const auto initial = t.Number("initial");
   const auto target = t.Number("target");
-  const bool quantile_keys = quantile || initial || target;
-  if (list && quantile_keys) {
-    t.Fail("threshold", "give either threshold = [...] or quantile / initial / target, not both");
+  const bool adaptive_keys = quantile || weighted || rate || ess || initial || target;
+  if (list && adaptive_keys) {
+    t.Fail("threshold",
+           "give either threshold = [...] or the adaptive keys (quantile, acceptance_rate, "
+           "ess_fraction, initial, target), not both");
   }
   ScheduleSpec spec;
   if (list) {
@@ -36,13 +48,39 @@ ScheduleSpec ParseSchedule(TableReader& t, const ScheduleSpec& fallback) {
     spec.source = {t.Key("threshold"), t.Line("threshold")};
     return spec;
   }
-  if (!quantile_keys) return fallback;
-  spec.schedule.kind = ThresholdKind::kQuantile;
-  const char* first = quantile ? "quantile" : initial ? "initial" : "target";
+  if (!adaptive_keys) return fallback;
+  // One rule: quantile (the default), acceptance_rate or ess_fraction.
+  if ((quantile ? 1 : 0) + (rate ? 1 : 0) + (ess ? 1 : 0) > 1) {
+    t.Fail(rate ? "acceptance_rate" : "ess_fraction",
+           "give one of quantile, acceptance_rate and ess_fraction: each is a rule for eps_t");
+  }
+  spec.schedule.kind = rate  ? ThresholdKind::kAcceptance
+                       : ess ? ThresholdKind::kEss
+                             : ThresholdKind::kQuantile;
+  const char* first = quantile   ? "quantile"
+                      : rate     ? "acceptance_rate"
+                      : ess      ? "ess_fraction"
+                      : weighted ? "weighted"
+                      : initial  ? "initial"
+                                 : "target";
   spec.source = {t.Key(first), t.Line(first)};
   if (quantile) {
     if (!(*quantile > 0.0 && *quantile <= 1.0)) t.Fail("quantile", "must be in (0, 1]");
     spec.schedule.quantile = *quantile;
+  }
+  if (weighted) {
+    if (spec.schedule.kind != ThresholdKind::kQuantile) {
+      t.Fail("weighted", "only used by the quantile schedule");
+    }
+    spec.schedule.weighted = *weighted;
+  }
+  if (rate) {
+    if (!(*rate > 0.0 && *rate <= 1.0)) t.Fail("acceptance_rate", "must be in (0, 1]");
+    spec.schedule.acceptance_rate = *rate;
+  }
+  if (ess) {
+    if (!(*ess > 0.0 && *ess < 1.0)) t.Fail("ess_fraction", "must be in (0, 1)");
+    spec.schedule.ess_fraction = *ess;
   }
   if (initial) {
     if (!(*initial >= 0.0)) t.Fail("initial", "must be >= 0 (inf = accept everything)");
@@ -199,10 +237,13 @@ void ParseMetricTable(TableReader& table,
     component.name = ct.String("name").value_or("");
     if (KindOf(component.type) == ComponentKind::kIndicator) {
       if (HasScheduleKeys(ct)) {
-        const char* key = ct.Has("threshold")  ? "threshold"
-                          : ct.Has("quantile") ? "quantile"
-                          : ct.Has("initial")  ? "initial"
-                                               : "target";
+        const char* key = "target";
+        for (const char* k : kScheduleKeys) {
+          if (ct.Has(k)) {
+            key = k;
+            break;
+          }
+        }
         ct.Fail(key,
                 std::string("a ") + ToString(component.type) +
                     " indicator must equal 1 and takes no threshold");

@@ -1,11 +1,13 @@
-// [proposal] (the kernels: ProposalOptions) and [parameters.<name>] (continuous unknowns of the
-// model with their priors).
+// [proposal] (the kernels: ProposalOptions), [parameters.<name>] (continuous unknowns of the
+// model with their priors) and [[joint_prior]] (a correlated Gaussian over some of them).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/params/parameter_space.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -35,9 +37,26 @@ ContinuousPrior ParsePrior(TableReader& t, const plate::SensorVariationField& in
   if (!kind) {
     t.Fail("prior",
            "missing required key: one of \"uniform\", \"normal\", \"lognormal\", "
-           "\"truncated_normal\"");
+           "\"truncated_normal\", \"joint\"");
   }
   prior.kind = *kind;
+  if (prior.kind == PriorKind::kJoint) {
+    // A coordinate of a [[joint_prior]]: low and high bound its support (default: the physical
+    // range), which the joint prior's sampler must respect.
+    for (const char* key : {"mean", "sd"}) {
+      if (t.Has(key)) t.Fail(key, "not used by prior = \"joint\" (the [[joint_prior]] has it)");
+    }
+    prior.low = t.Number("low").value_or(info.low);
+    prior.high = t.Number("high").value_or(info.high);
+    if (!(prior.low < prior.high)) t.Fail("high", "must be above low = " + Num(prior.low));
+    if (prior.low < info.low || prior.high > info.high) {
+      t.Fail(prior.low < info.low ? "low" : "high",
+             "the support [" + Num(prior.low) + ", " + Num(prior.high) + "] must lie within " +
+                 std::string(info.name) + "'s physical range [" + Num(info.low) + ", " +
+                 Num(info.high) + "]");
+    }
+    return prior;
+  }
   const bool bounded =
       prior.kind == PriorKind::kUniform || prior.kind == PriorKind::kTruncatedNormal;
   auto number = [&](const char* key, bool wanted) -> double {
@@ -139,6 +158,63 @@ void ParseParametersSection(TableReader& root, CalibrationConfig* c) {
     p->Finish();
   }
   t->Finish();
+}
+
+void ParseJointPriorSection(TableReader& root, CalibrationConfig* c) {
+  for (TableReader& t : root.Tables("joint_prior")) {
+    JointPriorGroup group;
+    group.names = t.Strings("parameters").value_or(std::vector<std::string>{});
+    if (group.names.empty()) t.Fail("parameters", "missing required key: the reals it covers");
+    for (const std::string& name : group.names) {
+      const bool joint = std::any_of(c->reals.begin(), c->reals.end(), [&](const auto& r) {
+        return r.name == name && r.prior.kind == PriorKind::kJoint;
+      });
+      if (!joint) {
+        t.Fail("parameters",
+               "needs [parameters." + name + "] with prior = \"joint\" for " + Excerpt(name));
+      }
+    }
+    const std::string kind = t.String("kind").value_or("");
+    if (kind != "normal") t.Fail("kind", "must be \"normal\" (a correlated Gaussian)");
+    const std::vector<double> mean = t.Numbers("mean").value_or(std::vector<double>{});
+    if (mean.size() != group.names.size()) {
+      t.Fail("mean", "needs one value per parameter (" + std::to_string(group.names.size()) + ")");
+    }
+    // covariance = [[...], [...]]: one row per parameter.
+    std::vector<double> covariance;
+    const toml::node* rows = t.Raw("covariance");
+    if (!rows || !rows->is_array() || rows->as_array()->size() != mean.size()) {
+      t.Fail("covariance",
+             "needs one row per parameter: [[...], ...], " + std::to_string(mean.size()) + " x " +
+                 std::to_string(mean.size()));
+    }
+    for (const toml::node& row : *rows->as_array()) {
+      if (!row.is_array() || row.as_array()->size() != mean.size()) {
+        t.Fail("covariance", "each row needs " + std::to_string(mean.size()) + " numbers");
+      }
+      for (const toml::node& x : *row.as_array()) {
+        const auto v = x.value<double>();
+        if (!v) t.Fail("covariance", "holds numbers only");
+        covariance.push_back(*v);
+      }
+    }
+    try {
+      group.prior = MakeMultivariateNormalPrior(mean, std::move(covariance));
+    } catch (const Error& e) {
+      t.Fail("covariance", e.message());
+    }
+    t.Finish();
+    c->joint_priors.push_back(std::move(group));
+  }
+  // The rest (every joint real covered once; the sampler against the density) as the run's space
+  // will check it, now, so that the error points at the config.
+  if (c->reals.empty()) return;
+  try {
+    const ParameterSpace check(BinarySpace::Independent(0), c->reals, c->joint_priors);
+  } catch (const Error& e) {
+    root.Fail(c->joint_priors.empty() ? "parameters" : "joint_prior",
+              e.field() + ": " + e.message());
+  }
 }
 
 }  // namespace combabc::config_internal

@@ -175,6 +175,7 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* config, Sources* 
 // [proposal] and [parameters.<name>] (config_proposal.cpp).
 void ParseProposalSection(TableReader& root, CalibrationConfig* config);
 void ParseParametersSection(TableReader& root, CalibrationConfig* config);
+void ParseJointPriorSection(TableReader& root, CalibrationConfig* config);
 // [design] (config_design.cpp): after [model].
 void ParseDesignSection(TableReader& root, CalibrationConfig* config);
 // A [data] table (config_experiment.cpp); impact_default: the Gaussian extension's default

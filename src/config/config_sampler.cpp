@@ -111,7 +111,28 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sourc
   sources->sampler = {t->prefix(), t->line()};
   smc.num_waves = t->IntegerIn("waves", smc.num_waves, 1, 1000000);
   Note(sources->smc, "num_waves", *t, "waves");
-  smc.accepted_per_wave = t->IntegerIn("accepted_per_wave", smc.accepted_per_wave, 1, 1000000000);
+  // accepted_per_wave: one n for every wave, or a list of n_t, one per wave.
+  const toml::node* accepted = t->Raw("accepted_per_wave");
+  if (accepted && accepted->is_array()) {
+    const toml::array& list = *accepted->as_array();
+    if (static_cast<int>(list.size()) != smc.num_waves) {
+      t->Fail("accepted_per_wave",
+              "has " + std::to_string(list.size()) +
+                  " entries; a list needs one per wave (waves = " + std::to_string(smc.num_waves) +
+                  ")");
+    }
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const auto n = list[i].value<std::int64_t>();
+      if (!list[i].is_integer() || !n || *n < 1 || *n > 1000000000) {
+        t->FailAt(list[i],
+                  "sampler.accepted_per_wave[" + std::to_string(i) + "]",
+                  "must be an integer in [1, 1000000000]");
+      }
+      smc.accepted_by_wave.push_back(static_cast<int>(*n));
+    }
+  } else if (accepted) {
+    smc.accepted_per_wave = t->IntegerIn("accepted_per_wave", smc.accepted_per_wave, 1, 1000000000);
+  }
   Note(sources->smc, "accepted_per_wave", *t, "accepted_per_wave");
   smc.estimator = t->Choice<Estimator>("estimator", "estimator").value_or(smc.estimator);
   if (const auto seed = t->Integer("seed")) {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include "combabc/core/check.hpp"
+
 namespace combabc {
 namespace {
 
@@ -176,6 +178,13 @@ bool ContinuousPrior::IsValid(std::string* why) const {
                ? true
                : fail(std::string(field) + " = " + Num(value) + "; must be finite");
   };
+  if (kind == PriorKind::kJoint) {
+    if (!(low < high)) {
+      return fail("low = " + Num(low) + " >= high = " + Num(high) + "; low must be below high");
+    }
+    if (!finite("mean", mean) || !finite("sd", sd)) return false;
+    return sd > 0.0 ? true : fail("sd = " + Num(sd) + "; must be > 0");
+  }
   const bool uses_bounds = kind == PriorKind::kUniform || kind == PriorKind::kTruncatedNormal;
   const bool uses_normal = kind != PriorKind::kUniform;
   if (uses_bounds) {
@@ -194,6 +203,7 @@ bool ContinuousPrior::IsValid(std::string* why) const {
   switch (kind) {
     case PriorKind::kUniform:
     case PriorKind::kNormal:
+    case PriorKind::kJoint:
       return true;
     case PriorKind::kLogNormal:
       if (mean + sd * sd >= kMaxLogMoment) {
@@ -224,6 +234,8 @@ bool ContinuousPrior::InSupport(double x) const {
       return std::isfinite(x);
     case PriorKind::kLogNormal:
       return x > 0.0 && x < kInf;
+    case PriorKind::kJoint:
+      return x >= low && x <= high && std::isfinite(x);
   }
   return false;
 }
@@ -246,6 +258,8 @@ double ContinuousPrior::LogDensity(double x) const {
       const double z = (x - mean) / sd;
       return -0.5 * z * z - std::log(sd) - kLogSqrt2Pi - std::log(TruncateStandardised(*this).mass);
     }
+    case PriorKind::kJoint:
+      COMBABC_CHECK(kind != PriorKind::kJoint);  // ParameterSpace::LogPriorReals
   }
   return -kInf;
 }
@@ -269,6 +283,8 @@ double ContinuousPrior::Sample(RandomStream& rng) const {
       // z lies in [a, b]; mean + sd z may round a hair outside [low, high].
       return std::clamp(mean + sd * z, low, high);
     }
+    case PriorKind::kJoint:
+      COMBABC_CHECK(kind != PriorKind::kJoint);  // ParameterSpace::SampleReals
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
@@ -278,6 +294,7 @@ double ContinuousPrior::Mean() const {
     case PriorKind::kUniform:
       return 0.5 * (low + high);
     case PriorKind::kNormal:
+    case PriorKind::kJoint:
       return mean;
     case PriorKind::kLogNormal:
       return std::exp(mean + 0.5 * sd * sd);
@@ -292,6 +309,7 @@ double ContinuousPrior::StandardDeviation() const {
     case PriorKind::kUniform:
       return (high - low) / std::sqrt(12.0);
     case PriorKind::kNormal:
+    case PriorKind::kJoint:
       return sd;
     case PriorKind::kLogNormal:
       // sqrt(exp(sd^2) - 1) exp(mean + sd^2 / 2); expm1 keeps small sd accurate.

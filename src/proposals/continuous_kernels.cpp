@@ -102,11 +102,10 @@ class GaussianMixtureProposal final : public ContinuousProposal {
                           const std::vector<double>& weights,
                           std::vector<Factor> factors,
                           const std::vector<std::size_t>& factor_of)
-      : d_(static_cast<std::size_t>(space.num_reals())), factors_(std::move(factors)) {
-    for (const ContinuousParameter& p : space.reals()) {
-      priors_.push_back(p.prior);
-      names_.push_back(p.name);
-    }
+      : d_(static_cast<std::size_t>(space.num_reals())),
+        prior_(space.reals_prior()),
+        factors_(std::move(factors)) {
+    for (const ContinuousParameter& p : space.reals()) names_.push_back(p.name);
     double total = 0.0;
     for (std::size_t j = 0; j < weights.size(); ++j) {
       if (!(weights[j] > 0.0)) continue;
@@ -161,10 +160,10 @@ class GaussianMixtureProposal final : public ContinuousProposal {
         for (std::size_t k = 0; k <= i; ++k) r += f.l[Tri(i, k)] * reals[k];
         reals[i] = r;
       }
-      if (InSupport(reals)) return;
+      if (prior_.InSupport(reals)) return;
     }
     std::size_t bad = 0;
-    while (bad + 1 < d_ && priors_[bad].InSupport(reals[bad])) ++bad;
+    while (bad + 1 < d_ && prior_.marginal(bad).InSupport(reals[bad])) ++bad;
     throw Error(ErrorKind::kSoftware,
                 "continuous proposal: " + std::to_string(kMaxSupportTries) +
                     " draws in a row fell outside the prior support of the reals (the last at " +
@@ -176,7 +175,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
   // The mass of the support under q (the truncation constant) is common to the wave and omitted.
   double LogDensity(std::span<const double> reals) const override {
     COMBABC_CHECK(reals.size() == d_);
-    if (!InSupport(reals)) return -kInfinity;
+    if (!prior_.InSupport(reals)) return -kInfinity;
     double max = -kInfinity, sum = 0.0;
     auto add = [&](double term) {
       if (term <= max) {
@@ -221,15 +220,9 @@ class GaussianMixtureProposal final : public ContinuousProposal {
   static constexpr std::size_t kStackDims = 64;
 
   std::size_t NumComponents() const { return cumulative_.size(); }
-  bool InSupport(std::span<const double> reals) const {
-    for (std::size_t k = 0; k < d_; ++k) {
-      if (!priors_[k].InSupport(reals[k])) return false;
-    }
-    return true;
-  }
 
   std::size_t d_;
-  std::vector<ContinuousPrior> priors_;  // copies: the proposal may outlive the space
+  RealsPrior prior_;  // a copy: the proposal may outlive the space
   std::vector<std::string> names_;
   std::vector<Factor> factors_;
   std::vector<double> centres_;         // N x d
@@ -240,26 +233,21 @@ class GaussianMixtureProposal final : public ContinuousProposal {
   std::vector<double> whitened_;  // shared_: L^{-1} (c_j - c_0), N x d
 };
 
-// Wave 0 proposes from the prior itself: each real drawn from its own prior, in order, so the
-// importance weight p / q is 1 and every draw is inside the support.
+// Wave 0 proposes from the prior itself: each real drawn from its own prior (a joint prior's at
+// its first real), in order, so the importance weight p / q is 1 and every draw is inside the
+// support.
 class PriorProposal final : public ContinuousProposal {
  public:
-  explicit PriorProposal(const ParameterSpace& space) {
-    for (const ContinuousParameter& p : space.reals()) priors_.push_back(p.prior);
-  }
+  explicit PriorProposal(const ParameterSpace& space) : prior_(space.reals_prior()) {}
   void Sample(RandomStream& rng, std::span<double> reals) const override {
-    COMBABC_CHECK(reals.size() == priors_.size());
-    for (std::size_t k = 0; k < priors_.size(); ++k) reals[k] = priors_[k].Sample(rng);
+    prior_.Sample(rng, reals);
   }
   double LogDensity(std::span<const double> reals) const override {
-    COMBABC_CHECK(reals.size() == priors_.size());
-    double sum = 0.0;
-    for (std::size_t k = 0; k < priors_.size(); ++k) sum += priors_[k].LogDensity(reals[k]);
-    return sum;
+    return prior_.LogDensity(reals);
   }
 
  private:
-  std::vector<ContinuousPrior> priors_;  // copies: the proposal may outlive the space
+  RealsPrior prior_;  // a copy: the proposal may outlive the space
 };
 
 // The population's reals as an N x d matrix and its weights, checked against the space.

@@ -271,6 +271,7 @@ class SmcRun {
     std::vector<double> thresholds;
     std::vector<double> column;
     std::vector<double> weights;  // a multi-fidelity wave's, for its confirmed distances
+    std::vector<double> importance;
     offsets.assign(schedules_.size(), 0.0);
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
       const std::size_t k = threshold_components_[s];
@@ -287,6 +288,7 @@ class SmcRun {
       }
       column.clear();
       weights.clear();
+      importance.clear();
       if (previous) {
         // A multi-fidelity wave: the expensive distances of its confirmed particles with a
         // positive multiplier (the thresholds are the expensive model's; a cheap model far from
@@ -302,12 +304,15 @@ class SmcRun {
         for (const auto& p : previous->particles) {
           if (p.multiplier > 0.0 && (p.confirmed || !confirmed)) {
             column.push_back(p.distance[k] - offsets[s]);
+            importance.push_back(p.weight);
             if (confirmed) weights.push_back(InverseContinuation(p, *previous));
           }
         }
       }
-      double eps = schedules_[s].ThresholdFor(t, column, weights);
-      if (IsLikelihood(s) && schedules_[s].kind == ThresholdKind::kQuantile && previous) {
+      PreviousWave last{.distances = column, .counts = weights, .importance = importance};
+      if (previous) last.acceptance_rate = previous->acceptance_rate;
+      double eps = schedules_[s].ThresholdFor(t, last);
+      if (IsLikelihood(s) && schedules_[s].kind != ThresholdKind::kList && previous) {
         // Near the posterior the quantile of d - m can exceed T (many configurations within a
         // few T): force a geometric decrease so the schedule cannot stall above 1.
         eps = std::max(schedules_[s].target,
@@ -355,7 +360,7 @@ class SmcRun {
         wave.pattern_classes = FindPatternClasses(
             population,
             [&](std::span<const std::uint8_t> bits) { return bit_proposal_->LogDensity(bits); },
-            options_.accepted_per_wave);
+            options_.AcceptedIn(wave.wave));
         for (PatternClass& c : wave.pattern_classes) {
           std::vector<std::uint8_t> full(static_cast<std::size_t>(space_.binary().dimension()));
           space_.binary().Expand(c.bits, full);
@@ -499,7 +504,7 @@ class SmcRun {
     // Cost unknown (the run's first batch, or a resume's): one candidate per worker measures it.
     if (!(cost_s_ > 0.0)) return workers;
     const double needed =
-        std::max(static_cast<double>(options_.accepted_per_wave) - effective, 1.0);
+        std::max(static_cast<double>(options_.AcceptedIn(wave.wave)) - effective, 1.0);
     // The wave's own rate once it has a few acceptances; before, the previous wave's, which may
     // be far off (thresholds and proposal changed): then only half the candidates it predicts,
     // and the wave's own rate sizes the rest.
@@ -544,12 +549,12 @@ class SmcRun {
                               static_cast<std::int64_t>(wave.particles.size()));
   }
 
-  // Simulates wave candidates until accepted_per_wave are accepted or a stopping rule fires;
+  // Simulates wave candidates until n_t (AcceptedIn) are accepted or a stopping rule fires;
   // `done` are the waves before it.
   Stop RunWave(WaveRecord& wave, std::int64_t next_index, std::span<const WaveRecord> done) {
     const auto wave_start = Clock::now();
     const WaveProposal proposal{bit_proposal_.get(), real_proposal_.get(), from_prior_};
-    const int n = options_.accepted_per_wave;
+    const int n = options_.AcceptedIn(wave.wave);
     const double prior_rate = last_rate_;
     Stop stop;
     // With a low-fidelity simulator, the batch decides which candidates continue to the

@@ -13,6 +13,16 @@ bool SmcOptions::IsValid(std::string* why) const {
   if (accepted_per_wave < 1) {
     return fail("accepted_per_wave = " + std::to_string(accepted_per_wave) + "; must be >= 1");
   }
+  if (!accepted_by_wave.empty() && static_cast<int>(accepted_by_wave.size()) != num_waves) {
+    return fail("accepted_by_wave has " + std::to_string(accepted_by_wave.size()) +
+                " entries; must have one per wave (num_waves = " + std::to_string(num_waves) + ")");
+  }
+  for (std::size_t t = 0; t < accepted_by_wave.size(); ++t) {
+    if (accepted_by_wave[t] < 1) {
+      return fail("accepted_by_wave[" + std::to_string(t) +
+                  "] = " + std::to_string(accepted_by_wave[t]) + "; must be >= 1");
+    }
+  }
   for (std::size_t k = 0; k < thresholds.size(); ++k) {
     if (!thresholds[k].IsValid(
             "SmcOptions::thresholds[" + std::to_string(k) + "]", num_waves, why)) {

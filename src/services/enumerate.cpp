@@ -30,14 +30,14 @@ std::vector<double> FinalThresholds(const CalibrationConfig& config) {
     const ThresholdSchedule& schedule = config.smc.thresholds[s];
     if (schedule.kind == ThresholdKind::kList && !schedule.values.empty()) {
       eps.push_back(schedule.values.back());
-    } else if (schedule.kind == ThresholdKind::kQuantile && schedule.target > 0) {
+    } else if (schedule.kind != ThresholdKind::kList && schedule.target > 0) {
       eps.push_back(schedule.target);
     } else {
-      // A quantile schedule without a target (0, its default) adapts down forever: there is no
+      // An adaptive schedule without a target (0, its default) adapts down forever: there is no
       // final threshold to enumerate at.
       throw Error(ErrorKind::kUsage,
                   "threshold component " + std::to_string(s + 1) +
-                      " has no final threshold in the config (a quantile schedule without "
+                      " has no final threshold in the config (an adaptive schedule without "
                       "target); give one per threshold component with --threshold",
                   config.path);
     }

@@ -68,7 +68,7 @@ void BuildModel(Problem& p, const std::string& history_path) {
   p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
   p.low_fidelity =
       MakeLowFidelitySimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
-  p.space.emplace(BinarySpace(p.config.space), p.config.reals);
+  p.space.emplace(BinarySpace(p.config.space), p.config.reals, p.config.joint_priors);
 }
 
 void BuildModelIn(Problem& p, const std::string& history_path) {

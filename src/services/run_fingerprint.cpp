@@ -59,6 +59,10 @@ void AddThreshold(Canonical& c, const ThresholdSchedule& t) {
       .Add("threshold.quantile", t.quantile)
       .Add("threshold.initial", t.initial)
       .Add("threshold.target", t.target);
+  // The newer kinds' fields only where they apply, so that earlier runs keep their digest.
+  if (t.weighted) c.Add("threshold.weighted", true);
+  if (t.kind == ThresholdKind::kAcceptance) c.Add("threshold.acceptance_rate", t.acceptance_rate);
+  if (t.kind == ThresholdKind::kEss) c.Add("threshold.ess_fraction", t.ess_fraction);
 }
 
 // What decides the sequence of candidates and acceptances. Not threads or batch_size (the history
@@ -66,6 +70,8 @@ void AddThreshold(Canonical& c, const ThresholdSchedule& t) {
 std::string SamplerPart(const SmcOptions& s) {
   Canonical c;
   c.Add("num_waves", s.num_waves).Add("accepted_per_wave", s.accepted_per_wave);
+  // Only when given, so that earlier runs keep their digest and resume.
+  for (const int n : s.accepted_by_wave) c.Add("accepted_by_wave", n);
   c.Add("thresholds", static_cast<int>(s.thresholds.size()));
   for (const ThresholdSchedule& t : s.thresholds) AddThreshold(c, t);
   c.Add("tempering.kind", ToString(s.tempering.kind))
@@ -110,6 +116,13 @@ std::string SpacePart(const ParameterSpace& space) {
         .Add("real.high", r.prior.high)
         .Add("real.mean", r.prior.mean)
         .Add("real.sd", r.prior.sd);
+  }
+  // Joint priors only when there are any, so that earlier runs keep their digest and resume. A
+  // custom prior's code cannot be hashed: its kJoint reals' sampled moments above stand for it.
+  if (!space.joint_priors().empty()) c.Add("joint", static_cast<int>(space.joint_priors().size()));
+  for (const JointPriorGroup& g : space.joint_priors()) {
+    for (const std::string& name : g.names) c.Add("joint.name", name);
+    c.Add("joint.prior", g.prior->Describe());
   }
   return c.Digest();
 }

@@ -17,6 +17,7 @@
 #include "combabc/metrics/metric_component.hpp"
 #include "combabc/params/binary_space.hpp"
 #include "combabc/params/continuous_prior.hpp"
+#include "combabc/params/joint_prior.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/samplers/smc_options.hpp"
 #include "combabc/simulators/external_simulator.hpp"
@@ -143,6 +144,8 @@ struct CalibrationConfig {
   // alphabetical order (docs/config.md lists the names the sensor model has; an external
   // simulator takes any name).
   std::vector<ContinuousParameter> reals;
+  // [[joint_prior]]: correlated Gaussian priors over reals declared with prior = "joint".
+  std::vector<JointPriorGroup> joint_priors;
   OutputConfig output;
   std::optional<DesignConfig> design;  // [design], for `combabc design` only
 };

@@ -33,6 +33,9 @@ struct SmcOptions {
   int num_waves = 5;
   // n_t: accepted particles per wave (paper: 500).
   int accepted_per_wave = 500;
+  // When not empty: n_t for each wave, num_waves entries (each >= 1), in place of
+  // accepted_per_wave (e.g. a large first wave to explore the prior, smaller ones after).
+  std::vector<int> accepted_by_wave;
   // One schedule per *threshold* component of the distance, in component order (indicator
   // components need none). Empty = one default quantile schedule for each.
   std::vector<ThresholdSchedule> thresholds;
@@ -71,6 +74,11 @@ struct SmcOptions {
   MultiFidelityOptions multi_fidelity;
 
   bool IsValid(std::string* why) const;
+  // n_t of wave t: accepted_by_wave[t] when given, else accepted_per_wave.
+  int AcceptedIn(int wave) const {
+    return accepted_by_wave.empty() ? accepted_per_wave
+                                    : accepted_by_wave.at(static_cast<std::size_t>(wave));
+  }
 };
 
 }  // namespace combabc

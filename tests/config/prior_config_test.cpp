@@ -1,0 +1,79 @@
+// [parameters.<name>] prior = "joint" with a [[joint_prior]] (a correlated Gaussian): what it sets,
+// and its one-line errors, including the joint prior's own check, before any simulation.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "combabc/config/config.hpp"
+#include "config_error.hpp"
+
+namespace combabc {
+namespace {
+
+using testing::ConfigErrorOf;
+
+const std::string kMinimal =
+    "[data]\n"
+    "csv = \"p.csv\"\n"
+    "[metric]\n"
+    "preset = \"area\"\n"
+    "[parameters.stiffness_scale]\n"
+    "prior = \"joint\"\n"
+    "[parameters.loss_factor]\n"
+    "prior = \"joint\"\n"
+    "low = 0.0\n"
+    "high = 1.0\n";
+
+const std::string kJoint =
+    "[[joint_prior]]\n"
+    "parameters = [\"stiffness_scale\", \"loss_factor\"]\n"
+    "kind = \"normal\"\n"
+    "mean = [1.0, 0.5]\n";
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(PriorConfig, JointNormalOverTwoReals) {
+  const CalibrationConfig c = ParseConfig(
+      kMinimal + kJoint + "covariance = [[0.01, 0.001], [0.001, 0.0004]]\n", "dir/run.toml");
+  ASSERT_EQ(c.joint_priors.size(), 1U);
+  EXPECT_EQ(c.joint_priors[0].names, (std::vector<std::string>{"stiffness_scale", "loss_factor"}));
+  EXPECT_EQ(c.joint_priors[0].prior->dimension(), 2);
+  ASSERT_EQ(c.reals.size(), 2U);
+  for (const ContinuousParameter& r : c.reals) EXPECT_EQ(r.prior.kind, PriorKind::kJoint);
+  // The sensor's loss_factor: its own bounds; stiffness_scale: its physical range.
+  EXPECT_EQ(c.reals[0].name, "loss_factor");
+  EXPECT_EQ(c.reals[0].prior.high, 1.0);
+  EXPECT_EQ(c.reals[1].prior.low, 1e-6);
+}
+
+TEST(PriorConfig, JointPriorErrorsNameTheKeyAndTheParameter) {
+  std::string e = ConfigErrorOf(kMinimal + kJoint + "covariance = [[0.01, 0.2], [0.2, 0.0004]]\n");
+  EXPECT_TRUE(Contains(e,
+                       "joint_prior[0].covariance: joint normal prior: covariance is not "
+                       "positive definite"))
+      << e;
+  e = ConfigErrorOf(kMinimal + kJoint + "covariance = [[0.01, 0.0], [0.0]]\n");
+  EXPECT_TRUE(Contains(e, "joint_prior[0].covariance: each row needs 2 numbers")) << e;
+  // A loss factor of sd 0.5 around 0.5 leaves [0, 1]: the sampler leaves the support.
+  e = ConfigErrorOf(kMinimal + kJoint + "covariance = [[0.01, 0.0], [0.0, 0.25]]\n");
+  EXPECT_TRUE(Contains(e, "reals[0] (loss_factor): prior: the sampler drew")) << e;
+  EXPECT_TRUE(Contains(e, "outside the support [0, 1]")) << e;
+  // A joint real that no joint prior covers.
+  e = ConfigErrorOf(kMinimal);
+  EXPECT_TRUE(Contains(e, "(loss_factor): prior kind joint, but no joint prior covers it")) << e;
+  e = ConfigErrorOf(kMinimal + "[[joint_prior]]\nparameters = [\"foundation_stiffness\"]\n");
+  EXPECT_TRUE(Contains(e,
+                       "joint_prior[0].parameters: needs [parameters.foundation_stiffness] with "
+                       "prior = \"joint\""))
+      << e;
+  // low > high still errors.
+  e = ConfigErrorOf(
+      "[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\n[parameters.loss_factor]\n"
+      "prior = \"joint\"\nlow = 0.5\nhigh = 0.2\n");
+  EXPECT_TRUE(Contains(e, "parameters.loss_factor.high: must be above low = 0.5")) << e;
+}
+
+}  // namespace
+}  // namespace combabc
