@@ -96,13 +96,10 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave) {
   std::vector<double> weights;
   weights.reserve(wave.particles.size());
   for (const Particle& p : wave.particles) weights.push_back(p.weight);
-  e.min_bit_ess = WeightsEss(weights);
   if (wave.particles.empty()) return e;
   const std::size_t bits = wave.particles.front().theta.bits.size();
   const std::size_t reals = wave.particles.front().theta.reals.size();
   std::vector<double> values(weights.size());
-  bool some_bit_varies = false;
-  double min_ess = std::numeric_limits<double>::infinity();
   for (std::size_t b = 0; b < bits; ++b) {
     bool varies = false;
     for (std::size_t i = 0; i < values.size(); ++i) {
@@ -110,12 +107,8 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave) {
       varies = varies || values[i] != values[0];
     }
     e.bits.push_back(WeightedMean(weights, values));
-    if (varies) {
-      some_bit_varies = true;
-      min_ess = std::min(min_ess, e.bits.back().ess);
-    }
+    if (varies) e.bits_ess = std::min(e.bits_ess.value_or(e.bits.back().ess), e.bits.back().ess);
   }
-  if (some_bit_varies) e.min_bit_ess = min_ess;
   for (std::size_t r = 0; r < reals; ++r) {
     for (std::size_t i = 0; i < values.size(); ++i) values[i] = wave.particles[i].theta.reals[r];
     e.real_means.push_back(WeightedMean(weights, values));

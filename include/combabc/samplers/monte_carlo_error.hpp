@@ -6,6 +6,7 @@
 // (ESS = 1 / sum w^2 of normalised weights) assumes they do not. The same formula serves the
 // paper estimator's equal weights (then it is the textbook sd / sqrt(n)) and a multi-fidelity
 // wave's signed weights.
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -38,9 +39,9 @@ struct WaveErrors {
   std::vector<WeightedMoment> bits;
   std::vector<WeightedMoment> real_means;
   std::vector<WeightedMoment> real_sds;
-  // The smallest ESS among the bits that vary among the particles (a constant bit has no error
-  // to speak of); the weights' ESS when none varies or there are no bits.
-  double min_bit_ess = 0.0;
+  // The bits' ESS: the smallest among the bits that vary among the particles (a constant bit has
+  // no error to speak of); none when no bit varies or there are no bits.
+  std::optional<double> bits_ess;
 };
 WaveErrors WaveMonteCarloErrors(const WaveRecord& wave);
 
