@@ -332,6 +332,7 @@ void EffortTable(const Answer& a, std::string& out) {
   bool incomplete = false;
   for (std::size_t first = 0; first < a.per_wave.size(); first += kPerRow) {
     std::vector<std::string> rows;
+    rows.reserve(labels.size());
     for (const std::string& l : labels) rows.push_back(" " + Pad(l, width));
     for (std::size_t t = first; t < a.per_wave.size() && t < first + kPerRow; ++t) {
       const WaveEffort& e = a.per_wave[t];
