@@ -322,7 +322,8 @@ std::string Bits(const Answer& a, const std::string& bits, bool side_by_side) {
 // simulations; eight waves a row.
 void EffortTable(const Answer& a, std::string& out) {
   constexpr std::size_t kPerRow = 8;
-  const bool bits = !a.bits.empty();
+  // An enumeration is exact: no per-quantity ESS to show.
+  const bool bits = !a.bits.empty() && !a.exact;
   std::vector<std::string> labels = {"wave", "ESS"};
   if (bits) labels.push_back("ESS bits");
   for (const AnswerReal& r : a.reals) labels.push_back("ESS " + r.name);
@@ -342,7 +343,7 @@ void EffortTable(const Answer& a, std::string& out) {
       rows[row++] += cell;
       std::snprintf(cell, sizeof cell, "%8.0f ", e.ess);
       rows[row++] += cell;
-      // A wave without particles has no per-quantity ESS: "-".
+      // "-": a wave without particles, or (the bits) none of whose bits varies.
       if (bits) {
         if (e.bits_ess) {
           std::snprintf(cell, sizeof cell, "%8.0f ", *e.bits_ess);

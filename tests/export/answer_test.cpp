@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "combabc/samplers/enumeration.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "combabc/services/history_tools.hpp"
 #include "history/fake_run.hpp"
 #include "samplers/toy_models.hpp"
@@ -127,6 +128,9 @@ TEST(Answer, OfAnEnumerationIsTheExactPosteriorOfABruteForce) {
   const std::string text = AnswerText(a);
   EXPECT_NE(text.find("answer: exact"), std::string::npos) << text;
   EXPECT_NE(text.find(" b1    1.00        fixed"), std::string::npos) << text;
+  // Exact: no per-quantity ESS.
+  EXPECT_FALSE(a.per_wave[0].bits_ess);
+  EXPECT_EQ(text.find("ESS bits"), std::string::npos) << text;
 }
 
 // A run that named no bits: the answer names them as the export's particles.csv columns do
@@ -233,6 +237,49 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithDeltaMethodErrors) {
       EXPECT_EQ(a.per_wave[t].simulations, h.waves[t].candidates);
       EXPECT_DOUBLE_EQ(a.per_wave[t].ess, h.waves[t].ess);
     }
+  }
+}
+
+// A run with continuous parameters: each real's mean and sd with their delta-method errors and
+// the mean's ESS, per wave the bits' and each real's ESS, on the terminal and in the JSON.
+TEST(Answer, RealsGetDeltaMethodErrorsAndEveryQuantityItsEss) {
+  testing::FakeRunOptions options;
+  options.per_wave = 40;
+  options.reals = 2;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  m.estimator = "importance";
+  RunHistory h = testing::MakeFakeHistory(options);
+  for (WaveRecord& w : h.waves) ComputeWaveStatistics(w, Estimator::kImportance);
+  const WaveRecord& last = h.waves.back();
+  std::vector<double> weights, values;
+  for (const Particle& p : last.particles) {
+    weights.push_back(p.weight);
+    values.push_back(p.theta.reals[1]);
+  }
+  const Answer a = SummariseAnswer(m, h);
+  ASSERT_EQ(a.reals.size(), 2u);
+  const WeightedMoment mean = WeightedMean(weights, values);
+  const WeightedMoment sd = WeightedSd(weights, values);
+  EXPECT_NEAR(a.reals[1].mean, mean.value, 1e-9 * std::abs(mean.value));
+  EXPECT_DOUBLE_EQ(a.reals[1].mc_se, mean.se);
+  EXPECT_DOUBLE_EQ(a.reals[1].sd_se, sd.se);
+  EXPECT_DOUBLE_EQ(a.reals[1].ess, mean.ess);
+  ASSERT_EQ(a.per_wave.back().reals_ess.size(), 2u);
+  EXPECT_DOUBLE_EQ(a.per_wave.back().reals_ess[1], mean.ess);
+  ASSERT_TRUE(a.per_wave.back().bits_ess);
+
+  const std::string text = AnswerText(a);
+  for (const char* expected : {"(delta method; ESS of the bits >= ",
+                               "sd ± standard error (delta method), ESS",
+                               "\n ESS bits     ",
+                               "\n ESS stiffness_1 ",
+                               "\n ESS stiffness_2 ",
+                               "\n simulations "}) {
+    EXPECT_NE(text.find(expected), std::string::npos) << expected << " in\n" << text;
+  }
+  const std::string json = AnswerJson(a);
+  for (const char* expected : {"\"sd_se\": ", "\"ess_bits\": ", "\"ess_reals\": ["}) {
+    EXPECT_NE(json.find(expected), std::string::npos) << expected << " in\n" << json;
   }
 }
 
