@@ -11,6 +11,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "export/json_text.hpp"
 #include "history/fake_run.hpp"
 #include "support/test_support.hpp"
@@ -287,6 +288,14 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
   ASSERT_EQ(waves.size(), 3u);
   EXPECT_EQ(std::stod(Field(waves[2], 10)), history.waves[1].reals_mean[0]);
   EXPECT_EQ(std::stod(Field(waves[2], 13)), history.waves[1].reals_sd[1]);
+  // The Monte-Carlo errors: the bits' ESS, then per real its mean's and sd's SE and its ESS.
+  const WaveErrors errors = WaveMonteCarloErrors(history.waves[1]);
+  ASSERT_TRUE(errors.bits_ess);
+  EXPECT_NEAR(std::stod(Field(waves[2], 14)), *errors.bits_ess, 1e-9 * *errors.bits_ess);
+  EXPECT_NEAR(std::stod(Field(waves[2], 18)), errors.real_means[1].se, 1e-12);
+  EXPECT_NEAR(std::stod(Field(waves[2], 19)), errors.real_sds[1].se, 1e-12);
+  EXPECT_NEAR(
+      std::stod(Field(waves[2], 20)), errors.real_means[1].ess, 1e-9 * errors.real_means[1].ess);
 
   std::ifstream json(out / "summary.json");
   std::stringstream text;
@@ -299,7 +308,13 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
                                "\"continuous_kernel\": \"olcm\"",
                                "\"tempering_form\": \"geometric\"",
                                "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
-                               "\"reals_mean\": ["}) {
+                               "\"reals_mean\": [",
+                               "\"marginals_se\": [",
+                               "\"marginals_ess\": [",
+                               "\"ess_bits\": ",
+                               "\"reals_mean_se\": [",
+                               "\"reals_sd_se\": [",
+                               "\"reals_ess\": ["}) {
     EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
   }
 }
