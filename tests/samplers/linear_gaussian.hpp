@@ -1,7 +1,7 @@
 #pragma once
 // The linear Gaussian model y = sum_k w_k b_k + theta + sigma e with |y - y*| as the distance, and
 // its exact ABC posterior by enumeration over the bits x quadrature over theta: the mixed toy of
-// continuous_test.cpp and the Monte-Carlo error coverage test.
+// continuous_test.cpp, the Monte-Carlo error coverage test and bench_engine_coverage.
 #include <cmath>
 #include <cstdint>
 #include <span>
