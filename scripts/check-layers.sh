@@ -29,7 +29,7 @@ declare -A deps=(
   [metrics]="core distances schedules"
   [config]="core rng params proposals distances schedules samplers simulators plate data metrics"
   [history]="core rng params proposals distances schedules samplers"
-  [export]="core metrics history"
+  [export]="core samplers metrics history"
   [services]="core rng params proposals distances schedules samplers design simulators plate data metrics config history export"
 )
 # plate: the element kernels (and the laminate they take) <- the assembled plate (grid,

@@ -85,12 +85,20 @@ def answer_html(summary, sensor=True):
         rows = []
         for r in reals:
             mean = fmt(float(r.get("mean", math.nan)), ".4g")
-            if r.get("mc_se") is not None and not answer.get("exact"):
-                mean += f" &plusmn; {fmt(float(r['mc_se']), '.2g')}"
-            rows.append([e(str(r.get("name", ""))), mean,
-                         e(fmt(float(r.get("sd", math.nan)), ".4g"))])
-        parts.append("<h3>Continuous parameters</h3>\n" + table(
-            ["Name", "Posterior mean ± SE", "Posterior sd"], rows, numeric=(1, 2)))
+            sd = fmt(float(r.get("sd", math.nan)), ".4g")
+            if not answer.get("exact"):
+                if r.get("mc_se") is not None:
+                    mean += f" &plusmn; {fmt(float(r['mc_se']), '.2g')}"
+                if r.get("sd_se") is not None:
+                    sd += f" &plusmn; {fmt(float(r['sd_se']), '.2g')}"
+            ess = r.get("ess")
+            rows.append([e(str(r.get("name", ""))), mean, sd,
+                         e(fmt(float(ess), ".0f")) if ess is not None else "—"])
+        parts.append("<h3>Continuous parameters</h3>\n<p>Standard errors by the delta method "
+                     "(they see how the importance weights go with each quantity); ESS: the "
+                     "mean's own effective sample size, Var/SE&sup2;.</p>\n" + table(
+                         ["Name", "Posterior mean ± SE", "Posterior sd ± SE", "ESS"], rows,
+                         numeric=(1, 2, 3)))
     configurations = answer.get("top_configurations") or []
     particles, distinct = answer.get("particles"), answer.get("distinct")
     if not bits:
@@ -114,10 +122,25 @@ def answer_html(summary, sensor=True):
             ["Rank", "Posterior mass", f"Bits {title}", "Bits"], rows, numeric=(0, 1)))
     per_wave = answer.get("per_wave") or []
     if per_wave:
-        rows = [[e(fmt(w.get("wave"))), e(fmt(w.get("ess"), ".1f")), e(fmt(w.get("simulations")))]
-                for w in per_wave]
+        # Per-quantity ESS (Var/SE^2): the bits' smallest and each real's mean's, beside the
+        # weights' 1/sum w^2; "—" where a wave has none (no particles, an enumeration).
+        names = [str(r.get("name", "")) for r in reals]
+        with_bits = bool(bits) and not answer.get("exact")
+
+        def ess(value):
+            return e(fmt(float(value), ".1f")) if value is not None else "—"
+        rows = []
+        for w in per_wave:
+            row = [e(fmt(w.get("wave"))), ess(w.get("ess"))]
+            if with_bits:
+                row.append(ess(w.get("ess_bits")))
+            by_real = w.get("ess_reals") or []
+            row += [ess(by_real[k] if k < len(by_real) else None) for k in range(len(names))]
+            rows.append(row + [e(fmt(w.get("simulations")))])
+        header = (["Wave", "ESS"] + (["ESS bits (smallest)"] if with_bits else [])
+                  + [f"ESS {n}" for n in names] + ["Simulations"])
         parts.append("<h3>ESS and simulations per wave</h3>\n" +
-                     table(["Wave", "ESS", "Simulations"], rows, numeric=(0, 1, 2)))
+                     table(header, rows, numeric=tuple(range(len(header)))))
     lost = answer.get("mode_loss") or []
     if lost:
         # The mode-loss diagnostic (docs/algorithm.md, "Mode loss"): patterns the previous wave

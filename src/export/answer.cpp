@@ -4,17 +4,18 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
 
 #include "combabc/export/export.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
 namespace {
 
+using export_text::JsonArray;
 using export_text::JsonNumber;
 using export_text::JsonString;
 
@@ -39,32 +40,15 @@ std::string Estimate(double value, std::optional<double> se, int digits) {
   return text;
 }
 
-// sqrt(p (1 - p) / n): the standard error of a proportion estimated from n independent draws.
-double StandardError(double p, double n) {
-  if (!(n > 0) || std::isinf(n)) return 0.0;
-  return std::sqrt(std::max(0.0, p * (1.0 - p)) / n);
-}
-
-// A wave with signed (multi-fidelity) weights: the delta-method standard error of the
-// self-normalised estimate p = sum w x / sum w, sqrt(sum w^2 (x - p)^2) / sum w, with x = 1 for
-// the particles `counts` selects. sqrt(p (1 - p) / ESS) assumes weights of one sign and
-// understates it when some are negative. Empty without a negative weight.
-std::optional<double> SignedWeightsError(const WaveRecord& w,
-                                         double p,
-                                         const std::function<bool(const Particle&)>& counts) {
-  if (std::none_of(w.particles.begin(), w.particles.end(), [](const Particle& q) {
-        return q.weight < 0.0;
-      })) {
-    return std::nullopt;
-  }
-  double sum = 0.0;
-  double squares = 0.0;
-  for (const Particle& q : w.particles) {
-    const double deviation = (counts(q) ? 1.0 : 0.0) - p;
-    sum += q.weight;
-    squares += q.weight * q.weight * deviation * deviation;
-  }
-  return sum > 0.0 ? std::sqrt(squares) / sum : std::numeric_limits<double>::infinity();
+// The per-wave effort: the weights' ESS and the per-quantity ones (none for an enumeration: its
+// numbers are exact).
+WaveEffort EffortOf(const WaveRecord& w, bool exact) {
+  WaveEffort e{w.wave + 1, w.ess, std::nullopt, {}, w.candidates, w.complete};
+  if (w.particles.empty() || exact) return e;
+  const WaveErrors errors = WaveMonteCarloErrors(w);
+  e.bits_ess = errors.bits_ess;
+  for (const WeightedMoment& r : errors.real_means) e.reals_ess.push_back(r.ess);
+  return e;
 }
 
 // The wave the answer is taken from: the last complete one, else the last with particles.
@@ -80,30 +64,29 @@ const WaveRecord* AnswerWave(const RunHistory& h) {
 
 std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
                                                    const RunMetadata& metadata,
-                                                   double effective_size,
                                                    bool exact) {
   std::map<std::string, double> mass;
   double total = 0.0;
+  std::vector<std::string> patterns;
+  std::vector<double> weights;
   for (const Particle& p : w.particles) {
     std::string bits;
     for (std::uint8_t b : p.theta.bits) bits += b ? '1' : '0';
     mass[bits] += p.weight;
     total += p.weight;
+    patterns.push_back(std::move(bits));
+    weights.push_back(p.weight);
   }
+  std::vector<double> in(weights.size());
   std::vector<AnswerConfiguration> top;
   for (const auto& [bits, m] : mass) {
     AnswerConfiguration c;
     c.bits = bits;
     c.mass = total > 0 ? m / total : 0.0;
     if (!exact) {
-      // A structured binding cannot be captured (before C++20 as clang 14 reads it): a name.
-      const std::string& pattern = bits;
-      c.mass_se = SignedWeightsError(w, c.mass, [&pattern](const Particle& q) {
-                    for (std::size_t b = 0; b < pattern.size(); ++b) {
-                      if ((pattern[b] == '1') != (q.theta.bits[b] != 0)) return false;
-                    }
-                    return true;
-                  }).value_or(StandardError(c.mass, effective_size));
+      // The mass is the mean of the indicator "the particle is this configuration".
+      for (std::size_t i = 0; i < in.size(); ++i) in[i] = patterns[i] == bits ? 1.0 : 0.0;
+      c.mass_se = WeightedMean(weights, in).se;
     }
     for (std::size_t b = 0; b < bits.size(); ++b) {
       if (bits[b] == '1') c.fixed.push_back(BitName(metadata, b));
@@ -141,7 +124,7 @@ Answer SummariseAnswer(const RunMetadata& m,
   a.estimator = ToString(estimator);
   a.waves = static_cast<int>(h.waves.size());
   for (const WaveRecord& w : h.waves) {
-    a.per_wave.push_back({w.wave + 1, w.ess, w.candidates, w.complete});
+    a.per_wave.push_back(EffortOf(w, a.exact));
     a.simulations += w.candidates;
     if (w.multi_fidelity) {
       a.expensive_simulations =
@@ -160,11 +143,9 @@ Answer SummariseAnswer(const RunMetadata& m,
   // An enumeration's wave counts every accepted configuration, also those it did not keep.
   a.particles = std::max(w->accepted, static_cast<std::int64_t>(w->particles.size()));
   a.distinct = w->distinct;
-  // The paper estimator weighs every particle alike; the importance estimator's weights count
-  // as their ESS.
-  a.effective_size = a.exact                          ? std::numeric_limits<double>::infinity()
-                     : estimator == Estimator::kPaper ? static_cast<double>(a.particles)
-                                                      : w->ess;
+  // The particles' stored weights are the estimator's (the paper estimator's equal ones, the
+  // importance estimator's p/q): one delta-method formula serves both, and signed weights.
+  const WaveErrors errors = WaveMonteCarloErrors(*w);
   const std::vector<double>& p = w->marginals(estimator);
   for (std::size_t b = 0; b < p.size(); ++b) {
     AnswerBit bit;
@@ -173,19 +154,25 @@ Answer SummariseAnswer(const RunMetadata& m,
     if (b < positions.size()) bit.position = positions[b];
     // A sum of weights may pass 1 by a rounding error (1.0000000000000007): a probability.
     bit.p_one = std::clamp(p[b], 0.0, 1.0);
-    bit.mc_se = SignedWeightsError(*w, bit.p_one, [b](const Particle& q) {
-                  return q.theta.bits[b] != 0;
-                }).value_or(StandardError(bit.p_one, a.effective_size));
+    bit.mc_se = a.exact || b >= errors.bits.size() ? 0.0 : errors.bits[b].se;
     bit.verdict = VerdictOf(bit.p_one, a.verdict_level);
     a.bits.push_back(std::move(bit));
   }
   // Without bits every particle is the one empty configuration: nothing to list.
-  if (!a.bits.empty()) a.top_configurations = TopConfigurations(*w, m, a.effective_size, a.exact);
+  if (!a.bits.empty()) a.top_configurations = TopConfigurations(*w, m, a.exact);
   for (std::size_t r = 0; r < m.reals.size() && r < w->reals_mean.size(); ++r) {
-    const double sd = r < w->reals_sd.size() ? w->reals_sd[r] : 0.0;
-    const double n = a.effective_size;
-    a.reals.push_back(
-        {m.reals[r].name, w->reals_mean[r], n > 0 && !std::isinf(n) ? sd / std::sqrt(n) : 0.0, sd});
+    AnswerReal real;
+    real.name = m.reals[r].name;
+    real.mean = w->reals_mean[r];
+    real.sd = r < w->reals_sd.size() ? w->reals_sd[r] : 0.0;
+    if (r < errors.real_means.size()) {
+      real.ess = errors.real_means[r].ess;
+      if (!a.exact) {
+        real.mc_se = errors.real_means[r].se;
+        real.sd_se = errors.real_sds[r].se;
+      }
+    }
+    a.reals.push_back(std::move(real));
   }
   return a;
 }
@@ -230,7 +217,8 @@ std::string AnswerJson(const Answer& a, int indent) {
       const AnswerReal& x = a.reals[r];
       out += std::string(r ? "," : "") + "\n" + in2 + "  {\"name\": " + JsonString(x.name) +
              ", \"mean\": " + JsonNumber(x.mean) + ", \"mc_se\": " + JsonNumber(x.mc_se) +
-             ", \"sd\": " + JsonNumber(x.sd) + "}";
+             ", \"sd\": " + JsonNumber(x.sd) + ", \"sd_se\": " + JsonNumber(x.sd_se) +
+             ", \"ess\": " + JsonNumber(x.ess) + "}";
     }
     out += "\n" + in2 + "],\n";
   }
@@ -253,6 +241,8 @@ std::string AnswerJson(const Answer& a, int indent) {
     const WaveEffort& e = a.per_wave[t];
     out += std::string(t ? "," : "") + "\n" + in2 + "  {\"wave\": " + std::to_string(e.wave) +
            ", \"ess\": " + JsonNumber(e.ess) +
+           ", \"ess_bits\": " + (e.bits_ess ? JsonNumber(*e.bits_ess) : "null") +
+           ", \"ess_reals\": " + JsonArray(e.reals_ess) +
            ", \"simulations\": " + std::to_string(e.simulations) + "}";
   }
   out += std::string(a.per_wave.empty() ? "" : "\n" + in2) + "]\n" + in + "}";
@@ -341,25 +331,55 @@ std::string Bits(const Answer& a, const std::string& bits, bool side_by_side) {
   return out;
 }
 
+// Per wave: the weights' ESS, the bits' (the smallest per-bit one) and each real's, and the
+// simulations; eight waves a row.
 void EffortTable(const Answer& a, std::string& out) {
   constexpr std::size_t kPerRow = 8;
+  // An enumeration is exact: no per-quantity ESS to show.
+  const bool bits = !a.bits.empty() && !a.exact;
+  std::vector<std::string> labels = {"wave", "ESS"};
+  if (bits) labels.push_back("ESS bits");
+  for (const AnswerReal& r : a.reals) labels.push_back("ESS " + r.name);
+  labels.push_back("simulations");
+  std::size_t width = 0;
+  for (const std::string& l : labels) width = std::max(width, l.size());
   bool incomplete = false;
   for (std::size_t first = 0; first < a.per_wave.size(); first += kPerRow) {
-    std::string waves = " wave       ", ess = " ESS        ", sims = " simulations";
+    std::vector<std::string> rows;
+    rows.reserve(labels.size());
+    for (const std::string& l : labels) rows.push_back(" " + Pad(l, width));
     for (std::size_t t = first; t < a.per_wave.size() && t < first + kPerRow; ++t) {
       const WaveEffort& e = a.per_wave[t];
       char cell[32];
+      std::size_t row = 0;
       std::snprintf(cell, sizeof cell, "%8d%s", e.wave, e.complete ? " " : "*");
-      waves += cell;
+      rows[row++] += cell;
       std::snprintf(cell, sizeof cell, "%8.0f ", e.ess);
-      ess += cell;
+      rows[row++] += cell;
+      // "-": a wave without particles, or (the bits) none of whose bits varies.
+      if (bits) {
+        if (e.bits_ess) {
+          std::snprintf(cell, sizeof cell, "%8.0f ", *e.bits_ess);
+        } else {
+          std::snprintf(cell, sizeof cell, "%8s ", "-");
+        }
+        rows[row++] += cell;
+      }
+      for (std::size_t r = 0; r < a.reals.size(); ++r) {
+        if (r < e.reals_ess.size()) {
+          std::snprintf(cell, sizeof cell, "%8.0f ", e.reals_ess[r]);
+        } else {
+          std::snprintf(cell, sizeof cell, "%8s ", "-");
+        }
+        rows[row++] += cell;
+      }
       std::snprintf(cell, sizeof cell, "%8lld ", static_cast<long long>(e.simulations));
-      sims += cell;
+      rows[row++] += cell;
       incomplete = incomplete || !e.complete;
     }
-    for (std::string* row : {&waves, &ess, &sims}) {
-      while (!row->empty() && row->back() == ' ') row->pop_back();
-      out += *row + "\n";
+    for (std::string& row : rows) {
+      while (!row.empty() && row.back() == ' ') row.pop_back();
+      out += row + "\n";
     }
   }
   if (incomplete) out += " * incomplete wave (fewer particles than accepted_per_wave)\n";
@@ -373,11 +393,13 @@ void BitsText(const Answer& a, std::size_t configurations, std::string& out) {
   if (a.exact) {
     out += " " + what + " exact (no Monte-Carlo error)\n";
   } else {
+    // The bits' ESS: the smallest per-bit one (each bit's own, Var_w / SE^2).
+    const WaveEffort& e = a.per_wave[static_cast<std::size_t>(a.wave - 1)];
     std::snprintf(line,
                   sizeof line,
-                  " %s ± its Monte-Carlo standard error (n = %.0f)\n",
+                  " %s ± its Monte-Carlo standard error (delta method; ESS of the bits >= %.0f)\n",
                   what.c_str(),
-                  a.effective_size);
+                  e.bits_ess.value_or(e.ess));
     out += line;
   }
   std::snprintf(line,
@@ -411,19 +433,27 @@ void BitsText(const Answer& a, std::size_t configurations, std::string& out) {
   }
 }
 
-// The continuous parameters: posterior mean ± its Monte-Carlo standard error, and sd.
+// The continuous parameters: posterior mean and sd, each ± its Monte-Carlo standard error, and
+// the mean's ESS.
 void RealLines(const Answer& a, std::string& out) {
   if (a.reals.empty()) return;
   std::size_t width = 9;  // "parameter"
   for (const AnswerReal& r : a.reals) width = std::max(width, r.name.size());
   out += " " + Pad("parameter", width) + "  posterior mean" + (a.exact ? "" : " ± standard error") +
-         ", sd\n";
+         ", sd" + (a.exact ? "" : " ± standard error (delta method), ESS") + "\n";
   for (const AnswerReal& r : a.reals) {
-    char text[128];
+    char text[160];
     if (a.exact) {
       std::snprintf(text, sizeof text, "%.6g, sd %.4g", r.mean, r.sd);
     } else {
-      std::snprintf(text, sizeof text, "%.6g ± %.2g, sd %.4g", r.mean, r.mc_se, r.sd);
+      std::snprintf(text,
+                    sizeof text,
+                    "%.6g ± %.2g, sd %.4g ± %.2g, ESS %.0f",
+                    r.mean,
+                    r.mc_se,
+                    r.sd,
+                    r.sd_se,
+                    r.ess);
     }
     out += " " + Pad(r.name, width) + "  " + text + "\n";
   }

@@ -10,6 +10,7 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "export/json_text.hpp"
 
 namespace combabc {
@@ -138,6 +139,33 @@ bool MultiFidelity(const RunHistory& h) {
 // database keeps the engine's 0-based numbers).
 int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
 
+// A wave's Monte-Carlo errors (samplers/monte_carlo_error.hpp); none for an enumeration, whose
+// numbers are exact.
+WaveErrors ErrorsOf(const RunMetadata& m, const WaveRecord& w) {
+  if (m.termination == ToString(Termination::kEnumerated)) return {};
+  return WaveMonteCarloErrors(w);
+}
+
+// A wave's "waves" entry's errors (docs/history.md): per bit its standard error and ESS, the
+// bits' ESS (null when no bit varies), per real its mean's and sd's standard errors and its
+// mean's ESS.
+std::string WaveErrorsJson(const WaveErrors& e) {
+  std::vector<double> se, ess, mean_se, sd_se, reals_ess;
+  for (const WeightedMoment& b : e.bits) {
+    se.push_back(b.se);
+    ess.push_back(b.ess);
+  }
+  for (std::size_t r = 0; r < e.real_means.size(); ++r) {
+    mean_se.push_back(e.real_means[r].se);
+    sd_se.push_back(e.real_sds[r].se);
+    reals_ess.push_back(e.real_means[r].ess);
+  }
+  return ",\n     \"marginals_se\": " + JsonArray(se) + ", \"marginals_ess\": " + JsonArray(ess) +
+         ", \"ess_bits\": " + (e.bits_ess ? JsonNumber(*e.bits_ess) : "null") +
+         ",\n     \"reals_mean_se\": " + JsonArray(mean_se) +
+         ", \"reals_sd_se\": " + JsonArray(sd_se) + ", \"reals_ess\": " + JsonArray(reals_ess);
+}
+
 void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h) {
   std::ostream& out = dir.Add("waves.csv");
   const std::size_t k = h.waves.empty() ? 0 : h.waves.front().thresholds.size();
@@ -147,6 +175,14 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
   // The reals' estimates, last: files of runs without reals keep their columns and order.
   for (const ContinuousParameter& r : m.reals) {
     out << ',' << CsvField(r.name + "_mean") << ',' << CsvField(r.name + "_sd");
+  }
+  // The Monte-Carlo errors (samplers/monte_carlo_error.hpp), after the estimates: the bits' ESS
+  // (the smallest per-bit one), then per real its mean's and sd's standard errors and its
+  // mean's ESS.
+  out << ",ess_bits";
+  for (const ContinuousParameter& r : m.reals) {
+    out << ',' << CsvField(r.name + "_mean_se") << ',' << CsvField(r.name + "_sd_se") << ','
+        << CsvField(r.name + "_ess");
   }
   // A multi-fidelity run's continuation probabilities and costs, after everything else.
   const bool fidelity = MultiFidelity(h);
@@ -167,6 +203,17 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
       // A wave that accepted nothing has no estimates.
       out << ',' << (i < w.reals_mean.size() ? Number(w.reals_mean[i]) : "NaN") << ','
           << (i < w.reals_sd.size() ? Number(w.reals_sd[i]) : "NaN");
+    }
+    // NaN: an enumeration, no particles, or (ess_bits) no bit that varies among them.
+    const WaveErrors e = ErrorsOf(m, w);
+    out << ',' << (e.bits_ess ? Number(*e.bits_ess) : "NaN");
+    for (std::size_t i = 0; i < m.reals.size(); ++i) {
+      if (i < e.real_means.size()) {
+        out << ',' << Number(e.real_means[i].se) << ',' << Number(e.real_sds[i].se) << ','
+            << Number(e.real_means[i].ess);
+      } else {
+        out << ",NaN,NaN,NaN";
+      }
     }
     if (fidelity) {
       const WaveFidelity f = w.multi_fidelity.value_or(WaveFidelity{});
@@ -460,7 +507,7 @@ void WriteSummary(OutputDirectory& dir,
         << ",\n     \"marginals_paper\": " << JsonArray(w.marginals_paper)
         << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance)
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
-        << ", \"reals_sd\": " << JsonArray(w.reals_sd) << "}";
+        << ", \"reals_sd\": " << JsonArray(w.reals_sd) << WaveErrorsJson(ErrorsOf(m, w)) << "}";
   }
   const Answer answer = SummariseAnswer(m, h, positions);
   out << "\n  ],";

@@ -15,6 +15,7 @@
 
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/samplers/enumeration.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "combabc/services/history_tools.hpp"
 #include "history/fake_run.hpp"
 #include "samplers/toy_models.hpp"
@@ -128,6 +129,9 @@ TEST(Answer, OfAnEnumerationIsTheExactPosteriorOfABruteForce) {
   const std::string text = AnswerText(a);
   EXPECT_NE(text.find("answer: exact"), std::string::npos) << text;
   EXPECT_NE(text.find(" b1    1.00        fixed"), std::string::npos) << text;
+  // Exact: no per-quantity ESS.
+  EXPECT_FALSE(a.per_wave[0].bits_ess);
+  EXPECT_EQ(text.find("ESS bits"), std::string::npos) << text;
 }
 
 // A run that named no bits: the answer names them as the export's particles.csv columns do
@@ -151,9 +155,9 @@ TEST(Answer, UnnamedBitsAreNamedAsTheExportNamesThem) {
 }
 
 // A sampled run (the fake 36-clamp run, three complete waves): each estimator's marginals and
-// configuration masses from the particles, with sqrt(p (1 - p) / n) standard errors, n the
-// particles for the paper estimator and the weights' ESS for the importance estimator.
-TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
+// configuration masses from the particles, with delta-method standard errors
+// sqrt(sum w^2 (x - p)^2) / sum w: for the paper estimator's equal weights sqrt(p (1 - p) / n).
+TEST(Answer, OfASampledRunIsTheEstimatorsWithDeltaMethodErrors) {
   testing::FakeRunOptions options;
   options.per_wave = 40;
   const RunMetadata paper_metadata = testing::MakeFakeMetadata(options);
@@ -172,12 +176,17 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
     if (!paper) {
       for (std::size_t i = 0; i < n; ++i) weight[i] = std::exp(last.particles[i].log_weight);
     }
-    double sum = 0.0, sum_sq = 0.0;
-    for (double w : weight) {
-      sum += w;
-      sum_sq += w * w;
-    }
-    const double ess = sum * sum / sum_sq;
+    double sum = 0.0;
+    for (double w : weight) sum += w;
+    // The delta method's standard error of the weighted mean of x_i = counts(particle i).
+    auto error = [&](double p, const std::function<bool(std::size_t)>& counts) {
+      double squares = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = counts(i) ? 1.0 : 0.0;
+        squares += weight[i] * weight[i] * (x - p) * (x - p);
+      }
+      return std::sqrt(squares) / sum;
+    };
     std::map<std::string, double> mass;
     std::vector<double> ones(options.dimension, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -193,17 +202,35 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
     EXPECT_FALSE(a.exact);
     EXPECT_EQ(a.wave, options.waves);
     EXPECT_EQ(a.estimator, m.estimator);
-    EXPECT_NEAR(a.effective_size, paper ? static_cast<double>(n) : ess, 1e-9);
     ASSERT_EQ(a.bits.size(), ones.size());
+    double min_ess = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < ones.size(); ++k) {
       EXPECT_NEAR(a.bits[k].p_one, ones[k], 1e-12) << k;
-      EXPECT_NEAR(a.bits[k].mc_se, std::sqrt(ones[k] * (1 - ones[k]) / a.effective_size), 1e-12);
+      const double se =
+          error(ones[k], [&](std::size_t i) { return last.particles[i].theta.bits[k] != 0; });
+      EXPECT_NEAR(a.bits[k].mc_se, se, 1e-12) << k;
+      if (paper) {
+        EXPECT_NEAR(se, std::sqrt(ones[k] * (1 - ones[k]) / static_cast<double>(n)), 1e-12) << k;
+      }
+      if (se > 0) min_ess = std::min(min_ess, ones[k] * (1 - ones[k]) / (se * se));
+    }
+    // The bits' ESS: the smallest per-bit Var_w / SE^2 (the particles for equal weights).
+    ASSERT_TRUE(a.per_wave.back().bits_ess);
+    EXPECT_NEAR(*a.per_wave.back().bits_ess, min_ess, 1e-6 * min_ess);
+    if (paper) {
+      EXPECT_NEAR(min_ess, static_cast<double>(n), 1e-6);
     }
     ASSERT_FALSE(a.top_configurations.empty());
     for (const AnswerConfiguration& c : a.top_configurations) {
       EXPECT_NEAR(c.mass, mass.at(c.bits), 1e-12);
       ASSERT_TRUE(c.mass_se);
-      EXPECT_NEAR(*c.mass_se, std::sqrt(c.mass * (1 - c.mass) / a.effective_size), 1e-12);
+      const double se = error(c.mass, [&](std::size_t i) {
+        for (std::size_t b = 0; b < c.bits.size(); ++b) {
+          if ((c.bits[b] == '1') != (last.particles[i].theta.bits[b] != 0)) return false;
+        }
+        return true;
+      });
+      EXPECT_NEAR(*c.mass_se, se, 1e-12) << c.bits;
     }
     ASSERT_EQ(a.per_wave.size(), static_cast<std::size_t>(options.waves));
     for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
@@ -211,6 +238,49 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithEssBasedErrors) {
       EXPECT_EQ(a.per_wave[t].simulations, h.waves[t].candidates);
       EXPECT_DOUBLE_EQ(a.per_wave[t].ess, h.waves[t].ess);
     }
+  }
+}
+
+// A run with continuous parameters: each real's mean and sd with their delta-method errors and
+// the mean's ESS, per wave the bits' and each real's ESS, on the terminal and in the JSON.
+TEST(Answer, RealsGetDeltaMethodErrorsAndEveryQuantityItsEss) {
+  testing::FakeRunOptions options;
+  options.per_wave = 40;
+  options.reals = 2;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  m.estimator = "importance";
+  RunHistory h = testing::MakeFakeHistory(options);
+  for (WaveRecord& w : h.waves) ComputeWaveStatistics(w, Estimator::kImportance);
+  const WaveRecord& last = h.waves.back();
+  std::vector<double> weights, values;
+  for (const Particle& p : last.particles) {
+    weights.push_back(p.weight);
+    values.push_back(p.theta.reals[1]);
+  }
+  const Answer a = SummariseAnswer(m, h);
+  ASSERT_EQ(a.reals.size(), 2u);
+  const WeightedMoment mean = WeightedMean(weights, values);
+  const WeightedMoment sd = WeightedSd(weights, values);
+  EXPECT_NEAR(a.reals[1].mean, mean.value, 1e-9 * std::abs(mean.value));
+  EXPECT_DOUBLE_EQ(a.reals[1].mc_se, mean.se);
+  EXPECT_DOUBLE_EQ(a.reals[1].sd_se, sd.se);
+  EXPECT_DOUBLE_EQ(a.reals[1].ess, mean.ess);
+  ASSERT_EQ(a.per_wave.back().reals_ess.size(), 2u);
+  EXPECT_DOUBLE_EQ(a.per_wave.back().reals_ess[1], mean.ess);
+  ASSERT_TRUE(a.per_wave.back().bits_ess);
+
+  const std::string text = AnswerText(a);
+  for (const char* expected : {"(delta method; ESS of the bits >= ",
+                               "sd ± standard error (delta method), ESS",
+                               "\n ESS bits     ",
+                               "\n ESS stiffness_1 ",
+                               "\n ESS stiffness_2 ",
+                               "\n simulations "}) {
+    EXPECT_NE(text.find(expected), std::string::npos) << expected << " in\n" << text;
+  }
+  const std::string json = AnswerJson(a);
+  for (const char* expected : {"\"sd_se\": ", "\"ess_bits\": ", "\"ess_reals\": ["}) {
+    EXPECT_NE(json.find(expected), std::string::npos) << expected << " in\n" << json;
   }
 }
 
@@ -245,7 +315,7 @@ TEST(Answer, SignedWeightsGetTheSelfNormalisedError) {
     const double expected =
         error(a.bits[k].p_one, [k](const Particle& q) { return q.theta.bits[k] != 0; });
     EXPECT_NEAR(a.bits[k].mc_se, expected, 1e-12) << k;
-    const double naive = std::sqrt(a.bits[k].p_one * (1 - a.bits[k].p_one) / a.effective_size);
+    const double naive = std::sqrt(a.bits[k].p_one * (1 - a.bits[k].p_one) / last.ess);
     differs |= std::abs(expected - naive) > 1e-3;
   }
   EXPECT_TRUE(differs);

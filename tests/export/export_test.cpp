@@ -11,6 +11,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "export/json_text.hpp"
 #include "history/fake_run.hpp"
 #include "support/test_support.hpp"
@@ -30,6 +31,14 @@ std::vector<std::string> Lines(const fs::path& path) {
 
 std::size_t Fields(const std::string& line) {
   return static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+}
+
+// Field n (from 0) of a CSV line without quoted commas.
+std::string Field(const std::string& line, int n) {
+  std::stringstream in(line);
+  std::string value;
+  for (int i = 0; i <= n; ++i) std::getline(in, value, ',');
+  return value;
 }
 
 class ExportTest : public ::testing::Test {
@@ -65,7 +74,7 @@ TEST_F(ExportTest, WritesEveryTableWithHeaders) {
   ASSERT_EQ(waves.size(), 3u);
   EXPECT_EQ(waves[0],
             "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
-            "wall_seconds,complete");
+            "wall_seconds,complete,ess_bits");
   EXPECT_EQ(Fields(waves[1]), Fields(waves[0]));
 
   const auto marginals = Lines(out / "marginals.csv");
@@ -158,7 +167,7 @@ TEST_F(ExportTest, AMultiFidelityRunGetsItsColumnsAndBlock) {
   ASSERT_EQ(waves.size(), 3u);
   EXPECT_EQ(waves[0],
             "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
-            "wall_seconds,complete,continue_if_accepted,continue_if_rejected,"
+            "wall_seconds,complete,ess_bits,continue_if_accepted,continue_if_rejected,"
             "expensive_simulations,cheap_seconds,expensive_seconds,next_continue_if_accepted,"
             "next_continue_if_rejected,cost_ratio");
   const WaveFidelity& f = *history.waves[0].multi_fidelity;
@@ -266,24 +275,27 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
       "wave,index,bits,clamp 1,clamp 2,clamp 3,clamp 4,clamp 5,clamp 6,stiffness_1,stiffness_2,"
       "log_weight,weight,d_least_squares,d_secondary_peak");
   ASSERT_EQ(particles.size(), 1u + 2u * 5u);
-  auto field = [](const std::string& line, int n) {
-    std::stringstream in(line);
-    std::string value;
-    for (int i = 0; i <= n; ++i) std::getline(in, value, ',');
-    return value;
-  };
   const Particle& last = history.waves[1].particles.back();
-  EXPECT_EQ(std::stod(field(particles.back(), 9)), last.theta.reals[0]) << "exact round trip";
-  EXPECT_EQ(std::stod(field(particles.back(), 10)), last.theta.reals[1]);
+  EXPECT_EQ(std::stod(Field(particles.back(), 9)), last.theta.reals[0]) << "exact round trip";
+  EXPECT_EQ(std::stod(Field(particles.back(), 10)), last.theta.reals[1]);
 
   const auto waves = Lines(out / "waves.csv");
-  EXPECT_EQ(
-      waves[0],
-      "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
-      "wall_seconds,complete,stiffness_1_mean,stiffness_1_sd,stiffness_2_mean,stiffness_2_sd");
+  EXPECT_EQ(waves[0],
+            "wave,eps_least_squares,phi,candidates,accepted,acceptance_rate,ess,distinct,"
+            "wall_seconds,complete,stiffness_1_mean,stiffness_1_sd,stiffness_2_mean,stiffness_2_sd,"
+            "ess_bits,stiffness_1_mean_se,stiffness_1_sd_se,stiffness_1_ess,stiffness_2_mean_se,"
+            "stiffness_2_sd_se,stiffness_2_ess");
   ASSERT_EQ(waves.size(), 3u);
-  EXPECT_EQ(std::stod(field(waves[2], 10)), history.waves[1].reals_mean[0]);
-  EXPECT_EQ(std::stod(field(waves[2], 13)), history.waves[1].reals_sd[1]);
+  EXPECT_EQ(std::stod(Field(waves[2], 10)), history.waves[1].reals_mean[0]);
+  EXPECT_EQ(std::stod(Field(waves[2], 13)), history.waves[1].reals_sd[1]);
+  // The Monte-Carlo errors: the bits' ESS, then per real its mean's and sd's SE and its ESS.
+  const WaveErrors errors = WaveMonteCarloErrors(history.waves[1]);
+  ASSERT_TRUE(errors.bits_ess);
+  EXPECT_NEAR(std::stod(Field(waves[2], 14)), *errors.bits_ess, 1e-9 * *errors.bits_ess);
+  EXPECT_NEAR(std::stod(Field(waves[2], 18)), errors.real_means[1].se, 1e-12);
+  EXPECT_NEAR(std::stod(Field(waves[2], 19)), errors.real_sds[1].se, 1e-12);
+  EXPECT_NEAR(
+      std::stod(Field(waves[2], 20)), errors.real_means[1].ess, 1e-9 * errors.real_means[1].ess);
 
   std::ifstream json(out / "summary.json");
   std::stringstream text;
@@ -296,7 +308,13 @@ TEST_F(ExportTest, RealsGetColumnsAndTheirMetadataIsInTheSummary) {
                                "\"continuous_kernel\": \"olcm\"",
                                "\"tempering_form\": \"geometric\"",
                                "\"fingerprint\": {\"data\": \"0123456789abcdef\"}",
-                               "\"reals_mean\": ["}) {
+                               "\"reals_mean\": [",
+                               "\"marginals_se\": [",
+                               "\"marginals_ess\": [",
+                               "\"ess_bits\": ",
+                               "\"reals_mean_se\": [",
+                               "\"reals_sd_se\": [",
+                               "\"reals_ess\": ["}) {
     EXPECT_NE(text.str().find(expected), std::string::npos) << expected << " in\n" << text.str();
   }
 }
@@ -369,8 +387,9 @@ TEST_F(ExportTest, KilledRunExportsItsPartialWave) {
   ExportRun(path, out.string());
   const auto waves = Lines(out / "waves.csv");
   ASSERT_EQ(waves.size(), 3u);
-  EXPECT_EQ(waves[1].back(), '1');
-  EXPECT_EQ(waves[2].back(), '0') << "the cut wave is exported as incomplete: " << waves[2];
+  // `complete`, the tenth column.
+  EXPECT_EQ(Field(waves[1], 9), "1");
+  EXPECT_EQ(Field(waves[2], 9), "0") << "the cut wave is exported as incomplete: " << waves[2];
   EXPECT_EQ(waves[1].rfind("1,", 0), 0u) << "waves are numbered from 1, as users see them";
   EXPECT_EQ(waves[2].rfind("2,", 0), 0u);
   // The answer is the last complete wave's.

@@ -51,8 +51,26 @@ class AnswerTables(unittest.TestCase):
         self.assertIn('<td class="number">1</td><td class="number">0.5875 &plusmn; 0.0210</td>'
                       "<td>clamp 1, clamp &lt;3&gt;</td><td><code>101</code></td>", html)
         self.assertIn('<td class="number">0.3751</td><td>clamp 1</td>', html)  # no SE: none shown
+        # Per wave: the weights' ESS, the bits' (the smallest per-bit one; a dash for none).
+        self.assertIn("<th>ESS bits (smallest)</th>", html)
         self.assertIn('<td class="number">1</td><td class="number">812.2</td>'
-                      '<td class="number">1000</td>', html)
+                      '<td class="number">640.5</td><td class="number">1000</td>', html)
+        self.assertIn('<td class="number">433.5</td><td class="number">—</td>', html)
+
+    def test_reals_with_their_errors_and_ess(self):
+        # A continuous parameter: mean and sd each +- its delta-method SE, its ESS, and an ESS
+        # column per wave.
+        summary = fixture()
+        summary["answer"]["reals"] = [{"name": "k<1>", "mean": 1.25, "mc_se": 0.012, "sd": 0.5,
+                                       "sd_se": 0.0091, "ess": 377.4}]
+        for w, ess in zip(summary["answer"]["per_wave"], (801.0, 377.4)):
+            w["ess_reals"] = [ess]
+        html = compact(page.answer_html(summary))
+        self.assertIn("<td>k&lt;1&gt;</td><td class=\"number\">1.25 &plusmn; 0.012</td>"
+                      "<td class=\"number\">0.5 &plusmn; 0.0091</td><td class=\"number\">377</td>",
+                      html)
+        self.assertIn("<th>ESS k&lt;1&gt;</th>", html)
+        self.assertIn('<td class="number">640.5</td><td class="number">801.0</td>', html)
 
     def test_mode_loss_is_a_warning_table_only_when_flagged(self):
         html = compact(page.answer_html(fixture()))

@@ -1,9 +1,10 @@
 #pragma once
 // The answer of a run or an enumeration, in numbers: per bit P(bit = 1) with its Monte-Carlo
 // standard error and a verdict, the most probable configurations with their posterior mass, and
-// each wave's ESS and simulations. One pure function of a loaded history computes it, for the
-// terminal at the end of `combabc run` / `resume` / `enumerate` (AnswerText) and for summary.json's
-// "answer" (AnswerJson), so that both show the same numbers (docs/history.md, "The answer").
+// each wave's ESS (of the weights, of the bits and of each real) and simulations. One pure function
+// of a loaded history computes it, for the terminal at the end of `combabc run` / `resume` /
+// `enumerate` (AnswerText) and for summary.json's "answer" (AnswerJson), so that both show the same
+// numbers (docs/history.md, "The answer").
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -49,7 +50,7 @@ struct AnswerBit {
   std::string name;
   std::optional<BitPosition> position;
   double p_one = 0.0;  // P(bit = 1) under the estimator (the sensor: P(fixed))
-  double mc_se = 0.0;  // its Monte-Carlo standard error; 0 when exact (enumerated)
+  double mc_se = 0.0;  // its Monte-Carlo standard error (delta method); 0 when exact (enumerated)
   Verdict verdict = Verdict::kNotDetermined;
 };
 
@@ -60,18 +61,25 @@ struct AnswerConfiguration {
   std::vector<std::string> fixed;  // the names of its bits set to 1
 };
 
-// A continuous parameter's posterior mean, its Monte-Carlo standard error (sd / sqrt(n), n the
-// estimator's effective sample size, as for the bits) and its posterior sd.
+// A continuous parameter's posterior mean and sd, each with its Monte-Carlo standard error (delta
+// method), and the mean's effective sample size (samplers/monte_carlo_error.hpp).
 struct AnswerReal {
   std::string name;
   double mean = 0.0;
   double mc_se = 0.0;
   double sd = 0.0;
+  double sd_se = 0.0;
+  double ess = 0.0;
 };
 
 struct WaveEffort {
-  int wave = 0;  // from 1
-  double ess = 0.0;
+  int wave = 0;      // from 1
+  double ess = 0.0;  // the weights' ESS, 1 / sum w^2
+  // The per-quantity ESS Var_w(f) / SE_f^2 (WaveMonteCarloErrors): the smallest over the bits
+  // that vary among the wave's particles (none without such bits, and for an enumeration), and
+  // each real's mean's.
+  std::optional<double> bits_ess;
+  std::vector<double> reals_ess;
   std::int64_t simulations = 0;
   bool complete = false;
 };
@@ -97,7 +105,6 @@ struct Answer {
   double verdict_level = kVerdictLevel;
   std::int64_t particles = 0;   // the wave's accepted particles (configurations when enumerated)
   std::int64_t distinct = 0;    // distinct configurations among them
-  double effective_size = 0.0;  // the sample size the standard errors assume (infinite if exact)
   std::string termination;      // the run's (metadata), e.g. "budget_exhausted"
   std::vector<AnswerBit> bits;  // none in a continuous-only run
   std::vector<AnswerConfiguration> top_configurations;  // most probable first, at most 10; none
@@ -115,10 +122,11 @@ struct Answer {
 };
 
 // The answer of a loaded history: the last complete wave (or, when no wave is complete, the last
-// wave with particles), under the run's estimator. Standard errors: sqrt(p (1 - p) / n) with n the
-// estimator's effective sample size (the paper estimator's equal weights: the particles; the
-// importance estimator: the wave's ESS, 1 / sum w^2), which assumes independent draws; an
-// enumeration's numbers are exact (SE 0, mass_se none). `positions`: one per bit, or empty.
+// wave with particles), under the run's estimator. Standard errors: the delta method's for the
+// self-normalised estimate under the particles' stored weights (WaveMonteCarloErrors; for the
+// paper estimator's equal weights the textbook sqrt(p (1 - p) / n) and sd / sqrt(n)), which sees
+// how the weights go with each quantity; an enumeration's numbers are exact (SE 0, mass_se none).
+// `positions`: one per bit, or empty.
 Answer SummariseAnswer(const RunMetadata& metadata,
                        const RunHistory& history,
                        const std::vector<std::optional<BitPosition>>& positions = {});

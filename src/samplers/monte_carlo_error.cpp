@@ -1,0 +1,120 @@
+// Delta-method standard errors of self-normalised weighted estimates (monte_carlo_error.hpp).
+#include "combabc/samplers/monte_carlo_error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "combabc/core/check.hpp"
+
+namespace combabc {
+namespace {
+
+// (sum w)^2 / sum w^2: the weights' ESS (1 / sum w^2 once normalised).
+double WeightsEss(std::span<const double> weights) {
+  double sum = 0.0;
+  double squares = 0.0;
+  for (const double w : weights) {
+    sum += w;
+    squares += w * w;
+  }
+  return squares > 0.0 ? sum * sum / squares : 0.0;
+}
+
+// The estimate whose influence terms are `influence` (f_i - mu for a mean): se =
+// sqrt(sum w^2 psi^2) / sum w, and n_f = spread / se^2.
+WeightedMoment FromInfluence(std::span<const double> weights,
+                             std::span<const double> influence,
+                             double value,
+                             double spread) {
+  double sum = 0.0;
+  double squares = 0.0;
+  for (std::size_t i = 0; i < weights.size(); ++i) {
+    sum += weights[i];
+    squares += weights[i] * weights[i] * influence[i] * influence[i];
+  }
+  WeightedMoment m;
+  m.value = value;
+  if (!(sum > 0.0)) {
+    m.se = std::numeric_limits<double>::infinity();
+    return m;
+  }
+  m.se = std::sqrt(squares) / sum;
+  m.ess = m.se > 0.0 ? spread / (m.se * m.se) : WeightsEss(weights);
+  return m;
+}
+
+}  // namespace
+
+WeightedMoment WeightedMean(std::span<const double> weights, std::span<const double> values) {
+  COMBABC_CHECK(weights.size() == values.size());
+  double sum = 0.0;
+  double first = 0.0;
+  for (std::size_t i = 0; i < weights.size(); ++i) {
+    sum += weights[i];
+    first += weights[i] * values[i];
+  }
+  const double mean = sum > 0.0 ? first / sum : 0.0;
+  std::vector<double> influence(values.size());
+  double spread = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    influence[i] = values[i] - mean;
+    spread += weights[i] * influence[i] * influence[i];
+  }
+  return FromInfluence(weights, influence, mean, sum > 0.0 ? std::max(0.0, spread / sum) : 0.0);
+}
+
+WeightedMoment WeightedSd(std::span<const double> weights, std::span<const double> values) {
+  const WeightedMoment mean = WeightedMean(weights, values);
+  double sum = 0.0;
+  double second = 0.0;
+  for (std::size_t i = 0; i < weights.size(); ++i) {
+    const double d = values[i] - mean.value;
+    sum += weights[i];
+    second += weights[i] * d * d;
+  }
+  const double var = sum > 0.0 ? std::max(0.0, second / sum) : 0.0;
+  std::vector<double> influence(values.size());
+  double spread = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double d = values[i] - mean.value;
+    influence[i] = d * d - var;
+    spread += weights[i] * influence[i] * influence[i];
+  }
+  WeightedMoment v =
+      FromInfluence(weights, influence, var, sum > 0.0 ? std::max(0.0, spread / sum) : 0.0);
+  WeightedMoment sd;
+  sd.value = std::sqrt(var);
+  sd.ess = v.ess;
+  // se(sd) = se(var) / (2 sd); a constant quantity (sd 0) has se 0 as its variance has.
+  sd.se = sd.value > 0.0 ? v.se / (2.0 * sd.value) : v.se;
+  return sd;
+}
+
+WaveErrors WaveMonteCarloErrors(const WaveRecord& wave) {
+  WaveErrors e;
+  std::vector<double> weights;
+  weights.reserve(wave.particles.size());
+  for (const Particle& p : wave.particles) weights.push_back(p.weight);
+  if (wave.particles.empty()) return e;
+  const std::size_t bits = wave.particles.front().theta.bits.size();
+  const std::size_t reals = wave.particles.front().theta.reals.size();
+  std::vector<double> values(weights.size());
+  for (std::size_t b = 0; b < bits; ++b) {
+    bool varies = false;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      values[i] = wave.particles[i].theta.bits[b] != 0 ? 1.0 : 0.0;
+      varies = varies || values[i] != values[0];
+    }
+    e.bits.push_back(WeightedMean(weights, values));
+    if (varies) e.bits_ess = std::min(e.bits_ess.value_or(e.bits.back().ess), e.bits.back().ess);
+  }
+  for (std::size_t r = 0; r < reals; ++r) {
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = wave.particles[i].theta.reals[r];
+    e.real_means.push_back(WeightedMean(weights, values));
+    e.real_sds.push_back(WeightedSd(weights, values));
+  }
+  return e;
+}
+
+}  // namespace combabc
