@@ -202,10 +202,9 @@ class AncestorProposal final : public JointProposal {
       return;
     }
     const std::vector<double> prior_sd = PriorSd(space);
-    if (r_ > 0)
-      factors_.push_back(Factorise(scale * Covariance(population, AllOf(members)), prior_sd));
-    else
-      factors_.emplace_back();
+    // factors_[0], the whole population's (without reals: an empty factor, log det 0).
+    factors_.push_back(r_ > 0 ? Factorise(scale * Covariance(population, AllOf(members)), prior_sd)
+                              : Factor{});
     for (const auto* bits : order) {
       const std::vector<std::size_t>& js = members.at(*bits);
       Pattern g;
