@@ -18,7 +18,7 @@
 namespace combabc {
 namespace {
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kMinusInfinity = -std::numeric_limits<double>::infinity();
 // The defensive weight of the prior (ancestor_kernel.hpp).
 constexpr double kDefensive = 0.05;
 // The flip rates' floor, times the number of free bits: the expected number of flips of bits the
@@ -26,14 +26,12 @@ constexpr double kDefensive = 0.05;
 constexpr double kMinFlips = 0.1;
 // A bit pattern's particles make its own covariance from this effective sample size on.
 constexpr double kMinPatternEss = 10.0;
-// Sample gives up after this many draws in a row outside the support (proposal.hpp).
-constexpr int kMaxSupportTries = 10000;
 
 // Adds exp(term) to a running log-sum-exp (max, sum): one pass, no overflow.
 struct LogSum {
-  double max = -kInfinity, sum = 0.0;
+  double max = kMinusInfinity, sum = 0.0;
   void Add(double term) {
-    if (term == -kInfinity) return;
+    if (term == kMinusInfinity) return;
     if (term <= max) {
       sum += std::exp(term - max);
     } else {
@@ -41,7 +39,7 @@ struct LogSum {
       max = term;
     }
   }
-  double Value() const { return max == -kInfinity ? max : max + std::log(sum); }
+  double Value() const { return max == kMinusInfinity ? max : max + std::log(sum); }
 };
 
 // One distinct free-bit pattern of the population and its particles (those of positive weight).
@@ -113,14 +111,14 @@ class AncestorProposal final : public JointProposal {
   double LogDensity(std::span<const std::uint8_t> free_bits,
                     std::span<const double> reals) const override {
     COMBABC_CHECK(free_bits.size() == f_ && reals.size() == r_);
-    if (!InSupport(reals)) return -kInfinity;
+    if (!InSupport(reals)) return kMinusInfinity;
     LogSum sum;
     sum.Add(log_defensive_ + LogPrior(free_bits, reals));
     if (patterns_.empty()) return sum.Value();
     std::vector<double> y(r_);
     for (const Pattern& g : patterns_) {
       const double bits = log_ancestors_ + LogFlips(g, free_bits);
-      if (bits == -kInfinity) continue;
+      if (bits == kMinusInfinity) continue;
       // L_g^{-1} (r - c_first); the particles' whitened offsets are precomputed, so that each
       // costs O(r) here and nothing cancels when the reals are large with a small spread.
       const Factor& l = factors_[g.factor];
@@ -300,7 +298,7 @@ class AncestorProposal final : public JointProposal {
 
   std::size_t f_, r_;
   double defensive_;
-  double log_defensive_ = 0.0, log_ancestors_ = -kInfinity;
+  double log_defensive_ = 0.0, log_ancestors_ = kMinusInfinity;
   BernoulliProposal prior_bits_;
   std::vector<double> prior_one_;
   std::vector<ContinuousPrior> priors_;  // copies: the proposal may outlive the space

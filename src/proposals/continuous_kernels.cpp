@@ -20,8 +20,6 @@ namespace combabc {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// Sample gives up after this many draws in a row outside the support (proposal.hpp).
-constexpr int kMaxSupportTries = 10000;
 
 std::string Formatted(double x) {
   std::array<char, 32> buf{};

@@ -1,5 +1,6 @@
 #pragma once
-// Gaussian kernels' covariance factors, shared by the continuous kernels and the ancestor kernel.
+// Gaussian kernels' covariance factors and constants, shared by the continuous kernels and the
+// ancestor kernel.
 #include <Eigen/Core>
 #include <cstddef>
 #include <vector>
@@ -9,6 +10,9 @@
 namespace combabc {
 
 constexpr double kLogRootTwoPi = 0.91893853320467274178;  // log sqrt(2 pi)
+// A Gaussian kernel's Sample gives up after this many draws in a row outside the prior's support
+// (proposal.hpp).
+constexpr int kMaxSupportTries = 10000;
 
 // Index of element (i, k), k <= i, of a lower-triangular matrix stored row by row.
 constexpr std::size_t Tri(std::size_t i, std::size_t k) { return i * (i + 1) / 2 + k; }
