@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "combabc/proposals/logistic_kernel.hpp"
@@ -101,10 +102,12 @@ Population MixedPopulation(std::size_t patterns, std::size_t reals) {
   RandomStream rng(2025, 0, 0);
   for (std::size_t j = 0; j < n; ++j) {
     const std::size_t g = j % patterns;
-    for (std::size_t i = 0; i < f; ++i)
+    for (std::size_t i = 0; i < f; ++i) {
       p.free_bits.push_back(static_cast<std::uint8_t>((g >> i) & 1U));
-    for (std::size_t k = 0; k < reals; ++k)
+    }
+    for (std::size_t k = 0; k < reals; ++k) {
       p.reals.push_back(static_cast<double>(g) + 0.1 * rng.Normal());
+    }
     p.weights.push_back(1.0 / n);
   }
   p.within_next.assign(n, 1);
