@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -24,6 +25,8 @@ constexpr double kDefensive = 0.05;
 // The flip rates' floor, times the number of free bits: the expected number of flips of bits the
 // population holds fixed, per candidate.
 constexpr double kMinFlips = 0.1;
+// LogDensity's scratch for up to this many reals is on the stack.
+constexpr std::size_t kStackReals = 16;
 // A bit pattern's particles make its own covariance from this effective sample size on.
 constexpr double kMinPatternEss = 10.0;
 
@@ -115,7 +118,10 @@ class AncestorProposal final : public JointProposal {
     LogSum sum;
     sum.Add(log_defensive_ + LogPrior(free_bits, reals));
     if (patterns_.empty()) return sum.Value();
-    std::vector<double> y(r_);
+    // L_g^{-1} (r - c_first) on the stack (no allocation per candidate) unless r is large.
+    std::array<double, kStackReals> stack{};
+    std::vector<double> heap(r_ > kStackReals ? r_ : 0);
+    double* y = r_ > kStackReals ? heap.data() : stack.data();
     for (const Pattern& g : patterns_) {
       const double bits = log_ancestors_ + LogFlips(g, free_bits);
       if (bits == kMinusInfinity) continue;
