@@ -73,15 +73,20 @@ void Report(benchmark::State& state, const RunHistory& h, double cpu) {
   state.counters["cpu_ms_per_ess"] = 1e3 * cpu / last.ess;
 }
 
+// Arg 1: the variant of the problem (0 single flips, 1 joint flips).
 void BM_MinorModes(benchmark::State& state) {
   const PairKinds pair = PairOf(state.range(0));
+  const auto variant = state.range(1) == 1 ? mm::Variant::kJointFlips : mm::Variant::kSingleFlips;
   const ParameterSpace space = mm::Space();
-  const mm::Simulator sim;
+  const mm::Simulator sim(variant);
   const mm::Distance dist;
-  static const mm::Exact exact = mm::ExactPosterior();
+  const mm::Exact exact = mm::ExactPosterior(variant);
   for (auto _ : state) {
     auto o = mm::Options(
-        pair.binary, pair.continuous, 1000, NextSeed("minor" + std::to_string(state.range(0))));
+        pair.binary,
+        pair.continuous,
+        1000,
+        NextSeed("minor" + std::to_string(state.range(0)) + "/" + std::to_string(state.range(1))));
     o.threads = 1;
     const double start = ProcessSeconds();
     const RunHistory h = RunCombinatorialSmc({&space, &sim, &dist}, o);
@@ -91,21 +96,23 @@ void BM_MinorModes(benchmark::State& state) {
     const Moments m = RealMoments(last);
     double minor_plus = 0.0, minor_minus = 0.0, bit_error = 0.0;
     for (const auto& p : last.particles) {
-      const auto& b = p.theta.bits;
-      const bool main = b[1] && b[2] && b[3] && !b[4] && !b[5] && !b[6];
-      if (main && !b[0] && !b[7]) minor_plus += p.weight;
-      if (main && b[0] && b[7]) minor_minus += p.weight;
+      const int mode = mm::MinorMode(variant, p.theta.bits);
+      if (mode == 1) minor_plus += p.weight;
+      if (mode == -1) minor_minus += p.weight;
     }
     for (int k = 0; k < mm::kBits; ++k) {
       bit_error = std::max(bit_error, std::abs(last.marginals_importance[k] - exact.bit_mean[k]));
     }
-    state.counters["sd"] = m.sd;  // exact: mm::ExactPosterior().sd
+    state.counters["sd"] = m.sd;
     state.counters["sd_error"] = std::abs(m.sd - exact.sd);
     state.counters["min_minor"] = std::min(minor_plus, minor_minus);
     state.counters["max_bit_error"] = bit_error;
   }
 }
-BENCHMARK(BM_MinorModes)->DenseRange(0, 4)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MinorModes)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // x ~ 0.5 N(theta, 1) + 0.5 N(theta, 0.1^2), from the candidate's stream.
 class MixtureSimulator final : public Simulator {

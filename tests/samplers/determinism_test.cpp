@@ -134,7 +134,7 @@ TEST(Determinism, ResumingFromAnyCheckpointReproducesTheUninterruptedRun) {
 TEST(Determinism, AncestorKernelHistoryIsIndependentOfThreadsBatchesAndResume) {
   namespace mm = testing::minor_modes;
   const ParameterSpace space = mm::Space();
-  const mm::Simulator sim;
+  const mm::Simulator sim(mm::Variant::kJointFlips);
   const mm::Distance dist;
   auto o = mm::Options(BinaryKernelKind::kAncestor, ContinuousKernelKind::kNormal, 100, 5);
   o.threads = 1;
