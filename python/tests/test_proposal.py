@@ -8,8 +8,8 @@ import pytest
 import combabc
 from test_smc import THRESHOLDS, exact_posterior, options, problem, same_history
 
-# (binary kernel, tempering): the untempered paper kernel, the logistic conditionals, and each
-# with a tempering form, so that every binding reaches the engine.
+# (kernel, tempering): the untempered paper kernel, the logistic conditionals, each with a
+# tempering form, and the joint ancestor kernel, so that every binding reaches the engine.
 CHOICES = {
     "independent": (combabc.ProposalOptions(), combabc.TemperingSchedule()),
     "logistic": (combabc.ProposalOptions(kind="logistic"), combabc.TemperingSchedule()),
@@ -19,6 +19,7 @@ CHOICES = {
         combabc.ProposalOptions(kind="logistic",
                                 logistic=combabc.LogisticKernelOptions(max_predecessors=3)),
         combabc.TemperingSchedule(kind="list", form="mixture", values=[0.4, 0.2])),
+    "ancestor": (combabc.ProposalOptions(kind="ancestor"), combabc.TemperingSchedule()),
 }
 
 
@@ -69,19 +70,21 @@ def test_continuous_kernels_reach_the_engine():
     def simulate(bits, reals):
         return np.array([bits.sum() + reals[0]])
 
-    def run(continuous, threads=1):
+    def run(continuous, threads=1, kind="independent"):
         space = combabc.BinarySpace(dimension=3)
         reals = [combabc.ContinuousParameter("offset", kind="uniform", low=-1.0, high=1.0)]
         p = combabc.Problem(space, simulate, [1.5], reals=reals)
-        proposal = combabc.ProposalOptions(continuous=continuous, scale=1.0)
+        proposal = combabc.ProposalOptions(kind=kind, continuous=continuous, scale=1.0)
         return combabc.run(p, combabc.make_options(num_waves=3, accepted_per_wave=200, seed=3,
                                                    thresholds=[1.0, 0.5, 0.25],
                                                    proposal=proposal), threads=threads)
 
-    normal, olcm = run("normal"), run("olcm")
+    normal, olcm, ancestor = run("normal"), run("olcm"), run("normal", kind="ancestor")
     assert not np.array_equal(normal.waves[-1].reals, olcm.waves[-1].reals)
+    assert not np.array_equal(normal.waves[-1].reals, ancestor.waves[-1].reals)
     same_history(olcm, run("olcm", threads=2))
-    for h in (normal, olcm):
+    same_history(ancestor, run("normal", threads=2, kind="ancestor"))
+    for h in (normal, olcm, ancestor):
         last = h.waves[-1]
         assert np.all(np.abs(last.bits.sum(axis=1) + last.reals[:, 0] - 1.5) <= 0.25)
 
@@ -105,7 +108,8 @@ def test_fields_read_and_write():
 
 
 def test_bad_values_raise_the_engines_messages():
-    with pytest.raises(combabc.Error, match=r'expected one of "independent", "logistic"'):
+    with pytest.raises(combabc.Error,
+                       match=r'expected one of "independent", "logistic", "ancestor"'):
         combabc.ProposalOptions(kind="logistc")
     with pytest.raises(combabc.Error, match=r'expected one of "normal", "olcm"'):
         combabc.ProposalOptions(continuous="gaussian")

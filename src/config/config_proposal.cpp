@@ -122,6 +122,9 @@ void ParseProposalSection(TableReader& root, CalibrationConfig* c) {
   l.clip = t->NumberIn("clip", l.clip, 1e-12, 0.1);
   p.continuous =
       t->Choice<ContinuousKernelKind>("continuous", "continuous kernel").value_or(p.continuous);
+  if (p.binary == BinaryKernelKind::kAncestor && p.continuous != ContinuousKernelKind::kNormal) {
+    t->Fail("continuous", "kind = \"ancestor\" proposes the reals itself (with scale)");
+  }
   if (p.continuous != ContinuousKernelKind::kNormal && t->Has("scale")) {
     t->Fail("scale", "only used with continuous = \"normal\"");
   }

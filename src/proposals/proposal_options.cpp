@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "combabc/core/error.hpp"
+#include "combabc/proposals/ancestor_kernel.hpp"
 #include "combabc/proposals/logistic_kernel.hpp"
 
 namespace combabc {
@@ -53,6 +54,15 @@ bool ProposalOptions::IsValid(std::string* why) const {
     }
     return false;
   }
+  // The ancestor kernel proposes the reals itself, around each ancestor (the normal kernel's
+  // scale): another continuous kernel would be ignored.
+  if (binary == BinaryKernelKind::kAncestor && continuous != ContinuousKernelKind::kNormal) {
+    if (why) {
+      *why = std::string("ProposalOptions::continuous = ") + ToString(continuous) +
+             "; the ancestor kernel proposes the reals itself (continuous = normal)";
+    }
+    return false;
+  }
   return true;
 }
 
@@ -62,10 +72,19 @@ std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options) {
       return MakeIndependentKernel();
     case BinaryKernelKind::kLogistic:
       return MakeLogisticKernel(options.logistic);
+    case BinaryKernelKind::kAncestor:
+      break;  // joint: MakeJointKernel
   }
   throw Error(ErrorKind::kConfig,
               "ProposalOptions::binary = " + std::to_string(static_cast<int>(options.binary)) +
                   "; not a known binary kernel");
+}
+
+std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw Error(ErrorKind::kConfig, why);
+  if (options.binary == BinaryKernelKind::kAncestor) return MakeAncestorKernel(options.scale);
+  return MakeProductKernel(MakeBinaryKernel(options), MakeContinuousKernel(options));
 }
 
 }  // namespace combabc

@@ -94,21 +94,18 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
         seed_, static_cast<std::uint64_t>(wave), static_cast<std::uint64_t>(first) + i);
     auto free = span_of(free_, i, f_);
     auto reals = span_of(reals_, i, r_);
-    proposal_.bits->Sample(rngs_[i], free);
-    if (r_ > 0) {
-      try {
-        proposal_.reals->Sample(rngs_[i], reals);
-      } catch (const std::exception& e) {
-        throw Error(ErrorKind::kSoftware, e.what(), "", 0, which);
-      }
+    try {
+      proposal_.proposal->Sample(rngs_[i], free, reals);
+    } catch (const std::exception& e) {
+      throw Error(ErrorKind::kSoftware, e.what(), "", 0, which);
     }
     space_.binary().Expand(free, span_of(bits_, i, d_));
-    // Importance weight p(theta) / q(theta); the binary and continuous proposals are independent,
-    // so it factors. Wave 0 proposes from the prior: exactly 1.
+    // Importance weight p(theta) / q(theta). Wave 0 proposes from the prior: exactly 1.
     double log_weight = 0.0;
     if (!proposal_.from_prior) {
-      log_weight = space_.LogPriorBits(free) - proposal_.bits->LogDensity(free);
-      if (r_ > 0) log_weight += space_.LogPriorReals(reals) - proposal_.reals->LogDensity(reals);
+      log_weight = space_.LogPriorBits(free);
+      if (r_ > 0) log_weight += space_.LogPriorReals(reals);
+      log_weight -= proposal_.proposal->LogDensity(free, reals);
     }
     log_weights_[i] = log_weight;
   }

@@ -1,9 +1,9 @@
 #pragma once
 // A batch of consecutive candidates of one wave, evaluated by an Executor into flat buffers (no
 // allocation per candidate). Candidate i's randomness is RandomStream(seed, wave, first + i):
-// the binary proposal draws first, then the continuous one, then whatever a stochastic
-// simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance. With a
-// low-fidelity stage, the simulator that draws is the cheap one, and after the acceptance
+// the proposal draws first (the product kernels: the bits, then the reals), then whatever a
+// stochastic simulator draws, then (with draw_uniform) the uniform of the noise-aware acceptance.
+// With a low-fidelity stage, the simulator that draws is the cheap one, and after the acceptance
 // uniform come the continuation uniform and then the expensive simulator's draws.
 #include <cstdint>
 #include <functional>
@@ -22,10 +22,9 @@
 
 namespace combabc {
 
-// The proposals of one wave; `from_prior` marks wave 0, whose importance weights are exactly 1.
+// The proposal of one wave; `from_prior` marks wave 0, whose importance weights are exactly 1.
 struct WaveProposal {
-  const BinaryProposal* bits = nullptr;
-  const ContinuousProposal* reals = nullptr;  // null when the space has no reals
+  const JointProposal* proposal = nullptr;
   bool from_prior = false;
 };
 

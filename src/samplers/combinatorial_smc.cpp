@@ -116,17 +116,11 @@ class SmcRun {
         options_(options),
         observer_(observer),
         components_(distance_.components()) {
-    if (problem.binary_kernel) {
-      binary_kernel_ = problem.binary_kernel;
+    if (problem.kernel) {
+      kernel_ = problem.kernel;
     } else {
-      owned_binary_kernel_ = MakeBinaryKernel(options_.proposal);
-      binary_kernel_ = owned_binary_kernel_.get();
-    }
-    if (problem.continuous_kernel) {
-      continuous_kernel_ = problem.continuous_kernel;
-    } else {
-      owned_continuous_kernel_ = MakeContinuousKernel(options_.proposal);
-      continuous_kernel_ = owned_continuous_kernel_.get();
+      owned_kernel_ = MakeJointKernel(options_.proposal);
+      kernel_ = owned_kernel_.get();
     }
     if (problem.executor) {
       executor_ = problem.executor;
@@ -341,25 +335,21 @@ class SmcRun {
       }
       wave.multi_fidelity = fidelity;
     }
-    const auto& prior = space_.binary().free_prior_one();
     wave.phi = options_.tempering.Phi(t, options_.num_waves);
     if (!previous || previous->particles.empty()) {
       // Wave 0 proposes from the prior.
-      bit_proposal_ = binary_kernel_->Prior(prior);
-      if (space_.num_reals() > 0) real_proposal_ = continuous_kernel_->Prior(space_);
+      proposal_ = kernel_->Prior(space_);
       from_prior_ = true;
     } else {
-      // Eq. 2 generalised: the kernels fit the previous wave's weighted particles; the binary
-      // proposal is tempered toward the prior (Eq. 3).
+      // Eq. 2 generalised: the kernel fits the previous wave's weighted particles; the bits are
+      // tempered toward the prior (Eq. 3).
       const Population population = MakePopulation(*previous, wave.thresholds);
-      bit_proposal_ =
-          binary_kernel_->Fit(population, prior, Tempering{wave.phi, options_.tempering.form});
-      if (space_.num_reals() > 0) real_proposal_ = continuous_kernel_->Fit(population, space_);
+      proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
       from_prior_ = false;
       if (population.num_free_bits > 0) {
         wave.pattern_classes = FindPatternClasses(
             population,
-            [&](std::span<const std::uint8_t> bits) { return bit_proposal_->LogDensity(bits); },
+            [&](std::span<const std::uint8_t> bits) { return proposal_->LogBitsDensity(bits); },
             options_.AcceptedIn(wave.wave));
         for (PatternClass& c : wave.pattern_classes) {
           std::vector<std::uint8_t> full(static_cast<std::size_t>(space_.binary().dimension()));
@@ -368,7 +358,7 @@ class SmcRun {
         }
       }
     }
-    wave.proposal = bit_proposal_->Marginals();
+    wave.proposal = proposal_->Marginals();
     if (observer_) observer_->OnWaveStart(wave);
     return wave;
   }
@@ -553,7 +543,7 @@ class SmcRun {
   // `done` are the waves before it.
   Stop RunWave(WaveRecord& wave, std::int64_t next_index, std::span<const WaveRecord> done) {
     const auto wave_start = Clock::now();
-    const WaveProposal proposal{bit_proposal_.get(), real_proposal_.get(), from_prior_};
+    const WaveProposal proposal{proposal_.get(), from_prior_};
     const int n = options_.AcceptedIn(wave.wave);
     const double prior_rate = last_rate_;
     Stop stop;
@@ -813,15 +803,12 @@ class SmcRun {
   const Distance& distance_;
   const SmcOptions& options_;
   SmcObserver* observer_;
-  const BinaryKernel* binary_kernel_ = nullptr;
-  const ContinuousKernel* continuous_kernel_ = nullptr;
+  const JointKernel* kernel_ = nullptr;
   Executor* executor_ = nullptr;
-  std::unique_ptr<BinaryKernel> owned_binary_kernel_;
-  std::unique_ptr<ContinuousKernel> owned_continuous_kernel_;
+  std::unique_ptr<JointKernel> owned_kernel_;
   std::unique_ptr<Executor> owned_executor_;
-  // The current wave's proposals.
-  std::unique_ptr<BinaryProposal> bit_proposal_;
-  std::unique_ptr<ContinuousProposal> real_proposal_;
+  // The current wave's proposal.
+  std::unique_ptr<JointProposal> proposal_;
   bool from_prior_ = true;
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;

@@ -336,6 +336,18 @@ TEST(Config, ProposalAndContinuousParameters) {
   EXPECT_EQ(c.reals[1].prior.high, 2.0);
 }
 
+// kind = "ancestor" is the joint kernel: it takes scale and refuses another continuous kernel.
+TEST(Config, AncestorProposal) {
+  const auto c =
+      ParseConfig(kMinimal + "[proposal]\nkind = \"ancestor\"\nscale = 1.5\n", "inline.toml");
+  EXPECT_EQ(c.smc.proposal.binary, BinaryKernelKind::kAncestor);
+  EXPECT_EQ(c.smc.proposal.scale, 1.5);
+  ExpectLocated(ConfigError(kMinimal + "[proposal]\nkind = \"ancestor\"\ncontinuous = \"olcm\"\n"),
+                "inline.toml",
+                7,
+                "proposal.continuous");
+}
+
 // A mixed run builds the continuous-unknowns precompute too: at a limit between the clamp-only
 // estimate and that plus the continuous one, the clamp-only run is accepted and the mixed one
 // refused, with the estimate.

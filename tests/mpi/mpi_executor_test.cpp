@@ -139,10 +139,9 @@ TEST(MpiExecutor, FailedSimulationsAreGatheredLikeAnyResult) {
   o.thresholds = {list};
   ThreadPoolExecutor local(1);
   const RunHistory reference =
-      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, nullptr, &local}, o);
+      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, &local}, o);
   MpiExecutor executor(1);
-  const RunHistory h =
-      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, nullptr, &executor}, o);
+  const RunHistory h = RunCombinatorialSmc({&space, &simulator, &distance, nullptr, &executor}, o);
   ASSERT_GT(reference.summary.failures, 0);
   std::string where;
   EXPECT_TRUE(SameHistory(reference, h, &where)) << where;

@@ -1,8 +1,9 @@
 #pragma once
-// The proposal seam. A wave proposes candidates from a Proposal; a kernel fits the next wave's
-// Proposal to the previous wave's weighted population. Binary and continuous parts are separate
-// kernels whose product is the joint proposal (a mixed run: q(b, r) = q_bits(b) q_reals(r)), so
-// importance weights p(theta) / q(theta) factor too. See docs/algorithm.md.
+// The proposal seam. A wave proposes candidates from a JointProposal over the free bits and the
+// reals; a JointKernel fits the next wave's JointProposal to the previous wave's weighted
+// population. One implementation is the product of a binary kernel and a continuous kernel
+// (q(b, r) = q_bits(b) q_reals(r): MakeProductKernel); another proposes both from one ancestor
+// particle (the ancestor kernel, ancestor_kernel.hpp). See docs/algorithm.md.
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -87,6 +88,50 @@ class ContinuousKernel {
   virtual std::unique_ptr<ContinuousProposal> Fit(const Population& population,
                                                   const ParameterSpace& space) const = 0;
 };
+
+// One wave's proposal over the free bits and the reals together; what the sampler draws candidates
+// from and weighs them by. Every method is const and thread-safe.
+class JointProposal {
+ public:
+  virtual ~JointProposal() = default;
+  // Draws free bits, then reals (empty without reals), using only `rng`. The reals are inside the
+  // prior's support (drawn again, from the same stream, until they are; throws
+  // combabc::Error(kSoftware) after 10^4 tries).
+  virtual void Sample(RandomStream& rng,
+                      std::span<std::uint8_t> free_bits,
+                      std::span<double> reals) const = 0;
+  // log q(free_bits, reals), exact up to a constant common to the wave (the mass of the reals'
+  // support), so self-normalised importance weights p/q are exact; -infinity where q = 0.
+  virtual double LogDensity(std::span<const std::uint8_t> free_bits,
+                            std::span<const double> reals) const = 0;
+  // log of the proposal's marginal probability of the free-bit pattern (the reals integrated out):
+  // normalised, so that it sums to 1 over all patterns. For the mode-loss diagnostic: how likely
+  // the wave is to propose the patterns that carry the previous population's mass.
+  virtual double LogBitsDensity(std::span<const std::uint8_t> free_bits) const = 0;
+  // P(free bit j = 1) under this proposal (recorded as the wave's proposal; exact where a closed
+  // form exists, a fixed-stream Monte-Carlo estimate otherwise).
+  virtual std::vector<double> Marginals() const = 0;
+};
+
+// Fits joint proposals. Tempering applies to the bits (Eq. 3).
+class JointKernel {
+ public:
+  virtual ~JointKernel() = default;
+  // What the history records as the proposal kind ("independent", "logistic", "ancestor").
+  virtual std::string name() const = 0;
+  // Wave 0 (and any wave with an empty population): the prior.
+  virtual std::unique_ptr<JointProposal> Prior(const ParameterSpace& space) const = 0;
+  virtual std::unique_ptr<JointProposal> Fit(const Population& population,
+                                             const ParameterSpace& space,
+                                             const Tempering& tempering) const = 0;
+};
+
+// q(b, r) = q_bits(b) q_reals(r): each part fitted on its own (`reals` unused by a space without
+// reals). Sample draws the bits first, then the reals, from the same stream. Its name() is the
+// binary kernel's. Such a proposal draws reals without regard to the bits they go with, so it can
+// lose a posterior mode whose pattern needs other reals (docs/algorithm.md).
+std::unique_ptr<JointKernel> MakeProductKernel(std::unique_ptr<BinaryKernel> bits,
+                                               std::unique_ptr<ContinuousKernel> reals);
 
 // The independent per-bit kernel: Eq. 2 (weighted fractions of 1s), tempered by Eq. 3.
 std::unique_ptr<BinaryKernel> MakeIndependentKernel();

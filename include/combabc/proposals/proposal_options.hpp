@@ -11,12 +11,16 @@ namespace combabc {
 enum class BinaryKernelKind {
   kIndependent,  // Eq. 2 / Eq. 3: each free bit on its own
   kLogistic,     // logistic conditionals (Schaefer & Chopin 2013): p(x) = prod p(x_i | x_<i)
+  // Not a binary kernel: the joint ancestor kernel (ancestor_kernel.hpp), which proposes the bits
+  // and the reals together (the reals with ProposalOptions::scale; continuous must be kNormal).
+  kAncestor,
 };
 template <>
 struct EnumNames<BinaryKernelKind> {
   static constexpr std::pair<BinaryKernelKind, const char*> kNames[] = {
       {BinaryKernelKind::kIndependent, "independent"},
       {BinaryKernelKind::kLogistic, "logistic"},
+      {BinaryKernelKind::kAncestor, "ancestor"},
   };
 };
 
@@ -54,13 +58,18 @@ struct ProposalOptions {
   BinaryKernelKind binary = BinaryKernelKind::kIndependent;
   LogisticKernelOptions logistic;
   ContinuousKernelKind continuous = ContinuousKernelKind::kNormal;
-  // kNormal: covariance = scale x weighted covariance (2 is Beaumont et al.'s choice).
+  // kNormal and kAncestor: covariance = scale x weighted covariance (2 is Beaumont et al.'s
+  // choice).
   double scale = 2.0;
 
   bool IsValid(std::string* why) const;  // why: "ProposalOptions::field = value; constraint"
 };
 
+// The parts of a product kernel: MakeBinaryKernel throws Error(kConfig) for kAncestor.
 std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options);
 std::unique_ptr<ContinuousKernel> MakeContinuousKernel(const ProposalOptions& options);
+// The kernel a run proposes from: MakeAncestorKernel(scale) for kAncestor, else MakeProductKernel
+// of the two above. Throws Error(kConfig) with IsValid's message for invalid options.
+std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& options);
 
 }  // namespace combabc

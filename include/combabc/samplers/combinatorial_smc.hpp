@@ -39,10 +39,9 @@ struct SmcProblem {
   const ParameterSpace* space = nullptr;
   const Simulator* simulator = nullptr;
   const Distance* distance = nullptr;
-  // Optional. Null: made from SmcOptions::proposal (MakeBinaryKernel, MakeContinuousKernel) and
-  // a ThreadPoolExecutor of SmcOptions::threads.
-  const BinaryKernel* binary_kernel = nullptr;
-  const ContinuousKernel* continuous_kernel = nullptr;
+  // Optional. Null: made from SmcOptions::proposal (MakeJointKernel) and a ThreadPoolExecutor of
+  // SmcOptions::threads.
+  const JointKernel* kernel = nullptr;
   Executor* executor = nullptr;
   // Optional: a cheap simulator with the same outputs as `simulator`. Set, every candidate runs
   // it and the expensive `simulator` runs only with SmcOptions::multi_fidelity's continuation
