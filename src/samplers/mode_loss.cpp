@@ -31,7 +31,8 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
     // is recorded is always a probability.
     const double q = std::exp(log_q_bits(bits));
     c.proposal = std::isnan(q) ? 0.0 : std::min(q, 1.0);
-    c.flagged = static_cast<double>(particles) * c.proposal < 1.0;
+    c.flagged = static_cast<double>(particles) * c.proposal < 1.0 ||
+                c.proposal < c.mass / kModeLossMassRatio;
     classes.push_back(std::move(c));
   }
   // Stable: the map's pattern order among equal masses.

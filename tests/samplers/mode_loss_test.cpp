@@ -103,6 +103,18 @@ TEST(ModeLoss, FlaggedWhenAWaveExpectsLessThanOneParticle) {
   EXPECT_FALSE(classes[2].flagged);  // 11
 }
 
+TEST(ModeLoss, FlaggedWhenProposedTwentyTimesUnderItsMass) {
+  // A wave of 10,000 expects 50 particles of 01 (mass 0.2, q = 0.005: 40 times under its mass,
+  // flagged) and 200 of 11 (mass 0.2, q = 0.02: 10 times under, kept).
+  const Population pop = Crafted({{{0, 0}, 60}, {{0, 1}, 20}, {{1, 1}, 20}});
+  const auto classes =
+      FindPatternClasses(pop, Table({{{0, 0}, 0.975}, {{0, 1}, 0.005}, {{1, 1}, 0.02}}), 10'000);
+  ASSERT_EQ(classes.size(), 3u);
+  EXPECT_FALSE(classes[0].flagged);  // 00
+  EXPECT_TRUE(classes[1].flagged);   // 01
+  EXPECT_FALSE(classes[2].flagged);  // 11
+}
+
 TEST(ModeLoss, ABrokenDensityIsRecordedAsAProbability) {
   const Population pop = Crafted({{{0, 0}, 90}, {{1, 1}, 10}});
   const auto classes = FindPatternClasses(

@@ -25,6 +25,11 @@ using LogBitsDensity = std::function<double(std::span<const std::uint8_t>)>;
 // them is a mode.
 inline constexpr double kModeLossMinMass = 0.01;
 inline constexpr double kModeLossMinParticles = 5.0;
+// A heavy class proposed with less than 1/kModeLossMassRatio of its mass is flagged too: its
+// particles would need weights this many times the average, and the product kernels lose a mixed
+// run's minor modes this way (tests/samplers/minor_modes_test.cpp: 107-162 where the modes were
+// lost, at most 6.3 where they were kept).
+inline constexpr double kModeLossMassRatio = 20.0;
 double ModeLossMinMass(int particles);
 
 // The pattern classes of `population` (its distinct free-bit patterns, with the sum of their
@@ -33,8 +38,8 @@ double ModeLossMinMass(int particles);
 // the wave's proposal (at most 1; 0 where the density is NaN). A class is flagged when particles *
 // q < 1: a wave of `particles` particles expects fewer than one of the pattern (about particles * q
 // of them, as many as the proposal draws it among its candidates if the pattern is accepted about
-// as often as the others), where the population held at least 5 particles' worth. `bits` are free
-// bits (the caller expands them).
+// as often as the others), where the population held at least 5 particles' worth; or when
+// q < mass / kModeLossMassRatio. `bits` are free bits (the caller expands them).
 std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              const LogBitsDensity& log_q_bits,
                                              int particles);
