@@ -109,12 +109,22 @@ std::string ListRepr(const std::vector<double>& values) {
   return py::repr(py::cast(values)).cast<std::string>();
 }
 
+// MultivariateNormalPrior(mean=[0.0, 0.0], covariance=[[1.0, 0.5], [0.5, 1.0]]).
+std::string NormalRepr(const std::vector<double>& mean, const std::vector<double>& covariance) {
+  std::string rows;
+  for (std::size_t i = 0; i < mean.size(); ++i) {
+    const auto row = covariance.begin() + static_cast<std::ptrdiff_t>(i * mean.size());
+    rows += (i ? ", " : "") +
+            ListRepr(std::vector<double>(row, row + static_cast<std::ptrdiff_t>(mean.size())));
+  }
+  return "MultivariateNormalPrior(mean=" + ListRepr(mean) + ", covariance=[" + rows + "])";
+}
+
 class PythonNormalPrior : public PythonJointPrior {
  public:
-  PythonNormalPrior(std::vector<double> mean, std::vector<double> covariance)
+  PythonNormalPrior(const std::vector<double>& mean, const std::vector<double>& covariance)
       : PythonJointPrior(MakeMultivariateNormalPrior(mean, covariance),
-                         "MultivariateNormalPrior(mean=" + ListRepr(mean) +
-                             ", covariance=" + ListRepr(covariance) + ")") {}
+                         NormalRepr(mean, covariance)) {}
 };
 
 // The covariance as a d x d nested list or array, flattened row-major; ValueError for another

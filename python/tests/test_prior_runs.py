@@ -87,7 +87,8 @@ def test_a_custom_prior_run_is_the_same_for_any_thread_count():
 def test_a_multivariate_normal_prior_keeps_its_correlation():
     # y observes a alone; b follows through the prior's correlation: E[b | a] = 0.8 a.
     prior = combabc.MultivariateNormalPrior([0.0, 0.0], [[1.0, 0.8], [0.8, 1.0]])
-    assert prior.dimension == 2 and repr(prior).startswith("MultivariateNormalPrior(mean=[0.0, 0.0]")
+    assert prior.dimension == 2
+    assert repr(prior) == "MultivariateNormalPrior(mean=[0.0, 0.0], covariance=[[1.0, 0.8], [0.8, 1.0]])"
     reals = [combabc.ContinuousParameter(n, kind="joint") for n in ("a", "b")]
     p = combabc.Problem(combabc.BinarySpace(dimension=0), noisy, OBSERVED, reals=reals,
                         batch=True, rng=True, priors={("a", "b"): prior})
