@@ -546,6 +546,9 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   std::vector<JointPriorGroup> joint;
   for (const auto& [names, prior] : request.priors) joint.push_back({names, prior.prior()});
   const ParameterSpace space(request.space, request.reals, std::move(joint));
+  for (const auto& [names, prior] : request.priors) {
+    if (prior.error()) prior.error()->Clear();  // what its check or an earlier run raised
+  }
   const PythonSimulator simulator(request.simulator,
                                   request.batch,
                                   static_cast<int>(request.observed.size()),
@@ -605,6 +608,10 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
       } catch (const std::exception&) {
         // The store itself may be what failed (disk full); the first error is the one to report.
       }
+    }
+    // A custom prior's own exception, else the simulator's or distance's, as itself.
+    for (const auto& [names, prior] : request.priors) {
+      if (prior.error() && prior.error()->error()) RaiseFirstError(*prior.error(), e);
     }
     RaiseFirstError(first_error, e);
   }

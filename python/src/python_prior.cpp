@@ -21,17 +21,22 @@ namespace py = pybind11;
 namespace combabc::python {
 namespace {
 
-// The two callables and numpy's default_rng. The prior may be dropped on a thread without the
-// GIL (the run's workers hold copies), so the Python references are released with it held.
+// The two callables, numpy's default_rng and the first exception they raised. The prior may be
+// dropped on a thread without the GIL (the run's workers hold copies), so the Python references
+// are released with it held.
 struct Callables {
   py::object log_density, sample, default_rng;
+  FirstPythonError error;
 };
 using SharedCallables = std::shared_ptr<Callables>;
 
 SharedCallables Hold(py::object log_density, py::object sample) {
-  auto* c = new Callables{std::move(log_density),
-                          std::move(sample),
-                          py::module_::import("numpy.random").attr("default_rng")};
+  py::object default_rng = py::module_::import("numpy.random").attr("default_rng");
+  // NOLINTNEXTLINE(cppcoreguidelines-owning-memory): owned by the shared_ptr returned
+  auto* c = new Callables;
+  c->log_density = std::move(log_density);
+  c->sample = std::move(sample);
+  c->default_rng = std::move(default_rng);
   return {c, [](Callables* p) {
             const py::gil_scoped_acquire gil;
             delete p;  // NOLINT(cppcoreguidelines-owning-memory): the deleter of a shared_ptr
@@ -41,10 +46,6 @@ SharedCallables Hold(py::object log_density, py::object sample) {
 // A Python exception or a bad result as the one-line combabc::Error(kConfig) a run reports.
 [[noreturn]] void Fail(const std::string& what) {
   throw Error(ErrorKind::kConfig, "CustomPrior: " + what);
-}
-
-std::string Raised(py::error_already_set& e) {
-  return std::string(py::str(e.type().attr("__name__"))) + ": " + std::string(py::str(e.value()));
 }
 
 // The object the user gave, or TypeError naming the argument.
@@ -59,14 +60,11 @@ py::object Callable(const py::object& f, const char* name) {
 // A prior from two Python callables. The sampler gets a numpy Generator seeded from the
 // candidate's stream (DrawSeed), as a per-sample simulator's rng=, so that a draw does not depend
 // on the thread. Both take the GIL: the engine calls them from its workers.
-std::shared_ptr<const JointPrior> MakePythonPrior(const py::object& log_density,
-                                                  const py::object& sample,
-                                                  int dimension) {
+std::shared_ptr<const JointPrior> MakePythonPrior(const SharedCallables& c, int dimension) {
   if (dimension < 1) {
     throw py::value_error("CustomPrior: dimension = " + std::to_string(dimension) +
                           "; must be >= 1");
   }
-  SharedCallables c = Hold(Callable(log_density, "log_density"), Callable(sample, "sample"));
   const auto d = static_cast<py::ssize_t>(dimension);
   return MakeCustomPrior(
       dimension,
@@ -78,7 +76,7 @@ std::shared_ptr<const JointPrior> MakePythonPrior(const py::object& log_density,
           const Doubles value = Checked(result, {}, "log density");
           return *value.data();
         } catch (py::error_already_set& e) {
-          Fail("log_density raised " + Raised(e));
+          Fail("log_density raised " + c->error.Remember(e, "prior's log_density"));
         }
       },
       [c, d](RandomStream& rng, std::span<double> x) {
@@ -93,7 +91,7 @@ std::shared_ptr<const JointPrior> MakePythonPrior(const py::object& log_density,
                       "sampler");
           std::copy(values.data(), values.data() + d, x.begin());
         } catch (py::error_already_set& e) {
-          Fail("sample raised " + Raised(e));
+          Fail("sample raised " + c->error.Remember(e, "prior's sample"));
         }
       });
 }
@@ -101,8 +99,14 @@ std::shared_ptr<const JointPrior> MakePythonPrior(const py::object& log_density,
 class PythonCustomPrior : public PythonJointPrior {
  public:
   PythonCustomPrior(const py::object& log_density, const py::object& sample, int dimension)
-      : PythonJointPrior(MakePythonPrior(log_density, sample, dimension),
-                         "CustomPrior(dimension=" + std::to_string(dimension) + ")") {}
+      : PythonCustomPrior(Hold(Callable(log_density, "log_density"), Callable(sample, "sample")),
+                          dimension) {}
+
+ private:
+  PythonCustomPrior(const SharedCallables& c, int dimension)
+      : PythonJointPrior(MakePythonPrior(c, dimension),
+                         "CustomPrior(dimension=" + std::to_string(dimension) + ")",
+                         std::shared_ptr<FirstPythonError>(c, &c->error)) {}
 };
 
 std::string ListRepr(const std::vector<double>& values) {

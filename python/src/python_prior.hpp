@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "combabc/params/joint_prior.hpp"
+#include "python_call.hpp"
 
 namespace combabc::python {
 
@@ -18,15 +19,21 @@ namespace combabc::python {
 // (combabc._core.JointPrior).
 class PythonJointPrior {
  public:
-  PythonJointPrior(std::shared_ptr<const JointPrior> prior, std::string repr)
-      : prior_(std::move(prior)), repr_(std::move(repr)) {}
+  PythonJointPrior(std::shared_ptr<const JointPrior> prior,
+                   std::string repr,
+                   std::shared_ptr<FirstPythonError> error = nullptr)
+      : prior_(std::move(prior)), repr_(std::move(repr)), error_(std::move(error)) {}
   int dimension() const { return prior_->dimension(); }
   const std::shared_ptr<const JointPrior>& prior() const { return prior_; }
   const std::string& repr() const { return repr_; }
+  // A custom prior's first Python exception, which the run raises again as itself (null for a
+  // prior without Python code).
+  FirstPythonError* error() const { return error_.get(); }
 
  private:
   std::shared_ptr<const JointPrior> prior_;
   std::string repr_;
+  std::shared_ptr<FirstPythonError> error_;
 };
 
 // Adds JointPrior, CustomPrior and MultivariateNormalPrior to the module.

@@ -118,6 +118,35 @@ def test_a_prior_whose_sampler_and_density_disagree_fails_before_any_simulation(
     assert "\n" not in str(e.value) and simulator.calls == 0
 
 
+class TiredSampler:
+    """A standard normal sampler that raises LookupError after `calls` draws."""
+
+    def __init__(self, calls):
+        self.calls, self.left = calls, calls
+
+    def __call__(self, rng):
+        self.left -= 1
+        if self.left < 0:
+            raise LookupError("the sampler is tired")
+        return rng.standard_normal()
+
+
+def test_the_priors_own_exception_reaches_the_caller_as_itself():
+    # 4000 draws for the check, then wave 0's candidates: it raises in a worker thread.
+    sampler = TiredSampler(4100)
+    prior = combabc.CustomPrior(log_density=standard_normal_density, sample=sampler)
+    for _ in range(2):  # a second run of the same prior raises its own error again
+        sampler.left = sampler.calls
+        with pytest.raises(LookupError, match="the sampler is tired") as e:
+            combabc.run(mu_problem(prior), combabc.make_options(
+                num_waves=2, accepted_per_wave=500, seed=3, threads=2, thresholds=[1.5, 0.5]))
+        assert "CustomPrior: sample raised LookupError" in e.value.__notes__[0]
+    # During the check it is the check's one-line error.
+    sampler.left = 10
+    with pytest.raises(combabc.Error, match="CustomPrior: sample raised LookupError"):
+        combabc.run(mu_problem(prior))
+
+
 def test_bad_priors_are_refused_naming_what_is_wrong():
     with pytest.raises(TypeError, match="CustomPrior: sample must be callable, not str"):
         combabc.CustomPrior(log_density=standard_normal_density, sample="normal")
