@@ -88,7 +88,8 @@ def test_a_multivariate_normal_prior_keeps_its_correlation():
     # y observes a alone; b follows through the prior's correlation: E[b | a] = 0.8 a.
     prior = combabc.MultivariateNormalPrior([0.0, 0.0], [[1.0, 0.8], [0.8, 1.0]])
     assert prior.dimension == 2
-    assert repr(prior) == "MultivariateNormalPrior(mean=[0.0, 0.0], covariance=[[1.0, 0.8], [0.8, 1.0]])"
+    assert repr(prior) == ("MultivariateNormalPrior(mean=[0.0, 0.0], "
+                           "covariance=[[1.0, 0.8], [0.8, 1.0]])")
     reals = [combabc.ContinuousParameter(n, kind="joint") for n in ("a", "b")]
     p = combabc.Problem(combabc.BinarySpace(dimension=0), noisy, OBSERVED, reals=reals,
                         batch=True, rng=True, priors={("a", "b"): prior})
@@ -116,6 +117,30 @@ def test_a_prior_whose_sampler_and_density_disagree_fails_before_any_simulation(
     with pytest.raises(combabc.Error, match=r"mu.*outside the support") as e:
         combabc.run(mu_problem(normal, simulator, batch=False, low=-1.0, high=1.0))
     assert "\n" not in str(e.value) and simulator.calls == 0
+
+
+def scaled_normal(scale):
+    return combabc.CustomPrior(
+        log_density=lambda x: standard_normal_density(x / scale) - math.log(scale),
+        sample=lambda rng: scale * rng.standard_normal())
+
+
+def test_a_custom_prior_run_resumes_with_its_prior_and_refuses_another(tmp_path):
+    def options(**fields):
+        return combabc.make_options(num_waves=2, accepted_per_wave=200, seed=6,
+                                    thresholds=[1.5, 0.5], **fields)
+
+    whole = combabc.run(mu_problem(scaled_normal(1.0)), options())
+    stopped = combabc.run(mu_problem(scaled_normal(1.0)), options(max_simulations=300),
+                          output_directory=tmp_path)
+    assert stopped.termination == "budget_exhausted"
+    # The fingerprint holds the joint real's moments from the prior's draws.
+    with pytest.raises(combabc.Error, match=r"the problem \(space, reals"):
+        combabc.resume(stopped, mu_problem(scaled_normal(1.5)), options(),
+                       max_simulations=10 ** 6)
+    resumed = combabc.resume(stopped, mu_problem(scaled_normal(1.0)), options(),
+                             max_simulations=10 ** 6)
+    np.testing.assert_array_equal(resumed.waves[-1].reals, whole.waves[-1].reals)
 
 
 class TiredSampler:
