@@ -23,15 +23,17 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, Error,
-                    LogisticKernelOptions, MultiFidelityOptions, ProposalOptions,
-                    SimulationFailed, SmcOptions, TemperingSchedule, ThresholdSchedule)
+from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, CustomPrior, Error,
+                    LogisticKernelOptions, MultiFidelityOptions, MultivariateNormalPrior,
+                    ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
+                    ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, Wave
 
 __version__ = _core.__version__
-__all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "Error", "Experiment",
-           "History", "LogisticKernelOptions", "MultiFidelityOptions", "Problem", "ProposalOptions",
+__all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "CustomPrior", "Error",
+           "Experiment", "History", "LogisticKernelOptions", "MultiFidelityOptions",
+           "MultivariateNormalPrior", "Problem", "ProposalOptions",
            "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
            "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
            "plot", "resume", "run"]
@@ -69,13 +71,20 @@ class Problem:
     {name: uint8[n] or float64[n]} batched. "pandas": f(params), params a pandas Series of
     float64 (per sample, bits as 0.0/1.0) or a DataFrame with one row per candidate (batched),
     columns by name.
+
+    priors: joint priors of reals, a mapping from a real's name, or a tuple of names, to a
+    combabc.CustomPrior (a log density and a sampler) or combabc.MultivariateNormalPrior over
+    them, in that order; each of those reals is declared ContinuousParameter(name, kind="joint",
+    low=..., high=...) (bounds optional). The run checks each against its sampler before any
+    simulation (docs/python.md, "Custom and joint priors").
     """
 
     def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
                  distance=None, components=None, distance_batch=None, low_fidelity=None,
-                 parameters="arrays"):
+                 parameters="arrays", priors=None):
         self.space = space
         self.reals = list(reals)
+        self.priors = _joint_priors(priors)
         self.batch = bool(batch)
         self.parameters = parameters
         if parameters not in _PARAMETER_STYLES:
@@ -98,6 +107,23 @@ class Problem:
 
 
 _PARAMETER_STYLES = ("arrays", "dict", "pandas")
+
+
+def _joint_priors(priors):
+    """Problem(priors=...) as the run takes them: a list of (names, prior)."""
+    if priors is None:
+        return []
+    if not hasattr(priors, "items"):
+        raise TypeError("priors: expected a mapping from a real's name (or a tuple of names) to "
+                        f"a CustomPrior or MultivariateNormalPrior, not {type(priors).__name__}")
+    groups = []
+    for names, prior in priors.items():
+        names = [names] if isinstance(names, str) else [str(n) for n in names]
+        if not isinstance(prior, _core.JointPrior):
+            raise TypeError(f"priors[{', '.join(map(repr, names))}]: expected a CustomPrior or "
+                            f"MultivariateNormalPrior, not {type(prior).__name__}")
+        groups.append((names, prior))
+    return groups
 
 
 def _by_name(function, problem, what):
@@ -147,7 +173,9 @@ def _by_name(function, problem, what):
 
 
 def make_options(**fields):
-    """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7). thresholds
+    """SmcOptions with the given fields set, e.g. make_options(num_waves=4, seed=7).
+    accepted_per_wave may be a list (or array) of one population size per wave, as the config's
+    (it sets accepted_by_wave). thresholds
     (as SmcOptions.thresholds) may be a list of ThresholdSchedule, one per threshold component,
     or of lists of numbers (one per wave: a "list" schedule), or for one threshold component a
     list of numbers; numbers are Python's or NumPy's scalars, a list may be a NumPy array. proposal=ProposalOptions(...)
@@ -158,13 +186,16 @@ def make_options(**fields):
     for name, value in fields.items():
         if not hasattr(options, name):
             raise TypeError(f"SmcOptions has no field {name!r}")
+        if name == "accepted_per_wave" and np.ndim(value) == 1:
+            name = "accepted_by_wave"
         setattr(options, name, value)
     return options
 
 
 def _smc_request(problem, options):
     return _core.SmcRequest(
-        space=problem.space, reals=problem.reals, simulator=problem.simulator,
+        space=problem.space, reals=problem.reals, priors=problem.priors,
+        simulator=problem.simulator,
         batch=problem.batch, rng=problem.rng, observed=problem.observed, options=options,
         distance=problem.distance, distance_batch=problem.distance_batch,
         components=problem.components, low_fidelity=problem.low_fidelity)

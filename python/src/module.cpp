@@ -14,6 +14,7 @@
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "batch_random.hpp"
@@ -102,9 +103,11 @@ HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
 
 // The arguments a prior kind takes, as the config's [parameters.<name>] table (docs/config.md).
 bool UsesBounds(PriorKind kind) {
-  return kind == PriorKind::kUniform || kind == PriorKind::kTruncatedNormal;
+  return kind == PriorKind::kUniform || kind == PriorKind::kTruncatedNormal ||
+         kind == PriorKind::kJoint;
 }
-bool UsesNormal(PriorKind kind) { return kind != PriorKind::kUniform; }
+// A joint real's mean and sd are its joint prior's (set by ParameterSpace).
+bool UsesNormal(PriorKind kind) { return kind != PriorKind::kUniform && kind != PriorKind::kJoint; }
 
 // ContinuousParameter(name, kind, low, high, mean, sd): an argument the kind does not use is
 // refused rather than ignored, one it uses and was not given keeps ContinuousPrior's default, and
@@ -120,6 +123,10 @@ ContinuousParameter MakeContinuousParameter(std::string name,
   ContinuousParameter p;
   p.name = std::move(name);
   p.prior.kind = Parse<PriorKind>(kind, where + ".kind");
+  if (p.prior.kind == PriorKind::kJoint) {  // unbounded unless low or high say otherwise
+    p.prior.low = -HUGE_VAL;
+    p.prior.high = HUGE_VAL;
+  }
   const std::string kind_text(ToString(p.prior.kind));
   auto take = [&](const char* key, const std::optional<double>& value, bool used, double& field) {
     if (!value) return;
@@ -140,6 +147,38 @@ ContinuousParameter MakeContinuousParameter(std::string name,
   std::string why;
   if (!p.prior.IsValid(&why)) throw Error(ErrorKind::kConfig, why, {}, 0, where);
   return p;
+}
+
+// ThresholdSchedule(kind, values, quantile, initial, target, *, weighted, acceptance_rate,
+// ess_fraction): a keyword that only another kind uses is refused rather than ignored.
+ThresholdSchedule MakeThresholdSchedule(const std::string& kind,
+                                        std::vector<double> values,
+                                        double quantile,
+                                        double initial,
+                                        double target,
+                                        std::optional<bool> weighted,
+                                        std::optional<double> acceptance_rate,
+                                        std::optional<double> ess_fraction) {
+  ThresholdSchedule s;
+  s.kind = Parse<ThresholdKind>(kind, "kind");
+  s.values = std::move(values);
+  s.quantile = quantile;
+  s.initial = initial;
+  s.target = target;
+  auto only = [&](const char* key, bool given, ThresholdKind user) {
+    if (given && s.kind != user) {
+      throw py::value_error(std::string("ThresholdSchedule: ") + key +
+                            " is only used by kind = \"" + ToString(user) + "\", not \"" +
+                            ToString(s.kind) + "\"");
+    }
+  };
+  only("weighted", weighted.has_value(), ThresholdKind::kQuantile);
+  only("acceptance_rate", acceptance_rate.has_value(), ThresholdKind::kAcceptance);
+  only("ess_fraction", ess_fraction.has_value(), ThresholdKind::kEss);
+  s.weighted = weighted.value_or(s.weighted);
+  s.acceptance_rate = acceptance_rate.value_or(s.acceptance_rate);
+  s.ess_fraction = ess_fraction.value_or(s.ess_fraction);
+  return s;
 }
 
 // ContinuousParameter('k', kind='uniform', low=0.5, high=2.0): the arguments its kind uses.
@@ -345,6 +384,8 @@ py::array_t<double> SimulateNominal(const services::NominalSimulator& model, con
 struct SmcRequest {
   BinarySpace space;
   std::vector<ContinuousParameter> reals;
+  // Joint priors: the names of the reals each covers (declared with kind "joint") and the prior.
+  std::vector<std::pair<std::vector<std::string>, PythonJointPrior>> priors;
   py::object simulator;  // f(bits[, reals]) (PythonSimulator)
   bool batch = false;    // f takes a batch
   bool rng = false;      // f takes rng=
@@ -501,7 +542,13 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                                 simulation_failed,
                                                 first_error);
   }
-  const ParameterSpace space(request.space, request.reals);
+  // Checks the joint priors (CheckJointPrior) before any simulation.
+  std::vector<JointPriorGroup> joint;
+  for (const auto& [names, prior] : request.priors) joint.push_back({names, prior.prior()});
+  const ParameterSpace space(request.space, request.reals, std::move(joint));
+  for (const auto& [names, prior] : request.priors) {
+    if (prior.error()) prior.error()->Clear();  // what its check or an earlier run raised
+  }
   const PythonSimulator simulator(request.simulator,
                                   request.batch,
                                   static_cast<int>(request.observed.size()),
@@ -525,8 +572,10 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   problem.simulator = &simulator;
   problem.distance = distance.get();
   problem.low_fidelity = cheap ? &*cheap : nullptr;
+  // The space's reals: a joint real's mean and sd are its prior's, which the fingerprint then
+  // holds (a custom prior's functions cannot be fingerprinted; the moments of their draws can).
   const PythonProblem described{.space = &request.space,
-                                .reals = &request.reals,
+                                .reals = &space.reals(),
                                 .observed = &request.observed,
                                 .components = distance->components(),
                                 .batch = request.batch,
@@ -559,6 +608,10 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
       } catch (const std::exception&) {
         // The store itself may be what failed (disk full); the first error is the one to report.
       }
+    }
+    // A custom prior's own exception, else the simulator's or distance's, as itself.
+    for (const auto& [names, prior] : request.priors) {
+      if (prior.error() && prior.error()->error()) RaiseFirstError(*prior.error(), e);
     }
     RaiseFirstError(first_error, e);
   }
@@ -864,27 +917,22 @@ void BindTypes(py::module_& m) {
       .def("__repr__", &ContinuousParameterRepr);
 
   py::class_<ThresholdSchedule>(m, "ThresholdSchedule")
-      .def(py::init([](const std::string& kind,
-                       std::vector<double> values,
-                       double quantile,
-                       double initial,
-                       double target) {
-             ThresholdSchedule s;
-             s.kind = Parse<ThresholdKind>(kind, "kind");
-             s.values = std::move(values);
-             s.quantile = quantile;
-             s.initial = initial;
-             s.target = target;
-             return s;
-           }),
+      .def(py::init(&MakeThresholdSchedule),
            py::arg("kind") = "quantile",
            py::arg("values") = std::vector<double>{},
            py::arg("quantile") = 0.5,
            py::arg("initial") = HUGE_VAL,
-           py::arg("target") = 0.0)
+           py::arg("target") = 0.0,
+           py::kw_only(),
+           py::arg("weighted") = py::none(),
+           py::arg("acceptance_rate") = py::none(),
+           py::arg("ess_fraction") = py::none())
       .def_property_readonly("kind", [](const ThresholdSchedule& s) { return ToString(s.kind); })
       .def_readwrite("values", &ThresholdSchedule::values)
       .def_readwrite("quantile", &ThresholdSchedule::quantile)
+      .def_readwrite("weighted", &ThresholdSchedule::weighted)
+      .def_readwrite("acceptance_rate", &ThresholdSchedule::acceptance_rate)
+      .def_readwrite("ess_fraction", &ThresholdSchedule::ess_fraction)
       .def_readwrite("initial", &ThresholdSchedule::initial)
       .def_readwrite("target", &ThresholdSchedule::target);
 
@@ -921,6 +969,7 @@ void BindTypes(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("num_waves", &SmcOptions::num_waves)
       .def_readwrite("accepted_per_wave", &SmcOptions::accepted_per_wave)
+      .def_readwrite("accepted_by_wave", &SmcOptions::accepted_by_wave)
       .def_property(
           "thresholds",
           [](const SmcOptions& o) { return o.thresholds; },
@@ -1031,6 +1080,7 @@ PYBIND11_MODULE(_core, m) {
   py::class_<SmcRequest>(m, "SmcRequest")
       .def(py::init([](const BinarySpace& space,
                        std::vector<ContinuousParameter> reals,
+                       std::vector<std::pair<std::vector<std::string>, PythonJointPrior>> priors,
                        py::object simulator,
                        bool batch,
                        bool rng,
@@ -1042,6 +1092,7 @@ PYBIND11_MODULE(_core, m) {
                        py::object low_fidelity) {
              return SmcRequest{.space = space,
                                .reals = std::move(reals),
+                               .priors = std::move(priors),
                                .simulator = std::move(simulator),
                                .batch = batch,
                                .rng = rng,
@@ -1055,6 +1106,7 @@ PYBIND11_MODULE(_core, m) {
            py::kw_only(),
            py::arg("space"),
            py::arg("reals") = std::vector<ContinuousParameter>{},
+           py::arg("priors") = std::vector<std::pair<std::vector<std::string>, PythonJointPrior>>{},
            py::arg("simulator"),
            py::arg("batch") = false,
            py::arg("rng") = false,

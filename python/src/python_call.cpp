@@ -46,16 +46,25 @@ Doubles Checked(const py::object& result,
 }
 
 void FirstPythonError::Keep(py::error_already_set& error, const char* who) {
+  const std::string text = Remember(error, who);
+  throw std::runtime_error(std::string("the Python ") + who + " raised " + text);
+}
+
+std::string FirstPythonError::Remember(py::error_already_set& error, const char* who) {
   std::string text = py::str(error.type().attr("__name__"));
   text += ": " + std::string(py::str(error.value()));
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    if (!error_) {
-      error_ = error;
-      who_ = who;
-    }
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!error_) {
+    error_ = error;
+    who_ = who;
   }
-  throw std::runtime_error(std::string("the Python ") + who + " raised " + text);
+  return text;
+}
+
+void FirstPythonError::Clear() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  error_.reset();
+  who_.clear();
 }
 
 void FirstPythonError::ThrowIfKept() const {

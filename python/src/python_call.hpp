@@ -22,12 +22,18 @@ Doubles Checked(const pybind11::object& result,
                 const char* who);
 
 // The first Python exception (not SimulationFailed) that ended a run, shared by the run's Python
-// simulator and distance. Made and destroyed with the GIL held; the methods too.
+// simulator and distance (a custom prior has its own). Made and destroyed with the GIL held; the
+// methods too.
 class FirstPythonError {
  public:
   // Keeps `error` unless one is kept already, and throws the C++ exception that ends the run
   // ("the Python <who> raised <type>: <message>"); who: "simulator" or "distance".
   [[noreturn]] void Keep(pybind11::error_already_set& error, const char* who);
+  // Keeps `error` unless one is kept already, and returns its one line ("<type>: <message>"):
+  // for a caller that throws its own exception (a custom prior's combabc::Error).
+  std::string Remember(pybind11::error_already_set& error, const char* who);
+  // Forgets the kept error: a custom prior keeps its own, and may serve several runs.
+  void Clear();
   // Throws once one is kept: no Python function is called after the run's first error.
   void ThrowIfKept() const;
   // The caller raises it again in Python once the run has returned.

@@ -87,6 +87,15 @@ std::vector<std::pair<std::string, std::string>> PythonRunFingerprint(const Pyth
   for (const ThresholdSchedule& s : options.thresholds) {
     o << std::string(ToString(s.kind)) << s.quantile << s.initial << s.target;
     for (const double v : s.values) o << v;
+    // What came with issue 23, only where it applies, so that older fingerprints are what they
+    // were and a history from before still resumes.
+    if (s.weighted) o << std::string("weighted");
+    if (s.kind == ThresholdKind::kAcceptance) o << s.acceptance_rate;
+    if (s.kind == ThresholdKind::kEss) o << s.ess_fraction;
+  }
+  if (!options.accepted_by_wave.empty()) {
+    o << std::string("accepted_by_wave");
+    for (const int n : options.accepted_by_wave) o << std::int64_t{n};
   }
   const TemperingSchedule& t = options.tempering;
   o << std::string(ToString(t.kind)) << std::string(ToString(t.form)) << t.phi0;

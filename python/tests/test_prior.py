@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+import combabc
 from combabc import _core
 
 
@@ -14,7 +15,7 @@ def normal(mean, sd):
 
 
 def test_a_consistent_prior_passes_its_check_and_gives_its_density():
-    prior = _core.CustomPrior(log_density=normal(1.0, 2.0), sample=lambda rng: rng.normal(1.0, 2.0))
+    prior = combabc.CustomPrior(log_density=normal(1.0, 2.0), sample=lambda rng: rng.normal(1.0, 2.0))
     prior.check(["k"])
     assert prior.dimension == 1
     assert prior.log_density([1.0]) == pytest.approx(-math.log(2.0) - 0.5 * math.log(2 * math.pi))
@@ -28,12 +29,12 @@ def test_a_joint_prior_of_two_reals():
     def log_density(x):
         return -0.5 * x @ inv @ x - 0.5 * logdet - math.log(2 * math.pi)
 
-    prior = _core.CustomPrior(log_density=log_density,
+    prior = combabc.CustomPrior(log_density=log_density,
                               sample=lambda rng: rng.multivariate_normal([0.0, 0.0], cov),
                               dimension=2)
     prior.check(["a", "b"])
     # Ignoring the correlation is caught on the pair.
-    wrong = _core.CustomPrior(log_density=log_density, sample=lambda rng: rng.normal(size=2),
+    wrong = combabc.CustomPrior(log_density=log_density, sample=lambda rng: rng.normal(size=2),
                               dimension=2)
     with pytest.raises(_core.Error, match=r"b: prior: the sampler and the log density disagree: "
                                           r"the draws' covariance with a"):
@@ -42,21 +43,21 @@ def test_a_joint_prior_of_two_reals():
 
 def test_invalid_custom_priors_are_refused_in_one_line():
     with pytest.raises(TypeError, match="CustomPrior: log_density must be callable, not int"):
-        _core.CustomPrior(log_density=3, sample=lambda rng: 0.0)
+        combabc.CustomPrior(log_density=3, sample=lambda rng: 0.0)
     with pytest.raises(ValueError, match="dimension = 0; must be >= 1"):
-        _core.CustomPrior(log_density=normal(0, 1), sample=lambda rng: 0.0, dimension=0)
+        combabc.CustomPrior(log_density=normal(0, 1), sample=lambda rng: 0.0, dimension=0)
     # The wrong shape, a density that is not finite, a sampler outside the bounds, a sampler that
     # disagrees with the density: each names the parameter, before any simulation.
-    shape = _core.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal(size=3))
+    shape = combabc.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal(size=3))
     with pytest.raises(_core.Error, match=r"sampler returned an array of shape \(3,\)"):
         shape.check(["k"])
-    nan = _core.CustomPrior(log_density=lambda x: float("nan"), sample=lambda rng: rng.normal())
+    nan = combabc.CustomPrior(log_density=lambda x: float("nan"), sample=lambda rng: rng.normal())
     with pytest.raises(_core.Error, match="k: prior: the log density is nan"):
         nan.check(["k"])
-    bounded = _core.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal())
+    bounded = combabc.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal())
     with pytest.raises(_core.Error, match=r"k: prior: the sampler drew .*outside the support"):
         bounded.check(["k"], low=[-1.0], high=[1.0])
-    shifted = _core.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal(0.5, 1))
+    shifted = combabc.CustomPrior(log_density=normal(0, 1), sample=lambda rng: rng.normal(0.5, 1))
     with pytest.raises(_core.Error, match="k: prior: the sampler and the log density disagree"):
         shifted.check(["k"])
     for error in (shape, nan, bounded, shifted):
