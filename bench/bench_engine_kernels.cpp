@@ -127,7 +127,7 @@ void BM_JointSampleAndLogDensity(benchmark::State& state) {
   const ParameterSpace space(BinarySpace::Independent(8), reals);
   ProposalOptions o;
   o.binary = state.range(0) == 1 ? BinaryKernelKind::kAncestor : BinaryKernelKind::kIndependent;
-  const auto q = MakeJointKernel(o)->Fit(MixedPopulation(patterns, r), space, {});
+  const auto q = MakeJointKernel(o, space)->Fit(MixedPopulation(patterns, r), space, {});
   std::vector<std::uint8_t> bits(8);
   std::vector<double> x(r);
   std::uint64_t index = 0;

@@ -546,6 +546,10 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   std::vector<JointPriorGroup> joint;
   for (const auto& [names, prior] : request.priors) joint.push_back({names, prior.prior()});
   const ParameterSpace space(request.space, request.reals, std::move(joint));
+  // The default kernel resolved for this space, as the history records it (kind = "auto").
+  SmcOptions options = request.options;
+  options.proposal =
+      ResolvedProposal(options.proposal, space.num_free_bits() > 0 && space.num_reals() > 0);
   for (const auto& [names, prior] : request.priors) {
     if (prior.error()) prior.error()->Clear();  // what its check or an earlier run raised
   }
@@ -558,7 +562,7 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                   first_error);
   std::optional<PythonSimulator> cheap;
   if (!request.low_fidelity.is_none()) {
-    CheckMultiFidelity(request.options.multi_fidelity);
+    CheckMultiFidelity(options.multi_fidelity);
     cheap.emplace(request.low_fidelity,
                   request.batch,
                   static_cast<int>(request.observed.size()),
@@ -588,11 +592,11 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   if (!file.history_path.empty()) {
     const py::gil_scoped_release release;
     if (file.resume) {
-      store.emplace(OpenPythonRun(file.history_path, described, request.options));
+      store.emplace(OpenPythonRun(file.history_path, described, options));
       resume = store->BeginResume();
     } else {
       store.emplace(HistoryStore::Create(
-          file.history_path, PythonRunMetadata(described, request.options), file.overwrite));
+          file.history_path, PythonRunMetadata(described, options), file.overwrite));
     }
   }
   PythonSignals signals;
@@ -600,7 +604,7 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   RunHistory history;
   try {
     const py::gil_scoped_release release;
-    history = RunCombinatorialSmc(problem, request.options, &observer, resume ? &*resume : nullptr);
+    history = RunCombinatorialSmc(problem, options, &observer, resume ? &*resume : nullptr);
   } catch (const std::exception& e) {
     if (store) {
       try {
@@ -638,9 +642,9 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
     return result;
   }
   // Named as a history file of the same run would be.
-  const RunMetadata metadata = PythonRunMetadata(described, request.options);
+  const RunMetadata metadata = PythonRunMetadata(described, options);
   py::dict result = HistoryToDict(history, NamesOf(metadata, history));
-  result["seed"] = request.options.seed;
+  result["seed"] = options.seed;
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["real_priors"] = RealPriors(metadata.reals);
   return result;

@@ -95,7 +95,8 @@ def test_fields_read_and_write():
     assert (proposal.kind, proposal.continuous, proposal.scale) == ("logistic", "olcm", 1.5)
     assert proposal.logistic.ridge == 0.01
     defaults = combabc.SmcOptions()
-    assert (defaults.proposal.kind, defaults.proposal.continuous) == ("independent", "normal")
+    # "auto": the ancestor kernel for a mixed space, independent otherwise (resolved at the run).
+    assert (defaults.proposal.kind, defaults.proposal.continuous) == ("auto", "normal")
     assert (defaults.tempering.kind, defaults.tempering.form) == ("none", "geometric")
     # Nested fields are written in place, as in C++.
     defaults.proposal.kind = "logistic"
@@ -109,7 +110,7 @@ def test_fields_read_and_write():
 
 def test_bad_values_raise_the_engines_messages():
     with pytest.raises(combabc.Error,
-                       match=r'expected one of "independent", "logistic", "ancestor"'):
+                       match=r'expected one of "auto", "independent", "logistic", "ancestor"'):
         combabc.ProposalOptions(kind="logistc")
     with pytest.raises(combabc.Error, match=r'expected one of "normal", "olcm"'):
         combabc.ProposalOptions(continuous="gaussian")

@@ -259,6 +259,9 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   config_internal::ParseProposalSection(root, &c);
   config_internal::ParseParametersSection(root, &c);
   config_internal::ParseJointPriorSection(root, &c);
+  // The default kernel (kind = "auto") as the run records it: the ancestor kernel for a mixed
+  // space, else independent.
+  c.smc.proposal = ResolvedProposal(c.smc.proposal, c.space.dimension > 0 && !c.reals.empty());
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   if (c.space.dimension == 0 && c.reals.empty()) {
     throw Error(ErrorKind::kConfig,

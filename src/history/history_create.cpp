@@ -302,7 +302,9 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
         .Bind(7, prior.sd)
         .Run();
   }
-  WriteProposal(db, m.proposal, m.tempering_form);
+  // The kernel the run used: a default (kAuto) not yet resolved is resolved for the run's space.
+  WriteProposal(
+      db, ResolvedProposal(m.proposal, m.dimension > 0 && !m.reals.empty()), m.tempering_form);
   for (const auto& [part, digest] : m.fingerprint) {
     meta.Bind(1, "fingerprint_" + part).Bind(2, digest).Run();
   }
@@ -591,7 +593,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
       ALTER TABLE wave ADD COLUMN reals_sd BLOB;
       ALTER TABLE particle ADD COLUMN reals BLOB;)sql");
     db.Exec(kSchemaV3Tables);
-    WriteProposal(db, ProposalOptions{}, "");
+    // Runs before v3 had no reals: the default kernel was, and resolves to, independent.
+    WriteProposal(db, ResolvedProposal(ProposalOptions{}, /*mixed=*/false), "");
   }
   if (schema_version < 4) {
     // An older run recorded no failures: its simulators could not fail without ending the run.

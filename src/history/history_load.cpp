@@ -594,6 +594,9 @@ RunMetadata HistoryStore::LoadMetadata() const {
   Statement limits(
       db, "SELECT key, value FROM meta WHERE substr(key, 1, 11) = 'stop_limit_' ORDER BY key");
   while (limits.Step()) m.stop_limits.emplace_back(limits.Text(0).substr(11), limits.Text(1));
+  // A history from before the proposal table ran the default kernels of the time: independent (the
+  // default is now kAuto, which is resolved before it is recorded).
+  m.proposal.binary = BinaryKernelKind::kIndependent;
   if (m.schema_version < 3) return m;  // no reals, default kernels, no fingerprint
   Statement reals(db, "SELECT name, kind, low, high, mean, sd FROM real ORDER BY i");
   while (reals.Step()) {

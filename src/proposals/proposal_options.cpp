@@ -66,6 +66,15 @@ bool ProposalOptions::IsValid(std::string* why) const {
   return true;
 }
 
+ProposalOptions ResolvedProposal(ProposalOptions options, bool mixed) {
+  if (options.binary == BinaryKernelKind::kAuto) {
+    options.binary = mixed && options.continuous == ContinuousKernelKind::kNormal
+                         ? BinaryKernelKind::kAncestor
+                         : BinaryKernelKind::kIndependent;
+  }
+  return options;
+}
+
 std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options) {
   switch (options.binary) {
     case BinaryKernelKind::kIndependent:
@@ -73,14 +82,18 @@ std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options) {
     case BinaryKernelKind::kLogistic:
       return MakeLogisticKernel(options.logistic);
     case BinaryKernelKind::kAncestor:
-      break;  // joint: MakeJointKernel
+    case BinaryKernelKind::kAuto:
+      break;  // joint, or not resolved: MakeJointKernel
   }
   throw Error(ErrorKind::kConfig,
               "ProposalOptions::binary = " + std::to_string(static_cast<int>(options.binary)) +
                   "; not a known binary kernel");
 }
 
-std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& options) {
+std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& given,
+                                             const ParameterSpace& space) {
+  const ProposalOptions options =
+      ResolvedProposal(given, space.num_free_bits() > 0 && space.num_reals() > 0);
   std::string why;
   if (!options.IsValid(&why)) throw Error(ErrorKind::kConfig, why);
   if (options.binary == BinaryKernelKind::kAncestor) return MakeAncestorKernel(options.scale);

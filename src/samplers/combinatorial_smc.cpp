@@ -119,7 +119,7 @@ class SmcRun {
     if (problem.kernel) {
       kernel_ = problem.kernel;
     } else {
-      owned_kernel_ = MakeJointKernel(options_.proposal);
+      owned_kernel_ = MakeJointKernel(options_.proposal, space_);
       kernel_ = owned_kernel_.get();
     }
     if (problem.executor) {

@@ -16,14 +16,19 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              int particles) {
   // Masses summed in particle order, so that a resumed run computes the same.
   std::map<std::vector<std::uint8_t>, double> mass;
+  std::map<std::vector<std::uint8_t>, int> held;  // particles per pattern
   for (std::size_t i = 0; i < population.size; ++i) {
     const auto bits = population.bits_of(i);
-    mass[std::vector<std::uint8_t>(bits.begin(), bits.end())] += population.weights[i];
+    const std::vector<std::uint8_t> key(bits.begin(), bits.end());
+    mass[key] += population.weights[i];
+    ++held[key];
   }
   const double heavy = ModeLossMinMass(particles);
   std::vector<PatternClass> classes;
   for (const auto& [bits, m] : mass) {
-    if (m < heavy) continue;
+    // A pattern held by fewer than kModeLossMinParticles particles is no mode, however heavy
+    // their weights (one importance-weighted particle of 36 bits can carry 2 % of the mass).
+    if (m < heavy || held[bits] < static_cast<int>(kModeLossMinParticles)) continue;
     PatternClass c;
     c.bits = bits;
     c.mass = m;

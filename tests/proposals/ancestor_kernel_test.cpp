@@ -261,9 +261,10 @@ TEST(AncestorKernel, PriorAndEmptyPopulationAreThePrior) {
 }
 
 TEST(AncestorKernel, OptionsChooseItAndRefuseAnotherContinuousKernel) {
+  const ParameterSpace space = MixedSpace();
   ProposalOptions o;
   o.binary = BinaryKernelKind::kAncestor;
-  EXPECT_EQ(MakeJointKernel(o)->name(), "ancestor");
+  EXPECT_EQ(MakeJointKernel(o, space)->name(), "ancestor");
   EXPECT_THROW(MakeBinaryKernel(o), Error);
   o.continuous = ContinuousKernelKind::kOlcm;
   std::string why;
@@ -271,8 +272,25 @@ TEST(AncestorKernel, OptionsChooseItAndRefuseAnotherContinuousKernel) {
   EXPECT_EQ(why,
             "ProposalOptions::continuous = olcm; the ancestor kernel proposes the reals itself "
             "(continuous = normal)");
-  EXPECT_THROW(MakeJointKernel(o), Error);
+  EXPECT_THROW(MakeJointKernel(o, space), Error);
   EXPECT_THROW(MakeAncestorKernel(0.0), Error);
+}
+
+// The default (kAuto) is the ancestor kernel for a mixed space with the normal kernel, the
+// independent product kernel for bits alone, reals alone, or another continuous kernel.
+TEST(AncestorKernel, TheDefaultIsTheAncestorKernelForMixedSpacesOnly) {
+  const ProposalOptions o;
+  EXPECT_EQ(o.binary, BinaryKernelKind::kAuto);
+  EXPECT_EQ(ResolvedProposal(o, true).binary, BinaryKernelKind::kAncestor);
+  EXPECT_EQ(ResolvedProposal(o, false).binary, BinaryKernelKind::kIndependent);
+  ProposalOptions olcm;
+  olcm.continuous = ContinuousKernelKind::kOlcm;
+  EXPECT_EQ(ResolvedProposal(olcm, true).binary, BinaryKernelKind::kIndependent);
+  ProposalOptions logistic;
+  logistic.binary = BinaryKernelKind::kLogistic;
+  EXPECT_EQ(ResolvedProposal(logistic, true).binary, BinaryKernelKind::kLogistic);
+  EXPECT_EQ(MakeJointKernel(o, MixedSpace())->name(), "ancestor");
+  EXPECT_THROW(MakeBinaryKernel(o), Error);  // not resolved
 }
 
 }  // namespace

@@ -130,7 +130,7 @@ TEST(ModeLossRun, FlagsTheLogisticKernelsLossesAcrossSeedsAndNeverTheIndependent
       EXPECT_EQ(flagged, 0);
       EXPECT_EQ(lost, 0);
     }
-    EXPECT_GE(agree, 38);
+    EXPECT_GE(agree, 35);
   }
 }
 

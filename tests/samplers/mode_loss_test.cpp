@@ -83,7 +83,7 @@ TEST(ModeLoss, ManyLightPatternsAreNotChecked) {
 
 TEST(ModeLoss, HeavyMeansFiveParticlesWorthInSmallWaves) {
   // 4 % of the mass: heavy for waves of 500 particles (5 / 500 = 1 %), not for 100 (5 %).
-  const Population pop = Crafted({{{0, 0}, 96}, {{1, 1}, 4}});
+  const Population pop = Crafted({{{0, 0}, 192}, {{1, 1}, 8}});
   const auto log_q = Table({{{0, 0}, 0.999}, {{1, 1}, 1e-7}});
   const auto big = FindPatternClasses(pop, log_q, 500);
   ASSERT_EQ(big.size(), 2u);
@@ -91,6 +91,20 @@ TEST(ModeLoss, HeavyMeansFiveParticlesWorthInSmallWaves) {
   EXPECT_EQ(FindPatternClasses(pop, log_q, 100).size(), 1u);
   EXPECT_DOUBLE_EQ(ModeLossMinMass(100), 0.05);
   EXPECT_DOUBLE_EQ(ModeLossMinMass(1000), 0.01);
+}
+
+TEST(ModeLoss, AFewHeavilyWeightedParticlesAreNoMode) {
+  // 11 holds 30 % of the mass in 4 particles (importance weights), never proposed: not checked;
+  // with a fifth particle it is a class, and flagged.
+  Population pop = Crafted({{{0, 0}, 96}, {{1, 1}, 4}});
+  for (std::size_t i = 0; i < pop.size; ++i) pop.weights[i] = i < 96 ? 0.7 / 96 : 0.3 / 4;
+  const auto log_q = Table({{{0, 0}, 1.0}});
+  EXPECT_EQ(FindPatternClasses(pop, log_q, 100).size(), 1u);
+  pop = Crafted({{{0, 0}, 95}, {{1, 1}, 5}});
+  for (std::size_t i = 0; i < pop.size; ++i) pop.weights[i] = i < 95 ? 0.7 / 95 : 0.3 / 5;
+  const auto classes = FindPatternClasses(pop, log_q, 100);
+  ASSERT_EQ(classes.size(), 2u);
+  EXPECT_TRUE(classes[1].flagged);
 }
 
 TEST(ModeLoss, FlaggedWhenAWaveExpectsLessThanOneParticle) {

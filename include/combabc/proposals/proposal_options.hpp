@@ -9,6 +9,11 @@
 namespace combabc {
 
 enum class BinaryKernelKind {
+  // The default: kAncestor for a mixed space (free bits and reals, continuous = kNormal), where
+  // the product kernels can lose minor modes whose bit patterns need their own reals
+  // (docs/algorithm.md, "Joint: `ancestor`"); kIndependent otherwise. Resolved against the space
+  // (ResolvedProposal) before a run records its options.
+  kAuto,
   kIndependent,  // Eq. 2 / Eq. 3: each free bit on its own
   kLogistic,     // logistic conditionals (Schaefer & Chopin 2013): p(x) = prod p(x_i | x_<i)
   // Not a binary kernel: the joint ancestor kernel (ancestor_kernel.hpp), which proposes the bits
@@ -18,6 +23,7 @@ enum class BinaryKernelKind {
 template <>
 struct EnumNames<BinaryKernelKind> {
   static constexpr std::pair<BinaryKernelKind, const char*> kNames[] = {
+      {BinaryKernelKind::kAuto, "auto"},
       {BinaryKernelKind::kIndependent, "independent"},
       {BinaryKernelKind::kLogistic, "logistic"},
       {BinaryKernelKind::kAncestor, "ancestor"},
@@ -55,7 +61,7 @@ struct LogisticKernelOptions {
 };
 
 struct ProposalOptions {
-  BinaryKernelKind binary = BinaryKernelKind::kIndependent;
+  BinaryKernelKind binary = BinaryKernelKind::kAuto;
   LogisticKernelOptions logistic;
   ContinuousKernelKind continuous = ContinuousKernelKind::kNormal;
   // kNormal and kAncestor: covariance = scale x weighted covariance (2 is Beaumont et al.'s
@@ -65,11 +71,16 @@ struct ProposalOptions {
   bool IsValid(std::string* why) const;  // why: "ProposalOptions::field = value; constraint"
 };
 
-// The parts of a product kernel: MakeBinaryKernel throws Error(kConfig) for kAncestor.
+// The options with kAuto resolved for a space with (`mixed`) or without both free bits and reals.
+ProposalOptions ResolvedProposal(ProposalOptions options, bool mixed);
+
+// The parts of a product kernel: MakeBinaryKernel throws Error(kConfig) for kAncestor and kAuto.
 std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options);
 std::unique_ptr<ContinuousKernel> MakeContinuousKernel(const ProposalOptions& options);
 // The kernel a run proposes from: MakeAncestorKernel(scale) for kAncestor, else MakeProductKernel
-// of the two above. Throws Error(kConfig) with IsValid's message for invalid options.
-std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& options);
+// of the two above; kAuto as ResolvedProposal resolves it for `space`. Throws Error(kConfig) with
+// IsValid's message for invalid options.
+std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& options,
+                                             const ParameterSpace& space);
 
 }  // namespace combabc

@@ -20,9 +20,10 @@ namespace combabc {
 using LogBitsDensity = std::function<double(std::span<const std::uint8_t>)>;
 
 // A class is heavy when its mass reaches both kModeLossMinMass and kModeLossMinParticles particles'
-// worth of a wave of n particles: max(0.01, 5 / n). Many light classes (a posterior spread over
-// many configurations, each held by a particle or two) are then never checked: no single one of
-// them is a mode.
+// worth of a wave of n particles, max(0.01, 5 / n), and it is held by at least
+// kModeLossMinParticles particles (a single particle with a large importance weight is no mode).
+// Many light classes (a posterior spread over many configurations, each held by a particle or two)
+// are then never checked: no single one of them is a mode.
 inline constexpr double kModeLossMinMass = 0.01;
 inline constexpr double kModeLossMinParticles = 5.0;
 // A heavy class proposed with less than 1/kModeLossMassRatio of its mass is flagged too: its
