@@ -120,6 +120,13 @@ PrecomputeKey KeyOf(const Plate& plate,
   return h.Finish();
 }
 
+// The largest cache payload this model's pieces can take: what the precompute keeps is part of
+// its estimated peak (SensorOptions::EstimatedMemoryBytes), so twice the estimate and a MiB of
+// headers is far above any true entry and far below what a planted file could make us allocate.
+std::uint64_t MaxPrecomputeBytes(const SensorOptions& o) {
+  return static_cast<std::uint64_t>(2.0 * o.EstimatedMemoryBytes()) + (std::uint64_t{1} << 20);
+}
+
 }  // namespace
 
 std::string DefaultPrecomputeCache() {
@@ -174,7 +181,7 @@ SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& 
   if (!precompute.cache_directory.empty()) {
     key = KeyOf(*plate_, options_, group_size, *layout_);
     std::unique_ptr<SectionCondensation> read;
-    if (cache.Load(key, [&](ByteReader& reader) {
+    if (cache.Load(key, MaxPrecomputeBytes(options_), [&](ByteReader& reader) {
           read = SectionCondensation::Read(reader, layout_, kernels);
           return read != nullptr;
         })) {

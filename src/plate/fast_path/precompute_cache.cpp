@@ -10,6 +10,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <set>
 #include <system_error>
 #include <thread>
 
@@ -75,6 +78,47 @@ bool IsTemporaryName(const std::string& name) {
          name.compare(32 + kSuffix.size(), kTemporary.size(), kTemporary) == 0;
 }
 
+// Group or others may write it.
+bool SharedWritable(const struct stat& st) { return (st.st_mode & (S_IWGRP | S_IWOTH)) != 0; }
+
+std::string Octal(mode_t mode) {
+  char text[8];
+  std::snprintf(text, sizeof(text), "%04o", static_cast<unsigned>(mode & 07777));
+  return text;
+}
+
+// Creates the folders of `directory` that do not exist, each owner-only (0700) whatever the
+// umask: an entry must not be writable by anyone else from the moment it exists. Folders that
+// exist are left as they are (never changed: the user may have chosen their modes).
+void CreatePrivateFolders(const fs::path& directory) {
+  std::error_code ec;
+  fs::path at;
+  for (const fs::path& part : fs::absolute(directory, ec).lexically_normal()) {
+    at /= part;
+    if (part.empty() || at == at.root_path()) continue;
+    if (::mkdir(at.c_str(), 0700) == 0) ::chmod(at.c_str(), 0700);
+  }
+}
+
+// The sink of UntrustedCacheWarning: stderr, once per folder and process.
+std::mutex warn_mutex;
+std::function<void(const std::string&)>& WarnSink() {
+  static std::function<void(const std::string&)> sink = [](const std::string& message) {
+    std::cerr << "combabc: warning: " << message << "\n";
+  };
+  return sink;
+}
+
+void WarnOnce(const std::string& directory, const std::string& why) {
+  const std::lock_guard<std::mutex> lock(warn_mutex);
+  static std::set<std::string> warned;
+  if (!warned.insert(directory).second) return;
+  if (WarnSink()) {
+    WarnSink()("the precompute cache " + directory + " is not used (" + why +
+               "): the sensor's pieces are built afresh (docs/model.md, \"Who the cache trusts\")");
+  }
+}
+
 // Least recently used first, until the entries fit; `keep` stays whatever its size.
 void Evict(const fs::path& directory, const fs::path& keep, std::uint64_t max_bytes) {
   struct Entry {
@@ -130,6 +174,38 @@ PrecomputeKey KeyHasher::Finish() const {
 
 std::string_view PlateBuildId() { return COMBABC_PLATE_BUILD_ID; }
 
+std::string UntrustedCacheFolder(const std::string& directory) {
+  // As ssh's StrictModes treats ~/.ssh: every folder on the way, links resolved, must be owned by
+  // this user or root and writable by nobody else (or sticky, as /tmp: others cannot then rename
+  // or remove what is ours); the cache folder itself must be this user's.
+  std::error_code ec;
+  const fs::path real = fs::canonical(directory, ec);
+  if (ec) return "cannot resolve " + directory + ": " + ec.message();
+  const uid_t me = ::geteuid();
+  fs::path at;
+  for (const fs::path& part : real) {
+    at /= part;
+    struct stat st {};
+    if (::stat(at.c_str(), &st) != 0) return "cannot stat " + at.string();
+    const bool last = at == real;
+    if (last && !S_ISDIR(st.st_mode)) return real.string() + " is not a folder";
+    if (last ? st.st_uid != me : st.st_uid != me && st.st_uid != 0) {
+      return at.string() + " is owned by user " + std::to_string(st.st_uid) + ", not by user " +
+             std::to_string(me);
+    }
+    if (SharedWritable(st) && (last || (st.st_mode & S_ISVTX) == 0)) {
+      return at.string() + " is writable by group or others (mode " + Octal(st.st_mode) +
+             "; chmod go-w it)";
+    }
+  }
+  return "";
+}
+
+void SetUntrustedCacheWarning(std::function<void(const std::string&)> sink) {
+  const std::lock_guard<std::mutex> lock(warn_mutex);
+  WarnSink() = std::move(sink);
+}
+
 PrecomputeCache::PrecomputeCache(std::string directory, std::uint64_t max_bytes)
     : directory_(std::move(directory)), max_bytes_(max_bytes) {}
 
@@ -144,15 +220,26 @@ std::string PrecomputeCache::FileName(const PrecomputeKey& key) {
 }
 
 bool PrecomputeCache::Load(const PrecomputeKey& key,
+                           std::uint64_t max_payload_bytes,
                            const std::function<bool(ByteReader&)>& read) const {
   if (directory_.empty()) return false;
+  std::error_code ec;
+  if (!fs::exists(directory_, ec)) return false;  // nothing stored yet
+  if (const std::string why = UntrustedCacheFolder(directory_); !why.empty()) {
+    WarnOnce(directory_, why);
+    return false;
+  }
   const std::string path = (fs::path(directory_) / FileName(key)).string();
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Not blocking (a FIFO planted at the name would block open() for ever), not following a link;
+  // then only a regular file of this user's, writable by nobody else, of a size the caller's
+  // model can need: nothing is allocated for a file that fails these.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
   if (fd < 0) return false;
   Header header{};
   struct stat st {};
-  bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
-            static_cast<std::uint64_t>(st.st_size) >= sizeof(Header) &&
+  bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid() &&
+            !SharedWritable(st) && static_cast<std::uint64_t>(st.st_size) >= sizeof(Header) &&
+            static_cast<std::uint64_t>(st.st_size) - sizeof(Header) <= max_payload_bytes &&
             ReadAll(fd, reinterpret_cast<char*>(&header), sizeof(Header)) &&
             std::memcmp(header.magic, kMagic, sizeof(kMagic)) == 0 && header.format == kFormat &&
             header.key[0] == key[0] && header.key[1] == key[1] &&
@@ -170,10 +257,14 @@ bool PrecomputeCache::Load(const PrecomputeKey& key,
 bool PrecomputeCache::Store(const PrecomputeKey& key,
                             const std::function<void(ByteWriter&)>& write) const {
   if (directory_.empty()) return false;
-  std::error_code ec;
   const fs::path directory(directory_);
-  fs::create_directories(directory, ec);
-  if (ec) return false;
+  CreatePrivateFolders(directory);
+  // Nothing is written, replaced or evicted in a folder that others could write: it is not ours
+  // to keep (docs/model.md, "Who the cache trusts").
+  if (const std::string why = UntrustedCacheFolder(directory_); !why.empty()) {
+    WarnOnce(directory_, why);
+    return false;
+  }
   const fs::path target = directory / FileName(key);
   // A temporary of this process and thread alone, renamed into place: a reader sees the old entry
   // or the new one, never a part; two writers of one key write the same bytes.
@@ -182,7 +273,8 @@ bool PrecomputeCache::Store(const PrecomputeKey& key,
       target.string() + std::string(kTemporary) + std::to_string(::getpid()) + "." +
       std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id())) + "." +
       std::to_string(counter.fetch_add(1));
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const int fd =
+      ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600);
   if (fd < 0) return false;
   // The header last, once the payload's size and checksum are known.
   Header header{};

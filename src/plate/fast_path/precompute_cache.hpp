@@ -9,6 +9,12 @@
 // (SensorModel::PrecomputeKey). Entries are written to a temporary of their own and renamed into
 // place, so readers and writers in other processes only ever see whole entries; a damaged entry
 // (size, magic, key or checksum wrong) is never trusted: it is rebuilt and replaced.
+// A checksum proves no authorship (anyone can recompute it), so trust comes from the file system
+// (docs/model.md, "Who the cache trusts"): the folders are created owner-only (0700); a folder on
+// the way that another user could write, or a cache folder not this user's, is not used at all
+// (nothing read, written or evicted there; one warning); an entry that is not a regular file of
+// this user's, writable by nobody else and no larger than the caller's model can need, is a miss
+// (rebuilt and replaced), found so without blocking, following a link or allocating.
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -154,6 +160,15 @@ class ByteReader {
 // another build is never read.
 std::string_view PlateBuildId();
 
+// Why `directory` (which exists) cannot be trusted with cache entries, or "" when it can: it or a
+// folder on its way (links resolved) is owned by another user (root may own the folders on the
+// way), or is writable by group or others (a folder on the way may be, when sticky, as /tmp).
+std::string UntrustedCacheFolder(const std::string& directory);
+
+// Where the one warning per folder and process about an untrusted cache folder goes: stderr
+// ("combabc: warning: ...") unless replaced; an empty function silences it.
+void SetUntrustedCacheWarning(std::function<void(const std::string&)> sink);
+
 class PrecomputeCache {
  public:
   // An empty `directory` disables the cache (Load finds nothing, Store does nothing).
@@ -161,9 +176,13 @@ class PrecomputeCache {
 
   // Reads the entry stored under `key` with `read`, which returns whether it made sense of it; true
   // when it did, read the whole payload and the payload's checksum matched (checked after `read`
-  // returns: what it built must not be used otherwise). A hit marks the entry as just used (its
-  // modification time), for the eviction order.
-  bool Load(const PrecomputeKey& key, const std::function<bool(ByteReader&)>& read) const;
+  // returns: what it built must not be used otherwise). An entry whose payload is larger than
+  // `max_payload_bytes` (what the caller's model can need at most) is a miss, found before
+  // anything is read. A hit marks the entry as just used (its modification time), for the
+  // eviction order.
+  bool Load(const PrecomputeKey& key,
+            std::uint64_t max_payload_bytes,
+            const std::function<bool(ByteReader&)>& read) const;
 
   // Stores what `write` writes under `key` (replacing a damaged entry), then removes the least
   // recently used entries until the folder's entries fit in max_bytes (never the one just stored).
