@@ -22,6 +22,16 @@ void PrintDesign(const services::DesignOutcome& o) {
   std::printf("design from %s; %zu candidates, noise sigma on the normalised profile\n",
               o.population.c_str(),
               o.candidates.size());
+  if (o.singular > 0) {
+    // Dropped, as a run fails them: the ranking is over the configurations the plate can be
+    // solved in.
+    std::printf(
+        "note: %zu of the %zu configurations left out, the plate being singular in them "
+        "(the first: %s)\n",
+        o.singular,
+        o.singular + o.particles,
+        o.singular_reason.c_str());
+  }
   std::printf("prior: %.2f bits of marginal entropy, %.0f clamps identified\n",
               r.prior_entropy,
               r.prior_identified);

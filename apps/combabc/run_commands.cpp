@@ -78,6 +78,9 @@ void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& chec
                 << outcome.history_path << " " << services::LimitOption(summary.termination)
                 << " ...\n";
       break;
+    case Termination::kTooManyParticles:  // final: no limit to raise
+      std::cerr << "stopped: " << summary.message << "\n";
+      break;
     default:
       break;
   }

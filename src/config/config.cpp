@@ -10,6 +10,7 @@
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "config_reader.hpp"
 
@@ -159,9 +160,14 @@ SamplerMemory EstimateSamplerMemory(const CalibrationConfig& c) {
   const double batch = c.smc.batch_size > 0 ? c.smc.batch_size : AutomaticBatchBound(c);
   SamplerMemory memory;
   memory.batch = batch * (2.0 * d + 8.0 * (m + components) + kOverheadBytes);
+  // A multi-fidelity wave keeps up to kMultiFidelityParticlesPerAccepted particles per one it
+  // needs (the engine stops it there), each with its cheap distances as well.
+  const bool multi_fidelity = c.low_fidelity.has_value();
+  const double kept = multi_fidelity ? kMultiFidelityParticlesPerAccepted : 1.0;
+  const double cheap = multi_fidelity ? 8.0 * components + 32.0 : 0.0;
   memory.particles =
-      TotalAccepted(c.smc) *
-          (d + 8.0 * components + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes) +
+      kept * TotalAccepted(c.smc) *
+          (d + 8.0 * components + cheap + (c.smc.keep_outputs ? 8.0 * m : 0.0) + kOverheadBytes) +
       (d <= static_cast<double>(kMaxPairCorrelationBits)
            ? static_cast<double>(c.smc.num_waves) * 8.0 * d * d
            : 0.0);
@@ -225,7 +231,12 @@ void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
                   "; the run would need about " + Gigabytes(total) + " of memory (limit " +
                   Gigabytes(c.model.memory_limit_bytes) + "): model " + Gigabytes(model) +
                   ", candidate batch " + Gigabytes(sampler.batch) + ", accepted particles " +
-                  Gigabytes(sampler.particles) + advice + " (docs/config.md, \"Limits\")",
+                  Gigabytes(sampler.particles) +
+                  (c.low_fidelity ? " (a multi-fidelity wave keeps up to " +
+                                        std::to_string(kMultiFidelityParticlesPerAccepted) +
+                                        " x accepted_per_wave)"
+                                  : "") +
+                  advice + " (docs/config.md, \"Limits\")",
               c.path,
               source.line,
               it != sources.smc.end() ? source.key : SamplerKeyOf(field));
@@ -283,7 +294,7 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
                 sources.multi_fidelity->key);
   }
   ParseOutput(root, &c);
-  config_internal::ParseDesignSection(root, &c);
+  config_internal::ParseDesignSection(root, &c, model_sources);
   root.Finish();
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 

@@ -177,7 +177,9 @@ void ParseProposalSection(TableReader& root, CalibrationConfig* config);
 void ParseParametersSection(TableReader& root, CalibrationConfig* config);
 void ParseJointPriorSection(TableReader& root, CalibrationConfig* config);
 // [design] (config_design.cpp): after [model].
-void ParseDesignSection(TableReader& root, CalibrationConfig* config);
+void ParseDesignSection(TableReader& root,
+                        CalibrationConfig* config,
+                        const std::map<std::string, Source>& model_sources);
 // A [data] table (config_experiment.cpp); impact_default: the Gaussian extension's default
 // centre (the experiment's load position), nullopt where there is none (external simulators).
 void ParseDataTable(TableReader& t, std::optional<double> impact_default, DataConfig* data);

@@ -11,6 +11,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/proposals/proposal_options.hpp"
 #include "combabc/samplers/mode_loss.hpp"
+#include "combabc/samplers/multi_fidelity.hpp"
 #include "proposals/log_sum_exp.hpp"
 #include "samplers/candidate_batch.hpp"
 #include "samplers/continuation_tuning.hpp"
@@ -539,6 +540,27 @@ class SmcRun {
                               static_cast<std::int64_t>(wave.particles.size()));
   }
 
+  // The stop of a multi-fidelity wave that holds kMultiFidelityParticlesPerAccepted x n particles
+  // and still counts fewer than n effective ones (multi_fidelity.hpp): without it the wave grows
+  // without bound, and so do the memory and the history.
+  Stop ParticleCapStop(const WaveRecord& wave, int n, const EffectiveCount& effective) const {
+    const auto cap =
+        static_cast<std::size_t>(kMultiFidelityParticlesPerAccepted) * static_cast<std::size_t>(n);
+    if (!low_fidelity_ || wave.particles.size() < cap) return std::nullopt;
+    char count[32];
+    std::snprintf(count, sizeof count, "%.1f", effective.value());
+    return Stop({Termination::kTooManyParticles,
+                 "wave " + std::to_string(wave.wave + 1) + " kept " +
+                     std::to_string(wave.particles.size()) + " particles (" +
+                     std::to_string(kMultiFidelityParticlesPerAccepted) + " x the " +
+                     std::to_string(n) + " it needs), whose multi-fidelity weights count only " +
+                     count +
+                     " effective particles: the expensive model rejects too many of the cheap "
+                     "model's acceptances; improve the cheap model or raise "
+                     "[sampler.multi_fidelity] floor (docs/algorithm.md, \"Multi-fidelity "
+                     "sampling\")"});
+  }
+
   // Simulates wave candidates until n_t (AcceptedIn) are accepted or a stopping rule fires;
   // `done` are the waves before it.
   Stop RunWave(WaveRecord& wave, std::int64_t next_index, std::span<const WaveRecord> done) {
@@ -609,6 +631,7 @@ class SmcRun {
               LogSumExp(fidelity.unkept_false_positive_log_w2, 2.0 * batch.log_weight(i));
         }
         stop = CheckCandidate(wave, next_index + i);
+        if (!stop) stop = ParticleCapStop(wave, n, effective);
         if (stop) {
           consumed = i + 1;
           break;

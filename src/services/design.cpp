@@ -13,6 +13,7 @@
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/params/binary_space.hpp"
+#include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
 #include "services/python_script.hpp"
@@ -21,8 +22,6 @@ namespace combabc::services {
 namespace fs = std::filesystem;
 namespace {
 
-// Free-bit spaces up to this size are designed over every configuration (exact prior).
-constexpr int kExactBits = 12;
 constexpr std::uint64_t kPriorStream = 0xD4'0000'0000ULL;
 
 std::string DesignNumber(double x) {
@@ -95,7 +94,7 @@ design::Population FromPrior(const CalibrationConfig& c, std::string* what) {
   std::map<std::vector<std::uint8_t>, double> merged;
   std::vector<std::uint8_t> f(static_cast<std::size_t>(free));
   std::vector<std::uint8_t> bits(static_cast<std::size_t>(space.dimension()));
-  if (free <= kExactBits) {
+  if (free <= kDesignExactBits) {
     for (std::uint64_t code = 0; code < (std::uint64_t{1} << free); ++code) {
       double mass = 1.0;
       for (int k = 0; k < free; ++k) {
@@ -133,50 +132,81 @@ std::vector<DesignCandidate> Candidates(const DesignConfig& d) {
 }
 
 std::vector<double> ScanPositions(const DesignCandidate& c, double spacing) {
-  std::vector<double> x;
-  const auto n = static_cast<int>(std::floor((c.scan_to - c.scan_from) / spacing + 1e-9));
-  for (int k = 0; k <= n; ++k) x.push_back(c.scan_from + k * spacing);
-  return x;
+  return DesignScanPositions(c.scan_from, c.scan_to, spacing);
 }
 
 // Each candidate's normalised profile for every particle: one plate model whose load cases are
-// the candidates, solved once per particle (one factorization for all of them).
-std::vector<design::CandidateProfiles> SimulateCandidates(
-    const CalibrationConfig& c,
-    const std::vector<DesignCandidate>& candidates,
-    const design::Population& population,
-    int threads) {
-  plate::SensorOptions options = c.model;
-  options.normalise = true;  // as the measured data are normalised
-  options.load_cases.clear();
-  const plate::LoadCase base = c.model.load_cases.front();
-  for (const DesignCandidate& k : candidates) {
-    plate::LoadCase lc = base;
-    lc.load_x = k.load_x;
-    lc.load_y_fraction = k.load_y_fraction;
-    lc.output_positions = ScanPositions(k, c.design->scan_spacing);
-    lc.output_y_fraction = k.scan_y_fraction;
-    options.load_cases.push_back(std::move(lc));
-  }
+// the candidates, solved once per particle (one factorization for all of them). A configuration
+// the plate cannot be solved in (plate::SingularSystem: a rigid-body motion left free) is
+// dropped from `population` with its weight, as a run fails that candidate; its count and reason
+// go to `o`. Only when every configuration is singular is the design refused.
+std::vector<design::CandidateProfiles> SimulateCandidates(const CalibrationConfig& c,
+                                                          design::Population& population,
+                                                          int threads,
+                                                          DesignOutcome& o) {
+  const plate::SensorOptions options = DesignSensorOptions(c);
   ThreadPool pool(threads);
   plate::PrecomputeOptions precompute;
   precompute.pool = &pool;
   precompute.cache_directory = plate::DefaultPrecomputeCache();
   const plate::SensorModel model(options, precompute);
   const std::size_t n = population.size();
+  const auto d = static_cast<std::size_t>(population.dimension);
   const auto outputs = static_cast<std::size_t>(model.num_outputs());
   std::vector<double> all(n * outputs);
-  model.ProfileBatch(population.bits, n, all, threads);
-  std::vector<design::CandidateProfiles> profiles(candidates.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
+  std::vector<std::string> singular(n);  // the reason, for each singular configuration
+  // Each configuration writes only its own row, so the result does not depend on the schedule.
+  pool.ParallelFor(n, 16, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      try {
+        model.Profile(std::span(population.bits).subspan(i * d, d),
+                      std::span(all).subspan(i * outputs, outputs));
+      } catch (const plate::SingularSystem& e) {
+        singular[i] = e.message();
+      }
+    }
+  });
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (singular[i].empty()) {
+      kept.push_back(i);
+    } else {
+      if (o.singular == 0) o.singular_reason = singular[i];
+      ++o.singular;
+    }
+  }
+  if (kept.empty()) {
+    throw Error(ErrorKind::kConfig,
+                "every one of the " + std::to_string(n) +
+                    " configurations to design from is singular: " + singular.front(),
+                c.path,
+                c.design->line,
+                "design");
+  }
+  if (kept.size() < n) {
+    design::Population p;
+    p.dimension = population.dimension;
+    double total = 0.0;
+    for (std::size_t i : kept) total += population.weights[i];
+    for (std::size_t i : kept) {
+      p.bits.insert(p.bits.end(),
+                    population.bits.begin() + static_cast<std::ptrdiff_t>(i * d),
+                    population.bits.begin() + static_cast<std::ptrdiff_t>(i * d + d));
+      p.weights.push_back(population.weights[i] / total);
+    }
+    population = std::move(p);
+  }
+  const std::size_t candidates = options.load_cases.size();
+  std::vector<design::CandidateProfiles> profiles(candidates);
+  for (std::size_t k = 0; k < candidates; ++k) {
     const std::size_t begin = options.OutputOffset(k);
     const std::size_t points = options.load_cases[k].output_positions.size();
     profiles[k].points = static_cast<int>(points);
-    profiles[k].values.resize(n * points);
-    for (std::size_t i = 0; i < n; ++i) {
-      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(i * outputs + begin),
+    profiles[k].values.resize(kept.size() * points);
+    for (std::size_t r = 0; r < kept.size(); ++r) {
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(kept[r] * outputs + begin),
                   points,
-                  profiles[k].values.begin() + static_cast<std::ptrdiff_t>(i * points));
+                  profiles[k].values.begin() + static_cast<std::ptrdiff_t>(r * points));
     }
   }
   return profiles;
@@ -299,14 +329,31 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   }
 
   DesignOutcome o;
-  const design::Population population =
-      request.posterior_path.empty() ? FromPrior(c, &o.population)
-                                     : FromPosterior(request.posterior_path, c, &o.population);
-  o.particles = population.size();
-  o.exhaustive = request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kExactBits;
+  design::Population population = request.posterior_path.empty()
+                                      ? FromPrior(c, &o.population)
+                                      : FromPosterior(request.posterior_path, c, &o.population);
+  if (!request.posterior_path.empty()) {
+    // The prior's population was sized against memory_limit_gb when the config was read; a
+    // posterior's is known only now.
+    const DesignMemory memory = EstimateDesignMemory(c, static_cast<double>(population.size()));
+    if (memory.total() > c.model.memory_limit_bytes) {
+      throw Error(ErrorKind::kUsage,
+                  "its " + std::to_string(population.size()) +
+                      " distinct configurations would need about " +
+                      DesignNumber(memory.total() / 1e9) + " GB of memory to design from (limit " +
+                      DesignNumber(c.model.memory_limit_bytes / 1e9) +
+                      " GB); fewer truths or scan points in [design], or raise memory_limit_gb",
+                  request.posterior_path,
+                  0,
+                  "--posterior");
+    }
+  }
+  o.exhaustive =
+      request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kDesignExactBits;
   o.candidates = Candidates(*c.design);
   const std::vector<design::CandidateProfiles> profiles =
-      SimulateCandidates(c, o.candidates, population, threads);
+      SimulateCandidates(c, population, threads, o);
+  o.particles = population.size();
   design::DesignOptions options;
   options.noise_sigma = c.design->noise;
   options.truths = c.design->truths;

@@ -369,6 +369,35 @@ TEST(Config, AMixedRunCountsTheContinuousPrecomputeInItsMemory) {
   EXPECT_NE(std::string(e.what()).find("raise memory_limit_gb"), std::string::npos) << e.what();
 }
 
+// [design]'s sizes are refused when the config is read, at their key, against memory_limit_gb
+// (the reviewers' scan_spacing = 0.00000025 built 5.6 GB of positions before a refusal naming no
+// key, and particles = 3e6 ended in bad_alloc, exit 70).
+TEST(Config, DesignSizesAreRefusedAtTheirKey) {
+  const std::string design = kMinimal + "[design]\nload_x = [45]\n";
+  EXPECT_NO_THROW(ParseConfig(design, "inline.toml"));
+  const Error spacing = ConfigError(design + "scan_spacing = 0.00000025\n");
+  ExpectLocated(spacing, "inline.toml", 7, "design.scan_spacing");
+  EXPECT_NE(std::string(spacing.what()).find("scan points"), std::string::npos) << spacing.what();
+  const Error particles = ConfigError(design + "particles = 3000000\n");
+  ExpectLocated(particles, "inline.toml", 7, "design.particles");
+  EXPECT_NE(std::string(particles.what()).find("the design would need about"), std::string::npos)
+      << particles.what();
+  ExpectLocated(ConfigError(design + "truths = 1000000\n"), "inline.toml", 7, "design.truths");
+  // The estimate holds a larger memory limit.
+  EXPECT_NO_THROW(
+      ParseConfig("memory_limit_gb = 1000\n" + design + "particles = 3000000\n", "inline.toml"));
+}
+
+// A load of amplitude 0 deflects nothing: a design over it would rank every candidate at zero
+// gain. Refused at the amplitude's key.
+TEST(Config, ADesignRefusesALoadOfAmplitudeZero) {
+  const std::string load = "[model.load]\namplitude = 0\n";
+  ExpectLocated(ConfigError(load + kMinimal + "[design]\nload_x = [45]\n"),
+                "inline.toml",
+                2,
+                "model.load.amplitude");
+}
+
 TEST(Config, ProposalAndParameterErrorsNameTheKey) {
   ExpectLocated(ConfigError(kMinimal + "[proposal]\nkind = \"pairwise\"\n"),
                 "inline.toml",

@@ -69,6 +69,27 @@ TEST(LowFidelityConfig, ACheapSensorOfTheSensorWithACoarserMeshAndItsOptions) {
   EXPECT_FALSE(ParseConfig(kRest, "run.toml").low_fidelity.has_value());
 }
 
+// A multi-fidelity wave keeps up to kMultiFidelityParticlesPerAccepted particles per one it needs
+// (the engine stops it there), and the memory estimate counts them: 10 waves of 100,000 fit in
+// 1 GB single-fidelity (0.2 GB of particles), not with a cheap model (4.72 GB).
+TEST(LowFidelityConfig, TheMemoryEstimateCountsTheParticlesAWaveMayKeep) {
+  const std::string sampler = "[sampler]\nbatch_size = 8\nwaves = 10\naccepted_per_wave = 100000\n";
+  const std::string cheap =
+      "[simulator.low_fidelity]\nkind = \"command\"\nargv = [\"c\", \"{params}\"]\n"
+      "[simulator.low_fidelity.bits]\ncount = 4\n"
+      "[simulator.low_fidelity.outputs]\ncoordinates = [0.1, 0.2, 0.3]\n";
+  const std::string limit = "memory_limit_gb = 1\n";
+  EXPECT_EQ(ConfigErrorOf(limit + kCommand + sampler + kRest), "no error");
+  const std::string e = ConfigErrorOf(limit + kCommand + sampler + cheap + kRest);
+  EXPECT_EQ(e.rfind("dir/run.toml:12: sampler.accepted_per_wave: is 100000; the run would need "
+                    "about 4.72 GB",
+                    0),
+            0u)
+      << e;
+  EXPECT_NE(e.find("a multi-fidelity wave keeps up to 20 x accepted_per_wave"), std::string::npos)
+      << e;
+}
+
 TEST(LowFidelityConfig, ACheapSensorOfACommandNeedsNoOutputDeclaration) {
   const CalibrationConfig c = ParseConfig(
       "[model.clamps]\nper_edge = 2\n" + kCommand + "[simulator.low_fidelity]\n" + kRest,

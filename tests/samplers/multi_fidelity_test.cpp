@@ -4,6 +4,7 @@
 // *expensive* model's posterior, not the cheap one's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -294,6 +295,40 @@ TEST(MultiFidelity, FewConfirmationsNeverLowerAContinuationProbability) {
   const auto& second = *history.waves[1].multi_fidelity;
   EXPECT_GE(second.expensive_simulations, 100);
   EXPECT_EQ(second.next_continue_if_accepted, options.multi_fidelity.floor);
+}
+
+// A cheap model that accepts every candidate (it reports the observed outputs), confirmed at
+// eta_1 = 0.1: the expensive model rejects most, their multipliers 1 - 1 / eta_1 = -9 cancel the
+// others', and the wave's effective count stays near 0.4 % of its particles. It stops at
+// kMultiFidelityParticlesPerAccepted x n particles; before, it grew until the count reached n
+// (on the sensor: waves of 200, 12,796, 144,985 and 842,019 particles, 2.2 GB).
+TEST(MultiFidelity, AWaveWhoseWeightsCancelStopsAtItsParticleCap) {
+  Toy toy;
+  class AcceptsAll : public Simulator {
+   public:
+    int output_size() const override { return kBits; }
+    void Simulate(const ParameterView&, RandomStream&, std::span<double> out) const override {
+      const double observed[kBits] = {1, 0, 1, 1, 0, 0, 1, 0};  // the distance's target
+      std::copy(observed, observed + kBits, out.begin());
+    }
+  } cheap;
+  SmcProblem problem{&toy.space, &toy.expensive, &toy.dist};
+  problem.low_fidelity = &cheap;
+  auto options = toy.Options(0.1, 0.1, 1);
+  options.multi_fidelity.adapt = false;
+  options.num_waves = 1;
+  options.accepted_per_wave = 20;
+  options.thresholds[0].values = {kFinalEps};
+  const auto history = RunCombinatorialSmc(problem, options);
+  ASSERT_EQ(history.waves.size(), 1U);
+  const WaveRecord& wave = history.waves[0];
+  EXPECT_FALSE(wave.complete);
+  EXPECT_EQ(wave.particles.size(),
+            static_cast<std::size_t>(kMultiFidelityParticlesPerAccepted * 20));
+  EXPECT_EQ(history.summary.termination, Termination::kTooManyParticles);
+  EXPECT_NE(history.summary.message.find("wave 1 kept 400 particles (20 x the 20 it needs)"),
+            std::string::npos)
+      << history.summary.message;
 }
 
 TEST(MultiFidelity, PerfectCheapModelRarelyCallsTheExpensiveOne) {

@@ -161,6 +161,25 @@ std::vector<SensorModelPlan> SensorModels(const CalibrationConfig& config);
 // experiments' loads, the expensive simulator's output coordinates.
 std::vector<SensorModelPlan> LowFidelitySensorModels(const CalibrationConfig& config);
 
+// `combabc design` (docs/config.md, "Design"): a free-bit space up to this size is designed over
+// every configuration (the exact prior), a larger one over [design] particles prior draws.
+inline constexpr int kDesignExactBits = 12;
+// The scan positions of a design candidate's window [from, to] every `spacing` (m).
+std::vector<double> DesignScanPositions(double from, double to, double spacing);
+// The sensor `combabc design` simulates: [model] with one load case per candidate of [design], in
+// the order load_x, load_y_fraction, scan, scan_y_fraction (outermost first), normalised.
+plate::SensorOptions DesignSensorOptions(const CalibrationConfig& config);
+// The peak memory (bytes) of `combabc design` over `particles` configurations: the sensor's
+// precompute, every particle's profile under every candidate (held twice while split by
+// candidate), and the scoring's per-truth log-likelihoods.
+struct DesignMemory {
+  double model = 0.0;
+  double profiles = 0.0;
+  double scoring = 0.0;
+  double total() const { return model + profiles + scoring; }
+};
+DesignMemory EstimateDesignMemory(const CalibrationConfig& config, double particles);
+
 // Largest config file accepted (docs/config.md, "Limits"): a real config is a few KiB.
 inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;  // 1 MiB
 

@@ -34,6 +34,16 @@ struct MultiFidelityOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The most particles a multi-fidelity wave keeps, per particle it needs (n_t, AcceptedIn): its
+// signed multipliers count (sum m)^2 / sum m^2 effective particles, which a cheap model whose
+// acceptances the expensive one mostly rejects keeps near zero however many particles the wave
+// holds (a wave of 200 grew to 842,019 particles, 2.2 GB). At this many the run stops
+// (too_many_particles, docs/algorithm.md "Multi-fidelity sampling"), and the memory
+// estimate of a multi-fidelity run counts this many particles per wave. An effective count of
+// 1/20 of the particles is what eta_1 at the default floor (0.1) leaves when the expensive model
+// confirms about half of the cheap model's acceptances.
+inline constexpr int kMultiFidelityParticlesPerAccepted = 20;
+
 // The candidate's multi-fidelity weight multiplier (Prescott & Baker 2020, JUQ 8(1)):
 // 1(cheap accepted) + 1(continued) / eta * [1(expensive accepted) - 1(cheap accepted)], with
 // eta the continuation probability of the cheap outcome. Its expectation over the continuation is

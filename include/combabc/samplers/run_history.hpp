@@ -123,6 +123,10 @@ enum class Termination {
   kInterrupted,           // the observer asked to stop
   kEnumerated,            // exact enumeration (Enumerate): one wave holding the exact posterior
   kTooManyFailures,       // more than max_failure_fraction of the simulations failed
+  // A multi-fidelity wave kept kMultiFidelityParticlesPerAccepted x n_t particles whose signed
+  // weights still count fewer than n_t effective ones (final: the options that decide it are
+  // part of the run's fingerprint).
+  kTooManyParticles,
 };
 template <>
 struct EnumNames<Termination> {
@@ -135,6 +139,7 @@ struct EnumNames<Termination> {
       {Termination::kInterrupted, "interrupted"},
       {Termination::kEnumerated, "enumerated"},
       {Termination::kTooManyFailures, "too_many_failures"},
+      {Termination::kTooManyParticles, "too_many_particles"},
   };
 };
 

@@ -33,6 +33,10 @@ struct DesignOutcome {
   std::string population;  // what was known: "the prior (every one of 64 configurations)", ...
   std::size_t particles = 0;
   bool exhaustive = false;  // the population is every configuration (no sampling error in it)
+  // Configurations dropped because the plate cannot be solved in them (plate::SingularSystem),
+  // and the first one's reason; `particles` counts those kept.
+  std::size_t singular = 0;
+  std::string singular_reason;
   std::vector<DesignCandidate> candidates;
   design::DesignResult result;
   std::string next_experiment;  // the [[experiment]] block for the best candidate
