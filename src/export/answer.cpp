@@ -84,9 +84,13 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
     c.bits = bits;
     c.mass = total > 0 ? m / total : 0.0;
     if (!exact) {
-      // The mass is the mean of the indicator "the particle is this configuration".
+      // The mass is the mean of the indicator "the particle is this configuration": a
+      // probability, which signed weights can put outside [0, 1] (1.06): clamped, its error
+      // covering the raw estimate, and floored by the rule of three (WeightedProbability).
       for (std::size_t i = 0; i < in.size(); ++i) in[i] = patterns[i] == bits ? 1.0 : 0.0;
-      c.mass_se = WeightedMean(weights, in).se;
+      const WeightedMoment p = WeightedProbability(weights, in, w.multi_fidelity.has_value());
+      c.mass = p.value;
+      c.mass_se = p.se;
     }
     for (std::size_t b = 0; b < bits.size(); ++b) {
       if (bits[b] == '1') c.fixed.push_back(BitName(metadata, b));
@@ -145,7 +149,7 @@ Answer SummariseAnswer(const RunMetadata& m,
   a.distinct = w->distinct;
   // The particles' stored weights are the estimator's (the paper estimator's equal ones, the
   // importance estimator's p/q): one delta-method formula serves both, and signed weights.
-  const WaveErrors errors = WaveMonteCarloErrors(*w);
+  const WaveErrors errors = WaveMonteCarloErrors(*w, m.bit_prior_one);
   const std::vector<double>& p = w->marginals(estimator);
   for (std::size_t b = 0; b < p.size(); ++b) {
     AnswerBit bit;
