@@ -19,7 +19,11 @@ class Wave:
 
     Attributes: number (from 1), thresholds, phi, proposal, candidates, accepted, acceptance_rate,
     complete, marginals_paper, marginals_importance, ess, reals_mean, reals_sd, distinct,
-    discarded, wall_seconds, pair_correlations (float64[d, d]: the Pearson correlation of bits i
+    discarded, wall_seconds; the Monte-Carlo errors of the run's estimator, as summary.json's
+    "waves" entries name them (docs/history.md, "The answer"): marginals_se and marginals_ess
+    (float64[d]: per bit its standard error, floored by the rule of three, and its ESS), ess_bits
+    (the smallest ESS of a bit that varies; NaN when none does), reals_mean_se, reals_sd_se and
+    reals_ess (float64[r]), each NaN for an enumeration (exact); pair_correlations (float64[d, d]: the Pearson correlation of bits i
     and j under the particles' weights, 0 for a bit constant among them; 0 x 0 without
     particles); per particle: index int64[n], bits uint8[n, d], reals float64[n, r],
     log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
@@ -115,6 +119,8 @@ class History:
         self._threshold_columns = list(names["threshold_columns"])
         self._distance_columns = list(names["distance_columns"])
         self.estimator = data["estimator"]
+        # The kernels the run used (summary.json's "proposal"): binary_kernel, continuous_kernel.
+        self.proposal = dict(data.get("proposal") or {})
         self.summary = dict(data["summary"])
         self.termination = self.summary["termination"]
         self.waves = [Wave(w, self.estimator) for w in data["waves"]]
@@ -141,6 +147,17 @@ class History:
                             enumerate(data.get("experiments") or [{}])]
         self._provenance = {key: data.get(key) or "" for key in
                             ("combabc_version", "config_path", "config_text", "end_time")}
+
+    @property
+    def binary_kernel(self):
+        """The binary proposal kernel the run used, `auto` resolved ("independent", "logistic",
+        ...), as summary.json's proposal.binary_kernel."""
+        return self.proposal.get("binary_kernel", "")
+
+    @property
+    def continuous_kernel(self):
+        """The continuous proposal kernel the run used, `auto` resolved."""
+        return self.proposal.get("continuous_kernel", "")
 
     @property
     def multi_fidelity(self):
@@ -174,6 +191,12 @@ class History:
         if note:
             warnings.warn(note, stacklevel=2)
         return self.posterior_wave.marginals
+
+    @property
+    def posterior_se(self):
+        """posterior's Monte-Carlo standard errors, per bit (posterior_wave.marginals_se: the
+        answer's mc_se in summary.json and on the terminal); NaN for an enumeration (exact)."""
+        return self.posterior_wave.marginals_se
 
     def experiment(self, which):
         """An experiment by name or index."""
@@ -273,7 +296,8 @@ class History:
     def wave_table(self):
         """One row per wave: wave (from 1), eps_<component> (T_<component> for a likelihood
         component) per threshold, phi, candidates,
-        accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures, and for a
+        accepted, acceptance_rate, ess, distinct, wall_seconds, complete, failures, ess_bits (as
+        waves.csv: the smallest per-bit ESS; NaN when no bit varies or exact), and for a
         multi-fidelity run continue_if_accepted, continue_if_rejected, expensive_simulations,
         cheap_seconds, expensive_seconds, next_continue_if_accepted, next_continue_if_rejected
         and cost_ratio."""
@@ -286,7 +310,7 @@ class History:
             row.update(phi=w.phi, candidates=w.candidates, accepted=w.accepted,
                        acceptance_rate=w.acceptance_rate, ess=w.ess, distinct=w.distinct,
                        wall_seconds=w.wall_seconds, complete=int(w.complete),
-                       failures=len(w.failure_index))
+                       failures=len(w.failure_index), ess_bits=w.ess_bits)
             if self.multi_fidelity:
                 row.update({key: (w.multi_fidelity or {}).get(key, np.nan)
                             for key in _WAVE_FIDELITY_COLUMNS})
@@ -296,8 +320,10 @@ class History:
     def to_inference_data(self, all_waves=False):
         """The run in ArviZ's InferenceData layout: a dict of xarray Datasets, groups posterior
         (posterior_wave's particles, the last complete wave's, resampled to equally weighted draws
-        (attributes wave, posterior_note and incomplete_wave_left_out say which): bits and the continuous
-        parameters; dims chain = 1, draw), sample_stats (per draw its particle's weight,
+        (attributes wave, posterior_note and incomplete_wave_left_out say which): bits and the
+        continuous parameters; dims chain = 1, draw; none when that wave's weights are signed, a
+        multi-fidelity wave with negative weights: then sample_stats holds every particle with its
+        signed weight, particle_bits and particle_<name>, and a UserWarning says so), sample_stats (per draw its particle's weight,
         log_weight, distance per component, particle_index), prior, posterior_predictive (the
         resampled accepted curves, when the run kept outputs) and observed_data, as
         `combabc export` writes in inference_data.nc (docs/history.md, "NetCDF"); all_waves=True
@@ -312,7 +338,7 @@ class History:
                  "config_text": self._provenance["config_text"]}
         waves = self.waves if all_waves else \
             list({id(x): x for x in (self.waves[0], w, self.waves[-1])}.values())
-        return _netcdf.inference_data(
+        groups = _netcdf.inference_data(
             waves=[{"number": x.number, "complete": x.complete, "thresholds": x.thresholds,
                     "bits": x.bits,
                     "reals": x.reals, "log_weight": x.log_weight, "weight": x.weight,
@@ -332,6 +358,11 @@ class History:
                           "components": len(x.component_names),
                           "first_output": x.outputs.start,
                           "outputs": len(x.output_position)} for x in self.experiments])
+        # Signed (multi-fidelity) weights: no posterior group, as `combabc export` notes.
+        note = groups["sample_stats"].attrs.get("signed_weights_note", "")
+        if note:
+            warnings.warn(note, stacklevel=2)
+        return groups
 
     def to_netcdf(self, path, all_waves=False):
         """to_inference_data(all_waves) written to `path` (NetCDF-4, one group each;

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "combabc/export/export.hpp"
+#include "combabc/samplers/monte_carlo_error.hpp"
 
 namespace py = pybind11;
 
@@ -59,6 +60,34 @@ void AddFidelity(const WaveRecord& wave, py::ssize_t num_components, py::dict& d
   d["low_distance"] = low_distance;
 }
 
+// A wave's Monte-Carlo errors (WaveMonteCarloErrors), under summary.json's names: per bit its
+// standard error and ESS, the bits' ESS (NaN when no bit varies), per real its mean's and sd's
+// standard errors and its mean's ESS. An enumeration's numbers are exact: NaN each.
+void AddErrors(const WaveRecord& wave, const HistoryNames& names, py::dict& d) {
+  const WaveErrors e = names.exact ? WaveErrors{} : WaveMonteCarloErrors(wave, names.bit_prior_one);
+  const double nan = std::nan("");
+  std::vector<double> se(wave.marginals_paper.size(), nan);
+  std::vector<double> ess(se.size(), nan);
+  for (std::size_t b = 0; b < e.bits.size() && b < se.size(); ++b) {
+    se[b] = e.bits[b].se;
+    ess[b] = e.bits[b].ess;
+  }
+  std::vector<double> mean_se(wave.reals_mean.size(), nan);
+  std::vector<double> sd_se(mean_se.size(), nan);
+  std::vector<double> reals_ess(mean_se.size(), nan);
+  for (std::size_t r = 0; r < e.real_means.size() && r < mean_se.size(); ++r) {
+    mean_se[r] = e.real_means[r].se;
+    sd_se[r] = e.real_sds[r].se;
+    reals_ess[r] = e.real_means[r].ess;
+  }
+  d["marginals_se"] = Vector(se);
+  d["marginals_ess"] = Vector(ess);
+  d["ess_bits"] = e.bits_ess.value_or(nan);
+  d["reals_mean_se"] = Vector(mean_se);
+  d["reals_sd_se"] = Vector(sd_se);
+  d["reals_ess"] = Vector(reals_ess);
+}
+
 py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   py::dict d;
   d["number"] = wave.wave + 1;  // waves count from 1 wherever a user sees them
@@ -74,6 +103,7 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   d["ess"] = wave.ess;
   d["reals_mean"] = Vector(wave.reals_mean);
   d["reals_sd"] = Vector(wave.reals_sd);
+  AddErrors(wave, names, d);
   d["distinct"] = wave.distinct;
   d["discarded"] = wave.discarded;
   d["wall_seconds"] = wave.wall_seconds;
@@ -168,6 +198,10 @@ py::dict HistoryToDict(const RunHistory& history, const HistoryNames& names) {
   name_lists["distance_columns"] = names.distance_columns;
   result["names"] = name_lists;
   result["estimator"] = names.estimator;
+  py::dict proposal;
+  proposal["binary_kernel"] = names.binary_kernel;
+  proposal["continuous_kernel"] = names.continuous_kernel;
+  result["proposal"] = proposal;
   const RunSummary& s = history.summary;
   py::dict summary;
   summary["termination"] = std::string(ToString(s.termination));

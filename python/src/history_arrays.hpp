@@ -20,11 +20,22 @@ struct HistoryNames {
   std::vector<std::string> threshold_columns;
   std::vector<std::string> distance_columns;
   std::string estimator;  // "paper" or "importance"
+  // The kernels the run used, `auto` resolved (summary.json's "proposal").
+  std::string binary_kernel;
+  std::string continuous_kernel;
+  // An enumeration's numbers are exact: no Monte-Carlo errors. bit_prior_one: a bit its prior
+  // fixes has no error either (WaveMonteCarloErrors).
+  bool exact = false;
+  std::vector<double> bit_prior_one;
 };
 
 // Keys: "names" (bits, reals, components, threshold_columns, distance_columns), "estimator",
+// "proposal" (binary_kernel, continuous_kernel),
 // "summary" (termination, message, waves completed, simulations, discarded, failures, wall seconds)
-// and "waves", a list of dicts, one per wave: its statistics (wave is 0-based), then the particles'
+// and "waves", a list of dicts, one per wave: its statistics (wave is 0-based), its Monte-Carlo
+// errors as summary.json's "waves" entries name them (marginals_se, marginals_ess, ess_bits,
+// reals_mean_se, reals_sd_se, reals_ess: samplers/monte_carlo_error.hpp; NaN when exact), then
+// the particles'
 // index int64[n], bits uint8[n, d], reals float64[n, r], log_weight and weight float64[n], distance
 // float64[n, k], output float64[n, m] (m = 0 without kept outputs), failure_index /
 // failure_reason, and for a multi-fidelity wave "multi_fidelity" (a dict of WaveFidelity's

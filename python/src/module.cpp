@@ -91,6 +91,10 @@ HistoryNames NamesOf(const RunMetadata& metadata, const RunHistory& history) {
     names.components.push_back(c.name);
   }
   names.estimator = metadata.estimator;
+  names.binary_kernel = ToString(metadata.proposal.binary);
+  names.continuous_kernel = ToString(metadata.proposal.continuous);
+  names.exact = metadata.termination == ToString(Termination::kEnumerated);
+  names.bit_prior_one = metadata.bit_prior_one;
   std::size_t thresholds = 0;
   for (const DistanceComponent& c : metadata.distance_components) {
     if (c.kind != ComponentKind::kIndicator) ++thresholds;

@@ -89,7 +89,7 @@ def test_dataframes_equal_combabc_export(finished_run):
     waves = pd.read_csv(out / "waves.csv", float_precision="round_trip")
     mine = history.wave_table()
     for column in ("wave", "eps_least_squares_48_80cm", "phi", "candidates", "accepted",
-                   "acceptance_rate", "ess", "distinct", "complete"):
+                   "acceptance_rate", "ess", "distinct", "complete", "ess_bits"):
         np.testing.assert_array_equal(mine[column].to_numpy(), waves[column].to_numpy(),
                                       err_msg=column)
 

@@ -3,6 +3,7 @@ probabilities and costs, each particle's multiplier, confirmed and cheap distanc
 DataFrames under export's column names and in the NetCDF sample_stats; none of them for a
 single-fidelity run. The histories are tests/history's synthetic runs (combabc_fake_history)."""
 
+import json
 import os
 import subprocess
 
@@ -65,12 +66,70 @@ def test_a_single_fidelity_history_has_none(tmp_path):
 def test_the_netcdf_sample_stats_carry_multiplier_and_confirmed(tmp_path):
     pytest.importorskip("xarray")
     history = fake(tmp_path, "mf.db", "--multi-fidelity")
-    stats = history.to_inference_data()["sample_stats"]
-    rows = [list(history.waves[-1].index).index(i) for i in stats["particle_index"].values[0]]
-    assert np.array_equal(stats["multiplier"].values[0], history.waves[-1].multiplier[rows])
-    assert np.array_equal(stats["confirmed"].values[0],
-                          history.waves[-1].confirmed[rows].astype(np.uint8))
-    # Draws come from the positive part of the signed weights: never a negative particle.
-    assert np.all(stats["weight"].values[0] > 0)
+    w = history.posterior_wave
+    assert np.any(w.weight < 0)  # the fake's false positives, multiplier 1 - 1/0.8
+    with pytest.warns(UserWarning, match="weights are signed"):
+        groups = history.to_inference_data()
+    stats = groups["sample_stats"]
+    # Signed weights: every particle once, in order, not resampled.
+    assert np.array_equal(stats["particle_index"].values[0], w.index)
+    assert np.array_equal(stats["multiplier"].values[0], w.multiplier)
+    assert np.array_equal(stats["confirmed"].values[0], w.confirmed.astype(np.uint8))
     single = fake(tmp_path, "single.db").to_inference_data()["sample_stats"]
     assert "multiplier" not in single and "confirmed" not in single
+
+
+def test_signed_weights_give_no_posterior_group_but_the_particles_and_their_weights(tmp_path):
+    """Issue 35, E3: a posterior resampled from the positive part of signed weights is another
+    distribution (P = 0.56 where the answer said 1.00): the NetCDF layout has no posterior then,
+    and its sample_stats' weighted particles give the answer's marginals."""
+    pytest.importorskip("xarray")
+    history = fake(tmp_path, "mf.db", "--multi-fidelity")
+    w = history.posterior_wave
+    with pytest.warns(UserWarning, match="no posterior group"):
+        groups = history.to_inference_data(all_waves=True)
+    assert "posterior" not in groups and "posterior_predictive" not in groups
+    assert not any(name.startswith("posterior_wave_") for name in groups)
+    stats = groups["sample_stats"]
+    assert stats.attrs["signed_weights"] == 1
+    assert stats.attrs["resampling"] == "none"
+    assert f"wave {w.number}'s weights are signed" in stats.attrs["signed_weights_note"]
+    assert groups["prior"].attrs["signed_weights"] == 1
+    weight = stats["weight"].values[0]
+    assert np.array_equal(weight, w.weight)
+    bits = stats["particle_bits"].values[0]
+    assert list(stats["bit"].values) == history.bit_names
+    np.testing.assert_allclose(np.clip(weight @ bits, 0, 1), w.marginals, atol=1e-12)
+    # A single-fidelity run keeps its resampled posterior, flagged unsigned.
+    single = fake(tmp_path, "single.db").to_inference_data()
+    assert "posterior" in single and single["posterior"].attrs["signed_weights"] == 0
+    assert "particle_bits" not in single["sample_stats"]
+
+
+def test_export_of_signed_weights_says_the_netcdf_has_no_posterior(tmp_path):
+    pytest.importorskip("xarray")
+    netcdf = pytest.importorskip("netCDF4")
+    history = fake(tmp_path, "mf.db", "--multi-fidelity")
+    with pytest.warns(UserWarning, match=r"inference_data.nc: wave \d+'s weights are signed"):
+        out = combabc.export(history, tmp_path / "export")
+    with netcdf.Dataset(os.path.join(out, "inference_data.nc")) as f:
+        assert "posterior" not in f.groups and "sample_stats" in f.groups
+        assert "particle_bits" in f.groups["sample_stats"].variables
+
+
+def test_standard_errors_and_the_kernel_are_the_summarys(tmp_path):
+    """History shows what summary.json shows: per wave the Monte-Carlo errors under its names,
+    the answer's mc_se (History.posterior_se), and the kernel `auto` resolved to."""
+    history = fake(tmp_path, "mf.db", "--multi-fidelity")
+    out = combabc.export(history, tmp_path / "export", netcdf=False)
+    with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+        summary = json.load(f)
+    for w, entry in zip(history.waves, summary["waves"]):
+        for key in ("marginals_se", "marginals_ess", "reals_mean_se", "reals_sd_se", "reals_ess"):
+            np.testing.assert_allclose(getattr(w, key), np.asarray(entry[key], dtype=float),
+                                       rtol=1e-12, err_msg=key)
+    np.testing.assert_allclose(history.posterior_se,
+                               [b["mc_se"] for b in summary["answer"]["bits"]], rtol=1e-12)
+    assert np.all(history.posterior_se > 0)
+    assert history.binary_kernel == summary["proposal"]["binary_kernel"] != ""
+    assert history.continuous_kernel == summary["proposal"]["continuous_kernel"]

@@ -22,8 +22,15 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
 - sample_stats, per draw, of the particle it was drawn from: `weight` and `log_weight`,
   `distance` (chain, draw, component) and `particle_index` (its candidate index in the wave); in a
   multi-fidelity run also `multiplier` and `confirmed` (0/1). Such a run's draws are resampled
-  from its particles' weights (which hold the multipliers) under either estimator, from their
-  positive part when some are negative (attribute `resampling_weights` says so);
+  from its particles' weights (which hold the multipliers) under either estimator;
+- signed weights (a multi-fidelity wave with some negative weights): no equally weighted sample
+  can be drawn from them (resampling their positive part gives another distribution), so that
+  wave has no `posterior` (nor `posterior_predictive`) group; its sample_stats holds every
+  particle once, in order, unresampled: `weight` (signed, summing to 1), the other statistics,
+  and the particle's `particle_bits` (chain, draw, bit) and `particle_<name>` per continuous
+  parameter, so that sum(weight * particle_bits) is combabc's marginals. The attributes
+  `signed_weights` (1) and `signed_weights_note` say so (`combabc export` prints the note, and
+  History.to_inference_data warns it);
 - prior: wave 1's particles when its thresholds are all infinite (prior draws), else as many
   draws from the stated prior (independent bits at bit_prior_one, the continuous priors);
   attribute `source` says which;
@@ -37,7 +44,8 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
 - with --all-waves (History.to_inference_data(all_waves=True)) also `posterior_wave_<k>` and
   `sample_stats_wave_<k>` for every wave k from 1, resampled likewise;
 - attributes of every group: inference_library = combabc, its version, the seed, the wave (from 1)
-  of the posterior, the termination, the config file's path and text, `posterior_note` (why the
+  of the posterior, `signed_weights` (0 or 1) and `signed_weights_note` ("" or why that wave has
+  no posterior group, above), the termination, the config file's path and text, `posterior_note` (why the
   posterior is not the last wave's, in the CLI's words: "the numbers are wave 2's: wave 3 is
   incomplete (budget_exhausted)"; "" when it is the last wave, complete) and
   `incomplete_wave_left_out` (the number of the incomplete last wave left out; 0 for none).
@@ -79,6 +87,20 @@ def resample(weight, seed, wave):
     u = np.random.default_rng([int(seed or 0), int(wave)]).random()
     indices = np.searchsorted(cumulative, (u + np.arange(n)) / n, side="right")
     return np.minimum(indices, n - 1).astype(np.int64)
+
+
+def signed(wave):
+    """Whether a wave's weights are signed (a multi-fidelity wave with some negative ones)."""
+    import numpy as np
+    return bool(np.any(np.asarray(wave["weight"], dtype=np.float64) < 0))
+
+
+def signed_note(number):
+    """Why a wave of signed weights has no posterior group, in one sentence."""
+    return (f"wave {number}'s weights are signed (multi-fidelity: some are negative) and no "
+            f"equally weighted sample can be drawn from them: no posterior group; its particles "
+            f"and their signed weights are in sample_stats (particle_bits, weight: weigh each "
+            f"particle by its weight)")
 
 
 def prior_draws(n, bit_prior_one, dimension, real_priors, seed):
@@ -152,6 +174,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
     attrs["wave"] = final["number"]
     attrs["posterior_note"] = note
     attrs["incomplete_wave_left_out"] = waves[-1]["number"] if answer_at != len(waves) - 1 else 0
+    attrs["signed_weights"] = int(signed(final))
+    attrs["signed_weights_note"] = signed_note(final["number"]) if signed(final) else ""
     d, r = len(bit_names), len(real_names)
     measured_position = np.asarray(measured_position, dtype=np.float64)
     measured_value = np.asarray(measured_value, dtype=np.float64)
@@ -179,10 +203,13 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
         distance = np.asarray(wave["distance"], dtype=np.float64).reshape(len(weight),
                                                                           len(components))
         uniform = estimator == "paper" and wave.get("multiplier") is None
-        # Signed (multi-fidelity) weights: the draws come from their positive part.
-        signed = bool(np.any(weight < 0))
-        rows = resample(np.ones_like(weight) if uniform else np.clip(weight, 0.0, None), seed,
-                        wave["number"])
+        # Signed (multi-fidelity) weights: no resample (its draws would follow their positive
+        # part, not the posterior); every particle once, with its weight, and no posterior.
+        is_signed = signed(wave)
+        if is_signed:
+            rows = np.arange(len(weight), dtype=np.int64)
+        else:
+            rows = resample(np.ones_like(weight) if uniform else weight, seed, wave["number"])
         n = len(rows)
         stats = {
             "weight": (("chain", "draw"), weight[rows][None]),
@@ -206,11 +233,23 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
                 for k in range(first, min(first + x.get("components", 0), len(owner))):
                     owner[k] = x["name"]
             coords["component_experiment"] = ("component", owner)
-        stats_attrs = {**attrs, "wave": wave["number"], "resampling": "systematic",
-                       "resampling_weights": "equal" if uniform else
-                       "weight (its positive part)" if signed else "weight"}
-        posterior = parameters(np.asarray(wave["bits"])[rows], np.asarray(
-            wave["reals"], dtype=np.float64).reshape(len(weight), r)[rows])
+        bits = np.asarray(wave["bits"], dtype=np.uint8).reshape(len(weight), d)[rows]
+        reals = np.asarray(wave["reals"], dtype=np.float64).reshape(len(weight), r)[rows]
+        stats_attrs = {**attrs, "wave": wave["number"],
+                       "resampling": "none" if is_signed else "systematic",
+                       "resampling_weights": "none (signed weights)" if is_signed else
+                       "equal" if uniform else "weight",
+                       "signed_weights": int(is_signed),
+                       "signed_weights_note": signed_note(wave["number"]) if is_signed else ""}
+        if is_signed:
+            # The particles themselves beside their weights: the posterior is their signed
+            # weighted sum, which no unweighted statistic of a posterior group would give.
+            stats["particle_bits"] = (("chain", "draw", "bit"), bits[None])
+            for k, name in enumerate(real_names):
+                stats[f"particle_{variable_name(name)}"] = (("chain", "draw"), reals[None, :, k])
+            coords["bit"] = list(bit_names)
+            return rows, None, xr.Dataset(stats, coords=coords, attrs=stats_attrs)
+        posterior = parameters(bits, reals)
         posterior.attrs = stats_attrs
         return rows, posterior, xr.Dataset(stats, coords=coords, attrs=stats_attrs)
 
@@ -226,7 +265,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
             if named else {})
 
     rows, posterior, sample_stats = resampled(final)
-    groups = {"posterior": posterior, "sample_stats": sample_stats}
+    groups = {"sample_stats": sample_stats} if posterior is None else \
+        {"posterior": posterior, "sample_stats": sample_stats}
 
     first = waves[0]
     if first["number"] == 1 and len(first["thresholds"]) and \
@@ -239,7 +279,7 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
     groups["prior"] = prior
 
     output = np.asarray(final.get("output", np.zeros((0, 0))), dtype=np.float64)
-    if output.ndim == 2 and output.shape[1] and len(rows):
+    if posterior is not None and output.ndim == 2 and output.shape[1] and len(rows):
         curves = output[rows]
         predictive, predictive_coords = {}, {}
         for x in layout:
@@ -263,7 +303,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
     if all_waves:
         for wave in waves:
             _, posterior, stats = resampled(wave)
-            groups[f"posterior_wave_{wave['number']}"] = posterior
+            if posterior is not None:
+                groups[f"posterior_wave_{wave['number']}"] = posterior
             groups[f"sample_stats_wave_{wave['number']}"] = stats
     return groups
 
@@ -368,9 +409,9 @@ def main(argv=None):
               file=sys.stderr)
         return EX_UNAVAILABLE
     try:
-        write_netcdf(inference_data(**from_export(args.particles, args.measured, args.summary,
-                                                  args.curves, args.positions, args.all_waves)),
-                     args.out)
+        groups = inference_data(**from_export(args.particles, args.measured, args.summary,
+                                              args.curves, args.positions, args.all_waves))
+        write_netcdf(groups, args.out)
     except (KeyError, ValueError, json.JSONDecodeError) as error:
         print(f"combabc_netcdf: unreadable export: {type(error).__name__}: {error}",
               file=sys.stderr)
@@ -378,6 +419,10 @@ def main(argv=None):
     except OSError as error:
         print(f"combabc_netcdf: {args.out}: {' '.join(str(error).split())}", file=sys.stderr)
         return EX_IOERR
+    # `combabc export` prints this line as its note: the file has no posterior to read.
+    note = groups["sample_stats"].attrs.get("signed_weights_note", "")
+    if note:
+        print(f"combabc_netcdf: note: {note}", file=sys.stderr)
     return 0
 
 

@@ -76,8 +76,11 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
   std::map<std::string, Group> groups;
   double total = 0.0;
   double total_squares = 0.0;
+  std::vector<double> weights;
+  weights.reserve(w.particles.size());
   std::string bits;
   for (const Particle& p : w.particles) {
+    weights.push_back(p.weight);
     bits.clear();
     for (std::uint8_t b : p.theta.bits) bits += b ? '1' : '0';
     Group& g = groups[bits];
@@ -96,6 +99,7 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
     return mass(*a.second) > mass(*b.second);
   });
   if (order.size() > kAnswerConfigurations) order.resize(kAnswerConfigurations);
+  const double ess = ProbabilityEss(weights, w.multi_fidelity.has_value());
   std::vector<AnswerConfiguration> top;
   for (const auto& [pattern, g] : order) {
     AnswerConfiguration c;
@@ -105,15 +109,22 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
       // The mass is the weighted mean mu of the indicator "the particle is this configuration";
       // its delta-method se (WeightedMean) is sqrt(sum_i w_i^2 (1_i - mu)^2) / sum_i w_i, where
       // the sum splits into the group's (1 - mu)^2 S_g and the others' mu^2 (S - S_g), with S
-      // the sums of squared weights.
+      // the sums of squared weights. A probability, which signed weights can put outside [0, 1]
+      // (1.06): clamped, its error covering the raw estimate, and floored by the rule of three
+      // (BoundProbability, as WeightedProbability).
+      WeightedMoment m;
+      m.value = c.mass;
       if (total > 0.0) {
         const double mu = c.mass;
         const double spread = (1.0 - mu) * (1.0 - mu) * g->squares +
                               mu * mu * std::max(total_squares - g->squares, 0.0);
-        c.mass_se = std::sqrt(spread) / total;
+        m.se = std::sqrt(spread) / total;
       } else {
-        c.mass_se = std::numeric_limits<double>::infinity();
+        m.se = std::numeric_limits<double>::infinity();
       }
+      m = BoundProbability(m, ess);
+      c.mass = m.value;
+      c.mass_se = m.se;
     }
     for (std::size_t b = 0; b < c.bits.size(); ++b) {
       if (c.bits[b] == '1') c.fixed.push_back(BitName(metadata, b));
@@ -167,7 +178,7 @@ Answer SummariseAnswer(const RunMetadata& m,
   a.distinct = w->distinct;
   // The particles' stored weights are the estimator's (the paper estimator's equal ones, the
   // importance estimator's p/q): one delta-method formula serves both, and signed weights.
-  const WaveErrors errors = WaveMonteCarloErrors(*w);
+  const WaveErrors errors = WaveMonteCarloErrors(*w, m.bit_prior_one);
   const std::vector<double>& p = w->marginals(estimator);
   for (std::size_t b = 0; b < p.size(); ++b) {
     AnswerBit bit;

@@ -143,7 +143,7 @@ int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
 // numbers are exact.
 WaveErrors ErrorsOf(const RunMetadata& m, const WaveRecord& w) {
   if (m.termination == ToString(Termination::kEnumerated)) return {};
-  return WaveMonteCarloErrors(w);
+  return WaveMonteCarloErrors(w, m.bit_prior_one);
 }
 
 // A wave's "waves" entry's errors (docs/history.md): per bit its standard error and ESS, the

@@ -64,6 +64,39 @@ WeightedMoment WeightedMean(std::span<const double> weights, std::span<const dou
   return FromInfluence(weights, influence, mean, sum > 0.0 ? std::max(0.0, spread / sum) : 0.0);
 }
 
+double ProbabilityEss(std::span<const double> weights, bool heavy_particles) {
+  double ess = WeightsEss(weights);
+  if (heavy_particles) {
+    double sum = 0.0;
+    double heaviest = 0.0;
+    for (const double w : weights) {
+      sum += w;
+      heaviest = std::max(heaviest, std::abs(w));
+    }
+    if (heaviest > 0.0) ess = std::min(ess, sum / heaviest);
+  }
+  return ess;
+}
+
+WeightedMoment BoundProbability(WeightedMoment m, double ess) {
+  const double clamped = std::clamp(m.value, 0.0, 1.0);
+  // Weights that cancel (signed sum <= 0) keep their infinite error.
+  if (std::isfinite(m.se)) {
+    const double floor = ess > 0.0 ? std::min(kRuleOfThree / ess, 0.5) : 0.5;
+    const double edge = std::min(clamped, 1.0 - clamped);
+    m.se = std::max({m.se, floor - edge, std::abs(m.value - clamped)});
+  }
+  m.value = clamped;
+  return m;
+}
+
+WeightedMoment WeightedProbability(std::span<const double> weights,
+                                   std::span<const double> indicator,
+                                   bool heavy_particles) {
+  return BoundProbability(WeightedMean(weights, indicator),
+                          ProbabilityEss(weights, heavy_particles));
+}
+
 WeightedMoment WeightedSd(std::span<const double> weights, std::span<const double> values) {
   const WeightedMoment mean = WeightedMean(weights, values);
   double sum = 0.0;
@@ -91,7 +124,7 @@ WeightedMoment WeightedSd(std::span<const double> weights, std::span<const doubl
   return sd;
 }
 
-WaveErrors WaveMonteCarloErrors(const WaveRecord& wave) {
+WaveErrors WaveMonteCarloErrors(const WaveRecord& wave, std::span<const double> prior_one) {
   WaveErrors e;
   std::vector<double> weights;
   weights.reserve(wave.particles.size());
@@ -106,7 +139,10 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave) {
       values[i] = wave.particles[i].theta.bits[b] != 0 ? 1.0 : 0.0;
       varies = varies || values[i] != values[0];
     }
-    e.bits.push_back(WeightedMean(weights, values));
+    e.bits.push_back(WeightedProbability(weights, values, wave.multi_fidelity.has_value()));
+    // A bit the prior fixes: its posterior is the prior's 0 or 1, with no error to floor.
+    if (b < prior_one.size() && (prior_one[b] == 0.0 || prior_one[b] == 1.0))
+      e.bits.back().se = 0.0;
     if (varies) e.bits_ess = std::min(e.bits_ess.value_or(e.bits.back().ess), e.bits.back().ess);
   }
   for (std::size_t r = 0; r < reals; ++r) {

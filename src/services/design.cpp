@@ -1,5 +1,6 @@
 #include "combabc/services/design.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -72,6 +73,20 @@ design::Population FromPosterior(const std::string& path,
   if (last == nullptr || last->particles.empty()) {
     throw Error(
         ErrorKind::kUsage, "the run has no complete wave to start from", path, 0, "--posterior");
+  }
+  // A multi-fidelity run's signed weights are no distribution to draw truths from and weigh
+  // candidates by (a configuration's merged weight may be negative): refused, with what to do.
+  if (std::any_of(last->particles.begin(), last->particles.end(), [](const Particle& p) {
+        return p.weight < 0.0 || p.multiplier < 0.0;
+      })) {
+    throw Error(ErrorKind::kUsage,
+                "wave " + std::to_string(last->wave + 1) +
+                    " of the run has negative (multi-fidelity) weights, which cannot be a design's "
+                    "population: design from the prior (leave out --posterior) or from a "
+                    "single-fidelity run",
+                path,
+                0,
+                "--posterior");
   }
   std::map<std::vector<std::uint8_t>, double> merged;
   double total = 0.0;

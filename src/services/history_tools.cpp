@@ -2,6 +2,7 @@
 #include "combabc/services/history_tools.hpp"
 
 #include <filesystem>
+#include <string_view>
 
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
@@ -71,6 +72,15 @@ void AddNetcdf(OutputDirectory& dir, bool all_waves, ExportOutcome& outcome) {
                     ScriptMessage(result.err, result.status, "combabc_netcdf"));
   }
   outcome.netcdf_path = (fs::path(dir.path()) / kNetcdfFile).string();
+  // A file without a posterior group (signed multi-fidelity weights): the script's note line,
+  // for the terminal.
+  constexpr std::string_view kNote = "combabc_netcdf: note: ";
+  const std::size_t at = result.err.find(kNote);
+  if (at != std::string::npos) {
+    const std::size_t from = at + kNote.size();
+    outcome.note = std::string(kNetcdfFile) + ": " +
+                   result.err.substr(from, result.err.find('\n', from) - from);
+  }
 }
 
 }  // namespace

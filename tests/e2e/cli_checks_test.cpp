@@ -280,5 +280,33 @@ TEST_F(CliChecks, TheChecksBeforeSamplingPrecedeTheSecondWave) {
   EXPECT_LT(At(r.err, "warning [units_mismatch]"), At(r.err, "wave 2:")) << r.err;
 }
 
+// E13 (issue 35): `design --posterior` of a multi-fidelity run whose last wave has negative
+// weights is a usage error (64, one line saying why and what to do), not an internal error 70,
+// and writes nothing.
+TEST_F(CliChecks, DesignFromASignedWeightPosteriorIsAUsageError) {
+  FakeRunOptions options;
+  options.dimension = 6;  // the tiny sensor's clamps
+  options.waves = 2;
+  options.multi_fidelity = true;  // multipliers 1 - 1 / 0.8 < 0 among them
+  const RunMetadata metadata = MakeFakeMetadata(options);
+  const RunHistory history = MakeFakeHistory(options);
+  const std::string path = (dir_.path() / "signed.sqlite").string();
+  {
+    HistoryStore store = HistoryStore::Create(path, metadata);
+    for (const WaveRecord& wave : history.waves) RecordWave(store, wave, 10);
+    store.Finish(history.summary);
+  }
+  WriteTinySensorData(dir_.path());
+  std::ofstream(dir_ / "design.toml")
+      << TinySensorConfig("seed = 1\n", "[design]\nload_x = [40]\n[output]\ndirectory = \"out\"\n");
+  const CliResult r =
+      ExpectFailure({"design", dir_ / "design.toml", "--posterior", path, "-o", dir_ / "design"},
+                    64,
+                    path + ": ");
+  EXPECT_NE(r.err.find("negative (multi-fidelity) weights"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("leave out --posterior"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "design"));
+}
+
 }  // namespace
 }  // namespace combabc::testing

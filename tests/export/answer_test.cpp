@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -177,7 +178,14 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithDeltaMethodErrors) {
       for (std::size_t i = 0; i < n; ++i) weight[i] = std::exp(last.particles[i].log_weight);
     }
     double sum = 0.0;
-    for (double w : weight) sum += w;
+    double squares_w = 0.0;
+    for (double w : weight) {
+      sum += w;
+      squares_w += w * w;
+    }
+    // A probability's interval reaches at least 3 / ESS from the nearer edge (the rule of three,
+    // WeightedProbability).
+    const double floor = std::min(3.0 * squares_w / (sum * sum), 0.5);
     // The delta method's standard error of the weighted mean of x_i = counts(particle i).
     auto error = [&](double p, const std::function<bool(std::size_t)>& counts) {
       double squares = 0.0;
@@ -208,7 +216,8 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithDeltaMethodErrors) {
       EXPECT_NEAR(a.bits[k].p_one, ones[k], 1e-12) << k;
       const double se =
           error(ones[k], [&](std::size_t i) { return last.particles[i].theta.bits[k] != 0; });
-      EXPECT_NEAR(a.bits[k].mc_se, se, 1e-12) << k;
+      EXPECT_NEAR(a.bits[k].mc_se, std::max(se, floor - std::min(ones[k], 1 - ones[k])), 1e-12)
+          << k;
       if (paper) {
         EXPECT_NEAR(se, std::sqrt(ones[k] * (1 - ones[k]) / static_cast<double>(n)), 1e-12) << k;
       }
@@ -230,7 +239,7 @@ TEST(Answer, OfASampledRunIsTheEstimatorsWithDeltaMethodErrors) {
         }
         return true;
       });
-      EXPECT_NEAR(*c.mass_se, se, 1e-12) << c.bits;
+      EXPECT_NEAR(*c.mass_se, std::max(se, floor - std::min(c.mass, 1 - c.mass)), 1e-12) << c.bits;
     }
     ASSERT_EQ(a.per_wave.size(), static_cast<std::size_t>(options.waves));
     for (std::size_t t = 0; t < a.per_wave.size(); ++t) {
@@ -300,7 +309,13 @@ TEST(Answer, SignedWeightsGetTheSelfNormalisedError) {
   }
   for (WaveRecord& w : h.waves) ComputeWaveStatistics(w, Estimator::kImportance);
   double sum = 0.0;
-  for (const Particle& q : last.particles) sum += q.weight;
+  double squares_w = 0.0;
+  for (const Particle& q : last.particles) {
+    sum += q.weight;
+    squares_w += q.weight * q.weight;
+  }
+  // The rule of three: 3 / ESS with the signed weights' ESS (WeightedProbability).
+  const double floor = std::min(3.0 * squares_w / (sum * sum), 0.5);
   auto error = [&](double p, const std::function<bool(const Particle&)>& counts) {
     double squares = 0.0;
     for (const Particle& q : last.particles) {
@@ -314,7 +329,8 @@ TEST(Answer, SignedWeightsGetTheSelfNormalisedError) {
   for (std::size_t k = 0; k < a.bits.size(); ++k) {
     const double expected =
         error(a.bits[k].p_one, [k](const Particle& q) { return q.theta.bits[k] != 0; });
-    EXPECT_NEAR(a.bits[k].mc_se, expected, 1e-12) << k;
+    const double edge = std::min(a.bits[k].p_one, 1 - a.bits[k].p_one);
+    EXPECT_NEAR(a.bits[k].mc_se, std::max(expected, floor - edge), 1e-12) << k;
     const double naive = std::sqrt(a.bits[k].p_one * (1 - a.bits[k].p_one) / last.ess);
     differs |= std::abs(expected - naive) > 1e-3;
   }
@@ -327,8 +343,50 @@ TEST(Answer, SignedWeightsGetTheSelfNormalisedError) {
       }
       return true;
     });
-    EXPECT_NEAR(*c.mass_se, expected, 1e-12) << c.bits;
+    EXPECT_NEAR(*c.mass_se, std::max(expected, floor - std::min(c.mass, 1 - c.mass)), 1e-12)
+        << c.bits;
   }
+}
+
+// Signed weights can give a configuration a raw mass above 1 and another one below 0 (issue 35's
+// 1.060 and -0.060): the answer shows masses in [0, 1], each with an error that covers its raw
+// estimate, in the terminal's text and in the JSON.
+TEST(Answer, SignedConfigurationMassesStayInZeroOneWithErrorsCoveringTheRawEstimate) {
+  testing::FakeRunOptions options;
+  options.per_wave = 40;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  m.estimator = "paper";
+  RunHistory h = testing::MakeFakeHistory(options);
+  WaveRecord& last = h.waves.back();
+  // Every particle one configuration but three false positives of another (multiplier -1): raw
+  // masses 40 / 37 = 1.08 and -3 / 37.
+  const std::vector<std::uint8_t> bits = last.particles.front().theta.bits;
+  std::vector<std::uint8_t> other = bits;
+  other[0] = !other[0];
+  for (std::size_t i = 0; i < last.particles.size(); ++i) {
+    const bool negative = i < 3;
+    last.particles[i].theta.bits = negative ? other : bits;
+    last.particles[i].multiplier = negative ? -1.0 : 1.0;
+  }
+  ComputeWaveStatistics(last, Estimator::kPaper);
+  const double raw_top = 37.0 / 34.0;  // 37 of weight 1 over the signed sum 37 - 3
+  const Answer a = SummariseAnswer(m, h);
+  ASSERT_EQ(a.top_configurations.size(), 2u);
+  for (const AnswerConfiguration& c : a.top_configurations) {
+    EXPECT_GE(c.mass, 0.0) << c.bits;
+    EXPECT_LE(c.mass, 1.0) << c.bits;
+    ASSERT_TRUE(c.mass_se);
+  }
+  EXPECT_EQ(a.top_configurations[0].mass, 1.0);
+  EXPECT_GE(*a.top_configurations[0].mass_se, raw_top - 1.0);
+  EXPECT_EQ(a.top_configurations[1].mass, 0.0);
+  EXPECT_GE(*a.top_configurations[1].mass_se, 3.0 / 34.0);
+  const std::string json = AnswerJson(a);
+  EXPECT_EQ(json.find("\"mass\": -"), std::string::npos) << json;
+  EXPECT_EQ(json.find("\"mass\": 1.0"), std::string::npos) << json;
+  const std::string text = AnswerText(a);
+  EXPECT_EQ(text.find("1.08"), std::string::npos) << text;
+  EXPECT_EQ(text.find("-0.08"), std::string::npos) << text;
 }
 
 TEST(Answer, VerdictsAreFixedAtTheLevelAndFreeAtOneMinusIt) {

@@ -26,7 +26,9 @@ Answer ReadAnswer(const std::string& history_path);
 struct ExportOutcome {
   std::string directory;
   std::string netcdf_path;  // empty when no NetCDF file was written
-  std::string note;         // why not, when it was asked for but its Python packages are missing
+  // Why not, when it was asked for but its Python packages are missing; or why it has no
+  // posterior group (the answer's wave has signed multi-fidelity weights).
+  std::string note;
 };
 
 // CSV + JSON export (docs/history.md); default directory: export/ beside the history; directory
