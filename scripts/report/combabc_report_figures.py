@@ -524,8 +524,10 @@ def predictive_figure(waves, run, estimator, out):
             # summary.json writes a non-finite ratio (a noise estimate of 0) as null.
             ratio = fit.get("ratio")
             ratio = float("nan") if ratio is None else ratio
+            # Judged against the noise-aware components' stated sigma, or the data's estimate.
+            stated = " (stated sigma)" if fit.get("sigma_source") == "stated" else ""
             title += (" — " if title else "") + (
-                f"fit {fit.get('verdict', '?')}: best RMS / noise = {ratio:.3g}")
+                f"fit {fit.get('verdict', '?')}: best RMS / noise = {ratio:.3g}{stated}")
         if title:
             ax.set_title(title, fontsize=10)
         ax.set_ylabel(ylabel)

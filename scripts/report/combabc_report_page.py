@@ -67,6 +67,17 @@ def answer_html(summary, sensor=True):
                      f"{fmt(float(level), 'g')}, free if {e(p)} &le; {fmt(1 - float(level), 'g')}, "
                      "else not determined.")
     parts.append("</p>\n")
+    if answer.get("tempered"):
+        # A noise-aware run whose answer wave is above T = 1 (stopped early by a limit, or a
+        # target above 1): not the posterior under the noise model (docs/algorithm.md).
+        # summary.json writes an infinite temperature (the prior's wave) as null.
+        temperatures = ", ".join(
+            f"{fmt(t.get('temperature'), '.3g') or 'inf'} ({t.get('component', '')})"
+            for t in answer.get("temperatures") or [])
+        parts.append("<h3>Warning: a tempered answer</h3>\n<p>The likelihood's temperatures in "
+                     f"this wave are {e(temperatures)}: only T = 1 is the posterior under the "
+                     "noise model; these numbers are a flatter, tempered one. A run stopped by a "
+                     "limit goes on towards T = 1 when resumed past it.</p>\n")
     rows = []
     for bit in bits:
         verdict = str(bit.get("verdict", ""))
@@ -176,14 +187,20 @@ def checks_html(summary):
              _findings("After sampling: the fit", checks.get("after") or [])]
     fits = checks.get("fit") or []
     if fits:
+        # Older exports have no sigma, points or p_value: their sigma was the estimate.
         rows = [([e(str(f.get("experiment") or "—")), e(fmt(f.get("best_rms"))),
-                  e(fmt(f.get("noise_sigma"))), e(fmt(f.get("ratio"), ".3g")),
+                  e(fmt(f.get("sigma", f.get("noise_sigma")))),
+                  e(str(f.get("sigma_source", "estimated"))), e(fmt(f.get("points"))),
+                  e(fmt(f.get("ratio"), ".3g")), e(fmt(f.get("p_value"), ".2g")),
                   e(str(f.get("verdict", "")))],
                  "fixed" if f.get("verdict") == "good" else "")
                 for f in fits]
-        parts.append("<h3>Goodness of fit</h3>\n" + table(
-            ["Experiment", "Best accepted RMS", "Noise sigma", "Ratio", "Verdict"], rows,
-            numeric=(1, 2, 3)))
+        parts.append("<h3>Goodness of fit</h3>\n<p>The best accepted curve against the noise: "
+                     "the noise-aware components' stated sigma (chi-square), or the data's "
+                     "estimate (an F test: the estimate's own scatter counts); poor when the "
+                     "ratio exceeds 3 or p &lt; 0.001.</p>\n" + table(
+            ["Experiment", "Best accepted RMS", "Sigma", "Sigma from", "Points", "Ratio", "p",
+             "Verdict"], rows, numeric=(1, 2, 4, 5, 6)))
     noise = checks.get("noise_sigma") or []
     if isinstance(noise, dict):
         noise = [noise]

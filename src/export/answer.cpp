@@ -173,6 +173,17 @@ Answer SummariseAnswer(const RunMetadata& m,
   if (w == nullptr) return a;
   a.wave = w->wave + 1;
   a.complete = w->complete;
+  // The wave's thresholds hold one slot per non-indicator component, a likelihood's temperature.
+  std::size_t slot = 0;
+  for (const DistanceComponent& c : m.distance_components) {
+    if (c.kind == ComponentKind::kIndicator) continue;
+    if (c.kind == ComponentKind::kNegLogLikelihood && slot < w->thresholds.size()) {
+      a.temperatures.push_back({c.name, w->thresholds[slot]});
+      // NaN is no temperature of 1 either.
+      a.tempered = a.tempered || !(w->thresholds[slot] <= 1.0);
+    }
+    ++slot;
+  }
   // An enumeration's wave counts every accepted configuration, also those it did not keep.
   a.particles = std::max(w->accepted, static_cast<std::int64_t>(w->particles.size()));
   a.distinct = w->distinct;
@@ -263,6 +274,14 @@ std::string AnswerJson(const Answer& a, int indent) {
            ", \"proposal\": " + JsonNumber(f.proposal) + "}";
   }
   out += std::string(a.mode_loss.empty() ? "" : "\n" + in2) + "],\n";
+  out += in2 + "\"tempered\": " + (a.tempered ? "true" : "false") + ",\n";
+  out += in2 + "\"temperatures\": [";
+  for (std::size_t k = 0; k < a.temperatures.size(); ++k) {
+    out += std::string(k ? ", " : "") +
+           "{\"component\": " + JsonString(a.temperatures[k].component) +
+           ", \"temperature\": " + JsonNumber(a.temperatures[k].temperature) + "}";
+  }
+  out += "],\n";
   out += in2 + "\"exact\": " + (a.exact ? "true" : "false") + ",\n";
   out += in2 + "\"particles\": " + std::to_string(a.particles) + ",\n";
   out += in2 + "\"distinct\": " + std::to_string(a.distinct) + ",\n";
@@ -492,6 +511,22 @@ void RealLines(const Answer& a, std::string& out) {
   }
 }
 
+// " tempered: ..." with each likelihood component's temperature: the numbers are not the
+// posterior the docs promise, and nothing else on the screen would say so.
+std::string TemperedLine(const Answer& a) {
+  std::string temperatures;
+  for (const AnswerTemperature& t : a.temperatures) {
+    char value[32];
+    std::snprintf(value, sizeof value, "%.3g", t.temperature);
+    temperatures +=
+        (temperatures.empty() ? "" : ", ") + std::string(value) + " (" + t.component + ")";
+  }
+  return " tempered: the likelihood's temperatures are " + temperatures +
+         ": only T = 1 is the posterior under the noise model, these numbers are a flatter, "
+         "tempered one (a run stopped by a limit goes on towards T = 1 when resumed past it; "
+         "[metric] target = 1)\n";
+}
+
 }  // namespace
 
 std::string AnswerText(const Answer& a, std::size_t configurations) {
@@ -526,6 +561,7 @@ std::string AnswerText(const Answer& a, std::size_t configurations) {
                   a.termination.empty() ? "stopped" : a.termination.c_str());
     out += line;
   }
+  if (a.tempered) out += TemperedLine(a);
   if (!a.bits.empty()) BitsText(a, configurations, out);
   RealLines(a, out);
   EffortTable(a, out);

@@ -129,7 +129,9 @@ ExportOutcome ExportHistory(const std::string& history_path,
     options.add_files = [&](OutputDirectory& dir) { AddNetcdf(dir, all_waves, outcome); };
   }
   const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
-  options.bit_positions = BitPositions(store.LoadMetadata());
+  const RunMetadata metadata = store.LoadMetadata();
+  options.bit_positions = BitPositions(metadata);
+  options.checks = CheckOptions(metadata);
   ExportRun(store, outcome.directory, options);
   return outcome;
 }

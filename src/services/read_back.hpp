@@ -38,6 +38,38 @@ inline std::vector<std::optional<BitPosition>> BitPositions(const RunMetadata& m
   return positions;
 }
 
+// The checks' options for a run: the defaults, with the stated noise of its noise-aware
+// components from its config (the history records their kind, not their sigma). A config this
+// version no longer reads, or whose components do not match the history's, states none: the fit
+// is then judged against the data's estimate.
+inline FitCheckOptions CheckOptions(const RunMetadata& metadata) {
+  FitCheckOptions options;
+  CalibrationConfig config;
+  try {
+    config = ParseConfig(metadata.config_text, metadata.config_path);
+  } catch (const Error&) {
+    return options;
+  }
+  std::vector<StatedNoise> stated;
+  std::size_t component = 0;
+  for (const ExperimentConfig& x : config.experiments) {
+    for (const MetricComponentConfig& c : x.metric.components) {
+      if (c.noise.model == NoiseModel::kGaussian) {
+        stated.push_back({component, c.noise.sigma_noise, c.noise.sigma_model, c.from, c.to});
+      }
+      ++component;
+    }
+  }
+  if (component != metadata.distance_components.size()) return options;
+  for (const StatedNoise& s : stated) {
+    if (metadata.distance_components[s.component].kind != ComponentKind::kNegLogLikelihood) {
+      return options;
+    }
+  }
+  options.stated_noise = std::move(stated);
+  return options;
+}
+
 // The fit checks and the answer of a finished job's history, from one read of it. Warnings, never
 // an error: a history that cannot be read back is for verify to judge; the checks then carry a
 // note and the answer is absent.
@@ -50,7 +82,7 @@ inline ReadBack ReadBackHistory(const HistoryStore& store) {
   try {
     const RunMetadata metadata = store.LoadMetadata();
     const RunHistory history = store.LoadHistory();
-    back.checks = ComputeFitChecks(metadata, history);
+    back.checks = ComputeFitChecks(metadata, history, CheckOptions(metadata));
     back.answer = SummariseAnswer(metadata, history, BitPositions(metadata));
   } catch (const Error& e) {
     back.checks.after.push_back(

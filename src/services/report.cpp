@@ -136,7 +136,9 @@ std::string WriteReport(const std::string& history_path,
   const fs::path exported = staging.path() / "export";
   const fs::path drawn = staging.path() / "report";
   ExportOptions export_options;
-  export_options.bit_positions = BitPositions(store.LoadMetadata());
+  const RunMetadata metadata = store.LoadMetadata();
+  export_options.bit_positions = BitPositions(metadata);
+  export_options.checks = CheckOptions(metadata);
   ExportRun(store, exported.string(), export_options);
   std::vector<std::string> args = {tools.python,
                                    tools.script,

@@ -92,8 +92,9 @@ class BeforeChecks : public SmcObserver {
     FitChecks checks;
     try {
       const RunHistory stored = store_->LoadHistory();
-      checks = ComputeBeforeChecks(store_->LoadMetadata(),
-                                   stored.waves.empty() ? nullptr : &stored.waves.front());
+      const RunMetadata metadata = store_->LoadMetadata();
+      checks = ComputeBeforeChecks(
+          metadata, stored.waves.empty() ? nullptr : &stored.waves.front(), CheckOptions(metadata));
     } catch (const Error& e) {
       // Warnings, never an error: the end of the run says it again.
       checks.before.push_back(

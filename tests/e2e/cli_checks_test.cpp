@@ -260,6 +260,22 @@ TEST_F(CliChecks, TheChecksBeforeSamplingPrecedeTheSecondWave) {
   EXPECT_EQ(r.err.find("checks: 33", At(r.err, "checks: 33") + 1), std::string::npos) << r.err;
   EXPECT_GT(At(r.err, "warning [poor_fit]"), At(r.err, "wave 3:")) << r.err;
 
+  // Issue 35 (E17): the data in µm, read as µm, not normalised, are in the model's units, but
+  // their peak is 76.5x the median peak of a first wave of 200 prior draws, where the check before
+  // warned (one wave, 0.1 s; its best draw fits poorly): no warning now, the peak lying within the
+  // 5-95 % range of the draws' peaks.
+  std::string micrometres =
+      std::regex_replace(shipped, std::regex("normalise = true"), "normalise = false");
+  micrometres = std::regex_replace(micrometres, std::regex("\nwaves = 3"), "\nwaves = 1");
+  micrometres = std::regex_replace(
+      micrometres, std::regex("accepted_per_wave = 50"), "accepted_per_wave = 200");
+  std::ofstream(dir_ / "micrometres.toml") << micrometres;
+  r = RunCli({"run", dir_ / "micrometres.toml", "-o", dir_ / "um", "--no-report", "-j", "1"},
+             dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(At(r.err, "prior predictive peaks"), std::string::npos) << r.err;
+  EXPECT_EQ(At(r.err, "[units_mismatch]"), std::string::npos) << r.err;
+
   // A run stopped in its first wave, resumed: the resume completes the first wave and warns
   // before its second.
   std::ofstream(dir_ / "stopped.toml")
@@ -306,6 +322,47 @@ TEST_F(CliChecks, DesignFromASignedWeightPosteriorIsAUsageError) {
   EXPECT_NE(r.err.find("negative (multi-fidelity) weights"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("leave out --posterior"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_.path() / "design"));
+}
+
+// Issue 35: the 45 cm example with the noise-aware acceptance and a sigma_noise ten times below
+// its noise (0.0007 against the estimate's 0.0073) warns before the second wave and judges the
+// fit against it; stopped by its budget in its third wave, its answer (the second wave's, at a
+// temperature far above 1) and summary.json say tempered, with the temperature. 3 waves of 50, at
+// most 300 simulations (0.4 s).
+TEST_F(CliChecks, ATooSmallSigmaWarnsAndATemperedAnswerSaysSo) {
+  const fs::path example = fs::path(COMBABC_SOURCE_DIR) / "examples/sensor-45cm";
+  fs::copy_file(example / "data.csv", dir_.path() / "data.csv");
+  std::string text = ReadFile(example / "least_squares.toml");
+  text = std::regex_replace(text, std::regex("\nwaves = 5"), "\nwaves = 3");
+  text = std::regex_replace(text, std::regex("accepted_per_wave = 500"), "accepted_per_wave = 50");
+  text = std::regex_replace(text, std::regex("\nseed = "), "\nmax_simulations = 300\nseed = ");
+  text = std::regex_replace(text,
+                            std::regex("quantile = 0.3 "),
+                            "quantile = 0.3\nnoise = \"gaussian\"\nsigma_noise = 0.0007 ");
+  std::ofstream(dir_ / "low.toml") << text;
+  const auto r =
+      RunCli({"run", dir_ / "low.toml", "-o", dir_ / "low", "--no-report", "-j", "1"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t warned = At(r.err, "warning [noise_below_estimate]");
+  ASSERT_NE(warned, std::string::npos) << r.err;
+  EXPECT_LT(warned, At(r.err, "wave 2:")) << r.err;
+  EXPECT_NE(At(r.err, "x the stated sigma 0.0007 over 33 points"), std::string::npos) << r.err;
+  EXPECT_NE(At(r.err, "warning [poor_fit]"), std::string::npos) << r.err;
+  EXPECT_NE(At(r.out, "the numbers are wave 2's: wave 3 is incomplete (budget_exhausted)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(At(r.out, " tempered: the likelihood's temperatures are "), std::string::npos) << r.out;
+  const auto e = RunCli(
+      {"export", "--no-netcdf", (dir_.path() / "low" / "history.sqlite").string()}, dir_.path());
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const std::string summary = ReadFile(dir_.path() / "low" / "export" / "summary.json");
+  EXPECT_NE(summary.find("\"tempered\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"temperatures\": [{\"component\": \"least_squares[48-80cm]\", "
+                         "\"temperature\": "),
+            std::string::npos);
+  EXPECT_EQ(summary.find("\"temperature\": null"), std::string::npos) << "the prior's wave";
+  EXPECT_NE(summary.find("\"code\": \"noise_below_estimate\""), std::string::npos);
+  EXPECT_NE(summary.find("\"sigma_source\": \"stated\""), std::string::npos);
 }
 
 }  // namespace

@@ -432,6 +432,40 @@ TEST(Answer, OfARunStoppedMidWaveIsTheLastCompleteWave) {
   EXPECT_NE(AnswerText(a).find("none yet"), std::string::npos);
 }
 
+// Issue 35: a noise-aware run stopped early answers from a wave above T = 1, a tempered posterior;
+// the answer said only which wave. It names each likelihood component's temperature (the
+// thresholds' slots skip the indicators) in its text and JSON, and says tempered.
+TEST(Answer, AWaveAboveTemperatureOneIsTempered) {
+  testing::FakeRunOptions options;
+  RunMetadata m = testing::MakeFakeMetadata(options);
+  m.distance_components = {{"rise", ComponentKind::kIndicator, 1.0},
+                           {"45cm/least_squares", ComponentKind::kNegLogLikelihood, 1.0},
+                           {"area", ComponentKind::kThreshold, 1.0},
+                           {"70cm/least_squares", ComponentKind::kNegLogLikelihood, 1.0}};
+  RunHistory h = testing::MakeFakeHistory(options);
+  for (WaveRecord& w : h.waves) w.thresholds = {3.9, 0.25, 19.0};
+  Answer a = SummariseAnswer(m, h);
+  ASSERT_EQ(a.temperatures.size(), 2u);
+  EXPECT_EQ(a.temperatures[0].component, "45cm/least_squares");
+  EXPECT_EQ(a.temperatures[1].temperature, 19.0);
+  EXPECT_TRUE(a.tempered);
+  const std::string text = AnswerText(a);
+  EXPECT_NE(text.find("tempered: the likelihood's temperatures are 3.9 (45cm/least_squares), 19 "
+                      "(70cm/least_squares)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(AnswerJson(a).find("\"tempered\": true"), std::string::npos);
+  EXPECT_NE(AnswerJson(a).find("{\"component\": \"70cm/least_squares\", \"temperature\": 19}"),
+            std::string::npos)
+      << AnswerJson(a);
+  // At T = 1 it is the posterior, and nothing is said.
+  h.waves.back().thresholds = {1.0, 0.25, 1.0};
+  a = SummariseAnswer(m, h);
+  EXPECT_FALSE(a.tempered);
+  EXPECT_EQ(AnswerText(a).find("tempered"), std::string::npos);
+  EXPECT_NE(AnswerJson(a).find("\"tempered\": false"), std::string::npos);
+}
+
 // The mode-loss diagnostic's flagged classes (WaveRecord::pattern_classes): in the answer, its
 // JSON, its text (a warning line per wave) and the checks after sampling (summary.json, report).
 TEST(Answer, FlaggedPatternClassesAreWarned) {

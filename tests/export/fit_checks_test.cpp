@@ -7,9 +7,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "combabc/export/tail_probability.hpp"
 #include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
@@ -310,6 +312,129 @@ TEST(FitChecks, AStalledThresholdWarns) {
   // A run that reached its target has not stalled.
   h.summary.termination = Termination::kTargetReached;
   EXPECT_FALSE(Has(ComputeFitChecks(Metadata(NoisyData()), h).after, "threshold_stalled"));
+}
+
+// Issue 35 (E17): a prior over clamp patterns spreads its curves' peaks over orders of magnitude,
+// and data of a pattern with free clamps near the load lie far above their median in the right
+// units. Only a peak outside their 5-95 % range by 31.6x is a unit mistake.
+TEST(FitChecks, DataAboveTheMedianPriorPeakButWithinItsRangeAreNoUnitMistake) {
+  // Prior curves with peaks log-uniform over 1e-8 to 1e-4 m (median 1e-6); data peaking at 5e-5 m,
+  // 50 times the median and within the range.
+  std::vector<std::vector<double>> prior;
+  std::vector<double> peaks;
+  for (int i = 0; i < 100; ++i) {
+    RandomStream rng(21, 0, static_cast<std::uint64_t>(i));
+    const double scale = std::pow(10.0, -8.0 + 4.0 * rng.Uniform());
+    std::vector<double> curve;
+    for (double x : Positions()) curve.push_back(scale * std::abs(Shape(x)));
+    peaks.push_back(*std::max_element(curve.begin(), curve.end()));
+    prior.push_back(curve);
+  }
+  std::sort(peaks.begin(), peaks.end());
+  std::vector<double> data = NoisyData();
+  for (double& y : data) y = 5e-5 * std::abs(y);
+  RunHistory h;
+  h.waves.push_back(Wave(1, kInf, prior));
+  const FitChecks right = ComputeBeforeChecks(Metadata(data), &h.waves.front());
+  const double peak = *std::max_element(data.begin(), data.end());
+  ASSERT_GT(peak / peaks[50], 31.6) << "the case: above the median by more than 31.6x";
+  EXPECT_FALSE(Has(right.before, "units_mismatch")) << FormatBeforeChecks(right, "m");
+  // The same data in µm read as m, and in m read as µm, are.
+  for (double factor : {1e6, 1e-6}) {
+    std::vector<double> wrong = data;
+    for (double& y : wrong) y *= factor;
+    const FitChecks checks = ComputeBeforeChecks(Metadata(wrong), &h.waves.front());
+    EXPECT_TRUE(Has(checks.before, "units_mismatch")) << factor;
+  }
+}
+
+// The chi-square and F tails against their closed forms: chi-square with 2 degrees of freedom
+// exp(-x/2), 4: exp(-x/2) (1 + x/2), 1: erfc(sqrt(x/2)); F(2, d2): (1 + 2 f / d2)^(-d2/2), F(d1,
+// 2): 1 - (d1 f / (2 + d1 f))^(d1/2). Values on both sides of each function's switch between
+// series and continued fraction.
+TEST(FitChecks, TailProbabilitiesMatchTheirClosedForms) {
+  for (double x : {0.01, 0.5, 1.9, 2.1, 7.0, 40.0, 300.0}) {
+    EXPECT_NEAR(ChiSquareUpperTail(x, 2.0) / std::exp(-x / 2), 1.0, 1e-8) << x;
+    EXPECT_NEAR(ChiSquareUpperTail(x, 4.0) / (std::exp(-x / 2) * (1 + x / 2)), 1.0, 1e-8) << x;
+    EXPECT_NEAR(ChiSquareUpperTail(x, 1.0) / std::erfc(std::sqrt(x / 2)), 1.0, 1e-8) << x;
+  }
+  for (double f : {0.05, 0.7, 1.0, 3.0, 30.0}) {
+    for (double d : {1.0, 3.7, 12.0, 90.0}) {
+      EXPECT_NEAR(FUpperTail(f, 2.0, d) / std::pow(1 + 2 * f / d, -d / 2), 1.0, 1e-8) << f << d;
+      EXPECT_NEAR(FUpperTail(f, d, 2.0), 1 - std::pow(d * f / (2 + d * f), d / 2), 1e-10)
+          << f << " " << d;
+    }
+  }
+  EXPECT_EQ(ChiSquareUpperTail(0.0, 3.0), 1.0);
+  EXPECT_EQ(FUpperTail(std::numeric_limits<double>::infinity(), 3.0, 4.0), 0.0);
+  EXPECT_TRUE(std::isnan(ChiSquareUpperTail(1.0, 0.0)));
+}
+
+// A noise-aware component's stated noise (its config's sigma_noise, sigma_model; the services
+// layer passes them) for the one-experiment run of Metadata(data, true).
+FitCheckOptions Stated(std::optional<double> sigma_noise, double sigma_model = 0.0) {
+  FitCheckOptions options;
+  options.stated_noise = {{0, sigma_noise, sigma_model, 0.48, 0.80}};
+  return options;
+}
+
+// Issue 35 (E4): a stated sigma ten times below the data's noise, 0.0007 against 0.0073, made a
+// confident wrong answer that the checks judged "good" (1.26 sigma of the estimate). Before
+// sampling it is warned of; after, the fit is judged against it.
+TEST(FitChecks, AStatedNoiseFarBelowTheDatasIsWarnedOfAndJudgedAgainst) {
+  const std::vector<double> data = NoisyData();  // sigma 0.01 of the peak
+  const RunMetadata m = Metadata(data, true);
+  const RunHistory h = SoundHistory();
+  const FitChecks low = ComputeFitChecks(m, h, Stated(0.0007));
+  ASSERT_TRUE(Has(low.before, "noise_below_estimate")) << FormatFitChecks(low, "m");
+  EXPECT_NE(low.before.back().message.find("\"least squares\""), std::string::npos);
+  EXPECT_NE(low.before.back().message.find("sigma_model"), std::string::npos);
+  EXPECT_EQ(FormatBeforeChecks(ComputeBeforeChecks(m, &h.waves.front(), Stated(0.0007)), "m"),
+            FormatBeforeChecks(low, "m"));
+  ASSERT_EQ(low.fit.size(), 1u);
+  EXPECT_EQ(low.fit[0].sigma_source, "stated");
+  EXPECT_DOUBLE_EQ(low.fit[0].sigma, 0.0007);
+  EXPECT_EQ(low.fit[0].points, data.size());
+  EXPECT_EQ(low.fit[0].verdict, "poor");
+  EXPECT_TRUE(Has(low.after, "poor_fit"));
+  EXPECT_NE(FormatAfterChecks(low).find("x the stated sigma 0.0007 over 33 points"),
+            std::string::npos)
+      << FormatAfterChecks(low);
+  // sigma_model counts in quadrature: 0.0007 with a model discrepancy of 0.01 is no warning.
+  EXPECT_FALSE(Has(ComputeFitChecks(m, h, Stated(0.0007, 0.01)).before, "noise_below_estimate"));
+  // The true sigma is neither warned of nor a poor fit; "estimate" is the estimate.
+  for (const FitCheckOptions& options : {Stated(0.01), Stated(std::nullopt)}) {
+    const FitChecks checks = ComputeFitChecks(m, h, options);
+    EXPECT_TRUE(checks.before.empty()) << FormatFitChecks(checks, "m");
+    EXPECT_TRUE(checks.after.empty()) << FormatFitChecks(checks, "m");
+    EXPECT_EQ(checks.fit[0].verdict, "good");
+  }
+  EXPECT_EQ(ComputeFitChecks(m, h, Stated(std::nullopt)).fit[0].sigma_source, "estimated");
+}
+
+// The verdict is a chi-square judgement, not a ratio alone: 1.6 sigma over 33 points is a chi2
+// of 84 on 33 degrees of freedom (p ~ 2e-6), not "good", though under the ratio of 3; against
+// the data's own estimate its scatter (about 23 % on 33 points) counts: an F test.
+TEST(FitChecks, TheVerdictWeighsTheRatioByTheNumberOfPoints) {
+  const std::vector<double> data = NoisyData();
+  const RunMetadata m = Metadata(data, true);
+  const RunHistory h = SoundHistory();
+  const double best = ComputeFitChecks(m, h).fit[0].best_rms;
+  const FitChecks checks = ComputeFitChecks(m, h, Stated(best / 1.6));
+  ASSERT_EQ(checks.fit.size(), 1u);
+  EXPECT_NEAR(checks.fit[0].ratio, 1.6, 1e-9);
+  EXPECT_NEAR(checks.fit[0].chi2, 33 * 1.6 * 1.6, 1e-6);
+  EXPECT_LT(checks.fit[0].p_value, 1e-5);
+  EXPECT_EQ(checks.fit[0].verdict, "poor") << FormatAfterChecks(checks);
+  // 1.1 sigma over the same points: p ~ 0.2.
+  EXPECT_EQ(ComputeFitChecks(m, h, Stated(best / 1.1)).fit[0].verdict, "good");
+  // The estimate's verdict: an F test with (33 - 5) / 2.91 degrees of freedom for the estimate.
+  const FitVerdict estimated = ComputeFitChecks(m, h).fit[0];
+  EXPECT_EQ(estimated.sigma_source, "estimated");
+  EXPECT_NEAR(estimated.sigma_dof, 28 / 2.91, 1e-12);
+  EXPECT_NEAR(estimated.p_value,
+              FUpperTail(estimated.ratio * estimated.ratio, 33, estimated.sigma_dof),
+              1e-15);
 }
 
 TEST(FitChecks, OptionsAreChecked) {

@@ -107,6 +107,16 @@ class AnswerTables(unittest.TestCase):
         summary["answer"]["bits"][0].update(p_one=1, mc_se=0)
         self.assertIn("1.000 &plusmn; 0.000", compact(page.answer_html(summary)))
 
+    def test_a_tempered_answer_says_so_with_its_temperatures(self):
+        summary = fixture()
+        self.assertNotIn("tempered", page.answer_html(summary))
+        summary["answer"].update(tempered=True, temperatures=[
+            {"component": "a/least_squares[48-80cm]", "temperature": 3.9},
+            {"component": "b/least_squares[0-89cm]", "temperature": None}])
+        html = compact(page.answer_html(summary))
+        self.assertIn("Warning: a tempered answer", html)
+        self.assertIn("3.9 (a/least_squares[48-80cm]), inf (b/least_squares[0-89cm])", html)
+
     def test_no_answer_no_section(self):
         summary = fixture()
         del summary["answer"]
@@ -121,8 +131,17 @@ class CheckLists(unittest.TestCase):
                       "(2.1e4) is 1e4 times the prior predictive&#x27;s &lt;range&gt;</li>", html)
         self.assertIn("[threshold_below_noise]", html)
         self.assertIn("<h3>Goodness of fit</h3>", html)
+        # The fixture's fit predates sigma, points and p: judged against the estimate.
         self.assertIn('<td class="number">0.0123</td><td class="number">0.0101</td>'
-                      '<td class="number">1.22</td><td>good</td>', html)
+                      '<td>estimated</td><td class="number"></td><td class="number">1.22</td>'
+                      '<td class="number"></td><td>good</td>', html)
+        summary = fixture()
+        summary["checks"]["fit"][0].update(sigma=0.0007, sigma_source="stated", points=33,
+                                           ratio=13.1, p_value=1e-200, verdict="poor")
+        html = compact(page.checks_html(summary))
+        self.assertIn('<td class="number">0.0007</td><td>stated</td><td class="number">33</td>'
+                      '<td class="number">13.1</td><td class="number">1e-200</td><td>poor</td>',
+                      html)
         self.assertIn("<td>best-fit residuals</td>", html)
 
     def test_no_warnings_is_said(self):

@@ -86,6 +86,13 @@ struct WaveEffort {
 
 inline constexpr std::size_t kAnswerConfigurations = 10;
 
+// A noise-aware (likelihood) component's temperature in the answer's wave (docs/algorithm.md,
+// "Noise-aware acceptance"): only T = 1 is the posterior under the error model.
+struct AnswerTemperature {
+  std::string component;  // the distance component's name
+  double temperature = 1.0;
+};
+
 // A pattern class the mode-loss diagnostic flagged (WaveRecord::pattern_classes, docs/algorithm.md
 // "Mode loss"): a pattern the previous wave held with `mass` that wave `wave` proposed with
 // probability `proposal`.
@@ -119,6 +126,12 @@ struct Answer {
   // (ModeLossWarning): the posterior may have lost a mode.
   std::vector<ModeLossFlag> mode_loss;
   std::vector<std::string> mode_loss_warnings;
+  // The answer wave's temperature of each likelihood component, in component order (none in a
+  // run without them). `tempered` when any is above 1: a run stopped early by a limit (or one
+  // whose target temperature is above 1) answers with a tempered, flatter posterior, not the
+  // posterior under the noise model.
+  std::vector<AnswerTemperature> temperatures;
+  bool tempered = false;
 };
 
 // The answer of a loaded history: the last complete wave (or, when no wave is complete, the last

@@ -9,6 +9,7 @@
 
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/export/fit_checks.hpp"
 #include "combabc/history/history_store.hpp"
 
 namespace combabc {
@@ -24,6 +25,9 @@ struct ExportOptions {
   // Where each bit acts, for summary.json's "answer" (export/answer.hpp): one per bit, or empty
   // (positions null). The services layer derives them from the run's config.
   std::vector<std::optional<BitPosition>> bit_positions;
+  // summary.json's "checks" (export/fit_checks.hpp): their options, with the stated noise of the
+  // run's noise-aware components, which the services layer reads from the run's config.
+  FitCheckOptions checks;
   // Called with the CSV and JSON files staged, before anything is committed: adds files made
   // from them (the NetCDF file, written by a script: services/history_tools.cpp). Empty: none.
   std::function<void(OutputDirectory&)> add_files;

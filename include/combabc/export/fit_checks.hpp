@@ -4,6 +4,8 @@
 // writes them into summary.json and tests call them without the CLI. Each warning is one line
 // naming the likely cause and the config key; none stops a run.
 #include <cstddef>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,16 +13,35 @@
 
 namespace combabc {
 
+// A noise-aware (gaussian) distance component's error model as the run's config states it, which
+// the history does not record: the services layer reads it from the config (as it does
+// ExportOptions::bit_positions). Its sigma is sqrt(sigma_noise^2 + sigma_model^2), in the units
+// the metric compares (the normalised profile when the data are normalised).
+struct StatedNoise {
+  std::size_t component = 0;          // index into RunMetadata::distance_components
+  std::optional<double> sigma_noise;  // none: "estimate", the data's own (EstimateNoiseSigma)
+  double sigma_model = 0.0;
+  // The component's window, metres: the measured points it compares.
+  double from = -std::numeric_limits<double>::infinity();
+  double to = std::numeric_limits<double>::infinity();
+};
+
 // The documented levels of the checks (docs/history.md, "Checks").
 struct FitCheckOptions {
-  // units_mismatch: the data's peak and the median peak of the first wave's curves at the
-  // measured positions differ by more than this factor (1.5 orders of magnitude).
+  // units_mismatch: the data's peak lies outside the 5-95 % range of the first wave's curves'
+  // peaks at the measured positions by more than this factor (1.5 orders of magnitude).
   double scale_factor = 31.6;
   // negative_data: a measured value below -max(4 noise sigmas, this fraction of the data's peak)
   // (noise on an amplitude near zero makes small negative values).
   double negative_fraction = 0.05;
-  // poor_fit: the best accepted curve's RMS residual exceeds this many noise sigmas.
+  // poor_fit: the best accepted curve's RMS residual exceeds this many noise sigmas, or noise of
+  // that sigma leaves residuals as large with a probability below poor_fit_p (chi-square against
+  // a stated sigma, F against the data's estimate; FitVerdict).
   double poor_fit_ratio = 3.0;
+  double poor_fit_p = 1e-3;
+  // noise_below_estimate: a noise-aware component's stated sigma is below this fraction of the
+  // noise estimated from its experiment's data.
+  double noise_below_fraction = 0.5;
   // threshold_stalled: the last `stall_waves` complete waves cut a plain threshold by less than
   // this fraction in all.
   double stall_reduction = 0.1;
@@ -37,6 +58,9 @@ struct FitCheckOptions {
   // The predictive band: these quantiles of the final wave's accepted curves.
   double band_low = 0.05;
   double band_high = 0.95;
+  // Not a level: the run's noise-aware components as its config states them (none for a run
+  // without a config, or without such components).
+  std::vector<StatedNoise> stated_noise;
   bool IsValid(std::string* why) const;
 };
 
@@ -72,12 +96,28 @@ struct NoiseLevel {
   double shape = 0.0;
 };
 
+// The best accepted curve (the smallest RMS residual over the experiment's measured points)
+// against the noise. An experiment with noise-aware components is judged against their stated
+// sigmas over their windows' points ("stated"); else, or when a component's sigma_noise is
+// "estimate", against the data's estimate ("estimated"), over every measured point.
 struct FitVerdict {
   std::string experiment;
-  double best_rms = 0.0;     // the best accepted curve's RMS residual at the measured positions
-  double noise_sigma = 0.0;  // NoiseLevel::value
-  double ratio = 0.0;        // best_rms / noise_sigma
-  std::string verdict;       // "good" or "poor" (ratio > FitCheckOptions::poor_fit_ratio)
+  double best_rms = 0.0;     // the best curve's RMS residual over the `points` judged
+  double noise_sigma = 0.0;  // NoiseLevel::value, the data's estimate
+  double sigma = 0.0;        // the sigma judged against (several components: best_rms / ratio)
+  std::string sigma_source;  // "stated" or "estimated"
+  std::size_t points = 0;
+  double ratio = 0.0;  // best_rms / sigma (several components: sqrt(chi2 / points))
+  double chi2 = 0.0;   // the sum of squared residuals in units of sigma^2, points * ratio^2
+  // The estimate's effective degrees of freedom ((N - 5) / 2.91 for N points: the fifth
+  // differences overlap); infinite for a stated sigma, taken as known.
+  double sigma_dof = 0.0;
+  // P(residuals as large | the model at its best, noise of that sigma): chi-square with `points`
+  // degrees of freedom against a stated sigma, F(points, sigma_dof) of ratio^2 against an
+  // estimated one (its own scatter counts).
+  double p_value = 0.0;
+  // "poor" when ratio > FitCheckOptions::poor_fit_ratio or p_value < poor_fit_p, else "good".
+  std::string verdict;
 };
 
 // The posterior predictive check of one experiment: the final complete wave's accepted curves at
