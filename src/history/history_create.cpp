@@ -582,7 +582,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
   // nor (before v4) any failed simulation; (before v6) it had a single, unnamed experiment; and
   // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL); and (before v8)
-  // it recorded no pattern classes (the columns stay NULL: none).
+  // it recorded no pattern classes (the columns stay NULL: none). v9 adds no column: a v8 wave's
+  // classes are whole patterns, stored as v9 stores a wave without classes of a few bits.
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {

@@ -349,7 +349,13 @@ class SmcRun {
       if (population.num_free_bits > 0) {
         wave.pattern_classes = FindPatternClasses(
             population,
-            [&](std::span<const std::uint8_t> bits) { return proposal_->LogBitsDensity(bits); },
+            [&](std::span<const std::uint8_t> bits, std::span<const double> reals) {
+              return proposal_->LogDensity(bits, reals) - space_.LogPriorBits(bits) -
+                     space_.LogPriorReals(reals);
+            },
+            [&](std::span<const std::uint8_t> bits) {
+              return proposal_->LogBitsDensity(bits) - space_.LogPriorBits(bits);
+            },
             options_.AcceptedIn(wave.wave));
         for (PatternClass& c : wave.pattern_classes) {
           std::vector<std::uint8_t> full(static_cast<std::size_t>(space_.binary().dimension()));
