@@ -88,7 +88,8 @@ double ModeLossMinMass(int particles) {
 std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              const LogProposalRatio& log_ratio,
                                              const LogBitsRatio& log_bits_ratio,
-                                             int particles) {
+                                             int particles,
+                                             std::span<const double> log_reweight) {
   const std::size_t f = population.num_free_bits;
   // The particles that stand for the posterior the new wave aims at: those its thresholds still
   // accept (all when none does, or when the caller gave no within_next). A class that the new
@@ -114,8 +115,9 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
   for (std::size_t k = 0; k < kept.size(); ++k) {
     const std::size_t i = kept[k];
     mass[k] = population.weights[i] / total;
-    log_joint[k] = log_ratio(population.bits_of(i), population.reals_of(i));
-    log_bits[k] = log_bits_ratio(population.bits_of(i));
+    const double extra = log_reweight.size() == population.size ? log_reweight[i] : 0.0;
+    log_joint[k] = log_ratio(population.bits_of(i), population.reals_of(i)) + extra;
+    log_bits[k] = log_bits_ratio(population.bits_of(i)) + extra;
   }
   const std::vector<double> joint = Shares(mass, std::move(log_joint));
   const std::vector<double> share = Shares(mass, std::move(log_bits));

@@ -191,6 +191,22 @@ TEST(ModeLoss, AClassTheNewThresholdsDropIsNotHeavy) {
   EXPECT_NEAR(classes[0].mass, 1.0, 1e-12);
 }
 
+// The paper estimator's equal weights stand for the previous proposal times the acceptance: a
+// share then takes each particle's log p/q_t too. 11 has q/p = 1e-3 under the new proposal, as
+// under the previous one (p/q_t = 1e3): the new proposal gives it what the old one did, no loss.
+TEST(ModeLoss, ThePaperEstimatorsSharesAreRelativeToThePreviousProposal) {
+  const Population pop = Crafted({{{0, 0}, 90}, {{1, 1}, 10}});
+  const auto ratio = Table({{{0, 0}, 1.0}, {{1, 1}, 1e-3}});
+  const auto bits_ratio = [&](std::span<const std::uint8_t> bits) { return ratio(bits, {}); };
+  EXPECT_TRUE(FindPatternClasses(pop, ratio, bits_ratio, 100)[1].flagged);
+  std::vector<double> log_p_over_q(pop.size, 0.0);
+  for (std::size_t i = 90; i < 100; ++i) log_p_over_q[i] = std::log(1e3);
+  const auto classes = FindPatternClasses(pop, ratio, bits_ratio, 100, log_p_over_q);
+  ASSERT_EQ(classes.size(), 2u);
+  EXPECT_FALSE(classes[1].flagged);
+  EXPECT_NEAR(classes[1].proposal, 0.1, 1e-12);
+}
+
 // Issue 35: where no two particles share a pattern (36 clamps, 500 distinct particles) no whole
 // pattern is heavy, but a bit's value or a pair's can be, and is flagged when the proposal stops
 // giving it particles. 200 distinct patterns of 12 bits: bit 1 = 0 in 20 of them (10 %), which the

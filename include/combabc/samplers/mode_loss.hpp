@@ -50,16 +50,20 @@ double ModeLossMinMass(int particles);
 // particles, normalised over all; once for the bits alone (log_bits_ratio), once for the bits and
 // the reals together (log_ratio), which sees a pattern whose reals the proposal no longer draws.
 // Flagged when particles * bits share < 1 (the wave expects fewer than one particle of a class
-// that held at least five particles' worth), bits share < mass / kModeLossMassRatio, or particles
-// * joint share < 1; `proposal` is the smaller share. First every heavy whole free-bit pattern
-// (heaviest first, equal masses in pattern order); then the flagged classes of one bit's value
-// (bit a = v: the other entries of `bits` are kAnyBit) and, up to kModeLossMaxPairBits free bits,
-// of two bits' values whose bits are not flagged on their own, leaving out those that flagged
-// whole patterns hold half of, heaviest first, at most kModeLossMaxPartialClasses of them. `bits`
-// are free bits (the caller expands them).
+// that held at least five particles' worth), bits share < mass / kModeLossMassRatio, or
+// particles * joint share < 1; `proposal` is the smaller share. First
+// every heavy whole free-bit pattern (heaviest first, equal masses in pattern order); then the
+// flagged classes of one bit's value (bit a = v: the other entries of `bits` are kAnyBit) and, up
+// to kModeLossMaxPairBits free bits, of two bits' values whose bits are not flagged on their own,
+// leaving out those that flagged whole patterns hold half of, heaviest first, at most
+// kModeLossMaxPartialClasses of them. `bits` are free bits (the caller expands them).
+// `log_reweight` (one per particle, or empty) is added to both log ratios: where the weights are
+// not the posterior's (the paper estimator's equal weights stand for q_t A, not p A), the
+// particles' log p/q_t, so that a share is m_i q / q_t normalised.
 std::vector<PatternClass> FindPatternClasses(const Population& population,
                                              const LogProposalRatio& log_ratio,
                                              const LogBitsRatio& log_bits_ratio,
-                                             int particles);
+                                             int particles,
+                                             std::span<const double> log_reweight = {});
 
 }  // namespace combabc
