@@ -28,12 +28,12 @@ from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, Cus
                     ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
 from . import plot
-from .history import Experiment, History, Wave
+from .history import Experiment, History, ModeLossWarning, Wave
 
 __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "CustomPrior", "Error",
            "Experiment", "History", "LogisticKernelOptions", "MultiFidelityOptions",
-           "MultivariateNormalPrior", "Problem", "ProposalOptions",
+           "ModeLossWarning", "MultivariateNormalPrior", "Problem", "ProposalOptions",
            "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
            "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
            "plot", "resume", "run"]
@@ -213,6 +213,17 @@ def _problem_history(data, problem):
     return History(data)
 
 
+def _warned(history):
+    """The history, after a ModeLossWarning per wave whose proposal may have lost a mode (the
+    line the CLI prints under that wave's progress line): a Python run prints nothing else, and
+    summary.json's answer.mode_loss is not where a user looks. stacklevel 3: the caller of run or
+    resume."""
+    for wave in history.waves:
+        if wave.mode_loss_warning:
+            warnings.warn(wave.mode_loss_warning, ModeLossWarning, stacklevel=3)
+    return history
+
+
 def run(what, options=None, *, threads=None, output_directory=None, overwrite=False,
         report=False):
     """Runs a calibration and returns its History.
@@ -238,12 +249,12 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
             os.makedirs(output_directory, exist_ok=True)
             path = os.path.join(os.fspath(output_directory), "history.sqlite")
         data = _core.run_smc(_smc_request(what, options), path, overwrite, False, report)
-        return _problem_history(data, what)
+        return _warned(_problem_history(data, what))
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")
     data = _core.run_config(os.fspath(what), -1 if threads is None else threads,
                             os.fspath(output_directory or ""), overwrite, report)
-    return History(data)
+    return _warned(History(data))
 
 
 def load_history(path):
@@ -292,9 +303,9 @@ def resume(path, problem=None, options=None, *, threads=None, report=False,
     if problem is None:
         if options is not None:
             raise TypeError("options apply to a Problem's run; a config run carries its own")
-        return History(_core.resume(path, -1 if threads is None else threads, report,
-                                    max_simulations, max_wall_time, min_acceptance_rate,
-                                    max_failure_fraction))
+        return _warned(History(_core.resume(path, -1 if threads is None else threads, report,
+                                            max_simulations, max_wall_time, min_acceptance_rate,
+                                            max_failure_fraction)))
     if options is None:
         options = SmcOptions()
     if threads is not None:
@@ -305,7 +316,7 @@ def resume(path, problem=None, options=None, *, threads=None, report=False,
         if value is not None:
             setattr(options, name, value)
     data = _core.run_smc(_smc_request(problem, options), path, False, True, report)
-    return _problem_history(data, problem)
+    return _warned(_problem_history(data, problem))
 
 
 def enumerate(config, *, thresholds=None, threads=None, output_directory=None, overwrite=False,

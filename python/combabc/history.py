@@ -14,6 +14,13 @@ import numpy as np
 from . import _netcdf
 
 
+class ModeLossWarning(UserWarning):
+    """A wave's proposal gave a heavy pattern of the previous wave a negligible probability: the
+    posterior may have lost a mode (docs/algorithm.md, "Mode loss"). combabc.run and
+    combabc.resume raise one per such wave, with the line the CLI prints; Wave.mode_loss_warning
+    holds it."""
+
+
 class Wave:
     """One wave: its statistics and its accepted particles as NumPy arrays.
 
@@ -29,7 +36,9 @@ class Wave:
     log_weight and weight float64[n], distance float64[n, k], output float64[n, m] (m = 0 when the
     run kept no outputs); failure_index int64[f] and failure_reason (list of str);
     pattern_classes, the mode-loss diagnostic's heavy patterns of the previous wave (a list of
-    dicts: bits uint8[d], mass, proposal, flagged; docs/algorithm.md, "Mode loss"). A
+    dicts: bits uint8[d] (2 for a bit the class leaves free), mass, proposal (the share of the
+    wave's particles), flagged; docs/algorithm.md, "Mode loss") and
+    mode_loss_warning (the CLI's line for the flagged ones, "" for none). A
     multi-fidelity run's wave also has multi_fidelity (a dict: continue_if_accepted,
     continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
     next_continue_if_accepted, next_continue_if_rejected, cost_ratio) and per particle multiplier

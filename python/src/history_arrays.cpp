@@ -182,6 +182,9 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
     classes.append(one);
   }
   d["pattern_classes"] = classes;
+  // The CLI's line for the wave's flagged classes ("" for none), which run and resume raise as a
+  // combabc.ModeLossWarning.
+  d["mode_loss_warning"] = ModeLossWarning(wave);
   AddFidelity(wave, num_components, d);
   return d;
 }

@@ -552,8 +552,8 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   const ParameterSpace space(request.space, request.reals, std::move(joint));
   // The default kernel resolved for this space, as the history records it (kind = "auto").
   SmcOptions options = request.options;
-  options.proposal =
-      ResolvedProposal(options.proposal, space.num_free_bits() > 0 && space.num_reals() > 0);
+  options.proposal = ResolvedProposal(
+      options.proposal, AnyUncertainBit(space.binary().free_prior_one()) && space.num_reals() > 0);
   for (const auto& [names, prior] : request.priors) {
     if (prior.error()) prior.error()->Clear();  // what its check or an earlier run raised
   }

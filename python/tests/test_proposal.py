@@ -144,3 +144,38 @@ def test_fields_set_later_are_checked_when_the_run_starts(change):
     with pytest.raises(combabc.Error) as raised:
         combabc.run(problem(), opts)
     assert str(raised.value) == "config error: " + why
+
+
+def parity_run(kind):
+    """The mode-loss problem of tests/e2e/mode_loss_test.cpp: three bits (prior P(1) = 0.2, 0.2,
+    0.5) whose data accept the even-parity patterns; the logistic kernel cannot represent bit 3 =
+    bit 1 xor bit 2 and loses 110 (mass 0.04) in wave 2."""
+    space = combabc.BinarySpace(dimension=3, prior_one=[0.2, 0.2, 0.5])
+
+    def simulate(bits):
+        odd = bits.sum(axis=1) % 2
+        return np.stack([1.0 - odd, odd], axis=1).astype(np.float64)
+
+    problem = combabc.Problem(space, simulate, np.array([1.0, 0.0]), batch=True)
+    return combabc.run(problem, combabc.make_options(
+        num_waves=4, accepted_per_wave=300, seed=1, threads=1, thresholds=[0.5] * 4,
+        estimator="importance", proposal=combabc.ProposalOptions(kind=kind)))
+
+
+def test_a_lost_mode_is_a_python_warning():
+    # Issue 35: the loss was in the history only (Wave.pattern_classes, summary.json), so a Python
+    # user, who sees no progress line, was never told.
+    with pytest.warns(combabc.ModeLossWarning, match=r"^wave 2 proposed pattern 110 \(mass "
+                      r".*the posterior may have lost a mode$") as caught:
+        history = parity_run("logistic")
+    assert caught[0].filename == __file__  # stacklevel: the caller of combabc.run
+    assert history.waves[1].mode_loss_warning == str(caught[0].message)
+    assert any(c["flagged"] for c in history.waves[1].pattern_classes)
+
+
+def test_a_run_that_keeps_its_modes_warns_of_nothing():
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", combabc.ModeLossWarning)
+        history = parity_run("independent")
+    assert all(w.mode_loss_warning == "" for w in history.waves)

@@ -10,6 +10,7 @@
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "config_reader.hpp"
@@ -271,8 +272,12 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   config_internal::ParseParametersSection(root, &c);
   config_internal::ParseJointPriorSection(root, &c);
   // The default kernel (kind = "auto") as the run records it: the ancestor kernel for a mixed
-  // space, else independent.
-  c.smc.proposal = ResolvedProposal(c.smc.proposal, c.space.dimension > 0 && !c.reals.empty());
+  // space (a bit whose prior is neither 0 nor 1, and a real), else independent. An invalid space
+  // is refused later, naming its key.
+  const bool uncertain = c.space.IsValid(nullptr)
+                             ? AnyUncertainBit(BinarySpace(c.space).free_prior_one())
+                             : c.space.dimension > 0;
+  c.smc.proposal = ResolvedProposal(c.smc.proposal, uncertain && !c.reals.empty());
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   if (c.space.dimension == 0 && c.reals.empty()) {
     throw Error(ErrorKind::kConfig,

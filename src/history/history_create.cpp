@@ -9,6 +9,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "history/history_impl.hpp"
 
 #ifndef COMBABC_VERSION
@@ -302,9 +303,11 @@ void WriteMetadata(history::Database& db, const RunMetadata& m) {
         .Bind(7, prior.sd)
         .Run();
   }
-  // The kernel the run used: a default (kAuto) not yet resolved is resolved for the run's space.
-  WriteProposal(
-      db, ResolvedProposal(m.proposal, m.dimension > 0 && !m.reals.empty()), m.tempering_form);
+  // The kernel the run used: a default (kAuto) not yet resolved is resolved for the run's space
+  // (its bits count only where their prior is neither 0 nor 1).
+  const bool uncertain =
+      m.bit_prior_one.empty() ? m.dimension > 0 : AnyUncertainBit(m.bit_prior_one);
+  WriteProposal(db, ResolvedProposal(m.proposal, uncertain && !m.reals.empty()), m.tempering_form);
   for (const auto& [part, digest] : m.fingerprint) {
     meta.Bind(1, "fingerprint_" + part).Bind(2, digest).Run();
   }
@@ -579,7 +582,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // recorded neither its tempering form (left empty) nor a fingerprint (resume then checks none),
   // nor (before v4) any failed simulation; (before v6) it had a single, unnamed experiment; and
   // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL); and (before v8)
-  // it recorded no pattern classes (the columns stay NULL: none).
+  // it recorded no pattern classes (the columns stay NULL: none). v9 adds no column: a v8 wave's
+  // classes are whole patterns, stored as v9 stores a wave without classes of a few bits.
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {

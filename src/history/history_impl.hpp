@@ -62,6 +62,7 @@ struct HistoryStore::Impl {
   bool has_experiments() const { return schema_version >= 6; }
   bool has_multi_fidelity() const { return schema_version >= 7; }
   bool has_pattern_classes() const { return schema_version >= 8; }
+  bool has_pattern_masks() const { return schema_version >= 9; }
   // Refuses a read-only store; otherwise PrepareWrite. Every writer calls it first.
   void RequireWritable(const char* what);
   // WAL mode and, for an older file, MigrateToCurrent: once, before the first write.

@@ -271,11 +271,13 @@ void ReadParticleFidelity(const WaveReader& check,
 }
 
 // The wave's pattern classes (schema v8; NULL columns: none): pattern_mass and pattern_proposal
-// one double per class, pattern_bits each class's packed bits in turn, pattern_flagged a byte 0/1
-// per class.
+// one double per class, pattern_bits each class's packed bits in turn (from v9, where a class of
+// one or two bits' values is among them: each class's bits, then its mask), pattern_flagged a byte
+// 0/1 per class.
 std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
                                              const Statement& row,
                                              int dimension,
+                                             bool masks,
                                              const std::string& path) {
   // Each class holds at least 1 % of a mass of 1 (ModeLossMinMass): at most 100, and rounding.
   constexpr std::size_t kMaxClasses = 128;
@@ -287,7 +289,9 @@ std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
   const auto bytes_per_class = (static_cast<std::size_t>(dimension) + 7) / 8;
   const auto bits = row.Bytes(kPatternBits);
   const auto flagged = row.Bytes(kPatternFlagged);
-  if (bits.size() != k * bytes_per_class || (k > 0 && row.Type(kPatternBits) != SQLITE_BLOB)) {
+  const bool masked = masks && k > 0 && bits.size() == 2 * k * bytes_per_class;
+  const std::size_t stride = (masked ? 2 : 1) * bytes_per_class;
+  if (bits.size() != k * stride || (k > 0 && row.Type(kPatternBits) != SQLITE_BLOB)) {
     check.Corrupt("pattern_bits",
                   "has " + std::to_string(bits.size()) + " bytes, expected " +
                       std::to_string(k * bytes_per_class) + " (" + per_class + ")");
@@ -303,9 +307,19 @@ std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
         flagged[c] > 1) {
       check.Corrupt(who, "has mass, proposal or flag out of range");
     }
-    const auto* first = bits.data() + c * bytes_per_class;
+    const auto* first = bits.data() + c * stride;
     classes[c].bits = history::UnpackBits(
         std::vector<std::uint8_t>(first, first + bytes_per_class), dimension, path);
+    if (masked) {
+      const auto fixed = history::UnpackBits(
+          std::vector<std::uint8_t>(first + bytes_per_class, first + stride), dimension, path);
+      for (std::size_t b = 0; b < fixed.size(); ++b) {
+        if (fixed[b] == 0 && classes[c].bits[b] != 0) {
+          check.Corrupt(who, "has a bit set that its mask leaves free");
+        }
+        if (fixed[b] == 0) classes[c].bits[b] = kAnyBit;
+      }
+    }
     classes[c].mass = mass[c];
     classes[c].proposal = proposal[c];
     classes[c].flagged = flagged[c] != 0;
@@ -425,7 +439,8 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   }
 
   wave.multi_fidelity = ReadFidelity(check, row, wave.candidates, ended);
-  wave.pattern_classes = ReadPatternClasses(check, row, shape.dimension, db.path());
+  wave.pattern_classes =
+      ReadPatternClasses(check, row, shape.dimension, has_pattern_masks(), db.path());
 
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);

@@ -1,4 +1,5 @@
 // Recording a run into its history: the SmcObserver callbacks, Finish and MarkFailed.
+#include <algorithm>
 #include <cstdint>
 #include <set>
 
@@ -127,9 +128,24 @@ void BindPatternClasses(Statement& s, int first, const std::vector<PatternClass>
   std::vector<double> mass;
   std::vector<double> proposal;
   std::vector<std::uint8_t> flagged;
+  // A wave with a class of one or two bits' values (v9) stores each class's bits (kAnyBit as 0)
+  // and then its mask (1 where the class fixes the bit); a wave of whole patterns only, the bits
+  // alone, as v8 did.
+  const bool masked = std::any_of(classes.begin(), classes.end(), [](const PatternClass& c) {
+    return std::find(c.bits.begin(), c.bits.end(), kAnyBit) != c.bits.end();
+  });
   for (const PatternClass& c : classes) {
-    const auto packed = PackBits(c.bits);
+    std::vector<std::uint8_t> value(c.bits.size()), fixed(c.bits.size());
+    for (std::size_t k = 0; k < c.bits.size(); ++k) {
+      value[k] = c.bits[k] == 1 ? 1 : 0;
+      fixed[k] = c.bits[k] == kAnyBit ? 0 : 1;
+    }
+    const auto packed = PackBits(value);
     bits.insert(bits.end(), packed.begin(), packed.end());
+    if (masked) {
+      const auto mask = PackBits(fixed);
+      bits.insert(bits.end(), mask.begin(), mask.end());
+    }
     mass.push_back(c.mass);
     proposal.push_back(c.proposal);
     flagged.push_back(c.flagged ? 1 : 0);

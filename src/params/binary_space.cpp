@@ -117,6 +117,11 @@ std::vector<double> BinarySpace::bit_prior_one() const {
   return out;
 }
 
+bool AnyUncertainBit(std::span<const double> prior_one) {
+  return std::any_of(
+      prior_one.begin(), prior_one.end(), [](double p) { return p > 0.0 && p < 1.0; });
+}
+
 void BinarySpace::Expand(std::span<const std::uint8_t> free, std::span<std::uint8_t> bits) const {
   COMBABC_CHECK(free.size() == free_prior_one_.size() && bits.size() == free_of_bit_.size());
   for (std::size_t k = 0; k < bits.size(); ++k) bits[k] = free[free_of_bit_[k]];

@@ -175,10 +175,18 @@ class AncestorProposal final : public JointProposal {
       const auto bits = population.bits_of(j);
       for (std::size_t i = 0; i < f_; ++i) m[i] += bits[i] ? population.weights[j] : 0.0;
     }
+    // A bit whose prior is 0 or 1 (a fixed or dummy bit) is never flipped: every particle of
+    // positive weight holds its one possible value, and a flip would only propose candidates of
+    // prior 0, accepted for nothing (weight 0). The floor spreads over the other bits.
+    const auto uncertain = [&](std::size_t i) {
+      return prior_one_[i] > 0.0 && prior_one_[i] < 1.0;
+    };
+    std::size_t movable = 0;
+    for (std::size_t i = 0; i < f_; ++i) movable += uncertain(i) ? 1 : 0;
     const double floor =
-        std::min(0.5, kMinFlips / static_cast<double>(std::max<std::size_t>(f_, 1)));
+        std::min(0.5, kMinFlips / static_cast<double>(std::max<std::size_t>(movable, 1)));
     for (std::size_t i = 0; i < f_; ++i) {
-      const double e = std::clamp(std::min(m[i], 1.0 - m[i]), floor, 0.5);
+      const double e = uncertain(i) ? std::clamp(std::min(m[i], 1.0 - m[i]), floor, 0.5) : 0.0;
       flip_rate_.push_back(e);
       flip_.push_back(BernoulliThreshold(e));
       log_keep_.push_back(std::log1p(-e));

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "combabc/core/error.hpp"
+#include "combabc/params/binary_space.hpp"
 #include "combabc/proposals/ancestor_kernel.hpp"
 #include "combabc/proposals/logistic_kernel.hpp"
 
@@ -92,8 +93,8 @@ std::unique_ptr<BinaryKernel> MakeBinaryKernel(const ProposalOptions& options) {
 
 std::unique_ptr<JointKernel> MakeJointKernel(const ProposalOptions& given,
                                              const ParameterSpace& space) {
-  const ProposalOptions options =
-      ResolvedProposal(given, space.num_free_bits() > 0 && space.num_reals() > 0);
+  const ProposalOptions options = ResolvedProposal(
+      given, AnyUncertainBit(space.binary().free_prior_one()) && space.num_reals() > 0);
   std::string why;
   if (!options.IsValid(&why)) throw Error(ErrorKind::kConfig, why);
   if (options.binary == BinaryKernelKind::kAncestor) return MakeAncestorKernel(options.scale);

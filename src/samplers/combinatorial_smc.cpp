@@ -350,8 +350,15 @@ class SmcRun {
       if (population.num_free_bits > 0) {
         wave.pattern_classes = FindPatternClasses(
             population,
-            [&](std::span<const std::uint8_t> bits) { return proposal_->LogBitsDensity(bits); },
-            options_.AcceptedIn(wave.wave));
+            [&](std::span<const std::uint8_t> bits, std::span<const double> reals) {
+              return proposal_->LogDensity(bits, reals) - space_.LogPriorBits(bits) -
+                     space_.LogPriorReals(reals);
+            },
+            [&](std::span<const std::uint8_t> bits) {
+              return proposal_->LogBitsDensity(bits) - space_.LogPriorBits(bits);
+            },
+            options_.AcceptedIn(wave.wave),
+            PaperReweight(*previous));
         for (PatternClass& c : wave.pattern_classes) {
           std::vector<std::uint8_t> full(static_cast<std::size_t>(space_.binary().dimension()));
           space_.binary().Expand(c.bits, full);
@@ -362,6 +369,16 @@ class SmcRun {
     wave.proposal = proposal_->Marginals();
     if (observer_) observer_->OnWaveStart(wave);
     return wave;
+  }
+
+  // The paper estimator's equal weights stand for the previous wave's proposal times its
+  // acceptance, not for the posterior: the mode-loss shares then take each particle's log p/q
+  // (FindPatternClasses). Empty for the importance estimator.
+  std::vector<double> PaperReweight(const WaveRecord& previous) const {
+    std::vector<double> log_weight;
+    if (options_.estimator != Estimator::kPaper) return log_weight;
+    for (const auto& p : previous.particles) log_weight.push_back(p.log_weight);
+    return log_weight;
   }
 
   // The previous wave's particles as the kernels see them: free bits, reals, the estimator's

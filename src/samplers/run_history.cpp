@@ -211,9 +211,19 @@ bool Differ(const T& a, const T& b, const std::string& what, std::string* where)
 std::string PatternText(const std::vector<std::uint8_t>& bits) {
   constexpr std::size_t kShown = 64;
   std::string text;
-  for (std::size_t k = 0; k < std::min(bits.size(), kShown); ++k) text += bits[k] ? '1' : '0';
+  if (bits.size() > kShown && std::count(bits.begin(), bits.end(), kAnyBit) > 0) {
+    for (std::size_t k = 0; k < bits.size(); ++k) {
+      if (bits[k] == kAnyBit) continue;
+      text += (text.empty() ? "bit " : ", bit ") + std::to_string(k + 1) + " = " +
+              (bits[k] ? "1" : "0");
+    }
+    return text;
+  }
+  for (std::size_t k = 0; k < std::min(bits.size(), kShown); ++k) {
+    text += bits[k] == kAnyBit ? '-' : bits[k] ? '1' : '0';
+  }
   if (bits.size() > kShown) {
-    const auto set = std::count_if(bits.begin(), bits.end(), [](std::uint8_t b) { return b != 0; });
+    const auto set = std::count_if(bits.begin(), bits.end(), [](std::uint8_t b) { return b == 1; });
     text += "... (" + std::to_string(set) + " of " + std::to_string(bits.size()) + " bits set)";
   }
   return text;

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -808,6 +809,52 @@ TEST_F(HistoryIntegrityTest, PatternClassesRoundTripAndAreChecksummed) {
     EXPECT_EQ(error.kind(), ErrorKind::kData) << error.what();
     EXPECT_NE(std::string(error.what()).find("wave 2"), std::string::npos) << error.what();
   }
+}
+
+// Classes of one or two bits' values (v9) store a mask after each class's bits: a free bit reads
+// back as kAnyBit, and a bit set that its mask leaves free is refused.
+TEST_F(HistoryIntegrityTest, PatternClassesOfAFewBitsRoundTrip) {
+  FakeRunOptions options = SmallRun();
+  options.pattern_classes = true;
+  RunHistory history = MakeFakeHistory(options);
+  std::vector<std::uint8_t> some(history.waves[1].pattern_classes[0].bits.size(), kAnyBit);
+  some[1] = 0;
+  some.back() = 1;
+  history.waves[1].pattern_classes.push_back({some, 0.05, 1e-4, true});
+  const std::string path = Path("masked.db");
+  {
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(options));
+    RecordWave(store, history.waves[0], 5);
+    RecordWave(store, history.waves[1], 5);
+  }
+  const RunHistory loaded = HistoryStore::Open(path, true).LoadHistory();
+  ASSERT_EQ(loaded.waves.size(), 2u);
+  EXPECT_EQ(loaded.waves[1].pattern_classes, history.waves[1].pattern_classes);
+  EXPECT_EQ(PatternText(loaded.waves[1].pattern_classes.back().bits).substr(0, 3), "-0-");
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  // The blob written anew with every bit of the masked class's values set, bits its mask leaves
+  // free among them.
+  std::string hex;
+  for (const PatternClass& c : history.waves[1].pattern_classes) {
+    const bool damaged = &c == &history.waves[1].pattern_classes.back();
+    for (const bool mask : {false, true}) {
+      std::vector<unsigned> bytes((c.bits.size() + 7) / 8, 0);
+      for (std::size_t k = 0; k < c.bits.size(); ++k) {
+        const bool set = mask ? c.bits[k] != kAnyBit : damaged || c.bits[k] == 1;
+        bytes[k / 8] |= (set ? 1U : 0U) << (k % 8);
+      }
+      for (const unsigned b : bytes) {
+        char two[3];
+        std::snprintf(two, sizeof two, "%02x", b);
+        hex += two;
+      }
+    }
+  }
+  Sql(path, "UPDATE wave SET pattern_bits = x'" + hex + "' WHERE wave = 1");
+  const Error error = Catch([&] { HistoryStore::Open(path, true).LoadHistory(); });
+  EXPECT_EQ(error.kind(), ErrorKind::kData) << error.what();
+  EXPECT_NE(std::string(error.what()).find("mask leaves free"), std::string::npos) << error.what();
 }
 
 // A v7 file (before pattern classes) reads as waves without any; resuming it upgrades it to v8

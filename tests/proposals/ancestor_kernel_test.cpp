@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -291,6 +292,74 @@ TEST(AncestorKernel, TheDefaultIsTheAncestorKernelForMixedSpacesOnly) {
   EXPECT_EQ(ResolvedProposal(logistic, true).binary, BinaryKernelKind::kLogistic);
   EXPECT_EQ(MakeJointKernel(o, MixedSpace())->name(), "ancestor");
   EXPECT_THROW(MakeBinaryKernel(o), Error);  // not resolved
+}
+
+// A fixed or dummy bit (prior 0 or 1) is never flipped (issue 35: about 10 % of a wave's accepted
+// particles carried weight 0, their fixed bit flipped to a value of prior 0), the floor of the
+// flip rates spreads over the other bits, and the density stays exact: the proposal gives the
+// impossible values probability 0 and still sums to 1.
+TEST(AncestorKernel, BitsWhosePriorIsZeroOrOneAreNeverFlipped) {
+  BinarySpaceOptions so;
+  so.dimension = 4;
+  so.prior_one = {0.0, 0.5, 1.0, 0.5};
+  const ContinuousPrior wide{.kind = PriorKind::kNormal, .mean = 0.0, .sd = 10.0};
+  const ParameterSpace space(BinarySpace(so), {{"x", wide}});
+  Population p;
+  p.num_free_bits = 4;
+  p.num_reals = 1;
+  for (int k = 0; k < 20; ++k) {
+    const std::array<std::uint8_t, 4> bits = {0, static_cast<std::uint8_t>(k % 2), 1, 1};
+    p.free_bits.insert(p.free_bits.end(), bits.begin(), bits.end());
+    p.reals.push_back(0.1 * k);
+    p.weights.push_back(1.0 / 20);
+    ++p.size;
+  }
+  const auto q = MakeAncestorKernel(kScale)->Fit(p, space, {});
+  std::vector<std::uint8_t> b(4);
+  std::vector<double> r(1);
+  int moved = 0;  // draws that flipped bit 3, which the population holds at 1 (floor 0.1 / 2)
+  for (int k = 0; k < 20000; ++k) {
+    RandomStream rng(13, 1, static_cast<std::uint64_t>(k));
+    q->Sample(rng, b, r);
+    ASSERT_EQ(b[0], 0) << "draw " << k;
+    ASSERT_EQ(b[2], 1) << "draw " << k;
+    moved += b[3] == 0 ? 1 : 0;
+  }
+  // (1 - a) 0.05 + a 0.5 = 0.0725 with a = 0.05 (the floor 0.1 / 4 would give 0.049).
+  EXPECT_NEAR(moved / 20000.0, 0.0725, 5.0 * std::sqrt(0.0725 * 0.9275 / 20000));
+  double sum = 0.0;
+  for (unsigned c = 0; c < 16; ++c) {
+    std::vector<std::uint8_t> pattern(4);
+    for (std::size_t i = 0; i < 4; ++i) pattern[i] = static_cast<std::uint8_t>((c >> i) & 1U);
+    const double log_q = q->LogBitsDensity(pattern);
+    if (pattern[0] == 1 || pattern[2] == 0) {
+      EXPECT_EQ(log_q, -std::numeric_limits<double>::infinity()) << c;
+      const std::array<double, 1> x = {0.5};
+      EXPECT_EQ(q->LogDensity(pattern, x), -std::numeric_limits<double>::infinity()) << c;
+    }
+    sum += std::exp(log_q);
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  const auto m = q->Marginals();
+  EXPECT_EQ(m[0], 0.0);
+  EXPECT_DOUBLE_EQ(m[2], 1.0);
+}
+
+// `auto` looks at the bits the data can inform: a space whose bits all have prior 0 or 1 and a
+// real is continuous to it (issue 35: a fixed or dummy bit switched it to the ancestor kernel).
+TEST(AncestorKernel, TheDefaultIgnoresFixedBits) {
+  BinarySpaceOptions so;
+  so.dimension = 2;
+  so.prior_one = {0.0, 1.0};
+  const ContinuousPrior wide{.kind = PriorKind::kNormal, .mean = 0.0, .sd = 10.0};
+  const ParameterSpace fixed(BinarySpace(so), {{"x", wide}});
+  EXPECT_EQ(MakeJointKernel(ProposalOptions{}, fixed)->name(), "independent");
+  so.prior_one = {0.0, 0.4};
+  const ParameterSpace one_free(BinarySpace(so), {{"x", wide}});
+  EXPECT_EQ(MakeJointKernel(ProposalOptions{}, one_free)->name(), "ancestor");
+  EXPECT_FALSE(AnyUncertainBit(std::vector<double>{0.0, 1.0}));
+  EXPECT_TRUE(AnyUncertainBit(std::vector<double>{1.0, 0.999}));
+  EXPECT_FALSE(AnyUncertainBit(std::vector<double>{}));
 }
 
 }  // namespace

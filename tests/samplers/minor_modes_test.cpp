@@ -83,10 +83,28 @@ TEST_P(MinorModes, AgainstTheExactPosterior) {
   ASSERT_GT(last.ess, 200.0);
   const double ess = last.ess;
   int flagged = 0;
+  double worst = 1e300;  // the smallest share / mass of a heavy class, and its N share
+  double worst_count = 0.0;
   for (const WaveRecord& w : h.waves) {
-    for (const PatternClass& c : w.pattern_classes) flagged += c.flagged ? 1 : 0;
+    for (const PatternClass& c : w.pattern_classes) {
+      flagged += c.flagged ? 1 : 0;
+      if (c.proposal / c.mass < worst) {
+        worst = c.proposal / c.mass;
+        worst_count = 1000.0 * c.proposal;
+      }
+      if (c.flagged) {
+        std::printf("  flagged: wave %d, %s, mass %.4f, share %.3g\n",
+                    w.wave + 1,
+                    PatternText(c.bits).c_str(),
+                    c.mass,
+                    c.proposal);
+      }
+    }
   }
-  std::printf("  flagged pattern classes: %d\n", flagged);
+  std::printf("  flagged pattern classes: %d; smallest share / mass 1/%.3g (N share %.3g)\n",
+              flagged,
+              1.0 / worst,
+              worst_count);
   EXPECT_EQ(flagged > 0, !pair.keeps_modes);
   if (!pair.keeps_modes) {
     // The failure of issue 23: both minor modes lost, and with them most of the real's spread,

@@ -28,9 +28,10 @@ namespace combabc {
 // version 6 the experiments (table experiment); version 7 the multi-fidelity columns (each
 // particle's multiplier, confirmed and low_distance, each wave's continuation probabilities and
 // costs), NULL in a single-fidelity run; version 8 each wave's pattern classes (the mode-loss
-// diagnostic: pattern_bits, pattern_mass, pattern_proposal, pattern_flagged), NULL for none. An
-// older file written to (resume) is upgraded to this version.
-inline constexpr int kHistorySchemaVersion = 8;
+// diagnostic: pattern_bits, pattern_mass, pattern_proposal, pattern_flagged), NULL for none;
+// version 9 classes of one or two bits' values (pattern_bits then holds each class's bits and its
+// mask; no new column). An older file written to (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 9;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise

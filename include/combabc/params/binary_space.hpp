@@ -51,4 +51,8 @@ class BinarySpace {
   std::vector<std::string> names_;
 };
 
+// Whether any of these priors P(bit = 1) is neither 0 nor 1: a bit the data can inform. A fixed or
+// dummy bit (prior 0 or 1) is a constant to the kernels, so it does not make a space mixed.
+bool AnyUncertainBit(std::span<const double> prior_one);
+
 }  // namespace combabc

@@ -67,14 +67,18 @@ struct WaveFidelity {
   double cost_ratio = 0.0;
 };
 
+// A PatternClass's bit that the class leaves free (a class of one or two bits' values).
+inline constexpr std::uint8_t kAnyBit = 2;
+
 // One pattern class of the population a wave's proposal was fitted to: its particles that share
-// a bit configuration (docs/algorithm.md, "Mode loss"). A wave records the classes whose mass
-// reaches ModeLossMinMass, each with the probability its proposal gives the pattern, flagged when
-// that is so small that the wave expects fewer than one particle of it: the class may be lost.
+// a bit configuration, or one or two bits' values (docs/algorithm.md, "Mode loss"). A wave records
+// the heavy whole patterns and the flagged classes of one or two bits' values
+// (FindPatternClasses), each with the share of the wave's particles its proposal is expected to
+// give it, flagged when that is so small that the class may be lost.
 struct PatternClass {
-  std::vector<std::uint8_t> bits;  // the full bit vector (0/1)
+  std::vector<std::uint8_t> bits;  // the full bit vector: 0/1, kAnyBit where the class is free
   double mass = 0.0;               // the population's normalised weight of the class
-  double proposal = 0.0;           // q(bits) under the wave's binary proposal
+  double proposal = 0.0;           // the expected share of the wave's accepted particles
   bool flagged = false;            // proposed with negligible probability (mode loss)
   bool operator==(const PatternClass&) const = default;
 };
@@ -161,8 +165,9 @@ struct RunHistory {
   std::string FullReport(Estimator estimator) const;
 };
 
-// A pattern as the answer prints configurations, "0110...", bit 1 first; beyond 64 bits the first
-// 64 and how many of all are set.
+// A pattern as the answer prints configurations, "0110...", bit 1 first, '-' for a kAnyBit; beyond
+// 64 bits the first 64 and how many of all are set, or for a class of a few bits' values those
+// values ("bit 70 = 1, bit 72 = 0").
 std::string PatternText(const std::vector<std::uint8_t>& bits);
 
 // The mode-loss warning of a wave with flagged pattern classes, one line without a newline: "wave
