@@ -145,9 +145,10 @@ class GaussianMixtureProposal final : public ContinuousProposal {
             (truncate_ ? LogBoxMass(f, box_, reals, y0.data(), w) : 0.0));
       }
     } else {
+      // L_j^{-1} (r - c_j), kept only for a truncated kernel's LogBoxMass.
       std::array<double, kStackDims> stack{};
-      std::vector<double> heap(d_ > kStackDims ? d_ : 0);
-      double* y = d_ > kStackDims ? heap.data() : stack.data();  // L_j^{-1} (r - c_j)
+      std::vector<double> heap(truncate_ && d_ > kStackDims ? d_ : 0);
+      double* y = !truncate_ ? nullptr : d_ > kStackDims ? heap.data() : stack.data();
       for (std::size_t j = 0; j < NumComponents(); ++j) {
         const Factor& f = factors_[factor_of_[j]];
         const double* c = &centres_[j * d_];
@@ -155,7 +156,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
         for (std::size_t i = 0; i < d_; ++i) {
           double v = 0.0;
           for (std::size_t k = 0; k <= i; ++k) v += f.l_inv[Tri(i, k)] * (reals[k] - c[k]);
-          y[i] = v;
+          if (y) y[i] = v;
           q += v * v;
         }
         add(log_weight_[j] - 0.5 * q - (truncate_ ? LogBoxMass(f, box_, reals, y, nullptr) : 0.0));
