@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 namespace py = pybind11;
 
@@ -21,6 +22,18 @@ std::string Shape(const py::array& a) {
 Doubles Checked(const py::object& result,
                 const std::vector<py::ssize_t>& expected,
                 const char* who) {
+  // numpy's forced cast would turn a complex number into its real part and a string of digits
+  // into a number: refuse those kinds rather than compute with a value the function never meant.
+  const py::array raw = py::array::ensure(result);
+  const char kind = raw ? raw.dtype().kind() : 'O';
+  if (kind == 'c' || kind == 'U' || kind == 'S' || kind == 'V' || kind == 'M' || kind == 'm') {
+    PyErr_Format(PyExc_TypeError,
+                 "the %s returned %s of dtype %s, not an array of real numbers",
+                 who,
+                 Py_TYPE(result.ptr())->tp_name,
+                 py::str(raw.dtype()).cast<std::string>().c_str());
+    throw py::error_already_set();
+  }
   Doubles values = Doubles::ensure(result);
   if (!values) {
     PyErr_Format(PyExc_TypeError,

@@ -70,28 +70,37 @@ std::shared_ptr<const JointPrior> MakePythonPrior(const SharedCallables& c, int 
       dimension,
       [c, d](std::span<const double> x) {
         const py::gil_scoped_acquire gil;
+        py::object result;
         try {
           const py::array_t<double> point(d, x.data());
-          const py::object result = c->log_density(point);
-          const Doubles value = Checked(result, {}, "log density");
-          return *value.data();
+          result = c->log_density(point);
         } catch (py::error_already_set& e) {
           Fail("log_density raised " + c->error.Remember(e, "prior's log_density"));
+        }
+        try {
+          return *Checked(result, {}, "log density").data();
+        } catch (py::error_already_set& e) {
+          Fail(c->error.Remember(e, "prior's log_density"));
         }
       },
       [c, d](RandomStream& rng, std::span<double> x) {
         const py::gil_scoped_acquire gil;
+        py::object result;
         try {
-          const py::object result = c->sample(NumpyGenerator(c->default_rng, DrawSeed(rng)));
-          // A number for a prior of one real, or an array of shape (dimension,).
-          const Doubles values =
-              Checked(result,
-                      d == 1 && Doubles::ensure(result).ndim() == 0 ? std::vector<py::ssize_t>{}
-                                                                    : std::vector<py::ssize_t>{d},
-                      "sampler");
-          std::copy(values.data(), values.data() + d, x.begin());
+          result = c->sample(NumpyGenerator(c->default_rng, DrawSeed(rng)));
         } catch (py::error_already_set& e) {
           Fail("sample raised " + c->error.Remember(e, "prior's sample"));
+        }
+        try {
+          // A number for a prior of one real, or an array of shape (dimension,). Anything else
+          // (a string, a dict, a complex number, an object) is Checked's TypeError.
+          const py::array any = py::array::ensure(result);  // null if numpy cannot hold it
+          const bool number = d == 1 && any && any.ndim() == 0;
+          const Doubles values = Checked(
+              result, number ? std::vector<py::ssize_t>{} : std::vector<py::ssize_t>{d}, "sampler");
+          std::copy(values.data(), values.data() + d, x.begin());
+        } catch (py::error_already_set& e) {
+          Fail(c->error.Remember(e, "prior's sample"));
         }
       });
 }
@@ -161,7 +170,7 @@ void Check(const PythonJointPrior& p,
     throw py::value_error("check: names, low and high need " + std::to_string(d) +
                           " entries each (the prior's dimension)");
   }
-  CheckJointPrior(*p.prior(), names, low, high);
+  CheckJointPrior(*RestrictJointPrior(p.prior(), names, low, high), names, low, high);
 }
 
 }  // namespace

@@ -65,3 +65,20 @@ def test_invalid_custom_priors_are_refused_in_one_line():
             error.check(["k"], low=[-1.0], high=[1.0])
         except _core.Error as e:
             assert "\n" not in str(e)
+
+
+@pytest.mark.parametrize("bad", ["x", "0.5", {}, 1j, np.complex128(0.5), object()],
+                         ids=["str", "digits", "dict", "complex", "numpy-complex", "object"])
+def test_callables_returning_no_real_number_are_a_type_error_not_a_crash(bad):
+    # These killed Python with SIGSEGV (issue 35, E8), or (complex, a string of digits) were
+    # silently cast to a number; now the one-line error of the check names the prior and TypeError.
+    sampler = combabc.CustomPrior(log_density=normal(0, 1), sample=lambda rng: bad)
+    with pytest.raises(_core.Error, match="CustomPrior: TypeError: the sampler returned"):
+        sampler.check(["k"])
+    pair = combabc.CustomPrior(log_density=lambda x: 0.0, sample=lambda rng: [bad, bad],
+                               dimension=2)
+    with pytest.raises(_core.Error, match="CustomPrior: TypeError: the sampler returned"):
+        pair.check(["a", "b"])
+    density = combabc.CustomPrior(log_density=lambda x: bad, sample=lambda rng: rng.normal())
+    with pytest.raises(_core.Error, match="CustomPrior: TypeError: the log density returned"):
+        density.check(["k"])

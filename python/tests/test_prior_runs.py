@@ -246,3 +246,18 @@ def test_resume_refuses_changed_new_options(tmp_path, changed):
                        max_simulations=10 ** 6)
     resumed = combabc.resume(stopped, problem(), options(**started), max_simulations=10 ** 6)
     assert [len(w.index) for w in resumed.waves] == [200, 200, 200]
+
+
+def test_a_sampler_returning_a_string_during_the_run_raises_type_error():
+    # After the check's draws, wave 0's candidates get "x": the TypeError reaches the caller as
+    # itself (issue 35, E8: it was SIGSEGV).
+    calls = [0]
+
+    def sample(rng):
+        calls[0] += 1
+        return rng.standard_normal() if calls[0] <= 4000 else "x"
+
+    prior = combabc.CustomPrior(log_density=standard_normal_density, sample=sample)
+    with pytest.raises(TypeError, match="the sampler returned str"):
+        combabc.run(mu_problem(prior), combabc.make_options(
+            num_waves=2, accepted_per_wave=200, seed=3, threads=2, thresholds=[1.5, 0.5]))

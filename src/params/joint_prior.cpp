@@ -9,6 +9,7 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "params/truncated_normal.hpp"
 
 namespace combabc {
 namespace {
@@ -119,6 +120,8 @@ class MultivariateNormalPrior final : public JointPrior {
       x[i] = r;
     }
   }
+  const std::vector<double>& mean() const { return mean_; }
+  const std::vector<double>& covariance() const { return covariance_; }
   std::string Describe() const override {
     std::string text = "normal(mean=";
     for (const double m : mean_) text += Shortest(m) + ",";
@@ -131,6 +134,71 @@ class MultivariateNormalPrior final : public JointPrior {
   std::vector<double> mean_, covariance_, l_;
   double log_norm_ = 0.0;
 };
+
+// A multivariate normal restricted to a box and normalised there (RestrictJointPrior). Diagonal:
+// each coordinate a truncated normal, drawn exactly, log_mass the sum of theirs. Otherwise (only
+// with all but kNegligibleMass of the mass inside): drawn whole until inside, log_mass taken as 0
+// (off by at most kNegligibleMass).
+class BoxedNormalPrior final : public JointPrior {
+ public:
+  BoxedNormalPrior(std::shared_ptr<const MultivariateNormalPrior> normal,
+                   std::vector<double> low,
+                   std::vector<double> high,
+                   bool diagonal)
+      : normal_(std::move(normal)), low_(std::move(low)), high_(std::move(high)) {
+    const std::size_t d = low_.size();
+    for (std::size_t k = 0; diagonal && k < d; ++k) {
+      const double sd = std::sqrt(normal_->covariance()[k * d + k]);
+      const double a = (low_[k] - normal_->mean()[k]) / sd,
+                   b = (high_[k] - normal_->mean()[k]) / sd;
+      sd_.push_back(sd);
+      a_.push_back(a);
+      b_.push_back(b);
+      log_mass_k_.push_back(LogStandardNormalMass(a, b));
+      log_mass_ += log_mass_k_.back();
+    }
+  }
+  int dimension() const override { return normal_->dimension(); }
+  double LogDensity(std::span<const double> x) const override {
+    return Inside(x) ? normal_->LogDensity(x) - log_mass_ : -kInfinite;
+  }
+  void Sample(RandomStream& rng, std::span<double> x) const override {
+    if (!sd_.empty()) {
+      for (std::size_t k = 0; k < x.size(); ++k) {
+        const double z = SampleStandardTruncated(a_[k], b_[k], log_mass_k_[k], rng);
+        // z is in [a, b]; mean + sd z may round a hair outside [low, high].
+        x[k] = std::clamp(normal_->mean()[k] + sd_[k] * z, low_[k], high_[k]);
+      }
+      return;
+    }
+    for (;;) {  // P(outside) <= 1e-12: a second try is already rare
+      normal_->Sample(rng, x);
+      if (Inside(x)) return;
+    }
+  }
+  std::string Describe() const override { return normal_->Describe(); }  // bounds: the reals'
+
+ private:
+  bool Inside(std::span<const double> x) const {
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (!(x[k] >= low_[k] && x[k] <= high_[k])) return false;
+    }
+    return true;
+  }
+
+  std::shared_ptr<const MultivariateNormalPrior> normal_;
+  std::vector<double> low_, high_;
+  std::vector<double> sd_, a_, b_, log_mass_k_;  // diagonal only
+  double log_mass_ = 0.0;
+};
+
+// A correlated normal is truncated only where the mass outside its box is below this (the union
+// bound over the coordinates, about 6 sd from a single bound): its normaliser, taken as 1, is
+// then off by less, far below any Monte Carlo error.
+constexpr double kNegligibleMass = 1e-9;
+// A diagonal normal's truncation needs this much mass left in each coordinate, as a
+// truncated_normal prior does (ContinuousPrior::IsValid).
+constexpr double kMinBoxMass = 1e-12;
 
 // The names of a group, "a, b", for messages about the group as a whole.
 std::string Joined(std::span<const std::string> names) {
@@ -161,6 +229,11 @@ std::shared_ptr<const JointPrior> MakeMultivariateNormalPrior(std::vector<double
     throw Error(ErrorKind::kConfig, "joint normal prior: " + why);
   };
   if (d == 0) fail("mean is empty; needs one value per parameter");
+  if (d > static_cast<std::size_t>(kMaxJointPriorDimension)) {
+    fail("mean has " + std::to_string(d) + " entries; a joint prior covers at most " +
+         std::to_string(kMaxJointPriorDimension) +
+         " reals (its check before the run cannot judge more): split it into independent groups");
+  }
   if (covariance.size() != d * d) {
     fail("covariance has " + std::to_string(covariance.size()) + " entries; must be " +
          std::to_string(d) + " x " + std::to_string(d));
@@ -188,6 +261,72 @@ std::shared_ptr<const JointPrior> MakeMultivariateNormalPrior(std::vector<double
       std::move(mean), std::move(covariance), std::move(l));
 }
 
+std::shared_ptr<const JointPrior> RestrictJointPrior(std::shared_ptr<const JointPrior> prior,
+                                                     std::span<const std::string> names,
+                                                     std::span<const double> low,
+                                                     std::span<const double> high) {
+  auto normal = std::dynamic_pointer_cast<const MultivariateNormalPrior>(prior);
+  if (!normal) return prior;
+  const std::size_t d = normal->mean().size();
+  COMBABC_CHECK(names.size() == d && low.size() == d && high.size() == d);
+  const std::vector<double>& cov = normal->covariance();
+  bool diagonal = true;
+  double outside = 0.0, worst = -1.0;
+  std::size_t worst_k = 0;
+  for (std::size_t k = 0; k < d; ++k) {
+    for (std::size_t i = 0; i < d; ++i) diagonal = diagonal && (i == k || cov[k * d + i] == 0.0);
+    const double sd = std::sqrt(cov[k * d + k]);
+    const double a = (low[k] - normal->mean()[k]) / sd, b = (high[k] - normal->mean()[k]) / sd;
+    // The marginal's mass outside [low, high]: Phi(a) + Q(b), each from its own tail.
+    const double out = 0.5 * std::erfc(-a / std::sqrt(2.0)) + 0.5 * std::erfc(b / std::sqrt(2.0));
+    outside += out;
+    if (out > worst) {
+      worst = out;
+      worst_k = k;
+    }
+  }
+  if (outside == 0.0) return prior;  // nothing to cut, to double precision
+  if (outside <= kNegligibleMass) {
+    // Drawn whole until inside: the same draws as the normal's own, but never outside.
+    return std::make_shared<BoxedNormalPrior>(std::move(normal),
+                                              std::vector<double>(low.begin(), low.end()),
+                                              std::vector<double>(high.begin(), high.end()),
+                                              false);
+  }
+  if (!diagonal) {
+    const double sd = std::sqrt(cov[worst_k * d + worst_k]);
+    throw Error(ErrorKind::kConfig,
+                "prior: the correlated normal puts " + Short(worst) + " of its mass outside [" +
+                    Shortest(low[worst_k]) + ", " + Shortest(high[worst_k]) + "] (mean " +
+                    Shortest(normal->mean()[worst_k]) + ", sd " + Short(sd) +
+                    "); a correlated normal is truncated only where under 1e-9 of its mass is "
+                    "cut (its mass in a box has no closed form): widen the bounds to mean +- 6.2 "
+                    "sd, or give the group a diagonal covariance",
+                "",
+                0,
+                names[worst_k]);
+  }
+  // A truncation with too little mass left could not be sampled or normalised reliably.
+  for (std::size_t k = 0; k < d; ++k) {
+    const double sd = std::sqrt(cov[k * d + k]);
+    const double log_mass = LogStandardNormalMass((low[k] - normal->mean()[k]) / sd,
+                                                  (high[k] - normal->mean()[k]) / sd);
+    if (!(log_mass >= std::log(kMinBoxMass))) {
+      throw Error(ErrorKind::kConfig,
+                  "prior: the normal (mean " + Shortest(normal->mean()[k]) + ", sd " + Short(sd) +
+                      ") has mass " + Short(std::exp(log_mass)) + " on [" + Shortest(low[k]) +
+                      ", " + Shortest(high[k]) + "], must be >= 1e-12",
+                  "",
+                  0,
+                  names[k]);
+    }
+  }
+  return std::make_shared<BoxedNormalPrior>(std::move(normal),
+                                            std::vector<double>(low.begin(), low.end()),
+                                            std::vector<double>(high.begin(), high.end()),
+                                            true);
+}
+
 JointPriorMoments CheckJointPrior(const JointPrior& prior,
                                   std::span<const std::string> names,
                                   std::span<const double> low,
@@ -197,6 +336,14 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
   auto fail = [&](const std::string& field, const std::string& why) {
     throw Error(ErrorKind::kConfig, "prior: " + why, "", 0, field);
   };
+  // Before any draw: the check's cost grows as d^2 (12 s at d = 500), for a verdict that beyond
+  // ~25 Gaussian dimensions is a refusal anyway.
+  if (d > static_cast<std::size_t>(kMaxJointPriorDimension)) {
+    fail(names.front() + ", ..., " + names.back(),
+         "the joint prior covers " + std::to_string(d) + " reals; at most " +
+             std::to_string(kMaxJointPriorDimension) +
+             " can be checked against its sampler: split it into independent groups");
+  }
   RandomStream rng(kCheckSeed, 0, 0);
 
   // 1. The sampler's draws: finite, inside the bounds, of finite density.

@@ -209,7 +209,9 @@ void ParameterSpace::CheckJointPriors() {
       low.push_back(it->prior.low);
       high.push_back(it->prior.high);
     }
-    const JointPriorMoments moments = CheckJointPrior(*group.prior, names, low, high);
+    // Restricted to its reals' bounds (a normal truncated there), then checked as drawn.
+    indexed.prior = RestrictJointPrior(group.prior, names, low, high);
+    const JointPriorMoments moments = CheckJointPrior(*indexed.prior, names, low, high);
     for (std::size_t i = 0; i < indexed.index.size(); ++i) {
       ContinuousPrior& prior = reals_[indexed.index[i]].prior;
       prior.mean = moments.mean[i];

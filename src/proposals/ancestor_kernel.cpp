@@ -62,7 +62,8 @@ class AncestorProposal final : public JointProposal {
         defensive_(1.0),
         prior_bits_(space.binary().free_prior_one()),
         prior_one_(space.binary().free_prior_one()),
-        prior_reals_(space.reals_prior()) {}
+        prior_reals_(space.reals_prior()),
+        box_(SupportBox(prior_reals_)) {}
 
   AncestorProposal(const Population& population,
                    const ParameterSpace& space,
@@ -78,6 +79,9 @@ class AncestorProposal final : public JointProposal {
               std::span<std::uint8_t> free_bits,
               std::span<double> reals) const override {
     COMBABC_CHECK(free_bits.size() == f_ && reals.size() == r_);
+    std::array<double, kStackReals> stack{};
+    std::vector<double> heap(truncate_ && r_ > kStackReals ? r_ : 0);
+    const std::span<double> z(r_ > kStackReals ? heap.data() : stack.data(), truncate_ ? r_ : 0);
     for (int attempt = 0; attempt < kMaxSupportTries; ++attempt) {
       if (patterns_.empty() || rng.Uniform() < defensive_) {
         prior_bits_.Sample(rng, free_bits);
@@ -93,21 +97,18 @@ class AncestorProposal final : public JointProposal {
       for (std::size_t i = 0; i < f_; ++i) {
         free_bits[i] = static_cast<std::uint8_t>(g.bits[i] ^ (rng.Bernoulli53(flip_[i]) ? 1 : 0));
       }
-      const Factor& l = factors_[g.factor];
-      const double* c = &centres_[j * r_];
-      for (std::size_t i = 0; i < r_; ++i) reals[i] = rng.Normal();
-      // r = c_j + L z in place, from the last row up (row i needs z_0..z_i).
-      for (std::size_t i = r_; i-- > 0;) {
-        double x = c[i];
-        for (std::size_t k = 0; k <= i; ++k) x += l.l[Tri(i, k)] * reals[k];
-        reals[i] = x;
+      // Inside the bounds by construction when truncated (SampleInBox); else redrawn whole.
+      if (truncate_) {
+        SampleInBox(factors_[g.factor], &centres_[j * r_], box_, rng, reals, z);
+      } else {
+        SampleGaussian(factors_[g.factor], &centres_[j * r_], rng, reals);
       }
       if (InSupport(reals)) return;
     }
     throw Error(ErrorKind::kSoftware,
                 "ancestor proposal: " + std::to_string(kMaxSupportTries) +
                     " draws in a row fell outside the prior support of the reals; the kernel has "
-                    "almost no mass inside the support");
+                    "almost no mass where the joint prior's density is positive");
   }
 
   double LogDensity(std::span<const std::uint8_t> free_bits,
@@ -137,7 +138,8 @@ class AncestorProposal final : public JointProposal {
         const double* w = &whitened_[j * r_];
         double q = 0.0;
         for (std::size_t i = 0; i < r_; ++i) q += (y[i] - w[i]) * (y[i] - w[i]);
-        sum.Add(bits + log_normal_[j] - 0.5 * q);
+        sum.Add(bits + log_normal_[j] - 0.5 * q -
+                (truncate_ ? LogBoxMass(l, box_, reals, y, w) : 0.0));
       }
     }
     return sum.Value();
@@ -257,6 +259,13 @@ class AncestorProposal final : public JointProposal {
     }
     log_defensive_ = std::log(defensive_);
     log_ancestors_ = std::log1p(-defensive_);
+    truncate_ = r_ > 0 && TruncateEachCoordinate(
+                              cumulative_,
+                              centres_,
+                              [&](std::size_t j) -> const Factor& {
+                                return factors_[patterns_[pattern_of_[j]].factor];
+                              },
+                              box_);
   }
 
   static std::vector<std::size_t> AllOf(
@@ -308,6 +317,8 @@ class AncestorProposal final : public JointProposal {
   BernoulliProposal prior_bits_;
   std::vector<double> prior_one_;
   RealsPrior prior_reals_;  // a copy: the proposal may outlive the space
+  Box box_;                 // the reals' bounds
+  bool truncate_ = false;   // each Gaussian truncated to box_ (TruncateEachCoordinate)
   std::vector<double> flip_rate_, log_keep_, log_flip_;
   std::vector<std::uint64_t> flip_;  // BernoulliThreshold(flip_rate_)
   std::vector<Pattern> patterns_;

@@ -27,8 +27,11 @@ std::string Formatted(double x) {
   return {buf.data(), result.ptr};
 }
 
-// q(r) = sum_j w_j N(r; c_j, Sigma_j) restricted to the prior's support. Everything is
-// precomputed: Sample and LogDensity only read, so they are thread-safe, and they allocate nothing.
+// q(r) = sum_j w_j N(r; c_j, Sigma_j) restricted to the prior's support: redrawn whole until
+// inside, or, when that would rarely succeed (many bounded reals), each Gaussian truncated to the
+// box of the reals' bounds coordinate by coordinate and normalised there (TruncateEachCoordinate).
+// Everything is precomputed: Sample and LogDensity only read, so they are thread-safe, and they
+// allocate nothing below kStackDims reals.
 class GaussianMixtureProposal final : public ContinuousProposal {
  public:
   // `centres` is N x d row-major; `weights` sum to 1 (zero-weight components are dropped);
@@ -41,8 +44,8 @@ class GaussianMixtureProposal final : public ContinuousProposal {
                           const std::vector<std::size_t>& factor_of)
       : d_(static_cast<std::size_t>(space.num_reals())),
         prior_(space.reals_prior()),
+        box_(SupportBox(prior_)),
         factors_(std::move(factors)) {
-    for (const ContinuousParameter& p : space.reals()) names_.push_back(p.name);
     double total = 0.0;
     for (std::size_t j = 0; j < weights.size(); ++j) {
       if (!(weights[j] > 0.0)) continue;
@@ -74,14 +77,23 @@ class GaussianMixtureProposal final : public ContinuousProposal {
         }
       }
     }
+    truncate_ = TruncateEachCoordinate(
+        cumulative_,
+        centres_,
+        [&](std::size_t j) -> const Factor& { return factors_[factor_of_[j]]; },
+        box_);
   }
 
   void Sample(RandomStream& rng, std::span<double> reals) const override {
     COMBABC_CHECK(reals.size() == d_);
+    std::array<double, kStackDims> stack{};
+    std::vector<double> heap(truncate_ && d_ > kStackDims ? d_ : 0);
+    const std::span<double> z(d_ > kStackDims ? heap.data() : stack.data(), truncate_ ? d_ : 0);
     // A draw outside the support is discarded whole and both the component and z drawn again:
     // that samples q restricted to the support, q 1_S / Z with one constant Z for the wave. Keeping
     // j and redrawing only z would truncate each component on its own, with a Z_j per component
-    // that LogDensity could not omit.
+    // that LogDensity could not omit. Truncating each coordinate instead normalises each component
+    // on the box, and only a joint prior's constraint between its reals can reject its draws.
     for (int attempt = 0; attempt < kMaxSupportTries; ++attempt) {
       // Component j with probability w_j: the first cumulative weight above u x total.
       const double u = rng.Uniform() * cumulative_.back();
@@ -89,27 +101,22 @@ class GaussianMixtureProposal final : public ContinuousProposal {
           std::upper_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin(),
           cumulative_.size() - 1);
       const Factor& f = factors_[factor_of_[j]];
-      const double* c = &centres_[j * d_];
-      for (std::size_t i = 0; i < d_; ++i) reals[i] = rng.Normal();
-      // r = c_j + L z in place: row i needs z_0..z_i only, so fill from the last row up.
-      for (std::size_t i = d_; i-- > 0;) {
-        double r = c[i];
-        for (std::size_t k = 0; k <= i; ++k) r += f.l[Tri(i, k)] * reals[k];
-        reals[i] = r;
+      if (truncate_) {
+        SampleInBox(f, &centres_[j * d_], box_, rng, reals, z);
+      } else {
+        SampleGaussian(f, &centres_[j * d_], rng, reals);
       }
       if (prior_.InSupport(reals)) return;
     }
-    std::size_t bad = 0;
-    while (bad + 1 < d_ && prior_.marginal(bad).InSupport(reals[bad])) ++bad;
     throw Error(ErrorKind::kSoftware,
                 "continuous proposal: " + std::to_string(kMaxSupportTries) +
-                    " draws in a row fell outside the prior support of the reals (the last at " +
-                    names_[bad] + " = " + Formatted(reals[bad]) +
-                    "); the kernel has almost no mass inside the support");
+                    " draws in a row fell outside the prior support of the reals; the kernel has "
+                    "almost no mass where the joint prior's density is positive");
   }
 
-  // log sum_j w_j N(r; c_j, Sigma_j) by a one-pass log-sum-exp; -infinity outside the support.
-  // The mass of the support under q (the truncation constant) is common to the wave and omitted.
+  // log sum_j w_j N(r; c_j, Sigma_j) by a one-pass log-sum-exp, each Gaussian divided by its mass
+  // in the box when truncated; -infinity outside the support. The mass of the support under this
+  // (the constant of the whole redraws) is common to the wave and omitted.
   double LogDensity(std::span<const double> reals) const override {
     COMBABC_CHECK(reals.size() == d_);
     if (!prior_.InSupport(reals)) return -kInfinity;
@@ -134,19 +141,25 @@ class GaussianMixtureProposal final : public ContinuousProposal {
         const double* w = &whitened_[j * d_];
         double q = 0.0;
         for (std::size_t i = 0; i < d_; ++i) q += (y0[i] - w[i]) * (y0[i] - w[i]);
-        add(log_weight_[j] - 0.5 * q);
+        add(log_weight_[j] - 0.5 * q -
+            (truncate_ ? LogBoxMass(f, box_, reals, y0.data(), w) : 0.0));
       }
     } else {
+      // L_j^{-1} (r - c_j), kept only for a truncated kernel's LogBoxMass.
+      std::array<double, kStackDims> stack{};
+      std::vector<double> heap(truncate_ && d_ > kStackDims ? d_ : 0);
+      double* y = !truncate_ ? nullptr : d_ > kStackDims ? heap.data() : stack.data();
       for (std::size_t j = 0; j < NumComponents(); ++j) {
         const Factor& f = factors_[factor_of_[j]];
         const double* c = &centres_[j * d_];
         double q = 0.0;
         for (std::size_t i = 0; i < d_; ++i) {
-          double y = 0.0;
-          for (std::size_t k = 0; k <= i; ++k) y += f.l_inv[Tri(i, k)] * (reals[k] - c[k]);
-          q += y * y;
+          double v = 0.0;
+          for (std::size_t k = 0; k <= i; ++k) v += f.l_inv[Tri(i, k)] * (reals[k] - c[k]);
+          if (y) y[i] = v;
+          q += v * v;
         }
-        add(log_weight_[j] - 0.5 * q);
+        add(log_weight_[j] - 0.5 * q - (truncate_ ? LogBoxMass(f, box_, reals, y, nullptr) : 0.0));
       }
     }
     return max + std::log(sum);
@@ -160,7 +173,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
 
   std::size_t d_;
   RealsPrior prior_;  // a copy: the proposal may outlive the space
-  std::vector<std::string> names_;
+  Box box_;
   std::vector<Factor> factors_;
   std::vector<double> centres_;         // N x d
   std::vector<double> cumulative_;      // running sums of the weights
@@ -168,6 +181,7 @@ class GaussianMixtureProposal final : public ContinuousProposal {
   std::vector<double> log_weight_;      // log w_j - (d/2) log 2 pi - log det L_j
   bool shared_ = false;
   std::vector<double> whitened_;  // shared_: L^{-1} (c_j - c_0), N x d
+  bool truncate_ = false;         // each Gaussian truncated to the box (TruncateEachCoordinate)
 };
 
 // Wave 0 proposes from the prior itself: each real drawn from its own prior (a joint prior's at

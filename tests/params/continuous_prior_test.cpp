@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "params/truncated_normal.hpp"
+
 namespace combabc {
 namespace {
 
@@ -258,6 +260,58 @@ TEST(ContinuousPrior, IsValidNamesTheBadField) {
   EXPECT_TRUE(normal.IsValid(nullptr));
   // Just above the mass floor is valid: N(0, 1) on [7, 8] has 1.28e-12.
   EXPECT_TRUE(Truncated(0.0, 1.0, 7.0, 8.0).IsValid(nullptr));
+}
+
+// log Q(x) for large x from the asymptotic series Q(x) = phi(x) / x (1 - 1/x^2 + 3/x^4 - 15/x^6
+// + 105/x^8 - 945/x^10), independent of the implementation (error ~1e-14 relative at x = 40).
+double LogUpperTailSeries(double x) {
+  const double u = 1.0 / (x * x);
+  const double series =
+      1.0 - u * (1.0 - 3.0 * u * (1.0 - 5.0 * u * (1.0 - 7.0 * u * (1.0 - 9.0 * u))));
+  return -0.5 * x * x - 0.5 * std::log(2.0 * M_PI) - std::log(x) + std::log(series);
+}
+
+TEST(TruncatedNormal, LogMassIsAccurateFromTheCentreToFarTails) {
+  // Where erfc is representable, its differences; beyond (x > 37), the asymptotic series. The
+  // kernels need the far tails: a conditional mean can sit many sd outside a real's bounds.
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{{-1.0, 2.0},
+                                                                   {0.5, 0.7},
+                                                                   {7.9, 8.6},
+                                                                   {9.0, 9.2},
+                                                                   {12.0, 30.0},
+                                                                   {29.0, 31.0},
+                                                                   {33.0, 36.0},
+                                                                   {5.0, INFINITY},
+                                                                   {-INFINITY, -20.0}}) {
+    const double direct = std::log(Q(a) - Q(b));
+    EXPECT_NEAR(LogStandardNormalMass(a, b), direct, 1e-11 * std::fabs(direct) + 1e-13)
+        << a << ", " << b;
+  }
+  for (const double x : {40.0, 100.0, 1e4}) {
+    EXPECT_NEAR(LogStandardNormalMass(x, INFINITY), LogUpperTailSeries(x), 1e-12 * x * x) << x;
+    EXPECT_EQ(LogStandardNormalMass(-INFINITY, -x), LogStandardNormalMass(x, INFINITY));
+    // [x, x + 0.5]: all but exp(-x / 2)-ish of the tail's mass.
+    const double narrow = LogStandardNormalMass(x, x + 0.5);
+    const double both = LogUpperTailSeries(x) +
+                        std::log1p(-std::exp(LogUpperTailSeries(x + 0.5) - LogUpperTailSeries(x)));
+    EXPECT_NEAR(narrow, both, 1e-12 * x * x) << x;
+  }
+  EXPECT_EQ(LogStandardNormalMass(1.0, 1.0), -INFINITY);
+}
+
+TEST(TruncatedNormal, FarTailDrawsHaveTheTailsMean) {
+  // N(0, 1) on [40, inf): mean phi(40) / Q(40) = 1 / R(40) ~ 40.025, sd ~ 1/40.
+  RandomStream rng(8, 0, 0);
+  const double log_mass = LogStandardNormalMass(40.0, INFINITY);
+  const double mean = std::exp(-800.0 - 0.5 * std::log(2.0 * M_PI) - log_mass);
+  double sum = 0.0;
+  constexpr int kDraws = 20000;
+  for (int i = 0; i < kDraws; ++i) {
+    const double z = SampleStandardTruncated(40.0, INFINITY, log_mass, rng);
+    ASSERT_GE(z, 40.0);
+    sum += z;
+  }
+  EXPECT_NEAR(sum / kDraws, mean, 6.0 * (1.0 / 40.0) / std::sqrt(kDraws));
 }
 
 }  // namespace
