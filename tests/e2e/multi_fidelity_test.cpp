@@ -154,8 +154,8 @@ TEST(ExternalWorkFolder, IsMadeForEveryExternalProgramAndRemovedAfterTheRun) {
       "argv = [\"sh\", \"-c\", 'echo combabc-worker 2 4 tiny; while read id rest; do "
       "echo \"$id ok 0.86 0.95 0.96 0.87\"; done']\n";
   const std::string rest =
-      "[sampler]\nseed = 2\nwaves = 1\naccepted_per_wave = 5\n"
-      "max_simulations = 300\n[output]\ndirectory = \"out\"\n";
+      "[sampler]\nseed = 2\nwaves = 1\naccepted_per_wave = 3\n"
+      "max_simulations = 60\n[output]\ndirectory = \"out\"\n";
   const std::string cheap = "[simulator.low_fidelity]\n" + command +
                             "[simulator.low_fidelity.bits]\ncount = 6\n"
                             "[simulator.low_fidelity.outputs]\n" +
@@ -180,7 +180,7 @@ TEST(ExternalWorkFolder, IsMadeForEveryExternalProgramAndRemovedAfterTheRun) {
   };
   for (const Case& c : {
            Case{"the sensor beside a cheap command",
-                TinySensorConfig("seed = 2\nwaves = 1\naccepted_per_wave = 5\n",
+                TinySensorConfig("seed = 2\nwaves = 1\naccepted_per_wave = 3\n",
                                  "[output]\ndirectory = \"out\"\n" + cheap +
                                      "[model.output]\npositions = [0.31, 0.4, 0.49, 0.58]\n")},
            Case{"a command beside a cheap command",
