@@ -14,6 +14,7 @@
 #include <atomic>
 #include <string>
 
+#include "combabc/core/output_files.hpp"
 #include "combabc/samplers/observer.hpp"
 
 namespace combabc::cli {
@@ -33,7 +34,9 @@ extern "C" inline void OnSignal(int signal_number) {
     [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, term_note, note);
   }
   if (!armed.load() || requested.exchange(true)) {
-    // Nothing resumable in flight, or the user insists: die by the signal (default action).
+    // Nothing resumable in flight, or the user insists: die by the signal (default action),
+    // leaving no temporary behind (an export's staged files; no destructor runs).
+    RemovePendingOutputs();
     ::signal(signal_number, SIG_DFL);
     ::raise(signal_number);
   }

@@ -510,13 +510,18 @@ struct PythonRunFile {
 };
 
 // Raises the user's Python exception that ended a run as itself (its type, message and
-// traceback), with the engine's line (wave and candidate) attached as a note; else rethrows.
-[[noreturn]] void RaiseFirstError(const FirstPythonError& first_error, const std::exception& e) {
+// traceback), with the engine's line (wave and candidate) attached as a note; else rethrows. A
+// KeyboardInterrupt (Ctrl-C that reached Python inside the simulator or distance) is an interrupt
+// like one seen between batches: it gets `interrupted`, the note that says how to continue.
+[[noreturn]] void RaiseFirstError(const FirstPythonError& first_error,
+                                  const std::exception& e,
+                                  const std::string& interrupted = "") {
   std::optional<py::error_already_set> raised = first_error.error();
   if (!raised) throw;
-  if (py::hasattr(raised->value(), "add_note")) {
-    raised->value().attr("add_note")(std::string("combabc: ") + e.what());
-  }
+  const bool interrupt = raised->matches(PyExc_KeyboardInterrupt);
+  const std::string note =
+      interrupt && !interrupted.empty() ? interrupted : std::string("combabc: ") + e.what();
+  if (py::hasattr(raised->value(), "add_note")) raised->value().attr("add_note")(note);
   throw *raised;
 }
 
@@ -605,6 +610,10 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   }
   PythonSignals signals;
   StoredRun observer(store ? &*store : nullptr, signals);
+  const std::string interrupted = file.history_path.empty()
+                                      ? "combabc: run interrupted"
+                                      : "combabc: interrupted; continue with combabc.resume(\"" +
+                                            file.history_path + "\", problem, options)";
   RunHistory history;
   try {
     const py::gil_scoped_release release;
@@ -621,17 +630,14 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
     for (const auto& [names, prior] : request.priors) {
       if (prior.error() && prior.error()->error()) RaiseFirstError(*prior.error(), e);
     }
-    RaiseFirstError(first_error, e);
+    RaiseFirstError(first_error, e, interrupted);
   }
   if (store) {
     const py::gil_scoped_release release;
     store->Finish(history.summary);
     store.reset();  // closed: the history is read back from the file below
   }
-  signals.RaiseIfInterrupted(file.history_path.empty()
-                                 ? "combabc: run interrupted"
-                                 : "combabc: interrupted; continue with combabc.resume(\"" +
-                                       file.history_path + "\", problem, options)");
+  signals.RaiseIfInterrupted(interrupted);
   if (!file.history_path.empty()) {
     // Read back from the file, as a config run's, so that the arrays are what export writes.
     py::dict result = LoadHistory(file.history_path);

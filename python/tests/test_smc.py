@@ -2,6 +2,7 @@
 determinism across thread counts, and errors raised in Python reaching the caller."""
 
 import itertools
+import os
 import warnings
 
 import numpy as np
@@ -347,6 +348,29 @@ def test_ctrl_c_stops_a_python_run_with_keyboard_interrupt(threads):
         combabc.run(problem(interrupted_once), options(accepted_per_wave=3000), threads=threads)
     # Stopped soon after, not at the end of the run (which takes several thousand calls).
     assert len(calls) < 2000
+
+
+def test_a_keyboard_interrupt_raised_in_the_simulator_says_how_to_resume(tmp_path):
+    """Issue 35: Ctrl-C that Python delivers inside the simulator (KeyboardInterrupt raised
+    there) is an interrupt like one seen between batches: KeyboardInterrupt with the note naming
+    combabc.resume, not "simulator failed"; and the run resumes."""
+    calls = []
+
+    def interrupted_once(bits):
+        calls.append(1)
+        if len(calls) == 50:
+            raise KeyboardInterrupt
+        return W @ bits
+
+    with pytest.raises(KeyboardInterrupt) as raised:
+        combabc.run(problem(interrupted_once), options(accepted_per_wave=100),
+                    output_directory=tmp_path)
+    path = os.path.join(os.fspath(tmp_path), "history.sqlite")
+    assert getattr(raised.value, "__notes__", []) == [
+        f'combabc: interrupted; continue with combabc.resume("{path}", problem, options)']
+    resumed = combabc.resume(path, problem(interrupted_once), options(accepted_per_wave=100))
+    assert resumed.status == "finished"
+    assert [w.complete for w in resumed.waves] == [True, True, True]
 
 
 def test_a_budget_stopped_runs_posterior_is_its_last_complete_wave():

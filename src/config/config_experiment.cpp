@@ -69,21 +69,6 @@ bool GoodName(const std::string& name) {
   });
 }
 
-// The name as an export column sees it (export.cpp's Identifier: lower case, each run of other
-// characters one '_'): two experiments must differ there too, or their columns would collide.
-std::string ColumnKey(const std::string& name) {
-  std::string out;
-  for (char ch : name) {
-    if (std::isalnum(static_cast<unsigned char>(ch)) != 0) {
-      out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    } else if (!out.empty() && out.back() != '_') {
-      out += '_';
-    }
-  }
-  while (!out.empty() && out.back() == '_') out.pop_back();
-  return out;
-}
-
 // The threshold schedules of every threshold or likelihood component, experiment by experiment.
 void CollectThresholds(CalibrationConfig* c) {
   c->smc.thresholds.clear();
@@ -106,6 +91,41 @@ void CheckSensorExperiment(const CalibrationConfig& c,
   one.frequency_hz = x.frequency_hz;
   std::string why;
   if (!one.IsValid(&why)) ThrowModelError(why, sources, x.line, c.path);
+}
+
+// Every component's export columns (d_<name>, eps_<name>: the full name, "<experiment>/<name>"
+// with experiments, as export.cpp's Identifier writes it) must be its own: two names that differ
+// only in case or punctuation ("fit-a", "fit_a"; experiment "a_b" with "c" and "a" with "b_c")
+// would give two columns of one name, and a reader would take one for the other.
+void CheckComponentColumns(const CalibrationConfig& c) {
+  struct Seen {
+    std::string name;
+    int line;
+  };
+  std::map<std::string, Seen> columns;
+  for (std::size_t e = 0; e < c.experiments.size(); ++e) {
+    const ExperimentConfig& x = c.experiments[e];
+    const std::vector<MetricComponentConfig>& components = x.metric.components;
+    for (std::size_t k = 0; k < components.size(); ++k) {
+      const MetricComponentConfig& component = components[k];
+      const std::string name = x.ComponentPrefix() + ComponentName(component);
+      const std::string column = ColumnKey(name);
+      const auto [it, fresh] = columns.emplace(column, Seen{name, component.config_line});
+      if (fresh) continue;
+      const std::string table = x.metric.preset ? std::string("metric.preset")
+                                                : "metric.component[" + std::to_string(k) + "]";
+      const bool named = !component.name.empty();
+      throw Error(ErrorKind::kConfig,
+                  "component " + Excerpt(name) + " would share the export columns (d_" + column +
+                      ") of component " + Excerpt(it->second.name) + " at line " +
+                      std::to_string(it->second.line) +
+                      ": names that differ only in case or punctuation are one column; " +
+                      (named ? "rename one" : "give one a name"),
+                  c.path,
+                  component.config_line,
+                  x.Key(e, table));
+    }
+  }
 }
 
 void ParseOne(TableReader& t,
@@ -152,6 +172,22 @@ void ParseOne(TableReader& t,
 }
 
 }  // namespace
+
+// The name as an export column sees it (export.cpp's Identifier: lower case, each run of other
+// characters one '_'): two experiments or components must differ there too, or their columns
+// would collide.
+std::string ColumnKey(const std::string& name) {
+  std::string out;
+  for (char ch : name) {
+    if (std::isalnum(static_cast<unsigned char>(ch)) != 0) {
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    } else if (!out.empty() && out.back() != '_') {
+      out += '_';
+    }
+  }
+  while (!out.empty() && out.back() == '_') out.pop_back();
+  return out;
+}
 
 void RefuseExperimentPlaceholders(const std::vector<std::string>& argv,
                                   int line,
@@ -288,6 +324,7 @@ void ParseExperiments(TableReader& root,
                                             x.output_coordinates.begin(),
                                             x.output_coordinates.end());
   }
+  CheckComponentColumns(*c);
   CollectThresholds(c);
 }
 

@@ -1,11 +1,14 @@
 #include "combabc/core/output_files.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -34,6 +37,63 @@ std::string RandomSuffix() {
   std::string suffix(8, ' ');
   for (char& c : suffix) c = kAlphabet[pick(device)];
   return suffix;
+}
+
+// What RemovePendingOutputs removes: fixed slots, as a signal handler may not allocate or lock.
+// A slot is claimed (kWriting), filled, then published as a file or a directory; one that finds
+// every slot taken is not registered (a later command removes its leftover as stale).
+enum PendingKind : int { kFree = 0, kWriting = 1, kFile = 2, kDirectory = 3 };
+struct PendingSlot {
+  std::atomic<int> kind{kFree};
+  char path[4096];
+};
+constexpr int kPendingSlots = 64;
+PendingSlot pending_slots[kPendingSlots];
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free slots");
+
+int AddPending(const std::string& path, PendingKind kind) {
+  if (path.size() >= sizeof(PendingSlot::path)) return -1;
+  for (int i = 0; i < kPendingSlots; ++i) {
+    int expected = kFree;
+    if (pending_slots[i].kind.compare_exchange_strong(expected, kWriting)) {
+      std::memcpy(pending_slots[i].path, path.c_str(), path.size() + 1);
+      pending_slots[i].kind.store(kind);
+      return i;
+    }
+  }
+  return -1;
+}
+
+void DropPending(int& slot) {
+  if (slot >= 0) pending_slots[slot].kind.store(kFree);
+  slot = -1;
+}
+
+// A temporary of ours whose process has ended: ".combabc-tmp-<pid>-..." with no process <pid>
+// (a live one may be another command's at work, and a name without a pid is not recognised).
+bool IsStaleTemporary(const std::string& name) {
+  const std::string prefix = OutputDirectory::kTemporaryPrefix;
+  if (name.rfind(prefix, 0) != 0) return false;
+  std::size_t end = prefix.size();
+  while (end < name.size() && end - prefix.size() < 10 && name[end] >= '0' && name[end] <= '9') {
+    ++end;
+  }
+  if (end == prefix.size() || end >= name.size() || name[end] != '-') return false;
+  const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+  if (pid <= 0 || pid == static_cast<long>(::getpid())) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
+// Removes the stale temporaries (regular files only) of a directory combabc owns.
+void RemoveStaleTemporaries(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!IsStaleTemporary(it->path().filename().string())) continue;
+    struct stat st {};
+    if (::lstat(it->path().c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+      ::unlink(it->path().c_str());
+    }
+  }
 }
 
 // lstat: a symlink is reported as itself, never as what it points to.
@@ -177,12 +237,14 @@ AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)),
   if (kind == OutputPathKind::kRegularFile && !replace_) ThrowExists(path_);
   const fs::path dir = target.parent_path();
   for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
-    const std::string temp = (dir / (OutputDirectory::kTemporaryPrefix + RandomSuffix() + "-" +
-                                     target.filename().string()))
-                                 .string();
+    const std::string temp =
+        (dir / (OutputDirectory::kTemporaryPrefix + std::to_string(::getpid()) + "-" +
+                RandomSuffix() + "-" + target.filename().string()))
+            .string();
     fd_ = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd_ >= 0) {
       temp_path_ = temp;
+      pending_ = AddPending(temp, kFile);
     } else if (errno != EEXIST) {
       throw Error(ErrorKind::kCantCreate, "cannot create file: " + SystemError(), path_);
     }
@@ -193,6 +255,21 @@ AtomicFile::AtomicFile(std::string path, bool replace) : path_(std::move(path)),
 AtomicFile::~AtomicFile() {
   if (fd_ >= 0) ::close(fd_);
   if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
+  DropPending(pending_);
+}
+
+void RemovePendingOutputs() noexcept {
+  // Files first: a directory goes only once empty.
+  for (const PendingKind kind : {kFile, kDirectory}) {
+    for (PendingSlot& slot : pending_slots) {
+      if (slot.kind.load() != kind) continue;
+      if (kind == kFile) {
+        ::unlink(slot.path);
+      } else {
+        ::rmdir(slot.path);
+      }
+    }
+  }
 }
 
 void AtomicFile::Flush() {
@@ -243,6 +320,7 @@ void AtomicFile::Commit() {
     throw Error(ErrorKind::kCantCreate, "cannot write: " + SystemError(), path_);
   }
   temp_path_.clear();
+  DropPending(pending_);
   SyncDirectory(fs::path(path_).parent_path());
 }
 
@@ -269,12 +347,17 @@ OutputDirectory::OutputDirectory(std::string path, bool overwrite)
       throw Error(ErrorKind::kCantCreate, "cannot create directory: " + SystemError(), path_);
     }
     created_ = true;
+    pending_ = AddPending(dir.string(), kDirectory);
+  } else if (state.has_manifest || state.empty) {
+    // combabc's directory: what an interrupted or killed command of ours left is removed.
+    RemoveStaleTemporaries(dir);
   }
 }
 
 OutputDirectory::~OutputDirectory() {
   staged_.clear();  // removes the temporaries of an uncommitted directory
   if (created_ && !committed_) ::rmdir(WithoutTrailingSlash(path_).c_str());
+  DropPending(pending_);
 }
 
 std::ostream& OutputDirectory::Add(const std::string& name) {
@@ -364,6 +447,7 @@ void OutputDirectory::Commit() {
   }
   write_manifest(written);
   committed_ = true;
+  DropPending(pending_);
 }
 
 }  // namespace combabc

@@ -87,6 +87,20 @@ Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config) {
   return ComputeFingerprint(inputs);
 }
 
+std::vector<StoredExperiment> ExperimentsOf(const Problem& p) {
+  std::vector<StoredExperiment> experiments;
+  for (std::size_t e = 0; e < p.config.experiments.size(); ++e) {
+    const ExperimentConfig& x = p.config.experiments[e];
+    const JointDistance::Part& part = p.distance->parts()[e];
+    experiments.push_back({x.name,
+                           ExperimentDescription(p.config, x),
+                           static_cast<int>(part.distance->output_size()),
+                           static_cast<int>(p.data[e].positions.size()),
+                           static_cast<int>(part.distance->configs().size())});
+  }
+  return experiments;
+}
+
 RunMetadata Describe(const Problem& p) {
   RunMetadata m;
   m.combabc_version = COMBABC_VERSION;
@@ -109,19 +123,12 @@ RunMetadata Describe(const Problem& p) {
   m.distance_components = p.distance->components();
   m.output_positions = p.config.simulator.outputs.coordinates;
   m.position_unit = "m";
-  for (std::size_t e = 0; e < p.config.experiments.size(); ++e) {
-    const ExperimentConfig& x = p.config.experiments[e];
-    const MeasuredProfile& data = p.data[e];
+  for (const MeasuredProfile& data : p.data) {
     m.measured.positions.insert(
         m.measured.positions.end(), data.positions.begin(), data.positions.end());
     m.measured.values.insert(m.measured.values.end(), data.values.begin(), data.values.end());
-    const JointDistance::Part& part = p.distance->parts()[e];
-    m.experiments.push_back({x.name,
-                             ExperimentDescription(p.config, x),
-                             static_cast<int>(part.distance->output_size()),
-                             static_cast<int>(data.positions.size()),
-                             static_cast<int>(part.distance->configs().size())});
   }
+  m.experiments = ExperimentsOf(p);
   m.reals = p.space->reals();
   m.proposal = p.config.smc.proposal;
   m.tempering_form = ToString(p.config.smc.tempering.form);

@@ -58,6 +58,10 @@ void BuildModelIn(Problem& p, const std::string& history_path);
 // `config` defaults to the problem's own; resume also asks what another reading of it would give.
 Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config = nullptr);
 
+// The experiments as the history's experiment table records them (name, description, and how
+// many outputs, measured points and components each has).
+std::vector<StoredExperiment> ExperimentsOf(const Problem& p);
+
 // The run's metadata as its history stores it (the fingerprint included).
 RunMetadata Describe(const Problem& p);
 

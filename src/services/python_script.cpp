@@ -98,27 +98,41 @@ PythonScript FindPythonScript(const std::string& file_name,
   return tools;
 }
 
-std::vector<std::string> MissingModules(const std::string& python,
-                                        const std::vector<std::string>& modules) {
-  // find_spec locates a module without importing it: one interpreter start, a few ms.
+std::string ModulesProblem(const std::string& python, const std::vector<std::string>& modules) {
+  // Imported, not only looked up: a broken installation fails here rather than after sampling.
+  // The last line says how it went; only a python that ran the check to its end prints "ok" (any
+  // program that merely exits 0, or a python that fails to start, is no such python).
   std::vector<std::string> args = {
       python,
       "-c",
-      "import importlib.util, sys\n"
-      "missing = [m for m in sys.argv[1:] if importlib.util.find_spec(m) is None]\n"
-      "sys.stderr.write(' '.join(missing))\n"
-      "sys.exit(3 if missing else 0)\n"};
+      "import importlib, sys\n"
+      "missing, broken = [], []\n"
+      "for m in sys.argv[1:]:\n"
+      "    try:\n"
+      "        importlib.import_module(m)\n"
+      "    except ModuleNotFoundError as e:\n"
+      "        (missing if e.name == m else broken).append((m, e))\n"
+      "    except Exception as e:\n"
+      "        broken.append((m, e))\n"
+      "if missing:\n"
+      "    sys.stderr.write('\\nhas no module ' + missing[0][0] +\n"
+      "                     (' (nor ' + missing[1][0] + ')' if len(missing) > 1 else ''))\n"
+      "elif broken:\n"
+      "    m, e = broken[0]\n"
+      "    sys.stderr.write('\\ncannot import ' + m + ' (' + type(e).__name__ + ': ' +\n"
+      "                     ' '.join(str(e).split())[:160] + ')')\n"
+      "else:\n"
+      "    sys.stderr.write('\\nok')\n"};
   args.insert(args.end(), modules.begin(), modules.end());
   const ProcessResult result = RunProcess(args, "");
-  std::vector<std::string> missing;
-  if (result.status != 3) return missing;
-  std::size_t begin = 0;
-  while (begin < result.err.size()) {
-    const std::size_t end = std::min(result.err.find(' ', begin), result.err.size());
-    if (end > begin) missing.push_back(result.err.substr(begin, end - begin));
-    begin = end + 1;
-  }
-  return missing;
+  const std::size_t last = result.err.find_last_of('\n');
+  const std::string line = last == std::string::npos ? "" : result.err.substr(last + 1);
+  if (result.status == 0 && line == "ok") return {};
+  if (line.rfind("has no module ", 0) == 0 || line.rfind("cannot import ", 0) == 0) return line;
+  return "did not run the check for " + modules.front() + " (" +
+         (result.status >= 128 ? "killed by signal " + std::to_string(result.status - 128)
+                               : "exit status " + std::to_string(result.status)) +
+         (result.status == 0 ? ", no answer" : "") + ")";
 }
 
 ErrorKind KindOfScriptStatus(int status) {

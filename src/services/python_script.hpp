@@ -39,11 +39,11 @@ ProcessResult RunProcess(std::vector<std::string> args,
                          const std::string& needs,
                          const std::function<void()>& before_signal = {});
 
-// The names among `modules` that `python` cannot import, found without importing them (one
-// interpreter start). Empty when all are there, or when the check itself could not run (the
-// script's own error says why later).
-std::vector<std::string> MissingModules(const std::string& python,
-                                        const std::vector<std::string>& modules);
+// Why `python` cannot serve a script that imports `modules`: "has no module numpy (nor
+// matplotlib)", "cannot import numpy (<error>)", or, for a program that did not run the check to
+// its end (not a python, a python that does not start), "did not run the check for numpy (exit
+// status 1)". Empty when it imports them all (one interpreter start that imports them).
+std::string ModulesProblem(const std::string& python, const std::vector<std::string>& modules);
 
 // The scripts exit with the sysexits code of what went wrong.
 ErrorKind KindOfScriptStatus(int status);

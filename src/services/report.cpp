@@ -99,17 +99,16 @@ std::string ReportDirectory(const std::string& history_path) {
 
 void CheckReportPossible(const std::string& directory) {
   const PythonScript tools = FindReportTools();
-  // A python without the plotting packages would be found out only after sampling: said now.
-  if (const auto missing = MissingModules(tools.python, {"numpy", "matplotlib"});
-      !missing.empty()) {
+  // A python without the plotting packages (or no python at all) would be found out only after
+  // sampling: said now.
+  if (const std::string problem = ModulesProblem(tools.python, {"numpy", "matplotlib"});
+      !problem.empty()) {
     const char* variable = std::getenv("COMBABC_PYTHON");
     const std::string which = variable != nullptr && *variable != '\0'
                                   ? "COMBABC_PYTHON=" + tools.python
                                   : tools.python + " (COMBABC_PYTHON unset)";
     throw Error(ErrorKind::kCantCreate,
-                "report: " + which + " has no module " + missing.front() +
-                    (missing.size() > 1 ? " (nor " + missing[1] + ")" : "") + "; " + kReportNeeds +
-                    "; or use --no-report");
+                "report: " + which + " " + problem + "; " + kReportNeeds + "; or use --no-report");
   }
   // A directory whose parent does not exist yet (a new output directory) will be created fresh.
   const fs::path parent = fs::path(directory).parent_path();

@@ -59,6 +59,40 @@ std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::str
   return profiles;
 }
 
+// The history's experiment table must be what its configuration gives: the data were split by it
+// (StoredProfiles), and export and report name and slice the experiments by it. The fingerprint
+// does not cover it, so a table that disagrees (a crafted or damaged history) would resume and
+// report its experiments under the wrong names or slices.
+void CheckStoredExperiments(const std::vector<StoredExperiment>& stored,
+                            const std::vector<StoredExperiment>& now,
+                            const std::string& path) {
+  for (std::size_t e = 0; e < stored.size() && e < now.size(); ++e) {
+    const StoredExperiment& a = stored[e];
+    const StoredExperiment& b = now[e];
+    std::string field, before, after;
+    auto differs = [&](const char* key, const std::string& x, const std::string& y) {
+      if (!field.empty() || x == y) return;
+      field = key;
+      before = x;
+      after = y;
+    };
+    differs("name", Excerpt(a.name), Excerpt(b.name));
+    differs("description", Excerpt(a.description), Excerpt(b.description));
+    differs("outputs", std::to_string(a.outputs), std::to_string(b.outputs));
+    differs("measured points", std::to_string(a.measured), std::to_string(b.measured));
+    differs("components", std::to_string(a.components), std::to_string(b.components));
+    if (field.empty()) continue;
+    throw Error(ErrorKind::kConfig,
+                "resume: the history's experiment table disagrees with its configuration: "
+                "experiment " +
+                    std::to_string(e + 1) + "'s " + field + " is " + before + " in the table and " +
+                    after +
+                    " as this combabc reads the configuration; "
+                    "start a new run",
+                path);
+  }
+}
+
 // The history store's callbacks, made on the primary only (`store` is null elsewhere) and joined
 // after each, so that a failed write (disk full) stops every worker at the same callback instead
 // of leaving the others waiting in the next batch.
@@ -319,6 +353,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
       now = FingerprintOf(p);
     }
   }
+  CheckStoredExperiments(metadata.experiments, ExperimentsOf(p), history_path);
   // The rebuilt problem must be the one the run started with, or the continuation would not
   // equal an uninterrupted run. Checked before BeginResume rewrites anything, and over the config
   // as written: the stop limits below are not part of the run's identity.

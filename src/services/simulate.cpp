@@ -48,8 +48,10 @@ NominalSimulator::NominalSimulator(CalibrationConfig config,
   if (config_.low_fidelity) config_.low_fidelity->model.normalise = false;
   // The cheap simulator's outputs are those that stand for the expensive one's: the same
   // coordinates.
-  simulator_ = low_fidelity ? MakeLowFidelitySimulator(config_, work_directory).simulator
-                            : MakeSimulator(config_, work_directory).simulator;
+  BuiltSimulator built = low_fidelity ? MakeLowFidelitySimulator(config_, work_directory)
+                                      : MakeSimulator(config_, work_directory);
+  work_folder_ = std::move(built.folder);
+  simulator_ = std::move(built.simulator);
 }
 
 NominalSimulator::~NominalSimulator() = default;

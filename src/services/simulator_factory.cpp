@@ -1,10 +1,13 @@
 #include "services/simulator_factory.hpp"
 
 #include <filesystem>
+#include <map>
+#include <mutex>
 
 #include "combabc/core/error.hpp"
 #include "combabc/services/sensor_simulator.hpp"
 #include "combabc/simulators/command_simulator.hpp"
+#include "combabc/simulators/work_directory.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
 #include "services/experiments_simulator.hpp"
 #include "services/selected_outputs.hpp"
@@ -18,6 +21,37 @@ std::string WorkDirectoryOf(const std::string& history_path) {
 }
 
 namespace {
+
+// The program runs in its own folder: no path handed to it may be relative to combabc's.
+std::string Absolute(const std::string& path) {
+  std::error_code ec;
+  return fs::absolute(path, ec).lexically_normal().string();
+}
+
+// A work folder held by every simulator that works in it: made when absent, removed (if empty)
+// when the last holder goes. One object per folder, shared through a registry, so that neither
+// the order in which the simulators are destroyed (one per experiment; the expensive and the
+// cheap one, whose folder lies inside the expensive one's) nor which of them came first decides
+// whether an empty folder stays behind; a folder that was there before is never removed.
+struct HeldFolder {
+  HeldFolder(std::shared_ptr<const HeldFolder> outer, const std::string& path)
+      : parent(std::move(outer)), folder(path) {}
+  std::shared_ptr<const HeldFolder> parent;  // the folder this one lies in: it goes after it
+  WorkDirectory folder;
+};
+
+std::shared_ptr<const HeldFolder> HoldFolder(const std::string& path,
+                                             std::shared_ptr<const HeldFolder> parent) {
+  static std::mutex mutex;
+  static std::map<std::string, std::weak_ptr<const HeldFolder>> held;
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::erase_if(held, [](const auto& entry) { return entry.second.expired(); });
+  std::weak_ptr<const HeldFolder>& slot = held[path];
+  if (auto folder = slot.lock()) return folder;
+  auto folder = std::make_shared<const HeldFolder>(std::move(parent), path);
+  slot = folder;
+  return folder;
+}
 
 std::unique_ptr<Simulator> MakeSensor(const CalibrationConfig& config,
                                       const std::vector<SensorModelPlan>& plans,
@@ -42,15 +76,15 @@ std::unique_ptr<Simulator> MakeSensor(const CalibrationConfig& config,
 }
 
 // A command or worker simulator (`simulator`: the config's [simulator] or its cheap one), one
-// per experiment when the config has [[experiment]] tables.
+// per experiment when the config has [[experiment]] tables, working in `folder`.
 BuiltSimulator MakeExternal(const CalibrationConfig& config,
                             const SimulatorConfig& simulator,
-                            const std::string& work_directory) {
+                            std::shared_ptr<const HeldFolder> folder) {
   BuiltSimulator built;
   ExternalSimulatorOptions options = simulator.external;
-  // The program runs in its own folder: no path handed to it may be relative to combabc's.
+  options.work_directory = folder->folder.path();
+  built.folder = std::move(folder);
   std::error_code ec;
-  options.work_directory = fs::absolute(work_directory, ec).lexically_normal().string();
   const fs::path dir = fs::absolute(config.directory.empty() ? "." : config.directory, ec);
   options.config_directory = dir.lexically_normal().string();
   if (!options.config_directory.empty() && options.config_directory.back() == '/' &&
@@ -103,7 +137,7 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config,
     built.simulator = MakeSensor(config, SensorModels(config), "model", threads);
     return built;
   }
-  return MakeExternal(config, config.simulator, work_directory);
+  return MakeExternal(config, config.simulator, HoldFolder(Absolute(work_directory), nullptr));
 }
 
 BuiltSimulator MakeLowFidelitySimulator(const CalibrationConfig& config,
@@ -116,9 +150,13 @@ BuiltSimulator MakeLowFidelitySimulator(const CalibrationConfig& config,
     built.simulator =
         MakeSensor(config, LowFidelitySensorModels(config), "simulator.low_fidelity", threads);
   } else {
-    // Its own folder inside the run's: its calls' folders must not meet the expensive ones'.
-    built =
-        MakeExternal(config, low.simulator, (fs::path(work_directory) / "low_fidelity").string());
+    // Its own folder inside the run's: its calls' folders must not meet the expensive ones'. The
+    // run's folder is made here too, as the expensive simulator may be the sensor.
+    const std::string run_folder = Absolute(work_directory);
+    built = MakeExternal(config,
+                         low.simulator,
+                         HoldFolder((fs::path(run_folder) / "low_fidelity").string(),
+                                    HoldFolder(run_folder, nullptr)));
   }
   bool identity = static_cast<int>(low.output_map.size()) == built.simulator->output_size();
   for (std::size_t k = 0; identity && k < low.output_map.size(); ++k) {

@@ -12,6 +12,10 @@
 namespace combabc::services {
 
 struct BuiltSimulator {
+  // An external simulator's work folder (and the run's `.work` folder it is in), made here when
+  // absent and removed, if empty, when the last simulator working in it has gone. Declared
+  // before `simulator` so that it outlives it. Null for the sensor.
+  std::shared_ptr<const void> folder;
   std::unique_ptr<Simulator> simulator;
   // What identifies the program beyond the config, for the run's fingerprint: a worker's
   // handshake line; empty for the others.
@@ -29,7 +33,8 @@ BuiltSimulator MakeSimulator(const CalibrationConfig& config,
 
 // A multi-fidelity run's cheap simulator ([simulator.low_fidelity]; none without one), its outputs
 // those that stand for the expensive simulator's. An external one works in
-// "<work_directory>/low_fidelity".
+// "<work_directory>/low_fidelity" (both folders made here when absent, whatever the expensive
+// simulator is).
 BuiltSimulator MakeLowFidelitySimulator(const CalibrationConfig& config,
                                         const std::string& work_directory,
                                         ThreadPool* threads = nullptr);

@@ -654,6 +654,40 @@ TEST(Config, MetricShapeErrors) {
   EXPECT_EQ(e.field(), "metric");
 }
 
+// Two components whose names differ only in case or punctuation would give export columns of one
+// name (d_fit_a twice): refused at the second, naming the first, within a metric and across
+// experiments ("a_b" / "c" and "a" / "b_c" are both a_b_c).
+TEST(Config, ComponentsThatWouldShareExportColumnsAreRefused) {
+  const std::string head = "[data]\ncsv = \"p.csv\"\n[metric]\n";
+  auto component = [](const std::string& window, const std::string& name) {
+    return "[[metric.component]]\ntype = \"area\"\nwindow = " + window + "\n" +
+           (name.empty() ? "" : "name = \"" + name + "\"\n");
+  };
+  Error e = ConfigError(head + component("[1, 2]", "fit-a") + component("[3, 4]", "Fit_A"));
+  ExpectLocated(e, "inline.toml", 8, "metric.component[1]");
+  EXPECT_NE(std::string(e.what()).find("component 'Fit_A' would share the export columns "
+                                       "(d_fit_a) of component 'fit-a' at line 4"),
+            std::string::npos)
+      << e.what();
+  e = ConfigError(head + component("[1, 2]", "") + component("[1, 2]", ""));
+  ExpectLocated(e, "inline.toml", 7, "metric.component[1]");
+  EXPECT_NE(std::string(e.what()).find("give one a name"), std::string::npos) << e.what();
+  EXPECT_NO_THROW(
+      ParseConfig(head + component("[1, 2]", "fit-a") + component("[3, 4]", "fit_b"), "in.toml"));
+  auto experiment = [&](const std::string& name, const std::string& component_name) {
+    std::string text = "[[experiment]]\nname = \"" + name +
+                       "\"\n[experiment.data]\ncsv = \"p.csv\"\n[experiment.metric]\n" +
+                       component("[1, 2]", component_name);
+    return text.replace(text.find("[[metric"), 8, "[[experiment.metric");
+  };
+  e = ConfigError(experiment("a_b", "c") + experiment("a", "b_c"));
+  ExpectLocated(e, "inline.toml", 15, "experiment[1].metric.component[0]");
+  EXPECT_NE(std::string(e.what()).find("component 'a/b_c' would share the export columns "
+                                       "(d_a_b_c) of component 'a_b/c' at line 6"),
+            std::string::npos)
+      << e.what();
+}
+
 }  // namespace
 }  // namespace combabc
 

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -163,6 +164,67 @@ TEST_F(OutputFilesTest, LeftoversOfAKilledCommandDoNotMakeADirectoryForeign) {
   OutputDirectory::Check(out.string(), false);
   Write(out / "user.txt", "x");
   EXPECT_EQ(KindOf([&] { OutputDirectory::Check(out.string(), false); }), ErrorKind::kCantCreate);
+}
+
+// Issue 35 (E15): what a signal handler removes before the signal ends the process (no
+// destructor runs then): every live temporary, then an uncommitted directory combabc created.
+TEST_F(OutputFilesTest, PendingOutputsAreRemovedForASignalHandler) {
+  AtomicFile file((dir_ / "single.csv").string(), false);
+  file.out() << "half";
+  file.Flush();
+  OutputDirectory directory((dir_ / "export").string(), false);
+  directory.Add("a.csv") << "a";
+  const std::string staged = directory.StagedPath("a.csv");
+  ASSERT_TRUE(fs::exists(file.temporary_path()));
+  ASSERT_TRUE(fs::exists(staged));
+  RemovePendingOutputs();
+  EXPECT_FALSE(fs::exists(file.temporary_path()));
+  EXPECT_FALSE(fs::exists(staged));
+  EXPECT_FALSE(fs::exists(dir_ / "export"));
+  // A committed file or directory is no longer pending.
+  AtomicFile kept((dir_ / "kept.csv").string(), false);
+  kept.Commit();
+  {
+    OutputDirectory done((dir_ / "done").string(), false);
+    done.Add("b.csv") << "b";
+    done.Commit();
+  }
+  RemovePendingOutputs();
+  EXPECT_TRUE(fs::exists(dir_ / "kept.csv"));
+  EXPECT_TRUE(fs::exists(dir_ / "done/b.csv"));
+}
+
+// Issue 35 (E15): a temporary a killed or interrupted command left in combabc's directory (with a
+// manifest, or holding only temporaries) is removed by the next command that opens it, once its
+// process is gone; one of a live process, a name combabc does not make, and anything in a
+// directory that is not combabc's are left alone.
+TEST_F(OutputFilesTest, StaleTemporariesOfEndedProcessesAreRemovedFromCombabcsDirectories) {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ASSERT_EQ(::waitpid(child, nullptr, 0), child);  // reaped: no process has that id now
+  const std::string prefix = OutputDirectory::kTemporaryPrefix;
+  const std::string dead = prefix + std::to_string(child) + "-abcdefgh-waves.csv";
+  const std::string live = prefix + std::to_string(::getppid()) + "-abcdefgh-waves.csv";
+  const std::string unknown = prefix + "k1ll3d00-waves.csv";
+  for (const char* folder : {"owned", "leftovers", "foreign"}) {
+    fs::create_directories(dir_ / folder);
+    for (const std::string& name : {dead, live, unknown}) Write(dir_ / folder / name, "half");
+  }
+  {
+    OutputDirectory owned((dir_ / "owned").string(), false);
+    owned.Add("a.csv") << "a";
+    owned.Commit();
+  }
+  Write(dir_ / "owned/extra.txt", "the user's");
+  Write(dir_ / "foreign/notes.txt", "the user's");
+  { OutputDirectory again((dir_ / "owned").string(), false); }
+  { OutputDirectory leftovers((dir_ / "leftovers").string(), false); }
+  { OutputDirectory foreign((dir_ / "foreign").string(), true); }
+  EXPECT_EQ(Listing(dir_ / "owned"),
+            (std::set<std::string>{live, unknown, "a.csv", "extra.txt", ".combabc-manifest"}));
+  EXPECT_EQ(Listing(dir_ / "leftovers"), (std::set<std::string>{live, unknown}));
+  EXPECT_EQ(Listing(dir_ / "foreign"), (std::set<std::string>{dead, live, unknown, "notes.txt"}));
 }
 
 TEST_F(OutputFilesTest, ForeignDirectoryIsRefusedAndLeftAlone) {

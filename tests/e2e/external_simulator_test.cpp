@@ -11,6 +11,7 @@
 #include <fstream>
 #include <regex>
 #include <thread>
+#include <utility>
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
@@ -158,22 +159,27 @@ TEST_F(ExternalSimulatorCli, AProgramThatDoesNotExistIsAConfigErrorAtItsArgvLine
 
 // Regression (issue 20, D11): a COMBABC_PYTHON without numpy was found out only after sampling
 // (exit 73). The run now refuses to start, naming the variable and the module. (python3 -S has
-// no site-packages: no numpy.)
+// no site-packages: no numpy.) Issue 35 (E18): so is a COMBABC_PYTHON that is no python at all
+// (/bin/false, which failed the check and passed it), or one that exits 0 without running it.
 TEST_F(ExternalSimulatorCli, APythonWithoutNumpyForTheReportIsRefusedBeforeSampling) {
   const std::string config = Config("worker.toml", 10);
   const std::string python = dir_ / "python-without-numpy";
   std::ofstream(python) << "#!/bin/sh\nexec /usr/bin/python3 -S \"$@\"\n";
   fs::permissions(python, fs::perms::owner_all);
-  ASSERT_EQ(::setenv("COMBABC_PYTHON", python.c_str(), 1), 0);
-  const auto r = RunCli({"run", config}, dir_.path());
-  ::unsetenv("COMBABC_PYTHON");
-  EXPECT_EQ(r.exit_code, 73) << r.err;
-  EXPECT_EQ(CountLines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("report: COMBABC_PYTHON=" + python + " has no module numpy"),
-            std::string::npos)
-      << r.err;
-  EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir_ / "out")) << "refused before anything was written";
+  for (const auto& [program, says] :
+       {std::pair<std::string, std::string>{python, " has no module numpy"},
+        {"/bin/false", " did not run the check for numpy (exit status 1)"},
+        {"/bin/true", " did not run the check for numpy (exit status 0, no answer)"}}) {
+    SCOPED_TRACE(program);
+    ASSERT_EQ(::setenv("COMBABC_PYTHON", program.c_str(), 1), 0);
+    const auto r = RunCli({"run", config}, dir_.path());
+    ::unsetenv("COMBABC_PYTHON");
+    EXPECT_EQ(r.exit_code, 73) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("report: COMBABC_PYTHON=" + program + says), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "refused before anything was written";
+  }
 }
 
 TEST_F(ExternalSimulatorCli, SimulateRunsOneConfigurationThroughTheDeclaredSimulator) {

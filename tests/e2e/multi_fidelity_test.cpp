@@ -137,6 +137,74 @@ TEST_F(MultiFidelityRun, SimulateRunsTheCheapModelOnAsking) {
       << refused.err;
 }
 
+// An external program (the cheap one beside the sensor or beside another program, or one per
+// experiment) works in "<history stem>.work/", which combabc makes whatever the expensive simulator
+// is and removes once every simulator working in it has gone: none is left behind, empty or not.
+// `sh` programs (a few ms a call) and tiny waves keep this a unit test.
+TEST(ExternalWorkFolder, IsMadeForEveryExternalProgramAndRemovedAfterTheRun) {
+  TempFolder dir("e2e-work-folder");
+  WriteTinySensorData(dir.path());
+  // The data's tent at four positions, from a command (CSV on stdout) or a worker (protocol 2).
+  const std::string outputs = "coordinates = [0.31, 0.4, 0.49, 0.58]\n";
+  const std::string command =
+      "kind = \"command\"\n"
+      "argv = [\"sh\", \"-c\", 'printf \"0.86\\n0.95\\n0.96\\n0.87\\n\"', \"sh\", \"{params}\"]\n";
+  const std::string worker =
+      "kind = \"worker\"\n"
+      "argv = [\"sh\", \"-c\", 'echo combabc-worker 2 4 tiny; while read id rest; do "
+      "echo \"$id ok 0.86 0.95 0.96 0.87\"; done']\n";
+  const std::string rest =
+      "[sampler]\nseed = 2\nwaves = 1\naccepted_per_wave = 3\n"
+      "max_simulations = 60\n[output]\ndirectory = \"out\"\n";
+  const std::string cheap = "[simulator.low_fidelity]\n" + command +
+                            "[simulator.low_fidelity.bits]\ncount = 6\n"
+                            "[simulator.low_fidelity.outputs]\n" +
+                            outputs + "[sampler.multi_fidelity]\ncost_ratio = 10\n";
+  auto simulator = [&](const std::string& kind) {
+    return "[simulator]\n" + kind + "[simulator.bits]\ncount = 6\n[simulator.outputs]\n" + outputs;
+  };
+  auto experiment = [](const std::string& name) {
+    return "[[experiment]]\nname = \"" + name +
+           "\"\n[experiment.data]\ncsv = \"data.csv\"\nposition_column = \"position_m\"\n"
+           "displacement_column = \"displacement_m\"\nposition_unit = \"m\"\n"
+           "displacement_unit = \"m\"\n[experiment.metric]\n[[experiment.metric.component]]\n"
+           "type = \"least_squares\"\nwindow = [0.31, 0.58]\n";
+  };
+  // The tiny sensor's [data] and [metric] for a program as the run's [simulator].
+  const std::string sensor = TinySensorConfig("");
+  const std::string data_and_metric =
+      sensor.substr(sensor.find("[data]"), sensor.find("[sampler]") - sensor.find("[data]"));
+  struct Case {
+    const char* name;
+    std::string config;
+  };
+  for (const Case& c : {
+           Case{"the sensor beside a cheap command",
+                TinySensorConfig("seed = 2\nwaves = 1\naccepted_per_wave = 3\n",
+                                 "[output]\ndirectory = \"out\"\n" + cheap +
+                                     "[model.output]\npositions = [0.31, 0.4, 0.49, 0.58]\n")},
+           Case{"a command beside a cheap command",
+                simulator(command) + data_and_metric + rest + cheap},
+           Case{"a worker per experiment",
+                simulator(worker) + experiment("a") + experiment("b") + rest},
+       }) {
+    SCOPED_TRACE(c.name);
+    std::ofstream(dir / "run.toml") << c.config;
+    fs::remove_all(dir / "out");
+    const auto r = RunCli({"run", dir / "run.toml", "--no-report", "-q"}, dir.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "out/history.sqlite"));
+    EXPECT_FALSE(fs::exists(dir / "out/history.work")) << "left behind";
+    if (c.config.find("low_fidelity") == std::string::npos) continue;
+    const auto simulated = RunCli(
+        {"simulate", dir / "run.toml", "--clamps", "101001", "-o", dir / "x.csv", "--low-fidelity"},
+        dir.path());
+    EXPECT_EQ(simulated.exit_code, 0) << simulated.err;
+    EXPECT_FALSE(fs::exists(dir / "x.simulate.work")) << "left behind";
+    fs::remove(dir / "x.csv");
+  }
+}
+
 // Bad input: exit 78 with file, line and key, before anything is simulated or written.
 TEST(MultiFidelityBadInput, IsRefusedAtItsKey) {
   TempFolder dir("e2e-multi-fidelity-bad");

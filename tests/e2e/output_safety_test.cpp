@@ -3,6 +3,8 @@
 // that path. (The report's own cases, which need Python, are in report_test.cpp.)
 #include <gtest/gtest.h>
 
+#include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -97,6 +99,24 @@ TEST_F(OutputSafety, ExportOverwriteKeepsEverythingElseInTheDirectory) {
   r = RunCli({"export", db, "-o", dir_ / "export", "--overwrite"}, dir_.path());
   EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
   EXPECT_EQ(ReadFile(dir_ / "export"), "a file named export");
+}
+
+// Issue 35 (E15): Ctrl-C during an export (here while its NetCDF script runs, when every file is
+// staged) ends combabc by the signal and leaves none of its temporaries, nor the export directory
+// it created.
+TEST_F(OutputSafety, AnExportInterruptedBySigintLeavesNothing) {
+  const std::string db = MakeHistory(dir_.path() / "RUN.db");
+  Write("interrupt.py",
+        "import os, signal, time\nos.kill(os.getppid(), signal.SIGINT)\ntime.sleep(30)\n");
+  ASSERT_EQ(::setenv("COMBABC_NETCDF_SCRIPT", (dir_ / "interrupt.py").c_str(), 1), 0);
+  const auto r = RunCli({"export", db, "-o", dir_ / "export"}, dir_.path());
+  ::unsetenv("COMBABC_NETCDF_SCRIPT");
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "export"))
+      << "left: "
+      << ::testing::PrintToString(fs::exists(dir_.path() / "export")
+                                      ? Listing(dir_.path() / "export")
+                                      : std::set<std::string>{});
 }
 
 TEST_F(OutputSafety, RunRefusesAForeignReportDirectoryBeforeSampling) {

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "cli_runner.hpp"
 #include "combabc/history/history_store.hpp"
@@ -146,6 +147,42 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
   const auto r = RunCli({"resume", Started("two.sqlite", two), "--no-report"}, dir_.path());
   EXPECT_EQ(r.exit_code, 78);
   EXPECT_NE(r.err.find("(also fingerprint_simulator)"), std::string::npos) << r.err;
+}
+
+// Issue 35: the history's experiment table (names, descriptions and how its outputs, data and
+// components are sliced per experiment) is not in the fingerprint; one that disagrees with the
+// run's configuration (a crafted or damaged history) is refused, naming what differs, before
+// anything is rewritten. (With one experiment its counts must add up to the run's, which
+// HistoryStore::Create checks, so only its name and description can disagree here.)
+TEST_F(ResumeFingerprint, AnExperimentTableThatDisagreesWithTheConfigurationIsRefused) {
+  struct Case {
+    const char* name;
+    std::function<void(StoredExperiment&)> edit;
+    const char* says;
+  };
+  for (const Case& c : {
+           Case{"name",
+                [](StoredExperiment& x) { x.name = "left"; },
+                "experiment 1's name is 'left' in the table and '' as this combabc reads"},
+           Case{"description",
+                [](StoredExperiment& x) { x.description = "load at 0.2 m"; },
+                "experiment 1's description is 'load at 0.2 m' in the table and 'load at 0.45 m"},
+       }) {
+    SCOPED_TRACE(c.name);
+    RunMetadata crafted = finished_;
+    ASSERT_EQ(crafted.experiments.size(), 1u);
+    c.edit(crafted.experiments[0]);
+    const std::string path = Started(std::string(c.name) + ".sqlite", crafted);
+    const auto r = RunCli({"resume", path, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 78) << r.err;
+    EXPECT_NE(r.err.find(path + ": resume: the history's experiment table disagrees with its "
+                                "configuration: "),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+    EXPECT_EQ(HistoryStore::Open(path, true).LoadMetadata().resume_count, 0);
+  }
 }
 
 }  // namespace

@@ -59,8 +59,15 @@ class AtomicFile {
   bool replace_;
   bool stream_ = false;  // the target is a character device or FIFO, written into at Commit()
   int fd_ = -1;
+  int pending_ = -1;  // the temporary's slot for RemovePendingOutputs (-1: none)
   std::ostringstream buffer_;
 };
+
+// Removes now every temporary of a live AtomicFile, then every directory a live OutputDirectory
+// created and has not committed (if empty): for a signal handler about to end the process, which
+// runs no destructors (the CLI's, on Ctrl-C outside a wave), so that an interrupted export leaves
+// nothing behind. Async-signal-safe: it only reads fixed slots and calls unlink and rmdir.
+void RemovePendingOutputs() noexcept;
 
 // `text` into `path` through an AtomicFile: an existing `path` is replaced only when `overwrite`.
 void WriteFileAtomically(const std::string& path, std::string_view text, bool overwrite);
@@ -80,8 +87,10 @@ void WriteFileAtomically(const std::string& path, std::string_view text, bool ov
 class OutputDirectory {
  public:
   static constexpr const char* kManifest = ".combabc-manifest";
-  // Every temporary combabc makes in an output directory (AtomicFile's) starts with this. A
-  // directory holding nothing else (left by a killed command) counts as empty.
+  // Every temporary combabc makes in an output directory (AtomicFile's) starts with this, then
+  // the making process's id: ".combabc-tmp-<pid>-<random>-<name>". A directory holding nothing
+  // else (left by a killed command) counts as empty, and opening one (or one with a manifest)
+  // removes those of them whose process has ended.
   static constexpr const char* kTemporaryPrefix = ".combabc-tmp-";
 
   // What a refusal of a foreign directory suggests (the report of `run` has no --overwrite).
@@ -117,6 +126,7 @@ class OutputDirectory {
   bool overwrite_;
   bool created_ = false;
   bool committed_ = false;
+  int pending_ = -1;  // a created directory's slot for RemovePendingOutputs (-1: none)
   std::set<std::string> previous_;  // the manifest's names when the directory was opened
   std::vector<std::pair<std::string, std::unique_ptr<AtomicFile>>> staged_;
 };

@@ -49,6 +49,9 @@ class NominalSimulator {
  private:
   CalibrationConfig config_;
   bool sensor_ = true;  // the simulator run is the built-in sensor
+  // An external simulator's work folder: removed, if combabc made it and it is empty, after the
+  // simulator has gone.
+  std::shared_ptr<const void> work_folder_;
   std::unique_ptr<Simulator> simulator_;
 };
 
