@@ -26,7 +26,14 @@ Doubles Checked(const py::object& result,
   // into a number: refuse those kinds rather than compute with a value the function never meant.
   const py::array raw = py::array::ensure(result);
   const char kind = raw ? raw.dtype().kind() : 'O';
-  if (kind == 'c' || kind == 'U' || kind == 'S' || kind == 'V' || kind == 'M' || kind == 'm') {
+  if (kind == 'U' || kind == 'S') {
+    PyErr_Format(PyExc_TypeError,
+                 "the %s returned %s, not an array of numbers",
+                 who,
+                 Py_TYPE(result.ptr())->tp_name);
+    throw py::error_already_set();
+  }
+  if (kind == 'c' || kind == 'V' || kind == 'M' || kind == 'm') {
     PyErr_Format(PyExc_TypeError,
                  "the %s returned %s of dtype %s, not an array of real numbers",
                  who,

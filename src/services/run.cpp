@@ -77,7 +77,10 @@ void CheckStoredExperiments(const std::vector<StoredExperiment>& stored,
       after = y;
     };
     differs("name", Excerpt(a.name), Excerpt(b.name));
-    differs("description", Excerpt(a.description), Excerpt(b.description));
+    // A history from before the table (schema v1 to v5) is upgraded with one unnamed experiment
+    // without a description (docs/history.md, "Integrity"): its counts are what can be checked.
+    const bool upgraded = stored.size() == 1 && a.name.empty() && a.description.empty();
+    if (!upgraded) differs("description", Excerpt(a.description), Excerpt(b.description));
     differs("outputs", std::to_string(a.outputs), std::to_string(b.outputs));
     differs("measured points", std::to_string(a.measured), std::to_string(b.measured));
     differs("components", std::to_string(a.components), std::to_string(b.components));
