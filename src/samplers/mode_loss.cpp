@@ -143,8 +143,9 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
   std::vector<Tally> single(2 * f);
   for (std::size_t k = 0; k < kept.size(); ++k) {
     const auto bits = population.bits_of(kept[k]);
-    for (std::size_t a = 0; a < f; ++a)
+    for (std::size_t a = 0; a < f; ++a) {
       single[2 * a + (bits[a] ? 1 : 0)].Add(mass[k], share[k], joint[k]);
+    }
   }
   std::vector<PatternClass> partial;
   std::vector<std::uint8_t> flagged_value(2 * f, 0);
@@ -168,7 +169,8 @@ std::vector<PatternClass> FindPatternClasses(const Population& population,
       std::size_t at = 0;
       for (std::size_t a = 0; a < f; ++a) {
         for (std::size_t b = a + 1; b < f; ++b, ++at) {
-          pair[4 * at + 2 * (bits[a] ? 1 : 0) + (bits[b] ? 1 : 0)].Add(mass[k], share[k], joint[k]);
+          const std::size_t value = (bits[a] ? 2U : 0U) + (bits[b] ? 1U : 0U);
+          pair[4 * at + value].Add(mass[k], share[k], joint[k]);
         }
       }
     }

@@ -141,8 +141,9 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave, std::span<const double> 
     }
     e.bits.push_back(WeightedProbability(weights, values, wave.multi_fidelity.has_value()));
     // A bit the prior fixes: its posterior is the prior's 0 or 1, with no error to floor.
-    if (b < prior_one.size() && (prior_one[b] == 0.0 || prior_one[b] == 1.0))
+    if (b < prior_one.size() && (prior_one[b] == 0.0 || prior_one[b] == 1.0)) {
       e.bits.back().se = 0.0;
+    }
     if (varies) e.bits_ess = std::min(e.bits_ess.value_or(e.bits.back().ess), e.bits.back().ess);
   }
   for (std::size_t r = 0; r < reals; ++r) {

@@ -126,7 +126,7 @@ std::string ModulesProblem(const std::string& python, const std::vector<std::str
   args.insert(args.end(), modules.begin(), modules.end());
   const ProcessResult result = RunProcess(args, "");
   const std::size_t last = result.err.find_last_of('\n');
-  const std::string line = last == std::string::npos ? "" : result.err.substr(last + 1);
+  std::string line = last == std::string::npos ? "" : result.err.substr(last + 1);
   if (result.status == 0 && line == "ok") return {};
   if (line.rfind("has no module ", 0) == 0 || line.rfind("cannot import ", 0) == 0) return line;
   return "did not run the check for " + modules.front() + " (" +

@@ -85,14 +85,15 @@ void CheckStoredExperiments(const std::vector<StoredExperiment>& stored,
     differs("measured points", std::to_string(a.measured), std::to_string(b.measured));
     differs("components", std::to_string(a.components), std::to_string(b.components));
     if (field.empty()) continue;
-    throw Error(ErrorKind::kConfig,
-                "resume: the history's experiment table disagrees with its configuration: "
-                "experiment " +
-                    std::to_string(e + 1) + "'s " + field + " is " + before + " in the table and " +
-                    after +
-                    " as this combabc reads the configuration; "
-                    "start a new run",
-                path);
+    std::string message =
+        "resume: the history's experiment table disagrees with its configuration: experiment ";
+    message += std::to_string(e + 1);
+    message += "'s " + field + " is ";
+    message += before;
+    message += " in the table and ";
+    message += after;
+    message += " as this combabc reads the configuration; start a new run";
+    throw Error(ErrorKind::kConfig, message, path);
   }
 }
 
