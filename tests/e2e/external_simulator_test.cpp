@@ -176,7 +176,9 @@ TEST_F(ExternalSimulatorCli, APythonWithoutNumpyForTheReportIsRefusedBeforeSampl
     ::unsetenv("COMBABC_PYTHON");
     EXPECT_EQ(r.exit_code, 73) << r.err;
     EXPECT_EQ(CountLines(r.err), 1) << r.err;
-    EXPECT_NE(r.err.find("report: COMBABC_PYTHON=" + program + says), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string("report: COMBABC_PYTHON=").append(program).append(says)),
+              std::string::npos)
+        << r.err;
     EXPECT_NE(r.err.find("--no-report"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "out")) << "refused before anything was written";
   }

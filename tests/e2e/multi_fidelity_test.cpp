@@ -180,9 +180,11 @@ TEST(ExternalWorkFolder, IsMadeForEveryExternalProgramAndRemovedAfterTheRun) {
   };
   for (const Case& c : {
            Case{"the sensor beside a cheap command",
-                TinySensorConfig("seed = 2\nwaves = 1\naccepted_per_wave = 3\n",
-                                 "[output]\ndirectory = \"out\"\n" + cheap +
-                                     "[model.output]\npositions = [0.31, 0.4, 0.49, 0.58]\n")},
+                TinySensorConfig(
+                    "seed = 2\nwaves = 1\naccepted_per_wave = 3\n",
+                    std::string("[output]\ndirectory = \"out\"\n")
+                        .append(cheap)
+                        .append("[model.output]\npositions = [0.31, 0.4, 0.49, 0.58]\n"))},
            Case{"a command beside a cheap command",
                 simulator(command) + data_and_metric + rest + cheap},
            Case{"a worker per experiment",

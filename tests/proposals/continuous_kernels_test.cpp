@@ -450,6 +450,7 @@ TEST(ContinuousKernels, ThirtyBoundedRealsAreDrawnWithoutRejection) {
   // probability ~1e-7 and rejection gave up. Truncating each coordinate never leaves the box.
   constexpr int kD = 30, kN = 100;
   std::vector<ContinuousParameter> reals;
+  reals.reserve(kD);
   for (int k = 0; k < kD; ++k) reals.push_back({"r" + std::to_string(k), Uniform(-1.0, 1.0)});
   const ParameterSpace space(BinarySpace::Independent(0), reals);
   Population population;

@@ -183,6 +183,7 @@ class MaxDistance : public Distance {
 
 std::vector<ContinuousParameter> UniformReals(int d) {
   std::vector<ContinuousParameter> reals;
+  reals.reserve(static_cast<std::size_t>(d));
   for (int k = 0; k < d; ++k) {
     reals.push_back(
         {"r" + std::to_string(100 + k), {.kind = PriorKind::kUniform, .low = -1.0, .high = 1.0}});
@@ -223,6 +224,7 @@ TEST(ManyBoundedReals, TenRealsMatchTheirExactPosteriors) {
   constexpr double kSigma = 0.2, kEps = 0.6;
   const ParameterSpace space(BinarySpace::Independent(0), UniformReals(kD));
   std::vector<double> observed;
+  observed.reserve(kD);
   for (int k = 0; k < kD; ++k) observed.push_back(k % 2 ? 0.85 : 0.0);
   const NoisyIdentity sim(kD, kSigma);
   const MaxDistance dist(observed);
