@@ -186,7 +186,7 @@ TEST(ExternalWorkFolder, IsMadeForEveryExternalProgramAndRemovedAfterTheRun) {
                         .append(cheap)
                         .append("[model.output]\npositions = [0.31, 0.4, 0.49, 0.58]\n"))},
            Case{"a command beside a cheap command",
-                simulator(command) + data_and_metric + rest + cheap},
+                simulator(command).append(data_and_metric).append(rest).append(cheap)},
            Case{"a worker per experiment",
                 simulator(worker) + experiment("a") + experiment("b") + rest},
        }) {
