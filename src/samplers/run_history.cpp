@@ -276,6 +276,8 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
         Differ(x.failures, y.failures, w + "failures", where) ||
         Differ(x.pattern_classes, y.pattern_classes, w + "pattern_classes", where) ||
         Differ(x.multi_fidelity.has_value(), y.multi_fidelity.has_value(), w + "fidelity", where) ||
+        Differ(x.moves.has_value(), y.moves.has_value(), w + "moves", where) ||
+        (x.moves && Differ(*x.moves == *y.moves, true, w + "move statistics", where)) ||
         Differ(x.particles.size(), y.particles.size(), w + "particle count", where)) {
       return false;
     }
@@ -318,7 +320,8 @@ bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {
           Differ(p.low_distance, q.low_distance, pi + "low_distance", where) ||
           Differ(p.confirmed, q.confirmed, pi + "confirmed", where) ||
           Differ(p.distance, q.distance, pi + "distance", where) ||
-          Differ(p.output, q.output, pi + "output", where)) {
+          Differ(p.output, q.output, pi + "output", where) ||
+          Differ(p.ancestor, q.ancestor, pi + "ancestor", where)) {
         return false;
       }
     }

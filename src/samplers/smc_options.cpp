@@ -4,6 +4,31 @@
 
 namespace combabc {
 
+bool MoveOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& msg) {
+    if (why) *why = "MoveOptions::" + msg;
+    return false;
+  };
+  if (!(ess_fraction > 0.0 && ess_fraction < 1.0)) {
+    return fail("ess_fraction = " + std::to_string(ess_fraction) + "; must be in (0, 1)");
+  }
+  if (!(stay_probability > 0.0 && stay_probability < 1.0)) {
+    return fail("stay_probability = " + std::to_string(stay_probability) + "; must be in (0, 1)");
+  }
+  if (max_rounds < 1 || max_rounds > 10'000) {
+    return fail("max_rounds = " + std::to_string(max_rounds) + "; must be in [1, 10000]");
+  }
+  if (!(independent_share >= 0.0 && independent_share <= 1.0)) {
+    return fail("independent_share = " + std::to_string(independent_share) +
+                "; must be in [0, 1]");
+  }
+  if (!(min_survivor_fraction > 0.0 && min_survivor_fraction < 1.0)) {
+    return fail("min_survivor_fraction = " + std::to_string(min_survivor_fraction) +
+                "; must be in (0, 1)");
+  }
+  return true;
+}
+
 bool SmcOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& msg) {
     if (why) *why = "SmcOptions::" + msg;
@@ -68,6 +93,10 @@ bool SmcOptions::IsValid(std::string* why) const {
   }
   if (batch_size < 0) {
     return fail("batch_size = " + std::to_string(batch_size) + "; must be >= 0 (0 = automatic)");
+  }
+  if (!moves.IsValid(why)) {
+    if (why) *why = "SmcOptions::moves." + why->substr(why->find("::") + 2);
+    return false;
   }
   if (!multi_fidelity.IsValid(why)) {
     if (why) *why = "SmcOptions::multi_fidelity." + why->substr(why->find("::") + 2);

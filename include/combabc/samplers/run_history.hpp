@@ -31,6 +31,10 @@ struct Particle {
   bool confirmed = false;
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
+  // A resample-move wave's particle: the index (Particle::index) of the previous wave's particle
+  // it was resampled from and then moved; particles of one ancestor are correlated, which the
+  // Monte-Carlo errors take into account. -1 for a particle drawn afresh.
+  std::int64_t ancestor = -1;
 };
 
 // A candidate whose simulation failed (SimulationFailed, or an output or distance holding NaN):
@@ -65,6 +69,25 @@ struct WaveFidelity {
   double next_continue_if_accepted = 1.0;
   double next_continue_if_rejected = 1.0;
   double cost_ratio = 0.0;
+};
+
+// What the Metropolis-Hastings steps of a resample-move wave did (docs/algorithm.md,
+// "Resample-move"). Its particles are the previous wave's, reweighted to the wave's target,
+// resampled and moved; the wave's `candidates` are the proposals (one simulation each) and its
+// acceptance rate their acceptance.
+struct WaveMoves {
+  // The effective sample size of the previous wave's particles reweighted to this wave's target,
+  // before resampling.
+  double survivor_ess = 0.0;
+  // The fraction of the schedule's step (in threshold quantile or inverse temperature) this wave
+  // took, 1 unless shortened to keep MoveOptions::ess_fraction of the ESS.
+  double step = 1.0;
+  int rounds = 0;                          // every particle took this many proposals
+  std::int64_t proposed = 0;               // proposals, all rounds (= simulations)
+  std::int64_t accepted = 0;               // accepted proposals
+  std::int64_t independent_proposed = 0;   // of the proposals: from the fitted kernel
+  std::int64_t independent_accepted = 0;   // and accepted
+  bool operator==(const WaveMoves&) const = default;
 };
 
 // A PatternClass's bit that the class leaves free (a class of one or two bits' values).
@@ -107,6 +130,7 @@ struct WaveRecord {
   std::vector<SimulationFailure> failures;
   double wall_seconds = 0.0;                   // not deterministic; excluded from SameHistory
   std::optional<WaveFidelity> multi_fidelity;  // set in a multi-fidelity run only
+  std::optional<WaveMoves> moves;              // set for a resample-move wave only
   // The previous wave's heavy pattern classes under this wave's proposal (FindPatternClasses), set
   // when the wave starts; none in wave 0, which proposes from the prior.
   std::vector<PatternClass> pattern_classes;

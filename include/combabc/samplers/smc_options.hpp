@@ -27,6 +27,47 @@ struct EnumNames<Estimator> {
   };
 };
 
+// How each wave after the first reaches its target (docs/algorithm.md, "Resample-move").
+enum class SamplerMethod {
+  // Every wave draws fresh candidates from a kernel fitted to the previous wave and keeps those
+  // within its thresholds (the paper's section 3).
+  kRejection,
+  // Resample-move SMC (Del Moral, Doucet & Jasra 2012; Chopin 2002): the previous wave's
+  // particles are reweighted to the new target, resampled, and moved by Metropolis-Hastings
+  // steps that leave it invariant, so that particles which fit are kept rather than drawn anew.
+  kResampleMove,
+};
+template <>
+struct EnumNames<SamplerMethod> {
+  static constexpr std::pair<SamplerMethod, const char*> kNames[] = {
+      {SamplerMethod::kRejection, "rejection"},
+      {SamplerMethod::kResampleMove, "resample_move"},
+  };
+};
+
+// The resample-move waves' options (SamplerMethod::kResampleMove).
+struct MoveOptions {
+  // Each wave's step toward the schedule's next thresholds or temperatures is shortened, where
+  // needed, so that the reweighted particles keep at least this fraction of the previous wave's
+  // effective sample size (Del Moral, Doucet & Jasra 2012's alpha).
+  double ess_fraction = 0.5;
+  // Metropolis-Hastings rounds (every particle one proposal each) continue until a particle has
+  // moved at least once with probability 1 - stay_probability at the measured acceptance rate
+  // (Drovandi & Pettitt 2011), within [1, max_rounds].
+  double stay_probability = 0.01;
+  int max_rounds = 30;
+  // The share of proposals drawn from the kernel fitted to the reweighted particles (an
+  // independent Metropolis-Hastings proposal, Schaefer & Chopin 2013); the rest are local: one or
+  // two bits flipped, chosen by the particles' marginals and correlations, or a random walk on
+  // the reals.
+  double independent_share = 0.5;
+  // Where the reweighted particles keep fewer than this fraction of n_t as their effective sample
+  // size (a list schedule's step too large), the wave draws fresh candidates by rejection instead.
+  double min_survivor_fraction = 0.02;
+
+  bool IsValid(std::string* why) const;
+};
+
 struct SmcOptions {
   // Maximum number of waves (t = 0..num_waves-1). With list thresholds, each list has exactly
   // this many entries.
@@ -69,6 +110,9 @@ struct SmcOptions {
   int batch_size = 0;
   // Keep each accepted particle's simulated output in the history.
   bool keep_outputs = true;
+  // Rejection waves (the paper's) or resample-move waves after wave 0.
+  SamplerMethod method = SamplerMethod::kRejection;
+  MoveOptions moves;
   // The continuation probabilities of a run with a low-fidelity simulator
   // (SmcProblem::low_fidelity), their tuning, floor and cost ratio; unused without one.
   MultiFidelityOptions multi_fidelity;
