@@ -31,9 +31,10 @@ struct Particle {
   bool confirmed = false;
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
-  // A resample-move wave's particle: the index (Particle::index) of the previous wave's particle
-  // it was resampled from and then moved; particles of one ancestor are correlated, which the
-  // Monte-Carlo errors take into account. -1 for a particle drawn afresh.
+  // A resample-move wave's particle: the index (Particle::index) of the particle it descends from,
+  // through resampling and moves, in the last wave drawn afresh (Chan & Lai 2013's Eve index);
+  // particles of one ancestor are correlated, and the Monte-Carlo errors count them as one
+  // cluster. -1 for a particle drawn afresh.
   std::int64_t ancestor = -1;
 };
 
