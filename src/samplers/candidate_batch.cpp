@@ -96,9 +96,8 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
     auto free = span_of(free_, i, f_);
     auto reals = span_of(reals_, i, r_);
     if (proposal_.given) {
-      std::copy_n(proposal_.given_free.begin() + static_cast<std::ptrdiff_t>(index * f_),
-                  f_,
-                  free.begin());
+      std::copy_n(
+          proposal_.given_free.begin() + static_cast<std::ptrdiff_t>(index * f_), f_, free.begin());
       std::copy_n(proposal_.given_reals.begin() + static_cast<std::ptrdiff_t>(index * r_),
                   r_,
                   reals.begin());

@@ -219,6 +219,8 @@ class SmcRun {
     int first_wave = 0;
     if (resume) {
       history.waves = resume->completed;
+      // Not stored: derived from the ancestors, as the move waves' errors and Eves need.
+      AssignEveIndices(history.waves);
       for (const auto& w : history.waves) {
         total_ += w.candidates;
         discarded_ += w.discarded;
@@ -778,8 +780,7 @@ class SmcRun {
     std::vector<double> last_log_accept(n_prev);
     for (std::size_t i = 0; i < n_prev; ++i) {
       before[i] = std::max(particles[i].weight, 0.0);
-      last_log_accept[i] =
-          LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
+      last_log_accept[i] = LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
     }
     // Per threshold slot: the weighted share of the previous particles within the full step's
     // threshold, and their distances.
@@ -802,8 +803,8 @@ class SmcRun {
       std::vector<double> eps(full.size());
       for (std::size_t s = 0; s < full.size(); ++s) {
         if (IsLikelihood(s)) {
-          const double inverse =
-              1.0 / previous->thresholds[s] + step * (1.0 / full[s] - 1.0 / previous->thresholds[s]);
+          const double inverse = 1.0 / previous->thresholds[s] +
+                                 step * (1.0 / full[s] - 1.0 / previous->thresholds[s]);
           eps[s] = inverse > 0.0 ? 1.0 / inverse : std::numeric_limits<double>::infinity();
         } else {
           const double level = 1.0 - step * (1.0 - kept_share[s]);
@@ -824,12 +825,11 @@ class SmcRun {
       return w;
     };
     const MoveOptions& mo = options_.moves;
-    const EssStep found =
-        StepKeepingEss(weights_at, mo.ess_fraction * EffectiveSampleSize(before));
+    const EssStep found = StepKeepingEss(weights_at, mo.ess_fraction * EffectiveSampleSize(before));
     // Distances tied at the step's threshold: the step that keeps enough changes nothing, so the
     // wave takes the smallest one that does (keeping less), judged below.
-    const double step = thresholds_at(found.keeps) == previous->thresholds ? found.loses
-                                                                           : found.keeps;
+    const double step =
+        thresholds_at(found.keeps) == previous->thresholds ? found.loses : found.keeps;
     std::vector<double> weights = weights_at(step);
     const double survivor_ess = EffectiveSampleSize(weights);
     const int n = options_.AcceptedIn(t);
@@ -852,8 +852,7 @@ class SmcRun {
       const std::size_t row = population.free_bits.size();
       population.free_bits.resize(row + population.num_free_bits);
       COMBABC_CHECK(space_.binary().Reduce(
-          p.theta.bits,
-          std::span(population.free_bits.data() + row, population.num_free_bits)));
+          p.theta.bits, std::span(population.free_bits.data() + row, population.num_free_bits)));
       population.reals.insert(population.reals.end(), p.theta.reals.begin(), p.theta.reals.end());
       population.weights.push_back(weights[i] / total);
       population.within_next.push_back(1);
@@ -861,8 +860,8 @@ class SmcRun {
     }
     proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
     from_prior_ = false;
-    moves_ = std::make_unique<MoveProposals>(
-        population, space_, proposal_.get(), mo.independent_share);
+    moves_ =
+        std::make_unique<MoveProposals>(population, space_, proposal_.get(), mo.independent_share);
     move_weights_ = std::move(weights);
     wave.proposal = proposal_->Marginals();
     wave.moves = WaveMoves{.survivor_ess = survivor_ess, .step = step};
@@ -899,9 +898,8 @@ class SmcRun {
     wave.particles.reserve(nz);
     for (std::size_t i = 0; i < nz; ++i) {
       Particle p = previous.particles[picked[i]];
-      // The cluster of the Monte-Carlo errors: the particle of the last wave drawn afresh that
-      // this one descends from (Chan & Lai 2013's Eve index).
-      if (!previous.moves) p.ancestor = p.index;
+      p.eve = previous.moves ? p.eve : p.index;
+      p.ancestor = p.index;
       p.index = static_cast<std::int64_t>(i);
       p.log_weight = 0.0;
       p.multiplier = 1.0;
@@ -974,14 +972,15 @@ class SmcRun {
             const double new_accept = LogAcceptance(batch.distance(j), wave.thresholds, offsets_);
             const double new_prior =
                 space_.LogPriorBits(nf) + (r > 0 ? space_.LogPriorReals(nr) : 0.0);
-            const double log_ratio = new_prior - log_prior[i] + new_accept - log_accept[i] +
-                                     proposed[i].log_q_ratio;
+            const double log_ratio =
+                new_prior - log_prior[i] + new_accept - log_accept[i] + proposed[i].log_q_ratio;
             if (new_accept > -std::numeric_limits<double>::infinity() &&
                 std::log(uniforms[i]) < log_ratio) {
-              Particle moved = batch.MakeParticle(j, static_cast<std::int64_t>(i),
-                                                  options_.keep_outputs);
+              Particle moved =
+                  batch.MakeParticle(j, static_cast<std::int64_t>(i), options_.keep_outputs);
               moved.log_weight = 0.0;
               moved.ancestor = wave.particles[i].ancestor;
+              moved.eve = wave.particles[i].eve;
               wave.particles[i] = std::move(moved);
               std::copy(nf.begin(), nf.end(), free.begin() + i * f);
               std::copy(nr.begin(), nr.end(), reals.begin() + i * r);
@@ -1016,10 +1015,10 @@ class SmcRun {
       }
       if (stop) break;
       moves.rounds = round;
-      const double rate =
-          static_cast<double>(moves.accepted) / static_cast<double>(std::max<std::int64_t>(moves.proposed, 1));
-      rounds = std::max(round,
-                        RoundsNeeded(rate, options_.moves.stay_probability, options_.moves.max_rounds));
+      const double rate = static_cast<double>(moves.accepted) /
+                          static_cast<double>(std::max<std::int64_t>(moves.proposed, 1));
+      rounds = std::max(
+          round, RoundsNeeded(rate, options_.moves.stay_probability, options_.moves.max_rounds));
     }
     wave.complete = !stop;
     // An unfinished move wave holds no posterior: a resumed run does it again.

@@ -117,8 +117,8 @@ WeightedMoment WeightedProbability(std::span<const double> weights,
                                    std::span<const double> indicator,
                                    bool heavy_particles,
                                    std::span<const std::size_t> clusters) {
-  const double ess = clusters.empty() ? ProbabilityEss(weights, heavy_particles)
-                                      : ClusterEss(weights, clusters);
+  const double ess =
+      clusters.empty() ? ProbabilityEss(weights, heavy_particles) : ClusterEss(weights, clusters);
   return BoundProbability(WeightedMean(weights, indicator, clusters), ess);
 }
 
@@ -151,12 +151,12 @@ WeightedMoment WeightedSd(std::span<const double> weights,
   return sd;
 }
 
-std::vector<std::size_t> AncestorClusters(const WaveRecord& wave) {
+std::vector<std::size_t> AncestorClusters(const WaveRecord& wave, bool eve) {
   std::vector<std::size_t> clusters;
   if (!wave.moves) return clusters;
   std::vector<std::int64_t> ancestors;
   ancestors.reserve(wave.particles.size());
-  for (const Particle& p : wave.particles) ancestors.push_back(p.ancestor);
+  for (const Particle& p : wave.particles) ancestors.push_back(eve ? p.eve : p.ancestor);
   std::vector<std::int64_t> distinct = ancestors;
   std::sort(distinct.begin(), distinct.end());
   distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
@@ -174,8 +174,18 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave, std::span<const double> 
   weights.reserve(wave.particles.size());
   for (const Particle& p : wave.particles) weights.push_back(p.weight);
   if (wave.particles.empty()) return e;
-  // A resample-move wave's particles of one ancestor are correlated: their terms go together.
-  const std::vector<std::size_t> clusters = AncestorClusters(wave);
+  // A resample-move wave's particles of one parent, or of one Eve, are correlated: the larger of
+  // the two clustered errors (the Eve's sees a mode's share fixed waves ago, but degenerates to
+  // 0 once every particle has one Eve; the parent's sees this wave's duplicates).
+  const std::vector<std::size_t> clusters = AncestorClusters(wave, false);
+  const std::vector<std::size_t> eves = AncestorClusters(wave, true);
+  auto wider = [&](WeightedMoment m, const WeightedMoment& by_eve) {
+    if (by_eve.se > m.se) {
+      m.ess *= (m.se * m.se) / (by_eve.se * by_eve.se);
+      m.se = by_eve.se;
+    }
+    return m;
+  };
   const std::size_t bits = wave.particles.front().theta.bits.size();
   const std::size_t reals = wave.particles.front().theta.reals.size();
   std::vector<double> values(weights.size());
@@ -187,6 +197,7 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave, std::span<const double> 
     }
     e.bits.push_back(
         WeightedProbability(weights, values, wave.multi_fidelity.has_value(), clusters));
+    if (!eves.empty()) e.bits.back() = wider(e.bits.back(), WeightedMean(weights, values, eves));
     // A bit the prior fixes: its posterior is the prior's 0 or 1, with no error to floor.
     if (b < prior_one.size() && (prior_one[b] == 0.0 || prior_one[b] == 1.0)) {
       e.bits.back().se = 0.0;
@@ -197,6 +208,10 @@ WaveErrors WaveMonteCarloErrors(const WaveRecord& wave, std::span<const double> 
     for (std::size_t i = 0; i < values.size(); ++i) values[i] = wave.particles[i].theta.reals[r];
     e.real_means.push_back(WeightedMean(weights, values, clusters));
     e.real_sds.push_back(WeightedSd(weights, values, clusters));
+    if (!eves.empty()) {
+      e.real_means.back() = wider(e.real_means.back(), WeightedMean(weights, values, eves));
+      e.real_sds.back() = wider(e.real_sds.back(), WeightedSd(weights, values, eves));
+    }
   }
   return e;
 }

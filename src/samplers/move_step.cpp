@@ -186,8 +186,7 @@ MoveProposal MoveProposals::Propose(RandomStream& rng,
     return move;
   }
   for (std::size_t k = 0; k < r_; ++k) new_reals[k] += step_[k] * rng.Normal();
-  move.outside_prior =
-      space_.LogPriorReals(new_reals) == -std::numeric_limits<double>::infinity();
+  move.outside_prior = space_.LogPriorReals(new_reals) == -std::numeric_limits<double>::infinity();
   return move;
 }
 

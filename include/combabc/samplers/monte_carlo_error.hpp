@@ -73,14 +73,16 @@ WeightedMoment WeightedSd(std::span<const double> weights,
                           std::span<const std::size_t> clusters = {});
 
 // A resample-move wave's clusters for the errors above: particles with one ancestor
-// (Particle::ancestor) share a number; empty for a wave drawn afresh (independent particles).
-std::vector<std::size_t> AncestorClusters(const WaveRecord& wave);
+// (Particle::ancestor), or with `eve` one Eve (Particle::eve), share a number; empty for a wave
+// drawn afresh (independent particles).
+std::vector<std::size_t> AncestorClusters(const WaveRecord& wave, bool eve);
 
 // A wave's estimates under its particles' stored weights (the run's estimator): per bit P(bit =
 // 1) (WeightedProbability), per real its mean and sd, each with its standard error and effective
-// sample size; a multi-fidelity wave's (WaveRecord::multi_fidelity) bits count the rule of three in
-// its heaviest particles. `prior_one` (one per bit, or empty): a bit whose prior probability is 0
-// or 1 has that posterior probability exactly, with error 0.
+// sample size (a resample-move wave's clustered by parent and by Eve: the larger error); a
+// multi-fidelity wave's (WaveRecord::multi_fidelity) bits count the rule of three in its heaviest
+// particles. `prior_one` (one per bit, or empty): a bit whose prior probability is 0 or 1 has that
+// posterior probability exactly, with error 0.
 struct WaveErrors {
   std::vector<WeightedMoment> bits;
   std::vector<WeightedMoment> real_means;
