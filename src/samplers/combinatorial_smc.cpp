@@ -114,6 +114,7 @@ class SmcRun {
       : space_(*problem.space),
         simulator_(*problem.simulator),
         low_fidelity_(problem.low_fidelity),
+        start_population_(problem.start),
         distance_(*problem.distance),
         options_(options),
         observer_(observer),
@@ -234,6 +235,16 @@ class SmcRun {
       if (!history.waves.empty() && AllFinal(history.waves.back())) {
         return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
       }
+    }
+    if (start_population_ && first_wave == 0) {
+      // Wave 0 is the finished run's posterior, re-simulated; cut short, it is done again.
+      WaveRecord wave = StartFromPopulation();
+      const bool complete = wave.complete;
+      history.waves.push_back(std::move(wave));
+      if (!complete) {
+        return Finish(std::move(history), start_stop_->first, start_stop_->second);
+      }
+      first_wave = 1;
     }
     for (int t = first_wave; t < options_.num_waves; ++t) {
       const WaveRecord* previous = t > 0 ? &history.waves.back() : nullptr;
@@ -734,6 +745,108 @@ class SmcRun {
     return stop;
   }
 
+  // Wave 0 from SmcProblem::start: its parameters simulated under this problem (in batches, as a
+  // move round's), each kept with its weight (log_weight = log w) unless its simulation failed.
+  WaveRecord StartFromPopulation() {
+    const auto wave_start = Clock::now();
+    const StartPopulation& start = *start_population_;
+    if (start.thresholds.size() != schedules_.size() ||
+        start.weights.size() != start.thetas.size() || start.thetas.empty()) {
+      throw Error(ErrorKind::kConfig,
+                  "has " + std::to_string(start.thetas.size()) + " parameters, " +
+                      std::to_string(start.weights.size()) + " weights and " +
+                      std::to_string(start.thresholds.size()) + " thresholds; the problem has " +
+                      std::to_string(schedules_.size()) + " threshold and likelihood components",
+                  "",
+                  0,
+                  "SmcProblem::start");
+    }
+    const std::size_t n = start.thetas.size();
+    const std::size_t f = static_cast<std::size_t>(space_.num_free_bits());
+    const std::size_t r = static_cast<std::size_t>(space_.num_reals());
+    std::vector<std::uint8_t> free(n * f);
+    std::vector<double> reals(n * r);
+    for (std::size_t i = 0; i < n; ++i) {
+      const ParameterValue& theta = start.thetas[i];
+      if (theta.reals.size() != r ||
+          !space_.binary().Reduce(theta.bits, std::span(free.data() + i * f, f))) {
+        throw Error(ErrorKind::kConfig,
+                    "parameter " + std::to_string(i) + " does not fit the problem's space",
+                    "",
+                    0,
+                    "SmcProblem::start");
+      }
+      std::copy(theta.reals.begin(), theta.reals.end(), reals.begin() + i * r);
+    }
+    WaveRecord wave;
+    wave.wave = 0;
+    wave.thresholds = start.thresholds;
+    offsets_.assign(schedules_.size(), 0.0);
+    proposal_ = kernel_->Prior(space_);
+    from_prior_ = true;
+    wave.proposal = proposal_->Marginals();
+    if (observer_) observer_->OnWaveStart(wave);
+    CandidateBatch batch(space_, simulator_, distance_, components_.size());
+    const WaveProposal given{.given_free = free,
+                             .given_reals = reals,
+                             .given = true,
+                             .stream = MoveStream(0, kStartRound, true)};
+    const auto count = static_cast<std::int64_t>(n);
+    std::int64_t next = 0;
+    while (next < count && !start_stop_) {
+      const std::int64_t size = std::min(count - next, MoveBatchSize());
+      const auto batch_start = Clock::now();
+      batch.Evaluate(*executor_, options_.seed, 0, next, size, given);
+      MeasureCost(size, Seconds(batch_start));
+      const std::size_t before = wave.particles.size();
+      const std::size_t failures_before = wave.failures.size();
+      for (std::int64_t j = 0; j < size; ++j) {
+        const auto i = static_cast<std::size_t>(next + j);
+        ++total_;
+        ++wave.candidates;
+        if (batch.failed(j)) {
+          wave.failures.push_back({next + j, std::string(batch.reason(j))});
+          ++failures_;
+          last_failure_ = Describe(0, wave.failures.back());
+        } else if (start.weights[i] > 0.0) {
+          Particle p = batch.MakeParticle(j, next + j, options_.keep_outputs);
+          p.log_weight = std::log(start.weights[i]);
+          wave.particles.push_back(std::move(p));
+        }
+        start_stop_ = FailureOrFloorStop(
+            options_, total_, failures_, last_failure_, 0, wave.candidates, count);
+        if (start_stop_) break;
+      }
+      next += size;
+      if (observer_) {
+        BatchProgress progress{
+            0,
+            wave.candidates,
+            static_cast<std::int64_t>(wave.particles.size()),
+            0,
+            static_cast<int>(count),
+            total_,
+            Seconds(start_),
+            static_cast<std::int64_t>(wave.failures.size()),
+            std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
+            std::nullopt};
+        observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
+      }
+      if (!start_stop_) start_stop_ = WallTimeOrInterrupt(wave);
+    }
+    if (!start_stop_ && wave.particles.empty()) {
+      start_stop_ = Stop({Termination::kTooManyFailures,
+                          "every parameter of the finished run failed to simulate; last failure: " +
+                              last_failure_});
+    }
+    wave.complete = !start_stop_;
+    ComputeWaveStatistics(wave, options_.estimator);
+    wave.wall_seconds = Seconds(wave_start);
+    last_rate_ = 1.0;
+    if (observer_) observer_->OnWaveEnd(wave);
+    return wave;
+  }
+
   // m_k per schedule slot of the wave after `waves`: the best likelihood distance among their
   // particles (as Thresholds computes it), 0 for threshold slots and before any particle.
   std::vector<double> OffsetsAfter(std::span<const WaveRecord> waves) const {
@@ -873,6 +986,7 @@ class SmcRun {
   // resampling): apart from every wave's own candidate streams, which are numbered by the wave
   // alone. `simulation` marks the streams its simulators draw from (one per simulated proposal).
   static constexpr std::uint64_t kResampleRound = 0xFFFFFFFFULL;
+  static constexpr std::uint64_t kStartRound = 0xFFFFFFFEULL;  // SmcProblem::start's wave 0
   static std::uint64_t MoveStream(int t, std::uint64_t round, bool simulation) {
     return (simulation ? 1ULL << 63 : 0ULL) | (round << 32) | static_cast<std::uint64_t>(t);
   }
@@ -1198,7 +1312,9 @@ class SmcRun {
 
   const ParameterSpace& space_;
   const Simulator& simulator_;
-  const Simulator* low_fidelity_;  // null: single fidelity
+  const Simulator* low_fidelity_;            // null: single fidelity
+  const StartPopulation* start_population_;  // null: wave 0 from the prior
+  Stop start_stop_;                          // what stopped wave 0 from start_, if anything
   const Distance& distance_;
   const SmcOptions& options_;
   SmcObserver* observer_;
