@@ -808,7 +808,10 @@ class SmcRun {
           wave.failures.push_back({next + j, std::string(batch.reason(j))});
           ++failures_;
           last_failure_ = Describe(0, wave.failures.back());
-        } else if (start.weights[i] > 0.0) {
+        } else if (start.weights[i] > 0.0 &&
+                   LogAcceptance(batch.distance(j), wave.thresholds, offsets_) >
+                       -std::numeric_limits<double>::infinity()) {
+          if (!start.expected.empty()) CheckResimulated(start.expected.at(i), batch.distance(j), i);
           Particle p = batch.MakeParticle(j, next + j, options_.keep_outputs);
           p.log_weight = std::log(start.weights[i]);
           wave.particles.push_back(std::move(p));
@@ -845,6 +848,32 @@ class SmcRun {
     last_rate_ = 1.0;
     if (observer_) observer_->OnWaveEnd(wave);
     return wave;
+  }
+
+  // StartPopulation::expected against parameter i's re-simulated distances.
+  void CheckResimulated(std::span<const double> expected,
+                        std::span<const double> got,
+                        std::size_t i) const {
+    for (std::size_t k = 0; k < expected.size() && k < got.size(); ++k) {
+      if (std::isnan(expected[k]) ||
+          std::abs(got[k] - expected[k]) <= 1e-9 * std::max(1.0, std::abs(expected[k]))) {
+        continue;
+      }
+      char text[160];
+      std::snprintf(text,
+                    sizeof text,
+                    "parameter %zu re-simulates to distance %.10g for component \"%s\", where the "
+                    "finished run had %.10g",
+                    i,
+                    got[k],
+                    components_[k].name.c_str(),
+                    expected[k]);
+      throw Error(ErrorKind::kConfig,
+                  std::string(text) + ": the model or that experiment's data changed",
+                  "",
+                  0,
+                  "SmcProblem::start");
+    }
   }
 
   // m_k per schedule slot of the wave after `waves`: the best likelihood distance among their
@@ -931,7 +960,8 @@ class SmcRun {
       std::vector<double> w(n_prev, 0.0);
       for (std::size_t i = 0; i < n_prev; ++i) {
         const double log_accept = LogAcceptance(particles[i].distance, eps, offsets);
-        if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity()) {
+        if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity() &&
+            last_log_accept[i] > -std::numeric_limits<double>::infinity()) {
           w[i] = before[i] * std::exp(log_accept - last_log_accept[i]);
         }
       }
@@ -973,8 +1003,20 @@ class SmcRun {
     }
     proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
     from_prior_ = false;
-    moves_ =
-        std::make_unique<MoveProposals>(population, space_, proposal_.get(), mo.independent_share);
+    // The ancestor kernel beside the configured one (unless it is the configured one).
+    ancestor_proposal_.reset();
+    if (kernel_->name() != ToString(BinaryKernelKind::kAncestor)) {
+      if (!ancestor_kernel_) {
+        ProposalOptions ancestor = options_.proposal;
+        ancestor.binary = BinaryKernelKind::kAncestor;
+        ancestor.continuous = ContinuousKernelKind::kNormal;
+        ancestor_kernel_ = MakeJointKernel(ancestor, space_);
+      }
+      ancestor_proposal_ =
+          ancestor_kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
+    }
+    moves_ = std::make_unique<MoveProposals>(
+        population, space_, proposal_.get(), ancestor_proposal_.get(), mo.independent_share);
     move_weights_ = std::move(weights);
     wave.proposal = proposal_->Marginals();
     wave.moves = WaveMoves{.survivor_ess = survivor_ess, .step = step};
@@ -1328,6 +1370,8 @@ class SmcRun {
   // A move wave's local and independent proposals, and the previous particles' weights under its
   // target (what it resamples by).
   std::unique_ptr<MoveProposals> moves_;
+  std::unique_ptr<JointKernel> ancestor_kernel_;
+  std::unique_ptr<JointProposal> ancestor_proposal_;
   std::vector<double> move_weights_;
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;
