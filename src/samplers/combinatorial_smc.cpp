@@ -478,6 +478,35 @@ class SmcRun {
     return stochastic_ ? std::exp(log_accept) : 1.0;
   }
 
+  // The log of a resample-move wave's target, up to a constant: -inf when a threshold or
+  // indicator component rejects d, else -sum_k d_k / T_k over the likelihood components. Unlike
+  // LogAcceptance it needs no offset m_k (a Metropolis-Hastings ratio is not a probability and
+  // may exceed 1): a clamped exp(-max(d - m, 0) / T) would make every configuration better than
+  // the best seen so far equally likely.
+  double LogTarget(std::span<const double> d, const std::vector<double>& eps) const {
+    constexpr double kReject = -std::numeric_limits<double>::infinity();
+    double log_target = 0.0;
+    std::size_t s = 0;
+    for (std::size_t k = 0; k < components_.size(); ++k) {
+      switch (components_[k].kind) {
+        case ComponentKind::kThreshold:
+          if (!(d[k] <= eps[s++])) return kReject;
+          break;
+        case ComponentKind::kIndicator:
+          if (d[k] != components_[k].required) return kReject;
+          break;
+        case ComponentKind::kNegLogLikelihood: {
+          const double temperature = eps[s++];
+          if (std::isinf(temperature)) break;
+          if (!(d[k] < std::numeric_limits<double>::infinity())) return kReject;
+          log_target -= d[k] / temperature;
+          break;
+        }
+      }
+    }
+    return log_target;
+  }
+
   // -inf when a threshold or indicator component rejects d; else the log of the likelihood
   // components' acceptance probability (0 without any).
   double LogAcceptance(std::span<const double> d,
@@ -922,7 +951,12 @@ class SmcRun {
     std::vector<double> last_log_accept(n_prev);
     for (std::size_t i = 0; i < n_prev; ++i) {
       before[i] = std::max(particles[i].weight, 0.0);
-      last_log_accept[i] = LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
+      // A move wave's (or a started run's wave 0's) target has no offsets; a rejection wave's
+      // particles were accepted with LogAcceptance.
+      last_log_accept[i] =
+          previous->moves || (start_population_ && previous->wave == 0)
+              ? LogTarget(particles[i].distance, previous->thresholds)
+              : LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
     }
     // Per threshold slot: the weighted share of the previous particles within the full step's
     // threshold, and their distances.
@@ -959,7 +993,7 @@ class SmcRun {
       const std::vector<double> eps = thresholds_at(step);
       std::vector<double> w(n_prev, 0.0);
       for (std::size_t i = 0; i < n_prev; ++i) {
-        const double log_accept = LogAcceptance(particles[i].distance, eps, offsets);
+        const double log_accept = LogTarget(particles[i].distance, eps);
         if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity() &&
             last_log_accept[i] > -std::numeric_limits<double>::infinity()) {
           w[i] = before[i] * std::exp(log_accept - last_log_accept[i]);
@@ -1062,7 +1096,7 @@ class SmcRun {
       auto fi = std::span(free.data() + i * f, f);
       COMBABC_CHECK(space_.binary().Reduce(p.theta.bits, fi));
       std::copy(p.theta.reals.begin(), p.theta.reals.end(), reals.begin() + i * r);
-      log_accept[i] = LogAcceptance(p.distance, wave.thresholds, offsets_);
+      log_accept[i] = LogTarget(p.distance, wave.thresholds);
       log_prior[i] = space_.LogPriorBits(fi) + (r > 0 ? space_.LogPriorReals(p.theta.reals) : 0.0);
       wave.particles.push_back(std::move(p));
     }
@@ -1125,7 +1159,7 @@ class SmcRun {
           } else {
             const auto nf = std::span<const std::uint8_t>(new_free.data() + i * f, f);
             const auto nr = std::span<const double>(new_reals.data() + i * r, r);
-            const double new_accept = LogAcceptance(batch.distance(j), wave.thresholds, offsets_);
+            const double new_accept = LogTarget(batch.distance(j), wave.thresholds);
             const double new_prior =
                 space_.LogPriorBits(nf) + (r > 0 ? space_.LogPriorReals(nr) : 0.0);
             const double log_ratio =
