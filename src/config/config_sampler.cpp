@@ -167,6 +167,13 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sourc
   Note(sources->smc, "batch_size", *t, "batch_size");
   ParseTempering(*t, &smc, sources);
   ParseMultiFidelity(*t, &smc.multi_fidelity, sources);
+  smc.method = t->Choice<SamplerMethod>("method", "method").value_or(smc.method);  // TEMP
+  if (auto m = t->Table("moves")) {
+    smc.moves.stay_probability = m->NumberIn("stay_probability", smc.moves.stay_probability, 0.0, 1.0);
+    smc.moves.max_rounds = m->IntegerIn("max_rounds", smc.moves.max_rounds, 1, 10000);
+    smc.moves.ess_fraction = m->NumberIn("ess_fraction", smc.moves.ess_fraction, 0.0, 1.0);
+    smc.moves.independent_share = m->NumberIn("independent_share", smc.moves.independent_share, 0.0, 1.0);
+  }
 
   if (const toml::node* prior = t->Raw("prior")) {
     const std::string key = t->Key("prior");
