@@ -98,17 +98,25 @@ void PrintDesign(const services::DesignOutcome& o) {
     std::printf("next experiment:\n");
     for (const std::string& line : o.instructions) std::printf("  %s\n", line.c_str());
   }
-  // The undecided clamps, grouped by why: by number while the campaign goes on, with where they
-  // are when it stops.
+  // The undecided clamps: by number while the campaign goes on; when it stops, where each is and
+  // why no candidate decides it, grouped by reason.
+  if (!o.stop && !o.undecided.empty()) {
+    std::string clamps;
+    for (const auto& u : o.undecided) {
+      clamps += (clamps.empty() ? "" : ", ") + std::to_string(u.bit + 1);
+    }
+    std::printf("undecided now: clamps %s\n", clamps.c_str());
+  }
   std::vector<std::pair<std::string, std::string>> groups;  // reason, clamps
   for (const auto& u : o.undecided) {
+    if (!o.stop) break;
     auto it = std::find_if(
         groups.begin(), groups.end(), [&](const auto& g) { return g.first == u.reason; });
     if (it == groups.end()) it = groups.insert(groups.end(), {u.reason, ""});
-    it->second += (it->second.empty() ? "" : ", ") + (o.stop ? u.where : std::to_string(u.bit + 1));
+    it->second += (it->second.empty() ? "" : ", ") + u.where;
   }
   for (const auto& [reason, clamps] : groups) {
-    std::printf("undecided: %s%s: %s\n", o.stop ? "" : "clamps ", clamps.c_str(), reason.c_str());
+    std::printf("undecided: %s: %s\n", clamps.c_str(), reason.c_str());
   }
   std::printf("design: %s (%.2f s)\n", o.directory.c_str(), o.wall_seconds);
 }

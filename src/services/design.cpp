@@ -630,9 +630,10 @@ DesignOutcome RunDesign(const DesignRequest& request) {
     o.stop_reason = "every clamp is decided";
   } else if (o.expected_decided - o.decided_now < 0.5) {
     o.stop = true;
-    o.stop_reason = "no candidate is expected to decide another clamp (the best, candidate " +
-                    std::to_string(best + 1) + ", " +
-                    DesignNumber(o.expected_decided - o.decided_now) + ")";
+    char adds[32];
+    std::snprintf(adds, sizeof adds, "%.1f", o.expected_decided - o.decided_now);
+    o.stop_reason = "no candidate is expected to decide another clamp (the best, the load at " +
+                    DesignNumber(o.candidates[best].load_x * 100) + " cm, adds " + adds + ")";
   }
   for (int k = 0; k < o.clamps; ++k) {
     if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > options.identified_margin)

@@ -72,8 +72,8 @@ std::string RelativeTo(const fs::path& target, const fs::path& from) {
 
 // The name of an experiment at this load and scan line: "x20cm_y8mm_scan20mm".
 std::string ExperimentName(double load_x, double load_y, double scan_y, double width) {
-  return "x" + NextNumber(load_x * 100) + "cm_y" + NextMm(load_y * width) + "mm_scan" + NextMm(scan_y * width) +
-         "mm";
+  return "x" + NextNumber(load_x * 100) + "cm_y" + NextMm(load_y * width) + "mm_scan" +
+         NextMm(scan_y * width) + "mm";
 }
 
 // The config's text as lines, edited in place: string literals replaced at toml++'s source
@@ -160,7 +160,8 @@ void ScheduleKeys(const ThresholdSchedule& s, std::ostream& out) {
   switch (s.kind) {
     case ThresholdKind::kList: {
       out << "threshold = [";
-      for (std::size_t i = 0; i < s.values.size(); ++i) out << (i ? ", " : "") << NextNumber(s.values[i]);
+      for (std::size_t i = 0; i < s.values.size(); ++i)
+        out << (i ? ", " : "") << NextNumber(s.values[i]);
       out << "]\n";
       return;
     }
@@ -203,18 +204,20 @@ std::string ExperimentBlock(const CalibrationConfig& c,
   const DataConfig& data = c.experiments.back().data;
   const double unit = MetresPer(data.position_unit);
   const double width = c.model.width;
-  const std::string window = "[" + NextNumber(k.scan_from / unit) + ", " + NextNumber(k.scan_to / unit) + "]";
+  const std::string window =
+      "[" + NextNumber(k.scan_from / unit) + ", " + NextNumber(k.scan_to / unit) + "]";
   const char* position_unit = ToString(data.position_unit);
   std::ostringstream out;
   out << "\n# Experiment " << number << ", chosen by `combabc design`: the shaker at "
       << NextNumber(k.load_x * 100) << " cm along the strip, " << NextMm(k.load_y_fraction * width)
-      << " mm from edge 1; the scan " << NextNumber(k.scan_from * 100) << "-" << NextNumber(k.scan_to * 100)
-      << " cm every " << NextNumber(c.design->scan_spacing * 100) << " cm on the line "
-      << NextMm(k.scan_y_fraction * width) << " mm from edge 1.\n"
+      << " mm from edge 1; the scan " << NextNumber(k.scan_from * 100) << "-"
+      << NextNumber(k.scan_to * 100) << " cm every " << NextNumber(c.design->scan_spacing * 100)
+      << " cm on the line " << NextMm(k.scan_y_fraction * width) << " mm from edge 1.\n"
       << "[[experiment]]\nname = " << Quote(name) << "\n"
       << "[experiment.load]\nx = " << NextNumber(k.load_x) << "  # m\n"
-      << "y_fraction = " << NextNumber(k.load_y_fraction) << "  # " << NextMm(k.load_y_fraction * width)
-      << " mm from edge 1 (y = 0) of the " << NextMm(width) << " mm width\n"
+      << "y_fraction = " << NextNumber(k.load_y_fraction) << "  # "
+      << NextMm(k.load_y_fraction * width) << " mm from edge 1 (y = 0) of the " << NextMm(width)
+      << " mm width\n"
       << "[experiment.output]\npositions = [";
   const std::vector<double> x = DesignScanPositions(k.scan_from, k.scan_to, c.design->scan_spacing);
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -236,7 +239,8 @@ std::string ExperimentBlock(const CalibrationConfig& c,
       ref->noise.model == NoiseModel::kGaussian) {
     out << "noise = \"gaussian\"\n";
     if (ref->noise.sigma_noise) {
-      out << "sigma_noise = " << NextNumber(*ref->noise.sigma_noise) << "  # as the experiments before\n";
+      out << "sigma_noise = " << NextNumber(*ref->noise.sigma_noise)
+          << "  # as the experiments before\n";
     } else {
       out << "sigma_noise = \"estimate\"  # from this experiment's data, as the others\n";
     }
@@ -375,14 +379,23 @@ std::vector<std::string> Instructions(const CalibrationConfig& c,
                 NextMm(k.load_y_fraction * width) + " mm from edge 1 (edge 1 holds clamps 1-" +
                 std::to_string(n) + "; the strip is " + NextMm(width) + " mm wide).");
   out.push_back("2. Scan the line " + NextMm(k.scan_y_fraction * width) + " mm from edge 1, from " +
-                NextNumber(k.scan_from * 100) + " to " + NextNumber(k.scan_to * 100) + " cm, every " +
-                NextNumber(c.design->scan_spacing * 100) + " cm (" + std::to_string(points) + " points).");
-  out.push_back("3. Save the profile as " + next.data_path + ": columns " + data.position_column +
-                " (" + ToString(data.position_unit) + ") and " + data.displacement_column + " (" +
-                ToString(data.displacement_unit) + "), one row per point.");
+                NextNumber(k.scan_from * 100) + " to " + NextNumber(k.scan_to * 100) +
+                " cm, every " + NextNumber(c.design->scan_spacing * 100) + " cm (" +
+                std::to_string(points) + " points).");
+  // Paths as seen from here, where the user runs the commands.
+  auto here = [](const std::string& path) {
+    std::error_code ec;
+    const fs::path cwd = fs::current_path(ec);
+    return ec ? path : fs::path(path).lexically_proximate(cwd).generic_string();
+  };
+  out.push_back("3. Save the profile as " + here(next.data_path) + ": columns " +
+                data.position_column + " (" + ToString(data.position_unit) + ") and " +
+                data.displacement_column + " (" + ToString(data.displacement_unit) +
+                "), one row per point.");
   out.push_back("4. Calibrate with every experiment: combabc run " + next_config_path);
   out.push_back("5. Then design the next one: combabc design " + next_config_path +
-                " --posterior " + (fs::path(next.output_directory) / c.output.database).string());
+                " --posterior " +
+                here((fs::path(next.output_directory) / c.output.database).string()));
   return out;
 }
 
