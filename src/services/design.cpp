@@ -534,7 +534,9 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   const int threads = request.threads >= 0 ? request.threads : c.smc.threads;
   const std::string directory =
       request.output_directory.empty()
-          ? (fs::path(ResolvePath(c.directory, c.output.directory)) / "design").string()
+          ? (fs::path(ResolvePath(c.directory, c.output.directory)) / "design")
+                .lexically_normal()
+                .string()
           : request.output_directory;
   // Refused now rather than after the simulations; the parent folder is made only at the end.
   const fs::path parent = fs::path(directory).parent_path();

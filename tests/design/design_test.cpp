@@ -336,6 +336,18 @@ TEST(Design, TheNextConfigRunsAsWritten) {
       std::filesystem::weakly_canonical(std::filesystem::path(outcome.history_path).parent_path()),
       std::filesystem::weakly_canonical(folder / "results-e2"));
   EXPECT_FALSE(outcome.history.waves.empty());
+  // The next round designs from that run's posterior, its predictions from the truths'
+  // neighbourhoods under the run's likelihood, and its next run goes beside the others.
+  services::DesignRequest round2 = Request(folder);
+  round2.config_path = next;
+  round2.posterior_path = outcome.history_path;
+  const services::DesignOutcome o2 = services::RunDesign(round2);
+  EXPECT_NE(o2.method.find("neighbourhood"), std::string::npos) << o2.method;
+  EXPECT_GT(o2.simulated, 6U);  // at least a truth and its six flips
+  if (!o2.stop) {
+    EXPECT_EQ(LoadConfig(o2.next_config_path).experiments.size(), 3U);
+    EXPECT_NE(o2.next_config.find("\"../../results-e3\""), std::string::npos) << o2.next_config;
+  }
 }
 
 // The instructions in the bench's terms on a 50 mm strip: 0.2 of the width is 10 mm from edge 1,
