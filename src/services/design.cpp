@@ -5,10 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "combabc/config/config.hpp"
+#include "combabc/config/distance_from_config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/core/thread_pool.hpp"
@@ -17,6 +20,7 @@
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
+#include "services/design_campaign.hpp"
 #include "services/python_script.hpp"
 
 namespace combabc::services {
@@ -24,6 +28,10 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint64_t kPriorStream = 0xD4'0000'0000ULL;
+
+double SecondsSince(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
 
 std::string DesignNumber(double x) {
   char b[40];
@@ -54,7 +62,8 @@ design::Population ToPopulation(const std::map<std::vector<std::uint8_t>, double
 
 design::Population FromPosterior(const std::string& path,
                                  const CalibrationConfig& c,
-                                 std::string* what) {
+                                 std::string* what,
+                                 std::vector<double>* thresholds) {
   const HistoryStore store = HistoryStore::Open(path, true);
   const RunMetadata m = store.LoadMetadata();
   if (m.dimension != c.space.dimension) {
@@ -88,6 +97,7 @@ design::Population FromPosterior(const std::string& path,
                 0,
                 "--posterior");
   }
+  *thresholds = last->thresholds;
   std::map<std::vector<std::uint8_t>, double> merged;
   double total = 0.0;
   for (const Particle& p : last->particles) total += p.weight;
@@ -96,7 +106,7 @@ design::Population FromPosterior(const std::string& path,
     const double w = m.estimator == "paper" || !(total > 0.0) ? 1.0 : p.weight;
     AddDesignParticle(merged, p.theta.bits, w);
   }
-  *what = "the posterior of " + path + " (wave " + std::to_string(last->wave + 1) + ", " +
+  *what = "the run " + path + " (wave " + std::to_string(last->wave + 1) + ", " +
           std::to_string(last->particles.size()) + " particles, " + std::to_string(merged.size()) +
           " distinct)";
   return ToPopulation(merged, m.dimension);
@@ -146,109 +156,296 @@ std::vector<DesignCandidate> Candidates(const DesignConfig& d) {
   return out;
 }
 
-std::vector<double> ScanPositions(const DesignCandidate& c, double spacing) {
-  return DesignScanPositions(c.scan_from, c.scan_to, spacing);
-}
+// Each configuration simulated once: every candidate's normalised profile and, when asked, the
+// outputs of the experiments so far as the run simulates them. The candidates are load cases of
+// one plate model, with the experiments that share its frequency and normalisation (one
+// factorization per configuration for all of them); other experiments have their own model.
+struct Simulated {
+  std::vector<design::CandidateProfiles> profiles;  // per candidate: rows x points
+  std::vector<double> run;                          // rows x run_size
+  std::size_t run_size = 0;
+  std::vector<std::string> singular;  // per row: why the plate is singular, empty when solved
+};
 
-// Each candidate's normalised profile for every particle: one plate model whose load cases are
-// the candidates, solved once per particle (one factorization for all of them). A configuration
-// the plate cannot be solved in (plate::SingularSystem: a rigid-body motion left free) is
-// dropped from `population` with its weight, as a run fails that candidate; its count and reason
-// go to `o`. Only when every configuration is singular is the design refused.
-std::vector<design::CandidateProfiles> SimulateCandidates(const CalibrationConfig& c,
-                                                          design::Population& population,
-                                                          int threads,
-                                                          DesignOutcome& o) {
-  const plate::SensorOptions options = DesignSensorOptions(c);
+Simulated SimulateRows(const CalibrationConfig& c,
+                       std::span<const std::uint8_t> bits,
+                       std::size_t rows,
+                       int threads,
+                       bool experiments) {
+  struct Place {
+    std::size_t model = 0, load_case = 0, offset = 0;
+  };
+  std::vector<plate::SensorOptions> options{DesignSensorOptions(c)};
+  const std::size_t candidates = options.front().load_cases.size();
+  std::vector<Place> places(c.experiments.size());
+  Simulated s;
+  if (experiments) {
+    for (const SensorModelPlan& plan : SensorModels(c)) {
+      const bool merge = plan.options.frequency_hz == options.front().frequency_hz &&
+                         plan.options.normalise == options.front().normalise;
+      if (!merge) options.push_back(plan.options);
+      for (std::size_t i = 0; i < plan.experiments.size(); ++i) {
+        Place& p = places[plan.experiments[i]];
+        if (merge) {
+          options.front().load_cases.push_back(plan.options.load_cases[i]);
+          p = {0, options.front().load_cases.size() - 1, 0};
+        } else {
+          p = {options.size() - 1, i, 0};
+        }
+      }
+    }
+    for (std::size_t e = 0; e < places.size(); ++e) {
+      places[e].offset = s.run_size;
+      s.run_size += c.experiments[e].output_coordinates.size();
+    }
+  }
   ThreadPool pool(threads);
   plate::PrecomputeOptions precompute;
   precompute.pool = &pool;
   precompute.cache_directory = plate::DefaultPrecomputeCache();
-  const plate::SensorModel model(options, precompute);
-  const std::size_t n = population.size();
-  const auto d = static_cast<std::size_t>(population.dimension);
-  const auto outputs = static_cast<std::size_t>(model.num_outputs());
-  std::vector<double> all(n * outputs);
-  std::vector<std::string> singular(n);  // the reason, for each singular configuration
-  // Each configuration writes only its own row, so the result does not depend on the schedule.
-  pool.ParallelFor(n, 16, [&](std::size_t begin, std::size_t end) {
+  std::vector<std::unique_ptr<plate::SensorModel>> models;
+  for (const plate::SensorOptions& o : options) {
+    models.push_back(std::make_unique<plate::SensorModel>(o, precompute));
+  }
+  const plate::SensorOptions& design = options.front();
+  const auto d = static_cast<std::size_t>(c.space.dimension);
+  s.profiles.resize(candidates);
+  for (std::size_t k = 0; k < candidates; ++k) {
+    s.profiles[k].points = static_cast<int>(design.load_cases[k].output_positions.size());
+    s.profiles[k].values.resize(rows * static_cast<std::size_t>(s.profiles[k].points));
+  }
+  s.run.resize(rows * s.run_size);
+  s.singular.resize(rows);
+  // Each configuration writes only its own rows, so the result does not depend on the schedule.
+  pool.ParallelFor(rows, 16, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::vector<double>> out(models.size());
+    for (std::size_t m = 0; m < models.size(); ++m) {
+      out[m].resize(static_cast<std::size_t>(models[m]->num_outputs()));
+    }
     for (std::size_t i = begin; i < end; ++i) {
       try {
-        model.Profile(std::span(population.bits).subspan(i * d, d),
-                      std::span(all).subspan(i * outputs, outputs));
+        for (std::size_t m = 0; m < models.size(); ++m) {
+          models[m]->Profile(bits.subspan(i * d, d), out[m]);
+        }
       } catch (const plate::SingularSystem& e) {
-        singular[i] = e.message();
+        s.singular[i] = e.message();
+        continue;
+      }
+      for (std::size_t k = 0; k < candidates; ++k) {
+        const auto points = static_cast<std::size_t>(s.profiles[k].points);
+        std::copy_n(out[0].begin() + static_cast<std::ptrdiff_t>(design.OutputOffset(k)),
+                    points,
+                    s.profiles[k].values.begin() + static_cast<std::ptrdiff_t>(i * points));
+      }
+      for (std::size_t e = 0; e < places.size() && experiments; ++e) {
+        const Place& p = places[e];
+        const plate::SensorOptions& o = options[p.model];
+        std::copy_n(out[p.model].begin() + static_cast<std::ptrdiff_t>(o.OutputOffset(p.load_case)),
+                    c.experiments[e].output_coordinates.size(),
+                    s.run.begin() + static_cast<std::ptrdiff_t>(i * s.run_size + p.offset));
       }
     }
   });
+  return s;
+}
+
+// Each candidate's normalised profile for every particle. A configuration the plate cannot be
+// solved in (plate::SingularSystem: a rigid-body motion left free) is dropped from `population`
+// with its weight, as a run fails that candidate; its count and reason go to `o`. Only when every
+// configuration is singular is the design refused.
+std::vector<design::CandidateProfiles> SimulateCandidates(const CalibrationConfig& c,
+                                                          design::Population& population,
+                                                          int threads,
+                                                          DesignOutcome& o) {
+  const std::size_t n = population.size();
+  const auto d = static_cast<std::size_t>(population.dimension);
+  Simulated s = SimulateRows(c, population.bits, n, threads, false);
   std::vector<std::size_t> kept;
   for (std::size_t i = 0; i < n; ++i) {
-    if (singular[i].empty()) {
+    if (s.singular[i].empty()) {
       kept.push_back(i);
     } else {
-      if (o.singular == 0) o.singular_reason = singular[i];
+      if (o.singular == 0) o.singular_reason = s.singular[i];
       ++o.singular;
     }
   }
   if (kept.empty()) {
     throw Error(ErrorKind::kConfig,
                 "every one of the " + std::to_string(n) +
-                    " configurations to design from is singular: " + singular.front(),
+                    " configurations to design from is singular: " + s.singular.front(),
                 c.path,
                 c.design->line,
                 "design");
   }
-  if (kept.size() < n) {
-    design::Population p;
-    p.dimension = population.dimension;
-    double total = 0.0;
-    for (std::size_t i : kept) total += population.weights[i];
-    for (std::size_t i : kept) {
-      p.bits.insert(p.bits.end(),
-                    population.bits.begin() + static_cast<std::ptrdiff_t>(i * d),
-                    population.bits.begin() + static_cast<std::ptrdiff_t>(i * d + d));
-      p.weights.push_back(population.weights[i] / total);
-    }
-    population = std::move(p);
+  if (kept.size() == n) return std::move(s.profiles);
+  design::Population p;
+  p.dimension = population.dimension;
+  double total = 0.0;
+  for (std::size_t i : kept) total += population.weights[i];
+  for (std::size_t i : kept) {
+    p.bits.insert(p.bits.end(),
+                  population.bits.begin() + static_cast<std::ptrdiff_t>(i * d),
+                  population.bits.begin() + static_cast<std::ptrdiff_t>(i * d + d));
+    p.weights.push_back(population.weights[i] / total);
   }
-  const std::size_t candidates = options.load_cases.size();
-  std::vector<design::CandidateProfiles> profiles(candidates);
-  for (std::size_t k = 0; k < candidates; ++k) {
-    const std::size_t begin = options.OutputOffset(k);
-    const std::size_t points = options.load_cases[k].output_positions.size();
-    profiles[k].points = static_cast<int>(points);
-    profiles[k].values.resize(kept.size() * points);
+  population = std::move(p);
+  for (design::CandidateProfiles& profiles : s.profiles) {
+    const auto m = static_cast<std::size_t>(profiles.points);
+    std::vector<double> values(kept.size() * m);
     for (std::size_t r = 0; r < kept.size(); ++r) {
-      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(kept[r] * outputs + begin),
-                  points,
-                  profiles[k].values.begin() + static_cast<std::ptrdiff_t>(r * points));
+      std::copy_n(profiles.values.begin() + static_cast<std::ptrdiff_t>(kept[r] * m),
+                  m,
+                  values.begin() + static_cast<std::ptrdiff_t>(r * m));
     }
+    profiles.values = std::move(values);
   }
-  return profiles;
+  return std::move(s.profiles);
 }
 
-std::string ExperimentBlock(const DesignCandidate& k, const CalibrationConfig& c, int rank) {
-  std::ostringstream out;
-  out << "# The best next experiment by `combabc design` (rank " << rank
-      << "): add it to the config's [[experiment]] tables once measured.\n"
-      << "[[experiment]]\nname = \"x" << DesignNumber(k.load_x * 100) << "cm"
-      << (k.load_y_fraction != 0.5 ? "_y" + DesignNumber(k.load_y_fraction) : "") << "\"\n"
-      << "[experiment.load]\nx = " << DesignNumber(k.load_x) << "                # m\n"
-      << "y_fraction = " << DesignNumber(k.load_y_fraction) << "\n"
-      << "amplitude = " << DesignNumber(c.model.load_cases.front().load_force) << "          # N\n"
-      << "frequency = " << DesignNumber(c.model.frequency_hz) << "            # Hz\n"
-      << "[experiment.output]\npositions = [";
-  const std::vector<double> x = ScanPositions(k, c.design->scan_spacing);
-  for (std::size_t i = 0; i < x.size(); ++i) out << (i ? ", " : "") << DesignNumber(x[i]);
-  out << "]  # m\ny_fraction = " << DesignNumber(k.scan_y_fraction) << "\n"
-      << "[experiment.data]\ncsv = \"FILL IN: the measured profile\"\n"
-      << "position_unit = \"cm\"\nwindow = [" << DesignNumber(k.scan_from * 100) << ", "
-      << DesignNumber(k.scan_to * 100) << "]  # cm\n"
-      << "[experiment.metric]\n[[experiment.metric.component]]\ntype = \"least_squares\"\n"
-      << "window = [" << DesignNumber(k.scan_from * 100) << ", " << DesignNumber(k.scan_to * 100)
-      << "]  # cm\n"
-      << "noise = \"gaussian\"\nsigma_noise = " << DesignNumber(c.design->noise) << "\n";
-  return out.str();
+// The truths' neighbourhoods (design::LocalPopulation): for each distinct truth drawn from the
+// run's particles, its configuration, each free parameter flipped, the swaps of the pairs a
+// profile confuses most (a clamp and its mirror across the strip, a clamp and its neighbour along
+// an edge) and its mirror image; log_weight holds their log prior. Rows are distinct
+// configurations.
+design::LocalPopulation Neighbourhoods(const CalibrationConfig& c,
+                                       const design::Population& known,
+                                       const std::vector<std::size_t>& truths) {
+  const BinarySpace space(c.space);
+  const int d = space.dimension();
+  const auto free = static_cast<std::size_t>(space.num_free());
+  const std::vector<double>& prior = space.free_prior_one();
+  design::LocalPopulation local;
+  local.dimension = d;
+  for (int k = 0; k < d; ++k) local.free_of_bit.push_back(space.free_of_bit(k));
+  auto flippable = [&](std::size_t f) { return prior[f] > 0.0 && prior[f] < 1.0; };
+  std::set<std::pair<int, int>> pairs;
+  const int n = c.model.clamps_per_edge;
+  auto add = [&](int a, int b) {
+    const int fa = space.free_of_bit(a), fb = space.free_of_bit(b);
+    if (fa != fb) pairs.emplace(std::min(fa, fb), std::max(fa, fb));
+  };
+  for (int k = 0; k < n && 2 * n == d; ++k) {
+    add(k, k + n);
+    if (k + 1 < n) {
+      add(k, k + 1);
+      add(k + n, k + n + 1);
+    }
+  }
+  std::map<std::vector<std::uint8_t>, int> row_of;
+  std::vector<std::uint8_t> bits(static_cast<std::size_t>(d));
+  auto row = [&](const std::vector<std::uint8_t>& f) {
+    space.Expand(f, bits);
+    const auto [it, fresh] = row_of.emplace(bits, static_cast<int>(row_of.size()));
+    if (fresh) {
+      local.bits.insert(local.bits.end(), bits.begin(), bits.end());
+      double log_prior = 0.0;
+      for (std::size_t k = 0; k < free; ++k)
+        log_prior += std::log(f[k] ? prior[k] : 1.0 - prior[k]);
+      local.log_weight.push_back(log_prior);
+    }
+    return it->second;
+  };
+  std::map<std::size_t, design::Neighbourhood> made;
+  const auto width = static_cast<std::size_t>(d);
+  for (std::size_t t : truths) {
+    auto it = made.find(t);
+    if (it == made.end()) {
+      std::vector<std::uint8_t> f0(free);
+      space.Reduce(std::span(known.bits).subspan(t * width, width), f0);
+      design::Neighbourhood nb;
+      nb.rows.push_back(row(f0));
+      nb.single.assign(free, -1);
+      for (std::size_t f = 0; f < free; ++f) {
+        if (!flippable(f)) continue;
+        std::vector<std::uint8_t> f1 = f0;
+        f1[f] ^= 1U;
+        nb.single[f] = static_cast<int>(nb.rows.size());
+        nb.rows.push_back(row(f1));
+      }
+      for (const auto& [a, b] : pairs) {
+        const auto fa = static_cast<std::size_t>(a), fb = static_cast<std::size_t>(b);
+        if (f0[fa] == f0[fb] || !flippable(fa) || !flippable(fb)) continue;
+        std::vector<std::uint8_t> f2 = f0;
+        f2[fa] ^= 1U;
+        f2[fb] ^= 1U;
+        nb.swaps.push_back({a, b, static_cast<int>(nb.rows.size())});
+        nb.rows.push_back(row(f2));
+      }
+      // The mirror image across the centreline (edge 1 and edge 2 exchanged): what a centreline
+      // load and scan cannot tell from the truth.
+      if (2 * n == d) {
+        std::vector<std::uint8_t> truth(width), mirror(width), fm(free);
+        space.Expand(f0, truth);
+        for (std::size_t k = 0; k < width; ++k) mirror[k] = truth[(k + width / 2) % width];
+        design::Neighbourhood::Group group;
+        if (space.Reduce(mirror, fm) && fm != f0) {
+          for (std::size_t f = 0; f < free; ++f) {
+            if (fm[f] != f0[f]) group.flipped.push_back(static_cast<int>(f));
+          }
+          const bool possible = std::all_of(group.flipped.begin(), group.flipped.end(), [&](int f) {
+            return flippable(static_cast<std::size_t>(f));
+          });
+          if (possible) {
+            group.position = static_cast<int>(nb.rows.size());
+            nb.rows.push_back(row(fm));
+            nb.groups.push_back(std::move(group));
+          }
+        }
+      }
+      it = made.emplace(t, std::move(nb)).first;
+    }
+    local.truths.push_back(it->second);
+  }
+  return local;
+}
+
+// log of the run's acceptance of each row at its last complete wave: -d_k / T_k for a noise-aware
+// component, 0 or -inf for a threshold (d_k <= eps_k) or indicator one; -inf for a singular row.
+// The run's posterior is the prior times this (docs/algorithm.md, "Noise-aware acceptance").
+std::vector<double> RunLogLikelihood(const CalibrationConfig& c,
+                                     const Simulated& s,
+                                     const std::vector<double>& thresholds,
+                                     const std::string& posterior_path) {
+  const std::vector<MeasuredData> data = LoadExperimentData(c);
+  const std::vector<MeasuredProfile> profiles = ProfilesOf(data);
+  const std::unique_ptr<JointDistance> distance = MakeDistance(c, profiles);
+  const std::vector<DistanceComponent> components = distance->components();
+  std::size_t threshold_count = 0;
+  for (const DistanceComponent& k : components)
+    threshold_count += k.kind != ComponentKind::kIndicator;
+  if (threshold_count != thresholds.size()) {
+    throw Error(ErrorKind::kUsage,
+                "the run has " + std::to_string(thresholds.size()) +
+                    " threshold components; the config's experiments have " +
+                    std::to_string(threshold_count) + ": design from the run's own config",
+                posterior_path,
+                0,
+                "--posterior");
+  }
+  const std::size_t rows = s.singular.size();
+  std::vector<double> out(rows, -std::numeric_limits<double>::infinity());
+  std::vector<double> d(components.size());
+  for (std::size_t r = 0; r < rows; ++r) {
+    if (!s.singular[r].empty()) continue;
+    distance->Evaluate(std::span(s.run).subspan(r * s.run_size, s.run_size), d);
+    double ll = 0.0;
+    std::size_t t = 0;
+    for (std::size_t k = 0; k < components.size(); ++k) {
+      switch (components[k].kind) {
+        case ComponentKind::kNegLogLikelihood:
+          ll -= d[k] / thresholds[t++];
+          break;
+        case ComponentKind::kThreshold:
+          if (!(d[k] <= thresholds[t++])) ll = -std::numeric_limits<double>::infinity();
+          break;
+        case ComponentKind::kIndicator:
+          if (d[k] != components[k].required) ll = -std::numeric_limits<double>::infinity();
+          break;
+      }
+    }
+    out[r] = ll;
+  }
+  return out;
 }
 
 void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationConfig& c) {
@@ -294,13 +491,16 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
   ident << '\n';
   for (std::size_t k = 0; k < o.candidates.size(); ++k) {
     const DesignCandidate& d = o.candidates[k];
-    ident << k + 1 << ",\"load " << DesignNumber(d.load_x * 100) << " cm, y "
-          << DesignNumber(d.load_y_fraction) << "; scan " << DesignNumber(d.scan_from * 100) << "-"
-          << DesignNumber(d.scan_to * 100) << " cm, y " << DesignNumber(d.scan_y_fraction) << "\"";
+    // Across the strip in mm from edge 1 (y = 0), as the bench measures it.
+    const double width = c.model.width * 1000;
+    ident << k + 1 << ",\"load " << DesignNumber(d.load_x * 100) << " cm, "
+          << DesignNumber(d.load_y_fraction * width) << " mm from edge 1; scan "
+          << DesignNumber(d.scan_from * 100) << "-" << DesignNumber(d.scan_to * 100) << " cm, "
+          << DesignNumber(d.scan_y_fraction * width) << " mm from edge 1\"";
     for (double v : r.scores[k].identifiability) ident << ',' << DesignNumber(v);
     ident << '\n';
   }
-  dir.Add("next_experiment.toml") << o.next_experiment;
+  if (!o.next_config.empty()) dir.Add("next.toml") << o.next_config;
 }
 
 }  // namespace
@@ -334,7 +534,9 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   const int threads = request.threads >= 0 ? request.threads : c.smc.threads;
   const std::string directory =
       request.output_directory.empty()
-          ? (fs::path(ResolvePath(c.directory, c.output.directory)) / "design").string()
+          ? (fs::path(ResolvePath(c.directory, c.output.directory)) / "design")
+                .lexically_normal()
+                .string()
           : request.output_directory;
   // Refused now rather than after the simulations; the parent folder is made only at the end.
   const fs::path parent = fs::path(directory).parent_path();
@@ -344,31 +546,10 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   }
 
   DesignOutcome o;
-  design::Population population = request.posterior_path.empty()
-                                      ? FromPrior(c, &o.population)
-                                      : FromPosterior(request.posterior_path, c, &o.population);
-  if (!request.posterior_path.empty()) {
-    // The prior's population was sized against memory_limit_gb when the config was read; a
-    // posterior's is known only now.
-    const DesignMemory memory = EstimateDesignMemory(c, static_cast<double>(population.size()));
-    if (memory.total() > c.model.memory_limit_bytes) {
-      throw Error(ErrorKind::kUsage,
-                  "its " + std::to_string(population.size()) +
-                      " distinct configurations would need about " +
-                      DesignNumber(memory.total() / 1e9) + " GB of memory to design from (limit " +
-                      DesignNumber(c.model.memory_limit_bytes / 1e9) +
-                      " GB); fewer truths or scan points in [design], or raise memory_limit_gb",
-                  request.posterior_path,
-                  0,
-                  "--posterior");
-    }
-  }
-  o.exhaustive =
-      request.posterior_path.empty() && BinarySpace(c.space).num_free() <= kDesignExactBits;
+  o.noise_sigma = c.design->noise;
+  o.width = c.model.width;
+  o.clamps = c.space.dimension;
   o.candidates = Candidates(*c.design);
-  const std::vector<design::CandidateProfiles> profiles =
-      SimulateCandidates(c, population, threads, o);
-  o.particles = population.size();
   design::DesignOptions options;
   options.noise_sigma = c.design->noise;
   options.truths = c.design->truths;
@@ -376,9 +557,114 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   options.identified_margin = c.design->identified_margin;
   options.seed = c.smc.seed;
   options.threads = threads;
-  o.result = design::ScoreCandidates(population, profiles, options);
-  o.next_experiment =
-      ExperimentBlock(o.candidates[static_cast<std::size_t>(o.result.selected.front())], c, 1);
+  auto decided = [&](const std::vector<double>& marginals) {
+    int count = 0;
+    for (double p : marginals) count += std::abs(p - 0.5) > options.identified_margin;
+    return count;
+  };
+  std::vector<double> marginals;
+  const auto simulate_start = std::chrono::steady_clock::now();
+  if (request.posterior_path.empty()) {
+    design::Population population = FromPrior(c, &o.population);
+    o.exhaustive = BinarySpace(c.space).num_free() <= kDesignExactBits;
+    const std::vector<design::CandidateProfiles> profiles =
+        SimulateCandidates(c, population, threads, o);
+    o.simulated = population.size() + o.singular;
+    o.simulate_seconds = SecondsSince(simulate_start);
+    o.particles = population.size();
+    o.method = o.exhaustive ? "every configuration, reweighted by each truth's data"
+                            : "the prior draws, reweighted by each truth's data";
+    o.result = design::ScoreCandidates(population, profiles, options);
+    marginals = design::Marginals(population);
+    o.decided_now = decided(marginals);
+    o.expected_decided = o.result.cumulative.front().identified;
+  } else {
+    // The run's particles are too few to stand for what a new experiment's data would leave
+    // (reweighted, they collapse onto a handful and every clamp looks decided): the truths'
+    // neighbourhoods under the prior and the run's own likelihood instead (docs/algorithm.md,
+    // "Honest predictions").
+    std::vector<double> thresholds;
+    const design::Population known =
+        FromPosterior(request.posterior_path, c, &o.population, &thresholds);
+    marginals = design::Marginals(known);
+    o.decided_now = decided(marginals);
+    design::LocalPopulation local =
+        Neighbourhoods(c, known, design::DrawTruths(known.weights, options.truths, options.seed));
+    const DesignMemory memory = EstimateDesignMemory(c, static_cast<double>(local.rows()));
+    if (memory.total() > c.model.memory_limit_bytes) {
+      throw Error(ErrorKind::kUsage,
+                  "the truths' neighbourhoods hold " + std::to_string(local.rows()) +
+                      " configurations, which would need about " +
+                      DesignNumber(memory.total() / 1e9) + " GB of memory to design from (limit " +
+                      DesignNumber(c.model.memory_limit_bytes / 1e9) +
+                      " GB); fewer truths or scan points in [design], or raise memory_limit_gb",
+                  request.posterior_path,
+                  0,
+                  "--posterior");
+    }
+    const Simulated s = SimulateRows(c, local.bits, local.rows(), threads, true);
+    const std::vector<double> ll = RunLogLikelihood(c, s, thresholds, request.posterior_path);
+    for (std::size_t r = 0; r < local.rows(); ++r) {
+      local.log_weight[r] += ll[r];
+      if (!s.singular[r].empty()) {
+        if (o.singular == 0) o.singular_reason = s.singular[r];
+        ++o.singular;
+      }
+    }
+    o.simulated = local.rows();
+    o.simulate_seconds = SecondsSince(simulate_start);
+    o.particles = known.size();
+    o.method =
+        "each truth's neighbourhood (the truths, their one-bit flips, the swaps of mirror and "
+        "neighbouring clamps and their mirror images) under the prior and the run's likelihood";
+    o.result = design::ScoreNeighbourhoods(local, s.profiles, options);
+    // The neighbourhoods' own count before any new data stands in for the run's (each truth's
+    // flips are judged with the others held at the truth's values): what a candidate adds to it
+    // is added to what the run decided.
+    o.expected_decided =
+        o.decided_now +
+        std::max(0.0, o.result.cumulative.front().identified - o.result.prior_identified);
+  }
+  const std::size_t best = static_cast<std::size_t>(o.result.selected.front());
+  // The stop rule: every clamp decided, or no candidate expected to decide another one.
+  if (o.decided_now >= o.clamps) {
+    o.stop = true;
+    o.stop_reason = "every clamp is decided";
+  } else if (o.expected_decided - o.decided_now < 0.5) {
+    o.stop = true;
+    char adds[32];
+    std::snprintf(adds, sizeof adds, "%.1f", o.expected_decided - o.decided_now);
+    o.stop_reason = "no candidate is expected to decide another clamp (the best, the load at " +
+                    DesignNumber(o.candidates[best].load_x * 100) + " cm, adds " + adds + ")";
+  }
+  for (int k = 0; k < o.clamps; ++k) {
+    if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > options.identified_margin)
+      continue;
+    // The strongest evidence any candidate alone gives against flipping it.
+    double signal = std::numeric_limits<double>::quiet_NaN();
+    for (const design::Score& score : o.result.scores) {
+      const double v = score.flip_signal[static_cast<std::size_t>(k)];
+      if (std::isfinite(v) && !(v <= signal)) signal = v;
+    }
+    UndecidedClamp u;
+    u.bit = k;
+    u.where = ClampWhere(c, k);
+    u.reason = !std::isfinite(signal) ? "no candidate's data were simulated against its flip"
+               : signal < 2.0
+                   ? "flipping it changes no candidate's profile by more than the noise (the "
+                     "response there is below the noise)"
+                   : "its flip shows in a profile, but another clamp (its mirror across the strip "
+                     "or a neighbour) can be flipped with it for nearly the same profile";
+    o.undecided.push_back(std::move(u));
+  }
+  const fs::path design_directory = fs::absolute(directory);
+  if (!o.stop) {
+    const NextStep next = WriteNextConfig(c, o.candidates[best], design_directory);
+    o.next_config = next.config_text;
+    o.next_config_path = (fs::path(directory) / "next.toml").string();
+    o.next_data_path = next.data_path;
+    o.instructions = Instructions(c, o.candidates[best], next, o.next_config_path);
+  }
 
   if (!parent.empty() && !fs::exists(parent, ec)) {
     fs::create_directories(parent, ec);

@@ -5,13 +5,18 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
+#include "combabc/config/config.hpp"
 #include "combabc/design/experiment_design.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
 #include "combabc/services/design.hpp"
+#include "combabc/services/run.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc {
@@ -211,6 +216,199 @@ TEST(Design, ASingularConfigurationIsLeftOutNotFatal) {
   EXPECT_EQ(o.particles, 63U);
   ASSERT_EQ(o.result.scores.size(), 2U);
   for (const design::Score& s : o.result.scores) EXPECT_GT(s.information_gain, 0.0);
+}
+
+// The truths' neighbourhoods (design::ScoreNeighbourhoods, what `design --posterior` predicts
+// with) against the exact posterior over all 64 configurations: each candidate's expected count
+// of identified clamps within half a clamp of the exact count (measured: within 0.2). The
+// centreline candidate keeps its mirror pairs split only because the neighbourhoods hold the
+// mirror image (without it: 3.9 expected against the exact 2.2).
+TEST(Design, NeighbourhoodsPredictTheExactIdentifiedCount) {
+  const TinyDesign s = MakeSetup();
+  design::DesignOptions options;
+  options.noise_sigma = kSigma;
+  options.truths = 200;
+  const design::DesignResult exact = design::ScoreCandidates(s.population, s.candidates, options);
+  design::LocalPopulation local;
+  local.dimension = 6;
+  local.free_of_bit = {0, 1, 2, 3, 4, 5};
+  local.bits = s.population.bits;  // row = the configuration's code
+  local.log_weight.assign(64, std::log(1.0 / 64));
+  const int pairs[][2] = {{0, 3}, {1, 4}, {2, 5}, {0, 1}, {1, 2}, {3, 4}, {4, 5}};
+  for (std::size_t t : design::DrawTruths(s.population.weights, options.truths, options.seed)) {
+    const int code = static_cast<int>(t);
+    design::Neighbourhood nb;
+    nb.rows.push_back(code);
+    for (int f = 0; f < 6; ++f) {
+      nb.single.push_back(static_cast<int>(nb.rows.size()));
+      nb.rows.push_back(code ^ (1 << f));
+    }
+    for (const auto& [a, b] : pairs) {
+      if (((code >> a) & 1) == ((code >> b) & 1)) continue;
+      nb.swaps.push_back({a, b, static_cast<int>(nb.rows.size())});
+      nb.rows.push_back(code ^ (1 << a) ^ (1 << b));
+    }
+    const int mirror = ((code & 7) << 3) | (code >> 3);  // edge 1 and edge 2 exchanged
+    if (mirror != code) {
+      design::Neighbourhood::Group g;
+      for (int f = 0; f < 6; ++f) {
+        if (((code ^ mirror) >> f) & 1) g.flipped.push_back(f);
+      }
+      g.position = static_cast<int>(nb.rows.size());
+      nb.rows.push_back(mirror);
+      nb.groups.push_back(std::move(g));
+    }
+    local.truths.push_back(std::move(nb));
+  }
+  const design::DesignResult r = design::ScoreNeighbourhoods(local, s.candidates, options);
+  ASSERT_EQ(r.scores.size(), exact.scores.size());
+  for (std::size_t c = 0; c < r.scores.size(); ++c) {
+    EXPECT_NEAR(r.scores[c].identified, exact.scores[c].identified, 0.5) << c;
+    EXPECT_LT(r.scores[c].wrong, 0.2) << c;
+  }
+  // Mirror clamps under the centreline load and scan: a swap gives the same profile.
+  for (int k = 0; k < 3; ++k) EXPECT_LT(r.scores[0].identifiability[k], 0.75) << k;
+  EXPECT_EQ(r.selected.front(), exact.selected.front());
+}
+
+// The tiny sensor's config with a [design] table, its data written beside it.
+std::string CampaignConfig(const std::string& model, const std::string& design) {
+  return "[model]\n" + model +
+         "[model.clamps]\nper_edge = 3\n"
+         "[model.mesh]\nelements_per_section = 2\nelements_across_width = 2\n"
+         "[data]\ncsv = \"data/first.csv\"\nposition_column = \"x_cm\"\n"
+         "displacement_column = \"w_um\"\nposition_unit = \"cm\"\ndisplacement_unit = \"um\"\n"
+         "[metric]\n[[metric.component]]\ntype = \"least_squares\"\nwindow = [0, 90]\n"
+         "noise = \"gaussian\"\n"
+         "[sampler]\nwaves = 2\naccepted_per_wave = 20\nseed = 3\nthreads = 1\n"
+         "[design]\n" +
+         design + "truths = 20\nselect = 1\n[output]\ndirectory = \"results\"\n";
+}
+
+// A tent peaking at `peak_cm`, every 1 cm over 0-90 cm, in the columns CampaignConfig names.
+void WriteProfile(const std::filesystem::path& path, double peak_cm) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "x_cm,w_um\n";
+  // Uneven wiggles of about 1 %: noise the gaussian metric can estimate.
+  for (int x = 0; x <= 90; ++x) {
+    out << x << "," << 100.0 - std::abs(x - peak_cm) + ((x * 37) % 11 - 5) * 0.2 << "\n";
+  }
+}
+
+services::DesignRequest Request(const testing::TempFolder& folder) {
+  services::DesignRequest request;
+  request.config_path = folder / "campaign.toml";
+  request.threads = 1;
+  request.figure = false;
+  return request;
+}
+
+// The campaign loop's next config runs as written: experiment 1 (the [data] / [metric]
+// shorthand) converted to an [[experiment]] table, the designed one added with the data file and
+// columns it expects, and `combabc run` takes it once that file is there. Before, design wrote an
+// [[experiment]] block only, which the shorthand config refused.
+TEST(Design, TheNextConfigRunsAsWritten) {
+  const testing::TempFolder folder("design-campaign");
+  std::ofstream(folder / "campaign.toml") << CampaignConfig("", "load_x = [30]\n");
+  WriteProfile(folder.path() / "data" / "first.csv", 45);
+  const services::DesignOutcome o = services::RunDesign(Request(folder));
+  ASSERT_FALSE(o.stop) << o.stop_reason;
+  const std::string next = folder / "results/design/next.toml";
+  ASSERT_TRUE(std::filesystem::exists(next));
+  EXPECT_EQ(o.next_config_path, next);
+  // The new data file beside the run's output folder, named after the experiment.
+  EXPECT_EQ(o.next_data_path, folder / "x30cm_y20mm_scan20mm.csv");
+  // The noise treatment of experiment 1 (estimated), not a fixed sigma.
+  EXPECT_NE(o.next_config.find("sigma_noise = \"estimate\""), std::string::npos) << o.next_config;
+  const CalibrationConfig c = LoadConfig(next);
+  ASSERT_EQ(c.experiments.size(), 2U);
+  EXPECT_EQ(c.experiments[0].name, "x45cm_y20mm_scan20mm");
+  EXPECT_EQ(c.experiments[1].data.position_column, "x_cm");
+  EXPECT_EQ(c.experiments[1].data.displacement_unit, LengthUnit::kMicrometre);
+  WriteProfile(o.next_data_path, 30);
+  services::RunRequest run;
+  run.config_path = next;
+  run.report = false;
+  const services::RunOutcome outcome = services::RunCalibration(run);
+  // The next run writes beside the first one's output folder, not over it.
+  EXPECT_EQ(
+      std::filesystem::weakly_canonical(std::filesystem::path(outcome.history_path).parent_path()),
+      std::filesystem::weakly_canonical(folder / "results-e2"));
+  EXPECT_FALSE(outcome.history.waves.empty());
+  // The next round designs from that run's posterior, its predictions from the truths'
+  // neighbourhoods under the run's likelihood, and its next run goes beside the others.
+  services::DesignRequest round2 = Request(folder);
+  round2.config_path = next;
+  round2.posterior_path = outcome.history_path;
+  const services::DesignOutcome o2 = services::RunDesign(round2);
+  EXPECT_NE(o2.method.find("neighbourhood"), std::string::npos) << o2.method;
+  EXPECT_GT(o2.simulated, 6U);  // at least a truth and its six flips
+  if (!o2.stop) {
+    EXPECT_EQ(LoadConfig(o2.next_config_path).experiments.size(), 3U);
+    EXPECT_NE(o2.next_config.find("\"../../results-e3\""), std::string::npos) << o2.next_config;
+  }
+}
+
+// The instructions in the bench's terms on a 50 mm strip: 0.2 of the width is 10 mm from edge 1,
+// 0.8 is 40 mm.
+TEST(Design, TheInstructionsNameThePositionsOnTheStrip) {
+  const testing::TempFolder folder("design-instructions");
+  std::ofstream(folder / "campaign.toml")
+      << CampaignConfig("width = 0.05\n",
+                        "load_x = [30]\nload_y_fraction = [0.2]\nscan_y_fraction = [0.8]\n"
+                        "scan = [[10, 80]]\nscan_spacing = 2\n");
+  WriteProfile(folder.path() / "data" / "first.csv", 45);
+  const services::DesignOutcome o = services::RunDesign(Request(folder));
+  ASSERT_FALSE(o.stop) << o.stop_reason;
+  std::string text;
+  for (const std::string& line : o.instructions) text += line + "\n";
+  EXPECT_NE(text.find("shaker at 30 cm along the strip, 10 mm from edge 1"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("Scan the line 40 mm from edge 1, from 10 to 80 cm, every 2 cm (36 points)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("x30cm_y10mm_scan40mm.csv: columns x_cm (cm) and w_um (um)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("combabc run " + (folder / "results/design/next.toml")), std::string::npos)
+      << text;
+}
+
+// The stop rule: with every clamp decided (a prior that fixes them all) there is nothing to
+// measure; with a noise no profile rises above, no candidate decides a clamp, and each undecided
+// clamp is named with why. Neither writes a next config.
+TEST(Design, TheStopRuleFiresWhenEveryClampIsDecided) {
+  const testing::TempFolder folder("design-stop-decided");
+  std::string config = CampaignConfig("", "load_x = [30]\n");
+  config.replace(config.find("[sampler]\n"), 10, "[sampler]\nprior = 1\n");
+  std::ofstream(folder / "campaign.toml") << config;
+  WriteProfile(folder.path() / "data" / "first.csv", 45);
+  const services::DesignOutcome o = services::RunDesign(Request(folder));
+  EXPECT_TRUE(o.stop);
+  EXPECT_EQ(o.decided_now, 6);
+  EXPECT_EQ(o.stop_reason, "every clamp is decided");
+  EXPECT_TRUE(o.undecided.empty());
+  EXPECT_TRUE(o.instructions.empty());
+  EXPECT_FALSE(std::filesystem::exists(folder / "results/design/next.toml"));
+}
+
+TEST(Design, TheStopRuleFiresWhenNoCandidateHelps) {
+  const testing::TempFolder folder("design-stop-noise");
+  std::ofstream(folder / "campaign.toml") << CampaignConfig("", "load_x = [30, 60]\nnoise = 10\n");
+  WriteProfile(folder.path() / "data" / "first.csv", 45);
+  const services::DesignOutcome o = services::RunDesign(Request(folder));
+  EXPECT_TRUE(o.stop);
+  EXPECT_EQ(o.decided_now, 0);
+  EXPECT_NE(o.stop_reason.find("no candidate is expected to decide another clamp"),
+            std::string::npos)
+      << o.stop_reason;
+  ASSERT_EQ(o.undecided.size(), 6U);
+  EXPECT_EQ(o.undecided[3].where, "clamp 4 (edge 2, 0-30 cm)");
+  for (const services::UndecidedClamp& u : o.undecided) {
+    EXPECT_NE(u.reason.find("below the noise"), std::string::npos) << u.where << ": " << u.reason;
+  }
+  EXPECT_FALSE(std::filesystem::exists(folder / "results/design/next.toml"));
 }
 
 }  // namespace

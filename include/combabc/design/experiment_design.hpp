@@ -60,6 +60,10 @@ struct Score {
   // upper bounds (the population is too small for what the data would tell; docs/algorithm.md).
   double effective_particles = 0.0;
   std::vector<double> identifiability;  // per bit
+  // Per bit, E[|Y(truth) - Y(truth, bit flipped)|^2 / (2 sigma^2)] over this candidate's scan:
+  // the expected log-likelihood ratio its data give against flipping the bit alone (what
+  // "below the noise" means: near 0). NaN where the flips are not in the population.
+  std::vector<double> flip_signal;
 };
 
 struct DesignResult {
@@ -75,9 +79,59 @@ std::vector<double> Marginals(const Population& population);
 // sum_k h(p_k) in bits, h(p) = -p log2 p - (1 - p) log2 (1 - p).
 double MarginalEntropy(std::span<const double> marginals);
 
+// Truths drawn by weight (inverse CDF of one uniform each, from (seed, truth stream, j)): the
+// population indices ScoreCandidates uses.
+std::vector<std::size_t> DrawTruths(std::span<const double> weights,
+                                    int truths,
+                                    std::uint64_t seed);
+
 // Throws std::invalid_argument for inconsistent sizes or options.
 DesignResult ScoreCandidates(const Population& population,
                              const std::vector<CandidateProfiles>& candidates,
                              const DesignOptions& options);
+
+// The local posterior around each truth (docs/algorithm.md, "Honest predictions"). A finished
+// run's particles are too few to stand for the posterior a new experiment would leave: reweighted,
+// they collapse onto a handful, and every clamp looks decided. Around each truth drawn from them
+// instead: the truth, its one-bit neighbours (each free parameter flipped), the swaps of
+// confusable pairs (a fixed clamp and its free mirror or neighbour exchanged) and its mirror image
+// across the centreline (Neighbourhood::groups), each weighted by its
+// prior times the run's own likelihood of the data measured so far. Clamp k's P(truth's value) is
+// the smallest of its two-state posterior (truth against the flip), the four-state posteriors of
+// its pairs and the two-state posteriors against the groups that flip it, given the new data; the
+// scores follow from those marginals as in ScoreCandidates.
+struct Neighbourhood {
+  std::vector<int> rows;    // rows of LocalPopulation; rows[0] is the truth's configuration
+  std::vector<int> single;  // per free parameter: its flip's position in rows, -1 when it cannot
+  struct Swap {
+    int first = 0, second = 0;  // free parameters
+    int position = 0;           // in rows: both flipped
+  };
+  std::vector<Swap> swaps;
+  // Moves of several free parameters at once (the mirror image across the centreline, which a
+  // centreline load and scan cannot tell from the truth): each parameter it flips is also judged
+  // against the move alone.
+  struct Group {
+    std::vector<int> flipped;  // free parameters
+    int position = 0;          // in rows
+  };
+  std::vector<Group> groups;
+};
+
+struct LocalPopulation {
+  int dimension = 0;               // bits
+  std::vector<int> free_of_bit;    // per bit, the free parameter that drives it
+  std::vector<std::uint8_t> bits;  // rows x dimension
+  std::vector<double> log_weight;  // per row: log prior + log likelihood of the data so far
+  std::vector<Neighbourhood> truths;
+  std::size_t rows() const { return log_weight.size(); }
+};
+
+// As ScoreCandidates, over the neighbourhoods (candidates' profiles: rows() x points); the
+// number of truths is truths.size(). prior_entropy and prior_identified are the neighbourhoods'
+// before any new data, from which the gains count.
+DesignResult ScoreNeighbourhoods(const LocalPopulation& population,
+                                 const std::vector<CandidateProfiles>& candidates,
+                                 const DesignOptions& options);
 
 }  // namespace combabc::design
