@@ -98,7 +98,8 @@ struct NoiseSpec {
   bool given = false;  // some noise key was written in this table
 };
 
-// noise = "none" | "gaussian", sigma_noise = <number> | "estimate", sigma_model = <number>.
+// noise = "none" | "gaussian" | "folded_normal", sigma_noise = <number> | "estimate",
+// sigma_model = <number>.
 NoiseSpec ParseNoise(TableReader& t, const NoiseSpec& fallback) {
   const auto model = t.Choice<NoiseModel>("noise", "noise model");
   const toml::node* sigma_node = t.Raw("sigma_noise");
@@ -108,9 +109,11 @@ NoiseSpec ParseNoise(TableReader& t, const NoiseSpec& fallback) {
   if (!model && !sigma_node && !sigma_model) return spec;
   spec.given = true;
   if (model) spec.noise.model = *model;
-  if (spec.noise.model != NoiseModel::kGaussian) {
+  if (spec.noise.model == NoiseModel::kNone) {
     const char* key = sigma_node ? "sigma_noise" : sigma_model ? "sigma_model" : "noise";
-    if (key != std::string("noise")) t.Fail(key, "needs noise = \"gaussian\"");
+    if (key != std::string("noise")) {
+      t.Fail(key, "needs a noise model: noise = \"gaussian\" or \"folded_normal\"");
+    }
     return spec;
   }
   if (sigma_node) {
@@ -137,7 +140,7 @@ NoiseSpec ParseNoise(TableReader& t, const NoiseSpec& fallback) {
   return spec;
 }
 
-// A gaussian component's schedule holds temperatures, which end at 1 (the likelihood itself):
+// A noise-aware component's schedule holds temperatures, which end at 1 (the likelihood itself):
 // the default target 0 becomes 1; an explicit value below 1 is an error.
 void TemperatureSchedule(ScheduleSpec* spec, const TableReader& t, bool target_written) {
   auto& s = spec->schedule;
@@ -145,7 +148,7 @@ void TemperatureSchedule(ScheduleSpec* spec, const TableReader& t, bool target_w
     for (double v : s.values) {
       if (!(v >= 1.0)) {
         t.Fail("threshold",
-               "with noise = \"gaussian\" the schedule holds temperatures, which must be >= 1");
+               "with a noise model the schedule holds temperatures, which must be >= 1");
       }
     }
     return;
@@ -153,7 +156,7 @@ void TemperatureSchedule(ScheduleSpec* spec, const TableReader& t, bool target_w
   if (s.target < 1.0) {
     if (target_written) {
       t.Fail("target",
-             "with noise = \"gaussian\" the schedule holds temperatures: target must be >= 1 "
+             "with a noise model the schedule holds temperatures: target must be >= 1 "
              "(1 = the posterior under the noise model)");
     }
     s.target = 1.0;
@@ -216,7 +219,7 @@ void ParseMetricTable(TableReader& table,
       ScheduleSpec spec = base;
       if (component.type == MetricType::kLeastSquares) {
         component.noise = base_noise.noise;
-        if (base_noise.noise.model == NoiseModel::kGaussian) {
+        if (base_noise.noise.model != NoiseModel::kNone) {
           noise_used = true;
           TemperatureSchedule(&spec, *t, t->Has("target"));
         }
@@ -256,7 +259,7 @@ void ParseMetricTable(TableReader& table,
       } else if (noise.given && noise.noise.model != NoiseModel::kNone) {
         ct.Fail("noise", "a noise model applies to least_squares components only");
       }
-      if (component.noise.model == NoiseModel::kGaussian) {
+      if (component.noise.model != NoiseModel::kNone) {
         noise_used = true;
         const bool own = ct.Has("target") || ct.Has("threshold");
         TemperatureSchedule(&spec, own ? ct : *t, own ? ct.Has("target") : t->Has("target"));
@@ -267,7 +270,7 @@ void ParseMetricTable(TableReader& table,
     ct.Finish();
     metric->components.push_back(std::move(component));
   }
-  if (base_noise.given && base_noise.noise.model == NoiseModel::kGaussian && !noise_used) {
+  if (base_noise.given && base_noise.noise.model != NoiseModel::kNone && !noise_used) {
     t->Fail("noise", "no least_squares component to apply it to");
   }
   t->Finish();

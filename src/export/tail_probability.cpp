@@ -8,7 +8,7 @@
 namespace combabc {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kNoProbability = std::numeric_limits<double>::quiet_NaN();
 constexpr double kTiny = 1e-300;  // keeps the continued fractions' denominators off zero
 constexpr double kEps = 1e-15;
 constexpr int kMaxTerms = 10000;
@@ -114,13 +114,13 @@ double BetaI(double a, double b, double x) {
 }  // namespace
 
 double ChiSquareUpperTail(double x, double dof) {
-  if (std::isnan(x) || !(dof > 0.0)) return kNaN;
+  if (std::isnan(x) || !(dof > 0.0)) return kNoProbability;
   if (std::isinf(x)) return x > 0.0 ? 0.0 : 1.0;
   return GammaQ(0.5 * dof, 0.5 * x);
 }
 
 double FUpperTail(double f, double d1, double d2) {
-  if (std::isnan(f) || !(d1 > 0.0) || !(d2 > 0.0)) return kNaN;
+  if (std::isnan(f) || !(d1 > 0.0) || !(d2 > 0.0)) return kNoProbability;
   if (f <= 0.0) return 1.0;
   if (std::isinf(f)) return 0.0;
   // P(F >= f) = I_{d2 / (d2 + d1 f)}(d2 / 2, d1 / 2).

@@ -8,6 +8,7 @@
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/metrics/folded_normal.hpp"
 #include "metrics/window_checks.hpp"
 
 namespace combabc {
@@ -21,6 +22,23 @@ std::string Metres(double x) {
   std::ostringstream out;
   out << x << " m";
   return out.str();
+}
+
+// A folded_normal component's data are amplitudes: f(y) is 0 below 0, and the estimate reads
+// every measured point, so all of them must be >= 0.
+void CheckAmplitudes(const MetricComponentConfig& c,
+                     std::size_t i,
+                     std::span<const double> positions,
+                     std::span<const double> values) {
+  for (std::size_t j = 0; j < values.size(); ++j) {
+    if (values[j] >= 0.0) continue;
+    std::ostringstream what;
+    what << "noise = \"folded_normal\" models amplitudes (>= 0), but the measured value at "
+         << Metres(positions[j]) << " is " << values[j]
+         << ": give amplitudes in [data] displacement_column, or noise = \"gaussian\" for "
+            "signed data";
+    throw Error(ErrorKind::kConfig, what.str(), {}, c.config_line, Field(i));
+  }
 }
 
 void CheckIncreasing(std::span<const double> x, const char* what) {
@@ -105,17 +123,21 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
                   c.config_line,
                   Field(i));
     }
-    if (c.noise.model == NoiseModel::kGaussian) {
+    if (c.noise.model != NoiseModel::kNone) {
+      compiled.folded = c.noise.model == NoiseModel::kFoldedNormal;
+      if (compiled.folded) CheckAmplitudes(c, i, data_positions, data_values);
       double noise = 0.0;
       if (c.noise.sigma_noise) {
         noise = *c.noise.sigma_noise;
       } else if (data_positions.size() >= 3) {
-        noise = EstimateNoiseSigma(data_positions, data_values);
+        noise = compiled.folded ? EstimateAmplitudeNoise(data_positions, data_values).sigma
+                                : EstimateNoiseSigma(data_positions, data_values);
       }
       compiled.sigma = std::hypot(noise, c.noise.sigma_model);
       if (!(compiled.sigma > 0.0) || !std::isfinite(compiled.sigma)) {
         throw Error(ErrorKind::kConfig,
-                    "the gaussian noise model's sigma is " + std::to_string(compiled.sigma) +
+                    std::string("the ") + ToString(c.noise.model) + " noise model's sigma is " +
+                        std::to_string(compiled.sigma) +
                         (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
                         "; it must be finite and > 0: give sigma_noise or sigma_model",
                     {},
@@ -135,6 +157,11 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
         compiled.positions.push_back(x);
         compiled.observed.push_back(data_values[j]);
         compiled.samples.push_back(sample_at(x, i));
+        if (compiled.folded) {
+          const double y = data_values[j];
+          compiled.best_energy.push_back(
+              -FoldedNormalLogDensity(y, FoldedNormalBestMean(y, compiled.sigma), compiled.sigma));
+        }
       }
       const std::size_t needed = c.type == MetricType::kArea ? 2 : 1;
       if (compiled.positions.size() < needed) {
@@ -234,6 +261,16 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
         break;
       }
       case MetricType::kLeastSquares: {  // Eq. 5 (and each block of Eq. 6)
+        if (c.folded) {
+          // -log(pi(y | Y*) / c), c = prod_j max_mu f(y_j; mu): each term >= 0 but for rounding.
+          double sum = 0.0;
+          for (std::size_t j = 0; j < c.samples.size(); ++j) {
+            const double mu = Interpolate(simulated, c.samples[j], scale);
+            sum += -FoldedNormalLogDensity(c.observed[j], mu, c.sigma) - c.best_energy[j];
+          }
+          out[k] = std::max(sum, 0.0);
+          break;
+        }
         double sum = 0.0;
         for (std::size_t j = 0; j < c.samples.size(); ++j) {
           const double r = Interpolate(simulated, c.samples[j], scale) - c.observed[j];
@@ -257,52 +294,6 @@ void CompositeDistance::Evaluate(std::span<const double> simulated, std::span<do
       }
     }
   }
-}
-
-double EstimateNoiseSigma(std::span<const double> x, std::span<const double> y) {
-  COMBABC_CHECK(x.size() == y.size() && x.size() >= 3);
-  const std::size_t k = std::min<std::size_t>(5, x.size() - 1);
-  std::vector<double> e;
-  e.reserve(x.size() - k);
-  for (std::size_t i = 0; i + k < x.size(); ++i) {
-    double sum = 0.0;
-    double norm = 0.0;
-    for (std::size_t j = 0; j <= k; ++j) {
-      double c = 1.0;
-      for (std::size_t m = 0; m <= k; ++m) {
-        if (m != j) c /= x[i + j] - x[i + m];
-      }
-      sum += c * y[i + j];
-      norm += c * c;
-    }
-    e.push_back(std::abs(sum) / std::sqrt(norm));
-  }
-  std::vector<double> sorted = e;
-  const std::size_t half = sorted.size() / 2;
-  std::nth_element(
-      sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(half), sorted.end());
-  double median = sorted[half];
-  if (sorted.size() % 2 == 0) {
-    median = 0.5 * (median + *std::max_element(sorted.begin(),
-                                               sorted.begin() + static_cast<std::ptrdiff_t>(half)));
-  }
-  // 1.4826 = 1 / Phi^-1(3/4): the MAD of N(0, sigma^2) is sigma / 1.4826.
-  const double cut = 3.0 * 1.482602218505602 * median;
-  double squares = 0.0;
-  std::size_t kept = 0;
-  for (double v : e) {
-    if (v <= cut) {
-      squares += v * v;
-      ++kept;
-    }
-  }
-  // E[e^2 | |e| <= 3 sigma] = sigma^2 (1 - 6 phi(3) / (2 Phi(3) - 1)) = 0.973336 sigma^2.
-  constexpr double kCutVariance = 0.9733369246625415;
-  const double sigma = std::sqrt(squares / (static_cast<double>(kept) * kCutVariance));
-  // Rounding in the differences, not noise: exactly polynomial data read 0.
-  double scale = 0.0;
-  for (double v : y) scale = std::max(scale, std::abs(v));
-  return sigma <= 64.0 * std::numeric_limits<double>::epsilon() * scale ? 0.0 : sigma;
 }
 
 }  // namespace combabc

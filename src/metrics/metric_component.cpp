@@ -24,8 +24,8 @@ ComponentKind KindOf(MetricType type) {
 }
 
 ComponentKind KindOf(const MetricComponentConfig& config) {
-  return config.noise.model == NoiseModel::kGaussian ? ComponentKind::kNegLogLikelihood
-                                                     : KindOf(config.type);
+  return config.noise.model != NoiseModel::kNone ? ComponentKind::kNegLogLikelihood
+                                                 : KindOf(config.type);
 }
 
 std::string ComponentName(const MetricComponentConfig& config) {

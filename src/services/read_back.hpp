@@ -54,8 +54,9 @@ inline FitCheckOptions CheckOptions(const RunMetadata& metadata) {
   std::size_t component = 0;
   for (const ExperimentConfig& x : config.experiments) {
     for (const MetricComponentConfig& c : x.metric.components) {
-      if (c.noise.model == NoiseModel::kGaussian) {
-        stated.push_back({component, c.noise.sigma_noise, c.noise.sigma_model, c.from, c.to});
+      if (c.noise.model != NoiseModel::kNone) {
+        stated.push_back(
+            {component, c.noise.sigma_noise, c.noise.sigma_model, c.from, c.to, c.noise.model});
       }
       ++component;
     }

@@ -727,6 +727,50 @@ TEST(Config, GaussianNoiseModelKeys) {
   EXPECT_EQ(preset.smc.thresholds.size(), 3u);
 }
 
+// noise = "folded_normal" (amplitude data, docs/algorithm.md): the same keys as "gaussian", a
+// likelihood component whose schedule holds temperatures; a misspelt model is refused at its key.
+TEST(Config, FoldedNormalNoiseModelKeys) {
+  std::string base = kGaussianBase;
+  base.replace(base.find("\"gaussian\""), 10, "\"folded_normal\"");
+  const auto c = ParseConfig(base + "sigma_noise = 0.02\nsigma_model = 0.01\n", "x.toml");
+  const auto& m = c.experiments[0].metric.components[0];
+  EXPECT_EQ(m.noise.model, NoiseModel::kFoldedNormal);
+  EXPECT_EQ(m.noise.sigma_noise, 0.02);
+  EXPECT_EQ(m.noise.sigma_model, 0.01);
+  EXPECT_EQ(KindOf(m), ComponentKind::kNegLogLikelihood);
+  EXPECT_EQ(c.smc.thresholds.at(0).target, 1.0);
+  EXPECT_FALSE(ParseConfig(base, "x.toml").experiments[0].metric.components[0].noise.sigma_noise);
+  ExpectLocated(
+      ConfigError(base + "target = 0.5\n"), "inline.toml", 8, "metric.component[0].target");
+  ExpectLocated(
+      ConfigError(base + "sigma_noise = 0\n"), "inline.toml", 8, "metric.component[0].sigma_noise");
+  std::string misspelt = kGaussianBase;
+  misspelt.replace(misspelt.find("\"gaussian\""), 10, "\"folded\"");
+  const Error e = ConfigError(misspelt);
+  ExpectLocated(e, "inline.toml", 7, "metric.component[0].noise");
+  EXPECT_NE(std::string(e.what()).find("folded_normal"), std::string::npos) << e.what();
+  // In an [[experiment]] table, and at [metric] level for a preset.
+  std::string experiment = base;
+  experiment.replace(
+      experiment.find("[data]"), 6, "[[experiment]]\nname = \"a\"\n[experiment.data]");
+  experiment.replace(experiment.find("[metric]"), 8, "[experiment.metric]");
+  experiment.replace(
+      experiment.find("[[metric.component]]"), 20, "[[experiment.metric.component]]");
+  experiment.replace(experiment.find("folded_normal"), 13, "folded_norm");
+  ExpectLocated(
+      ConfigError(experiment), "inline.toml", 9, "experiment[0].metric.component[0].noise");
+  ExpectLocated(ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\nnoise = "
+                            "\"folded_normal\"\n"),
+                "inline.toml",
+                5,
+                "metric.noise");
+  ExpectLocated(
+      ConfigError("[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\nsigma_noise = 0.1\n"),
+      "inline.toml",
+      5,
+      "metric.sigma_noise");
+}
+
 TEST(Config, GaussianNoiseModelErrorsNameLineAndKey) {
   ExpectLocated(ConfigError(kGaussianBase + "sigma_noise = -1\n"),
                 "inline.toml",

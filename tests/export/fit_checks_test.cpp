@@ -9,9 +9,11 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "combabc/export/tail_probability.hpp"
+#include "combabc/metrics/noise_estimate.hpp"
 #include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
@@ -402,13 +404,16 @@ TEST(FitChecks, AStatedNoiseFarBelowTheDatasIsWarnedOfAndJudgedAgainst) {
       << FormatAfterChecks(low);
   // sigma_model counts in quadrature: 0.0007 with a model discrepancy of 0.01 is no warning.
   EXPECT_FALSE(Has(ComputeFitChecks(m, h, Stated(0.0007, 0.01)).before, "noise_below_estimate"));
-  // The true sigma is neither warned of nor a poor fit; "estimate" is the estimate.
+  // The true sigma is neither warned of nor a poor fit; "estimate" is the estimate. (Against the
+  // true sigma this history's best curve, off by its amplitude and offset errors too, reads 1.29
+  // sigma over 33 points, chi-square p = 0.01: "doubtful", not "good".)
   for (const FitCheckOptions& options : {Stated(0.01), Stated(std::nullopt)}) {
     const FitChecks checks = ComputeFitChecks(m, h, options);
     EXPECT_TRUE(checks.before.empty()) << FormatFitChecks(checks, "m");
     EXPECT_TRUE(checks.after.empty()) << FormatFitChecks(checks, "m");
-    EXPECT_EQ(checks.fit[0].verdict, "good");
+    EXPECT_NE(checks.fit[0].verdict, "poor") << FormatAfterChecks(checks);
   }
+  EXPECT_EQ(ComputeFitChecks(m, h, Stated(std::nullopt)).fit[0].verdict, "good");
   EXPECT_EQ(ComputeFitChecks(m, h, Stated(std::nullopt)).fit[0].sigma_source, "estimated");
 }
 
@@ -437,6 +442,72 @@ TEST(FitChecks, TheVerdictWeighsTheRatioByTheNumberOfPoints) {
               1e-15);
 }
 
+// Issue 33: a full-length scan, 91 amplitudes |w + e| (every 1 cm over 0-90 cm, the load at
+// 45 cm), whose best fit misses the data by RMS 1.35 times the noise judged against. That is a
+// chi-square of 166 on 91 points: "poor" against a stated sigma (p 3e-6), and not "good" against
+// the data's estimate either, whose own scatter an F test weighs: the Gaussian estimate's
+// (91 - 5) / 2.91 degrees of freedom give p 0.03, the amplitude estimate's (folded_normal: one
+// per floor point) 66 here give p 0.005 -- "doubtful" both. Before, 0.03 read "good".
+TEST(FitChecks, RmsOfOnePointThreeFiveSigmaOverNinetyOnePointsIsNotGood) {
+  std::vector<double> x;
+  std::vector<double> y;
+  RandomStream rng(33, 0, 0);
+  for (int cm = 0; cm <= 90; ++cm) {
+    x.push_back(cm * 0.01);
+    const double w = 2.0 * std::exp(-std::abs(x.back() - 0.45) / 0.03);
+    y.push_back(std::abs(w + 0.02 * rng.Normal()));  // peak 2: not normalised
+  }
+  RunMetadata m;
+  m.output_positions = x;
+  m.measured.positions = x;
+  m.measured.values = y;
+  DistanceComponent c;
+  c.name = "least squares";
+  c.kind = ComponentKind::kNegLogLikelihood;
+  m.distance_components = {c};
+  // The best (only) curve: the data, off by 1.35 sigma at every point, signs alternating.
+  auto history = [&](double sigma) {
+    std::vector<double> curve = y;
+    for (std::size_t j = 0; j < curve.size(); ++j) curve[j] += (j % 2 ? 1.35 : -1.35) * sigma;
+    RunHistory h;
+    h.waves.push_back(Wave(1, kInf, {curve}));
+    h.summary.termination = Termination::kTargetReached;
+    return h;
+  };
+  FitCheckOptions gaussian;
+  gaussian.stated_noise = {{0, std::nullopt, 0.0, 0.0, 0.9, NoiseModel::kGaussian}};
+  FitCheckOptions folded = gaussian;
+  folded.stated_noise[0].model = NoiseModel::kFoldedNormal;
+  const double g_sigma = EstimateNoiseSigma(x, y);
+  const AmplitudeNoiseEstimate a = EstimateAmplitudeNoise(x, y);
+  for (const auto& [options, sigma, dof] :
+       {std::tuple{gaussian, g_sigma, 86 / 2.91}, std::tuple{folded, a.sigma, a.dof}}) {
+    const FitChecks checks = ComputeFitChecks(m, history(sigma), options);
+    ASSERT_EQ(checks.fit.size(), 1u);
+    const FitVerdict& fit = checks.fit[0];
+    EXPECT_EQ(fit.points, 91u);
+    EXPECT_NEAR(fit.ratio, 1.35, 1e-9);
+    EXPECT_EQ(fit.sigma_source, "estimated");
+    EXPECT_NEAR(fit.sigma_dof, dof, 1e-9);
+    EXPECT_NEAR(fit.p_value, FUpperTail(1.35 * 1.35, 91, dof), 1e-12);
+    EXPECT_EQ(fit.verdict, "doubtful") << FormatAfterChecks(checks);
+    EXPECT_FALSE(Has(checks.after, "poor_fit"));
+  }
+  // The amplitude estimate reads the noise (0.02) where the Gaussian one reads the folded floor.
+  EXPECT_NEAR(a.sigma, 0.02, 0.003);
+  EXPECT_LT(g_sigma, 0.9 * a.sigma);
+  EXPECT_GT(a.dof, 60.0);
+  EXPECT_EQ(ComputeFitChecks(m, history(a.sigma), folded).noise[0].value, a.sigma);
+  // Against a stated sigma: a chi-square, poor.
+  FitCheckOptions stated = folded;
+  stated.stated_noise[0].sigma_noise = a.sigma;
+  const FitChecks poor = ComputeFitChecks(m, history(a.sigma), stated);
+  EXPECT_NEAR(poor.fit[0].chi2, 91 * 1.35 * 1.35, 1e-6);
+  EXPECT_LT(poor.fit[0].p_value, 1e-5);
+  EXPECT_EQ(poor.fit[0].verdict, "poor");
+  EXPECT_TRUE(Has(poor.after, "poor_fit"));
+}
+
 TEST(FitChecks, OptionsAreChecked) {
   std::string why;
   EXPECT_TRUE(FitCheckOptions{}.IsValid(&why));
@@ -444,6 +515,10 @@ TEST(FitChecks, OptionsAreChecked) {
   bad.band_low = 0.96;
   EXPECT_FALSE(bad.IsValid(&why));
   EXPECT_NE(why.find("band_low"), std::string::npos);
+  FitCheckOptions doubtful;
+  doubtful.doubtful_fit_p = 1e-4;  // below poor_fit_p
+  EXPECT_FALSE(doubtful.IsValid(&why));
+  EXPECT_NE(why.find("doubtful_fit_p"), std::string::npos);
 }
 
 }  // namespace

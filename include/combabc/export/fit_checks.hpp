@@ -10,10 +10,12 @@
 #include <vector>
 
 #include "combabc/history/history_store.hpp"
+#include "combabc/metrics/metric_component.hpp"
 
 namespace combabc {
 
-// A noise-aware (gaussian) distance component's error model as the run's config states it, which
+// A noise-aware (gaussian, folded_normal) distance component's error model as the run's config
+// states it, which
 // the history does not record: the services layer reads it from the config (as it does
 // ExportOptions::bit_positions). Its sigma is sqrt(sigma_noise^2 + sigma_model^2), in the units
 // the metric compares (the normalised profile when the data are normalised).
@@ -24,6 +26,8 @@ struct StatedNoise {
   // The component's window, metres: the measured points it compares.
   double from = -std::numeric_limits<double>::infinity();
   double to = std::numeric_limits<double>::infinity();
+  // folded_normal: the data are amplitudes, and the estimate is EstimateAmplitudeNoise's.
+  NoiseModel model = NoiseModel::kGaussian;
 };
 
 // The documented levels of the checks (docs/history.md, "Checks").
@@ -36,9 +40,11 @@ struct FitCheckOptions {
   double negative_fraction = 0.05;
   // poor_fit: the best accepted curve's RMS residual exceeds this many noise sigmas, or noise of
   // that sigma leaves residuals as large with a probability below poor_fit_p (chi-square against
-  // a stated sigma, F against the data's estimate; FitVerdict).
+  // a stated sigma, F against the data's estimate; FitVerdict). Between poor_fit_p and
+  // doubtful_fit_p the verdict is "doubtful": not poor enough to warn, not "good".
   double poor_fit_ratio = 3.0;
   double poor_fit_p = 1e-3;
+  double doubtful_fit_p = 0.05;
   // noise_below_estimate: a noise-aware component's stated sigma is below this fraction of the
   // noise estimated from its experiment's data.
   double noise_below_fraction = 0.5;
@@ -89,8 +95,11 @@ struct ExperimentOverview {
 
 struct NoiseLevel {
   std::string experiment;
-  double value = 0.0;  // EstimateNoiseSigma of the measured points
+  // EstimateNoiseSigma of the measured points, or EstimateAmplitudeNoise for an experiment with a
+  // folded_normal component.
+  double value = 0.0;
   std::string method;
+  double dof = 0.0;  // the estimate's effective degrees of freedom (FitVerdict::sigma_dof)
   // The same estimate of the best accepted curve (noise-free): what the profile itself reads;
   // NaN without curves.
   double shape = 0.0;
@@ -110,13 +119,15 @@ struct FitVerdict {
   double ratio = 0.0;  // best_rms / sigma (several components: sqrt(chi2 / points))
   double chi2 = 0.0;   // the sum of squared residuals in units of sigma^2, points * ratio^2
   // The estimate's effective degrees of freedom ((N - 5) / 2.91 for N points: the fifth
-  // differences overlap); infinite for a stated sigma, taken as known.
+  // differences overlap; the amplitude estimate's: its floor points plus its differences / 2.91);
+  // infinite for a stated sigma, taken as known.
   double sigma_dof = 0.0;
   // P(residuals as large | the model at its best, noise of that sigma): chi-square with `points`
   // degrees of freedom against a stated sigma, F(points, sigma_dof) of ratio^2 against an
   // estimated one (its own scatter counts).
   double p_value = 0.0;
-  // "poor" when ratio > FitCheckOptions::poor_fit_ratio or p_value < poor_fit_p, else "good".
+  // "poor" when ratio > FitCheckOptions::poor_fit_ratio or p_value < poor_fit_p, "doubtful" when
+  // p_value < doubtful_fit_p, else "good".
   std::string verdict;
 };
 

@@ -8,6 +8,7 @@
 
 #include "combabc/distances/distance.hpp"
 #include "combabc/metrics/metric_component.hpp"
+#include "combabc/metrics/noise_estimate.hpp"
 
 namespace combabc {
 
@@ -54,7 +55,7 @@ class CompositeDistance : public Distance {
   // One schedule per threshold or likelihood component, in component order: what
   // SmcOptions::thresholds wants.
   std::vector<ThresholdSchedule> threshold_schedules() const;
-  // Component k's total sigma (gaussian noise model; sigma_noise estimated if not given), or 0.
+  // Component k's total sigma (a noise model; sigma_noise estimated if not given), or 0.
   double noise_sigma(std::size_t k) const { return compiled_.at(k).sigma; }
   const std::vector<MetricComponentConfig>& configs() const { return configs_; }
   std::size_t output_size() const { return output_size_; }
@@ -71,7 +72,10 @@ class CompositeDistance : public Distance {
     std::vector<double> positions;  // x_j inside the window (area: trapezoid widths)
     std::vector<Sample> samples;    // where to read y*_j (rise / fall: the two endpoints)
     double observed_area = 0.0;     // area: A(Y)
-    double sigma = 0.0;             // gaussian noise model: sqrt(sigma_noise^2 + sigma_model^2)
+    double sigma = 0.0;             // noise model: sqrt(sigma_noise^2 + sigma_model^2)
+    bool folded = false;            // folded_normal
+    // folded_normal: -log max_mu f(y_j; mu, sigma), the normaliser of each point's likelihood.
+    std::vector<double> best_energy;
   };
 
   double Interpolate(std::span<const double> simulated, const Sample& s, double scale) const;
@@ -82,16 +86,5 @@ class CompositeDistance : public Distance {
   std::size_t output_size_ = 0;
   CompositeDistanceOptions options_;
 };
-
-// Noise standard deviation of y(x) = g(x) + e, e iid N(0, sigma^2), for a g that is smooth except
-// at a few points (docs/algorithm.md, "Noise estimate"). Each run of k + 1 = 6 neighbours gives a
-// pseudo-residual e_i = sum_j c_j y_{i+j} / |c|, c the fifth divided difference's weights from x
-// (c_j = 1 / prod_{m != j} (x_j - x_m)): zero for any quartic g, N(0, sigma^2) for pure noise.
-// Where g bends sharply (a steep start, a clamp's kink) e_i holds g's fifth derivative instead, so
-// the estimate is robust: s = 1.4826 median |e_i| (the MAD), then the root mean square of the e_i
-// with |e_i| <= 3 s, divided by its value for a normal cut at 3 sigma (0.98657); 0 when that is
-// at the level of rounding (64 epsilon max |y|). Needs n >= 3 points (with fewer than 6, k = n -
-// 1); x strictly increasing.
-double EstimateNoiseSigma(std::span<const double> x, std::span<const double> y);
 
 }  // namespace combabc

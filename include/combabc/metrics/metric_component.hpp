@@ -6,9 +6,10 @@
 //   rise           Eq. 7 H1: 1 if y*(to) - y*(from) > 0, else 0
 //   fall           Eq. 7 H2: 1 if y*(to) - y*(from) < 0, else 0
 // area and least_squares are threshold components (d_k <= eps_k); rise and fall are indicator
-// components that must equal 1. A least_squares component with a gaussian noise model is a
-// negative log-likelihood instead (docs/algorithm.md, "Noise-aware acceptance"):
+// components that must equal 1. A least_squares component with a noise model is a negative
+// log-likelihood instead (docs/algorithm.md, "Noise-aware acceptance"), gaussian:
 //   d = sum_j (y*_j - y_j)^2 / (2 sigma^2),  sigma^2 = sigma_noise^2 + sigma_model^2,
+// folded_normal (amplitudes y_j = |Y*_j + e_j|): d = sum_j -log(f(y_j; Y*_j) / max_mu f(y_j; mu)),
 // accepted with probability exp(-(d - m) / T).
 #include <optional>
 #include <string>
@@ -36,12 +37,16 @@ ComponentKind KindOf(MetricType type);
 enum class NoiseModel {
   kNone,      // the paper's acceptance: d_k <= eps_k
   kGaussian,  // y_j = Y*_j + e_j, e_j ~ N(0, sigma^2) independent (Wilkinson 2013)
+  // y_j = |Y*_j + e_j|, e_j as above: an amplitude (an LDV's, the sensor's maximum displacement)
+  // whose noise folds at zero where the signal is small (Leone, Nelson & Nottingham 1961).
+  kFoldedNormal,
 };
 template <>
 struct EnumNames<NoiseModel> {
   static constexpr std::pair<NoiseModel, const char*> kNames[] = {
       {NoiseModel::kNone, "none"},
       {NoiseModel::kGaussian, "gaussian"},
+      {NoiseModel::kFoldedNormal, "folded_normal"},
   };
 };
 
@@ -49,7 +54,8 @@ struct EnumNames<NoiseModel> {
 // normalised profile when the data are normalised).
 struct NoiseConfig {
   NoiseModel model = NoiseModel::kNone;
-  // Measurement noise; nullopt = estimate it from the measured data (EstimateNoiseSigma).
+  // Measurement noise; nullopt = estimate it from the measured data (EstimateNoiseSigma, or
+  // EstimateAmplitudeNoiseSigma for folded_normal).
   std::optional<double> sigma_noise;
   // Model discrepancy, added in quadrature.
   double sigma_model = 0.0;
@@ -64,8 +70,8 @@ struct MetricComponentConfig {
   // Name reported by Distance::components() and written to the history; empty = generated from
   // the type and window in centimetres, e.g. "least_squares[48-80cm]".
   std::string name;
-  // Threshold schedule (threshold components only; ignored for indicators). With a gaussian
-  // noise model it holds temperatures T >= 1 instead.
+  // Threshold schedule (threshold components only; ignored for indicators). With a noise model
+  // it holds temperatures T >= 1 instead.
   ThresholdSchedule threshold;
   // least_squares only.
   NoiseConfig noise;
@@ -74,7 +80,7 @@ struct MetricComponentConfig {
   int config_line = 0;
 };
 
-// KindOf(type), except kNegLogLikelihood for a component with a gaussian noise model.
+// KindOf(type), except kNegLogLikelihood for a component with a noise model.
 ComponentKind KindOf(const MetricComponentConfig& config);
 
 // The name a component reports: config.name, or the generated one.
