@@ -19,9 +19,10 @@ struct DesignArgs {
 // The ranking (best ten), the greedy selection and where the files are.
 void PrintDesign(const services::DesignOutcome& o) {
   const auto& r = o.result;
-  std::printf("design from %s; %zu candidates, noise sigma on the normalised profile\n",
+  std::printf("design from %s; %zu candidates, noise sigma %.3g on the normalised profile\n",
               o.population.c_str(),
-              o.candidates.size());
+              o.candidates.size(),
+              o.noise_sigma);
   if (o.singular > 0) {
     // Dropped, as a run fails them: the ranking is over the configurations the plate can be
     // solved in.

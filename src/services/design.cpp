@@ -371,6 +371,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   o.particles = population.size();
   design::DesignOptions options;
   options.noise_sigma = c.design->noise;
+  o.noise_sigma = options.noise_sigma;
   options.truths = c.design->truths;
   options.select = c.design->select;
   options.identified_margin = c.design->identified_margin;

@@ -39,6 +39,7 @@ struct DesignOutcome {
   std::string singular_reason;
   std::vector<DesignCandidate> candidates;
   design::DesignResult result;
+  double noise_sigma = 0.0;     // [design] noise: per point, as a fraction of the profile's peak
   std::string next_experiment;  // the [[experiment]] block for the best candidate
   double wall_seconds = 0.0;
 };
