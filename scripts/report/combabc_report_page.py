@@ -242,6 +242,9 @@ def strip_html(summary):
     out.append(f'<rect class="plate" x="{left}" y="{plate_top:.1f}" width="{plot}" '
                f'height="{plate_h:.1f}" fill="#fbfaf5" stroke="#555" stroke-width="1"/>')
     section = plot / n
+    # Narrow sections (many clamps) show their colour alone, and every `label_step`-th number.
+    texts = section >= 34
+    label_step = max(1, math.ceil(22 / section))
     for k, bit in enumerate(bits):
         edge = 1 if k < n else 2
         s = k % n
@@ -262,14 +265,16 @@ def strip_html(summary):
             f'data-p="{e(p_text)}" data-verdict="{e(verdict)}"><title>{e(title)}</title>'
             f'<rect x="{x + 1:.1f}" y="{y:.1f}" width="{section - 2:.1f}" height="{row_h - 2:.1f}" '
             f'fill="{colour}" {stroke}/>'
-            f'<text x="{x + section / 2:.1f}" y="{y + 14:.1f}" font-size="11" text-anchor="middle" '
-            f'fill="{"#fff" if dark else "#000"}">{e(p_text)}</text>'
-            f'<text x="{x + section / 2:.1f}" y="{y + 27:.1f}" font-size="10" text-anchor="middle" '
-            f'fill="{"#fff" if dark else "#000"}">{e({"fixed": "fixed", "free": "free"}.get(verdict, "?"))}'
-            '</text></g>')
-        number_y = y - 4 if edge == 2 else y + row_h + 11
-        out.append(f'<text x="{x + section / 2:.1f}" y="{number_y:.1f}" font-size="10" '
-                   f'text-anchor="middle" fill="#444">{e(str(bit.get("number")))}</text>')
+            + (f'<text x="{x + section / 2:.1f}" y="{y + 14:.1f}" font-size="11" '
+               f'text-anchor="middle" fill="{"#fff" if dark else "#000"}">{e(p_text)}</text>'
+               f'<text x="{x + section / 2:.1f}" y="{y + 27:.1f}" font-size="10" '
+               f'text-anchor="middle" fill="{"#fff" if dark else "#000"}">'
+               f'{e({"fixed": "fixed", "free": "free"}.get(verdict, "?"))}</text>'
+               if texts else "") + '</g>')
+        if s % label_step == 0:
+            number_y = y - 4 if edge == 2 else y + row_h + 11
+            out.append(f'<text x="{x + section / 2:.1f}" y="{number_y:.1f}" font-size="10" '
+                       f'text-anchor="middle" fill="#444">{e(str(bit.get("number")))}</text>')
     out.append(f'<text x="{left - 8}" y="{plate_top - row_h / 2 + 4:.1f}" font-size="12" '
                'text-anchor="end">edge 2</text>')
     out.append(f'<text x="{left - 8}" y="{plate_bottom + row_h / 2 + 4:.1f}" font-size="12" '

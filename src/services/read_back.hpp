@@ -43,7 +43,8 @@ inline std::vector<std::optional<BitPosition>> BitPositions(const RunMetadata& m
 
 // The strip's picture (export/strip.hpp) from the run's config: the sensor's plate and clamp
 // sections, and each experiment's load and scan line: from its first to its last measured point
-// (the history's, in metres), or its output positions when the history has no points for it.
+// (the history's, in metres; within its data window, when given), or its output positions when the
+// history has no points for it.
 // None for other simulators, or for a config this version no longer reads.
 inline std::optional<StripLayout> StripOf(const RunMetadata& metadata) {
   CalibrationConfig config;
@@ -77,6 +78,12 @@ inline std::optional<StripLayout> StripOf(const RunMetadata& metadata) {
       const auto [low, high] = std::minmax_element(scanned.begin(), scanned.end());
       shown.scan_from_m = *low;
       shown.scan_to_m = *high;
+    }
+    // The Gaussian extension's points (stored with the measured ones) were not scanned: the data
+    // window, when given, bounds the line.
+    if (x.data.window_min && x.data.window_max) {
+      shown.scan_from_m = std::clamp(shown.scan_from_m, *x.data.window_min, *x.data.window_max);
+      shown.scan_to_m = std::clamp(shown.scan_to_m, *x.data.window_min, *x.data.window_max);
     }
     shown.scan_y_m = load.output_y_fraction * strip.width_m;
     strip.experiments.push_back(shown);

@@ -517,6 +517,10 @@ TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
   text << in.rdbuf();
   m.config_text = text.str();
   m.config_path = (example / "least_squares.toml").string();
+  // A point the Gaussian extension would add toward the load: stored with the measured ones, but
+  // not scanned (the strip's scan line stays within the data window, 48-80 cm).
+  m.measured.positions.insert(m.measured.positions.begin(), 0.42);
+  m.measured.values.insert(m.measured.values.begin(), 0.5);
   const std::string path = dir / "RUN.db";
   {
     HistoryStore store = HistoryStore::Create(path, m);
@@ -554,6 +558,26 @@ TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
   // Clamp 1 and clamp 19 share the first row of the table.
   EXPECT_NE(shown.find("\n     1   0-5  "), std::string::npos) << shown;
   EXPECT_NE(shown.find("   19   0-5  "), std::string::npos) << shown;
+
+  // The strip's layout in summary.json (issue 34): the example's plate, its load at 45 cm on the
+  // centreline and its scan over the data window on the centreline.
+  services::ExportHistory(path, dir / "export", false, /*netcdf=*/false);
+  std::ifstream json(dir / "export" / "summary.json");
+  std::stringstream summary;
+  summary << json.rdbuf();
+  const std::string text = summary.str();
+  EXPECT_NE(text.find("\"strip\": {\"length_m\": 0.9, \"width_m\": 0.04, \"clamps_per_edge\": 18, "
+                      "\"experiments\": [\n    {\"name\": \"\", \"load_x_m\": 0.45, "
+                      "\"load_y_m\": 0.02, \"scan_from_m\": "),
+            std::string::npos)
+      << text;
+  const auto number_after = [&text](const std::string& key) {
+    const std::size_t at = text.find("\"" + key + "\": ", text.find("\"strip\": "));
+    return at == std::string::npos ? -1.0 : std::stod(text.substr(at + key.size() + 4));
+  };
+  EXPECT_NEAR(number_after("scan_from_m"), 0.48, 1e-12);  // not the extension's 0.42
+  EXPECT_NEAR(number_after("scan_to_m"), 0.80, 1e-12);
+  EXPECT_NEAR(number_after("scan_y_m"), 0.02, 1e-12);
 }
 
 // The strip for a terminal (export/strip.hpp): a hand-made answer on a strip of 10 sections per
