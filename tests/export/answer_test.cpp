@@ -562,18 +562,19 @@ TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
   // The strip's layout in summary.json (issue 34): the example's plate, its load at 45 cm on the
   // centreline and its scan over the data window on the centreline.
   services::ExportHistory(path, dir / "export", false, /*netcdf=*/false);
-  std::ifstream json(dir / "export" / "summary.json");
+  std::ifstream json(fs::path(dir / "export") / "summary.json");
   std::stringstream summary;
   summary << json.rdbuf();
-  const std::string text = summary.str();
-  EXPECT_NE(text.find("\"strip\": {\"length_m\": 0.9, \"width_m\": 0.04, \"clamps_per_edge\": 18, "
-                      "\"experiments\": [\n    {\"name\": \"\", \"load_x_m\": 0.45, "
-                      "\"load_y_m\": 0.02, \"scan_from_m\": "),
-            std::string::npos)
-      << text;
-  const auto number_after = [&text](const std::string& key) {
-    const std::size_t at = text.find("\"" + key + "\": ", text.find("\"strip\": "));
-    return at == std::string::npos ? -1.0 : std::stod(text.substr(at + key.size() + 4));
+  const std::string exported = summary.str();
+  EXPECT_NE(
+      exported.find("\"strip\": {\"length_m\": 0.9, \"width_m\": 0.04, \"clamps_per_edge\": 18, "
+                    "\"experiments\": [\n    {\"name\": \"\", \"load_x_m\": 0.45, "
+                    "\"load_y_m\": 0.02, \"scan_from_m\": "),
+      std::string::npos)
+      << exported;
+  const auto number_after = [&exported](const std::string& key) {
+    const std::size_t at = exported.find("\"" + key + "\": ", exported.find("\"strip\": "));
+    return at == std::string::npos ? -1.0 : std::stod(exported.substr(at + key.size() + 4));
   };
   EXPECT_NEAR(number_after("scan_from_m"), 0.48, 1e-12);  // not the extension's 0.42
   EXPECT_NEAR(number_after("scan_to_m"), 0.80, 1e-12);
