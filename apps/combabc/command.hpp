@@ -5,9 +5,12 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "combabc/export/answer.hpp"
+#include "combabc/export/strip.hpp"
 #include "combabc/samplers/observer.hpp"
+#include "combabc/services/report.hpp"
 #include "session.hpp"
 
 namespace combabc::cli {
@@ -32,14 +35,38 @@ struct Command {
 // observer. A combabc::Error ends it as one line "combabc: <kind>: <message>" and its sysexits
 // code; any other exception as "internal error" and 70. `job` returns the exit code.
 int Guarded(const Session& session, bool quiet, const std::function<int(SmcObserver*)>& job);
+// The same, with `temperatures` labelling the waves' threshold slots in the progress lines
+// (ProgressDisplay; TemperatureSlotsOfConfig, TemperatureSlotsOfHistory).
+int Guarded(const Session& session,
+            bool quiet,
+            const std::vector<bool>& temperatures,
+            const std::function<int(SmcObserver*)>& job);
+
+// Per threshold slot of a run, whether it holds a noise-aware component's temperature: from its
+// config file, or (resume) from its history. Empty when either cannot be read: the job itself
+// then says why.
+std::vector<bool> TemperatureSlotsOfConfig(const std::string& config_path);
+std::vector<bool> TemperatureSlotsOfHistory(const std::string& history_path);
 
 // Guarded, for a command that writes or prints only: rank 0 does it, the others wait for its code.
 int PrimaryOnly(const Session& session, const std::function<int()>& job);
 
 // The answer in numbers of the job's outcome (read back with its checks), on stdout: at the end of
 // run, resume and enumerate, on rank 0, unless `quiet`. A history that could not be read back is
-// said on stderr; the command's exit code stays the job's.
-void PrintAnswer(const Session& session, bool quiet, const std::optional<Answer>& answer);
+// said on stderr; the command's exit code stays the job's. The sensor's strip (`strip`) comes
+// first: the picture, with colour where stdout is a terminal that has it, and the verdict line.
+void PrintAnswer(const Session& session,
+                 bool quiet,
+                 const std::optional<Answer>& answer,
+                 const std::optional<StripLayout>& strip = std::nullopt);
+
+// "writing report ..." on stderr while the report is drawn (it takes seconds to a minute): on a
+// terminal one line updated with the figures drawn, otherwise (`off_terminal`) that line once.
+// Nothing with `quiet` or off rank 0. `combabc report` says it on a terminal only: off one, its
+// stderr stays what it was, empty or the one line of its error.
+services::ReportProgress ReportProgressLine(const Session& session,
+                                            bool quiet,
+                                            bool off_terminal = true);
 
 // --no-cache, for the commands that build the sensor: its precomputed pieces are built afresh and
 // not stored (docs/model.md, "Start-up and the precompute cache"). It empties COMBABC_CACHE_DIR

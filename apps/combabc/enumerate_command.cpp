@@ -25,7 +25,9 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
         "ends; nothing is written (an enumeration cannot be resumed)\n");
   }
   request.report = !args.no_report;
-  return Guarded(session, args.quiet, [&](SmcObserver* observer) {
+  request.on_report_progress = ReportProgressLine(session, args.quiet);
+  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
+  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
     const auto outcome = services::RunEnumeration(request, observer);
     if (outcome.interrupted) {
       std::cerr << "interrupted after " << outcome.enumerated << " of " << outcome.configurations
@@ -46,7 +48,7 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
     if (!outcome.report_directory.empty()) {
       std::cout << "report:  " << outcome.report_directory << "/index.html\n";
     }
-    PrintAnswer(session, args.quiet, outcome.answer);
+    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
     return 0;
   });
 }

@@ -29,7 +29,11 @@ struct ExportArgs : OutputArgs {
 int ReportCommand(const OutputArgs& args, const Session& session) {
   return PrimaryOnly(session, [&] {
     // Written first, printed after: a failure prints no half line on stdout.
-    const auto directory = services::WriteReport(args.history, args.directory, args.overwrite);
+    const auto directory =
+        services::WriteReport(args.history,
+                              args.directory,
+                              args.overwrite,
+                              ReportProgressLine(session, false, /*off_terminal=*/false));
     std::cout << "report: " << directory << "/index.html\n";
     return 0;
   });

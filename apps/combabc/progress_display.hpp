@@ -4,8 +4,12 @@
 // Waves are numbered from 1 here, like the paper and the report's figures (the engine, the
 // history file and the export count from 0).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "combabc/samplers/observer.hpp"
 
@@ -13,7 +17,10 @@ namespace combabc::cli {
 
 class ProgressDisplay : public SmcObserver {
  public:
-  explicit ProgressDisplay(bool terminal) : terminal_(terminal) {}
+  // `temperatures`: per threshold slot, whether it holds a noise-aware component's temperature
+  // (docs/algorithm.md, "Noise-aware acceptance"); empty or of another size: every slot an eps.
+  explicit ProgressDisplay(bool terminal, std::vector<bool> temperatures = {})
+      : terminal_(terminal), temperatures_(std::move(temperatures)) {}
 
   void OnWaveStart(const WaveRecord& wave) override {
     wave_start_ = std::chrono::steady_clock::now();
@@ -70,13 +77,11 @@ class ProgressDisplay : public SmcObserver {
 
   void OnWaveEnd(const WaveRecord& w) override {
     Clear();
-    std::string eps;
-    for (double e : w.thresholds) eps += (eps.empty() ? "" : ",") + Format(e);
     std::fprintf(
         stderr,
-        "wave %d: eps %s  %lld/%lld accepted (rate %.4f)%s  ESS %.0f  %.2f s%s\n",
+        "wave %d: %s  %lld/%lld accepted (rate %.4f)%s  ESS %.0f  %.2f s%s\n",
         w.wave + 1,
-        eps.c_str(),
+        Thresholds(w.thresholds).c_str(),
         static_cast<long long>(w.accepted),
         static_cast<long long>(w.candidates),
         w.acceptance_rate,
@@ -106,16 +111,46 @@ class ProgressDisplay : public SmcObserver {
   }
 
  private:
+  // The first wave has no threshold (every prior draw is accepted: an infinite eps or
+  // temperature, which the engine may record as NaN): shown as infinity.
   static std::string Format(double x) {
+    if (!std::isfinite(x)) return Utf8() ? "∞" : "inf";
     char b[32];
     std::snprintf(b, sizeof b, "%.4g", x);
     return b;
+  }
+  // "eps 0.12,0.3", or with noise-aware components "eps 0.12, temperature 3.4".
+  std::string Thresholds(const std::vector<double>& values) const {
+    const bool labelled = temperatures_.size() == values.size();
+    std::string out;
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      const bool temperature = labelled && temperatures_[k];
+      if (k == 0 || temperature != (labelled && temperatures_[k - 1])) {
+        out += std::string(k == 0 ? "" : ", ") + (temperature ? "temperature " : "eps ");
+      } else {
+        out += ",";
+      }
+      out += Format(values[k]);
+    }
+    return out.empty() ? "eps -" : out;
+  }
+  // Whether the terminal's locale writes UTF-8 (LC_ALL, else LC_CTYPE, else LANG).
+  static bool Utf8() {
+    for (const char* name : {"LC_ALL", "LC_CTYPE", "LANG"}) {
+      const char* value = std::getenv(name);
+      if (value == nullptr || *value == '\0') continue;
+      const std::string text = value;
+      return text.find("UTF-8") != std::string::npos || text.find("utf8") != std::string::npos ||
+             text.find("utf-8") != std::string::npos || text.find("UTF8") != std::string::npos;
+    }
+    return false;
   }
   double Elapsed() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wave_start_).count();
   }
 
   bool terminal_;
+  std::vector<bool> temperatures_;
   bool dirty_ = false;
   int wave_ = 0;
   std::int64_t total_ = 0;

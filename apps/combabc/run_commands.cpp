@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "combabc/services/run.hpp"
 #include "interrupt.hpp"
@@ -113,12 +114,14 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.executor = session.executor();
   request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
   request.report = !args.no_report;
+  request.on_report_progress = ReportProgressLine(session, args.quiet);
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
-  return Guarded(session, args.quiet, [&](SmcObserver* observer) {
+  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
+  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
     const auto outcome = services::RunCalibration(request, observer);
     const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.answer);
+    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
     return code;
   });
 }
@@ -127,6 +130,7 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   services::ResumeRequest& request = args.request;
   NoteHistory(session, request.history_path);
   request.report = !args.no_report;
+  request.on_report_progress = ReportProgressLine(session, args.quiet);
   request.executor = session.executor();
   services::StopLimits& limits = request.limits;
   if (args.max_simulations_option->count() > 0) limits.max_simulations = args.max_simulations;
@@ -139,10 +143,11 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   }
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
-  return Guarded(session, args.quiet, [&](SmcObserver* observer) {
+  const std::vector<bool> temperatures = TemperatureSlotsOfHistory(request.history_path);
+  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
     const auto outcome = services::ResumeCalibration(request, observer);
     const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.answer);
+    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
     return code;
   });
 }

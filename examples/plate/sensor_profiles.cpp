@@ -15,7 +15,7 @@ using combabc::plate::SensorOptions;
 
 namespace {
 
-// Clamp k (1-based) of edge A and its facing clamp k + 18 on edge B, both fixed.
+// Clamp k (1-based) of edge 1 and its facing clamp k + 18 on edge 2, both fixed.
 std::vector<std::uint8_t> PairsFixed(const std::vector<int>& pairs) {
   std::vector<std::uint8_t> c(36, 0);
   for (int k : pairs) {
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   Print(model, "only 11 fixed", PairsFixed({11}));
   Print(model, "only 12,13 fixed", PairsFixed({12, 13}));
   Print(model, "16-18 fixed", PairsFixed({16, 17, 18}));
-  Print(model, "edge A fixed only", [] {
+  Print(model, "edge 1 fixed only", [] {
     std::vector<std::uint8_t> c(36, 0);
     for (int k = 0; k < 18; ++k) c[k] = 1;
     return c;

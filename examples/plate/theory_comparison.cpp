@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       {"measured window free (10-16)", BothEdges([](int s) { return s < 10 || s > 16; })},
   };
   std::vector<std::uint8_t> one_side(36, 0);
-  one_side[8] = one_side[9] = 1;  // edge A only
+  one_side[8] = one_side[9] = 1;  // edge 1 only
   cases.push_back({"one side fixed at the load", one_side});
   SensorOptions base;
   base.load_cases[0].load_force = 0.042;

@@ -5,7 +5,7 @@
 
 IDENTIFIABILITY.csv is what combabc design writes: columns candidate, label, then one per bit
 (clamp) holding E|2 P(fixed) - 1| over the plausible truths (0: the prior's coin, 1: decided).
-One row of the figure per candidate, one column per clamp, edge A then edge B. Exit status:
+One row of the figure per candidate, one column per clamp, edge 1 then edge 2. Exit status:
 65 unreadable input, 69 numpy/matplotlib missing, 74 write failed.
 """
 import csv
@@ -45,7 +45,7 @@ def main(argv):
                       interpolation="nearest")
     ax.set_yticks(range(len(labels)), labels, fontsize=7)
     ax.set_xticks(range(len(names)), [n.replace("clamp ", "") for n in names], fontsize=6)
-    ax.set_xlabel("clamp (edge A, then edge B)")
+    ax.set_xlabel("clamp (edge 1, then edge 2)")
     half = len(names) / 2 - 0.5
     if len(names) % 2 == 0:
         ax.axvline(half, color="white", linewidth=1.0)

@@ -2,7 +2,7 @@
 """Report figures and index.html for a combabc run, after Shamas et al. (Sensors 2024), section 5.
 
     /usr/bin/python3 combabc_report.py --out DIR [--history LABEL] [--estimator paper|importance]
-                                       [--formats png,svg,pdf] [--] EXPORT_DIR
+                                       [--formats png,svg,pdf] [--progress] [--] EXPORT_DIR
 
 `combabc report` runs it: it stages the run's export (the files `combabc export` writes:
 summary.json, particles.csv, curves.csv, positions.csv, measured.csv; docs/history.md, "Export") in
@@ -31,8 +31,13 @@ missing; refused unless empty), in each format of the run's [output] figures (de
   fidelity.<fmt>                multi-fidelity runs only: cheap and expensive simulations and
                                 seconds per wave, the continuation probabilities each wave used,
                                 and its ESS per second (summary.json's "multi_fidelity")
-  index.html                    all of the above with the run's provenance, the answer and the
-                                checks of summary.json, and the per-wave table
+  answer.<fmt>                  runs with bits: the answer's P(fixed) (P(bit = 1)) per bit with one
+                                standard error, coloured as the strip; for the sensor on a
+                                centimetre axis, one panel per edge
+  index.html                    the sensor's strip to scale (summary.json's "strip": each clamp
+                                section coloured by P(fixed), the loads and scan lines), the
+                                verdict line, the answer and the checks of summary.json, all of
+                                the above with the run's provenance, and the per-wave table
 
 Modules: this file (arguments, reading the export), combabc_report_figures.py (the figures),
 combabc_report_page.py (index.html). Every failure is one line on stderr and a sysexits status:
@@ -363,7 +368,13 @@ def predictive_checks(run, waves):
 
 # --- main -----------------------------------------------------------------------------------------
 
-def make_report(export, out, estimator=None, formats=None, history=None):
+def print_progress(done, total):
+    """One stderr line per figure drawn: `combabc report` shows them as "writing report ...", and
+    keeps them out of the script's error message."""
+    print(f"combabc_report: progress {done}/{total}", file=sys.stderr, flush=True)
+
+
+def make_report(export, out, estimator=None, formats=None, history=None, progress=None):
     run, waves = load_export(export, history)
     if any(w.curves is not None and w.curves.shape[1] != run["x_cm"].size for w in waves):
         # Curves that are not one value per output position cannot be cut by experiment.
@@ -379,7 +390,7 @@ def make_report(export, out, estimator=None, formats=None, history=None):
         raise ReportError(f"{out}: exists and is not an empty directory (the script writes only "
                           "into a new one; `combabc report` publishes it)", EX_CANTCREAT)
     os.makedirs(out, exist_ok=True)
-    written = figures.render_all(waves, run, estimator, out, formats)
+    written = figures.render_all(waves, run, estimator, out, formats, progress)
     page.write_index(waves, run, estimator, out, written, formats,
                      history or os.path.abspath(export))
     return out
@@ -405,6 +416,8 @@ def main(argv=None):
     parser.add_argument("--history", help="the run history's path, shown on the page")
     parser.add_argument("--estimator", choices=["paper", "importance"],
                         help="marginals to plot (default: the run's estimator)")
+    parser.add_argument("--progress", action="store_true",
+                        help="a line 'combabc_report: progress DONE/TOTAL' on stderr per figure")
     parser.add_argument("--formats",
                         help="comma-separated figure formats among png, svg, pdf "
                              "(default: the run's [output] figures, else png)")
@@ -416,7 +429,8 @@ def main(argv=None):
         if unknown or not formats:
             parser.error(f"--formats: expected png, svg or pdf, got {args.formats!r}")
     try:
-        out = make_report(args.export, args.out, args.estimator, formats, args.history)
+        out = make_report(args.export, args.out, args.estimator, formats, args.history,
+                          print_progress if args.progress else None)
     except ReportError as error:
         print(f"combabc_report: {one_line(error)}", file=sys.stderr)
         return error.status

@@ -20,6 +20,8 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator  # noqa: E402
 
+from combabc_report_page import FIXED_RGB, FREE_RGB  # noqa: E402  the strip's colour scale
+
 DPI = 150
 # The simulated peak "lies outside the measured window" when the accepted curves rise above the
 # measured window's values by more than this factor: then the curve figures add a panel zoomed on
@@ -307,6 +309,78 @@ def marginals_figure(w, run, estimator, out):
     fig.legend(handles=marginal_handles(run), loc="lower center", ncol=2, frameon=False)
     fig.tight_layout(rect=(0, 0.25 / height, 1, 1))
     return save(fig, out, f"wave_{w.number}_marginals")
+
+
+# --- the answer's P(fixed) -------------------------------------------------------------------------
+
+def answer_figure(waves, run, estimator, out):
+    """The answer's P(fixed) per clamp (summary.json's "answer": its wave, estimator and standard
+    errors) as bars with error bars of one standard error, coloured as the strip on the page
+    (black edge: fixed) between the verdict levels: for the sensor one panel per edge, edge 2 above
+    edge 1, each bar over its section on a centimetre axis; otherwise one bar per bit, named."""
+    answer = run["summary"].get("answer") or {}
+    bits = answer.get("bits") or []
+    level = float(answer.get("verdict_level") or 0.95)
+    placed = all(b.get("edge") in (1, 2) and b.get("start_m") is not None for b in bits)
+    sensor = run["sensor"] and placed and len(bits) % 2 == 0
+    rows = ([(f"Edge {edge}", [b for b in bits if b["edge"] == edge]) for edge in (2, 1)]
+            if sensor else [("", bits)])
+    width = 10.0 if sensor else max(7.0, 0.3 * len(bits) + 1.5)
+    fig, axes = plt.subplots(len(rows), 1, figsize=(width, 2.3 * len(rows) + 0.9), sharex=True,
+                             squeeze=False)
+    for ax, (title, mine) in zip(axes[:, 0], rows):
+        p = np.array([number(b.get("p_one")) for b in mine])
+        se = np.array([number(b.get("mc_se")) or 0.0 for b in mine])
+        colours = [strip_colour(v) for v in p]
+        edges = ["black" if b.get("verdict") == "fixed" else "#999999" for b in mine]
+        if sensor:
+            start = np.array([float(b["start_m"]) for b in mine]) * 100.0
+            end = np.array([float(b["end_m"]) for b in mine]) * 100.0
+            centre, span = (start + end) / 2, (end - start) * 0.85
+        else:
+            centre, span = np.arange(len(mine), dtype=float), np.full(len(mine), 0.75)
+        ax.bar(centre, np.nan_to_num(p), width=span, color=colours, edgecolor=edges, linewidth=0.8)
+        # A bar at P = 0 has no height: a short thick line on the axis shows it is there.
+        low = np.isfinite(p) & (p < 0.01)
+        if low.any():
+            ax.hlines(np.zeros(int(low.sum())), centre[low] - span[low] / 2,
+                      centre[low] + span[low] / 2, colors="#777777", linewidth=2.5, zorder=4)
+        ax.errorbar(centre, np.nan_to_num(p), yerr=np.nan_to_num(se), fmt="none", ecolor="black",
+                    elinewidth=0.9, capsize=2.5)
+        for y in (level, 1 - level):
+            ax.axhline(y, color="#555555", linestyle=":", linewidth=0.8)
+        ax.set_ylim(0.0, 1.05)
+        ax.set_ylabel("P(fixed)" if sensor else "P(bit = 1)")
+        if sensor:
+            numbers = [str(b.get("number")) for b in mine]
+            for c, text, v in zip(centre, numbers, np.nan_to_num(p)):
+                ax.text(c, min(v, 0.98) + 0.03, text, ha="center", va="bottom", fontsize=7,
+                        color="#444444")
+            ax.set_title(title, fontsize=10, loc="left")
+            ax.set_xlim(0.0, float(np.max(end)))
+        else:
+            ax.set_xticks(centre, [str(b.get("name", "")) for b in mine],
+                          rotation=90 if len(mine) > 8 else 30,
+                          ha="center" if len(mine) > 8 else "right", fontsize=8)
+        ax.grid(True, axis="y", linewidth=0.4, alpha=0.4)
+    if sensor:
+        axes[-1, 0].set_xlabel("x along the strip (cm)")
+    what = "exact" if answer.get("exact") else f"wave {answer.get('wave')}, {answer.get('estimator')}"
+    fig.suptitle(f"The answer ({what}): P(fixed) ± one standard error; dotted: the verdict levels "
+                 f"{1 - level:g} and {level:g}" if sensor else
+                 f"The answer ({what}): P(bit = 1) ± one standard error; dotted: the verdict "
+                 f"levels {1 - level:g} and {level:g}", fontsize=10)
+    fig.tight_layout()
+    return save(fig, out, "answer")
+
+
+def strip_colour(p):
+    """The page's strip colour of P(fixed) (combabc_report_page.p_colour), for matplotlib."""
+    if not np.isfinite(p):
+        return "#bbbbbb"
+    p = min(max(p, 0.0), 1.0)
+    free, fixed = np.array(FREE_RGB, dtype=float), np.array(FIXED_RGB, dtype=float)
+    return tuple((free + (fixed - free) * p) / 255.0)
 
 
 # --- continuous parameters ------------------------------------------------------------------------
@@ -608,7 +682,7 @@ def save(fig, out, name):
     return name
 
 
-_WHOLE_RUN = {"overview": overview_figure, "summary": summary_figure, "reals": reals_figure,
+_WHOLE_RUN = {"answer": answer_figure, "overview": overview_figure, "summary": summary_figure, "reals": reals_figure,
               "predictive": predictive_figure, "fidelity": fidelity_figure}
 _PER_WAVE = {"curves": curves_figure, "marginals": marginals_figure}
 
@@ -622,11 +696,14 @@ def _render(task):
         return _PER_WAVE[kind](waves[index], run, estimator, out)
 
 
-def render_all(waves, run, estimator, out, formats):
+def render_all(waves, run, estimator, out, formats, progress=None):
     """Renders every figure; returns their names in display order. Figures are independent, so
     they are drawn by a pool of forked processes (matplotlib text layout and PNG encoding are
-    single-threaded and dominate the time)."""
+    single-threaded and dominate the time). progress(done, total), when given, is called before
+    the first figure and after each."""
     tasks = [("summary", None)]
+    if (run["summary"].get("answer") or {}).get("bits"):
+        tasks.insert(0, ("answer", None))
     # The overview draws curves and marginals: a continuous-only run without curves has neither.
     if run["dimension"] or any(w.curves is not None and w.curves.size for w in waves):
         tasks.append(("overview", None))
@@ -643,13 +720,24 @@ def render_all(waves, run, estimator, out, formats):
             tasks.append(("marginals", i))
     _JOB.update(waves=waves, run=run, estimator=estimator, out=out, formats=formats)
     workers = min(len(tasks), os.cpu_count() or 1, 8)
+    report = progress or (lambda done, total: None)
+    report(0, len(tasks))
+    names = [""] * len(tasks)
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
         # Longest first (the overview) so that the pool finishes together; names in task order.
         order = sorted(range(len(tasks)), key=lambda i: tasks[i][0] != "overview")
         with multiprocessing.get_context("fork").Pool(workers) as pool:
-            drawn = pool.map(_render, [tasks[i] for i in order], chunksize=1)
-        names = [""] * len(tasks)
-        for i, name in zip(order, drawn):
-            names[i] = name
+            for done, (i, name) in enumerate(pool.imap_unordered(
+                    _render_indexed, [(i, tasks[i]) for i in order], chunksize=1), 1):
+                names[i] = name
+                report(done, len(tasks))
         return names
-    return [_render(task) for task in tasks]
+    for i, task in enumerate(tasks):
+        names[i] = _render(task)
+        report(i + 1, len(tasks))
+    return names
+
+
+def _render_indexed(item):
+    index, task = item
+    return index, _render(task)

@@ -22,6 +22,8 @@ li.warning { color: #8a3b00; }
 figure { display: inline-block; margin: 0.5em; vertical-align: top; }
 img { max-width: 680px; border: 1px solid #eee; }
 pre { background: #f6f6f6; padding: 1em; overflow-x: auto; }
+div.strip svg { max-width: 100%; height: auto; }
+p.verdict { font-size: 1.1em; }
 """
 
 
@@ -167,6 +169,173 @@ def answer_html(summary, sensor=True):
     return "".join(parts)
 
 
+# The strip's colour scale: P(fixed) = 0 light grey, 1 dark green, linear in RGB between them
+# (the terminal's 256-colour strip follows the same ends; docs/history.md, "The strip").
+FREE_RGB = (242, 242, 242)
+FIXED_RGB = (27, 120, 55)
+
+
+def p_colour(p):
+    """The strip's colour of P(fixed) = p, as "#rrggbb"; grey for an unknown p."""
+    if p is None or not math.isfinite(float(p)):
+        return "#bbbbbb"
+    p = min(max(float(p), 0.0), 1.0)
+    return "#" + "".join(f"{round(a + (b - a) * p):02x}" for a, b in zip(FREE_RGB, FIXED_RGB))
+
+
+def verdict_line(summary, sensor=True):
+    """The verdicts in one line, as the terminal prints it (export/strip.hpp, VerdictLine):
+    "fixed: 12, 30; free: 10, 11; not determined: 30 clamps". Empty without bits."""
+    bits = (summary.get("answer") or {}).get("bits") or []
+    if not bits:
+        return ""
+    what = "clamps" if sensor else "bits"
+    groups = {"fixed": [], "free": [], "not determined": []}
+    for bit in bits:
+        label = str(bit.get("number")) if sensor else str(bit.get("name", ""))
+        groups.get(str(bit.get("verdict")), groups["not determined"]).append(label)
+
+    def group(title, members):
+        if not members:
+            return f"{title}: none"
+        if len(members) > VERDICT_LINE_LIST:
+            return f"{title}: {len(members)} {what}"
+        return f"{title}: " + ", ".join(members)
+    titles = ("fixed", "free") if sensor else ("bit = 1", "bit = 0")
+    return "; ".join([group(titles[0], groups["fixed"]), group(titles[1], groups["free"]),
+                      group("not determined", groups["not determined"])])
+
+
+VERDICT_LINE_LIST = 12  # as kVerdictLineList: a group lists up to this many, else counts them
+
+
+def _cm(metres):
+    return f"{metres * 100:.1f}".removesuffix(".0")
+
+
+def strip_html(summary):
+    """The sensor strip to scale (summary.json's "strip"), as inline SVG: the plate, its two rows of
+    clamp sections coloured by P(fixed) (edge 2 above, edge 1 below) with their numbers, P and
+    verdicts, each experiment's load (a numbered dot) and scan line (dashed), a centimetre axis and
+    the colour scale; then a line per experiment. Empty when the export has no strip (simulators
+    other than the sensor) or its bits are not the strip's clamps."""
+    strip = summary.get("strip")
+    bits = (summary.get("answer") or {}).get("bits") or []
+    if not strip:
+        return ""
+    n, length, width = int(strip["clamps_per_edge"]), float(strip["length_m"]), float(strip["width_m"])
+    if n <= 0 or length <= 0 or len(bits) != 2 * n:
+        return ""
+    left, plot = 70.0, 900.0
+    scale = plot / length  # px per metre, along and across alike: the plate to scale
+    plate_h = min(max(width * scale, 12.0), 240.0)
+    row_h, gap = 34.0, 14.0
+    top = 24.0 + 14.0  # room for edge 2's clamp numbers
+    plate_top = top + row_h
+    plate_bottom = plate_top + plate_h
+    axis_y = plate_bottom + row_h + 16.0
+    height = axis_y + 60.0
+    out = [f'<svg class="strip" xmlns="http://www.w3.org/2000/svg" width="{left + plot + 110:.0f}" '
+           f'height="{height:.0f}" viewBox="0 0 {left + plot + 110:.0f} {height:.0f}" '
+           'role="img" aria-label="the sensor strip with each clamp section coloured by '
+           'P(fixed)" font-family="sans-serif">']
+    out.append(f'<rect class="plate" x="{left}" y="{plate_top:.1f}" width="{plot}" '
+               f'height="{plate_h:.1f}" fill="#fbfaf5" stroke="#555" stroke-width="1"/>')
+    section = plot / n
+    # Narrow sections (many clamps) show their colour alone, and every `label_step`-th number.
+    texts = section >= 34
+    label_step = max(1, math.ceil(22 / section))
+    for k, bit in enumerate(bits):
+        edge = 1 if k < n else 2
+        s = k % n
+        x = left + s * section
+        y = plate_bottom if edge == 1 else plate_top - row_h
+        p = bit.get("p_one")
+        verdict = str(bit.get("verdict", ""))
+        p_text = "—" if p is None else f"{float(p):.2f}"
+        colour = p_colour(p)
+        dark = p is not None and float(p) > 0.6
+        title = (f"clamp {bit.get('number')} ({bit.get('position') or ''}): P(fixed) = {p_text}"
+                 + (f" ± {float(bit['mc_se']):.3f}" if bit.get("mc_se") else "")
+                 + f", {verdict}")
+        stroke = ('stroke="#000" stroke-width="2.5"' if verdict == "fixed" else
+                  'stroke="#999" stroke-width="0.8"')
+        out.append(
+            f'<g class="section" data-clamp="{e(str(bit.get("number")))}" data-edge="{edge}" '
+            f'data-p="{e(p_text)}" data-verdict="{e(verdict)}"><title>{e(title)}</title>'
+            f'<rect x="{x + 1:.1f}" y="{y:.1f}" width="{section - 2:.1f}" height="{row_h - 2:.1f}" '
+            f'fill="{colour}" {stroke}/>'
+            + (f'<text x="{x + section / 2:.1f}" y="{y + 14:.1f}" font-size="11" '
+               f'text-anchor="middle" fill="{"#fff" if dark else "#000"}">{e(p_text)}</text>'
+               f'<text x="{x + section / 2:.1f}" y="{y + 27:.1f}" font-size="10" '
+               f'text-anchor="middle" fill="{"#fff" if dark else "#000"}">'
+               f'{e({"fixed": "fixed", "free": "free"}.get(verdict, "?"))}</text>'
+               if texts else "") + '</g>')
+        if s % label_step == 0:
+            number_y = y - 4 if edge == 2 else y + row_h + 11
+            out.append(f'<text x="{x + section / 2:.1f}" y="{number_y:.1f}" font-size="10" '
+                       f'text-anchor="middle" fill="#444">{e(str(bit.get("number")))}</text>')
+    out.append(f'<text x="{left - 8}" y="{plate_top - row_h / 2 + 4:.1f}" font-size="12" '
+               'text-anchor="end">edge 2</text>')
+    out.append(f'<text x="{left - 8}" y="{plate_bottom + row_h / 2 + 4:.1f}" font-size="12" '
+               'text-anchor="end">edge 1</text>')
+    # Loads and scan lines, y measured from edge 1 (the bottom).
+    for k, x in enumerate(strip.get("experiments") or [], 1):
+        def at(x_m, y_m):
+            return (left + x_m * scale,
+                    plate_bottom - min(max(y_m / width, 0.0), 1.0) * plate_h if width > 0 else
+                    (plate_top + plate_bottom) / 2)
+        x0, y0 = at(float(x["scan_from_m"]), float(x["scan_y_m"]))
+        x1, _ = at(float(x["scan_to_m"]), float(x["scan_y_m"]))
+        out.append(f'<line class="scan" data-experiment="{k}" x1="{x0:.1f}" y1="{y0:.1f}" '
+                   f'x2="{x1:.1f}" y2="{y0:.1f}" stroke="#1f5fa8" stroke-width="2" '
+                   'stroke-dasharray="5 3"/>')
+        lx, ly = at(float(x["load_x_m"]), float(x["load_y_m"]))
+        out.append(f'<g class="load" data-experiment="{k}"><circle cx="{lx:.1f}" cy="{ly:.1f}" '
+                   'r="6" fill="#c0392b" stroke="#fff" stroke-width="1"/>'
+                   f'<text x="{lx:.1f}" y="{ly + 3.5:.1f}" font-size="9" fill="#fff" '
+                   f'text-anchor="middle">{k}</text></g>')
+    # The centimetre axis.
+    length_cm = length * 100
+    step = next(m * 10 ** d for d in range(-2, 6) for m in (1, 2, 5)
+                if m * 10 ** d / length_cm * plot >= 45)
+    out.append(f'<line x1="{left}" y1="{axis_y}" x2="{left + plot}" y2="{axis_y}" '
+               'stroke="#333"/>')
+    ticks = [k * step for k in range(int(length_cm / step + 1e-9) + 1)]
+    if length_cm - ticks[-1] > 1e-9:
+        ticks.append(length_cm)
+    for t in ticks:
+        tx = left + t / length_cm * plot
+        out.append(f'<line x1="{tx:.1f}" y1="{axis_y}" x2="{tx:.1f}" y2="{axis_y + 5}" '
+                   f'stroke="#333"/><text x="{tx:.1f}" y="{axis_y + 17}" font-size="11" '
+                   f'text-anchor="middle">{_cm(t / 100)}</text>')
+    out.append(f'<text x="{left + plot / 2}" y="{axis_y + 33}" font-size="11" '
+               'text-anchor="middle">x along the strip (cm)</text>')
+    # The colour scale.
+    sx, sy = left + plot + 20, plate_top - row_h
+    out.append('<defs><linearGradient id="p-fixed" x1="0" y1="1" x2="0" y2="0">'
+               f'<stop offset="0" stop-color="{p_colour(0)}"/>'
+               f'<stop offset="1" stop-color="{p_colour(1)}"/></linearGradient></defs>'
+               f'<rect x="{sx}" y="{sy}" width="14" height="{2 * row_h + plate_h:.1f}" '
+               'fill="url(#p-fixed)" stroke="#999"/>'
+               f'<text x="{sx + 18}" y="{sy + 9}" font-size="10">1</text>'
+               f'<text x="{sx + 18}" y="{sy + 2 * row_h + plate_h:.1f}" font-size="10">0</text>'
+               f'<text x="{sx + 18}" y="{sy + row_h + plate_h / 2 + 4:.1f}" font-size="10">'
+               'P(fixed)</text>')
+    out.append("</svg>")
+    rows = "".join(
+        f"<li><b>{k}</b>{' ' + e(x['name']) if x.get('name') else ''}: load at "
+        f"{_cm(float(x['load_x_m']))} cm, {float(x['load_y_m']) * 1000:.0f} mm from edge 1; "
+        f"scanned from {_cm(float(x['scan_from_m']))} to {_cm(float(x['scan_to_m']))} cm at "
+        f"{float(x['scan_y_m']) * 1000:.0f} mm from edge 1</li>"
+        for k, x in enumerate(strip.get("experiments") or [], 1))
+    caption = (f"<p class=\"strip-caption\">The strip to scale: {_cm(length)} cm long, "
+               f"{width * 1000:.0f} mm wide, {n} clamp sections per edge, each coloured by its "
+               "P(fixed) (thick outline: fixed). Red dots: the loads; dashed lines: the scan "
+               f"lines.</p>\n<ul class=\"experiments\">{rows}</ul>\n")
+    return '<div class="strip">' + "".join(out) + "</div>\n" + caption
+
+
 def _findings(title, items):
     if not items:
         return f"<h3>{e(title)}</h3>\n<p>No warnings.</p>\n"
@@ -282,7 +451,9 @@ def page_html(waves, run, estimator, written, formats, history):
         f"<td>{fmt(float(w.ess), '.1f')}</td><td>{w.distinct}</td>"
         f"<td>{fmt(float(w.wall_seconds), '.2f')}</td><td>{'yes' if w.complete else 'no'}</td></tr>"
         for w in waves)
-    figures = "\n".join(figure_html(n, formats) for n in written)
+    # The P(fixed) bars stand under the answer's table; the other figures in the gallery.
+    bars = figure_html("answer", formats) if "answer" in written else ""
+    figures = "\n".join(figure_html(n, formats) for n in written if n != "answer")
     experiments = ""
     if run["named"]:  # a single unnamed experiment's page is as it was before experiments
         listed = "\n".join(
@@ -298,12 +469,18 @@ def page_html(waves, run, estimator, written, formats, history):
     note = ("" if any(w.curves is not None for w in waves)
             else "<p>This run did not keep simulated outputs: no curve figures.</p>")
     summary = run["summary"]
+    sensor = run.get("sensor", True)
+    verdicts = verdict_line(summary, sensor)
+    verdicts = f'<p class="verdict"><b>Verdict</b> &mdash; {e(verdicts)}</p>\n' if verdicts else ""
+    # What the engineer asked first: the strip, the verdicts and the answer; the run's provenance
+    # after them.
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>combabc report</title>
 <style>{STYLE}</style></head><body>
 <h1>combabc run report</h1>
-<h2>Run</h2><table>{rows}</table>
-{answer_html(summary, run.get("sensor", True))}{checks_html(summary)}{experiments}<h2>Waves</h2><table>{head}{body}</table>
+{strip_html(summary) if sensor else ""}{verdicts}{answer_html(summary, sensor)}{bars}
+{checks_html(summary)}<h2>Run</h2><table>{rows}</table>
+{experiments}<h2>Waves</h2><table>{head}{body}</table>
 {fidelity}{note}
 <h2>Figures</h2>
 {figures}

@@ -418,8 +418,8 @@ std::string MultiFidelityJson(const RunHistory& h, int answer_wave) {
 void WriteSummary(OutputDirectory& dir,
                   const RunMetadata& m,
                   const RunHistory& h,
-                  const std::vector<std::optional<BitPosition>>& positions,
-                  const FitCheckOptions& checks) {
+                  const ExportOptions& options) {
+  const std::vector<std::optional<BitPosition>>& positions = options.bit_positions;
   std::ostream& out = dir.Add("summary.json");
   out << "{\n  \"format\": \"combabc-export\",\n  \"schema_version\": " << m.schema_version
       << ",\n";
@@ -516,7 +516,8 @@ void WriteSummary(OutputDirectory& dir,
     out << "\n  \"multi_fidelity\": " << MultiFidelityJson(h, answer.wave) << ',';
   }
   out << "\n  \"answer\": " << AnswerJson(answer)
-      << ",\n  \"checks\": " << FitChecksJson(ComputeFitChecks(m, h, checks), 2) << "\n}\n";
+      << ",\n  \"strip\": " << (options.strip ? StripJson(*options.strip) : "null")
+      << ",\n  \"checks\": " << FitChecksJson(ComputeFitChecks(m, h, options.checks), 2) << "\n}\n";
 }
 
 void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptions& options) {
@@ -531,7 +532,7 @@ void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptio
     WriteMeasured(dir, m);
     WriteExperiments(dir, m);
   }
-  if (options.json) WriteSummary(dir, m, h, options.bit_positions, options.checks);
+  if (options.json) WriteSummary(dir, m, h, options);
 }
 
 }  // namespace

@@ -178,13 +178,15 @@ void WriteEnumeration(const EnumerateRequest& request,
   ReadBack back = ReadBackHistory(store);
   outcome.checks = std::move(back.checks);
   outcome.answer = std::move(back.answer);
+  outcome.strip = std::move(back.strip);
   OutputDirectory files(files_directory, request.overwrite);
   WriteEnumerationFiles(files, metadata, result);
   files.Commit();
   outcome.enumeration_directory = files_directory;
   if (request.report) {
     try {
-      outcome.report_directory = WriteReport(store.path(), ReportDirectory(store.path()));
+      outcome.report_directory = WriteReport(
+          store.path(), ReportDirectory(store.path()), false, request.on_report_progress);
     } catch (const Error& e) {
       throw Error(e.kind(),
                   "the enumeration is saved in " + store.path() +

@@ -131,6 +131,7 @@ ExportOutcome ExportHistory(const std::string& history_path,
   const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
   const RunMetadata metadata = store.LoadMetadata();
   options.bit_positions = BitPositions(metadata);
+  options.strip = StripOf(metadata);
   options.checks = CheckOptions(metadata);
   ExportRun(store, outcome.directory, options);
   return outcome;

@@ -168,7 +168,8 @@ std::string ScriptMessage(const std::string& err, int status, const std::string&
 
 ProcessResult RunProcess(std::vector<std::string> args,
                          const std::string& needs,
-                         const std::function<void()>& before_signal) {
+                         const std::function<void()>& before_signal,
+                         const std::function<bool(const std::string&)>& on_line) {
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
@@ -223,6 +224,14 @@ ProcessResult RunProcess(std::vector<std::string> args,
     }
   };
   char buffer[4096];
+  std::string pending;  // with on_line: the start of a line not yet ended
+  const auto keep = [&](const char* text, std::size_t size) {
+    result.err.append(text, size);
+    // Only the end is kept: the script's message is its last line.
+    if (result.err.size() > 2 * kMaxScriptStderrBytes) {
+      result.err.erase(0, result.err.size() - kMaxScriptStderrBytes);
+    }
+  };
   for (;;) {
     forward_interrupt();
     pollfd p{pipe_fds[0], POLLIN, 0};
@@ -231,12 +240,24 @@ ProcessResult RunProcess(std::vector<std::string> args,
     const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
-    // Only the end is kept: the script's message is its last line.
-    result.err.append(buffer, static_cast<std::size_t>(n));
-    if (result.err.size() > 2 * kMaxScriptStderrBytes) {
-      result.err.erase(0, result.err.size() - kMaxScriptStderrBytes);
+    if (!on_line) {
+      keep(buffer, static_cast<std::size_t>(n));
+      continue;
+    }
+    pending.append(buffer, static_cast<std::size_t>(n));
+    std::size_t start = 0;
+    for (std::size_t end; (end = pending.find('\n', start)) != std::string::npos; start = end + 1) {
+      const std::string line = pending.substr(start, end - start);
+      if (!on_line(line)) keep(pending.data() + start, end + 1 - start);
+    }
+    pending.erase(0, start);
+    // A line longer than the kept end is no progress line: kept as it comes.
+    if (pending.size() > kMaxScriptStderrBytes) {
+      keep(pending.data(), pending.size());
+      pending.clear();
     }
   }
+  keep(pending.data(), pending.size());
   ::close(pipe_fds[0]);
   int status = 0;
   for (;;) {

@@ -34,10 +34,12 @@ struct ProcessResult {
 // and is waited for; then `before_signal` runs (the report removes its staging folder there: the
 // signal may end combabc without unwinding), the signal takes its course with combabc's own
 // handlers (for the CLI: combabc ends by it), and if that handler returns, Error(kSoftware)
-// "interrupted".
+// "interrupted". `on_line`, when set, hears each line of stderr (without its newline) as it
+// comes; a line it returns true for was a progress line and is not kept in `err`.
 ProcessResult RunProcess(std::vector<std::string> args,
                          const std::string& needs,
-                         const std::function<void()>& before_signal = {});
+                         const std::function<void()>& before_signal = {},
+                         const std::function<bool(const std::string&)>& on_line = {});
 
 // Why `python` cannot serve a script that imports `modules`: "has no module numpy (nor
 // matplotlib)", "cannot import numpy (<error>)", or, for a program that did not run the check to

@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string_view>
 #include <vector>
 
 #include "combabc/core/error.hpp"
@@ -122,7 +124,8 @@ void CheckReportPossible(const std::string& directory) {
 
 std::string WriteReport(const std::string& history_path,
                         const std::string& directory,
-                        bool overwrite) {
+                        bool overwrite,
+                        const ReportProgress& progress) {
   // The usual one-line errors for a missing, foreign or corrupt history (a corrupt wave: when the
   // export reads it).
   const HistoryStore store = HistoryStore::Open(history_path, /*read_only=*/true);
@@ -131,12 +134,14 @@ std::string WriteReport(const std::string& history_path,
   // that an interrupted report leaves nothing there.
   OutputDirectory::Check(out, overwrite);
   const PythonScript tools = FindReportTools();
+  if (progress) progress(0, 0);
   const StagingFolder staging;
   const fs::path exported = staging.path() / "export";
   const fs::path drawn = staging.path() / "report";
   ExportOptions export_options;
   const RunMetadata metadata = store.LoadMetadata();
   export_options.bit_positions = BitPositions(metadata);
+  export_options.strip = StripOf(metadata);
   export_options.checks = CheckOptions(metadata);
   ExportRun(store, exported.string(), export_options);
   std::vector<std::string> args = {tools.python,
@@ -144,14 +149,31 @@ std::string WriteReport(const std::string& history_path,
                                    "--out",
                                    drawn.string(),
                                    "--history",
-                                   fs::absolute(history_path).string(),
-                                   // "--": the staged export is never an option, whatever
-                                   // TMPDIR is.
-                                   "--",
-                                   exported.string()};
+                                   fs::absolute(history_path).string()};
+  // The script's "combabc_report: progress D/N" lines, one per figure drawn, are heard here and
+  // kept out of its message.
+  std::function<bool(const std::string&)> on_line;
+  if (progress) {
+    args.push_back("--progress");
+    on_line = [&progress](const std::string& line) {
+      constexpr std::string_view kHead = "combabc_report: progress ";
+      int done = 0;
+      int total = 0;
+      if (line.rfind(kHead, 0) != 0 ||
+          std::sscanf(line.c_str() + kHead.size(), "%d/%d", &done, &total) != 2) {
+        return false;
+      }
+      progress(done, total);
+      return true;
+    };
+  }
+  // "--": the staged export is never an option, whatever TMPDIR is.
+  args.push_back("--");
+  args.push_back(exported.string());
   ProcessResult result;
   try {
-    result = RunProcess(args, kReportNeeds, [&] { staging.Remove(); });
+    result = RunProcess(
+        args, kReportNeeds, [&] { staging.Remove(); }, on_line);
   } catch (const Error& e) {
     throw Error(e.kind(), "report: " + e.message(), e.file());
   }

@@ -141,6 +141,7 @@ RunOutcome Execute(Problem& problem,
                    const std::string& history_path,
                    const ResumePoint* resume,
                    bool report,
+                   const ReportProgress& report_progress,
                    SmcObserver* progress,
                    const std::function<void(const FitChecks&)>& on_checks_before) {
   Executor& executor = *problem.executor;
@@ -165,9 +166,11 @@ RunOutcome Execute(Problem& problem,
     ReadBack back = ReadBackHistory(*store);
     outcome.checks = std::move(back.checks);
     outcome.answer = std::move(back.answer);
+    outcome.strip = std::move(back.strip);
     if (!report) return;
     try {
-      outcome.report_directory = WriteReport(store->path(), ReportDirectory(store->path()));
+      outcome.report_directory =
+          WriteReport(store->path(), ReportDirectory(store->path()), false, report_progress);
     } catch (const Error& e) {
       // One line still, but saying that the run itself is safe and how to retry the report.
       throw Error(e.kind(),
@@ -262,6 +265,7 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
                  history_path,
                  nullptr,
                  request.report,
+                 request.on_report_progress,
                  progress,
                  request.on_checks_before);
 }
@@ -397,6 +401,7 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
                  history_path,
                  &resume,
                  report,
+                 request.on_report_progress,
                  progress,
                  request.on_checks_before);
 }

@@ -21,6 +21,7 @@ import fcntl
 import json
 import os
 import pathlib
+import re
 import select
 import shutil
 import subprocess
@@ -121,6 +122,25 @@ class Browser:
 IMAGES_JS = """JSON.stringify(Array.from(document.images).map(i => ({
     src: i.getAttribute("src"), complete: i.complete, width: i.naturalWidth})))"""
 
+# The strip as drawn: each clamp section's number and rendered fill, the loads' centres and the
+# plate's extent; and the answer table's rows (cell texts), which the colours must follow.
+STRIP_JS = """JSON.stringify({
+  strips: document.querySelectorAll("svg.strip").length,
+  sections: Array.from(document.querySelectorAll("svg.strip g.section")).map(g => ({
+    clamp: g.dataset.clamp, verdict: g.dataset.verdict,
+    fill: getComputedStyle(g.querySelector("rect")).fill})),
+  loads: Array.from(document.querySelectorAll("svg.strip g.load circle")).map(
+    c => c.cx.baseVal.value),
+  plate: (p => p ? [p.x.baseVal.value, p.width.baseVal.value] : null)(
+    document.querySelector("svg.strip rect.plate")),
+  verdict: (v => v ? v.textContent : "")(document.querySelector("p.verdict")),
+  rows: Array.from(document.querySelectorAll("tr")).map(
+    r => Array.from(r.cells).map(c => c.textContent))})"""
+
+# The documented colour scale of the strip (docs/history.md, "The strip"): P(fixed) = 0 is
+# rgb(242, 242, 242), 1 is rgb(27, 120, 55), linear between them.
+FREE_RGB, FIXED_RGB = (242, 242, 242), (27, 120, 55)
+
 
 def find_chromium():
     for name in ("chromium", "chromium-browser", "google-chrome"):
@@ -130,8 +150,10 @@ def find_chromium():
     return None
 
 
-def check_page(index_html, chromium, min_images=1):
-    """Returns the problems found on the page, one line each."""
+def check_page(index_html, chromium, min_images=1, strip=None):
+    """Returns the problems found on the page, one line each; with `strip` (a dict: the page must
+    draw the sensor strip, coloured by the answer's P(fixed), with loads at strip["loads"], as
+    fractions of the length; False: it must not) those of the strip too."""
     url = pathlib.Path(index_html).resolve().as_uri()
     with tempfile.TemporaryDirectory(prefix="combabc-chromium-") as profile:
         with Browser(chromium, profile) as browser:
@@ -145,10 +167,13 @@ def check_page(index_html, chromium, min_images=1):
             images = json.loads(browser.send(
                 "Runtime.evaluate", {"expression": IMAGES_JS, "returnByValue": True},
                 session=session)["result"]["value"])
+            drawn = json.loads(browser.send(
+                "Runtime.evaluate", {"expression": STRIP_JS, "returnByValue": True},
+                session=session)["result"]["value"])
             # A round trip after the load, so that messages logged during it have arrived.
             browser.send("Runtime.evaluate", {"expression": "1"}, session=session)
             events = list(browser.events)
-    problems = []
+    problems = [] if strip is None else strip_problems(index_html, drawn, strip)
     if len(images) < min_images:
         problems.append(f"{index_html}: {len(images)} images, expected at least {min_images}")
     for image in images:
@@ -169,21 +194,96 @@ def check_page(index_html, chromium, min_images=1):
     return problems
 
 
+def rgb(text):
+    """ "rgb(12, 34, 56)" as a tuple of ints."""
+    return tuple(int(v) for v in text[text.index("(") + 1:text.index(")")].split(","))
+
+
+def strip_problems(index_html, drawn, expected):
+    """The strip against the page's own answer table: one section per clamp, each filled with the
+    colour of the P(fixed) the table prints for it (within rounding) and with its verdict."""
+    if not expected:
+        return [] if drawn["strips"] == 0 else [f"{index_html}: a strip where none belongs"]
+    problems = []
+    if drawn["strips"] != 1 or not drawn["sections"]:
+        return [f"{index_html}: no strip drawn ({drawn['strips']} strips)"]
+    table = {}
+    for cells in drawn["rows"]:
+        # The answer's rows: #, name, position, "P ± SE", verdict.
+        if len(cells) == 5 and cells[0].strip().isdigit() and "±" in cells[3]:
+            table[cells[0].strip()] = (float(cells[3].split("±")[0]), cells[4].strip())
+    if len(table) != len(drawn["sections"]):
+        problems.append(f"{index_html}: {len(drawn['sections'])} sections drawn for "
+                        f"{len(table)} clamps in the answer table")
+    for section in drawn["sections"]:
+        p, verdict = table.get(section["clamp"], (None, None))
+        if p is None:
+            problems.append(f"{index_html}: section {section['clamp']} is not in the answer")
+            continue
+        want = tuple(a + (b - a) * p for a, b in zip(FREE_RGB, FIXED_RGB))
+        got = rgb(section["fill"])
+        # The table prints P to 3 decimals: 0.0005 of the scale is under 0.11 of a channel.
+        if any(abs(g - w) > 1.0 for g, w in zip(got, want)):
+            problems.append(f"{index_html}: clamp {section['clamp']} at P(fixed) = {p} is filled "
+                            f"{section['fill']}, expected rgb{tuple(round(w) for w in want)}")
+        if section["verdict"] != verdict:
+            problems.append(f"{index_html}: clamp {section['clamp']} drawn {section['verdict']}, "
+                            f"the table says {verdict}")
+    # Not a vacuous check: the synthetic run's clamps spread over P(fixed) (0.12-0.75 at 40
+    # particles a wave), so their colours differ.
+    fills = {s["fill"] for s in drawn["sections"]}
+    spread = [p for p, _ in table.values()]
+    if len(fills) < 5 or not spread or max(spread) - min(spread) < 0.3:
+        problems.append(f"{index_html}: too few colours ({len(fills)}) or too narrow a range of "
+                        "P(fixed) to test the strip on")
+    x, width = drawn["plate"] or (0.0, 0.0)
+    loads = sorted(round((cx - x) / width, 3) for cx in drawn["loads"]) if width else []
+    if len(loads) != len(expected["loads"]) or any(
+            abs(a - b) > 0.005 for a, b in zip(loads, sorted(expected["loads"]))):
+        problems.append(f"{index_html}: loads drawn at {loads} of the length, expected "
+                        f"{expected['loads']}")
+    if not drawn["verdict"].startswith("Verdict"):
+        problems.append(f"{index_html}: no verdict line over the answer")
+    return problems
+
+
 def self_test(args, chromium):
     work = pathlib.Path(args.workdir)
     shutil.rmtree(work, ignore_errors=True)  # this test's own scratch directory in the build tree
     work.mkdir(parents=True)
     db = work / "RUN.db"
-    subprocess.run([args.fake_history, str(db), "--waves", "3", "--per-wave", "40"], check=True)
+    # The sensor's 45 cm example as the run's config: the page draws its strip.
+    examples = pathlib.Path(__file__).resolve().parents[2] / "examples"
+    subprocess.run([args.fake_history, str(db), "--waves", "3", "--per-wave", "40", "--config",
+                    str(examples / "sensor-45cm" / "least_squares.toml")], check=True)
     report = work / "report"
     subprocess.run([args.combabc, "report", str(db), "-o", str(report)], check=True)
     figures = len(list(report.glob("*.png")))
-    problems = check_page(report / "index.html", chromium, min_images=figures)
+    # Its one load, at 45 of 90 cm: the middle of the plate.
+    problems = check_page(report / "index.html", chromium, min_images=figures,
+                          strip={"loads": [0.5]})
     for line in problems:
         print(line)
     if problems:
         return 1
-    print(f"report page: {figures} images loaded, no console errors")
+    print(f"report page: {figures} images loaded, no console errors, the strip coloured by the "
+          "answer's P(fixed)")
+
+    # A Python simulator's run (the custom-simulator example's config): the same page, no strip.
+    other = work / "python_simulator"
+    other.mkdir()
+    subprocess.run([args.fake_history, str(other / "RUN.db"), "--waves", "1", "--per-wave", "20",
+                    "--no-curves", "--config",
+                    str(examples / "custom-simulator" / "command.toml")], check=True)
+    subprocess.run([args.combabc, "report", str(other / "RUN.db"), "-o", str(other / "report")],
+                   check=True)
+    # Its page read as text (a second browser would add seconds, not checks): no SVG at all, and
+    # still the verdict line and the answer.
+    page = (other / "report" / "index.html").read_text(encoding="utf-8")
+    if "<svg" in page or 'class="verdict"' not in page or "<h2>Answer</h2>" not in page:
+        print(f"{other / 'report' / 'index.html'}: a strip, or no verdict line or answer")
+        return 1
+    print("a Python simulator's report: no strip")
 
     # The check must be able to fail: one image broken, then an error logged by the page.
     broken = work / "broken_image"
@@ -193,17 +293,27 @@ def self_test(args, chromium):
     if not any("summary.png did not load" in p for p in found):
         print(f"the check missed a broken image (it found: {found})")
         return 1
+    # An error logged by the page, and (one browser start for both) the strip with two sections
+    # of different P(fixed) swapped in colour.
     logged = work / "console_error"
     shutil.copytree(report, logged)
     page = (logged / "index.html").read_text(encoding="utf-8")
-    (logged / "index.html").write_text(
-        page.replace("</body>", "<script>console.error('planted error');</script></body>"),
-        encoding="utf-8")
-    found = check_page(logged / "index.html", chromium, min_images=figures)
+    page = page.replace("</body>", "<script>console.error('planted error');</script></body>")
+    fills = sorted(set(re.findall(r'fill="(#[0-9a-f]{6})" stroke="#000"', page)) |
+                   set(re.findall(r'fill="(#[0-9a-f]{6})" stroke="#999"', page)))
+    first, last = fills[0], fills[-1]
+    page = page.replace(first, "#TMPTMP").replace(last, first).replace("#TMPTMP", last)
+    (logged / "index.html").write_text(page, encoding="utf-8")
+    found = check_page(logged / "index.html", chromium, min_images=figures,
+                       strip={"loads": [0.5]})
     if not any("planted error" in p for p in found):
         print(f"the check missed a console error (it found: {found})")
         return 1
-    print("negative controls: a broken image and a console error are both caught")
+    if not any("is filled" in p for p in found):
+        print(f"the check missed swapped strip colours (it found: {found})")
+        return 1
+    print("negative controls: a broken image, a console error and swapped strip colours are all "
+          "caught")
     return 0
 
 

@@ -204,7 +204,8 @@ TEST(Design, ASingularConfigurationIsLeftOutNotFatal) {
                                            "elements_across_width = 2\n"
                                            "[model.load]\nfrequency = 0\n"
                                            "[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\n"
-                                           "[design]\nload_x = [30, 45]\ntruths = 20\nselect = 1\n";
+                                           "[design]\nload_x = [30, 45]\ntruths = 20\nselect = 1\n"
+                                           "noise = 0.02\n";
   services::DesignRequest request;
   request.config_path = folder / "design.toml";
   request.output_directory = folder / "out";
@@ -214,6 +215,7 @@ TEST(Design, ASingularConfigurationIsLeftOutNotFatal) {
   EXPECT_EQ(o.singular, 1U);
   EXPECT_NE(o.singular_reason.find("singular"), std::string::npos) << o.singular_reason;
   EXPECT_EQ(o.particles, 63U);
+  EXPECT_EQ(o.noise_sigma, 0.02);  // the header line prints it (issue 34)
   ASSERT_EQ(o.result.scores.size(), 2U);
   for (const design::Score& s : o.result.scores) EXPECT_GT(s.information_gain, 0.0);
 }

@@ -246,6 +246,17 @@ TEST_F(CliChecks, TheChecksBeforeSamplingPrecedeTheSecondWave) {
                   dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(At(r.err, "warning"), std::string::npos) << r.err;
+  // Issue 34: the strip before the answer, without colour off a terminal: edge 2 above edge 1,
+  // the load at 45 cm (column 8 + 36 of the middle row) over the scan line of 48-80 cm, and the
+  // verdict line.
+  EXPECT_EQ(r.out.find('\033'), std::string::npos) << r.out;
+  EXPECT_LT(At(r.out, "\nedge 2 |"), At(r.out, "\nedge 1 |")) << r.out;
+  EXPECT_NE(At(r.out, "\n       |                                    1"), std::string::npos)
+      << r.out;
+  EXPECT_NE(At(r.out, " 1: load at 45 cm, 20 mm from edge 1; scan 48-80 cm at 20 mm\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_LT(At(r.out, "\nverdict: fixed: "), At(r.out, "\nanswer: ")) << r.out;
   EXPECT_LT(At(r.err, "checks: 33 measured points"), At(r.err, "wave 2:")) << r.err;
   EXPECT_NE(At(r.err, "normalised to peak 1"), std::string::npos) << r.err;
   EXPECT_GT(At(r.err, "best fit RMS"), At(r.err, "wave 3:")) << r.err;
@@ -343,6 +354,13 @@ TEST_F(CliChecks, ATooSmallSigmaWarnsAndATemperedAnswerSaysSo) {
   const auto r =
       RunCli({"run", dir_ / "low.toml", "-o", dir_ / "low", "--no-report", "-j", "1"}, dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Issue 34: the waves' lines say temperature, and wave 1's (every prior draw accepted) is
+  // infinite, "inf" or "∞" as the locale writes, never "nan".
+  EXPECT_EQ(At(r.err, "nan"), std::string::npos) << r.err;
+  EXPECT_TRUE(At(r.err, "wave 1: temperature inf ") != std::string::npos ||
+              At(r.err, "wave 1: temperature ∞ ") != std::string::npos)
+      << r.err;
+  EXPECT_NE(At(r.err, "wave 2: temperature "), std::string::npos) << r.err;
   const std::size_t warned = At(r.err, "warning [noise_below_estimate]");
   ASSERT_NE(warned, std::string::npos) << r.err;
   EXPECT_LT(warned, At(r.err, "wave 2:")) << r.err;

@@ -11,9 +11,12 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/services/report.hpp"
 #include "output_test_support.hpp"
 
 namespace combabc::testing {
@@ -74,6 +77,8 @@ TEST_F(Report, RewritesItsOwnReportAndOverwriteKeepsTheUsersFiles) {
   auto r = RunCli({"report", db}, dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / ".combabc-manifest"));
+  // Not a terminal: nothing on stderr (the progress line is for a terminal).
+  EXPECT_EQ(r.err, "");
   Write("report/notes.txt", "the user's notes");
   r = RunCli({"report", db}, dir_.path());  // its own report: replaced without --overwrite
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -294,6 +299,47 @@ with open(os.path.join(out, "index.html"), "w") as f:
   EXPECT_EQ(Listing(dir.path() / "report"),
             (std::set<std::string>{".combabc-manifest", "index.html"}));
   EXPECT_TRUE(Listing(dir.path() / "tmp").empty()) << "the staging folder was left behind";
+}
+
+// Issue 34: the report's progress. With a listener, the script is asked for --progress and its
+// "combabc_report: progress D/N" lines reach the listener, after (0, 0) for the start; they never
+// become the error's message, even when the script dies right after one. A stand-in script.
+TEST(ReportProgress, TheScriptsProgressLinesReachTheListenerAndNotTheError) {
+  TempFolder dir("report-progress");
+  const std::string db = MakeHistory(dir.path() / "RUN.db");
+  const std::string script = dir / "progress.py";
+  std::ofstream(script) << R"(import os, sys
+assert "--progress" in sys.argv, sys.argv
+out = sys.argv[sys.argv.index("--out") + 1]
+for done in range(3):
+    print(f"combabc_report: progress {done}/2", file=sys.stderr, flush=True)
+if os.environ.get("FAIL") == "message":
+    print("combabc_report: the figures broke", file=sys.stderr)
+    sys.exit(70)
+if os.environ.get("FAIL") == "silent":
+    sys.exit(70)
+os.makedirs(out)
+with open(os.path.join(out, "index.html"), "w") as f:
+    f.write("drawn")
+)";
+  ScopedEnv use("COMBABC_REPORT_SCRIPT", script);
+  std::vector<std::pair<int, int>> heard;
+  const auto listen = [&heard](int done, int total) { heard.emplace_back(done, total); };
+  services::WriteReport(db, dir / "report", false, listen);
+  EXPECT_EQ(heard, (std::vector<std::pair<int, int>>{{0, 0}, {0, 2}, {1, 2}, {2, 2}}));
+  EXPECT_EQ(ReadFile(dir.path() / "report" / "index.html"), "drawn");
+  for (const char* fail : {"message", "silent"}) {
+    ScopedEnv failing("FAIL", fail);
+    try {
+      services::WriteReport(db, dir / fail, false, listen);
+      ADD_FAILURE() << "the script's failure was not an error";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string(fail) == "message" ? "the figures broke"
+                                               : "combabc_report failed with status 70");
+    }
+    EXPECT_FALSE(fs::exists(dir.path() / fail));
+  }
 }
 
 // Regression (issue 20, D20): SIGINT to combabc during the report ended combabc alone; the report

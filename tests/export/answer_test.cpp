@@ -4,7 +4,10 @@
 #include "combabc/export/answer.hpp"
 #include "combabc/export/export.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <stdlib.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +15,11 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/export/strip.hpp"
 #include "combabc/samplers/enumeration.hpp"
 #include "combabc/samplers/monte_carlo_error.hpp"
 #include "combabc/services/history_tools.hpp"
@@ -512,6 +517,10 @@ TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
   text << in.rdbuf();
   m.config_text = text.str();
   m.config_path = (example / "least_squares.toml").string();
+  // A point the Gaussian extension would add toward the load: stored with the measured ones, but
+  // not scanned (the strip's scan line stays within the data window, 48-80 cm).
+  m.measured.positions.insert(m.measured.positions.begin(), 0.42);
+  m.measured.values.insert(m.measured.values.begin(), 0.5);
   const std::string path = dir / "RUN.db";
   {
     HistoryStore store = HistoryStore::Create(path, m);
@@ -549,6 +558,194 @@ TEST(Answer, PlacesTheSensorsClampsFromTheRunsConfig) {
   // Clamp 1 and clamp 19 share the first row of the table.
   EXPECT_NE(shown.find("\n     1   0-5  "), std::string::npos) << shown;
   EXPECT_NE(shown.find("   19   0-5  "), std::string::npos) << shown;
+
+  // The strip's layout in summary.json (issue 34): the example's plate, its load at 45 cm on the
+  // centreline and its scan over the data window on the centreline.
+  services::ExportHistory(path, dir / "export", false, /*netcdf=*/false);
+  std::ifstream json(fs::path(dir / "export") / "summary.json");
+  std::stringstream summary;
+  summary << json.rdbuf();
+  const std::string exported = summary.str();
+  EXPECT_NE(
+      exported.find("\"strip\": {\"length_m\": 0.9, \"width_m\": 0.04, \"clamps_per_edge\": 18, "
+                    "\"experiments\": [\n    {\"name\": \"\", \"load_x_m\": 0.45, "
+                    "\"load_y_m\": 0.02, \"scan_from_m\": "),
+      std::string::npos)
+      << exported;
+  const auto number_after = [&exported](const std::string& key) {
+    const std::size_t at = exported.find("\"" + key + "\": ", exported.find("\"strip\": "));
+    return at == std::string::npos ? -1.0 : std::stod(exported.substr(at + key.size() + 4));
+  };
+  EXPECT_NEAR(number_after("scan_from_m"), 0.48, 1e-12);  // not the extension's 0.42
+  EXPECT_NEAR(number_after("scan_to_m"), 0.80, 1e-12);
+  EXPECT_NEAR(number_after("scan_y_m"), 0.02, 1e-12);
+}
+
+// The strip for a terminal (export/strip.hpp): a hand-made answer on a strip of 10 sections per
+// edge over 50 cm, 3 cm wide (not the default 18 over 90 cm), drawn at 80 columns without colour.
+// Each section's symbol sits in its own columns (to scale: 7 columns of 5 cm each), the load and
+// scan line where the layout puts them, and the verdict line lists the groups.
+Answer StripAnswer(int per_edge) {
+  Answer a;
+  a.wave = 1;
+  a.waves = 1;
+  a.complete = true;
+  for (int k = 1; k <= 2 * per_edge; ++k) {
+    AnswerBit bit;
+    bit.number = k;
+    bit.name = "clamp " + std::to_string(k);
+    // Clamps 3 and 13 fixed, 4 and 14 free, 5 at P = 0.62, the others at P = 0.31.
+    bit.p_one = k % per_edge == 3 ? 0.99 : k % per_edge == 4 ? 0.01 : k == 5 ? 0.62 : 0.31;
+    bit.verdict = VerdictOf(bit.p_one);
+    a.bits.push_back(bit);
+  }
+  return a;
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(Strip, DrawsTheStripToScaleIn80ColumnsWithoutColour) {
+  StripLayout strip;
+  strip.length_m = 0.50;
+  strip.width_m = 0.03;
+  strip.clamps_per_edge = 10;
+  // A load at 22 cm on the centreline scanned over 30-45 cm along edge 1 (y = 0).
+  strip.experiments.push_back({"near", 0.22, 0.015, 0.30, 0.45, 0.0});
+  const std::string shown = StripText(StripAnswer(10), strip, TextStyle{80, false, false});
+  EXPECT_EQ(shown.find('\033'), std::string::npos) << shown;
+  const std::vector<std::string> lines = Lines(shown);
+  for (const std::string& line : lines) EXPECT_LE(line.size(), 80u) << line;
+  const auto row = [&](const std::string& head) {
+    for (const std::string& line : lines) {
+      if (line.rfind(head, 0) == 0) return line;
+    }
+    ADD_FAILURE() << "no line starting with '" << head << "' in\n" << shown;
+    return std::string();
+  };
+  // 7 label columns, "|", then 10 sections of 7 columns: 6 symbols and a "|".
+  const std::string edge1 = row("edge 1 |");
+  const std::string edge2 = row("edge 2 |");
+  ASSERT_EQ(edge1.size(), 8u + 70u) << shown;
+  const auto section = [](const std::string& line, int s) {
+    return line.substr(static_cast<std::size_t>(8 + 7 * s), 7);
+  };
+  EXPECT_EQ(section(edge1, 2), "######|");  // clamp 3: fixed
+  EXPECT_EQ(section(edge1, 3), "......|");  // clamp 4: free
+  EXPECT_EQ(section(edge1, 4), "   6  |");  // clamp 5: P = 0.62, in tenths
+  EXPECT_EQ(section(edge1, 0), "   3  |");
+  EXPECT_EQ(section(edge2, 2), "######|");  // clamp 13
+  EXPECT_EQ(section(edge2, 3), "......|");  // clamp 14
+  // Edge 2 above edge 1, the clamp numbers outside them, the inside between them.
+  const auto at = [&](const std::string& line) {
+    return std::find(lines.begin(), lines.end(), line) - lines.begin();
+  };
+  EXPECT_EQ(at(edge1) - at(edge2), 4) << shown;
+  EXPECT_NE(lines[static_cast<std::size_t>(at(edge2) - 1)].find("    11"), std::string::npos);
+  EXPECT_NE(lines[static_cast<std::size_t>(at(edge1) + 1)].find("     1"), std::string::npos);
+  // The load: column 8 + floor(22/50 * 70) = 38 of the middle row; the scan along the bottom one
+  // from 8 + 42 to 8 + 63 (the column of 45 cm).
+  const std::string middle = lines[static_cast<std::size_t>(at(edge2) + 2)];
+  const std::string bottom = lines[static_cast<std::size_t>(at(edge2) + 3)];
+  EXPECT_EQ(middle.find('1'), 38u) << shown;
+  EXPECT_EQ(bottom.find('-'), 50u) << shown;
+  EXPECT_EQ(bottom.rfind('-'), 71u) << shown;
+  // The axis: 0 under the strip's left end, 50 (cm) at its right end.
+  const std::string axis = row("x (cm)");
+  EXPECT_EQ(axis.find(" 0 "), 7u - 1u) << axis;
+  EXPECT_EQ(axis.substr(axis.size() - 2), "50") << axis;
+  EXPECT_NE(shown.find(" 1 near: load at 22 cm, 15 mm from edge 1; scan 30-45 cm at 0 mm\n"),
+            std::string::npos)
+      << shown;
+  EXPECT_NE(shown.find("verdict: fixed: 3, 13; free: 4, 14; not determined: 16 clamps\n"),
+            std::string::npos)
+      << shown;
+}
+
+// With colour, the same picture: each section's background follows its P(fixed); without the
+// escapes the text is the colourless one. The default 18 sections per edge fill 80 columns.
+TEST(Strip, ColoursOnlyAddToTheSymbols) {
+  StripLayout strip;
+  strip.length_m = 0.90;
+  strip.width_m = 0.04;
+  strip.clamps_per_edge = 18;
+  strip.experiments.push_back({"", 0.45, 0.02, 0.48, 0.80, 0.02});
+  const Answer a = StripAnswer(18);
+  const std::string plain = StripText(a, strip, TextStyle{80, false, false});
+  for (const std::string& line : Lines(plain)) EXPECT_LE(line.size(), 80u) << line;
+  for (bool many : {false, true}) {
+    const std::string coloured = StripText(a, strip, TextStyle{80, true, many});
+    std::string stripped;
+    for (std::size_t k = 0; k < coloured.size(); ++k) {
+      if (coloured[k] == '\033') {
+        k = coloured.find('m', k);
+      } else {
+        stripped += coloured[k];
+      }
+    }
+    EXPECT_EQ(stripped, plain);
+    // Fixed (clamp 3, P = 0.99) dark green with white text, not determined (P = 0.31) pale,
+    // with black text: the page's colours, rgb(29, 121, 57) and rgb(175, 205, 183), at the nearest
+    // levels of the 256-colour cube, (0, 2, 1) and (3, 4, 3).
+    const std::string fixed = many ? "\033[48;5;29m\033[38;5;15m" : "\033[42;30m";
+    const std::string open = many ? "\033[48;5;151m\033[38;5;16m" : "\033[43;30m";
+    EXPECT_NE(coloured.find(fixed + "###"), std::string::npos) << coloured;
+    EXPECT_NE(coloured.find(open + " 3 "), std::string::npos) << coloured;
+  }
+  // The sections do not fit: a note, and still the verdicts.
+  strip.clamps_per_edge = 100;
+  const std::string crowded = StripText(StripAnswer(100), strip);
+  EXPECT_NE(crowded.find("do not fit in 80 columns"), std::string::npos) << crowded;
+  EXPECT_NE(crowded.find("verdict: fixed:"), std::string::npos) << crowded;
+  // No strip for an answer whose bits are not the strip's clamps.
+  EXPECT_EQ(StripText(StripAnswer(10), strip), "");
+}
+
+// The terminal's style: colour only on a terminal (a pseudo-terminal here) whose TERM is set and
+// not "dumb", and not with NO_COLOR set and not empty; 256 colours when TERM says so.
+TEST(Strip, ColourOnlyOnATerminalThatHasItAndNoColorHonoured) {
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  ASSERT_GE(master, 0);
+  ASSERT_EQ(::grantpt(master), 0);
+  ASSERT_EQ(::unlockpt(master), 0);
+  const int terminal = ::open(::ptsname(master), O_RDWR | O_NOCTTY);
+  ASSERT_GE(terminal, 0);
+  const int file = ::open("/dev/null", O_WRONLY);
+  ASSERT_GE(file, 0);
+  const auto saved = [](const char* name) -> std::optional<std::string> {
+    const char* value = std::getenv(name);
+    return value ? std::optional<std::string>(value) : std::nullopt;
+  };
+  const auto term = saved("TERM"), no_colour = saved("NO_COLOR"), colour_term = saved("COLORTERM");
+  const auto set = [](const char* name, const char* value) {
+    value ? ::setenv(name, value, 1) : ::unsetenv(name);
+  };
+  const auto style = [&](const char* t, const char* n, int fd) {
+    set("TERM", t);
+    set("NO_COLOR", n);
+    return TerminalStyle(fd);
+  };
+  set("COLORTERM", nullptr);
+  EXPECT_TRUE(style("xterm-256color", nullptr, terminal).colour);
+  EXPECT_TRUE(style("xterm-256color", nullptr, terminal).colour256);
+  EXPECT_TRUE(style("xterm", nullptr, terminal).colour);
+  EXPECT_FALSE(style("xterm", nullptr, terminal).colour256);
+  EXPECT_TRUE(style("xterm", "", terminal).colour);  // empty: not set (no-color.org)
+  EXPECT_FALSE(style("xterm-256color", "1", terminal).colour);
+  EXPECT_FALSE(style("dumb", nullptr, terminal).colour);
+  EXPECT_FALSE(style(nullptr, nullptr, terminal).colour);
+  EXPECT_FALSE(style("xterm-256color", nullptr, file).colour);  // not a terminal
+  EXPECT_EQ(style("xterm", nullptr, terminal).columns, 80);
+  set("TERM", term ? term->c_str() : nullptr);
+  set("NO_COLOR", no_colour ? no_colour->c_str() : nullptr);
+  set("COLORTERM", colour_term ? colour_term->c_str() : nullptr);
+  ::close(file);
+  ::close(terminal);
+  ::close(master);
 }
 
 }  // namespace

@@ -1,9 +1,13 @@
 // Writes a synthetic run history (36 clamps, 91-point curves by default) for trying the report
 // and export tools without running the FE model:
 //   combabc_fake_history OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves]
-//     [--reals N] [--multi-fidelity] [--pattern-classes]
+//     [--reals N] [--multi-fidelity] [--pattern-classes] [--config FILE]
+// --config: the run's config text is FILE's (e.g. an example's), so that the answer places the
+// sensor's clamps and the report draws the strip (or, for another simulator, does not).
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "combabc/core/error.hpp"
@@ -14,7 +18,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves] "
-                 "[--reals N] [--multi-fidelity] [--pattern-classes]\n",
+                 "[--reals N] [--multi-fidelity] [--pattern-classes] [--config FILE]\n",
                  argv[0]);
     return 64;
   }
@@ -22,6 +26,7 @@ int main(int argc, char** argv) {
   options.waves = 5;
   options.per_wave = 500;
   bool incomplete = false;
+  std::string config;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--waves" && i + 1 < argc) {
@@ -36,6 +41,8 @@ int main(int argc, char** argv) {
       options.multi_fidelity = true;
     } else if (arg == "--pattern-classes") {
       options.pattern_classes = true;
+    } else if (arg == "--config" && i + 1 < argc) {
+      config = argv[++i];
     } else if (arg == "--no-curves") {
       options.outputs = false;
     } else {
@@ -44,8 +51,19 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    HistoryStore store =
-        HistoryStore::Create(argv[1], testing::MakeFakeMetadata(options), /*overwrite=*/true);
+    RunMetadata metadata = testing::MakeFakeMetadata(options);
+    if (!config.empty()) {
+      std::ifstream in(config);
+      std::stringstream text;
+      text << in.rdbuf();
+      if (!in) {
+        std::fprintf(stderr, "combabc_fake_history: cannot read %s\n", config.c_str());
+        return 66;
+      }
+      metadata.config_text = text.str();
+      metadata.config_path = config;
+    }
+    HistoryStore store = HistoryStore::Create(argv[1], metadata, /*overwrite=*/true);
     const RunHistory history = testing::MakeFakeHistory(options);
     const std::size_t n = history.waves.size();
     for (std::size_t t = 0; t < n; ++t) {

@@ -8,6 +8,7 @@ from a hand-made summary.json holding summary.json's "answer" and "checks" (docs
 
 import json
 import os
+import re
 import sys
 import unittest
 
@@ -155,15 +156,94 @@ class CheckLists(unittest.TestCase):
         self.assertEqual(page.checks_html(summary), "")
 
 
-class WholePage(unittest.TestCase):
-    def test_answer_and_checks_come_before_the_waves(self):
+def strip_summary():
+    """The fixture on a strip of 2 sections per edge (its bits padded to 4 clamps), one load at
+    60 % of the length on the centreline, scanned along edge 2."""
+    summary = fixture()
+    bits = summary["answer"]["bits"]
+    bits.append(dict(bits[1], number=4, name="clamp 4", p_one=0.2, verdict="not determined"))
+    summary["strip"] = {"length_m": 0.5, "width_m": 0.04, "clamps_per_edge": 2,
+                        "experiments": [{"name": "x60", "load_x_m": 0.3, "load_y_m": 0.02,
+                                         "scan_from_m": 0.1, "scan_to_m": 0.4,
+                                         "scan_y_m": 0.04}]}
+    return summary
+
+
+def page_of(summary, sensor=True, written=("summary",)):
+    run = dict(summary["run"], summary=summary, config_text=summary["config_text"],
+               stop_limits=[], named=False, experiments=[], components=[], sensor=sensor)
+    return page.page_html([Wave()], run, "importance", list(written), ["png"], "/r/RUN.sqlite")
+
+
+class Strip(unittest.TestCase):
+    def test_sections_are_coloured_by_p_fixed_with_their_verdicts(self):
+        html = page.strip_html(strip_summary())
+        sections = re.findall(r'<g class="section" data-clamp="(\d+)" data-edge="(\d)" '
+                              r'data-p="([^"]*)" data-verdict="([^"]*)">.*?<rect [^>]*'
+                              r'fill="(#[0-9a-f]{6})"', html)
+        self.assertEqual([(c, edge, v) for c, edge, _, v, _ in sections],
+                         [("1", "1", "fixed"), ("2", "1", "free"), ("3", "2", "not determined"),
+                          ("4", "2", "not determined")])
+        # The documented scale: P = 0 at rgb(242, 242, 242), 1 at rgb(27, 120, 55), linear.
+        for _, _, p, _, fill in sections:
+            want = [round(a + (b - a) * float(p)) for a, b in ((242, 27), (242, 120), (242, 55))]
+            got = [int(fill[k:k + 2], 16) for k in (1, 3, 5)]
+            # data-p is P to 2 decimals: within one step of the colour of P itself.
+            self.assertTrue(all(abs(g - w) <= 1 for g, w in zip(got, want)), (p, got, want))
+        self.assertEqual(page.p_colour(0.0), "#f2f2f2")
+        self.assertEqual(page.p_colour(1.0), "#1b7837")
+
+    def test_load_and_scan_line_to_scale(self):
+        html = page.strip_html(strip_summary())
+        plate = re.search(r'<rect class="plate" x="([\d.]+)" y="([\d.]+)" width="([\d.]+)" '
+                          r'height="([\d.]+)"', html)
+        x, y, width, height = (float(v) for v in plate.groups())
+        self.assertAlmostEqual(height / width, 0.04 / 0.5, places=3)  # to scale
+        load = re.search(r'<circle cx="([\d.]+)" cy="([\d.]+)"', html)
+        self.assertAlmostEqual((float(load.group(1)) - x) / width, 0.6, places=3)
+        self.assertAlmostEqual(float(load.group(2)), y + height / 2, places=1)
+        scan = re.search(r'<line class="scan" data-experiment="1" x1="([\d.]+)" y1="([\d.]+)" '
+                         r'x2="([\d.]+)"', html)
+        self.assertAlmostEqual((float(scan.group(1)) - x) / width, 0.2, places=3)
+        self.assertAlmostEqual((float(scan.group(3)) - x) / width, 0.8, places=3)
+        self.assertAlmostEqual(float(scan.group(2)), y, places=1)  # along edge 2, the top
+        self.assertIn("<li><b>1</b> x60: load at 30 cm, 20 mm from edge 1; scanned from 10 to "
+                      "40 cm at 40 mm from edge 1</li>", html)
+
+    def test_the_strip_verdict_and_answer_open_the_page(self):
+        html = page_of(strip_summary(), written=("answer", "summary"))
+        self.assertIn("<p class=\"verdict\"><b>Verdict</b> &mdash; fixed: 1; free: 2; "
+                      "not determined: 3, 4</p>", html)
+        order = [html.index(t) for t in ('<svg class="strip"', 'class="verdict"',
+                                         "<h2>Answer</h2>", '<img src="answer.png"',
+                                         "<h2>Checks</h2>", "<h2>Run</h2>", "<h2>Waves</h2>",
+                                         '<img src="summary.png"')]
+        self.assertEqual(order, sorted(order))
+
+    def test_no_strip_for_other_simulators(self):
+        # A Python (command) simulator's export has "strip": null; and a run that is not the
+        # sensor's never draws one. The rest of the page is the same.
+        summary = strip_summary()
+        for html in (page_of(dict(summary, strip=None)), page_of(summary, sensor=False)):
+            self.assertNotIn("<svg", html)
+            self.assertIn("<h2>Answer</h2>", html)
+            self.assertIn('class="verdict"', html)
+        self.assertIn("bit = 1: clamp 1; bit = 0: clamp 2; not determined: clamp &lt;3&gt;, "
+                      "clamp 4", page_of(summary, sensor=False))
+
+    def test_verdict_line_counts_long_groups(self):
         summary = fixture()
-        run = dict(summary["run"], summary=summary, config_text=summary["config_text"],
-                   stop_limits=[], named=False, experiments=[], components=[], sensor=True)
-        html = page.page_html([Wave()], run, "importance", ["summary"], ["png"], "/r/RUN.sqlite")
-        self.assertLess(html.index("<h2>Run</h2>"), html.index("<h2>Answer</h2>"))
+        summary["answer"]["bits"] = [{"number": k, "verdict": "free"} for k in range(1, 14)]
+        self.assertEqual(page.verdict_line(summary),
+                         "fixed: none; free: 13 clamps; not determined: none")
+
+
+class WholePage(unittest.TestCase):
+    def test_answer_and_checks_come_before_the_run_and_the_waves(self):
+        html = page_of(fixture())
         self.assertLess(html.index("<h2>Answer</h2>"), html.index("<h2>Checks</h2>"))
-        self.assertLess(html.index("<h2>Checks</h2>"), html.index("<h2>Waves</h2>"))
+        self.assertLess(html.index("<h2>Checks</h2>"), html.index("<h2>Run</h2>"))
+        self.assertLess(html.index("<h2>Run</h2>"), html.index("<h2>Waves</h2>"))
         self.assertIn('<img src="summary.png"', html)
         self.assertIn("<td>/r/RUN.sqlite</td>", html)
 

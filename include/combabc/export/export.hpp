@@ -10,6 +10,7 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/export/strip.hpp"
 #include "combabc/history/history_store.hpp"
 
 namespace combabc {
@@ -25,6 +26,9 @@ struct ExportOptions {
   // Where each bit acts, for summary.json's "answer" (export/answer.hpp): one per bit, or empty
   // (positions null). The services layer derives them from the run's config.
   std::vector<std::optional<BitPosition>> bit_positions;
+  // summary.json's "strip" (export/strip.hpp): the sensor's plate, clamp sections, loads and scan
+  // lines, from the run's config; none (null) for other simulators.
+  std::optional<StripLayout> strip;
   // summary.json's "checks" (export/fit_checks.hpp): their options, with the stated noise of the
   // run's noise-aware components, which the services layer reads from the run's config.
   FitCheckOptions checks;

@@ -8,8 +8,10 @@
 
 #include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/export/strip.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/services/executor_factory.hpp"
+#include "combabc/services/report.hpp"
 
 namespace combabc::services {
 
@@ -25,6 +27,7 @@ struct EnumerateRequest {
   int top = 20;                    // configurations in top_configurations.csv
   int max_particles = 100000;      // accepted configurations kept in the history (by mass)
   ExecutorFactory executor;        // empty: threads on this machine
+  ReportProgress on_report_progress;  // as RunRequest's
 };
 
 struct EnumerateOutcome {
@@ -44,6 +47,7 @@ struct EnumerateOutcome {
   FitChecks checks;
   // The answer in numbers, exact (docs/history.md, "The answer"); as RunOutcome::answer.
   std::optional<Answer> answer;
+  std::optional<StripLayout> strip;  // the sensor's strip, as RunOutcome::strip
 };
 
 // Exact ABC posterior of the config's problem at the given (or the config's final) thresholds by

@@ -1,5 +1,9 @@
 #pragma once
 // `combabc report`: a run's figures and index.html.
+//
+// ReportProgress: (0, 0) when the report starts (its export is staged first), then (done, total)
+// each time the script has drawn a figure. It runs on the calling thread.
+#include <functional>
 #include <string>
 
 namespace combabc::services {
@@ -13,9 +17,12 @@ namespace combabc::services {
 // it drew is then published into the directory under OutputDirectory's rules
 // (core/output_files.hpp): a previous report there is replaced, a non-empty directory combabc did
 // not write is refused (before any work) unless `overwrite`. A failure is one combabc::Error line
-// and leaves the directory as it was. Returns the directory.
+// and leaves the directory as it was. Returns the directory. `progress`, when set, hears how far
+// the drawing is (the CLI's "writing report" line).
+using ReportProgress = std::function<void(int done, int total)>;
 std::string WriteReport(const std::string& history_path,
                         const std::string& directory = {},
-                        bool overwrite = false);
+                        bool overwrite = false,
+                        const ReportProgress& progress = {});
 
 }  // namespace combabc::services

@@ -11,9 +11,11 @@
 
 #include "combabc/export/answer.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/export/strip.hpp"
 #include "combabc/samplers/observer.hpp"
 #include "combabc/samplers/run_history.hpp"
 #include "combabc/services/executor_factory.hpp"
+#include "combabc/services/report.hpp"
 
 namespace combabc::services {
 
@@ -34,6 +36,8 @@ struct RunRequest {
   // starts, with the checks before sampling (ComputeBeforeChecks of the stored wave: the same
   // numbers as RunOutcome::checks). May be empty.
   std::function<void(const FitChecks&)> on_checks_before;
+  // Hears how far the report is drawn (services/report.hpp), on the primary. May be empty.
+  ReportProgress on_report_progress;
 };
 
 struct RunOutcome {
@@ -44,6 +48,8 @@ struct RunOutcome {
   // The answer in numbers (docs/history.md, "The answer"); primary only, absent when the history
   // could not be read back (checks says why).
   std::optional<Answer> answer;
+  // The sensor's strip (export/strip.hpp), printed with the answer; none for other simulators.
+  std::optional<StripLayout> strip;
 };
 
 // `progress` sees every wave start, batch and wave end (the CLI's progress bar) and may interrupt.
@@ -66,6 +72,7 @@ struct ResumeRequest {
   ExecutorFactory executor;  // empty: threads on this machine
   // As RunRequest's, when the first wave ends during this resume (a run killed in it).
   std::function<void(const FitChecks&)> on_checks_before;
+  ReportProgress on_report_progress;  // as RunRequest's
 };
 
 // Continues an interrupted or killed run, or one that stopped on a limit (budget, wall time,
