@@ -14,6 +14,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/data/csv_reader.hpp"
 #include "combabc/params/binary_space.hpp"
+#include "combabc/plate/clamp_pattern.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -190,7 +191,7 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
     sim.outputs.name = "displacement";
     // The coordinates: every experiment's output positions (ParseExperiments).
     c->space.names.clear();
-    for (int k = 1; k <= 2 * c->model.clamps_per_edge; ++k) {
+    for (int k = 1; k <= plate::ClampPattern::Size(c->model.clamps_per_edge); ++k) {
       c->space.names.push_back("clamp " + std::to_string(k));
     }
     if (s) {
@@ -252,7 +253,7 @@ std::vector<std::vector<double>> ParseCheapSensor(TableReader& t, CalibrationCon
   low.model = over.model;
   low.model.normalise = c->model.normalise;
   low.simulator.outputs.name = c->simulator.outputs.name;
-  const int clamps = 2 * low.model.clamps_per_edge;
+  const int clamps = plate::ClampPattern::Size(low.model.clamps_per_edge);
   if (clamps != c->space.dimension) {
     const auto set = sources.find("clamps_per_edge");
     throw Error(ErrorKind::kConfig,

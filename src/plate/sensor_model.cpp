@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <optional>
 
-#include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
@@ -331,7 +330,7 @@ void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double
 
 Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> clamps) const {
   const int n = options_.clamps_per_edge;
-  COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
+  const ClampPattern pattern(clamps, n);
   Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
   // Grid intervals per section (2 per element at element order 2).
@@ -341,8 +340,12 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
     const double start = x[static_cast<std::size_t>(s) * m];
     const double end = x[static_cast<std::size_t>(s + 1) * m];
-    if (clamps[s] != 0) c.AddEdgeSupport(Edge::kBottom, start, end, options_.fixed_support);
-    if (clamps[n + s] != 0) c.AddEdgeSupport(Edge::kTop, start, end, options_.fixed_support);
+    if (pattern.Fixed(ClampPattern::kEdgeA, s)) {
+      c.AddEdgeSupport(Edge::kBottom, start, end, options_.fixed_support);
+    }
+    if (pattern.Fixed(ClampPattern::kEdgeB, s)) {
+      c.AddEdgeSupport(Edge::kTop, start, end, options_.fixed_support);
+    }
   }
   c.AddEdgeSupport(Edge::kLeft, options_.short_edge_start);
   c.AddEdgeSupport(Edge::kRight, options_.short_edge_end);

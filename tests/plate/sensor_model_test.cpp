@@ -451,6 +451,64 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   EXPECT_TRUE(SensorOptions{}.IsValid(&why));
 }
 
+// The clamp layout (edge A's sections along x, then edge B's; nonzero = fixed) from both ends.
+TEST(PlateClampPattern, IndicesRoundTrip) {
+  const int n = 5;
+  EXPECT_EQ(ClampPattern::Size(n), 10);
+  for (int bit = 0; bit < ClampPattern::Size(n); ++bit) {
+    const int edge = ClampPattern::EdgeOf(bit, n);
+    const int section = ClampPattern::SectionOf(bit, n);
+    EXPECT_EQ(edge, bit < n ? ClampPattern::kEdgeA : ClampPattern::kEdgeB) << bit;
+    EXPECT_EQ(section, bit % n) << bit;
+    EXPECT_EQ(ClampPattern::Index(edge, section, n), bit) << bit;
+  }
+  // Clamp 7 (1-based) of 2 x 5 is section 2 (1-based) of edge B.
+  EXPECT_EQ(ClampPattern::Index(ClampPattern::kEdgeB, 1, n), 6);
+}
+
+TEST(PlateClampPattern, EncodesAndDecodesEachEdge) {
+  const std::vector<bool> a = {true, false, false, true};
+  const std::vector<bool> b = {false, false, true, true};
+  const std::vector<std::uint8_t> bits = ClampPattern::Encode(a, b);
+  EXPECT_EQ(bits, (std::vector<std::uint8_t>{1, 0, 0, 1, 0, 0, 1, 1}));
+  const ClampPattern pattern(bits, 4);
+  EXPECT_EQ(pattern.sections_per_edge(), 4);
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_EQ(pattern.Fixed(ClampPattern::kEdgeA, s), a[s]) << s;
+    EXPECT_EQ(pattern.Fixed(ClampPattern::kEdgeB, s), b[s]) << s;
+    EXPECT_EQ(pattern.State(s), (a[s] ? 1 : 0) | (b[s] ? 2 : 0)) << s;
+  }
+  // Any nonzero byte fixes its clamp.
+  const std::vector<std::uint8_t> loud = {0, 7, 255, 0};
+  EXPECT_EQ(ClampPattern(loud, 2).State(1), 1);
+  EXPECT_EQ(ClampPattern(loud, 2).State(0), 2);
+  // A boundary node is fixed when either adjoining section fixes it: on edge A boundaries 0-1
+  // (section 0) and 3-4 (section 3); on edge B 2-4 (sections 2 and 3).
+  const std::vector<bool> boundary_a = {true, true, false, true, true};
+  const std::vector<bool> boundary_b = {false, false, true, true, true};
+  for (int c = 0; c <= 4; ++c) {
+    EXPECT_EQ(pattern.BoundaryFixed(ClampPattern::kEdgeA, c), boundary_a[c]) << c;
+    EXPECT_EQ(pattern.BoundaryFixed(ClampPattern::kEdgeB, c), boundary_b[c]) << c;
+  }
+}
+
+TEST(PlateClampPattern, RefusesBitsOfTheWrongSize) {
+  const std::vector<std::uint8_t> bits(7, 0);
+  for (int per_edge : {3, 4, 0, -1}) {
+    try {
+      const ClampPattern pattern(bits, per_edge);
+      FAIL() << "expected combabc::Error for " << per_edge;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+      EXPECT_EQ(e.field(), "clamps");
+      EXPECT_EQ(e.message(),
+                "has 7 entries; " + std::to_string(per_edge) + " sections per edge take " +
+                    std::to_string(2 * per_edge));
+    }
+  }
+  EXPECT_NO_THROW(ClampPattern(std::vector<std::uint8_t>(8, 0), 4));
+}
+
 // The estimate that refuses oversized models must track what the precompute really keeps: above
 // it (it also counts transients) but not so far above that useful meshes are refused.
 TEST(PlateSensorModel, MemoryEstimateBoundsThePrecompute) {

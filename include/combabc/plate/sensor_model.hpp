@@ -33,6 +33,7 @@
 
 #include "combabc/core/thread_pool.hpp"
 #include "combabc/plate/assembly/plate.hpp"
+#include "combabc/plate/clamp_pattern.hpp"
 #include "combabc/plate/elements/laminate.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
 
@@ -263,7 +264,7 @@ class SensorModel {
   SensorModel(const SensorModel&) = delete;
   SensorModel& operator=(const SensorModel&) = delete;
 
-  int num_clamps() const { return 2 * options_.clamps_per_edge; }
+  int num_clamps() const { return ClampPattern::Size(options_.clamps_per_edge); }
   // All load cases' outputs, case after case (SensorOptions::OutputOffset).
   int num_outputs() const { return static_cast<int>(output_positions_.size()); }
   const std::vector<double>& output_positions() const { return output_positions_; }
