@@ -168,14 +168,12 @@ void FinishExternal(TableReader& s,
   e.output_size = sim->outputs.size();
   // The work folder is the run's (set by the services layer); a placeholder passes IsValid here.
   e.work_directory = ".";
-  std::string why;
-  if (!e.IsValid(sim->kind, &why)) {
-    const std::string text = why.substr(why.find("::") + 2);
-    const std::string field = text.substr(0, text.find_first_of(" ="));
+  ValidationError error;
+  if (!e.IsValid(sim->kind, &error)) {
     const std::map<std::string, std::string> keys = {
         {"argv", "argv"}, {"params", "params"}, {"results", "results"}};
-    const auto it = keys.find(field);
-    s.Fail(it != keys.end() ? it->second : "kind", text);
+    const auto it = keys.find(error.field);
+    s.Fail(it != keys.end() ? it->second : "kind", error.Detail());
   }
 }
 
@@ -284,8 +282,8 @@ std::vector<std::vector<double>> ParseCheapSensor(TableReader& t, CalibrationCon
     coordinates.push_back(x.output_coordinates);
   }
   for (const SensorModelPlan& plan : LowFidelitySensorModels(*c)) {
-    std::string why;
-    if (!plan.options.IsValid(&why)) ThrowModelError(why, sources, t.line(), c->path);
+    ValidationError error;
+    if (!plan.options.IsValid(&error)) ThrowModelError(error, sources, t.line(), c->path);
   }
   return coordinates;
 }

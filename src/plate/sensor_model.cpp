@@ -141,10 +141,9 @@ std::string DefaultPrecomputeCache() {
 
 SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& precompute)
     : options_(options) {
-  std::string why;
-  if (!options_.IsValid(&why)) {
-    const std::string field = why.substr(0, why.find(' '));
-    throw Error(ErrorKind::kConfig, why, "", 0, field);
+  ValidationError error;
+  if (!options_.IsValid(&error)) {
+    throw Error(ErrorKind::kConfig, error.Message(), "", 0, error.owner + "::" + error.field);
   }
   plate_ = std::make_unique<Plate>(SensorGrid(options_),
                                    EquivalentSingleLayer(options_.layers),

@@ -451,6 +451,41 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   EXPECT_TRUE(SensorOptions{}.IsValid(&why));
 }
 
+// The parts of a failed check, as the config reads them to find the key to blame: the field with
+// its index or layer, the value as written, and the constraint; the sentence is made of them.
+TEST(PlateSensorModel, InvalidOptionsGiveTheirParts) {
+  SensorOptions o;
+  o.layers[2].thickness = 2.0;
+  ValidationError error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.owner, "SensorOptions");
+  EXPECT_EQ(error.field, "layers[2]::thickness");
+  EXPECT_EQ(error.Member(), "layers");
+  EXPECT_EQ(error.value, "2");
+  EXPECT_EQ(error.constraint, "must be in [1e-9, 1] m");
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, error.Message());
+  o = SensorOptions{};
+  o.load_cases[0].output_positions.push_back(1.0);
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.field, "output_positions[91]");
+  EXPECT_EQ(error.value, "1");
+  o = SensorOptions{};
+  o.memory_limit_bytes = 1e6;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.field, "memory_limit_bytes");
+  EXPECT_EQ(error.value, "1e+06");
+  EXPECT_EQ(error.constraint.rfind("the model would need about", 0), 0u) << error.constraint;
+  // A layer on its own names itself, or the owner its caller gives.
+  Layer layer;
+  layer.density = 0.0;
+  EXPECT_FALSE(layer.IsValid(&error));
+  EXPECT_EQ(error.Message(), "Layer::density = 0; must be in [1e-3, 1e5] kg/m^3");
+  EXPECT_FALSE(layer.IsValid(&why, "Core"));
+  EXPECT_EQ(why, "Core::density = 0; must be in [1e-3, 1e5] kg/m^3");
+}
+
 // The clamp layout (edge A's sections along x, then edge B's; nonzero = fixed) from both ends.
 TEST(PlateClampPattern, IndicesRoundTrip) {
   const int n = 5;
