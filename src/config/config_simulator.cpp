@@ -14,7 +14,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/data/csv_reader.hpp"
 #include "combabc/params/binary_space.hpp"
-#include "combabc/plate/clamp_pattern.hpp"
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {

@@ -32,8 +32,8 @@
 #include <Eigen/Dense>
 
 #include "combabc/core/thread_pool.hpp"
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "combabc/plate/assembly/plate.hpp"
-#include "combabc/plate/clamp_pattern.hpp"
 #include "combabc/plate/elements/laminate.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
 

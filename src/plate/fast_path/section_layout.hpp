@@ -17,8 +17,8 @@
 
 #include <Eigen/Dense>
 
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "combabc/plate/assembly/plate.hpp"
-#include "combabc/plate/clamp_pattern.hpp"
 
 namespace combabc::plate {
 
