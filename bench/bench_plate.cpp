@@ -131,7 +131,7 @@ BENCHMARK(BM_SensorPrecomputeLoadCases)->DenseRange(1, 4)->Unit(benchmark::kMill
 void BM_SensorProfileFastKernels(benchmark::State& state) {
   SensorOptions options;
   options.vector_kernels = static_cast<combabc::plate::VectorKernels>(state.range(0));
-  if (!options.IsValid(nullptr)) {
+  if (combabc::ValidationError error; !options.IsValid(&error)) {
     state.SkipWithError("this CPU lacks the instruction set");
     return;
   }

@@ -1,6 +1,5 @@
 #include "combabc/config/config.hpp"
 
-#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -10,6 +9,7 @@
 
 #include "combabc/core/bounded_read.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/core/validation_error.hpp"
 #include "combabc/params/binary_space.hpp"
 #include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/samplers/run_history.hpp"
@@ -89,34 +89,30 @@ std::string SamplerKeyOf(const std::string& field) {
   return it != keys.end() ? it->second : "sampler";
 }
 
-// A failed IsValid() message reads "SmcOptions::field = value; constraint" (or "...::field.sub
-// has ..."): report it at the config key that set that field, in the config's words, so C++
-// field names never reach the user ("sampler.waves: is 0; must be >= 1").
-[[noreturn]] void ThrowAttributed(const std::string& why,
-                                  const std::string& prefix,
+// Reports a failed SmcOptions / BinarySpaceOptions check at the config key that set its field, in
+// the config's words, so C++ field names never reach the user ("sampler.waves: is 0; must be >=
+// 1"): the key of the member the field lies in ("tempering" of "tempering.values"), and below it
+// the rest of the field ("values has 1 entries; ...", "[0] has zero prior mass: ...").
+[[noreturn]] void ThrowAttributed(const ValidationError& error,
                                   const std::map<std::string, Source>& map,
                                   const Source& fallback,
                                   const std::string& path) {
-  std::size_t end = why.rfind(prefix, 0) == 0 ? prefix.size() : 0;
-  const std::size_t begin = end;
-  while (end < why.size() && (std::isalnum(static_cast<unsigned char>(why[end])) ||
-                              why[end] == '_' || why[end] == '[' || why[end] == ']')) {
-    ++end;
-  }
-  const std::string field = why.substr(begin, end - begin);
-  const std::string base = field.substr(0, field.find('['));
-  auto it = map.find(field);
+  const std::size_t dot = error.field.find('.');
+  const std::string member = error.field.substr(0, dot);  // "tied[0]", "proposal"
+  const std::string below = dot == std::string::npos ? "" : error.field.substr(dot + 1);
+  const std::string base = member.substr(0, member.find('['));  // "tied"
+  auto it = map.find(member);
   if (it == map.end()) it = map.find(base);
   const bool set_by_user = it != map.end();
   const std::string key = set_by_user ? it->second.key : SamplerKeyOf(base);
   const int line = set_by_user ? it->second.line : fallback.line;
-  std::string detail = why.substr(end);
-  if (detail.rfind(" = ", 0) == 0) {
-    detail = "is " + detail.substr(3);
+  std::string detail;
+  if (below.empty() && !error.value.empty()) {
+    detail = "is " + error.value + "; " + error.constraint;
   } else {
-    // "[2] = ...", ".values has ...": keep the part below the key.
-    if (!detail.empty() && (detail.front() == '.' || detail.front() == ' ')) detail.erase(0, 1);
-    if (field != base) detail = field.substr(base.size()) + " " + detail;
+    detail = below.empty() ? error.constraint
+                           : ValidationError{"", below, error.value, error.constraint}.Detail();
+    if (member != base) detail = member.substr(base.size()) + " " + detail;
   }
   throw Error(ErrorKind::kConfig, detail, path, line, key);
 }
@@ -274,7 +270,8 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   // The default kernel (kind = "auto") as the run records it: the ancestor kernel for a mixed
   // space (a bit whose prior is neither 0 nor 1, and a real), else independent. An invalid space
   // is refused later, naming its key.
-  const bool uncertain = c.space.IsValid(nullptr)
+  ValidationError space_error;
+  const bool uncertain = c.space.IsValid(&space_error)
                              ? AnyUncertainBit(BinarySpace(c.space).free_prior_one())
                              : c.space.dimension > 0;
   c.smc.proposal = ResolvedProposal(c.smc.proposal, uncertain && !c.reals.empty());
@@ -303,9 +300,9 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   root.Finish();
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 
-  std::string why;
-  if (!c.smc.IsValid(&why)) {
-    ThrowAttributed(why, "SmcOptions::", sources.smc, sources.sampler, c.path);
+  // SmcOptions gives its check as a sentence only (src/samplers): read back into its parts.
+  if (std::string why; !c.smc.IsValid(&why)) {
+    ThrowAttributed(ValidationError::FromMessage(why), sources.smc, sources.sampler, c.path);
   }
   if (!c.reals.empty() && c.smc.estimator == Estimator::kPaper) {
     throw Error(ErrorKind::kConfig,
@@ -315,8 +312,8 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
                 sources.sampler.line,
                 "sampler.estimator");
   }
-  if (!c.space.IsValid(&why)) {
-    ThrowAttributed(why, "BinarySpaceOptions::", sources.space, sources.sampler, c.path);
+  if (ValidationError error; !c.space.IsValid(&error)) {
+    ThrowAttributed(error, sources.space, sources.sampler, c.path);
   }
   CheckRunMemory(c, sources);
   return c;

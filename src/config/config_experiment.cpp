@@ -89,8 +89,8 @@ void CheckSensorExperiment(const CalibrationConfig& c,
   plate::SensorOptions one = c.model;
   one.load_cases = {x.load};
   one.frequency_hz = x.frequency_hz;
-  std::string why;
-  if (!one.IsValid(&why)) ThrowModelError(why, sources, x.line, c.path);
+  ValidationError error;
+  if (!one.IsValid(&error)) ThrowModelError(error, sources, x.line, c.path);
 }
 
 // Every component's export columns (d_<name>, eps_<name>: the full name, "<experiment>/<name>"

@@ -168,12 +168,11 @@ void ValidateSchedule(const ScheduleSpec& spec,
                       const std::string& path,
                       const std::string& fallback_key,
                       int fallback_line) {
-  std::string why;
-  if (spec.schedule.IsValid("schedule", num_waves, &why)) return;
-  if (why.rfind("schedule.", 0) == 0) why.erase(0, 9);
+  ValidationError error;
+  if (spec.schedule.IsValid(num_waves, &error)) return;
   const bool known = !spec.source.key.empty();
   throw Error(ErrorKind::kConfig,
-              why,
+              error.Detail(),
               path,
               known ? spec.source.line : fallback_line,
               known ? spec.source.key : fallback_key);

@@ -77,19 +77,16 @@ std::string ModelKeyOf(const std::string& field) {
   return it != keys.end() ? it->second : "model";
 }
 
-// Reports a failed SensorOptions::IsValid ("SensorOptions::field = value; constraint") at the
-// config key the user wrote (or would write), in the config's words: "file:line: model.load.x: is
-// 1.2; must lie on the plate, in [0, 0.9] m". C++ field names never reach the user.
+// Reports a failed SensorOptions::IsValid at the config key the user wrote (or would write), in
+// the config's words: "file:line: model.load.x: is 1.2; must lie on the plate, in [0, 0.9] m".
+// C++ field names never reach the user.
 }  // namespace
 
-[[noreturn]] void ThrowModelError(const std::string& why,
+[[noreturn]] void ThrowModelError(const ValidationError& error,
                                   const std::map<std::string, Source>& sources,
                                   int model_line,
                                   const std::string& path) {
-  const std::string prefix = "SensorOptions::";
-  const std::size_t equals = why.find(" = ");
-  std::string field = why.substr(prefix.size(), equals - prefix.size());
-  std::string detail = why.substr(equals + 3);  // "value; constraint"
+  const std::string& field = error.field;
   // output_positions[12] and output_positions.size() are both set by positions or spacing.
   std::string base = field;
   if (base.rfind("output_positions", 0) == 0) base = "output_positions";
@@ -97,21 +94,20 @@ std::string ModelKeyOf(const std::string& field) {
   const bool set_by_user = it != sources.end();
   const std::string key = set_by_user ? it->second.key : ModelKeyOf(base);
   const int line = set_by_user ? it->second.line : model_line;
+  const std::string& value = error.value;
+  const std::string constraint = "; " + error.constraint;
+  std::string detail;
   if (field.rfind("output_positions[", 0) == 0) {
-    detail = "entry " + field.substr(17, field.find(']') - 17) + " is " + detail;
+    detail = "entry " + field.substr(17, field.find(']') - 17) + " is " + value + constraint;
   } else if (field == "output_positions.size()") {
-    detail = "gives " + detail.substr(0, detail.find(';')) + " positions" +
-             detail.substr(detail.find(';'));
+    detail = "gives " + value + " positions" + constraint;
   } else if (field == "memory_limit_bytes") {  // bytes inside, GB in the config
-    const std::size_t semicolon = detail.find(';');
-    detail = "is " + Number(std::stod(detail.substr(0, semicolon)) / 1e9) +
-             (set_by_user ? "" : " (the default)") + detail.substr(semicolon);
+    detail =
+        "is " + Number(std::stod(value) / 1e9) + (set_by_user ? "" : " (the default)") + constraint;
   } else {
-    const std::size_t semicolon = detail.find(';');
-    detail = "is " + detail.substr(0, semicolon) + (set_by_user ? "" : " (the default)") +
-             detail.substr(semicolon);
+    detail = "is " + value + (set_by_user ? "" : " (the default)") + constraint;
   }
-  if (detail.find("of memory") != std::string::npos) {
+  if (error.constraint.find("of memory") != std::string::npos) {
     // "Lower it" would tell a user to lower the very limit that is too low.
     detail += field == "memory_limit_bytes"
                   ? "; raise it, or coarsen [model.mesh] (docs/config.md, \"Limits\")"
@@ -337,8 +333,8 @@ void ParseModelSection(TableReader& root,
     t->Finish();
   }
 
-  std::string why;
-  if (!m.IsValid(&why)) ThrowModelError(why, sources, t ? t->line() : 1, config->path);
+  ValidationError error;
+  if (!m.IsValid(&error)) ThrowModelError(error, sources, t ? t->line() : 1, config->path);
 }
 
 }  // namespace combabc::config_internal

@@ -16,6 +16,7 @@
 
 #include "combabc/core/enum_names.hpp"
 #include "combabc/core/error.hpp"
+#include "combabc/core/validation_error.hpp"
 
 namespace combabc::config_internal {
 
@@ -149,7 +150,7 @@ void ParseOutputTable(TableReader& o,
                       std::map<std::string, Source>* sources);
 // Reports a failed SensorOptions::IsValid at the config key that set the field (sources), or
 // the key that would set it, at `fallback_line` (config_model.cpp).
-[[noreturn]] void ThrowModelError(const std::string& why,
+[[noreturn]] void ThrowModelError(const ValidationError& error,
                                   const std::map<std::string, Source>& sources,
                                   int fallback_line,
                                   const std::string& path);

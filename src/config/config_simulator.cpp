@@ -14,6 +14,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/data/csv_reader.hpp"
 #include "combabc/params/binary_space.hpp"
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "config_reader.hpp"
 
 namespace combabc::config_internal {
@@ -167,14 +168,12 @@ void FinishExternal(TableReader& s,
   e.output_size = sim->outputs.size();
   // The work folder is the run's (set by the services layer); a placeholder passes IsValid here.
   e.work_directory = ".";
-  std::string why;
-  if (!e.IsValid(sim->kind, &why)) {
-    const std::string text = why.substr(why.find("::") + 2);
-    const std::string field = text.substr(0, text.find_first_of(" ="));
+  ValidationError error;
+  if (!e.IsValid(sim->kind, &error)) {
     const std::map<std::string, std::string> keys = {
         {"argv", "argv"}, {"params", "params"}, {"results", "results"}};
-    const auto it = keys.find(field);
-    s.Fail(it != keys.end() ? it->second : "kind", text);
+    const auto it = keys.find(error.field);
+    s.Fail(it != keys.end() ? it->second : "kind", error.Detail());
   }
 }
 
@@ -190,7 +189,7 @@ void ParseSimulatorSection(TableReader& root, CalibrationConfig* c) {
     sim.outputs.name = "displacement";
     // The coordinates: every experiment's output positions (ParseExperiments).
     c->space.names.clear();
-    for (int k = 1; k <= 2 * c->model.clamps_per_edge; ++k) {
+    for (int k = 1; k <= plate::ClampPattern::Size(c->model.clamps_per_edge); ++k) {
       c->space.names.push_back("clamp " + std::to_string(k));
     }
     if (s) {
@@ -252,7 +251,7 @@ std::vector<std::vector<double>> ParseCheapSensor(TableReader& t, CalibrationCon
   low.model = over.model;
   low.model.normalise = c->model.normalise;
   low.simulator.outputs.name = c->simulator.outputs.name;
-  const int clamps = 2 * low.model.clamps_per_edge;
+  const int clamps = plate::ClampPattern::Size(low.model.clamps_per_edge);
   if (clamps != c->space.dimension) {
     const auto set = sources.find("clamps_per_edge");
     throw Error(ErrorKind::kConfig,
@@ -283,8 +282,8 @@ std::vector<std::vector<double>> ParseCheapSensor(TableReader& t, CalibrationCon
     coordinates.push_back(x.output_coordinates);
   }
   for (const SensorModelPlan& plan : LowFidelitySensorModels(*c)) {
-    std::string why;
-    if (!plan.options.IsValid(&why)) ThrowModelError(why, sources, t.line(), c->path);
+    ValidationError error;
+    if (!plan.options.IsValid(&error)) ThrowModelError(error, sources, t.line(), c->path);
   }
   return coordinates;
 }

@@ -437,19 +437,14 @@ FitVerdict Verdict(const ExperimentView& v,
   return fit;
 }
 
-// After sampling: the final complete wave's curves against the data and the noise.
-void CheckAfter(const RunMetadata& m,
-                const ExperimentView& v,
-                const RunHistory& h,
-                const FitCheckOptions& options,
-                FitChecks& checks) {
-  const std::string prefix = Prefix(v.slice.name);
-  const NoiseLevel noise = NoiseOf(v, options);
-  checks.noise.push_back(noise);
+using PlainSlotList = std::vector<std::pair<std::size_t, std::string>>;
 
-  bool noise_aware = false;
-  const auto plain = PlainSlots(m, v.slice, &noise_aware);
-  // threshold_stalled: the last complete waves barely cut a plain threshold.
+// threshold_stalled: the last complete waves barely cut a plain threshold.
+void CheckThresholdStalled(const std::string& prefix,
+                           const PlainSlotList& plain,
+                           const RunHistory& h,
+                           const FitCheckOptions& options,
+                           FitChecks& checks) {
   std::vector<const WaveRecord*> complete;
   for (const WaveRecord& w : h.waves) {
     if (w.complete) complete.push_back(&w);
@@ -476,19 +471,116 @@ void CheckAfter(const RunMetadata& m,
       }
     }
   }
+}
 
+// poor_fit: the best curve's verdict, against the stated sigma or the noise estimate.
+void WarnPoorFit(const std::string& prefix,
+                 const FitVerdict& fit,
+                 double noise,
+                 FitChecks& checks) {
+  const std::string against = fit.sigma_source == "stated"
+                                  ? "the noise-aware components' sigma (" + Short(fit.sigma) +
+                                        "; the noise estimated from the data is " + Short(noise) +
+                                        ")"
+                                  : "the noise estimated from the data (" + Short(noise) + ")";
+  const std::string cause =
+      fit.sigma_source == "stated"
+          ? "the stated sigma is too small for what the model can reach, and the posterior "
+            "too narrow ([metric] sigma_noise, sigma_model for the model's discrepancy), or "
+            "the model cannot reproduce the data; likely causes: "
+          : "the model cannot reproduce the data; likely causes: ";
+  Warn(checks.after,
+       "poor_fit",
+       prefix + "the best accepted curve misses the data by RMS " + Short(fit.best_rms) + ", " +
+           Short(fit.ratio) + " times " + against + " over " + std::to_string(fit.points) +
+           " points, as large by noise alone with probability " + Short(fit.p_value) + ": " +
+           cause +
+           "units ([model] length, [data] position_unit, displacement_unit, normalise), the "
+           "load ([model.load] x, amplitude), the measured window ([data] window), or too few "
+           "waves");
+}
+
+// The curves of the final wave's particles at the data's positions (those that keep one), with
+// their weights' positive part: a multi-fidelity wave's signed weights as its posterior draws use
+// them (a quantile needs a distribution; docs/history.md, "Checks").
+void FinalCurves(const ExperimentView& v,
+                 const WaveRecord& final_wave,
+                 std::vector<std::vector<double>>* curves,
+                 std::vector<double>* weights) {
+  for (const Particle& p : final_wave.particles) {
+    std::vector<double> curve = CurveAt(v, p);
+    if (curve.empty()) continue;
+    curves->push_back(std::move(curve));
+    weights->push_back(std::max(p.weight, 0.0));
+  }
+}
+
+// threshold_below_noise: the final wave's curves all fit within L log-likelihood units of the
+// best of them (sums of squares within 2 sigma^2 L), and earlier waves hold curves just as good
+// that it no longer accepts: the threshold rejects what the noise cannot tell apart. The caller
+// checks it only with a good fit (else the model, not the noise, is what the threshold meets) and
+// a resolved noise (else its estimate may be too high).
+void CheckThresholdBelowNoise(const std::string& prefix,
+                              const ExperimentView& v,
+                              const RunHistory& h,
+                              const WaveRecord* final_wave,
+                              double best_rms,
+                              double worst_rms,
+                              double noise,
+                              const FitCheckOptions& options,
+                              FitChecks& checks) {
+  const auto n = static_cast<double>(v.y.size());
+  const double unit = 2.0 * noise * noise;
+  const double best_ss = n * best_rms * best_rms;
+  const double worst_ss = n * worst_rms * worst_rms;
+  const double band = (worst_ss - best_ss) / unit;
+  std::set<std::pair<std::vector<std::uint8_t>, std::vector<double>>> accepted;
+  for (const Particle& q : final_wave->particles) accepted.emplace(q.theta.bits, q.theta.reals);
+  std::size_t dropped = 0;
+  for (const WaveRecord& w : h.waves) {
+    if (&w == final_wave) continue;
+    for (const Particle& p : w.particles) {
+      const std::vector<double> curve = CurveAt(v, p);
+      if (curve.empty()) continue;
+      const double rms = Rms(curve, v.y);
+      const double ss = n * rms * rms;
+      if (ss > worst_ss && ss <= best_ss + options.overfit_loglik * unit &&
+          accepted.count({p.theta.bits, p.theta.reals}) == 0) {
+        ++dropped;
+      }
+    }
+  }
+  if (band < options.overfit_loglik && dropped > 0) {
+    Warn(checks.after,
+         "threshold_below_noise",
+         prefix + "the plain threshold has fallen below the noise: the final wave's curves fit " +
+             "the data within " + Short(band) + " log-likelihood units of the best (RMS " +
+             Short(best_rms) + " to " + Short(worst_rms) + ", sigma " + Short(noise) +
+             " estimated from the data) and it rejects " + std::to_string(dropped) +
+             " earlier particles the noise cannot tell from them, so the posterior is "
+             "overconfident; use [metric] noise = \"gaussian\" (the noise-aware acceptance) or "
+             "fewer [sampler] waves");
+  }
+}
+
+// After sampling: the final complete wave's curves against the data and the noise.
+void CheckAfter(const RunMetadata& m,
+                const ExperimentView& v,
+                const RunHistory& h,
+                const FitCheckOptions& options,
+                FitChecks& checks) {
+  const std::string prefix = Prefix(v.slice.name);
+  const NoiseLevel noise = NoiseOf(v, options);
+  checks.noise.push_back(noise);
+
+  bool noise_aware = false;
+  const auto plain = PlainSlots(m, v.slice, &noise_aware);
+  CheckThresholdStalled(prefix, plain, h, options, checks);
   const WaveRecord* final_wave = FinalWave(h);
   if (final_wave == nullptr || v.y.empty()) return;
   std::vector<std::vector<double>> curves;
   std::vector<double> weights;
-  for (const Particle& p : final_wave->particles) {
-    std::vector<double> curve = CurveAt(v, p);
-    if (curve.empty()) continue;
-    curves.push_back(std::move(curve));
-    // A multi-fidelity wave's signed weights: their positive part, as its posterior draws use
-    // (a quantile needs a distribution; docs/history.md, "Checks").
-    weights.push_back(std::max(p.weight, 0.0));
-  }
+  FinalCurves(v, *final_wave, &curves, &weights);
   if (curves.empty()) {
     Note(checks.after,
          "no_curves",
@@ -548,66 +640,11 @@ void CheckAfter(const RunMetadata& m,
   }
   checks.fit.push_back(Verdict(v, curves[best], best_rms, noise, options));
   const FitVerdict& fit = checks.fit.back();
-  if (fit.verdict == "poor") {
-    const std::string against =
-        fit.sigma_source == "stated"
-            ? "the noise-aware components' sigma (" + Short(fit.sigma) +
-                  "; the noise estimated from the data is " + Short(noise.value) + ")"
-            : "the noise estimated from the data (" + Short(noise.value) + ")";
-    const std::string cause =
-        fit.sigma_source == "stated"
-            ? "the stated sigma is too small for what the model can reach, and the posterior "
-              "too narrow ([metric] sigma_noise, sigma_model for the model's discrepancy), or "
-              "the model cannot reproduce the data; likely causes: "
-            : "the model cannot reproduce the data; likely causes: ";
-    Warn(checks.after,
-         "poor_fit",
-         prefix + "the best accepted curve misses the data by RMS " + Short(fit.best_rms) + ", " +
-             Short(fit.ratio) + " times " + against + " over " + std::to_string(fit.points) +
-             " points, as large by noise alone with probability " + Short(fit.p_value) + ": " +
-             cause +
-             "units ([model] length, [data] position_unit, displacement_unit, normalise), the "
-             "load ([model.load] x, amplitude), the measured window ([data] window), or too few "
-             "waves");
-  }
-  // threshold_below_noise: the final wave's curves all fit within L log-likelihood units of the
-  // best of them (sums of squares within 2 sigma^2 L), and earlier waves hold curves just as good
-  // that it no longer accepts: the threshold rejects what the noise cannot tell apart. Not with a
-  // poor fit (then the model, not the noise, is what the threshold meets), nor when the noise is
-  // not resolved (its estimate may be too high).
+  if (fit.verdict == "poor") WarnPoorFit(prefix, fit, noise.value, checks);
+  // Not with a poor fit, nor when the noise is not resolved (CheckThresholdBelowNoise).
   if (!noise_aware && !plain.empty() && noise.value > 0.0 && resolved && fit.verdict == "good") {
-    const auto n = static_cast<double>(v.y.size());
-    const double unit = 2.0 * noise.value * noise.value;
-    const double best_ss = n * best_rms * best_rms;
-    const double worst_ss = n * worst_rms * worst_rms;
-    const double band = (worst_ss - best_ss) / unit;
-    std::set<std::pair<std::vector<std::uint8_t>, std::vector<double>>> accepted;
-    for (const Particle& q : final_wave->particles) accepted.emplace(q.theta.bits, q.theta.reals);
-    std::size_t dropped = 0;
-    for (const WaveRecord& w : h.waves) {
-      if (&w == final_wave) continue;
-      for (const Particle& p : w.particles) {
-        const std::vector<double> curve = CurveAt(v, p);
-        if (curve.empty()) continue;
-        const double rms = Rms(curve, v.y);
-        const double ss = n * rms * rms;
-        if (ss > worst_ss && ss <= best_ss + options.overfit_loglik * unit &&
-            accepted.count({p.theta.bits, p.theta.reals}) == 0) {
-          ++dropped;
-        }
-      }
-    }
-    if (band < options.overfit_loglik && dropped > 0) {
-      Warn(checks.after,
-           "threshold_below_noise",
-           prefix + "the plain threshold has fallen below the noise: the final wave's curves fit " +
-               "the data within " + Short(band) + " log-likelihood units of the best (RMS " +
-               Short(best_rms) + " to " + Short(worst_rms) + ", sigma " + Short(noise.value) +
-               " estimated from the data) and it rejects " + std::to_string(dropped) +
-               " earlier particles the noise cannot tell from them, so the posterior is "
-               "overconfident; use [metric] noise = \"gaussian\" (the noise-aware acceptance) or "
-               "fewer [sampler] waves");
-    }
+    CheckThresholdBelowNoise(
+        prefix, v, h, final_wave, best_rms, worst_rms, noise.value, options, checks);
   }
 }
 

@@ -9,43 +9,58 @@
 namespace combabc {
 
 bool BinarySpaceOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& msg) {
-    if (why) *why = "BinarySpaceOptions::" + msg;
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
+}
+
+bool BinarySpaceOptions::IsValid(ValidationError* error) const {
+  // fail(field, value, constraint); with no value, constraint is what follows the field.
+  auto fail = [&](const std::string& field, const std::string& value, const std::string& rest) {
+    if (error) *error = {"BinarySpaceOptions", field, value, rest};
     return false;
   };
   // Zero bits is a continuous-only space: the binary part is then one empty configuration.
-  if (dimension < 0) return fail("dimension = " + std::to_string(dimension) + "; must be >= 0");
+  if (dimension < 0) return fail("dimension", std::to_string(dimension), "must be >= 0");
   if (!prior_one.empty() && static_cast<int>(prior_one.size()) != dimension) {
-    return fail("prior_one has " + std::to_string(prior_one.size()) +
-                " entries; must have dimension = " + std::to_string(dimension));
+    return fail("prior_one",
+                "",
+                "has " + std::to_string(prior_one.size()) +
+                    " entries; must have dimension = " + std::to_string(dimension));
   }
   // A prior of exactly 0 or 1 fixes the bit: allowed, but the bit then carries no information.
   auto bad_prob = [](double p) { return !(p >= 0.0 && p <= 1.0); };
   if (bad_prob(default_prior_one)) {
-    return fail("default_prior_one = " + std::to_string(default_prior_one) + "; must be in [0, 1]");
+    return fail("default_prior_one", std::to_string(default_prior_one), "must be in [0, 1]");
   }
   for (std::size_t k = 0; k < prior_one.size(); ++k) {
     if (bad_prob(prior_one[k])) {
-      return fail("prior_one[" + std::to_string(k) + "] = " + std::to_string(prior_one[k]) +
-                  "; must be in [0, 1]");
+      return fail("prior_one[" + std::to_string(k) + "]",
+                  std::to_string(prior_one[k]),
+                  "must be in [0, 1]");
     }
   }
   if (!names.empty() && static_cast<int>(names.size()) != dimension) {
-    return fail("names has " + std::to_string(names.size()) +
-                " entries; must have dimension = " + std::to_string(dimension));
+    return fail("names",
+                "",
+                "has " + std::to_string(names.size()) +
+                    " entries; must have dimension = " + std::to_string(dimension));
   }
   std::vector<int> group_of(static_cast<std::size_t>(dimension), -1);
   for (std::size_t g = 0; g < tied.size(); ++g) {
     const std::string where = "tied[" + std::to_string(g) + "]";
-    if (tied[g].size() < 2) return fail(where + " has fewer than 2 bits; a tie needs at least 2");
+    if (tied[g].size() < 2) return fail(where, "", "has fewer than 2 bits; a tie needs at least 2");
     for (int bit : tied[g]) {
       if (bit < 0 || bit >= dimension) {
-        return fail(where + " contains bit " + std::to_string(bit) + "; must be in [0, " +
-                    std::to_string(dimension - 1) + "]");
+        return fail(where,
+                    "",
+                    "contains bit " + std::to_string(bit) + "; must be in [0, " +
+                        std::to_string(dimension - 1) + "]");
       }
       if (group_of[bit] >= 0) {
-        return fail(where + " contains bit " + std::to_string(bit) + ", already in tied[" +
-                    std::to_string(group_of[bit]) + "]; groups must be disjoint");
+        return fail(where,
+                    "",
+                    "contains bit " + std::to_string(bit) + ", already in tied[" +
+                        std::to_string(group_of[bit]) + "]; groups must be disjoint");
       }
       group_of[bit] = static_cast<int>(g);
     }
@@ -56,7 +71,7 @@ bool BinarySpaceOptions::IsValid(std::string* why) const {
       all_zero *= 1.0 - p;
     }
     if (all_one + all_zero <= 0.0) {
-      return fail(where + " has zero prior mass: its bits' priors cannot all be equal");
+      return fail(where, "", "has zero prior mass: its bits' priors cannot all be equal");
     }
   }
   return true;

@@ -327,40 +327,53 @@ std::shared_ptr<const JointPrior> RestrictJointPrior(std::shared_ptr<const Joint
                                             true);
 }
 
-JointPriorMoments CheckJointPrior(const JointPrior& prior,
-                                  std::span<const std::string> names,
-                                  std::span<const double> low,
-                                  std::span<const double> high) {
-  const auto d = static_cast<std::size_t>(prior.dimension());
-  COMBABC_CHECK(names.size() == d && low.size() == d && high.size() == d);
-  auto fail = [&](const std::string& field, const std::string& why) {
-    throw Error(ErrorKind::kConfig, "prior: " + why, "", 0, field);
-  };
-  // Before any draw: the check's cost grows as d^2 (12 s at d = 500), for a verdict that beyond
-  // ~25 Gaussian dimensions is a refusal anyway.
-  if (d > static_cast<std::size_t>(kMaxJointPriorDimension)) {
-    fail(names.front() + ", ..., " + names.back(),
-         "the joint prior covers " + std::to_string(d) + " reals; at most " +
-             std::to_string(kMaxJointPriorDimension) +
-             " can be checked against its sampler: split it into independent groups");
-  }
-  RandomStream rng(kCheckSeed, 0, 0);
+namespace {
 
-  // 1. The sampler's draws: finite, inside the bounds, of finite density.
-  std::vector<double> draws(kDraws * d);
+// Refuses the joint prior of CheckJointPrior at `field`.
+[[noreturn]] void FailCheck(const std::string& field, const std::string& why) {
+  throw Error(ErrorKind::kConfig, "prior: " + why, "", 0, field);
+}
+
+// The sampler's draws (kDraws x d, row-major), their moments, covariance (d x d) and its Cholesky
+// factor: step 1 of CheckJointPrior.
+struct SamplerDraws {
+  std::vector<double> draws;
+  JointPriorMoments moments;
+  std::vector<double> cov;
+  std::vector<double> l;
+};
+
+// The reference draws (kReferenceDraws x d) and their importance weights p / r, shifted by the
+// largest (w) with their sum: step 2 of CheckJointPrior.
+struct ReferenceSample {
+  std::vector<double> ref;
+  std::vector<double> w;
+  double sum_w = 0.0;
+};
+
+// 1. The sampler's draws: finite, inside the bounds, of finite density, spread, of full rank.
+SamplerDraws DrawFromSampler(const JointPrior& prior,
+                             std::span<const std::string> names,
+                             std::span<const double> low,
+                             std::span<const double> high,
+                             RandomStream& rng) {
+  const auto d = static_cast<std::size_t>(prior.dimension());
+  SamplerDraws s;
+  std::vector<double>& draws = s.draws;
+  draws.resize(kDraws * d);
   for (std::size_t i = 0; i < kDraws; ++i) {
     const std::span<double> x(draws.data() + i * d, d);
     prior.Sample(rng, x);
     for (std::size_t k = 0; k < d; ++k) {
       if (!(x[k] >= low[k] && x[k] <= high[k]) || !std::isfinite(x[k])) {
-        fail(names[k],
-             "the sampler drew " + Shortest(x[k]) + ", outside the support [" + Shortest(low[k]) +
-                 ", " + Shortest(high[k]) + "]");
+        FailCheck(names[k],
+                  "the sampler drew " + Shortest(x[k]) + ", outside the support [" +
+                      Shortest(low[k]) + ", " + Shortest(high[k]) + "]");
       }
     }
     const double lp = prior.LogDensity(x);
     if (!std::isfinite(lp)) {
-      fail(
+      FailCheck(
           Joined(names),
           "the log density is " + Shortest(lp) + " at a point the sampler drew (" + Joined(names) +
               " = " +
@@ -373,8 +386,10 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     }
   }
   // Their means, covariance and fourth central moments.
-  JointPriorMoments moments{std::vector<double>(d, 0.0), std::vector<double>(d, 0.0)};
-  std::vector<double> cov(d * d, 0.0);
+  JointPriorMoments& moments = s.moments;
+  moments = {std::vector<double>(d, 0.0), std::vector<double>(d, 0.0)};
+  std::vector<double>& cov = s.cov;
+  cov.assign(d * d, 0.0);
   const auto n = static_cast<double>(kDraws);
   for (std::size_t i = 0; i < kDraws; ++i) {
     for (std::size_t k = 0; k < d; ++k) moments.mean[k] += draws[i * d + k] / n;
@@ -391,22 +406,38 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     bool spread = false;
     for (std::size_t i = 1; i < kDraws && !spread; ++i) spread = draws[i * d + k] != draws[k];
     if (!spread) {
-      fail(names[k],
-           "the sampler drew " + Shortest(draws[k]) + " every time; a prior needs a spread");
+      FailCheck(names[k],
+                "the sampler drew " + Shortest(draws[k]) + " every time; a prior needs a spread");
     }
     moments.sd[k] = std::sqrt(cov[k * d + k]);
   }
-  std::vector<double> l;
-  if (!Cholesky(cov, d, &l)) {
-    fail(Joined(names),
-         "the sampler's draws lie on a lower-dimensional set (a parameter is a function of the "
-         "others); such a prior has no density");
+  if (!Cholesky(cov, d, &s.l)) {
+    FailCheck(
+        Joined(names),
+        "the sampler's draws lie on a lower-dimensional set (a parameter is a function of the "
+        "others); such a prior has no density");
   }
+  return s;
+}
+
+// 2. Importance sampling under the density from the reference r (a mixture of two normals around
+// the draws' mean): the density must be finite there and integrate to 1.
+ReferenceSample WeighReference(const JointPrior& prior,
+                               std::span<const std::string> names,
+                               std::span<const double> low,
+                               std::span<const double> high,
+                               const SamplerDraws& s,
+                               RandomStream& rng) {
+  const auto d = static_cast<std::size_t>(prior.dimension());
+  const JointPriorMoments& moments = s.moments;
+  const std::vector<double>& l = s.l;
   double log_det_l = 0.0;
   for (std::size_t k = 0; k < d; ++k) log_det_l += std::log(l[k * d + k]);
-
-  // 2. Importance sampling under the density from the reference r: log w = log p - log r.
-  std::vector<double> ref(kReferenceDraws * d), log_w(kReferenceDraws);
+  // log w = log p - log r.
+  ReferenceSample r;
+  std::vector<double>& ref = r.ref;
+  ref.resize(kReferenceDraws * d);
+  std::vector<double> log_w(kReferenceDraws);
   std::vector<double> z(d);
   const auto dd = static_cast<double>(d);
   for (std::size_t j = 0; j < kReferenceDraws; ++j) {
@@ -433,16 +464,18 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     for (std::size_t k = 0; k < d; ++k) inside = inside && y[k] >= low[k] && y[k] <= high[k];
     const double lp = inside ? prior.LogDensity(y) : -kInfinite;
     if (std::isnan(lp) || lp == kInfinite) {
-      fail(Joined(names), "the log density is " + Shortest(lp) + " at a point of the support");
+      FailCheck(Joined(names), "the log density is " + Shortest(lp) + " at a point of the support");
     }
     log_w[j] = lp - log_r;
   }
   const double max_log_w = *std::max_element(log_w.begin(), log_w.end());
   if (!std::isfinite(max_log_w)) {
-    fail(Joined(names), "the log density is -inf wherever the sampler's draws spread");
+    FailCheck(Joined(names), "the log density is -inf wherever the sampler's draws spread");
   }
-  std::vector<double> w(kReferenceDraws);
-  double sum_w = 0.0, sum_w2 = 0.0;
+  std::vector<double>& w = r.w;
+  w.resize(kReferenceDraws);
+  double& sum_w = r.sum_w;
+  double sum_w2 = 0.0;
   for (std::size_t j = 0; j < kReferenceDraws; ++j) {
     w[j] = std::exp(log_w[j] - max_log_w);
     sum_w += w[j];
@@ -450,12 +483,13 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
   }
   const double ess = sum_w * sum_w / sum_w2;
   if (ess < kMinReferenceEss) {
-    fail(Joined(names),
-         "cannot check the sampler against the log density: importance sampling from the draws' "
-         "spread keeps an effective sample of " +
-             Short(ess) + " of " + std::to_string(kReferenceDraws) +
-             " (the density's mass lies where the sampler does not draw, or the group has too "
-             "many dimensions: split it into independent groups)");
+    FailCheck(
+        Joined(names),
+        "cannot check the sampler against the log density: importance sampling from the draws' "
+        "spread keeps an effective sample of " +
+            Short(ess) + " of " + std::to_string(kReferenceDraws) +
+            " (the density's mass lies where the sampler does not draw, or the group has too "
+            "many dimensions: split it into independent groups)");
   }
   // The density's mass: mean of the unshifted weights, which is 1 for a normalised density.
   const auto m = static_cast<double>(kReferenceDraws);
@@ -464,13 +498,27 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
   for (const double wj : w) mass_var += (wj - sum_w / m) * (wj - sum_w / m);
   const double mass_se = std::exp(max_log_w) * std::sqrt(mass_var / (m * (m - 1.0)));
   if (std::fabs(mass - 1.0) > kBound * mass_se + 0.01) {
-    fail(Joined(names),
-         "the density integrates to about " + Short(mass) + " (+- " + Short(mass_se) +
-             "), not 1: normalise the log density, or make the sampler draw from it");
+    FailCheck(Joined(names),
+              "the density integrates to about " + Short(mass) + " (+- " + Short(mass_se) +
+                  "), not 1: normalise the log density, or make the sampler draw from it");
   }
-  // 3. The draws' means and covariances against the density's (self-normalised importance
-  // sampling; delta-method standard errors): the means and variances of each real, and the
-  // covariances of each pair, which a sampler that ignores a correlation gets wrong.
+  return r;
+}
+
+// 3. The draws' means and covariances against the density's (self-normalised importance
+// sampling; delta-method standard errors): the means and variances of each real, and the
+// covariances of each pair, which a sampler that ignores a correlation gets wrong.
+void CompareMoments(std::span<const std::string> names,
+                    const SamplerDraws& s,
+                    const ReferenceSample& r) {
+  const std::size_t d = names.size();
+  const std::vector<double>& draws = s.draws;
+  const JointPriorMoments& moments = s.moments;
+  const std::vector<double>& cov = s.cov;
+  const std::vector<double>& ref = r.ref;
+  const std::vector<double>& w = r.w;
+  const double sum_w = r.sum_w;
+  const auto n = static_cast<double>(kDraws);
   std::vector<double> mean(d, 0.0);
   for (std::size_t j = 0; j < kReferenceDraws; ++j) {
     for (std::size_t k = 0; k < d; ++k) mean[k] += w[j] * ref[j * d + k] / sum_w;
@@ -487,10 +535,10 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
     }
     const double bound = kBound * std::sqrt(se2 + cov[k * d + k] / n);
     if (std::fabs(moments.mean[k] - mean[k]) > bound) {
-      fail(names[k],
-           "the sampler and the log density disagree: the draws' mean is " +
-               Short(moments.mean[k]) + ", the density's " + Short(mean[k]) + " (tolerance " +
-               Short(bound) + ")");
+      FailCheck(names[k],
+                "the sampler and the log density disagree: the draws' mean is " +
+                    Short(moments.mean[k]) + ", the density's " + Short(mean[k]) + " (tolerance " +
+                    Short(bound) + ")");
     }
   }
   for (std::size_t k = 0; k < d; ++k) {
@@ -515,18 +563,40 @@ JointPriorMoments CheckJointPrior(const JointPrior& prior,
       const double bound = kBound * std::sqrt(se2 + draws_var / n);
       if (std::fabs(v - c) <= bound) continue;
       if (i == k) {
-        fail(names[k],
-             "the sampler and the log density disagree: the draws' sd is " + Short(std::sqrt(v)) +
-                 ", the density's " + Short(std::sqrt(c)) + " (variance tolerance " + Short(bound) +
-                 ")");
+        FailCheck(names[k],
+                  "the sampler and the log density disagree: the draws' sd is " +
+                      Short(std::sqrt(v)) + ", the density's " + Short(std::sqrt(c)) +
+                      " (variance tolerance " + Short(bound) + ")");
       }
-      fail(names[k],
-           "the sampler and the log density disagree: the draws' covariance with " + names[i] +
-               " is " + Short(v) + ", the density's " + Short(c) + " (tolerance " + Short(bound) +
-               ")");
+      FailCheck(names[k],
+                "the sampler and the log density disagree: the draws' covariance with " + names[i] +
+                    " is " + Short(v) + ", the density's " + Short(c) + " (tolerance " +
+                    Short(bound) + ")");
     }
   }
-  return moments;
+}
+
+}  // namespace
+
+JointPriorMoments CheckJointPrior(const JointPrior& prior,
+                                  std::span<const std::string> names,
+                                  std::span<const double> low,
+                                  std::span<const double> high) {
+  const auto d = static_cast<std::size_t>(prior.dimension());
+  COMBABC_CHECK(names.size() == d && low.size() == d && high.size() == d);
+  // Before any draw: the check's cost grows as d^2 (12 s at d = 500), for a verdict that beyond
+  // ~25 Gaussian dimensions is a refusal anyway.
+  if (d > static_cast<std::size_t>(kMaxJointPriorDimension)) {
+    FailCheck(names.front() + ", ..., " + names.back(),
+              "the joint prior covers " + std::to_string(d) + " reals; at most " +
+                  std::to_string(kMaxJointPriorDimension) +
+                  " can be checked against its sampler: split it into independent groups");
+  }
+  RandomStream rng(kCheckSeed, 0, 0);
+  const SamplerDraws draws = DrawFromSampler(prior, names, low, high, rng);
+  const ReferenceSample reference = WeighReference(prior, names, low, high, draws, rng);
+  CompareMoments(names, draws, reference);
+  return draws.moments;
 }
 
 }  // namespace combabc

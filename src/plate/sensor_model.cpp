@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <optional>
 
-#include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/thread_pool.hpp"
 #include "plate/fast_path/continuous_condensation.hpp"
@@ -142,10 +141,9 @@ std::string DefaultPrecomputeCache() {
 
 SensorModel::SensorModel(const SensorOptions& options, const PrecomputeOptions& precompute)
     : options_(options) {
-  std::string why;
-  if (!options_.IsValid(&why)) {
-    const std::string field = why.substr(0, why.find(' '));
-    throw Error(ErrorKind::kConfig, why, "", 0, field);
+  ValidationError error;
+  if (!options_.IsValid(&error)) {
+    throw Error(ErrorKind::kConfig, error.Message(), "", 0, error.owner + "::" + error.field);
   }
   plate_ = std::make_unique<Plate>(SensorGrid(options_),
                                    EquivalentSingleLayer(options_.layers),
@@ -331,7 +329,7 @@ void SensorModel::Profile(std::span<const std::uint8_t> clamps, std::span<double
 
 Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> clamps) const {
   const int n = options_.clamps_per_edge;
-  COMBABC_CHECK(clamps.size() == static_cast<std::size_t>(2 * n));
+  const ClampPattern pattern(clamps, n);
   Constraints c = plate_->NewConstraints();
   const std::vector<double>& x = plate_->grid().x;
   // Grid intervals per section (2 per element at element order 2).
@@ -341,8 +339,12 @@ Constraints SensorModel::ConfigurationConstraints(std::span<const std::uint8_t> 
     // Closed intervals: the node shared with a free neighbour is fixed too (docs/model.md).
     const double start = x[static_cast<std::size_t>(s) * m];
     const double end = x[static_cast<std::size_t>(s + 1) * m];
-    if (clamps[s] != 0) c.AddEdgeSupport(Edge::kBottom, start, end, options_.fixed_support);
-    if (clamps[n + s] != 0) c.AddEdgeSupport(Edge::kTop, start, end, options_.fixed_support);
+    if (pattern.Fixed(ClampPattern::kEdgeA, s)) {
+      c.AddEdgeSupport(Edge::kBottom, start, end, options_.fixed_support);
+    }
+    if (pattern.Fixed(ClampPattern::kEdgeB, s)) {
+      c.AddEdgeSupport(Edge::kTop, start, end, options_.fixed_support);
+    }
   }
   c.AddEdgeSupport(Edge::kLeft, options_.short_edge_start);
   c.AddEdgeSupport(Edge::kRight, options_.short_edge_end);

@@ -11,13 +11,21 @@
 namespace combabc::plate {
 namespace {
 
-bool Fail(std::string* why, const char* field, double value, const char* constraint) {
-  if (why != nullptr) {
+bool FailVariation(ValidationError* error,
+                   const char* field,
+                   double value,
+                   const std::string& constraint) {
+  if (error != nullptr) {
     std::ostringstream os;
-    os << "SensorVariation::" << field << " = " << value << "; " << constraint;
-    *why = os.str();
+    os << value;
+    *error = {"SensorVariation", field, os.str(), constraint};
   }
   return false;
+}
+
+// The error a simulation with an invalid variation throws: the sentence, at the field.
+[[noreturn]] void ThrowInvalid(const ValidationError& error) {
+  throw Error(ErrorKind::kConfig, error.Message(), "", 0, error.owner + "::" + error.field);
 }
 
 bool Within(double value, double lo, double hi) { return value >= lo && value <= hi; }
@@ -25,12 +33,18 @@ bool Within(double value, double lo, double hi) { return value >= lo && value <=
 }  // namespace
 
 bool SensorVariation::IsValid(std::string* why) const {
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
+}
+
+bool SensorVariation::IsValid(ValidationError* error) const {
   // The ranges of SensorOptions::foundation_stiffness and Layer::loss_factor (docs/config.md);
   // NaN fails every comparison.
   for (const SensorVariationField& field : kSensorVariationFields) {
     const std::optional<double>& value = this->*field.member;
     if (value && !Within(*value, field.low, field.high)) {
-      return Fail(why, field.name, *value, (std::string("must be in ") + field.range_text).c_str());
+      return FailVariation(
+          error, field.name, *value, std::string("must be in ") + field.range_text);
     }
   }
   return true;
@@ -62,10 +76,8 @@ void SensorModel::ComplexProfile(std::span<const std::uint8_t> clamps,
     return;
   }
   CheckSpans(clamps, out.size());
-  std::string why;
-  if (!variation.IsValid(&why)) {
-    throw Error(ErrorKind::kConfig, why, "", 0, why.substr(0, why.find(' ')));
-  }
+  ValidationError error;
+  if (!variation.IsValid(&error)) ThrowInvalid(error);
   std::complex<double> factor;
   std::complex<double> mu;
   const ContinuousCondensation& continuous = Continuous(variation, &factor, &mu);
@@ -111,10 +123,8 @@ void SensorModel::ProfileBatch(std::span<const std::uint8_t> clamps,
 }
 
 std::array<int, 4> SensorModel::VariationSeriesTerms(const SensorVariation& variation) const {
-  std::string why;
-  if (!variation.IsValid(&why)) {
-    throw Error(ErrorKind::kConfig, why, "", 0, why.substr(0, why.find(' ')));
-  }
+  ValidationError error;
+  if (!variation.IsValid(&error)) ThrowInvalid(error);
   std::complex<double> factor;
   std::complex<double> mu;
   return Continuous(variation, &factor, &mu).SeriesTerms(mu);

@@ -10,61 +10,73 @@
 namespace combabc {
 namespace {
 
-// The checks shared by LogisticKernelOptions::IsValid and ProposalOptions::IsValid; `where` is the
-// field path that messages start with ("LogisticKernelOptions::" or "ProposalOptions::logistic.").
+// The checks shared by LogisticKernelOptions::IsValid and ProposalOptions::IsValid; `owner` and
+// `path` name the field ("LogisticKernelOptions" and "", or "ProposalOptions" and "logistic.").
 bool LogisticOptionsValid(const LogisticKernelOptions& o,
-                          const std::string& where,
-                          std::string* why) {
-  auto fail = [&](const std::string& msg) {
-    if (why) *why = where + msg;
+                          const char* owner,
+                          const std::string& path,
+                          ValidationError* error) {
+  auto fail = [&](const char* field, const std::string& value, const char* constraint) {
+    if (error) *error = {owner, path + field, value, constraint};
     return false;
   };
   if (!(o.min_correlation >= 0.0 && o.min_correlation < 1.0)) {
-    return fail("min_correlation = " + std::to_string(o.min_correlation) + "; must be in [0, 1)");
+    return fail("min_correlation", std::to_string(o.min_correlation), "must be in [0, 1)");
   }
   if (o.max_predecessors < 0) {
-    return fail("max_predecessors = " + std::to_string(o.max_predecessors) + "; must be >= 0");
+    return fail("max_predecessors", std::to_string(o.max_predecessors), "must be >= 0");
   }
   // ridge = 0 would let a separable regression run its slopes to infinity (it would then fall
   // back to the marginal, losing exactly the strong couplings the kernel exists for).
   if (!(o.ridge > 0.0 && std::isfinite(o.ridge))) {
-    return fail("ridge = " + std::to_string(o.ridge) + "; must be finite and > 0");
+    return fail("ridge", std::to_string(o.ridge), "must be finite and > 0");
   }
   if (!(o.min_marginal >= 0.0 && o.min_marginal < 0.5)) {
-    return fail("min_marginal = " + std::to_string(o.min_marginal) + "; must be in [0, 0.5)");
+    return fail("min_marginal", std::to_string(o.min_marginal), "must be in [0, 0.5)");
   }
   // clip > 0 keeps q > 0 everywhere (importance weights need the prior's support); clip < 0.5
   // keeps [clip, 1 - clip] a non-degenerate interval.
   if (!(o.clip > 0.0 && o.clip < 0.5)) {
-    return fail("clip = " + std::to_string(o.clip) + "; must be in (0, 0.5)");
+    return fail("clip", std::to_string(o.clip), "must be in (0, 0.5)");
   }
   return true;
 }
 
 }  // namespace
 
-bool LogisticKernelOptions::IsValid(std::string* why) const {
-  return LogisticOptionsValid(*this, "LogisticKernelOptions::", why);
+bool LogisticKernelOptions::IsValid(ValidationError* error) const {
+  return LogisticOptionsValid(*this, "LogisticKernelOptions", "", error);
 }
 
-bool ProposalOptions::IsValid(std::string* why) const {
-  if (!LogisticOptionsValid(logistic, "ProposalOptions::logistic.", why)) return false;
+bool LogisticKernelOptions::IsValid(std::string* why) const {
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
+}
+
+bool ProposalOptions::IsValid(ValidationError* error) const {
+  if (!LogisticOptionsValid(logistic, "ProposalOptions", "logistic.", error)) return false;
   if (!(scale > 0.0 && std::isfinite(scale))) {
-    if (why) {
-      *why = "ProposalOptions::scale = " + std::to_string(scale) + "; must be finite and > 0";
-    }
+    if (error)
+      *error = {"ProposalOptions", "scale", std::to_string(scale), "must be finite and > 0"};
     return false;
   }
   // The ancestor kernel proposes the reals itself, around each ancestor (the normal kernel's
   // scale): another continuous kernel would be ignored.
   if (binary == BinaryKernelKind::kAncestor && continuous != ContinuousKernelKind::kNormal) {
-    if (why) {
-      *why = std::string("ProposalOptions::continuous = ") + ToString(continuous) +
-             "; the ancestor kernel proposes the reals itself (continuous = normal)";
+    if (error) {
+      *error = {"ProposalOptions",
+                "continuous",
+                ToString(continuous),
+                "the ancestor kernel proposes the reals itself (continuous = normal)"};
     }
     return false;
   }
   return true;
+}
+
+bool ProposalOptions::IsValid(std::string* why) const {
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
 }
 
 ProposalOptions ResolvedProposal(ProposalOptions options, bool mixed) {

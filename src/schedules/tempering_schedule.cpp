@@ -5,17 +5,21 @@
 namespace combabc {
 
 bool TemperingSchedule::IsValid(const std::string& where, std::string* why) const {
-  auto fail = [&](const std::string& msg) {
-    if (why) *why = where + "." + msg;
+  ValidationError error;
+  const bool valid = IsValid(&error);
+  error.field = where + "." + error.field;
+  return ExplainValidation(valid, error, why);
+}
+
+bool TemperingSchedule::IsValid(ValidationError* error) const {
+  auto fail = [&](const std::string& field, double value) {
+    if (error) *error = {"", field, std::to_string(value), "must be in [0, 1]"};
     return false;
   };
-  if (!(phi0 >= 0.0 && phi0 <= 1.0)) {
-    return fail("phi0 = " + std::to_string(phi0) + "; must be in [0, 1]");
-  }
+  if (!(phi0 >= 0.0 && phi0 <= 1.0)) return fail("phi0", phi0);
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!(values[i] >= 0.0 && values[i] <= 1.0)) {
-      return fail("values[" + std::to_string(i) + "] = " + std::to_string(values[i]) +
-                  "; must be in [0, 1]");
+      return fail("values[" + std::to_string(i) + "]", values[i]);
     }
   }
   return true;

@@ -8,48 +8,57 @@
 namespace combabc {
 
 bool ThresholdSchedule::IsValid(const std::string& where, int num_waves, std::string* why) const {
-  auto fail = [&](const std::string& msg) {
-    if (why) *why = where + "." + msg;
+  ValidationError error;
+  const bool valid = IsValid(num_waves, &error);
+  error.field = where + "." + error.field;
+  return ExplainValidation(valid, error, why);
+}
+
+bool ThresholdSchedule::IsValid(int num_waves, ValidationError* error) const {
+  // fail(field, value, constraint); with no value, constraint is what follows the field.
+  auto fail = [&](const std::string& field, const std::string& value, const std::string& rest) {
+    if (error) *error = {"", field, value, rest};
     return false;
   };
   if (kind == ThresholdKind::kList) {
     if (static_cast<int>(values.size()) != num_waves) {
-      return fail("values has " + std::to_string(values.size()) +
-                  " entries; must have one per wave (num_waves = " + std::to_string(num_waves) +
-                  ")");
+      return fail("values",
+                  "",
+                  "has " + std::to_string(values.size()) +
+                      " entries; must have one per wave (num_waves = " + std::to_string(num_waves) +
+                      ")");
     }
     for (std::size_t t = 0; t < values.size(); ++t) {
-      if (!(values[t] >= 0.0)) {
-        return fail("values[" + std::to_string(t) + "] = " + std::to_string(values[t]) +
-                    "; must be >= 0");
-      }
+      const std::string field = "values[" + std::to_string(t) + "]";
+      if (!(values[t] >= 0.0)) return fail(field, std::to_string(values[t]), "must be >= 0");
       if (t > 0 && values[t] > values[t - 1]) {
-        return fail("values[" + std::to_string(t) + "] = " + std::to_string(values[t]) +
-                    " > values[" + std::to_string(t - 1) +
-                    "]; thresholds must not increase (Eq. 1)");
+        return fail(field,
+                    std::to_string(values[t]) + " > values[" + std::to_string(t - 1) + "]",
+                    "thresholds must not increase (Eq. 1)");
       }
     }
     return true;
   }
   if (kind == ThresholdKind::kQuantile && !(quantile > 0.0 && quantile <= 1.0)) {
-    return fail("quantile = " + std::to_string(quantile) + "; must be in (0, 1]");
+    return fail("quantile", std::to_string(quantile), "must be in (0, 1]");
   }
   if (kind != ThresholdKind::kQuantile && weighted) {
-    return fail("weighted = true; only the quantile schedule takes importance weights");
+    return fail("weighted", "true", "only the quantile schedule takes importance weights");
   }
   if (kind == ThresholdKind::kAcceptance && !(acceptance_rate > 0.0 && acceptance_rate <= 1.0)) {
-    return fail("acceptance_rate = " + std::to_string(acceptance_rate) + "; must be in (0, 1]");
+    return fail("acceptance_rate", std::to_string(acceptance_rate), "must be in (0, 1]");
   }
   if (kind == ThresholdKind::kEss && !(ess_fraction > 0.0 && ess_fraction < 1.0)) {
-    return fail("ess_fraction = " + std::to_string(ess_fraction) + "; must be in (0, 1)");
+    return fail("ess_fraction", std::to_string(ess_fraction), "must be in (0, 1)");
   }
-  if (!(initial >= 0.0)) return fail("initial = " + std::to_string(initial) + "; must be >= 0");
+  if (!(initial >= 0.0)) return fail("initial", std::to_string(initial), "must be >= 0");
   if (!(target >= 0.0 && std::isfinite(target))) {
-    return fail("target = " + std::to_string(target) + "; must be finite and >= 0");
+    return fail("target", std::to_string(target), "must be finite and >= 0");
   }
   if (target > initial) {
-    return fail("target = " + std::to_string(target) + " > initial = " + std::to_string(initial) +
-                "; the schedule must decrease");
+    return fail("target",
+                std::to_string(target) + " > initial = " + std::to_string(initial),
+                "the schedule must decrease");
   }
   return true;
 }

@@ -18,32 +18,41 @@ bool Mentions(const std::vector<std::string>& argv, const std::string& placehold
 }  // namespace
 
 bool ExternalSimulatorOptions::IsValid(SimulatorKind kind, std::string* why) const {
-  auto fail = [&](const std::string& message) {
-    if (why) *why = "ExternalSimulatorOptions::" + message;
+  ValidationError error;
+  return ExplainValidation(IsValid(kind, &error), error, why);
+}
+
+bool ExternalSimulatorOptions::IsValid(SimulatorKind kind, ValidationError* error) const {
+  // fail(field, constraint) or fail(field, value, constraint).
+  auto fail = [&](const std::string& field, const std::string& value, const std::string& rest) {
+    if (error) *error = {"ExternalSimulatorOptions", field, value, rest};
     return false;
   };
-  if (kind == SimulatorKind::kSensor) return fail("kind is the built-in sensor, not external");
-  if (argv.empty() || argv.front().empty()) return fail("argv is empty; name the program");
-  if (output_size < 1) {
-    return fail("output_size = " + std::to_string(output_size) + "; must be >= 1");
-  }
-  if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) return fail("timeout_s must be >= 0");
+  auto refuse = [&](const std::string& field, const std::string& rest) {
+    return fail(field, "", rest);
+  };
+  if (kind == SimulatorKind::kSensor) return refuse("kind", "is the built-in sensor, not external");
+  if (argv.empty() || argv.front().empty()) return refuse("argv", "is empty; name the program");
+  if (output_size < 1) return fail("output_size", std::to_string(output_size), "must be >= 1");
+  if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) return refuse("timeout_s", "must be >= 0");
   if (!(startup_timeout_s >= 0.0) || !std::isfinite(startup_timeout_s)) {
-    return fail("startup_timeout_s must be >= 0");
+    return refuse("startup_timeout_s", "must be >= 0");
   }
-  if (retries < 0) return fail("retries = " + std::to_string(retries) + "; must be >= 0");
-  if (work_directory.empty()) return fail("work_directory is empty");
+  if (retries < 0) return fail("retries", std::to_string(retries), "must be >= 0");
+  if (work_directory.empty()) return refuse("work_directory", "is empty");
   if (kind == SimulatorKind::kCommand) {
-    if (params == Transport::kStdout) return fail("params must be \"file\" or \"stdin\"");
-    if (results == Transport::kStdin) return fail("results must be \"stdout\" or \"file\"");
+    if (params == Transport::kStdout) return refuse("params", "must be \"file\" or \"stdin\"");
+    if (results == Transport::kStdin) return refuse("results", "must be \"stdout\" or \"file\"");
     if (params == Transport::kFile && !Mentions(argv, "{params}")) {
-      return fail("argv has no {params}: with params = \"file\" the program must be told where");
+      return refuse("argv",
+                    "has no {params}: with params = \"file\" the program must be told where");
     }
     if (results == Transport::kFile && !Mentions(argv, "{output}")) {
-      return fail("argv has no {output}: with results = \"file\" the program must be told where");
+      return refuse("argv",
+                    "has no {output}: with results = \"file\" the program must be told where");
     }
   } else if (Mentions(argv, "{params}") || Mentions(argv, "{output}")) {
-    return fail("argv of a worker cannot use {params} or {output} (requests come on stdin)");
+    return refuse("argv", "of a worker cannot use {params} or {output} (requests come on stdin)");
   }
   return true;
 }

@@ -1,10 +1,12 @@
 // combabc::Error is the one place user input reaches the terminal: it must stay one short,
 // printable line whatever the input holds.
 #include "combabc/core/error.hpp"
+#include "combabc/core/validation_error.hpp"
 
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 namespace combabc {
 namespace {
@@ -58,6 +60,60 @@ TEST(Error, ColumnFollowsTheLine) {
   EXPECT_STREQ(Error(ErrorKind::kData, "not a number", "d.csv", 4, "w", 2).what(),
                "d.csv:4:2: w: not a number");
   EXPECT_STREQ(Error(ErrorKind::kData, "empty", "d.csv", 4, "w").what(), "d.csv:4: w: empty");
+}
+
+// The sentence of a failed check is made of its parts, with or without a value or an owner.
+TEST(ValidationError, MessageFromItsParts) {
+  const ValidationError load{"SensorOptions", "load_x", "1.2", "must be in [0, 0.9] m"};
+  EXPECT_EQ(load.Message(), "SensorOptions::load_x = 1.2; must be in [0, 0.9] m");
+  EXPECT_EQ(load.Detail(), "load_x = 1.2; must be in [0, 0.9] m");
+  EXPECT_EQ(load.Member(), "load_x");
+  const ValidationError tie{"BinarySpaceOptions", "tied[2]", "", "has fewer than 2 bits"};
+  EXPECT_EQ(tie.Message(), "BinarySpaceOptions::tied[2] has fewer than 2 bits");
+  EXPECT_EQ(tie.Member(), "tied");
+  const ValidationError schedule{"", "values[1]", "0.5 > values[0]", "must not increase"};
+  EXPECT_EQ(schedule.Message(), "values[1] = 0.5 > values[0]; must not increase");
+  EXPECT_EQ((ValidationError{"SensorOptions", "layers[1]::density", "0", "x"}).Member(), "layers");
+  EXPECT_EQ((ValidationError{"SmcOptions", "tempering.values", "", "x"}).Member(), "tempering");
+}
+
+// FromMessage reads a sentence of that form back into the same parts.
+TEST(ValidationError, FromMessageInvertsMessage) {
+  const std::vector<ValidationError> errors = {
+      {"SmcOptions", "num_waves", "0", "must be >= 1"},
+      {"SmcOptions", "accepted_by_wave[1]", "0", "must be >= 1"},
+      {"SmcOptions",
+       "accepted_by_wave",
+       "",
+       "has 3 entries; must have one per wave (num_waves = 2)"},
+      {"SmcOptions",
+       "tempering.values",
+       "",
+       "has 1 entries; must have 3 (one per wave after the first)"},
+      {"SmcOptions",
+       "thresholds[0].values[1]",
+       "0.500000 > values[0]",
+       "thresholds must not increase"},
+      {"SmcOptions", "proposal.logistic.clip", "0.500000", "must be in (0, 0.5)"},
+      {"SmcOptions", "multi_fidelity.cost_ratio", "-1.000000", "must be > 0, or 0 to measure it"},
+  };
+  for (const ValidationError& e : errors) {
+    const ValidationError back = ValidationError::FromMessage(e.Message());
+    EXPECT_EQ(back.owner, e.owner) << e.Message();
+    EXPECT_EQ(back.field, e.field) << e.Message();
+    EXPECT_EQ(back.value, e.value) << e.Message();
+    EXPECT_EQ(back.constraint, e.constraint) << e.Message();
+  }
+}
+
+TEST(ValidationError, ExplainWritesTheSentenceOnlyOnFailure) {
+  const ValidationError e{"X", "y", "1", "must be 0"};
+  std::string why = "untouched";
+  EXPECT_TRUE(ExplainValidation(true, e, &why));
+  EXPECT_EQ(why, "untouched");
+  EXPECT_FALSE(ExplainValidation(false, e, &why));
+  EXPECT_EQ(why, "X::y = 1; must be 0");
+  EXPECT_FALSE(ExplainValidation(false, e, nullptr));
 }
 
 }  // namespace

@@ -451,6 +451,99 @@ TEST(PlateSensorModel, InvalidOptionsNameTheField) {
   EXPECT_TRUE(SensorOptions{}.IsValid(&why));
 }
 
+// The parts of a failed check, as the config reads them to find the key to blame: the field with
+// its index or layer, the value as written, and the constraint; the sentence is made of them.
+TEST(PlateSensorModel, InvalidOptionsGiveTheirParts) {
+  SensorOptions o;
+  o.layers[2].thickness = 2.0;
+  ValidationError error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.owner, "SensorOptions");
+  EXPECT_EQ(error.field, "layers[2]::thickness");
+  EXPECT_EQ(error.Member(), "layers");
+  EXPECT_EQ(error.value, "2");
+  EXPECT_EQ(error.constraint, "must be in [1e-9, 1] m");
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, error.Message());
+  o = SensorOptions{};
+  o.load_cases[0].output_positions.push_back(1.0);
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.field, "output_positions[91]");
+  EXPECT_EQ(error.value, "1");
+  o = SensorOptions{};
+  o.memory_limit_bytes = 1e6;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.field, "memory_limit_bytes");
+  EXPECT_EQ(error.value, "1e+06");
+  EXPECT_EQ(error.constraint.rfind("the model would need about", 0), 0u) << error.constraint;
+  // A layer on its own names itself, or the owner its caller gives.
+  Layer layer;
+  layer.density = 0.0;
+  EXPECT_FALSE(layer.IsValid(&error));
+  EXPECT_EQ(error.Message(), "Layer::density = 0; must be in [1e-3, 1e5] kg/m^3");
+  EXPECT_FALSE(layer.IsValid(&why, "Core"));
+  EXPECT_EQ(why, "Core::density = 0; must be in [1e-3, 1e5] kg/m^3");
+}
+
+// The clamp layout (edge A's sections along x, then edge B's; nonzero = fixed) from both ends.
+TEST(PlateClampPattern, IndicesRoundTrip) {
+  const int n = 5;
+  EXPECT_EQ(ClampPattern::Size(n), 10);
+  for (int bit = 0; bit < ClampPattern::Size(n); ++bit) {
+    const int edge = ClampPattern::EdgeOf(bit, n);
+    const int section = ClampPattern::SectionOf(bit, n);
+    EXPECT_EQ(edge, bit < n ? ClampPattern::kEdgeA : ClampPattern::kEdgeB) << bit;
+    EXPECT_EQ(section, bit % n) << bit;
+    EXPECT_EQ(ClampPattern::Index(edge, section, n), bit) << bit;
+  }
+  // Clamp 7 (1-based) of 2 x 5 is section 2 (1-based) of edge B.
+  EXPECT_EQ(ClampPattern::Index(ClampPattern::kEdgeB, 1, n), 6);
+}
+
+TEST(PlateClampPattern, EncodesAndDecodesEachEdge) {
+  const std::vector<bool> a = {true, false, false, true};
+  const std::vector<bool> b = {false, false, true, true};
+  const std::vector<std::uint8_t> bits = ClampPattern::Encode(a, b);
+  EXPECT_EQ(bits, (std::vector<std::uint8_t>{1, 0, 0, 1, 0, 0, 1, 1}));
+  const ClampPattern pattern(bits, 4);
+  EXPECT_EQ(pattern.sections_per_edge(), 4);
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_EQ(pattern.Fixed(ClampPattern::kEdgeA, s), a[s]) << s;
+    EXPECT_EQ(pattern.Fixed(ClampPattern::kEdgeB, s), b[s]) << s;
+    EXPECT_EQ(pattern.State(s), (a[s] ? 1 : 0) | (b[s] ? 2 : 0)) << s;
+  }
+  // Any nonzero byte fixes its clamp.
+  const std::vector<std::uint8_t> loud = {0, 7, 255, 0};
+  EXPECT_EQ(ClampPattern(loud, 2).State(1), 1);
+  EXPECT_EQ(ClampPattern(loud, 2).State(0), 2);
+  // A boundary node is fixed when either adjoining section fixes it: on edge A boundaries 0-1
+  // (section 0) and 3-4 (section 3); on edge B 2-4 (sections 2 and 3).
+  const std::vector<bool> boundary_a = {true, true, false, true, true};
+  const std::vector<bool> boundary_b = {false, false, true, true, true};
+  for (int c = 0; c <= 4; ++c) {
+    EXPECT_EQ(pattern.BoundaryFixed(ClampPattern::kEdgeA, c), boundary_a[c]) << c;
+    EXPECT_EQ(pattern.BoundaryFixed(ClampPattern::kEdgeB, c), boundary_b[c]) << c;
+  }
+}
+
+TEST(PlateClampPattern, RefusesBitsOfTheWrongSize) {
+  const std::vector<std::uint8_t> bits(7, 0);
+  for (int per_edge : {3, 4, 0, -1}) {
+    try {
+      const ClampPattern pattern(bits, per_edge);
+      FAIL() << "expected combabc::Error for " << per_edge;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kConfig);
+      EXPECT_EQ(e.field(), "clamps");
+      EXPECT_EQ(e.message(),
+                "has 7 entries; " + std::to_string(per_edge) + " sections per edge take " +
+                    std::to_string(2 * per_edge));
+    }
+  }
+  EXPECT_NO_THROW(ClampPattern(std::vector<std::uint8_t>(8, 0), 4));
+}
+
 // The estimate that refuses oversized models must track what the precompute really keeps: above
 // it (it also counts transients) but not so far above that useful meshes are refused.
 TEST(PlateSensorModel, MemoryEstimateBoundsThePrecompute) {

@@ -76,7 +76,12 @@ TEST(ProposalOptions, EachInvalidOptionIsRejectedWithItsMessage) {
     std::string why;
     EXPECT_FALSE(o.IsValid(&why)) << c.name;
     EXPECT_EQ(why, c.message) << c.name;
-    EXPECT_FALSE(o.IsValid(nullptr)) << c.name;
+    // The parts: the config reads the field from them, and the sentence is theirs.
+    ValidationError error;
+    EXPECT_FALSE(o.IsValid(&error)) << c.name;
+    EXPECT_EQ(error.owner, "ProposalOptions") << c.name;
+    EXPECT_EQ(error.Message(), c.message) << c.name;
+    EXPECT_FALSE(o.IsValid(static_cast<ValidationError*>(nullptr))) << c.name;
   }
 }
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "combabc/core/validation_error.hpp"
+
 namespace combabc {
 
 // Most bits a space may have where a user declares them: the config's [simulator.bits] count /
@@ -20,6 +22,9 @@ struct BinarySpaceOptions {
   std::vector<std::vector<int>> tied;  // groups of 0-based bit indices constrained equal
   std::vector<std::string> names;      // optional bit names (e.g. "clamp 1"); empty = "bit k"
 
+  // On failure `error` names the field (owner "BinarySpaceOptions"): "prior_one[3]", "tied[1]".
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "BinarySpaceOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 

@@ -32,6 +32,7 @@
 #include <Eigen/Dense>
 
 #include "combabc/core/thread_pool.hpp"
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/elements/laminate.hpp"
 #include "combabc/plate/fast_path/vector_kernels.hpp"
@@ -77,9 +78,11 @@ struct LoadCase {
   std::vector<double> output_positions = DefaultOutputPositions();
   double output_y_fraction = 0.5;  // the top centreline
 
-  // Checks each field against the plate of `options`; on failure `why` reads
-  // "SensorOptions::<prefix>field = value; constraint".
-  bool IsValid(const SensorOptions& options, const std::string& prefix, std::string* why) const;
+  // Checks each field against the plate of `options`; on failure `error` names the field as
+  // SensorOptions' "<prefix>field".
+  bool IsValid(const SensorOptions& options,
+               const std::string& prefix,
+               ValidationError* error) const;
 };
 
 struct SensorOptions {
@@ -184,8 +187,10 @@ struct SensorOptions {
   double EstimatedContinuousMemoryBytes(bool loss_factor_unknown) const;
 
   // Checks every field: finite values in physical ranges (docs/config.md), sizes within the
-  // kMax* limits, the estimated memory within memory_limit_bytes. On failure `why` reads
-  // "SensorOptions::field = value; constraint".
+  // kMax* limits, the estimated memory within memory_limit_bytes. On failure `error` names the
+  // field ("load_x", "layers[1]::thickness", "load_cases[2].load_x", "output_positions[4]").
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "SensorOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 
@@ -206,7 +211,9 @@ struct SensorVariation {
     return !foundation_stiffness.has_value() && !stiffness_scale.has_value() &&
            !loss_factor.has_value();
   }
-  // On failure `why` reads "SensorVariation::field = value; constraint".
+  // On failure `error` names the field (owner "SensorVariation").
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "SensorVariation::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 
@@ -263,7 +270,7 @@ class SensorModel {
   SensorModel(const SensorModel&) = delete;
   SensorModel& operator=(const SensorModel&) = delete;
 
-  int num_clamps() const { return 2 * options_.clamps_per_edge; }
+  int num_clamps() const { return ClampPattern::Size(options_.clamps_per_edge); }
   // All load cases' outputs, case after case (SensorOptions::OutputOffset).
   int num_outputs() const { return static_cast<int>(output_positions_.size()); }
   const std::vector<double>& output_positions() const { return output_positions_; }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/validation_error.hpp"
 #include "combabc/proposals/proposal.hpp"
 
 namespace combabc {
@@ -57,6 +58,9 @@ struct LogisticKernelOptions {
   // Conditional probabilities are clipped to [clip, 1 - clip] so no configuration has q = 0.
   double clip = 1e-4;
 
+  // On failure `error` names the field (owner "LogisticKernelOptions").
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "LogisticKernelOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 
@@ -68,7 +72,10 @@ struct ProposalOptions {
   // choice).
   double scale = 2.0;
 
-  bool IsValid(std::string* why) const;  // why: "ProposalOptions::field = value; constraint"
+  // On failure `error` names the field (owner "ProposalOptions"): "scale", "logistic.clip".
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "ProposalOptions::field = value; constraint".
+  bool IsValid(std::string* why) const;
 };
 
 // The options with kAuto resolved for a space with (`mixed`) or without both free bits and reals.

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/validation_error.hpp"
 
 namespace combabc {
 
@@ -42,6 +43,9 @@ struct TemperingSchedule {
   double phi0 = 0.5;           // kLinear: phi at wave 1, in [0, 1]
   std::vector<double> values;  // kList: phi for waves 1, 2, ...; each in [0, 1]
 
+  // On failure `error` names the field ("phi0", "values[1]"), with no owner.
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence that `where` prefixes, e.g. "SmcOptions::tempering".
   bool IsValid(const std::string& where, std::string* why) const;
   // phi(t) for the proposal of wave t >= 1 of `planned_waves`.
   double Phi(int wave, int planned_waves) const;

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/validation_error.hpp"
 
 namespace combabc {
 
@@ -55,7 +56,10 @@ struct ThresholdSchedule {
   double initial = std::numeric_limits<double>::infinity();
   double target = 0.0;
 
-  // `where` prefixes messages, e.g. "SmcOptions::thresholds[1]".
+  // On failure `error` names the field ("values[2]", "quantile"), with no owner: the caller knows
+  // which schedule it checked.
+  bool IsValid(int num_waves, ValidationError* error) const;
+  // The same as one sentence that `where` prefixes, e.g. "SmcOptions::thresholds[1]".
   bool IsValid(const std::string& where, int num_waves, std::string* why) const;
 
   // Threshold for wave t given what the previous wave left (nothing for t = 0).

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/validation_error.hpp"
 
 namespace combabc {
 
@@ -85,7 +86,9 @@ struct ExternalSimulatorOptions {
   // Worker simulator only: time for a new worker to print its handshake.
   double startup_timeout_s = 60.0;
 
-  // Names the field and the constraint ("ExternalSimulatorOptions::argv is empty").
+  // On failure `error` names the field (owner "ExternalSimulatorOptions") and the constraint.
+  bool IsValid(SimulatorKind kind, ValidationError* error) const;
+  // The same as one sentence: "ExternalSimulatorOptions::argv is empty; name the program".
   bool IsValid(SimulatorKind kind, std::string* why) const;
 };
 

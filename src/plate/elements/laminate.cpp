@@ -9,15 +9,11 @@
 namespace combabc::plate {
 namespace {
 
-bool Fail(std::string* why,
-          const std::string& prefix,
-          const char* field,
-          double value,
-          const char* constraint) {
-  if (why != nullptr) {
+bool FailLayer(ValidationError* error, const char* field, double value, const char* constraint) {
+  if (error != nullptr) {
     std::ostringstream os;
-    os << prefix << "::" << field << " = " << value << "; " << constraint;
-    *why = os.str();
+    os << value;
+    *error = {"Layer", field, os.str(), constraint};
   }
   return false;
 }
@@ -143,22 +139,29 @@ void ZigzagStiffness(const std::vector<Layer>& layers, PlateSection* section) {
 }  // namespace
 
 bool Layer::IsValid(std::string* why, const std::string& prefix) const {
+  ValidationError error;
+  const bool valid = IsValid(&error);
+  error.owner = prefix;
+  return ExplainValidation(valid, error, why);
+}
+
+bool Layer::IsValid(ValidationError* error) const {
   // Physical ranges, generous enough for any laminate (from foams to steel, nanometre films to
   // metre-thick slabs) and tight enough that the stiffness and mass stay finite doubles.
   if (!(thickness >= 1e-9 && thickness <= 1.0)) {
-    return Fail(why, prefix, "thickness", thickness, "must be in [1e-9, 1] m");
+    return FailLayer(error, "thickness", thickness, "must be in [1e-9, 1] m");
   }
   if (!(youngs_modulus >= 1.0 && youngs_modulus <= 1e13)) {
-    return Fail(why, prefix, "youngs_modulus", youngs_modulus, "must be in [1, 1e13] Pa");
+    return FailLayer(error, "youngs_modulus", youngs_modulus, "must be in [1, 1e13] Pa");
   }
   if (!(poisson_ratio > -1.0 && poisson_ratio < 0.5)) {
-    return Fail(why, prefix, "poisson_ratio", poisson_ratio, "must be in (-1, 0.5)");
+    return FailLayer(error, "poisson_ratio", poisson_ratio, "must be in (-1, 0.5)");
   }
   if (!(density >= 1e-3 && density <= 1e5)) {
-    return Fail(why, prefix, "density", density, "must be in [1e-3, 1e5] kg/m^3");
+    return FailLayer(error, "density", density, "must be in [1e-3, 1e5] kg/m^3");
   }
   if (!(loss_factor >= 0.0 && loss_factor <= 10.0)) {
-    return Fail(why, prefix, "loss_factor", loss_factor, "must be in [0, 10]");
+    return FailLayer(error, "loss_factor", loss_factor, "must be in [0, 10]");
   }
   return true;
 }

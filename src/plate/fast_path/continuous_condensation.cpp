@@ -139,32 +139,64 @@ ContinuousCondensation::ContinuousCondensation(const Plate& plate,
   BuildTables();
 }
 
+// The interior-interior entries of a section's matrices (complex stiffness and unit mass for the
+// sparse LU, their real parts for the eigenvalue bound), gathered while assembling it.
+struct ContinuousCondensation::InteriorTriplets {
+  std::vector<Eigen::Triplet<Complex>> k;
+  std::vector<Eigen::Triplet<Complex>> m;
+  std::vector<Eigen::Triplet<double>> real;
+  std::vector<Eigen::Triplet<double>> mass;
+};
+
 void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int state) {
-  const Eigen::MatrixXd& loads = layout_->loads();
-  const std::vector<CaseOutputs>& outputs = layout_->outputs();
-  const OutputSets& sets = layout_->sets();
-  const int nc = layout_->nc();
-  const int num_cases = layout_->num_cases();
-  const int m = layout_->intervals();
-  const int n_local = (m + 1) * nc;
-  const int nb = 2 * nc;
   // Local dofs: boundary (index into [left; right]), interior (index into I), or fixed, as in
   // SectionCondensation::CondenseSections.
-  std::vector<int> boundary_index;
-  std::vector<int> interior_index;
-  const int n_interior = layout_->ClassifySectionDofs(state, &boundary_index, &interior_index);
-  // The section matrices split by physics: K_base (K_real, + i K_imag for the layers' own loss
-  // factors) and M_1. Sections of one mesh have equal element matrices.
+  DofClasses local;
+  local.n_interior = layout_->ClassifySectionDofs(state, &local.boundary, &local.interior);
+  InteriorTriplets triplets;
+  AssembleState(plate, mesh_kind, state, local, &triplets);
+  // The distinct sections of this mesh: their output rows r_I, r_B and interior load f_I.
+  std::vector<int> kinds;
+  for (int kind = 0; kind < static_cast<int>(kind_section_.size()); ++kind) {
+    if (mesh_kind_[kind_section_[kind]] == mesh_kind) kinds.push_back(kind);
+  }
+  for (int kind : kinds) PrepareSection(plate, kind, state, local);
+  StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
+  const int n_interior = local.n_interior;
+  for (int i = 0; i < n_interior; ++i) {
+    if ((sd.k_ib.row(i).cwiseAbs().maxCoeff() != 0.0) ||
+        (sd.m_ib.row(i).cwiseAbs().maxCoeff() != 0.0)) {
+      sd.coupled.push_back(i);
+    }
+  }
+  if (n_interior == 0) {  // one element per section: nothing to condense, C = K_BB + mu M_BB
+    sd.lambda_bound = std::numeric_limits<double>::infinity();
+    sd.k_static = sd.k_bb;
+    sd.m_static = sd.m_bb;
+    return;
+  }
+  CondenseInterior(mesh_kind, state, kinds, triplets);
+}
+
+// The section matrices split by physics: K_base (K_real, + i K_imag for the layers' own loss
+// factors) and M_1, into the boundary blocks of the state and the interior triplets. Sections of
+// one mesh have equal element matrices.
+void ContinuousCondensation::AssembleState(const Plate& plate,
+                                           int mesh_kind,
+                                           int state,
+                                           const DofClasses& local,
+                                           InteriorTriplets* triplets) {
+  const int nb = 2 * layout_->nc();
+  const int m = layout_->intervals();
+  const int n_interior = local.n_interior;
+  const std::vector<int>& boundary_index = local.boundary;
+  const std::vector<int>& interior_index = local.interior;
   StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
   const int section = mesh_section_[mesh_kind];
   sd.k_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.m_bb = Eigen::MatrixXcd::Zero(nb, nb);
   sd.k_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
   sd.m_ib = Eigen::MatrixXcd::Zero(n_interior, nb);
-  std::vector<Eigen::Triplet<Complex>> k_triplets;
-  std::vector<Eigen::Triplet<Complex>> m_triplets;
-  std::vector<Eigen::Triplet<double>> real_triplets;
-  std::vector<Eigen::Triplet<double>> mass_triplets;
   ForEachSectionEntry(
       plate, section, m, [&](const ElementMatrices& e, int r, int c, int lr, int lc) {
         const double kr = e.stiffness_real(r, c);
@@ -183,92 +215,103 @@ void ContinuousCondensation::Precompute(const Plate& plate, int mesh_kind, int s
           sd.m_ib(ri, cb) += mm;
         }
         if (ri >= 0 && ci >= 0) {
-          k_triplets.emplace_back(ri, ci, k);
-          m_triplets.emplace_back(ri, ci, mm);
-          real_triplets.emplace_back(ri, ci, kr);
-          mass_triplets.emplace_back(ri, ci, mm);
+          triplets->k.emplace_back(ri, ci, k);
+          triplets->m.emplace_back(ri, ci, mm);
+          triplets->real.emplace_back(ri, ci, kr);
+          triplets->mass.emplace_back(ri, ci, mm);
         }
       });
-  // The distinct sections of this mesh: their output rows r_I, r_B and interior load f_I.
-  std::vector<int> kinds;
-  for (int kind = 0; kind < static_cast<int>(kind_section_.size()); ++kind) {
-    if (mesh_kind_[kind_section_[kind]] == mesh_kind) kinds.push_back(kind);
-  }
-  for (int kind : kinds) {
-    SectionData& sec = sections_[static_cast<std::size_t>(kind) * 4 + state];
-    const int s = kind_section_[kind];
-    const int s_offset = s * m * nc;
-    const OutputLayout& layout = layout_->SectionOutputs(s);
-    const auto n_out = static_cast<Eigen::Index>(layout.map_rows());
-    sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
-    sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
-    for (int set = 0; set < sets.num_sets(); ++set) {
-      const CaseOutputs& o = outputs[static_cast<std::size_t>(sets.case_of_set[set])];
-      const std::vector<int>& positions = layout.positions[set];
-      for (std::size_t t = 0; t < positions.size(); ++t) {
-        const Eigen::Index k = layout.map_begin[set] + static_cast<Eigen::Index>(t);
-        int dofs[kMaxElementDofs];
-        ElementVector row;
-        plate.InterpolationRow(o.x[positions[t]], o.y, dofs, &row);
-        for (int q = 0; q < plate.element_dofs(); ++q) {
-          const int d = dofs[q] - s_offset;
-          COMBABC_CHECK(d >= 0 && d < n_local);
-          if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);
-          if (interior_index[d] >= 0) sec.r_i(k, interior_index[d]) += row(q);
-        }
+}
+
+// Section `kind` of the mesh in `state`: its output rows r_I and r_B, the cases whose load reaches
+// its interior (f_I), and the interior dofs each output set reads.
+void ContinuousCondensation::PrepareSection(const Plate& plate,
+                                            int kind,
+                                            int state,
+                                            const DofClasses& local) {
+  const Eigen::MatrixXd& loads = layout_->loads();
+  const std::vector<CaseOutputs>& outputs = layout_->outputs();
+  const OutputSets& sets = layout_->sets();
+  const int nc = layout_->nc();
+  const int num_cases = layout_->num_cases();
+  const int m = layout_->intervals();
+  const int n_local = (m + 1) * nc;
+  const int nb = 2 * nc;
+  const int n_interior = local.n_interior;
+  const std::vector<int>& boundary_index = local.boundary;
+  const std::vector<int>& interior_index = local.interior;
+  SectionData& sec = sections_[static_cast<std::size_t>(kind) * 4 + state];
+  const int s = kind_section_[kind];
+  const int s_offset = s * m * nc;
+  const OutputLayout& layout = layout_->SectionOutputs(s);
+  const auto n_out = static_cast<Eigen::Index>(layout.map_rows());
+  sec.r_i = Eigen::MatrixXcd::Zero(n_out, n_interior);
+  sec.r_b = Eigen::MatrixXcd::Zero(n_out, nb);
+  for (int set = 0; set < sets.num_sets(); ++set) {
+    const CaseOutputs& o = outputs[static_cast<std::size_t>(sets.case_of_set[set])];
+    const std::vector<int>& positions = layout.positions[set];
+    for (std::size_t t = 0; t < positions.size(); ++t) {
+      const Eigen::Index k = layout.map_begin[set] + static_cast<Eigen::Index>(t);
+      int dofs[kMaxElementDofs];
+      ElementVector row;
+      plate.InterpolationRow(o.x[positions[t]], o.y, dofs, &row);
+      for (int q = 0; q < plate.element_dofs(); ++q) {
+        const int d = dofs[q] - s_offset;
+        COMBABC_CHECK(d >= 0 && d < n_local);
+        if (boundary_index[d] >= 0) sec.r_b(k, boundary_index[d]) += row(q);
+        if (interior_index[d] >= 0) sec.r_i(k, interior_index[d]) += row(q);
       }
     }
-    // The cases whose load reaches the interior, and their rows in the table (BuildTables).
-    sec.loaded_cases.clear();
-    sec.loaded_start.clear();
-    std::vector<Eigen::VectorXcd> f;
-    Eigen::Index next_row = n_out * nb;
-    for (int c = 0; c < num_cases; ++c) {
-      Eigen::VectorXcd f_c = Eigen::VectorXcd::Zero(n_interior);
-      for (int d = 0; d < n_local; ++d) {
-        if (interior_index[d] >= 0) f_c(interior_index[d]) = loads(s_offset + d, c);
+  }
+  // The cases whose load reaches the interior, and their rows in the table (BuildTables).
+  sec.loaded_cases.clear();
+  sec.loaded_start.clear();
+  std::vector<Eigen::VectorXcd> f;
+  Eigen::Index next_row = n_out * nb;
+  for (int c = 0; c < num_cases; ++c) {
+    Eigen::VectorXcd f_c = Eigen::VectorXcd::Zero(n_interior);
+    for (int d = 0; d < n_local; ++d) {
+      if (interior_index[d] >= 0) f_c(interior_index[d]) = loads(s_offset + d, c);
+    }
+    if (n_interior == 0 || f_c.cwiseAbs().maxCoeff() == 0.0) continue;
+    sec.loaded_cases.push_back(c);
+    sec.loaded_start.push_back(next_row);
+    next_row += nb + layout.rows_of_case(sets, c);
+    f.push_back(std::move(f_c));
+  }
+  sec.f_i.resize(n_interior, static_cast<Eigen::Index>(f.size()));
+  for (std::size_t l = 0; l < f.size(); ++l) sec.f_i.col(static_cast<Eigen::Index>(l)) = f[l];
+  sec.map_rows = static_cast<int>(n_out);
+  sec.read.assign(static_cast<std::size_t>(sets.num_sets()), {});
+  for (int set = 0; set < sets.num_sets(); ++set) {
+    const int first = layout.map_begin[set];
+    const int rows = layout.map_begin[set + 1] - first;
+    for (int i = 0; i < n_interior; ++i) {
+      if (rows > 0 && sec.r_i.col(i).segment(first, rows).cwiseAbs().maxCoeff() != 0.0) {
+        sec.read[set].push_back(i);
       }
-      if (n_interior == 0 || f_c.cwiseAbs().maxCoeff() == 0.0) continue;
-      sec.loaded_cases.push_back(c);
-      sec.loaded_start.push_back(next_row);
-      next_row += nb + layout.rows_of_case(sets, c);
-      f.push_back(std::move(f_c));
-    }
-    sec.f_i.resize(n_interior, static_cast<Eigen::Index>(f.size()));
-    for (std::size_t l = 0; l < f.size(); ++l) sec.f_i.col(static_cast<Eigen::Index>(l)) = f[l];
-    sec.map_rows = static_cast<int>(n_out);
-    sec.read.assign(static_cast<std::size_t>(sets.num_sets()), {});
-    for (int set = 0; set < sets.num_sets(); ++set) {
-      const int first = layout.map_begin[set];
-      const int rows = layout.map_begin[set + 1] - first;
-      for (int i = 0; i < n_interior; ++i) {
-        if (rows > 0 && sec.r_i.col(i).segment(first, rows).cwiseAbs().maxCoeff() != 0.0) {
-          sec.read[set].push_back(i);
-        }
-      }
-    }
-    sec.out_static = sec.r_b;
-  }
-  for (int i = 0; i < n_interior; ++i) {
-    if ((sd.k_ib.row(i).cwiseAbs().maxCoeff() != 0.0) ||
-        (sd.m_ib.row(i).cwiseAbs().maxCoeff() != 0.0)) {
-      sd.coupled.push_back(i);
     }
   }
-  if (n_interior == 0) {  // one element per section: nothing to condense, C = K_BB + mu M_BB
-    sd.lambda_bound = std::numeric_limits<double>::infinity();
-    sd.k_static = sd.k_bb;
-    sd.m_static = sd.m_bb;
-    return;
-  }
+  sec.out_static = sec.r_b;
+}
+
+// The static condensation of the interior (sparse LU of K_II) and the series terms in mu of the
+// state and of each of its sections: moments, output maps, loads and offsets.
+void ContinuousCondensation::CondenseInterior(int mesh_kind,
+                                              int state,
+                                              const std::vector<int>& kinds,
+                                              const InteriorTriplets& triplets) {
+  const OutputSets& sets = layout_->sets();
+  StateData& sd = states_[static_cast<std::size_t>(mesh_kind) * 4 + state];
+  const auto n_interior = static_cast<int>(sd.k_ib.rows());
   sd.k_ii.resize(n_interior, n_interior);
-  sd.k_ii.setFromTriplets(k_triplets.begin(), k_triplets.end());
+  sd.k_ii.setFromTriplets(triplets.k.begin(), triplets.k.end());
   sd.m_ii.resize(n_interior, n_interior);
-  sd.m_ii.setFromTriplets(m_triplets.begin(), m_triplets.end());
+  sd.m_ii.setFromTriplets(triplets.m.begin(), triplets.m.end());
   Eigen::SparseMatrix<double> k_real(n_interior, n_interior);
-  k_real.setFromTriplets(real_triplets.begin(), real_triplets.end());
+  k_real.setFromTriplets(triplets.real.begin(), triplets.real.end());
   Eigen::SparseMatrix<double> mass(n_interior, n_interior);
-  mass.setFromTriplets(mass_triplets.begin(), mass_triplets.end());
+  mass.setFromTriplets(triplets.mass.begin(), triplets.mass.end());
   sd.lambda_bound = LowestEigenvalueBound(k_real, mass);
 
   // Jacobi-scaled sparse LU of K_II (complex symmetric: LU, as everywhere in the plate layer).

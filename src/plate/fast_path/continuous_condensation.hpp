@@ -173,7 +173,26 @@ class ContinuousCondensation {
                    std::complex<double> mu,
                    std::span<std::complex<double>> w) const;
 
+  // The series of one (mesh, state) pair and of its sections (docs/model.md, "Continuous
+  // unknowns"), in three steps: assemble, prepare each section's outputs and loads, condense.
   void Precompute(const Plate& plate, int mesh_kind, int state);
+  // A section's local dofs in one state (SectionLayout::ClassifySectionDofs).
+  struct DofClasses {
+    std::vector<int> boundary;
+    std::vector<int> interior;
+    int n_interior = 0;
+  };
+  struct InteriorTriplets;
+  void AssembleState(const Plate& plate,
+                     int mesh_kind,
+                     int state,
+                     const DofClasses& local,
+                     InteriorTriplets* triplets);
+  void PrepareSection(const Plate& plate, int kind, int state, const DofClasses& local);
+  void CondenseInterior(int mesh_kind,
+                        int state,
+                        const std::vector<int>& kinds,
+                        const InteriorTriplets& triplets);
   void EvaluateSeries(
       int mesh_kind, int state, int terms, std::complex<double> mu, Evaluated* e) const;
   void EvaluateDirect(int mesh_kind, int state, std::complex<double> mu, Evaluated* e) const;

@@ -445,8 +445,9 @@ COMBABC_KERNEL void ContinuousCondensation::EvaluatePieces(std::span<const std::
   e.kind_needed.assign(num_kind_states, 0);
   if (e.piece.size() < num_states) e.piece.resize(num_states);
   if (e.section.size() < num_kind_states) e.section.resize(num_kind_states);
+  const ClampPattern pattern(clamps, ns);
   for (int s = 0; s < ns; ++s) {
-    const int state = (clamps[s] != 0 ? 1 : 0) | (clamps[ns + s] != 0 ? 2 : 0);
+    const int state = pattern.State(s);
     ws.state[s] = state;
     e.state_needed[static_cast<std::size_t>(mesh_kind_[s]) * 4 + state] = 1;
     e.kind_needed[static_cast<std::size_t>(kind_[s]) * 4 + state] = 1;
@@ -475,7 +476,8 @@ COMBABC_KERNEL void ContinuousCondensation::Assemble(std::span<const std::uint8_
   const int nc = layout_->nc();
   const int num_cases = layout_->num_cases();
   const int rows = ws.num_rows;
-  for (int c = 0; c < rows; ++c) ws.free[c] = &layout_->FreeDofs(c, clamps);
+  const ClampPattern pattern(clamps, ns);
+  for (int c = 0; c < rows; ++c) ws.free[c] = &layout_->FreeDofs(c, pattern);
   const auto piece_of = [&](int s) -> const Complex* {
     return e.piece[static_cast<std::size_t>(mesh_kind_[s]) * 4 + ws.state[s]].data();
   };

@@ -454,11 +454,10 @@ void SectionCondensation::CondenseSections(const Plate& plate,
 
 const SectionCondensation::SolvePiece& SectionCondensation::GroupPieceOf(
     int group, std::span<const std::uint8_t> clamps) const {
-  const int ns = layout_->num_sections();
+  const ClampPattern pattern(clamps, layout_->num_sections());
   int state = 0;
   for (int k = 0; k < group_size_; ++k) {
-    const int section = group * group_size_ + k;
-    state |= ((clamps[section] != 0 ? 1 : 0) | (clamps[ns + section] != 0 ? 2 : 0)) << (2 * k);
+    state |= pattern.State(group * group_size_ + k) << (2 * k);
   }
   return group_pieces_[group_piece_index_[group][state]];
 }

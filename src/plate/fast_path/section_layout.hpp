@@ -17,6 +17,7 @@
 
 #include <Eigen/Dense>
 
+#include "combabc/plate/assembly/clamp_pattern.hpp"
 #include "combabc/plate/assembly/plate.hpp"
 
 namespace combabc::plate {
@@ -110,13 +111,12 @@ class SectionLayout {
   const std::vector<int>& FreeDofs(int c, bool fixed_a, bool fixed_b) const {
     return free_dofs_[c][(fixed_a ? 1 : 0) | (fixed_b ? 2 : 0)];
   }
-  // The same in a configuration (clamps: 2 num_sections bytes, edge A's sections, then edge B's):
-  // a node on edge A (B) is fixed when either adjoining section fixes it.
-  const std::vector<int>& FreeDofs(int c, std::span<const std::uint8_t> clamps) const {
-    const int ns = num_sections_;
+  // The same in a configuration: a node on edge A (B) is fixed when either adjoining section
+  // fixes it.
+  const std::vector<int>& FreeDofs(int c, const ClampPattern& clamps) const {
     return FreeDofs(c,
-                    (c > 0 && clamps[c - 1] != 0) || (c < ns && clamps[c] != 0),
-                    (c > 0 && clamps[ns + c - 1] != 0) || (c < ns && clamps[ns + c] != 0));
+                    clamps.BoundaryFixed(ClampPattern::kEdgeA, c),
+                    clamps.BoundaryFixed(ClampPattern::kEdgeB, c));
   }
   // The local dofs of one section in clamp state `state` (bit 0 / bit 1: its edge-A / edge-B
   // clamp is fixed), (intervals + 1) cross-sections of nc: boundary[d] indexes [left; right] for

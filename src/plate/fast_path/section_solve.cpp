@@ -469,7 +469,8 @@ COMBABC_KERNEL void SectionCondensation::Assemble(std::span<const std::uint8_t> 
   const int nc = layout_->nc();
   const Index cases = layout_->num_cases();
   const int rows = ws.num_rows;
-  for (int i = 0; i < rows; ++i) ws.free[i] = &layout_->FreeDofs((i + 1) * group_size_, clamps);
+  const ClampPattern pattern(clamps, layout_->num_sections());
+  for (int i = 0; i < rows; ++i) ws.free[i] = &layout_->FreeDofs((i + 1) * group_size_, pattern);
   for (int i = 0; i < rows; ++i) {
     const SolvePiece& left = GroupPieceOf(i, clamps);
     const SolvePiece& right = GroupPieceOf(i + 1, clamps);

@@ -8,6 +8,8 @@
 
 #include <Eigen/Dense>
 
+#include "combabc/core/validation_error.hpp"
+
 namespace combabc::plate {
 
 // One isotropic layer; SI units.
@@ -18,7 +20,9 @@ struct Layer {
   double density = 1000.0;        // kg/m^3, in [1e-3, 1e5]
   double loss_factor = 0.0;  // eta in [0, 10]: hysteretic damping, complex modulus E(1 + i eta)
 
-  // Names the field and the violated constraint; `prefix` names the owner ("layers[1]").
+  // Names the field and the violated constraint (owner "Layer").
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence, `prefix` naming the owner: "Layer::thickness = 2; must be ...".
   bool IsValid(std::string* why, const std::string& prefix = "Layer") const;
 };
 
