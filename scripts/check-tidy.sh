@@ -9,12 +9,12 @@
 # standard headers are parsed once per batch, not once per file (docs/ci.md: about 3.5x less CPU).
 # The tests, the CLI, benchmarks, examples and the Python module are batched the same way for
 # clang-tidy alone (scripts/tidy_batches.py: the files of one command line, eight at a time, no two
-# that declare the same file-scope name), so gtest, CLI11, pybind11 and Eigen are parsed and
-# matched once per batch. The batches' own #include of .cpp files is what unity builds do, so
-# bugprone-suspicious-include is off for them. The price: the static analyzer's path-sensitive
-# checks look only at functions of the main file, so they skip the batched sources (the AST checks
-# still see every line); the plate stays one file at a time with every check, and so does every
-# file of a developer's tree (unity off).
+# that declare the same file-scope name, with their folder's .clang-tidy: tests/ has no analyzer),
+# so gtest, CLI11, pybind11 and Eigen are parsed and matched once per batch. The batches' own
+# #include of .cpp files is what unity builds do, so bugprone-suspicious-include is off for them.
+# The price: the static analyzer's path-sensitive checks look only at functions of the main file,
+# so they skip the batched sources (the AST checks still see every line); the plate stays one file
+# at a time with every check, and so does every file of a developer's tree (unity off).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -43,10 +43,10 @@ status=0
 args=(-quiet -extra-arg=-Wno-unknown-warning-option)
 if [ "$unity" -gt 0 ]; then
   # A batch's sources are "headers" to clang-tidy: the filter names them; the configuration is
-  # the repository's (the batches sit in the build tree, which need not be inside it).
+  # its files' (the batches sit in the build tree, which need not be inside the repository).
   binary=$(command -v clang-tidy-14 || command -v clang-tidy)
   python3 scripts/tidy_batches.py "$build" "$root" "$binary" "$(nproc)" \
-    -- "${args[@]}" -config="$(cat .clang-tidy)" -checks=-bugprone-suspicious-include \
+    -- "${args[@]}" -checks=-bugprone-suspicious-include \
     -header-filter='/(include/combabc|src|apps|tests|bench|examples|python)/.*\.(hpp|cpp)$' \
     -- "${args[@]}" 2>&1 | sed -r 's/\x1b\[[0-9;]*m//g' >>"$log" || status=$?
 else

@@ -15,6 +15,8 @@ batch that still does not compile is checked again one file at a time, so a clas
 never a missed or a false warning. It prints the CPU time of all the clang-tidy runs.
 
 usage: tidy_batches.py BUILD_DIR ROOT CLANG_TIDY JOBS -- BATCH_ARGS... -- SINGLE_ARGS...
+A batch is checked with the configuration its files have (-config: the .clang-tidy of their
+folder, tests/ and bench/ have their own) and BATCH_ARGS; a file alone with SINGLE_ARGS.
 Prints every translation unit's clang-tidy output; exits 1 if any clang-tidy run failed.
 """
 import concurrent.futures
@@ -38,9 +40,15 @@ def file_scope_names(path):
     """The names a file declares at namespace scope, roughly: what two files of one batch must not
     both declare. clang-format (Google style) leaves namespace scope unindented, so those are the
     declarations that start a line; a name missed here only costs the batch's retry."""
-    names = set()
+    names, raw = set(), False
     with open(path, encoding="utf-8", errors="replace") as f:
         for line in f:
+            # Lines inside a raw string literal (a config's text) declare nothing.
+            was_raw = raw
+            for mark in re.findall(r'R"\(|\)"', line):
+                raw = mark != ')"'
+            if was_raw:
+                continue
             if m := TEST_MACRO.match(line):
                 names.add("%s_%s_Test" % (m.group(2), m.group(3)))
             elif m := INSTANTIATE.match(line):
@@ -54,6 +62,8 @@ def file_scope_names(path):
                     head = re.sub(r"<[^<>]*>", "", head)
                 if ids := re.findall(r"[A-Za-z_]\w*", head):
                     names.add(ids[-1])
+                # And every name before an '=' (constexpr int kData = 65, kConfig = 78;).
+                names.update(re.findall(r"([A-Za-z_]\w*)(?:\[\])?\s*=(?!=)", line))
     return names
 
 
@@ -88,30 +98,40 @@ def key_of(entry):
     return entry["directory"], tuple(out)
 
 
+def config_dir(path, root):
+    """The folder of the .clang-tidy that applies to `path` (tests/ and bench/ have their own)."""
+    folder = os.path.dirname(path)
+    while folder.startswith(root) and not os.path.exists(os.path.join(folder, ".clang-tidy")):
+        folder = os.path.dirname(folder)
+    return folder if folder.startswith(root) else root
+
+
 def plan(build, root):
     """Writes BUILD/tidy-batches/ (batch files and a compile database); returns the work list of
-    (path, members) pairs: members is None for a single file or a library batch."""
+    (path, members, config folder) triples: members is None for a single file, [] for a library
+    batch."""
     with open(os.path.join(build, "compile_commands.json"), encoding="utf-8") as f:
         db = json.load(f)
     own = re.compile("^" + re.escape(root) + OWN)
     groups, work, entries = {}, [], []
     for e in db:
         if own.search(e["file"]):
-            groups.setdefault(key_of(e), []).append(e)
+            # One batch, one configuration: the files' own .clang-tidy (tests/ has no analyzer).
+            groups.setdefault(key_of(e) + (config_dir(e["file"], root),), []).append(e)
         elif re.search(LIBRARY_BATCH, e["file"]):
-            work.append((e["file"], []))
+            work.append((e["file"], [], root))
             entries.append(e)
         elif e["file"].startswith(root + "/src/"):
-            work.append((e["file"], None))
+            work.append((e["file"], None, None))
             entries.append(e)
     out = os.path.join(build, "tidy-batches")
     os.makedirs(out, exist_ok=True)
     n = 0
-    for (directory, args), files in sorted(groups.items(), key=lambda g: g[1][0]["file"]):
+    for (directory, args, folder), files in sorted(groups.items(), key=lambda g: g[1][0]["file"]):
         files.sort(key=lambda e: e["file"])
         for chunk in pack(files):
             if len(chunk) == 1:
-                work.append((chunk[0]["file"], None))
+                work.append((chunk[0]["file"], None, None))
                 entries.append(chunk[0])
                 continue
             path = os.path.join(out, "batch_%02d.cxx" % n)
@@ -123,7 +143,7 @@ def plan(build, root):
             entries.append({"directory": directory, "file": path,
                             "arguments": list(args) + ["-c", path]})
             entries.extend(chunk)  # for the one-file-at-a-time retry
-            work.append((path, [e["file"] for e in chunk]))
+            work.append((path, [e["file"] for e in chunk], folder))
     with open(os.path.join(out, "compile_commands.json"), "w", encoding="utf-8") as f:
         json.dump(entries, f, indent=1)
     return out, work
@@ -137,9 +157,20 @@ def main():
     batch_args, single_args = argv[first + 1:second], argv[second + 1:]
     db, work = plan(os.path.abspath(build), root)
 
-    def run(path, batch):
-        """clang-tidy on one translation unit: its exit code, output and CPU seconds."""
-        cmd = [tidy, "-p", db] + (batch_args if batch else single_args) + [path]
+    configs = {}  # folder -> the configuration clang-tidy reads for a file there
+
+    def config_of(folder):
+        if folder not in configs:
+            configs[folder] = subprocess.run(
+                [tidy, "--dump-config", os.path.join(folder, "any.cpp"), "--"],
+                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, check=True).stdout
+        return configs[folder]
+
+    def run(path, folder):
+        """clang-tidy on one translation unit (a batch when `folder` names its configuration):
+        its exit code, output and CPU seconds."""
+        cmd = [tidy, "-p", db] + (batch_args + ["-config=" + config_of(folder)]
+                                  if folder else single_args) + [path]
         p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         text = p.stdout.read()
         p.stdout.close()
@@ -148,16 +179,19 @@ def main():
         return p.returncode, text, usage.ru_utime + usage.ru_stime
 
     def check(item):
-        path, members = item
-        code, text, cpu = run(path, members is not None)
+        path, members, folder = item
+        code, text, cpu = run(path, folder)
         if members and COMPILE_ERROR.search(text):
             # A clash between the batch's files: each on its own, as without batches.
             text = "check-tidy: %s does not compile as one unit; its %d files one at a time\n" % (
                 os.path.basename(path), len(members))
             code = 0
             for m in members:
-                c, t, seconds = run(m, False)
+                c, t, seconds = run(m, None)
                 code, text, cpu = code or c, text + t, cpu + seconds
+        if os.environ.get("COMBABC_TIDY_TIMES"):  # each unit's CPU, to measure (docs/ci.md)
+            text += "check-tidy: %.1f s of CPU: %s %s\n" % (
+                cpu, path, " ".join(os.path.relpath(m, root) for m in members or []))
         return code, text, cpu
 
     failed, total = False, 0.0
