@@ -7,10 +7,14 @@
 # A build configured with COMBABC_UNITY=ON (CI's) lists the library components' unity batches
 # instead of their sources: each batch is checked as one translation unit, so Eigen, toml++ and the
 # standard headers are parsed once per batch, not once per file (docs/ci.md: about 3.5x less CPU).
-# The batches' own #include of .cpp files is what unity builds do, so bugprone-suspicious-include
-# is off for them. The price: the static analyzer's path-sensitive checks look only at functions
-# of the main file, so they skip the batched sources (the AST checks still see every line); the
-# plate, the CLI, the tests and the rest stay one file at a time with every check.
+# The tests, the CLI, benchmarks, examples and the Python module are batched the same way for
+# clang-tidy alone (scripts/tidy_batches.py: the files of one command line, eight at a time, no two
+# that declare the same file-scope name, with their folder's .clang-tidy: tests/ has no analyzer),
+# so gtest, CLI11, pybind11 and Eigen are parsed and matched once per batch. The batches' own
+# #include of .cpp files is what unity builds do, so bugprone-suspicious-include is off for them.
+# The price: the static analyzer's path-sensitive checks look only at functions of the main file,
+# so they skip the batched sources (the AST checks still see every line); the plate stays one file
+# at a time with every check, and so does every file of a developer's tree (unity off).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -28,7 +32,6 @@ fi
 build_abs=$(cd "$build" && pwd)
 # Generated sources (none today but the unity batches) live in the build tree.
 files="^$root/(src|apps|tests|bench|examples|python)/.*\.cpp$"
-batches="^$build_abs/src/CMakeFiles/[^/]+/Unity/unity_[0-9]+_cxx\.cxx$"
 count=$(grep -cE "\"file\": \"$root/(src|apps|tests|bench|examples|python)/.*\.cpp\"" "$db" || true)
 unity=$(grep -cE "\"file\": \"$build_abs/src/CMakeFiles/[^/]+/Unity/" "$db" || true)
 echo "check-tidy: $count files and $unity unity batches from $db, $(nproc) jobs"
@@ -37,18 +40,19 @@ trap 'rm -f "$log"' EXIT
 start=$SECONDS
 status=0
 # The database holds GCC's command lines: clang does not know some of its -Wno-* options.
-common=(-p "$build" -j "$(nproc)" -quiet -extra-arg=-Wno-unknown-warning-option)
+args=(-quiet -extra-arg=-Wno-unknown-warning-option)
 if [ "$unity" -gt 0 ]; then
   # A batch's sources are "headers" to clang-tidy: the filter names them; the configuration is
-  # the repository's (the batches sit in the build tree, which need not be inside it).
-  # run-clang-tidy echoes each command, the configuration's lines with it (the last one ending in
-  # the batch's name): those are dropped.
-  "$tidy" "${common[@]}" -config="$(cat .clang-tidy)" -checks=-bugprone-suspicious-include \
-    -header-filter='/(include/combabc|src)/.*\.(hpp|cpp)$' "$batches" 2>&1 |
-    sed -r 's/\x1b\[[0-9;]*m//g' | { grep -vxF -f .clang-tidy | grep -vE '_cxx\.cxx$' || true; } \
+  # its files' (the batches sit in the build tree, which need not be inside the repository).
+  binary=$(command -v clang-tidy-14 || command -v clang-tidy)
+  python3 scripts/tidy_batches.py "$build" "$root" "$binary" "$(nproc)" \
+    -- "${args[@]}" -checks=-bugprone-suspicious-include \
+    -header-filter='/(include/combabc|src|apps|tests|bench|examples|python)/.*\.(hpp|cpp)$' \
+    -- "${args[@]}" 2>&1 | sed -r 's/\x1b\[[0-9;]*m//g' >>"$log" || status=$?
+else
+  "$tidy" -p "$build" -j "$(nproc)" "${args[@]}" "$files" 2>&1 | sed -r 's/\x1b\[[0-9;]*m//g' \
     >>"$log" || status=$?
 fi
-"$tidy" "${common[@]}" "$files" 2>&1 | sed -r 's/\x1b\[[0-9;]*m//g' >>"$log" || status=$?
 # clang-tidy prints one "N warnings generated" line per file, mostly for suppressed headers.
 grep -vE '^[0-9]+ warnings? (and [0-9]+ errors? )?generated\.$|^Suppressed [0-9]+ warnings|^Use -header-filter|^clang-tidy(-[0-9]+)? |^Running clang-tidy' "$log" || true
 found=$(grep -E '^/.*: (warning|error): ' "$log" | sort -u || true)

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <string>
 
 #include "combabc/distances/euclidean_distance.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
@@ -135,6 +136,36 @@ TEST_P(ContinuousExactness, MixedBitsAndRealMatchEnumerationTimesQuadrature) {
     // the fourth moment of the support's half-width, 2.
     EXPECT_NEAR(got.mean, exact.mean, 5.0 * std::sqrt(exact.var / last.ess));
     EXPECT_NEAR(got.var, exact.var, 5.0 * 4.0 / std::sqrt(last.ess));
+  }
+}
+
+// The mixed toy above, small: the same history for one and two threads, under either binary
+// kernel. The ThreadSanitizer runs this one (CMakeLists.txt), not the exactness tests: their
+// 3,000-particle waves took 155 s there and test nothing more about threads.
+TEST_P(ContinuousExactness, MixedBitsAndRealSameHistoryForOneAndTwoThreads) {
+  ContinuousPrior prior;
+  prior.kind = PriorKind::kUniform;
+  prior.low = -2.0;
+  prior.high = 2.0;
+  BinarySpaceOptions so;
+  so.dimension = 3;
+  so.prior_one = {0.5, 0.3, 0.6};
+  const ParameterSpace space(BinarySpace(so), {{"theta", prior}});
+  const LinearGaussianSimulator sim({1.0, -0.5, 2.0}, 0.3);
+  const AbsoluteDistance dist(1.7);
+  for (const auto binary : {BinaryKernelKind::kIndependent, BinaryKernelKind::kLogistic}) {
+    auto o = ListOptions({2.0, 1.0, 0.5, 0.25}, GetParam(), 200, 32);
+    o.proposal.binary = binary;
+    o.tempering.kind = TemperingKind::kLinear;
+    o.tempering.phi0 = 0.3;
+    o.tempering.form = TemperingForm::kMixture;
+    o.threads = 1;
+    const auto one = RunCombinatorialSmc({&space, &sim, &dist}, o);
+    ASSERT_EQ(one.summary.termination, Termination::kTargetReached) << ToString(binary);
+    o.threads = 2;
+    const auto two = RunCombinatorialSmc({&space, &sim, &dist}, o);
+    std::string where;
+    EXPECT_TRUE(SameHistory(one, two, &where)) << ToString(binary) << ": " << where;
   }
 }
 

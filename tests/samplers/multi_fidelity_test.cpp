@@ -520,6 +520,44 @@ TEST(MultiFidelity, MixedBitsAndRealMatchEnumerationTimesQuadrature) {
   }
 }
 
+// The mixed bits x real toy above, small: the same history for one and two threads. This is the
+// ThreadSanitizer's run of multi-fidelity with reals (CMakeLists.txt): the exactness test itself
+// (2 x 4 waves of 3,000) took 98 s there and tests nothing more about threads.
+TEST(MultiFidelity, MixedBitsAndRealSameHistoryForOneAndTwoThreads) {
+  ContinuousPrior prior;
+  prior.kind = PriorKind::kUniform;
+  prior.low = -2.0;
+  prior.high = 2.0;
+  BinarySpaceOptions so;
+  so.dimension = 3;
+  so.prior_one = {0.5, 0.3, 0.6};
+  const ParameterSpace space(BinarySpace(so), {{"theta", prior}});
+  const LinearSimulator expensive({1.0, -0.5, 2.0}, 0.0, 0.3);
+  const LinearSimulator cheap({1.0, 0.0, 2.0}, 0.2, 0.0);
+  const AbsoluteDistance dist;
+  for (const auto binary : {BinaryKernelKind::kIndependent, BinaryKernelKind::kLogistic}) {
+    SmcOptions o;
+    o.num_waves = 4;
+    o.accepted_per_wave = 200;
+    o.seed = 32;
+    o.threads = 1;
+    o.proposal.binary = binary;
+    ThresholdSchedule s;
+    s.kind = ThresholdKind::kList;
+    s.values = {2.0, 1.0, 0.5, 0.25};
+    o.thresholds = {s};
+    o.multi_fidelity.cost_ratio = 20.0;
+    SmcProblem problem{&space, &expensive, &dist};
+    problem.low_fidelity = &cheap;
+    const auto one = RunCombinatorialSmc(problem, o);
+    ASSERT_EQ(one.summary.termination, Termination::kTargetReached) << ToString(binary);
+    o.threads = 2;
+    const auto two = RunCombinatorialSmc(problem, o);
+    std::string where;
+    EXPECT_TRUE(SameHistory(one, two, &where)) << ToString(binary) << ": " << where;
+  }
+}
+
 TEST(MultiFidelity, SameHistoryForOneAndTwoThreads) {
   Toy toy;
   const ToySimulator cheap({2, 5}, 0.3, 0.1);
