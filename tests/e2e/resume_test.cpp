@@ -116,7 +116,7 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
            Case{"data",
                 "resume: the measured data changed since the run started (data.csv: "
                 "fingerprint_data differs); start a new run or restore the file"},
-           Case{"sampler", "the sampler options ([sampler], [proposal])"},
+           Case{"sampler", "the sampler options ([sampler], [sampler.moves], [proposal])"},
            Case{"space", "the parameter space"},
            Case{"metric", "the metric ([metric])"},
            Case{"simulator", "the simulator (its kind, and [model] for the sensor"},
@@ -147,6 +147,30 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
   const auto r = RunCli({"resume", Started("two.sqlite", two), "--no-report"}, dir_.path());
   EXPECT_EQ(r.exit_code, 78);
   EXPECT_NE(r.err.find("(also fingerprint_simulator)"), std::string::npos) << r.err;
+}
+
+// The sampling method is part of the sampler's fingerprint: a rejection run whose stored
+// configuration now asks for resample-move waves (or other move options) is refused, since its
+// continuation would not be the run it started as. A rejection run's digest is the one it had
+// before the method existed (the resumes above, and OldDefaultTheory's history of an older
+// combabc).
+TEST_F(ResumeFingerprint, ARunResumedUnderAnotherMethodIsRefused) {
+  for (const char* method : {"method = \"resample_move\"\n",
+                             "method = \"resample_move\"\n[sampler.moves]\nmax_rounds = 3\n"}) {
+    SCOPED_TRACE(method);
+    RunMetadata changed = finished_;
+    const std::size_t sampler = changed.config_text.find("seed = 3\n");
+    ASSERT_NE(sampler, std::string::npos);
+    // [sampler.moves] must come after [sampler]'s own keys: at the end of the table's keys.
+    const std::size_t end = changed.config_text.find("accepted_per_wave = 5\n", sampler);
+    ASSERT_NE(end, std::string::npos);
+    changed.config_text.insert(end + std::string("accepted_per_wave = 5\n").size(), method);
+    const std::string path = Started("method.sqlite", changed);
+    const auto r = RunCli({"resume", path, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 78) << r.err;
+    EXPECT_NE(r.err.find("fingerprint_sampler differs"), std::string::npos) << r.err;
+    fs::remove(path);
+  }
 }
 
 // Issue 35: the history's experiment table (names, descriptions and how its outputs, data and
