@@ -90,10 +90,21 @@ void CandidateBatch::EvaluateRange(std::size_t begin, std::size_t end) {
                             std::to_string(first + static_cast<std::int64_t>(begin)) + "-" +
                             std::to_string(first + static_cast<std::int64_t>(end) - 1);
   for (std::size_t i = begin; i < end; ++i) {
+    const auto index = static_cast<std::uint64_t>(first) + i;
     rngs_[i] = RandomStream(
-        seed_, static_cast<std::uint64_t>(wave), static_cast<std::uint64_t>(first) + i);
+        seed_, proposal_.given ? proposal_.stream : static_cast<std::uint64_t>(wave), index);
     auto free = span_of(free_, i, f_);
     auto reals = span_of(reals_, i, r_);
+    if (proposal_.given) {
+      std::copy_n(
+          proposal_.given_free.begin() + static_cast<std::ptrdiff_t>(index * f_), f_, free.begin());
+      std::copy_n(proposal_.given_reals.begin() + static_cast<std::ptrdiff_t>(index * r_),
+                  r_,
+                  reals.begin());
+      space_.binary().Expand(free, span_of(bits_, i, d_));
+      log_weights_[i] = 0.0;
+      continue;
+    }
     try {
       proposal_.proposal->Sample(rngs_[i], free, reals);
     } catch (const std::exception& e) {

@@ -23,9 +23,16 @@
 namespace combabc {
 
 // The proposal of one wave; `from_prior` marks wave 0, whose importance weights are exactly 1.
+// A resample-move round gives its candidates instead (`given_free`, `given_reals`: one row per
+// candidate index, free bits and reals), and its own random streams (`stream`, in place of the
+// wave's number), which the candidates' simulators draw from; their log weight is then 0.
 struct WaveProposal {
   const JointProposal* proposal = nullptr;
   bool from_prior = false;
+  std::span<const std::uint8_t> given_free = {};
+  std::span<const double> given_reals = {};
+  bool given = false;
+  std::uint64_t stream = 0;
 };
 
 // What a multi-fidelity batch needs besides the expensive simulator: the cheap one, the

@@ -15,6 +15,7 @@
 #include "proposals/log_sum_exp.hpp"
 #include "samplers/candidate_batch.hpp"
 #include "samplers/continuation_tuning.hpp"
+#include "samplers/move_step.hpp"
 
 namespace combabc {
 namespace {
@@ -113,6 +114,7 @@ class SmcRun {
       : space_(*problem.space),
         simulator_(*problem.simulator),
         low_fidelity_(problem.low_fidelity),
+        start_population_(problem.start),
         distance_(*problem.distance),
         options_(options),
         observer_(observer),
@@ -138,6 +140,26 @@ class SmcRun {
                   "",
                   0,
                   "SmcOptions::estimator");
+    }
+    if (options_.method == SamplerMethod::kResampleMove) {
+      // Moves keep the previous wave's particles as draws from its target: they need the
+      // importance weights that make them so, and one simulator whose acceptance is the target.
+      if (options_.estimator == Estimator::kPaper) {
+        throw Error(ErrorKind::kConfig,
+                    "resample-move waves need importance weights (estimator = importance); the "
+                    "paper estimator's equal weights are not draws from the wave's target",
+                    "",
+                    0,
+                    "SmcOptions::method");
+      }
+      if (low_fidelity_) {
+        throw Error(ErrorKind::kConfig,
+                    "resample-move waves do not apply to a multi-fidelity run (its weights are "
+                    "signed and its acceptance is two simulators')",
+                    "",
+                    0,
+                    "SmcOptions::method");
+      }
     }
     for (std::size_t k = 0; k < components_.size(); ++k) {
       if (components_[k].kind != ComponentKind::kIndicator) threshold_components_.push_back(k);
@@ -198,6 +220,8 @@ class SmcRun {
     int first_wave = 0;
     if (resume) {
       history.waves = resume->completed;
+      // Not stored: derived from the ancestors, as the move waves' errors and Eves need.
+      AssignEveIndices(history.waves);
       for (const auto& w : history.waves) {
         total_ += w.candidates;
         discarded_ += w.discarded;
@@ -212,8 +236,30 @@ class SmcRun {
         return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
       }
     }
+    if (start_population_ && first_wave == 0) {
+      // Wave 0 is the finished run's posterior, re-simulated; cut short, it is done again.
+      WaveRecord wave = StartFromPopulation();
+      const bool complete = wave.complete;
+      history.waves.push_back(std::move(wave));
+      if (!complete) {
+        return Finish(std::move(history), start_stop_->first, start_stop_->second);
+      }
+      first_wave = 1;
+    }
     for (int t = first_wave; t < options_.num_waves; ++t) {
       const WaveRecord* previous = t > 0 ? &history.waves.back() : nullptr;
+      if (std::optional<WaveRecord> moving = StartMoveWave(t, previous, history.waves)) {
+        // A move wave is not checkpointed within: a resumed run does it again from its start
+        // (the same rounds, from the same streams), whatever a partial record of it holds.
+        const auto stop = MoveWave(*moving, *previous);
+        history.waves.push_back(std::move(*moving));
+        if (stop) return Finish(std::move(history), stop->first, stop->second);
+        if (AllFinal(history.waves.back())) {
+          return Finish(
+              std::move(history), Termination::kTargetReached, "target threshold reached");
+        }
+        continue;
+      }
       WaveRecord wave = StartWave(t, previous, history.waves);
       std::int64_t next_index = 0;
       if (resume && resume->has_partial && resume->partial_wave == t) {
@@ -699,6 +745,433 @@ class SmcRun {
     return stop;
   }
 
+  // Wave 0 from SmcProblem::start: its parameters simulated under this problem (in batches, as a
+  // move round's), each kept with its weight (log_weight = log w) unless its simulation failed.
+  WaveRecord StartFromPopulation() {
+    const auto wave_start = Clock::now();
+    const StartPopulation& start = *start_population_;
+    if (start.thresholds.size() != schedules_.size() ||
+        start.weights.size() != start.thetas.size() || start.thetas.empty()) {
+      throw Error(ErrorKind::kConfig,
+                  "has " + std::to_string(start.thetas.size()) + " parameters, " +
+                      std::to_string(start.weights.size()) + " weights and " +
+                      std::to_string(start.thresholds.size()) + " thresholds; the problem has " +
+                      std::to_string(schedules_.size()) + " threshold and likelihood components",
+                  "",
+                  0,
+                  "SmcProblem::start");
+    }
+    const std::size_t n = start.thetas.size();
+    const std::size_t f = static_cast<std::size_t>(space_.num_free_bits());
+    const std::size_t r = static_cast<std::size_t>(space_.num_reals());
+    std::vector<std::uint8_t> free(n * f);
+    std::vector<double> reals(n * r);
+    for (std::size_t i = 0; i < n; ++i) {
+      const ParameterValue& theta = start.thetas[i];
+      if (theta.reals.size() != r ||
+          !space_.binary().Reduce(theta.bits, std::span(free.data() + i * f, f))) {
+        throw Error(ErrorKind::kConfig,
+                    "parameter " + std::to_string(i) + " does not fit the problem's space",
+                    "",
+                    0,
+                    "SmcProblem::start");
+      }
+      std::copy(theta.reals.begin(), theta.reals.end(), reals.begin() + i * r);
+    }
+    WaveRecord wave;
+    wave.wave = 0;
+    wave.thresholds = start.thresholds;
+    offsets_.assign(schedules_.size(), 0.0);
+    proposal_ = kernel_->Prior(space_);
+    from_prior_ = true;
+    wave.proposal = proposal_->Marginals();
+    if (observer_) observer_->OnWaveStart(wave);
+    CandidateBatch batch(space_, simulator_, distance_, components_.size());
+    const WaveProposal given{.given_free = free,
+                             .given_reals = reals,
+                             .given = true,
+                             .stream = MoveStream(0, kStartRound, true)};
+    const auto count = static_cast<std::int64_t>(n);
+    std::int64_t next = 0;
+    while (next < count && !start_stop_) {
+      const std::int64_t size = std::min(count - next, MoveBatchSize());
+      const auto batch_start = Clock::now();
+      batch.Evaluate(*executor_, options_.seed, 0, next, size, given);
+      MeasureCost(size, Seconds(batch_start));
+      const std::size_t before = wave.particles.size();
+      const std::size_t failures_before = wave.failures.size();
+      for (std::int64_t j = 0; j < size; ++j) {
+        const auto i = static_cast<std::size_t>(next + j);
+        ++total_;
+        ++wave.candidates;
+        if (batch.failed(j)) {
+          wave.failures.push_back({next + j, std::string(batch.reason(j))});
+          ++failures_;
+          last_failure_ = Describe(0, wave.failures.back());
+        } else if (start.weights[i] > 0.0) {
+          Particle p = batch.MakeParticle(j, next + j, options_.keep_outputs);
+          p.log_weight = std::log(start.weights[i]);
+          wave.particles.push_back(std::move(p));
+        }
+        start_stop_ = FailureOrFloorStop(
+            options_, total_, failures_, last_failure_, 0, wave.candidates, count);
+        if (start_stop_) break;
+      }
+      next += size;
+      if (observer_) {
+        BatchProgress progress{
+            0,
+            wave.candidates,
+            static_cast<std::int64_t>(wave.particles.size()),
+            0,
+            static_cast<int>(count),
+            total_,
+            Seconds(start_),
+            static_cast<std::int64_t>(wave.failures.size()),
+            std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
+            std::nullopt};
+        observer_->OnBatch(progress, std::span<const Particle>(wave.particles).subspan(before));
+      }
+      if (!start_stop_) start_stop_ = WallTimeOrInterrupt(wave);
+    }
+    if (!start_stop_ && wave.particles.empty()) {
+      start_stop_ = Stop({Termination::kTooManyFailures,
+                          "every parameter of the finished run failed to simulate; last failure: " +
+                              last_failure_});
+    }
+    wave.complete = !start_stop_;
+    ComputeWaveStatistics(wave, options_.estimator);
+    wave.wall_seconds = Seconds(wave_start);
+    last_rate_ = 1.0;
+    if (observer_) observer_->OnWaveEnd(wave);
+    return wave;
+  }
+
+  // m_k per schedule slot of the wave after `waves`: the best likelihood distance among their
+  // particles (as Thresholds computes it), 0 for threshold slots and before any particle.
+  std::vector<double> OffsetsAfter(std::span<const WaveRecord> waves) const {
+    std::vector<double> offsets(schedules_.size(), 0.0);
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      if (!IsLikelihood(s)) continue;
+      const std::size_t k = threshold_components_[s];
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& w : waves) {
+        for (const auto& p : w.particles) best = std::min(best, p.distance[k]);
+      }
+      if (std::isfinite(best)) offsets[s] = best;
+    }
+    return offsets;
+  }
+
+  // Wave t as a resample-move wave (docs/algorithm.md, "Resample-move"), when the run moves and
+  // wave t - 1 (`previous`, done's last) is complete: its thresholds, the previous particles'
+  // weights under them (move_weights_), the kernel fitted to those (proposal_) and the moves
+  // (moves_). The thresholds are the schedule's, or a shorter step toward them (Del Moral, Doucet
+  // & Jasra 2012) where the full step would leave fewer than MoveOptions::ess_fraction of the
+  // previous effective sample size: for a likelihood component a step in 1 / T, for a threshold
+  // one in the quantile of the previous distances it keeps. Nothing (a rejection wave instead)
+  // when even that keeps fewer than MoveOptions::min_survivor_fraction x n_t.
+  std::optional<WaveRecord> StartMoveWave(int t,
+                                          const WaveRecord* previous,
+                                          const std::vector<WaveRecord>& done) {
+    if (options_.method != SamplerMethod::kResampleMove || !previous || !previous->complete ||
+        previous->particles.empty()) {
+      return std::nullopt;
+    }
+    const std::span<const WaveRecord> earlier(done.data(), done.size() - 1);
+    std::vector<double> offsets;
+    // The full step: a list schedule's next value; an adaptive schedule's target, from which the
+    // ESS rule below steps back (Del Moral, Doucet & Jasra 2012 choose eps_t by the ESS alone).
+    std::vector<double> full = Thresholds(t, previous, earlier, offsets);
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      if (schedules_[s].kind != ThresholdKind::kList) full[s] = schedules_[s].target;
+    }
+    const std::vector<double> last_offsets = OffsetsAfter(earlier);
+    const auto& particles = previous->particles;
+    const std::size_t n_prev = particles.size();
+    std::vector<double> before(n_prev);
+    std::vector<double> last_log_accept(n_prev);
+    for (std::size_t i = 0; i < n_prev; ++i) {
+      before[i] = std::max(particles[i].weight, 0.0);
+      last_log_accept[i] = LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
+    }
+    // Per threshold slot: the weighted share of the previous particles within the full step's
+    // threshold, and their distances.
+    std::vector<std::vector<double>> column(schedules_.size());
+    std::vector<double> kept_share(schedules_.size(), 1.0);
+    for (std::size_t s = 0; s < schedules_.size(); ++s) {
+      if (IsLikelihood(s)) continue;
+      const std::size_t k = threshold_components_[s];
+      double within = 0.0;
+      double total = 0.0;
+      for (std::size_t i = 0; i < n_prev; ++i) {
+        column[s].push_back(particles[i].distance[k]);
+        total += before[i];
+        if (particles[i].distance[k] <= full[s]) within += before[i];
+      }
+      kept_share[s] = total > 0.0 ? within / total : 1.0;
+    }
+    auto thresholds_at = [&](double step) {
+      if (step >= 1.0) return full;
+      std::vector<double> eps(full.size());
+      for (std::size_t s = 0; s < full.size(); ++s) {
+        if (IsLikelihood(s)) {
+          const double inverse = 1.0 / previous->thresholds[s] +
+                                 step * (1.0 / full[s] - 1.0 / previous->thresholds[s]);
+          eps[s] = inverse > 0.0 ? 1.0 / inverse : std::numeric_limits<double>::infinity();
+        } else {
+          const double level = 1.0 - step * (1.0 - kept_share[s]);
+          eps[s] = std::max(full[s], WeightedQuantile(column[s], before, level));
+        }
+      }
+      return eps;
+    };
+    auto weights_at = [&](double step) {
+      const std::vector<double> eps = thresholds_at(step);
+      std::vector<double> w(n_prev, 0.0);
+      for (std::size_t i = 0; i < n_prev; ++i) {
+        const double log_accept = LogAcceptance(particles[i].distance, eps, offsets);
+        if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity()) {
+          w[i] = before[i] * std::exp(log_accept - last_log_accept[i]);
+        }
+      }
+      return w;
+    };
+    const MoveOptions& mo = options_.moves;
+    const EssStep found = StepKeepingEss(weights_at, mo.ess_fraction * EffectiveSampleSize(before));
+    // Distances tied at the step's threshold: the step that keeps enough changes nothing, so the
+    // wave takes the smallest one that does (keeping less), judged below.
+    const double step =
+        thresholds_at(found.keeps) == previous->thresholds ? found.loses : found.keeps;
+    std::vector<double> weights = weights_at(step);
+    const double survivor_ess = EffectiveSampleSize(weights);
+    const int n = options_.AcceptedIn(t);
+    if (survivor_ess < mo.min_survivor_fraction * n) return std::nullopt;
+
+    WaveRecord wave;
+    wave.wave = t;
+    wave.thresholds = thresholds_at(step);
+    offsets_ = offsets;
+    wave.phi = options_.tempering.Phi(t, options_.num_waves);
+    // The reweighted particles, as the kernels and the local moves see them.
+    Population population;
+    population.num_free_bits = static_cast<std::size_t>(space_.num_free_bits());
+    population.num_reals = static_cast<std::size_t>(space_.num_reals());
+    double total = 0.0;
+    for (double w : weights) total += w;
+    for (std::size_t i = 0; i < n_prev; ++i) {
+      if (!(weights[i] > 0.0)) continue;
+      const auto& p = particles[i];
+      const std::size_t row = population.free_bits.size();
+      population.free_bits.resize(row + population.num_free_bits);
+      COMBABC_CHECK(space_.binary().Reduce(
+          p.theta.bits, std::span(population.free_bits.data() + row, population.num_free_bits)));
+      population.reals.insert(population.reals.end(), p.theta.reals.begin(), p.theta.reals.end());
+      population.weights.push_back(weights[i] / total);
+      population.within_next.push_back(1);
+      ++population.size;
+    }
+    proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
+    from_prior_ = false;
+    moves_ =
+        std::make_unique<MoveProposals>(population, space_, proposal_.get(), mo.independent_share);
+    move_weights_ = std::move(weights);
+    wave.proposal = proposal_->Marginals();
+    wave.moves = WaveMoves{.survivor_ess = survivor_ess, .step = step};
+    if (observer_) observer_->OnWaveStart(wave);
+    return wave;
+  }
+
+  // The random streams of a move wave t's round r (r >= 1; r = kResampleRound for its
+  // resampling): apart from every wave's own candidate streams, which are numbered by the wave
+  // alone. `simulation` marks the streams its simulators draw from (one per simulated proposal).
+  static constexpr std::uint64_t kResampleRound = 0xFFFFFFFFULL;
+  static constexpr std::uint64_t kStartRound = 0xFFFFFFFEULL;  // SmcProblem::start's wave 0
+  static std::uint64_t MoveStream(int t, std::uint64_t round, bool simulation) {
+    return (simulation ? 1ULL << 63 : 0ULL) | (round << 32) | static_cast<std::uint64_t>(t);
+  }
+
+  // Resamples n_t of the previous wave's particles by their move_weights_ and moves each by
+  // Metropolis-Hastings steps that leave the wave's target p(theta) A(d) invariant, A the
+  // acceptance of Accept (an indicator for thresholds, exp(-(d - m) / T) for a likelihood: a
+  // pseudo-marginal ratio where the simulator is stochastic, Andrieu & Roberts 2009). Rounds go
+  // on until a particle has moved with probability 1 - stay_probability (RoundsNeeded).
+  Stop MoveWave(WaveRecord& wave, const WaveRecord& previous) {
+    const auto wave_start = Clock::now();
+    const int n = options_.AcceptedIn(wave.wave);
+    const auto nz = static_cast<std::size_t>(n);
+    const std::size_t f = static_cast<std::size_t>(space_.num_free_bits());
+    const std::size_t r = static_cast<std::size_t>(space_.num_reals());
+    WaveMoves& moves = *wave.moves;
+    RandomStream resample(options_.seed, MoveStream(wave.wave, kResampleRound, false), 0);
+    const auto picked = SystematicResample(move_weights_, nz, resample.Uniform());
+    std::vector<std::uint8_t> free(nz * f);
+    std::vector<double> reals(nz * r);
+    std::vector<double> log_accept(nz);
+    std::vector<double> log_prior(nz);
+    wave.particles.reserve(nz);
+    for (std::size_t i = 0; i < nz; ++i) {
+      Particle p = previous.particles[picked[i]];
+      p.eve = previous.moves ? p.eve : p.index;
+      p.ancestor = p.index;
+      p.index = static_cast<std::int64_t>(i);
+      p.log_weight = 0.0;
+      p.multiplier = 1.0;
+      auto fi = std::span(free.data() + i * f, f);
+      COMBABC_CHECK(space_.binary().Reduce(p.theta.bits, fi));
+      std::copy(p.theta.reals.begin(), p.theta.reals.end(), reals.begin() + i * r);
+      log_accept[i] = LogAcceptance(p.distance, wave.thresholds, offsets_);
+      log_prior[i] = space_.LogPriorBits(fi) + (r > 0 ? space_.LogPriorReals(p.theta.reals) : 0.0);
+      wave.particles.push_back(std::move(p));
+    }
+    CandidateBatch batch(space_, simulator_, distance_, components_.size());
+    std::vector<std::uint8_t> new_free(nz * f);
+    std::vector<double> new_reals(nz * r);
+    std::vector<std::uint8_t> given_free;
+    std::vector<double> given_reals;
+    std::vector<MoveProposal> proposed(nz);
+    std::vector<double> uniforms(nz);
+    std::vector<std::size_t> simulated;
+    Stop stop;
+    int rounds = options_.moves.max_rounds;
+    for (int round = 1; round <= rounds && !stop; ++round) {
+      simulated.clear();
+      given_free.clear();
+      given_reals.clear();
+      for (std::size_t i = 0; i < nz; ++i) {
+        RandomStream rng(options_.seed, MoveStream(wave.wave, round, false), i);
+        const auto nf = std::span(new_free.data() + i * f, f);
+        const auto nr = std::span(new_reals.data() + i * r, r);
+        proposed[i] = moves_->Propose(rng,
+                                      std::span<const std::uint8_t>(free.data() + i * f, f),
+                                      std::span<const double>(reals.data() + i * r, r),
+                                      nf,
+                                      nr);
+        uniforms[i] = rng.Uniform();
+        ++moves.proposed;
+        moves.independent_proposed += proposed[i].independent ? 1 : 0;
+        if (proposed[i].outside_prior) continue;  // rejected without a simulation
+        simulated.push_back(i);
+        given_free.insert(given_free.end(), nf.begin(), nf.end());
+        given_reals.insert(given_reals.end(), nr.begin(), nr.end());
+      }
+      WaveProposal given{.given_free = given_free,
+                         .given_reals = given_reals,
+                         .given = true,
+                         .stream = MoveStream(wave.wave, static_cast<std::uint64_t>(round), true)};
+      const auto count = static_cast<std::int64_t>(simulated.size());
+      std::int64_t next = 0;
+      while (next < count) {
+        std::int64_t size = std::min(count - next, MoveBatchSize());
+        if (options_.max_simulations > 0) size = std::min(size, options_.max_simulations - total_);
+        if (size <= 0) {
+          stop = Stop({Termination::kBudgetExhausted, BudgetMessage(options_, wave.wave)});
+          break;
+        }
+        const auto batch_start = Clock::now();
+        batch.Evaluate(*executor_, options_.seed, wave.wave, next, size, given);
+        MeasureCost(size, Seconds(batch_start));
+        const std::size_t failures_before = wave.failures.size();
+        for (std::int64_t j = 0; j < size; ++j) {
+          const std::size_t i = simulated[static_cast<std::size_t>(next + j)];
+          ++total_;
+          const std::int64_t candidate = wave.candidates++;
+          if (batch.failed(j)) {
+            wave.failures.push_back({candidate, std::string(batch.reason(j))});
+            ++failures_;
+            last_failure_ = Describe(wave.wave, wave.failures.back());
+          } else {
+            const auto nf = std::span<const std::uint8_t>(new_free.data() + i * f, f);
+            const auto nr = std::span<const double>(new_reals.data() + i * r, r);
+            const double new_accept = LogAcceptance(batch.distance(j), wave.thresholds, offsets_);
+            const double new_prior =
+                space_.LogPriorBits(nf) + (r > 0 ? space_.LogPriorReals(nr) : 0.0);
+            const double log_ratio =
+                new_prior - log_prior[i] + new_accept - log_accept[i] + proposed[i].log_q_ratio;
+            if (new_accept > -std::numeric_limits<double>::infinity() &&
+                std::log(uniforms[i]) < log_ratio) {
+              Particle moved =
+                  batch.MakeParticle(j, static_cast<std::int64_t>(i), options_.keep_outputs);
+              moved.log_weight = 0.0;
+              moved.ancestor = wave.particles[i].ancestor;
+              moved.eve = wave.particles[i].eve;
+              wave.particles[i] = std::move(moved);
+              std::copy(nf.begin(), nf.end(), free.begin() + i * f);
+              std::copy(nr.begin(), nr.end(), reals.begin() + i * r);
+              log_accept[i] = new_accept;
+              log_prior[i] = new_prior;
+              ++moves.accepted;
+              moves.independent_accepted += proposed[i].independent ? 1 : 0;
+            }
+          }
+          stop = FailureOrFloorStop(
+              options_, total_, failures_, last_failure_, wave.wave, wave.candidates, n);
+          if (stop) break;
+        }
+        next += size;
+        if (observer_) {
+          BatchProgress progress{
+              wave.wave,
+              wave.candidates,
+              0,
+              0,
+              n,
+              total_,
+              Seconds(start_),
+              static_cast<std::int64_t>(wave.failures.size()),
+              std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
+              std::nullopt};
+          observer_->OnBatch(progress, {});
+        }
+        if (stop) break;
+        stop = WallTimeOrInterrupt(wave);
+        if (stop) break;
+      }
+      if (stop) break;
+      moves.rounds = round;
+      const double rate = static_cast<double>(moves.accepted) /
+                          static_cast<double>(std::max<std::int64_t>(moves.proposed, 1));
+      rounds = std::max(
+          round, RoundsNeeded(rate, options_.moves.stay_probability, options_.moves.max_rounds));
+    }
+    wave.complete = !stop;
+    // An unfinished move wave holds no posterior: a resumed run does it again.
+    if (!wave.complete) wave.particles.clear();
+    ComputeWaveStatistics(wave, options_.estimator);
+    wave.acceptance_rate = moves.proposed > 0 ? static_cast<double>(moves.accepted) /
+                                                    static_cast<double>(moves.proposed)
+                                              : 0.0;
+    wave.wall_seconds = Seconds(wave_start);
+    last_rate_ = wave.acceptance_rate;
+    if (observer_) observer_->OnWaveEnd(wave);
+    return stop;
+  }
+
+  // Simulations per batch of a move round: at most kMaxBatchSeconds of work per worker (so that a
+  // slow simulator's run shows progress and stops on Ctrl-C often), one per worker until the
+  // cost is known. The history does not depend on it: every proposal is decided in index order.
+  std::int64_t MoveBatchSize() const {
+    if (options_.batch_size > 0) return options_.batch_size;
+    const std::int64_t workers = executor_->concurrency();
+    if (!(cost_s_ > 0.0)) return workers;
+    return workers * static_cast<std::int64_t>(
+                         std::clamp(std::ceil(kMaxBatchSeconds / cost_s_), 1.0, 4096.0));
+  }
+
+  // The wall-time limit or an interrupt, decided by the primary between batches.
+  Stop WallTimeOrInterrupt(const WaveRecord& wave) const {
+    if (executor_->FromPrimary(options_.max_wall_time_s > 0 &&
+                               Seconds(start_) >= options_.max_wall_time_s)) {
+      return Stop({Termination::kWallTimeExceeded,
+                   "wall-time limit reached in wave " + std::to_string(wave.wave + 1)});
+    }
+    if (executor_->FromPrimary(observer_ && observer_->ShouldStop())) {
+      return Stop(
+          {Termination::kInterrupted, "interrupted in wave " + std::to_string(wave.wave + 1)});
+    }
+    return std::nullopt;
+  }
+
   // The expensive-to-cheap cost ratio: the options' when set, else measured over the waves
   // `done` and `wave` (summed call seconds per simulation); 0 when it cannot be measured yet.
   double CostRatio(const WaveRecord& wave, std::span<const WaveRecord> done) const {
@@ -839,7 +1312,9 @@ class SmcRun {
 
   const ParameterSpace& space_;
   const Simulator& simulator_;
-  const Simulator* low_fidelity_;  // null: single fidelity
+  const Simulator* low_fidelity_;            // null: single fidelity
+  const StartPopulation* start_population_;  // null: wave 0 from the prior
+  Stop start_stop_;                          // what stopped wave 0 from start_, if anything
   const Distance& distance_;
   const SmcOptions& options_;
   SmcObserver* observer_;
@@ -850,6 +1325,10 @@ class SmcRun {
   // The current wave's proposal.
   std::unique_ptr<JointProposal> proposal_;
   bool from_prior_ = true;
+  // A move wave's local and independent proposals, and the previous particles' weights under its
+  // target (what it resamples by).
+  std::unique_ptr<MoveProposals> moves_;
+  std::vector<double> move_weights_;
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;
   std::vector<ThresholdSchedule> schedules_;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <unordered_map>
 
 namespace combabc {
 
@@ -251,6 +252,21 @@ std::string ModeLossWarning(const WaveRecord& wave) {
         " (and " + std::to_string(more) + " more pattern" + (more > 1 ? "s" : "") + " likewise)";
   }
   return text + "; the posterior may have lost a mode";
+}
+
+void AssignEveIndices(std::vector<WaveRecord>& waves) {
+  for (std::size_t t = 1; t < waves.size(); ++t) {
+    if (!waves[t].moves) continue;
+    const WaveRecord& previous = waves[t - 1];
+    std::unordered_map<std::int64_t, std::int64_t> eve_of;
+    for (const Particle& p : previous.particles) {
+      eve_of[p.index] = previous.moves ? p.eve : p.index;
+    }
+    for (Particle& p : waves[t].particles) {
+      const auto it = eve_of.find(p.ancestor);
+      p.eve = it == eve_of.end() ? -1 : it->second;
+    }
+  }
 }
 
 bool SameHistory(const RunHistory& a, const RunHistory& b, std::string* where) {

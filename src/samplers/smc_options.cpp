@@ -19,8 +19,7 @@ bool MoveOptions::IsValid(std::string* why) const {
     return fail("max_rounds = " + std::to_string(max_rounds) + "; must be in [1, 10000]");
   }
   if (!(independent_share >= 0.0 && independent_share <= 1.0)) {
-    return fail("independent_share = " + std::to_string(independent_share) +
-                "; must be in [0, 1]");
+    return fail("independent_share = " + std::to_string(independent_share) + "; must be in [0, 1]");
   }
   if (!(min_survivor_fraction > 0.0 && min_survivor_fraction < 1.0)) {
     return fail("min_survivor_fraction = " + std::to_string(min_survivor_fraction) +

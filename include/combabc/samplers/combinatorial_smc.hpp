@@ -33,6 +33,17 @@ struct ResumePoint {
   std::optional<WaveFidelity> partial_fidelity;
 };
 
+// A finished run's posterior that a new run starts from instead of the prior, to add data to it
+// (IBIS, Chopin 2002; docs/algorithm.md, "Adding data to a finished run"): wave 0 re-simulates
+// these parameters under the new problem (the old experiments and the new ones) and keeps them
+// with their weights, at the finished run's final thresholds for the components it had and
+// infinite ones for the new; the waves after it bring the new components to their targets.
+struct StartPopulation {
+  std::vector<ParameterValue> thetas;
+  std::vector<double> weights;     // one per theta, >= 0, not all 0
+  std::vector<double> thresholds;  // one per schedule slot of the new distance
+};
+
 // What a run infers and with what. The sampler knows kernels, executors and simulators only
 // through these interfaces.
 struct SmcProblem {
@@ -47,6 +58,8 @@ struct SmcProblem {
   // it and the expensive `simulator` runs only with SmcOptions::multi_fidelity's continuation
   // probabilities (docs/algorithm.md, "Multi-fidelity sampling").
   const Simulator* low_fidelity = nullptr;
+  // Optional: the population wave 0 starts from (above); null = the prior.
+  const StartPopulation* start = nullptr;
 };
 
 // Runs waves t = 0..num_waves-1: wave 0 proposes from the prior, wave t+1 from the kernels fitted

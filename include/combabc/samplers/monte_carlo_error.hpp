@@ -27,7 +27,12 @@ struct WeightedMoment {
 
 // The mean of `values` under `weights` (one each, of any sign, sum > 0; need not be normalised).
 // se is infinite when the weights sum to <= 0 (signed weights that cancel).
-WeightedMoment WeightedMean(std::span<const double> weights, std::span<const double> values);
+// `clusters` (optional, one dense number 0..C-1 per particle): particles that are not independent
+// draws, such as a resample-move wave's descendants of one ancestor; their influence terms are
+// summed per cluster before squaring (the cluster-robust delta method, Chan & Lai 2013).
+WeightedMoment WeightedMean(std::span<const double> weights,
+                            std::span<const double> values,
+                            std::span<const std::size_t> clusters = {});
 
 // The rule of three: a quantity none of n independent draws showed has probability below 3 / n
 // at 95%: (1 - p)^n, the chance that none shows it, is below 0.05 once p > about 3 / n.
@@ -47,9 +52,12 @@ inline constexpr double kRuleOfThree = 3.0;
 // in rare particles continued with a small probability eta and weighted 1 / eta, so three of the
 // heaviest could be missing. F is at most 0.5, the largest sd of a probability. ess: the delta
 // method's (Var_w / se^2, before the floor).
+// With `clusters`, the floor's ESS is that of the clusters' total weights (a cluster counts as one
+// draw).
 WeightedMoment WeightedProbability(std::span<const double> weights,
                                    std::span<const double> indicator,
-                                   bool heavy_particles = false);
+                                   bool heavy_particles = false,
+                                   std::span<const std::size_t> clusters = {});
 
 // WeightedProbability's two steps, for a probability whose delta-method estimate was computed
 // elsewhere (TopConfigurations sums each configuration's weights instead of walking the particles
@@ -60,13 +68,21 @@ WeightedMoment BoundProbability(WeightedMoment m, double ess);
 // The standard deviation sqrt(sum w (f - mu)^2 / sum w) under the same weights, with the
 // delta-method standard error of the first two moments: the variance's influence terms are
 // (f_i - mu)^2 - var, and se(sd) = se(var) / (2 sd). ess: Var_w((f - mu)^2) / se(var)^2.
-WeightedMoment WeightedSd(std::span<const double> weights, std::span<const double> values);
+WeightedMoment WeightedSd(std::span<const double> weights,
+                          std::span<const double> values,
+                          std::span<const std::size_t> clusters = {});
+
+// A resample-move wave's clusters for the errors above: particles with one ancestor
+// (Particle::ancestor), or with `eve` one Eve (Particle::eve), share a number; empty for a wave
+// drawn afresh (independent particles).
+std::vector<std::size_t> AncestorClusters(const WaveRecord& wave, bool eve);
 
 // A wave's estimates under its particles' stored weights (the run's estimator): per bit P(bit =
 // 1) (WeightedProbability), per real its mean and sd, each with its standard error and effective
-// sample size; a multi-fidelity wave's (WaveRecord::multi_fidelity) bits count the rule of three in
-// its heaviest particles. `prior_one` (one per bit, or empty): a bit whose prior probability is 0
-// or 1 has that posterior probability exactly, with error 0.
+// sample size (a resample-move wave's clustered by parent and by Eve: the larger error); a
+// multi-fidelity wave's (WaveRecord::multi_fidelity) bits count the rule of three in its heaviest
+// particles. `prior_one` (one per bit, or empty): a bit whose prior probability is 0 or 1 has that
+// posterior probability exactly, with error 0.
 struct WaveErrors {
   std::vector<WeightedMoment> bits;
   std::vector<WeightedMoment> real_means;

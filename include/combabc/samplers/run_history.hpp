@@ -32,9 +32,12 @@ struct Particle {
   std::vector<double> distance;  // one value per distance component
   std::vector<double> output;    // simulated Y* (empty unless SmcOptions::keep_outputs)
   // A resample-move wave's particle: the index (Particle::index) of the previous wave's particle
-  // it was resampled from and then moved; particles of one ancestor are correlated, which the
-  // Monte-Carlo errors take into account. -1 for a particle drawn afresh.
+  // it was resampled from and then moved. -1 for a particle drawn afresh.
   std::int64_t ancestor = -1;
+  // Derived, not stored (AssignEveIndices): the index of the particle it descends from in the
+  // last wave drawn afresh (Chan & Lai 2013's Eve index). Particles of one parent or of one Eve
+  // are correlated; the Monte-Carlo errors count each group as one cluster.
+  std::int64_t eve = -1;
 };
 
 // A candidate whose simulation failed (SimulationFailed, or an output or distance holding NaN):
@@ -82,11 +85,11 @@ struct WaveMoves {
   // The fraction of the schedule's step (in threshold quantile or inverse temperature) this wave
   // took, 1 unless shortened to keep MoveOptions::ess_fraction of the ESS.
   double step = 1.0;
-  int rounds = 0;                          // every particle took this many proposals
-  std::int64_t proposed = 0;               // proposals, all rounds (= simulations)
-  std::int64_t accepted = 0;               // accepted proposals
-  std::int64_t independent_proposed = 0;   // of the proposals: from the fitted kernel
-  std::int64_t independent_accepted = 0;   // and accepted
+  int rounds = 0;                         // every particle took this many proposals
+  std::int64_t proposed = 0;              // proposals, all rounds (= simulations)
+  std::int64_t accepted = 0;              // accepted proposals
+  std::int64_t independent_proposed = 0;  // of the proposals: from the fitted kernel
+  std::int64_t independent_accepted = 0;  // and accepted
   bool operator==(const WaveMoves&) const = default;
 };
 
@@ -239,6 +242,11 @@ std::vector<double> PairCorrelations(const std::vector<Particle>& particles);
 // distinct count recomputed from a wave's particles (also used by the storage layer when
 // reloading a run).
 void ComputeWaveStatistics(WaveRecord& wave, Estimator estimator);
+
+// Sets Particle::eve of every resample-move wave's particles from their ancestors, wave by wave:
+// the ancestor's own Eve when the previous wave was a move wave, else the ancestor's index. What
+// a loaded history needs before its errors (WaveMonteCarloErrors) are computed.
+void AssignEveIndices(std::vector<WaveRecord>& waves);
 
 // True when the two histories agree in everything deterministic (all but wall times). On a
 // difference, *where says what differs first.
