@@ -1,6 +1,7 @@
 // Reading a run history back: metadata, waves, the resume point, and truncation for resume.
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -512,9 +513,13 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   wave.pattern_classes =
       ReadPatternClasses(check, row, shape.dimension, has_pattern_masks(), db.path());
   wave.moves = ReadMoves(check, row);
-  // A particle's ancestor is one of the previous wave's candidates (none before wave 1).
+  // A move wave's particles are numbered by their slot (0 .. n-1), not by a candidate: one whose
+  // proposals fell outside the prior (not simulated) may have fewer candidates than particles.
+  const std::int64_t indices =
+      wave.moves ? std::max(wave.candidates, wave.accepted) : wave.candidates;
+  // A particle's ancestor is one of the previous wave's particles (none before wave 1).
   const std::int64_t ancestors = expected_wave == 0 ? 0 : shape.previous_candidates;
-  shape.previous_candidates = wave.candidates;
+  shape.previous_candidates = indices;
 
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);
@@ -529,9 +534,8 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     Particle p;
     p.index = particles.Int(kCandidate);
     const std::string who = "particle " + std::to_string(p.index);
-    if (p.index < 0 || p.index >= wave.candidates) {
-      check.Corrupt(who,
-                    "lies outside the wave's " + std::to_string(wave.candidates) + " candidates");
+    if (p.index < 0 || p.index >= indices) {
+      check.Corrupt(who, "lies outside the wave's " + std::to_string(indices) + " candidates");
     }
     p.theta.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
     p.log_weight = particles.Real(kLogWeight);
@@ -566,7 +570,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
       if (p.ancestor >= ancestors) {
         check.Corrupt(field,
                       "is " + std::to_string(p.ancestor) + ", not one of the previous wave's " +
-                          std::to_string(ancestors) + " candidates");
+                          std::to_string(ancestors) + " particle numbers");
       }
     }
     confirmed += p.confirmed ? 1 : 0;
@@ -783,6 +787,9 @@ RunHistory HistoryStore::LoadHistory() const {
       break;  // at most one incomplete wave, and it is the last
     }
   }
+  // Not stored: the move waves' Eve indices, from their ancestors, which their Monte-Carlo errors
+  // (export, answer, Python) cluster by.
+  AssignEveIndices(history.waves);
 
   const RunMetadata metadata = LoadMetadata();
   if (!history.waves.empty() && history.waves.back().marginals_paper.empty() &&

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -905,6 +906,32 @@ TEST_F(HistoryIntegrityTest, MoveStatisticsAndAncestorsRoundTripAndAreChecksumme
   EXPECT_EQ(loaded.waves[1].particles[1].ancestor, history.waves[0].particles[1].index);
   HistoryCheck check = HistoryStore::Verify(path);
   EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  // The Eve indices (not stored) are derived on load: wave 2's from wave 1, drawn afresh, are its
+  // ancestors; wave 3's their ancestors' Eves.
+  for (std::size_t t = 1; t < 3; ++t) {
+    for (const Particle& p : loaded.waves[t].particles) {
+      const auto& previous = loaded.waves[t - 1].particles;
+      const auto parent = std::find_if(previous.begin(), previous.end(), [&](const Particle& q) {
+        return q.index == p.ancestor;
+      });
+      ASSERT_NE(parent, previous.end());
+      EXPECT_EQ(p.eve, t == 1 ? parent->index : parent->eve);
+    }
+  }
+  // A move wave's particles are numbered by their slot: it may have simulated fewer candidates
+  // than it has particles (proposals outside the prior are not simulated).
+  {
+    RunHistory few = history;
+    few.waves[2].candidates = 3;
+    for (std::size_t k = 0; k < few.waves[2].particles.size(); ++k) {
+      few.waves[2].particles[k].index = static_cast<std::int64_t>(k);
+    }
+    const std::string slots = Path("slots.db");
+    HistoryStore store = HistoryStore::Create(slots, MakeFakeMetadata(options));
+    for (const WaveRecord& wave : few.waves) RecordWave(store, wave, 5);
+    store.Finish(few.summary);
+    EXPECT_TRUE(SameHistory(few, HistoryStore::Open(slots, true).LoadHistory(), &where)) << where;
+  }
   // SameHistory itself tells a changed move count or ancestor.
   RunHistory other = loaded;
   other.waves[1].moves->accepted += 1;
