@@ -173,6 +173,45 @@ TEST_F(ResumeFingerprint, ARunResumedUnderAnotherMethodIsRefused) {
   }
 }
 
+// A resample-move run through the CLI: each move wave's line says what its moves did, as its
+// history records it; a run stopped inside a move wave and resumed (its wave reopened, its move
+// columns written anew) gives the uninterrupted run's history, moves and ancestors included.
+TEST(ResampleMove, TheTerminalSaysWhatTheMovesDidAndAResumeGivesTheSameHistory) {
+  TempFolder dir("e2e-moves");
+  WriteData(dir, 1.0);
+  const std::string sampler =
+      "seed = 3\nwaves = 3\naccepted_per_wave = 10\nmethod = \"resample_move\"\n";
+  std::ofstream(dir / "whole.toml") << TinySensorConfig(
+      sampler, "[sampler.moves]\nmax_rounds = 4\n[output]\ndirectory = \"whole\"\n");
+  std::ofstream(dir / "cut.toml") << TinySensorConfig(
+      sampler + "max_simulations = 30\n",
+      "[sampler.moves]\nmax_rounds = 4\n[output]\ndirectory = \"cut\"\n");
+  const auto whole = RunCli({"run", dir / "whole.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const RunHistory h = HistoryStore::Open(dir / "whole/history.sqlite", true).LoadHistory();
+  ASSERT_EQ(h.waves.size(), 3u);
+  EXPECT_FALSE(h.waves[0].moves.has_value());
+  for (std::size_t t = 1; t < h.waves.size(); ++t) {
+    ASSERT_TRUE(h.waves[t].moves.has_value()) << "wave " << t + 1;
+    const WaveMoves& m = *h.waves[t].moves;
+    const std::string line = "moves: " + std::to_string(m.rounds) + " rounds, " +
+                             std::to_string(m.proposed) + " proposals, ";
+    EXPECT_NE(whole.err.find(line), std::string::npos) << line << " in " << whole.err;
+    for (const Particle& p : h.waves[t].particles) EXPECT_GE(p.ancestor, 0);
+  }
+
+  const auto cut = RunCli({"run", dir / "cut.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(cut.exit_code, 0) << cut.err;
+  const std::string stopped = dir / "cut/history.sqlite";
+  ASSERT_EQ(HistoryStore::Open(stopped, true).LoadMetadata().termination, "budget_exhausted");
+  const auto resumed =
+      RunCli({"resume", stopped, "--no-report", "--max-simulations", "0"}, dir.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(h, HistoryStore::Open(stopped, true).LoadHistory(), &where)) << where;
+  EXPECT_TRUE(HistoryStore::Verify(stopped).problems.empty());
+}
+
 // Issue 35: the history's experiment table (names, descriptions and how its outputs, data and
 // components are sliced per experiment) is not in the fingerprint; one that disagrees with the
 // run's configuration (a crafted or damaged history) is refused, naming what differs, before
