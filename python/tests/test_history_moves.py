@@ -76,6 +76,28 @@ def test_a_rejection_run_resumed_as_a_move_run_is_refused(tmp_path):
         combabc.resume(history.path, problem, moved, max_simulations=0)
 
 
+def test_a_resample_move_run_records_its_moves_and_resumes_to_the_same_history(tmp_path):
+    space = combabc.BinarySpace(dimension=4)
+    problem = combabc.Problem(space, simulator, OBSERVED)
+
+    def options(**fields):
+        return combabc.make_options(num_waves=3, accepted_per_wave=8, seed=5, threads=1,
+                                    thresholds=[6.0, 3.0, 1.5], method="resample_move",
+                                    moves=combabc.MoveOptions(max_rounds=3), **fields)
+
+    whole = combabc.run(problem, options(), output_directory=tmp_path / "whole")
+    assert whole.resample_move and whole.waves[0].moves is None
+    for w in whole.waves[1:]:
+        assert w.moves["proposed"] >= w.moves["accepted"] > 0
+        assert np.all(w.ancestor >= 0)
+    cut = combabc.run(problem, options(max_simulations=20), output_directory=tmp_path / "cut")
+    assert cut.termination == "budget_exhausted"
+    resumed = combabc.resume(cut.path, problem, options(), max_simulations=0)
+    for a, b in zip(whole.waves, resumed.waves):
+        assert a.moves == b.moves
+        assert np.array_equal(a.ancestor, b.ancestor) and np.array_equal(a.bits, b.bits)
+
+
 @needs_fake
 def test_a_move_run_has_its_statistics_and_ancestors(tmp_path):
     history = fake(tmp_path, "moves.db", "--moves")
