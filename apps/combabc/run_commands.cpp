@@ -159,6 +159,11 @@ Command AddRunCommand(CLI::App& app) {
   run->add_option("-j,--threads", request.threads, "Threads, 0 = all cores (overrides [sampler])")
       ->check(CLI::Range(0, kMaxThreads));
   run->add_flag("--overwrite", request.overwrite, "Replace an existing history file");
+  run->add_option("--from",
+                  request.start_from,
+                  "Start from this finished run's posterior, adding the config's other "
+                  "experiments to it (docs/algorithm.md)")
+      ->check(CLI::ExistingFile);
   run->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   run->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*run);

@@ -116,8 +116,8 @@ def joint_config(model, experiments, label, design=False):
     config = {"description": f"sensor-design study: {label}", "model": model,
               "experiment": [experiment_table(*e, csv_name=f"data_{name_of(*e)}.csv")
                              for e in experiments],
-              "sampler": {"waves": 16, "accepted_per_wave": 500, "estimator": "importance",
-                          "seed": 2024, "threads": 0},
+              "sampler": {"waves": 30, "accepted_per_wave": 500, "estimator": "importance",
+                          "seed": 2024, "threads": 0, "method": "resample_move"},
               "output": {"directory": f"results-{label}", "figures": ["png"]}}
     if design:
         config["design"] = DESIGN

@@ -81,6 +81,7 @@ std::string SamplerKeyOf(const std::string& field) {
       {"tempering", "sampler.tempering"},
       {"multi_fidelity", "sampler.multi_fidelity"},
       {"moves", "sampler.moves"},
+      {"method", "sampler.method"},
       {"thresholds", "metric"},
       {"default_prior_one", "sampler.prior"},
       {"prior_one", "sampler.prior"},

@@ -200,6 +200,7 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sourc
   if (const auto method = t->Choice<SamplerMethod>("method", "sampler method")) {
     smc.method = *method;
     sources->method = Source{t->Key("method"), t->Line("method")};
+    Note(sources->smc, "method", *t, "method");
   }
   ParseMoves(*t, smc.method, &smc.moves, sources);
 

@@ -478,6 +478,35 @@ class SmcRun {
     return stochastic_ ? std::exp(log_accept) : 1.0;
   }
 
+  // The log of a resample-move wave's target, up to a constant: -inf when a threshold or
+  // indicator component rejects d, else -sum_k d_k / T_k over the likelihood components. Unlike
+  // LogAcceptance it needs no offset m_k (a Metropolis-Hastings ratio is not a probability and
+  // may exceed 1): a clamped exp(-max(d - m, 0) / T) would make every configuration better than
+  // the best seen so far equally likely.
+  double LogTarget(std::span<const double> d, const std::vector<double>& eps) const {
+    constexpr double kReject = -std::numeric_limits<double>::infinity();
+    double log_target = 0.0;
+    std::size_t s = 0;
+    for (std::size_t k = 0; k < components_.size(); ++k) {
+      switch (components_[k].kind) {
+        case ComponentKind::kThreshold:
+          if (!(d[k] <= eps[s++])) return kReject;
+          break;
+        case ComponentKind::kIndicator:
+          if (d[k] != components_[k].required) return kReject;
+          break;
+        case ComponentKind::kNegLogLikelihood: {
+          const double temperature = eps[s++];
+          if (std::isinf(temperature)) break;
+          if (!(d[k] < std::numeric_limits<double>::infinity())) return kReject;
+          log_target -= d[k] / temperature;
+          break;
+        }
+      }
+    }
+    return log_target;
+  }
+
   // -inf when a threshold or indicator component rejects d; else the log of the likelihood
   // components' acceptance probability (0 without any).
   double LogAcceptance(std::span<const double> d,
@@ -808,7 +837,10 @@ class SmcRun {
           wave.failures.push_back({next + j, std::string(batch.reason(j))});
           ++failures_;
           last_failure_ = Describe(0, wave.failures.back());
-        } else if (start.weights[i] > 0.0) {
+        } else if (start.weights[i] > 0.0 &&
+                   LogAcceptance(batch.distance(j), wave.thresholds, offsets_) >
+                       -std::numeric_limits<double>::infinity()) {
+          if (!start.expected.empty()) CheckResimulated(start.expected.at(i), batch.distance(j), i);
           Particle p = batch.MakeParticle(j, next + j, options_.keep_outputs);
           p.log_weight = std::log(start.weights[i]);
           wave.particles.push_back(std::move(p));
@@ -845,6 +877,32 @@ class SmcRun {
     last_rate_ = 1.0;
     if (observer_) observer_->OnWaveEnd(wave);
     return wave;
+  }
+
+  // StartPopulation::expected against parameter i's re-simulated distances.
+  void CheckResimulated(std::span<const double> expected,
+                        std::span<const double> got,
+                        std::size_t i) const {
+    for (std::size_t k = 0; k < expected.size() && k < got.size(); ++k) {
+      if (std::isnan(expected[k]) ||
+          std::abs(got[k] - expected[k]) <= 1e-9 * std::max(1.0, std::abs(expected[k]))) {
+        continue;
+      }
+      char text[160];
+      std::snprintf(text,
+                    sizeof text,
+                    "parameter %zu re-simulates to distance %.10g for component \"%s\", where the "
+                    "finished run had %.10g",
+                    i,
+                    got[k],
+                    components_[k].name.c_str(),
+                    expected[k]);
+      throw Error(ErrorKind::kConfig,
+                  std::string(text) + ": the model or that experiment's data changed",
+                  "",
+                  0,
+                  "SmcProblem::start");
+    }
   }
 
   // m_k per schedule slot of the wave after `waves`: the best likelihood distance among their
@@ -893,7 +951,12 @@ class SmcRun {
     std::vector<double> last_log_accept(n_prev);
     for (std::size_t i = 0; i < n_prev; ++i) {
       before[i] = std::max(particles[i].weight, 0.0);
-      last_log_accept[i] = LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
+      // A move wave's (or a started run's wave 0's) target has no offsets; a rejection wave's
+      // particles were accepted with LogAcceptance.
+      last_log_accept[i] =
+          previous->moves || (start_population_ && previous->wave == 0)
+              ? LogTarget(particles[i].distance, previous->thresholds)
+              : LogAcceptance(particles[i].distance, previous->thresholds, last_offsets);
     }
     // Per threshold slot: the weighted share of the previous particles within the full step's
     // threshold, and their distances.
@@ -930,8 +993,9 @@ class SmcRun {
       const std::vector<double> eps = thresholds_at(step);
       std::vector<double> w(n_prev, 0.0);
       for (std::size_t i = 0; i < n_prev; ++i) {
-        const double log_accept = LogAcceptance(particles[i].distance, eps, offsets);
-        if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity()) {
+        const double log_accept = LogTarget(particles[i].distance, eps);
+        if (before[i] > 0.0 && log_accept > -std::numeric_limits<double>::infinity() &&
+            last_log_accept[i] > -std::numeric_limits<double>::infinity()) {
           w[i] = before[i] * std::exp(log_accept - last_log_accept[i]);
         }
       }
@@ -973,8 +1037,20 @@ class SmcRun {
     }
     proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
     from_prior_ = false;
-    moves_ =
-        std::make_unique<MoveProposals>(population, space_, proposal_.get(), mo.independent_share);
+    // The ancestor kernel beside the configured one (unless it is the configured one).
+    ancestor_proposal_.reset();
+    if (kernel_->name() != ToString(BinaryKernelKind::kAncestor)) {
+      if (!ancestor_kernel_) {
+        ProposalOptions ancestor = options_.proposal;
+        ancestor.binary = BinaryKernelKind::kAncestor;
+        ancestor.continuous = ContinuousKernelKind::kNormal;
+        ancestor_kernel_ = MakeJointKernel(ancestor, space_);
+      }
+      ancestor_proposal_ =
+          ancestor_kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
+    }
+    moves_ = std::make_unique<MoveProposals>(
+        population, space_, proposal_.get(), ancestor_proposal_.get(), mo.independent_share);
     move_weights_ = std::move(weights);
     wave.proposal = proposal_->Marginals();
     wave.moves = WaveMoves{.survivor_ess = survivor_ess, .step = step};
@@ -1020,7 +1096,7 @@ class SmcRun {
       auto fi = std::span(free.data() + i * f, f);
       COMBABC_CHECK(space_.binary().Reduce(p.theta.bits, fi));
       std::copy(p.theta.reals.begin(), p.theta.reals.end(), reals.begin() + i * r);
-      log_accept[i] = LogAcceptance(p.distance, wave.thresholds, offsets_);
+      log_accept[i] = LogTarget(p.distance, wave.thresholds);
       log_prior[i] = space_.LogPriorBits(fi) + (r > 0 ? space_.LogPriorReals(p.theta.reals) : 0.0);
       wave.particles.push_back(std::move(p));
     }
@@ -1083,7 +1159,7 @@ class SmcRun {
           } else {
             const auto nf = std::span<const std::uint8_t>(new_free.data() + i * f, f);
             const auto nr = std::span<const double>(new_reals.data() + i * r, r);
-            const double new_accept = LogAcceptance(batch.distance(j), wave.thresholds, offsets_);
+            const double new_accept = LogTarget(batch.distance(j), wave.thresholds);
             const double new_prior =
                 space_.LogPriorBits(nf) + (r > 0 ? space_.LogPriorReals(nr) : 0.0);
             const double log_ratio =
@@ -1328,6 +1404,8 @@ class SmcRun {
   // A move wave's local and independent proposals, and the previous particles' weights under its
   // target (what it resamples by).
   std::unique_ptr<MoveProposals> moves_;
+  std::unique_ptr<JointKernel> ancestor_kernel_;
+  std::unique_ptr<JointProposal> ancestor_proposal_;
   std::vector<double> move_weights_;
   std::vector<DistanceComponent> components_;
   std::vector<std::size_t> threshold_components_;

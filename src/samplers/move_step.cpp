@@ -84,10 +84,12 @@ int RoundsNeeded(double rate, double stay, int max_rounds) {
 MoveProposals::MoveProposals(const Population& population,
                              const ParameterSpace& space,
                              const JointProposal* fitted,
+                             const JointProposal* ancestor,
                              double independent_share)
     : space_(space),
-      fitted_(fitted),
-      independent_share_(fitted ? independent_share : 0.0),
+      fitted_(fitted ? fitted : ancestor),
+      ancestor_(fitted ? ancestor : nullptr),
+      independent_share_(fitted_ ? independent_share : 0.0),
       f_(population.num_free_bits),
       r_(population.num_reals) {
   // The population's P(bit = 1) and, for the pair table, its moments.
@@ -165,8 +167,9 @@ MoveProposal MoveProposals::Propose(RandomStream& rng,
   MoveProposal move;
   if (independent_share_ > 0.0 && rng.Uniform() < independent_share_) {
     move.independent = true;
-    fitted_->Sample(rng, new_free, new_reals);
-    move.log_q_ratio = fitted_->LogDensity(free, reals) - fitted_->LogDensity(new_free, new_reals);
+    const JointProposal& q = ancestor_ && rng.Uniform() < 0.5 ? *ancestor_ : *fitted_;
+    q.Sample(rng, new_free, new_reals);
+    move.log_q_ratio = q.LogDensity(free, reals) - q.LogDensity(new_free, new_reals);
     return move;
   }
   std::copy(free.begin(), free.end(), new_free.begin());

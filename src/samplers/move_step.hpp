@@ -59,9 +59,14 @@ class MoveProposals {
  public:
   // `population`: the reweighted particles (their free bits, reals and normalised weights);
   // `fitted` may be null (then every move is local). `independent_share` in [0, 1].
+  // `ancestor` (may be null): a second independent proposal, the ancestor kernel fitted to the
+  // same particles (a mixture of small moves around each), which proposes what the particles hold
+  // -- other modes included -- where a product kernel cannot; half the independent proposals
+  // come from it.
   MoveProposals(const Population& population,
                 const ParameterSpace& space,
                 const JointProposal* fitted,
+                const JointProposal* ancestor,
                 double independent_share);
 
   // Draws a proposal for a particle at (free, reals) into (new_free, new_reals).
@@ -76,6 +81,7 @@ class MoveProposals {
 
   const ParameterSpace& space_;
   const JointProposal* fitted_;
+  const JointProposal* ancestor_;
   double independent_share_;
   std::size_t f_, r_;
   std::vector<double> first_;   // cumulative weights of the first bit to flip

@@ -93,6 +93,11 @@ bool SmcOptions::IsValid(std::string* why) const {
   if (batch_size < 0) {
     return fail("batch_size = " + std::to_string(batch_size) + "; must be >= 0 (0 = automatic)");
   }
+  if (method == SamplerMethod::kResampleMove && estimator == Estimator::kPaper) {
+    return fail(
+        "method = resample_move; it needs estimator = importance (the paper estimator's equal "
+        "weights are not draws from a wave's target)");
+  }
   if (!moves.IsValid(why)) {
     if (why) *why = "SmcOptions::moves." + why->substr(why->find("::") + 2);
     return false;

@@ -87,6 +87,27 @@ Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config) {
   return ComputeFingerprint(inputs);
 }
 
+// The measured profiles a history recorded, one per experiment.
+std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::string& path) {
+  std::vector<MeasuredProfile> profiles;
+  std::size_t begin = 0;
+  for (const StoredExperiment& x : m.experiments) {
+    const auto end = begin + static_cast<std::size_t>(x.measured);
+    if (end > m.measured.positions.size()) {
+      throw Error(
+          ErrorKind::kData, "the experiments' measured points exceed the stored ones", path);
+    }
+    MeasuredProfile profile;
+    profile.positions.assign(m.measured.positions.begin() + static_cast<std::ptrdiff_t>(begin),
+                             m.measured.positions.begin() + static_cast<std::ptrdiff_t>(end));
+    profile.values.assign(m.measured.values.begin() + static_cast<std::ptrdiff_t>(begin),
+                          m.measured.values.begin() + static_cast<std::ptrdiff_t>(end));
+    profiles.push_back(std::move(profile));
+    begin = end;
+  }
+  return profiles;
+}
+
 std::vector<StoredExperiment> ExperimentsOf(const Problem& p) {
   std::vector<StoredExperiment> experiments;
   for (std::size_t e = 0; e < p.config.experiments.size(); ++e) {

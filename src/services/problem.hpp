@@ -29,6 +29,8 @@ struct Problem {
   std::optional<ParameterSpace> space;
   std::unique_ptr<Executor> executor;
   // Last: external processes end before anything else goes.
+  // A run that adds experiments to a finished one: its posterior, where wave 0 starts.
+  std::optional<StartPopulation> start;
   BuiltSimulator low_fidelity;  // a multi-fidelity run's cheap simulator, else none
   BuiltSimulator simulator;
 
@@ -36,6 +38,7 @@ struct Problem {
     SmcProblem v{&*space, simulator.simulator.get(), distance.get()};
     v.executor = executor.get();
     v.low_fidelity = low_fidelity.simulator.get();
+    v.start = start ? &*start : nullptr;
     return v;
   }
 };
@@ -61,6 +64,9 @@ Fingerprint FingerprintOf(const Problem& p, const CalibrationConfig* config = nu
 // The experiments as the history's experiment table records them (name, description, and how
 // many outputs, measured points and components each has).
 std::vector<StoredExperiment> ExperimentsOf(const Problem& p);
+
+// The measured profiles a history recorded, one per experiment (`path` names it in errors).
+std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::string& path);
 
 // The run's metadata as its history stores it (the fingerprint included).
 RunMetadata Describe(const Problem& p);

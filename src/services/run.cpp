@@ -19,6 +19,7 @@
 #include "services/read_back.hpp"
 #include "services/report_checks.hpp"
 #include "services/run_fingerprint.hpp"
+#include "services/start_from.hpp"
 #include "services/worker_steps.hpp"
 
 #ifndef COMBABC_VERSION
@@ -36,27 +37,6 @@ std::string DataSources(const CalibrationConfig& c) {
     text += (text.empty() ? "" : ", ") + x.data.csv;
   }
   return text;
-}
-
-// The measured profiles a history recorded, one per experiment.
-std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::string& path) {
-  std::vector<MeasuredProfile> profiles;
-  std::size_t begin = 0;
-  for (const StoredExperiment& x : m.experiments) {
-    const auto end = begin + static_cast<std::size_t>(x.measured);
-    if (end > m.measured.positions.size()) {
-      throw Error(
-          ErrorKind::kData, "the experiments' measured points exceed the stored ones", path);
-    }
-    MeasuredProfile profile;
-    profile.positions.assign(m.measured.positions.begin() + static_cast<std::ptrdiff_t>(begin),
-                             m.measured.positions.begin() + static_cast<std::ptrdiff_t>(end));
-    profile.values.assign(m.measured.values.begin() + static_cast<std::ptrdiff_t>(begin),
-                          m.measured.values.begin() + static_cast<std::ptrdiff_t>(end));
-    profiles.push_back(std::move(profile));
-    begin = end;
-  }
-  return profiles;
 }
 
 // The history's experiment table must be what its configuration gives: the data were split by it
@@ -267,9 +247,14 @@ RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
     folders.Create(directory);
   });
   BuildModelIn(p, history_path);
+  RunMetadata metadata = Describe(p);
+  if (!request.start_from.empty()) {
+    p.start = StartFromFinishedRun(request.start_from, p);
+    metadata.fingerprint.push_back(StartFingerprint(request.start_from));
+  }
   std::optional<HistoryStore> store;
   OnPrimary(*p.executor, [&] {
-    store.emplace(HistoryStore::Create(history_path, Describe(p), request.overwrite));
+    store.emplace(HistoryStore::Create(history_path, metadata, request.overwrite));
     folders.Keep();
   });
   return Execute(p,
@@ -358,6 +343,11 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
     }
   }
   CheckStoredExperiments(metadata.experiments, ExperimentsOf(p), history_path);
+  // A run that started from a finished one (--from) keeps that part: its wave 0 holds the start.
+  const auto start = std::find_if(metadata.fingerprint.begin(),
+                                  metadata.fingerprint.end(),
+                                  [](const auto& part) { return part.first == "start"; });
+  if (start != metadata.fingerprint.end()) now.push_back(*start);
   // The rebuilt problem must be the one the run started with, or the continuation would not
   // equal an uninterrupted run. Checked before BeginResume rewrites anything, and over the config
   // as written: the stop limits below are not part of the run's identity.
@@ -379,6 +369,15 @@ RunOutcome ResumeCalibration(const ResumeRequest& request, SmcObserver* progress
                       LimitOption(stop->first),
                   history_path);
     }
+  }
+  if (start != metadata.fingerprint.end() &&
+      HistoryStore::Open(history_path, true).LoadResumePoint().completed.empty()) {
+    // Its wave 0 (the finished run's posterior, re-simulated) was cut short: the population it
+    // started from is not in this history.
+    throw Error(ErrorKind::kUsage,
+                "resume: the run started from a finished run (--from) and stopped before its "
+                "first wave was stored; start it again with 'combabc run CONFIG --from RUN.sqlite'",
+                history_path);
   }
   ResumePoint resume;
   OnPrimary(*p.executor, [&] { resume = store->BeginResume(limits); });

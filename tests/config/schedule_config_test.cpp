@@ -121,6 +121,10 @@ TEST(ScheduleConfig, SamplerMethodAndMoveOptions) {
                     0),
             0u)
       << e;
+  // SmcOptions::IsValid's complaint about the method is reported at its key.
+  e = ConfigErrorOf(kMinimal + "[sampler]\nestimator = \"paper\"\nmethod = \"resample_move\"\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:7: sampler.method: ", 0), 0u) << e;
+  EXPECT_NE(e.find("estimator = importance"), std::string::npos) << e;
   // Move options in a rejection run (by default or said) would be silently unused.
   for (const std::string method : {"", "method = \"rejection\"\n"}) {
     e = ConfigErrorOf(kMinimal + "[sampler]\n" + method + "[sampler.moves]\nmax_rounds = 5\n");

@@ -155,5 +155,68 @@ TEST(ExperimentsPosterior, IsTheProductOfTheExperimentsAcceptanceAndSmcSamplesIt
   }
 }
 
+// Adding an experiment to a finished run (`combabc run --from`, docs/algorithm.md "Adding data to
+// a finished run"): the right experiment's finished run, then the joint config started from it,
+// samples the same exact joint posterior as above; a config that changed the finished run's data
+// or adds no experiment is refused (exit 78) and writes nothing.
+TEST(ExperimentsPosterior, AddingAnExperimentToAFinishedRunSamplesTheJointPosterior) {
+  TempFolder dir("e2e-experiments-from");
+  WriteSimulatedData(dir.path(), {kRight, kLeft});
+  // Longer lists to the same final thresholds: a move wave may take a shorter step than its
+  // list's to keep its ESS, and catches up in the waves after.
+  TinyExperiment right = kRight;
+  TinyExperiment left = kLeft;
+  right.threshold = "[1.2, 0.6, 0.3, 0.2, 0.15, 0.1, 0.07, 0.07]";
+  left.threshold = "[2.0, 1.2, 1.0, 0.8, 0.7, 0.6, 0.6, 0.6]";
+  const std::string sampler =
+      "seed = 11\nwaves = 8\naccepted_per_wave = 500\nthreads = 2\nmethod = \"resample_move\"\n";
+  std::ofstream(dir / "joint.toml") << ExperimentsConfig({right, left}, sampler);
+  std::ofstream(dir / "right.toml") << ExperimentsConfig({right}, sampler);
+  const WaveRecord joint = Enumerated(dir.path(), "joint");
+  const auto both = Accepted(joint);
+  auto r =
+      RunCli({"run", dir / "right.toml", "--no-report", "-q", "-o", dir / "right"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string finished = dir / "right/history.sqlite";
+  r = RunCli(
+      {"run", dir / "joint.toml", "--no-report", "-q", "-o", dir / "added", "--from", finished},
+      dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const RunHistory h = HistoryStore::Open(dir / "added/history.sqlite", true).LoadHistory();
+  ASSERT_GE(h.waves.size(), 2u);
+  const RunHistory first = HistoryStore::Open(finished, true).LoadHistory();
+  EXPECT_EQ(h.waves.front().candidates,
+            static_cast<std::int64_t>(first.waves.back().particles.size()))
+      << "wave 0 re-simulates the finished run's last wave";
+  const WaveRecord& last = h.waves.back();
+  ASSERT_EQ(last.thresholds, joint.thresholds);
+  ASSERT_TRUE(last.moves.has_value());
+  for (const Particle& p : last.particles) {
+    ASSERT_TRUE(both.count(BitString(p.theta.bits))) << BitString(p.theta.bits);
+  }
+  for (int k = 0; k < 6; ++k) {
+    double exact = 0.0;
+    for (const auto& [bits, d] : both) exact += (bits[k] == '1') / static_cast<double>(both.size());
+    // Moved particles are correlated: a quarter of the particle count as the effective size.
+    const double bound = 5.0 * std::sqrt(exact * (1.0 - exact) / (last.ess / 4.0)) + 2e-3;
+    EXPECT_NEAR(last.marginals_importance[k], exact, bound) << "bit " << k;
+  }
+  // No new experiment: refused, nothing written.
+  r = RunCli(
+      {"run", dir / "right.toml", "--no-report", "-q", "-o", dir / "same", "--from", finished},
+      dir.path());
+  EXPECT_EQ(r.exit_code, 78) << r.err;
+  EXPECT_NE(r.err.find("adds no experiment"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(finished), std::string::npos) << r.err;
+  // The finished run's experiment with other data: refused.
+  WriteExperimentData(dir.path(), right, [](double p) { return 1.0 - std::abs(p - 0.5); });
+  r = RunCli(
+      {"run", dir / "joint.toml", "--no-report", "-q", "-o", dir / "other", "--from", finished},
+      dir.path());
+  EXPECT_EQ(r.exit_code, 78) << r.err;
+  EXPECT_NE(r.err.find("measured data differ"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "other/history.sqlite"));
+}
+
 }  // namespace
 }  // namespace combabc::testing

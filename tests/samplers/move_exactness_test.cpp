@@ -20,7 +20,7 @@
 namespace combabc {
 namespace {
 
-SmcOptions MoveOptions(std::vector<double> thresholds, int n, std::uint64_t seed) {
+SmcOptions MovingOptions(std::vector<double> thresholds, int n, std::uint64_t seed) {
   SmcOptions o;
   o.method = SamplerMethod::kResampleMove;
   o.num_waves = 30;
@@ -77,7 +77,7 @@ TEST(MoveExactness, ConfigurationAndItsComplement) {
   const std::vector<double> prior(16, 0.5);
   const ParameterSpace space{BinarySpace::Independent(16)};
   const testing::IdentitySimulator sim(16);
-  const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MoveOptions({1}, 1000, 21));
+  const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MovingOptions({1}, 500, 21));
   PrintWaves(h);
   ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
   const auto exact = testing::ExactMoments(distance, prior, 1.0).mean;
@@ -92,7 +92,7 @@ TEST(MoveExactness, ChainCoupledBits) {
   so.prior_one = prior;
   const ParameterSpace space{BinarySpace(so)};
   const testing::IdentitySimulator sim(12);
-  const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MoveOptions({1.5}, 1000, 22));
+  const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MovingOptions({1.5}, 500, 22));
   PrintWaves(h);
   ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
   const auto exact = testing::ExactMoments(distance, prior, 1.5).mean;
@@ -133,7 +133,7 @@ TEST(MoveExactness, NoiseAwareLikelihoodPosterior) {
     for (int k = 0; k < 8; ++k) exact[k] += bits[k] * p;
   }
   for (auto& x : exact) x /= z;
-  const auto h = RunCombinatorialSmc({&space, &sim, &dist}, MoveOptions({1.0}, 2000, 2013));
+  const auto h = RunCombinatorialSmc({&space, &sim, &dist}, MovingOptions({1.0}, 1000, 2013));
   PrintWaves(h);
   ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
   ASSERT_EQ(h.waves.back().thresholds[0], 1.0);
@@ -206,7 +206,7 @@ TEST(MoveExactness, AddingAnExperimentToAFinishedRun) {
     for (int k = 0; k < 8; ++k) exact[k] += bits[k] * p;
   }
   for (auto& x : exact) x /= z;
-  auto o = MoveOptions({1.0}, 2000, 2002);
+  auto o = MovingOptions({1.0}, 1000, 2002);
   const auto finished = RunCombinatorialSmc({&space, &sim, &first}, o);
   ASSERT_EQ(finished.summary.termination, Termination::kTargetReached);
   StartPopulation start;
@@ -223,7 +223,7 @@ TEST(MoveExactness, AddingAnExperimentToAFinishedRun) {
   const auto h = RunCombinatorialSmc(added, o);
   PrintWaves(h);
   ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
-  EXPECT_EQ(h.waves.front().candidates, 2000);  // wave 0: the finished posterior, re-simulated
+  EXPECT_EQ(h.waves.front().candidates, 1000);  // wave 0: the finished posterior, re-simulated
   ExpectMarginals(h, exact, "added experiment d=8");
   const auto from_prior = RunCombinatorialSmc({&space, &sim, &both}, o);
   std::printf("from the finished run: %lld simulations; from the prior: %lld\n",
@@ -241,7 +241,7 @@ TEST(MoveExactness, MixedMinorModes) {
     const mm::Simulator sim(variant);
     const mm::Distance dist;
     const mm::Exact exact = mm::ExactPosterior(variant);
-    auto o = mm::Options(BinaryKernelKind::kIndependent, ContinuousKernelKind::kNormal, 2000, 2301);
+    auto o = mm::Options(BinaryKernelKind::kIndependent, ContinuousKernelKind::kNormal, 1000, 2301);
     o.method = SamplerMethod::kResampleMove;
     // The problem's list schedule, whose steps keep enough of the ESS as they are.
     o.moves.ess_fraction = 0.1;
@@ -302,7 +302,7 @@ TEST(MoveExactness, DISABLED_CoverageOverSeeds) {
     double z2 = 0.0;
     int n = 0;
     for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-      const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MoveOptions({eps}, 500, seed));
+      const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MovingOptions({eps}, 500, seed));
       const auto& last = h.waves.back();
       const WaveErrors errors = WaveMonteCarloErrors(last);
       const auto parents = AncestorClusters(last, false);

@@ -42,6 +42,11 @@ struct StartPopulation {
   std::vector<ParameterValue> thetas;
   std::vector<double> weights;     // one per theta, >= 0, not all 0
   std::vector<double> thresholds;  // one per schedule slot of the new distance
+  // Optional, for a deterministic simulator: per theta, the finished run's distance for each
+  // component of the new distance (NaN for a new component). A re-simulated distance that
+  // differs (beyond 1e-9 relative) throws Error(kConfig): the model or the old data changed, and
+  // the population is no longer a draw from the old posterior.
+  std::vector<std::vector<double>> expected;
 };
 
 // What a run infers and with what. The sampler knows kernels, executors and simulators only

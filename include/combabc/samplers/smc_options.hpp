@@ -54,7 +54,7 @@ struct MoveOptions {
   // Metropolis-Hastings rounds (every particle one proposal each) continue until a particle has
   // moved at least once with probability 1 - stay_probability at the measured acceptance rate
   // (Drovandi & Pettitt 2011), within [1, max_rounds].
-  double stay_probability = 0.01;
+  double stay_probability = 0.05;
   int max_rounds = 30;
   // The share of proposals drawn from the kernel fitted to the reweighted particles (an
   // independent Metropolis-Hastings proposal, Schaefer & Chopin 2013); the rest are local: one or

@@ -23,7 +23,10 @@ struct RunRequest {
   int threads = -1;              // overrides [sampler] threads when >= 0
   bool overwrite = false;        // replace an existing history file
   bool report = true;            // write the report (report/ beside the history) when it ends
-  ExecutorFactory executor;      // empty: threads on this machine
+  // Not empty: a finished run's history whose posterior this run starts from, adding the config's
+  // other experiments to it (docs/algorithm.md, "Adding data to a finished run").
+  std::string start_from;
+  ExecutorFactory executor;  // empty: threads on this machine
   // Called with the history's path once it is known, before the history is created (the CLI
   // prepares the line it prints if mpirun ends the job; docs/mpi.md). May be empty.
   std::function<void(const std::string&)> on_history_path;
