@@ -213,12 +213,12 @@ void CheckOptions(const SmcProblem& problem,
                 "SmcProblem::space");
   }
   std::size_t threshold_components = 0;
-  for (const auto& c : components) threshold_components += c.kind == ComponentKind::kThreshold;
+  for (const auto& c : components) threshold_components += c.kind != ComponentKind::kIndicator;
   if (options.thresholds.size() != threshold_components) {
     throw Error(ErrorKind::kConfig,
                 "has " + std::to_string(options.thresholds.size()) +
                     " thresholds; the distance has " + std::to_string(threshold_components) +
-                    " threshold components",
+                    " threshold and likelihood components",
                 "",
                 0,
                 "EnumerationOptions::thresholds");
@@ -288,16 +288,26 @@ EnumerationResult Enumerate(const SmcProblem& problem,
   EnumerationResult result;
   result.configurations = std::int64_t{1} << space.num_free_bits();
 
-  auto accept = [&](std::span<const double> dist) {
+  // The log of a configuration's likelihood at the thresholds: -inf where a threshold or
+  // indicator component rejects it, else -sum_k d_k / T_k over the likelihood components (the
+  // noise-aware posterior p(theta) exp(-d / T), docs/algorithm.md "Noise-aware acceptance").
+  auto log_likelihood = [&](std::span<const double> dist) {
+    constexpr double kReject = -std::numeric_limits<double>::infinity();
+    double log_l = 0.0;
     std::size_t s = 0;
     for (std::size_t k = 0; k < components.size(); ++k) {
       if (components[k].kind == ComponentKind::kThreshold) {
-        if (!(dist[k] <= options.thresholds[s++])) return false;
+        if (!(dist[k] <= options.thresholds[s++])) return kReject;
+      } else if (components[k].kind == ComponentKind::kNegLogLikelihood) {
+        const double temperature = options.thresholds[s++];
+        if (std::isinf(temperature)) continue;
+        if (!(dist[k] < std::numeric_limits<double>::infinity())) return kReject;
+        log_l -= dist[k] / temperature;
       } else if (dist[k] != components[k].required) {
-        return false;
+        return kReject;
       }
     }
-    return true;
+    return log_l;
   };
 
   WaveRecord start_record;
@@ -310,6 +320,10 @@ EnumerationResult Enumerate(const SmcProblem& problem,
   // the same order for any executor, hence bit-identical results.
   BitMoments moments(d);
   double mass_sq_sum = 0.0;
+  // Masses are exp(log mass - shift), shift the largest log mass so far (0 for a threshold-only
+  // distance, whose masses are prior masses): a sharp likelihood's exp(-d) would underflow.
+  double shift = 0.0;
+  bool shifted = false;
   Best best(static_cast<std::size_t>(std::max(options.max_particles, options.top)));
   EnumerationBatch batch(
       space, *problem.simulator, *problem.distance, components.size(), options.seed);
@@ -319,14 +333,24 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     batch.Evaluate(*executor, next, n);
     for (std::int64_t i = 0; i < n; ++i) {
       const auto u = static_cast<std::size_t>(i);
-      if (!accept(batch.distance(u))) continue;
-      const double log_prior = batch.log_prior(u);
+      const double log_l = log_likelihood(batch.distance(u));
+      if (log_l == -std::numeric_limits<double>::infinity()) continue;
+      const double log_prior = batch.log_prior(u) + log_l;
       // A configuration of prior mass 0 (a bit or tied group of prior 0 or 1 set the other way)
       // has no posterior mass: not counted as accepted, not listed (were only such accepted, the
       // weights below would divide by a zero evidence).
       if (log_prior == -std::numeric_limits<double>::infinity()) continue;
       ++result.accepted;
-      const double mass = std::exp(log_prior);
+      if (log_l != 0.0 && (!shifted || log_prior > shift)) {
+        const double factor = shifted ? std::exp(shift - log_prior) : 0.0;
+        if (shifted) {
+          moments.Scale(factor);
+          mass_sq_sum *= factor * factor;
+        }
+        shift = log_prior;
+        shifted = true;
+      }
+      const double mass = std::exp(log_prior - shift);
       mass_sq_sum += mass * mass;
       const auto bits = batch.bits(u);
       moments.Add(bits, mass);
@@ -359,7 +383,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
   }
 
   const double mass_sum = moments.total();
-  result.evidence = mass_sum;
+  result.evidence = mass_sum * std::exp(shift);
   if (result.accepted > 0) {
     result.marginals = moments.Marginals();
     result.correlations = moments.Correlations();
@@ -368,11 +392,11 @@ EnumerationResult Enumerate(const SmcProblem& problem,
   auto sorted = best.Sorted();
   const auto top = std::min(sorted.size(), static_cast<std::size_t>(options.top));
   result.top.assign(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(top));
-  for (auto& p : result.top) p.weight = std::exp(p.log_weight) / mass_sum;
+  for (auto& p : result.top) p.weight = std::exp(p.log_weight - shift) / mass_sum;
   sorted.resize(std::min(sorted.size(), static_cast<std::size_t>(options.max_particles)));
   double kept_mass = 0.0;
-  for (const auto& p : sorted) kept_mass += std::exp(p.log_weight);
-  for (auto& p : sorted) p.weight = std::exp(p.log_weight) / kept_mass;
+  for (const auto& p : sorted) kept_mass += std::exp(p.log_weight - shift);
+  for (auto& p : sorted) p.weight = std::exp(p.log_weight - shift) / kept_mass;
   std::sort(sorted.begin(), sorted.end(), [](const Particle& a, const Particle& b) {
     return a.index < b.index;
   });

@@ -67,6 +67,12 @@ void BitMoments::Add(std::span<const std::uint8_t> bits, double weight) {
   }
 }
 
+void BitMoments::Scale(double factor) {
+  total_ *= factor;
+  for (double& x : ones_) x *= factor;
+  for (double& x : pairs_) x *= factor;
+}
+
 std::vector<double> BitMoments::Marginals() const {
   std::vector<double> marginals(d_);
   for (std::size_t k = 0; k < d_; ++k) marginals[k] = ones_[k] / total_;

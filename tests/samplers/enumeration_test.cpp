@@ -128,6 +128,70 @@ TEST(Enumeration, MatchesBruteForcePosterior) {
   }
 }
 
+// A noise-aware likelihood component at temperature T weighs each configuration by
+// prior x exp(-d / T), computed without underflow when every d is large (here d >= 2000, whose
+// exp(-d) is 0 in double precision).
+TEST(Enumeration, LikelihoodComponentsWeighByExpMinusDOverT) {
+  const std::vector<double> prior = {0.5, 0.3, 0.6, 0.5, 0.4, 0.7};
+  BinarySpaceOptions so;
+  so.dimension = 6;
+  so.prior_one = prior;
+  const ParameterSpace space{BinarySpace(so)};
+  const testing::LinearSimulator sim{{{1.0, 0.5, 0.0, 0.1, 0.0, 0.0},
+                                      {0.0, 1.0, 0.8, 0.0, 0.2, 0.0},
+                                      {0.3, 0.0, 1.0, 0.1, 0.0, 0.6},
+                                      {0.0, 0.0, 0.0, 0.1, 1.0, 0.4}}};
+  for (const double offset : {0.0, 2000.0}) {
+    // d = sum (y - observed)^2 / (2 sigma^2) + offset.
+    class Shifted : public Distance {
+     public:
+      explicit Shifted(double offset) : nll_({1.25, 0.7, 1.3, 0.2}, 0.3), offset_(offset) {}
+      std::vector<DistanceComponent> components() const override { return nll_.components(); }
+      void Evaluate(std::span<const double> y, std::span<double> out) const override {
+        nll_.Evaluate(y, out);
+        out[0] += offset_;
+      }
+
+     private:
+      testing::GaussianNllDistance nll_;
+      double offset_;
+    };
+    const Shifted dist(offset);
+    for (const double temperature : {1.0, 3.0}) {
+      EnumerationOptions o;
+      o.thresholds = {temperature};
+      const auto r = Enumerate({&space, &sim, &dist}, o);
+      std::vector<double> exact(6, 0.0);
+      double z = 0.0;
+      std::vector<double> y(4);
+      double d = 0.0;
+      RandomStream rng(0, 0, 0);
+      for (int c = 0; c < 64; ++c) {
+        std::vector<std::uint8_t> bits(6);
+        double p = 1.0;
+        for (int k = 0; k < 6; ++k) {
+          bits[k] = (c >> k) & 1;
+          p *= bits[k] != 0 ? prior[k] : 1.0 - prior[k];
+        }
+        sim.Simulate(ParameterView{bits, {}}, rng, y);
+        dist.Evaluate(y, std::span(&d, 1));
+        p *= std::exp(-(d - offset) / temperature);
+        z += p;
+        for (int k = 0; k < 6; ++k) exact[k] += bits[k] * p;
+      }
+      ASSERT_EQ(r.accepted, 64);
+      ASSERT_EQ(r.marginals.size(), 6u);
+      for (int k = 0; k < 6; ++k) {
+        EXPECT_NEAR(r.marginals[k], exact[k] / z, 1e-12)
+            << "offset " << offset << ", T " << temperature << ", bit " << k;
+      }
+      double weights = 0.0;
+      for (const auto& p : r.particles) weights += p.weight;
+      EXPECT_NEAR(weights, 1.0, 1e-12);
+    }
+  }
+}
+
 TEST(Enumeration, MaxParticlesKeepsTheLargestMasses) {
   Toy t;
   auto o = Options(1);
@@ -279,7 +343,8 @@ TEST(Enumeration, RefusesWhatItCannotEnumerate) {
 
   const ParameterSpace small{BinarySpace::Independent(3)};
   o.thresholds = {1.0, 2.0};
-  EXPECT_NE(ErrorOf({&small, &sim3, &dist3}, o).find("threshold components"), std::string::npos);
+  EXPECT_NE(ErrorOf({&small, &sim3, &dist3}, o).find("threshold and likelihood components"),
+            std::string::npos);
   o.thresholds = {-1.0};
   EXPECT_NE(ErrorOf({&small, &sim3, &dist3}, o).find(">= 0"), std::string::npos);
 }

@@ -1,8 +1,9 @@
 #pragma once
 // Exact ABC by enumeration: every configuration of the free bits is simulated once, so the ABC
-// posterior p(theta | d(theta) <= eps) ∝ prior(theta) 1[accepted] is computed exactly instead of
-// estimated. Feasible while 2^free bits stays small (kMaxEnumerationBits); the reference an SMC
-// run can be checked against (docs/algorithm.md, "Exact enumeration").
+// posterior p(theta | d(theta) <= eps) ∝ prior(theta) 1[accepted] (times exp(-d / T) for a
+// noise-aware likelihood component) is computed exactly instead of estimated. Feasible while 2^free
+// bits stays small (kMaxEnumerationBits); the reference an SMC run can be checked against
+// (docs/algorithm.md, "Exact enumeration").
 #include <cstdint>
 #include <vector>
 
@@ -17,8 +18,10 @@ namespace combabc {
 inline constexpr int kMaxEnumerationBits = 24;
 
 struct EnumerationOptions {
-  // One per threshold component of the distance, in component order (indicator components must
-  // equal their required value, as in the sampler).
+  // One per threshold or likelihood component of the distance, in component order: a threshold,
+  // or a likelihood component's temperature T, whose configurations then weigh
+  // prior x exp(-d / T) (indicator components must equal their required value, as in the
+  // sampler).
   std::vector<double> thresholds;
   int threads = 1;             // ThreadPoolExecutor threads when SmcProblem::executor is null
   int batch_size = 4096;       // configurations per Execute (and per ShouldStop / OnBatch)
@@ -43,7 +46,8 @@ struct EnumerationResult {
   double ess = 0.0;  // 1 / sum of squared normalised masses: the effective number of configurations
   // The `max_particles` accepted configurations of largest mass (ties: smaller index first), in
   // configuration order. index = configuration number (free bit j = bit j of the index);
-  // log_weight = log prior; weight = mass normalised over the kept particles.
+  // log_weight = log prior (+ the likelihood components' -d / T); weight = mass normalised over
+  // the kept particles.
   std::vector<Particle> particles;
   // The `top` configurations of largest mass, largest first; weight = mass / evidence.
   std::vector<Particle> top;

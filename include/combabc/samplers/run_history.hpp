@@ -213,6 +213,9 @@ class BitMoments {
   explicit BitMoments(std::size_t bits);
   void Add(std::span<const std::uint8_t> bits, double weight);
   double total() const { return total_; }  // the sum of the weights
+  // Multiplies every weight added so far by `factor` (> 0): a running sum of exp(log w) rescaled
+  // when a larger log w arrives, so that none underflows.
+  void Scale(double factor);
   // P(bit k = 1): the weight of the members with bit k set over total() (> 0).
   std::vector<double> Marginals() const;
   // Pearson correlation of bits i and j, row-major d x d. A bit constant in the population (its
