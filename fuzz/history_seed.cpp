@@ -96,10 +96,14 @@ void WriteSeedHistory(const std::string& path) {
     // Schema v8: two pattern classes of wave 1, the second flagged.
     two.pattern_classes = {{{1, 0, 1, 0, 1, 0}, 0.6, 0.5, false},
                            {{0, 1, 1, 0, 0, 1}, 0.3, 1e-4, true}};
+    // Schema v10: a resample-move wave, its particles moved from wave 1's particles 0 and 3.
+    two.moves = WaveMoves{2.5, 0.75, 1, 3, 2, 1, 1};
     store.OnWaveStart(two);
-    store.OnBatch({1, 3, 2, 0, 4, 9, 0.0, 0, {}},
-                  std::vector<Particle>{MakeParticle(0, {1, 0, 1, 1, 1, 0}, 0.1),
-                                        MakeParticle(1, {1, 0, 0, 0, 1, 0}, 0.2)});
+    std::vector<Particle> moved = {MakeParticle(0, {1, 0, 1, 1, 1, 0}, 0.1),
+                                   MakeParticle(1, {1, 0, 0, 0, 1, 0}, 0.2)};
+    moved[0].ancestor = 0;
+    moved[1].ancestor = 3;
+    store.OnBatch({1, 3, 2, 0, 4, 9, 0.0, 0, {}}, moved);
   }
   // One small self-contained file: fold the WAL back, leave WAL mode, use 512-byte pages.
   sqlite3* db = nullptr;

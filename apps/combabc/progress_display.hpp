@@ -99,6 +99,19 @@ class ProgressDisplay : public SmcObserver {
           w.multi_fidelity->continue_if_accepted,
           w.multi_fidelity->continue_if_rejected);
     }
+    if (w.moves) {
+      // Resample-move: the proposals are the wave's candidates (one simulation each).
+      const WaveMoves& m = *w.moves;
+      std::fprintf(stderr,
+                   "        moves: %d rounds, %lld proposals, %s accepted; %s independent; "
+                   "survivors' ESS %.0f%s\n",
+                   m.rounds,
+                   static_cast<long long>(m.proposed),
+                   Percent(m.accepted, m.proposed).c_str(),
+                   Percent(m.independent_proposed, m.proposed).c_str(),
+                   m.survivor_ess,
+                   m.step < 1.0 ? (", step " + Format(m.step)).c_str() : "");
+    }
     // The mode-loss diagnostic (docs/algorithm.md, "Mode loss"): known when the wave started,
     // said under its line.
     const std::string mode_loss = ModeLossWarning(w);
@@ -111,6 +124,14 @@ class ProgressDisplay : public SmcObserver {
   }
 
  private:
+  // "31%" of a count, "-" without any.
+  static std::string Percent(std::int64_t part, std::int64_t whole) {
+    if (whole <= 0) return "-";
+    char b[32];
+    std::snprintf(
+        b, sizeof b, "%.0f%%", 100.0 * static_cast<double>(part) / static_cast<double>(whole));
+    return b;
+  }
   // The first wave has no threshold (every prior draw is accepted: an infinite eps or
   // temperature, which the engine may record as NaN): shown as infinity.
   static std::string Format(double x) {

@@ -24,15 +24,15 @@ import numpy as np
 
 from . import _core
 from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, CustomPrior, Error,
-                    LogisticKernelOptions, MultiFidelityOptions, MultivariateNormalPrior,
-                    ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
+                    LogisticKernelOptions, MoveOptions, MultiFidelityOptions,
+                    MultivariateNormalPrior, ProposalOptions, SimulationFailed, SmcOptions, TemperingSchedule,
                     ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, ModeLossWarning, Wave
 
 __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "CustomPrior", "Error",
-           "Experiment", "History", "LogisticKernelOptions", "MultiFidelityOptions",
+           "Experiment", "History", "LogisticKernelOptions", "MoveOptions", "MultiFidelityOptions",
            "ModeLossWarning", "MultivariateNormalPrior", "Problem", "ProposalOptions",
            "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
            "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
@@ -181,7 +181,9 @@ def make_options(**fields):
     list of numbers; numbers are Python's or NumPy's scalars, a list may be a NumPy array. proposal=ProposalOptions(...)
     picks the kernels, tempering=TemperingSchedule(...) tempers the binary proposal toward the
     prior (paper Eq. 3), multi_fidelity=MultiFidelityOptions(...) sets a multi-fidelity run's
-    continuation probabilities (with Problem(low_fidelity=...))."""
+    continuation probabilities (with Problem(low_fidelity=...)), method="resample_move" moves the
+    particles that fit instead of drawing every wave afresh ("rejection", the default), with
+    moves=MoveOptions(...) (a config's [sampler] method and [sampler.moves], same names)."""
     options = SmcOptions()
     for name, value in fields.items():
         if not hasattr(options, name):

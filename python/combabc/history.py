@@ -43,7 +43,11 @@ class Wave:
     continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
     next_continue_if_accepted, next_continue_if_rejected, cost_ratio) and per particle multiplier
     float64[n], confirmed bool[n] and low_distance float64[n, k]; each is None in a
-    single-fidelity run.
+    single-fidelity run. Every wave has ancestor int64[n] (a resample-move wave's particle: the
+    index of the previous wave's particle it was resampled from and moved; -1 for one drawn
+    afresh) and moves: a resample-move wave's move statistics as summary.json's "moves" (a dict:
+    rounds, proposed, accepted, acceptance_rate, independent_proposed, independent_accepted,
+    independent_share, survivor_ess, step; docs/history.md), None for a wave drawn by rejection.
     """
 
     def __init__(self, record, estimator):
@@ -101,6 +105,10 @@ def _slice(record, first, count):
 _WAVE_FIDELITY_COLUMNS = ("continue_if_accepted", "continue_if_rejected", "expensive_simulations",
                           "cheap_seconds", "expensive_seconds", "next_continue_if_accepted",
                           "next_continue_if_rejected", "cost_ratio")
+
+
+_WAVE_MOVE_COLUMNS = ("rounds", "proposed", "accepted", "acceptance_rate", "independent_proposed",
+                      "independent_accepted", "independent_share", "survivor_ess", "step")
 
 
 def _fidelity_columns(w, distance_columns):
@@ -172,6 +180,12 @@ class History:
     def multi_fidelity(self):
         """Whether the run had a low-fidelity simulator (its waves carry multi_fidelity)."""
         return any(w.multi_fidelity is not None for w in self.waves)
+
+    @property
+    def resample_move(self):
+        """Whether the run moved particles (a resample-move run: some of its waves carry
+        moves)."""
+        return any(w.moves is not None for w in self.waves)
 
     @property
     def dimension(self):
@@ -254,8 +268,9 @@ class History:
         """Accepted particles as export's particles.csv: wave (from 1), index, bits (0/1 text),
         one column per bit named by its name (bit_names), one column per continuous parameter,
         log_weight, weight and d_<component> (component names made column-safe, as in the
-        export), and for a multi-fidelity run multiplier, confirmed (0/1) and
-        low_distance_<component>. wave: a wave's number (from 1), or None for every wave."""
+        export), for a multi-fidelity run multiplier, confirmed (0/1) and
+        low_distance_<component>, and for a resample-move run ancestor (-1 drawn afresh). wave: a
+        wave's number (from 1), or None for every wave."""
         import pandas as pd
         frames = []
         for w in self._selected(wave):
@@ -272,6 +287,8 @@ class History:
                 columns[name] = w.distance[:, k]
             if self.multi_fidelity:
                 columns.update(_fidelity_columns(w, self._distance_columns))
+            if self.resample_move:
+                columns["ancestor"] = w.ancestor
             frames.append(pd.DataFrame(columns))
         return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -309,7 +326,10 @@ class History:
         waves.csv: the smallest per-bit ESS; NaN when no bit varies or exact), and for a
         multi-fidelity run continue_if_accepted, continue_if_rejected, expensive_simulations,
         cheap_seconds, expensive_seconds, next_continue_if_accepted, next_continue_if_rejected
-        and cost_ratio."""
+        and cost_ratio, and for a resample-move run move_rounds, move_proposed, move_accepted,
+        move_acceptance_rate, move_independent_proposed, move_independent_accepted,
+        move_independent_share, move_survivor_ess and move_step (NaN in a wave drawn by
+        rejection), as waves.csv."""
         import pandas as pd
         rows = []
         for w in self.waves:
@@ -323,6 +343,9 @@ class History:
             if self.multi_fidelity:
                 row.update({key: (w.multi_fidelity or {}).get(key, np.nan)
                             for key in _WAVE_FIDELITY_COLUMNS})
+            if self.resample_move:
+                row.update({"move_" + key: (w.moves or {}).get(key, np.nan)
+                            for key in _WAVE_MOVE_COLUMNS})
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -353,7 +376,8 @@ class History:
                     "reals": x.reals, "log_weight": x.log_weight, "weight": x.weight,
                     "distance": x.distance, "index": x.index, "output": x.output,
                     "multiplier": x.multiplier,
-                    "confirmed": None if x.confirmed is None else x.confirmed.astype(np.uint8)}
+                    "confirmed": None if x.confirmed is None else x.confirmed.astype(np.uint8),
+                    "ancestor": x.ancestor if self.resample_move else None, "moves": x.moves}
                    for x in waves],
             bit_names=self.bit_names, real_names=self.real_names, components=self.components,
             measured_position=self.measured_position, measured_value=self.measured_value,

@@ -60,6 +60,38 @@ void AddFidelity(const WaveRecord& wave, py::ssize_t num_components, py::dict& d
   d["low_distance"] = low_distance;
 }
 
+// A resample-move wave's move statistics ("moves", a dict under summary.json's names; None for a
+// rejection wave) and its particles' ancestors (int64[n]: the previous wave's index, -1 drawn
+// afresh).
+void AddMoves(const WaveRecord& wave, py::dict& d) {
+  const auto n = static_cast<py::ssize_t>(wave.particles.size());
+  py::array_t<std::int64_t> ancestor(n);
+  auto ancestor_w = ancestor.mutable_unchecked<1>();
+  for (py::ssize_t i = 0; i < n; ++i)
+    ancestor_w(i) = wave.particles[static_cast<std::size_t>(i)].ancestor;
+  d["ancestor"] = ancestor;
+  if (!wave.moves) {
+    d["moves"] = py::none();
+    return;
+  }
+  const WaveMoves& m = *wave.moves;
+  const double nan = std::nan("");
+  const auto rate = [&](std::int64_t part) {
+    return m.proposed > 0 ? static_cast<double>(part) / static_cast<double>(m.proposed) : nan;
+  };
+  py::dict moves;
+  moves["rounds"] = m.rounds;
+  moves["proposed"] = m.proposed;
+  moves["accepted"] = m.accepted;
+  moves["acceptance_rate"] = rate(m.accepted);
+  moves["independent_proposed"] = m.independent_proposed;
+  moves["independent_accepted"] = m.independent_accepted;
+  moves["independent_share"] = rate(m.independent_proposed);
+  moves["survivor_ess"] = m.survivor_ess;
+  moves["step"] = m.step;
+  d["moves"] = moves;
+}
+
 // A wave's Monte-Carlo errors (WaveMonteCarloErrors), under summary.json's names: per bit its
 // standard error and ESS, the bits' ESS (NaN when no bit varies), per real its mean's and sd's
 // standard errors and its mean's ESS. An enumeration's numbers are exact: NaN each.
@@ -186,6 +218,7 @@ py::dict WaveToDict(const WaveRecord& wave, const HistoryNames& names) {
   // combabc.ModeLossWarning.
   d["mode_loss_warning"] = ModeLossWarning(wave);
   AddFidelity(wave, num_components, d);
+  AddMoves(wave, d);
   return d;
 }
 

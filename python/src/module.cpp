@@ -422,6 +422,13 @@ void CheckMultiFidelity(const MultiFidelityOptions& o) {
   }
 }
 
+// MoveOptions as its keywords name them: ValueError naming the argument (MoveOptions::IsValid's
+// ranges).
+void CheckMoves(const MoveOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw py::value_error(why);
+}
+
 // The history of a Python run, opened to continue it: refused (kUsage) for a config run's history,
 // a run that has finished (not on a limit), and a problem or options other than the run's.
 HistoryStore OpenPythonRun(const std::string& path,
@@ -570,8 +577,15 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                   request.rng,
                                   first_error);
   std::optional<PythonSimulator> cheap;
+  if (options.method == SamplerMethod::kResampleMove) CheckMoves(options.moves);
   if (!request.low_fidelity.is_none()) {
     CheckMultiFidelity(options.multi_fidelity);
+    // As a config's [simulator.low_fidelity] with method = "resample_move".
+    if (options.method == SamplerMethod::kResampleMove) {
+      throw py::value_error(
+          "SmcOptions: method = \"resample_move\": moves do not apply to multi-fidelity runs "
+          "(Problem(low_fidelity=...)); use method = \"rejection\"");
+    }
     cheap.emplace(request.low_fidelity,
                   request.batch,
                   static_cast<int>(request.observed.size()),
@@ -979,6 +993,34 @@ void BindTypes(py::module_& m) {
       .def_readwrite("floor", &MultiFidelityOptions::floor)
       .def_readwrite("cost_ratio", &MultiFidelityOptions::cost_ratio);
 
+  // SmcOptions::moves ([sampler.moves] in a config): used with method = "resample_move".
+  const MoveOptions move_defaults;
+  py::class_<MoveOptions>(m, "MoveOptions")
+      .def(py::init([](double ess_fraction,
+                       double stay_probability,
+                       int max_rounds,
+                       double independent_share,
+                       double min_survivor_fraction) {
+             const MoveOptions o{ess_fraction,
+                                 stay_probability,
+                                 max_rounds,
+                                 independent_share,
+                                 min_survivor_fraction};
+             CheckMoves(o);
+             return o;
+           }),
+           py::kw_only(),
+           py::arg("ess_fraction") = move_defaults.ess_fraction,
+           py::arg("stay_probability") = move_defaults.stay_probability,
+           py::arg("max_rounds") = move_defaults.max_rounds,
+           py::arg("independent_share") = move_defaults.independent_share,
+           py::arg("min_survivor_fraction") = move_defaults.min_survivor_fraction)
+      .def_readwrite("ess_fraction", &MoveOptions::ess_fraction)
+      .def_readwrite("stay_probability", &MoveOptions::stay_probability)
+      .def_readwrite("max_rounds", &MoveOptions::max_rounds)
+      .def_readwrite("independent_share", &MoveOptions::independent_share)
+      .def_readwrite("min_survivor_fraction", &MoveOptions::min_survivor_fraction);
+
   py::class_<SmcOptions>(m, "SmcOptions")
       .def(py::init<>())
       .def_readwrite("num_waves", &SmcOptions::num_waves)
@@ -1007,6 +1049,14 @@ void BindTypes(py::module_& m) {
       .def_readwrite("batch_size", &SmcOptions::batch_size)
       .def_readwrite("keep_outputs", &SmcOptions::keep_outputs)
       .def_readwrite("multi_fidelity", &SmcOptions::multi_fidelity)
+      // "rejection" (the paper's waves) or "resample_move" ([sampler] method in a config).
+      .def_property(
+          "method",
+          [](const SmcOptions& o) { return ToString(o.method); },
+          [](SmcOptions& o, const std::string& text) {
+            o.method = Parse<SamplerMethod>(text, "method");
+          })
+      .def_readwrite("moves", &SmcOptions::moves)
       .def("is_valid", [](const SmcOptions& o) {
         std::string why;
         const bool ok = o.IsValid(&why);

@@ -106,6 +106,12 @@ std::vector<std::pair<std::string, std::string>> PythonRunFingerprint(const Pyth
     << q.logistic.clip << std::string(ToString(q.continuous)) << q.scale;
   o << std::string(ToString(options.estimator)) << std::to_string(options.seed)
     << std::int64_t{options.batch_size} << std::int64_t{options.keep_outputs};
+  // Resample-move runs only, so that rejection runs' fingerprints are what they were.
+  if (options.method != SamplerMethod::kRejection) {
+    const MoveOptions& m = options.moves;
+    o << std::string(ToString(options.method)) << m.ess_fraction << m.stay_probability
+      << std::int64_t{m.max_rounds} << m.independent_share << m.min_survivor_fraction;
+  }
   // Multi-fidelity runs only, so that single-fidelity fingerprints are what they were.
   if (problem.low_fidelity) {
     const MultiFidelityOptions& mf = options.multi_fidelity;

@@ -22,7 +22,11 @@ layout. Waves are numbered from 1 and bits named, as everywhere a user sees them
 - sample_stats, per draw, of the particle it was drawn from: `weight` and `log_weight`,
   `distance` (chain, draw, component) and `particle_index` (its candidate index in the wave); in a
   multi-fidelity run also `multiplier` and `confirmed` (0/1). Such a run's draws are resampled
-  from its particles' weights (which hold the multipliers) under either estimator;
+  from its particles' weights (which hold the multipliers) under either estimator. In a
+  resample-move run also `ancestor` (the previous wave's particle_index it was resampled from and
+  moved; -1 drawn afresh), and a move wave's sample_stats the attributes `move_rounds`,
+  `move_proposed`, `move_accepted`, `move_independent_proposed`, `move_independent_accepted`,
+  `move_survivor_ess` and `move_step` (summary.json's "moves");
 - signed weights (a multi-fidelity wave with some negative weights): no equally weighted sample
   can be drawn from them (resampling their positive part gives another distribution), so that
   wave has no `posterior` (nor `posterior_predictive`) group; its sample_stats holds every
@@ -158,7 +162,8 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
     wave without it counts as complete), thresholds, and its particles as
     NumPy arrays (n particles): bits uint8[n, d], reals float64[n, r], log_weight, weight
     float64[n], distance float64[n, k], index int64[n], output float64[n, m] (m = 0 without
-    outputs), and in a multi-fidelity run multiplier float64[n] and confirmed uint8[n].
+    outputs), in a multi-fidelity run multiplier float64[n] and confirmed uint8[n], and in a
+    resample-move run ancestor int64[n] and, for a move wave, moves (summary.json's dict).
     experiments: the run's experiments as dicts (name, description, first_measured,
     measured, first_component, components, first_output, outputs: summary.json's
     "experiments"), or None for one holding everything. real_priors: per continuous parameter its
@@ -225,6 +230,10 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
                                    np.asarray(wave["multiplier"], dtype=np.float64)[rows][None])
             stats["confirmed"] = (("chain", "draw"),
                                   np.asarray(wave["confirmed"], dtype=np.uint8)[rows][None])
+        # A resample-move run: the previous wave's particle each draw's particle moved from.
+        if wave.get("ancestor") is not None:
+            stats["ancestor"] = (("chain", "draw"),
+                                 np.asarray(wave["ancestor"], dtype=np.int64)[rows][None])
         coords = {**draws(n), "component": list(components)}
         if named is not None:
             owner = [""] * len(components)
@@ -241,6 +250,11 @@ def inference_data(*, waves, bit_names, real_names, components, measured_positio
                        "equal" if uniform else "weight",
                        "signed_weights": int(is_signed),
                        "signed_weights_note": signed_note(wave["number"]) if is_signed else ""}
+        for key, value in (wave.get("moves") or {}).items():
+            if value is not None and key in ("rounds", "proposed", "accepted",
+                                             "independent_proposed", "independent_accepted",
+                                             "survivor_ess", "step"):
+                stats_attrs[f"move_{key}"] = value
         if is_signed:
             # The particles themselves beside their weights: the posterior is their signed
             # weighted sum, which no unweighted statistic of a posterior group would give.
@@ -333,9 +347,12 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
     table = pd.read_csv(particles_csv, dtype={"bits": str}, float_precision="round_trip")
     columns = list(table.columns)
     weight_at = columns.index("weight")
-    # A multi-fidelity run's columns follow the distances (multiplier, confirmed, low_distance_*).
+    # A multi-fidelity run's columns follow the distances (multiplier, confirmed, low_distance_*),
+    # then a resample-move run's ancestor.
     fidelity = "multiplier" in columns
-    distance_columns = columns[weight_at + 1:columns.index("multiplier") if fidelity else None]
+    moved = "ancestor" in columns
+    after = [columns.index(c) for c in ("multiplier", "ancestor") if c in columns]
+    distance_columns = columns[weight_at + 1:min(after) if after else None]
     if len(distance_columns) != len(components):
         components = [c[2:] for c in distance_columns]  # an older file: the export's names
     curves = None
@@ -364,6 +381,9 @@ def from_export(particles_csv, measured_csv, summary_json, curves_csv=None, posi
         if fidelity:
             wave["multiplier"] = rows["multiplier"].to_numpy(dtype=np.float64)
             wave["confirmed"] = rows["confirmed"].to_numpy(dtype=np.uint8)
+        if moved:
+            wave["ancestor"] = rows["ancestor"].to_numpy(dtype=np.int64)
+            wave["moves"] = w.get("moves")
         if curves is not None:
             by_index = curves[curves["wave"] == w["wave"]].drop(columns="wave").set_index("index")
             if set(wave["index"]) <= set(by_index.index):

@@ -102,6 +102,8 @@ class Wave:
         self.ess = number(entry.get("ess"))
         self.distinct = int(entry.get("distinct") or 0)
         self.wall_seconds = number(entry.get("wall_seconds"))
+        # A resample-move wave's move statistics (summary.json's "moves"); None otherwise.
+        self.moves = entry.get("moves")
         self.marginals = {"paper": numbers(entry.get("marginals_paper")),
                           "importance": numbers(entry.get("marginals_importance"))}
         self.index = np.zeros(0, dtype=np.int64)

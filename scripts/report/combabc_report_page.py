@@ -422,6 +422,35 @@ def fidelity_html(run):
             f"total: the answer's wave's over the run's).</p><table>{head}{body}</table>\n")
 
 
+def moves_html(waves):
+    """A resample-move run's moves per wave (summary.json's "moves"); nothing for a run whose
+    waves all drew their candidates by rejection."""
+    if not any(getattr(w, "moves", None) for w in waves):
+        return ""
+    head = ("<tr><th>Wave</th><th>Rounds</th><th>Proposals</th><th>Accepted</th>"
+            "<th>Acceptance rate</th><th>Independent share</th>"
+            "<th>Independent accepted</th><th>Survivors' ESS</th><th>Step</th></tr>")
+
+    def row(w):
+        m = getattr(w, "moves", None)
+        if not m:
+            return (f"<tr><td>{w.number}</td><td colspan=\"8\">drawn by rejection</td></tr>")
+        return (f"<tr><td>{w.number}</td><td>{m['rounds']}</td><td>{m['proposed']}</td>"
+                f"<td>{m['accepted']}</td><td>{fmt(m.get('acceptance_rate'), '.3g')}</td>"
+                f"<td>{fmt(m.get('independent_share'), '.3g')}</td>"
+                f"<td>{m['independent_accepted']}</td>"
+                f"<td>{fmt(m.get('survivor_ess'), '.1f')}</td><td>{fmt(m.get('step'), '.3g')}</td>"
+                "</tr>")
+
+    body = "\n".join(row(w) for w in waves)
+    return ("<h2>Moves</h2><p>Each move wave reweighted the previous wave's particles to its "
+            "target (survivors' ESS: their effective sample size then; step: the share of the "
+            "schedule's step taken), resampled them and moved each by Metropolis-Hastings "
+            "proposals, one per particle and round; independent proposals come from the kernel "
+            "fitted to the reweighted particles, the others flip bits or step the reals.</p>"
+            f"<table>{head}{body}</table>\n")
+
+
 def page_html(waves, run, estimator, written, formats, history):
     """The whole page."""
     provenance = [
@@ -481,7 +510,7 @@ def page_html(waves, run, estimator, written, formats, history):
 {strip_html(summary) if sensor else ""}{verdicts}{answer_html(summary, sensor)}{bars}
 {checks_html(summary)}<h2>Run</h2><table>{rows}</table>
 {experiments}<h2>Waves</h2><table>{head}{body}</table>
-{fidelity}{note}
+{moves_html(waves)}{fidelity}{note}
 <h2>Figures</h2>
 {figures}
 <h2>Configuration</h2><pre>{e(run.get("config_text") or "")}</pre>

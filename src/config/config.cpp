@@ -80,6 +80,8 @@ std::string SamplerKeyOf(const std::string& field) {
       {"batch_size", "sampler.batch_size"},
       {"tempering", "sampler.tempering"},
       {"multi_fidelity", "sampler.multi_fidelity"},
+      {"moves", "sampler.moves"},
+      {"method", "sampler.method"},
       {"thresholds", "metric"},
       {"default_prior_one", "sampler.prior"},
       {"prior_one", "sampler.prior"},
@@ -294,6 +296,16 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
                 c.path,
                 sources.multi_fidelity->line,
                 sources.multi_fidelity->key);
+  }
+  // A move's Metropolis-Hastings step leaves one simulator's target invariant; a multi-fidelity
+  // wave's weights carry the cheap simulator's continuation multipliers, which no move keeps.
+  if (c.smc.method == SamplerMethod::kResampleMove && c.low_fidelity) {
+    throw Error(ErrorKind::kConfig,
+                "moves do not apply to multi-fidelity runs ([simulator.low_fidelity]); use "
+                "method = \"rejection\" or remove the cheap simulator",
+                c.path,
+                sources.method->line,
+                sources.method->key);
   }
   ParseOutput(root, &c);
   config_internal::ParseDesignSection(root, &c, model_sources);

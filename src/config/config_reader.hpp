@@ -120,6 +120,8 @@ struct Sources {
   std::map<std::string, Source> space;   // BinarySpaceOptions field -> key
   Source sampler;                        // fallback: the [sampler] table
   std::optional<Source> multi_fidelity;  // the [sampler.multi_fidelity] table, when given
+  std::optional<Source> method;          // sampler.method, when given
+  std::optional<Source> moves;           // the [sampler.moves] table, when given
 };
 
 // Records that `field` was set by key `key` of `t` (if present).

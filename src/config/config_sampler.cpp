@@ -57,6 +57,36 @@ void ParseMultiFidelity(TableReader& s, MultiFidelityOptions* mf, Sources* sourc
   t->Finish();
 }
 
+// [sampler.moves]: MoveOptions, a resample-move run's only (method = "resample_move"); each key
+// checked against MoveOptions::IsValid's range here, so that the error names the key.
+void ParseMoves(TableReader& s, SamplerMethod method, MoveOptions* moves, Sources* sources) {
+  auto t = s.Table("moves");
+  if (!t) return;
+  sources->moves = Source{t->prefix(), t->line()};
+  sources->smc["moves"] = *sources->moves;
+  if (method != SamplerMethod::kResampleMove) {
+    throw Error(ErrorKind::kConfig,
+                "move options apply to resample-move runs only; set method = \"resample_move\" "
+                "in [sampler] or remove [sampler.moves]",
+                t->path(),
+                t->line(),
+                t->prefix());
+  }
+  // A fraction strictly between 0 and 1.
+  auto open_fraction = [&](const char* key, double* value) {
+    if (const auto v = t->Number(key)) {
+      if (!(*v > 0.0 && *v < 1.0)) t->Fail(key, "must be in (0, 1)");
+      *value = *v;
+    }
+  };
+  open_fraction("ess_fraction", &moves->ess_fraction);
+  open_fraction("stay_probability", &moves->stay_probability);
+  moves->max_rounds = t->IntegerIn("max_rounds", moves->max_rounds, 1, 10000);
+  moves->independent_share = t->NumberIn("independent_share", moves->independent_share, 0.0, 1.0);
+  open_fraction("min_survivor_fraction", &moves->min_survivor_fraction);
+  t->Finish();
+}
+
 void ParseTies(TableReader& s, int dimension, BinarySpaceOptions* space) {
   const toml::node* node = s.Raw("tie");
   if (!node) return;
@@ -167,13 +197,12 @@ void ParseSamplerSection(TableReader& root, CalibrationConfig* c, Sources* sourc
   Note(sources->smc, "batch_size", *t, "batch_size");
   ParseTempering(*t, &smc, sources);
   ParseMultiFidelity(*t, &smc.multi_fidelity, sources);
-  smc.method = t->Choice<SamplerMethod>("method", "method").value_or(smc.method);  // TEMP
-  if (auto m = t->Table("moves")) {
-    smc.moves.stay_probability = m->NumberIn("stay_probability", smc.moves.stay_probability, 0.0, 1.0);
-    smc.moves.max_rounds = m->IntegerIn("max_rounds", smc.moves.max_rounds, 1, 10000);
-    smc.moves.ess_fraction = m->NumberIn("ess_fraction", smc.moves.ess_fraction, 0.0, 1.0);
-    smc.moves.independent_share = m->NumberIn("independent_share", smc.moves.independent_share, 0.0, 1.0);
+  if (const auto method = t->Choice<SamplerMethod>("method", "sampler method")) {
+    smc.method = *method;
+    sources->method = Source{t->Key("method"), t->Line("method")};
+    Note(sources->smc, "method", *t, "method");
   }
+  ParseMoves(*t, smc.method, &smc.moves, sources);
 
   if (const toml::node* prior = t->Raw("prior")) {
     const std::string key = t->Key("prior");

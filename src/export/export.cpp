@@ -135,6 +135,24 @@ bool MultiFidelity(const RunHistory& h) {
       h.waves.begin(), h.waves.end(), [](const WaveRecord& w) { return w.multi_fidelity; });
 }
 
+// A resample-move run: one of its waves moved particles. Only then do the exported files have the
+// move columns (waves.csv), the ancestor (particles.csv) and summary.json's waves their "moves".
+bool Moves(const RunHistory& h) {
+  return std::any_of(h.waves.begin(), h.waves.end(), [](const WaveRecord& w) { return w.moves; });
+}
+
+// The moves' acceptance rate and the share of proposals from the fitted kernel (NaN without
+// proposals).
+double MoveAcceptance(const WaveMoves& m) {
+  return m.proposed > 0 ? static_cast<double>(m.accepted) / static_cast<double>(m.proposed)
+                        : std::nan("");
+}
+double IndependentShare(const WaveMoves& m) {
+  return m.proposed > 0
+             ? static_cast<double>(m.independent_proposed) / static_cast<double>(m.proposed)
+             : std::nan("");
+}
+
 // Waves are numbered from 1 in every exported file, as in the paper, the CLI and the report (the
 // database keeps the engine's 0-based numbers).
 int WaveNumber(const WaveRecord& w) { return w.wave + 1; }
@@ -190,6 +208,13 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
     out << ",continue_if_accepted,continue_if_rejected,expensive_simulations,cheap_seconds,"
            "expensive_seconds,next_continue_if_accepted,next_continue_if_rejected,cost_ratio";
   }
+  // A resample-move run's move statistics, last (NaN in its waves drawn by rejection).
+  const bool moves = Moves(h);
+  if (moves) {
+    out << ",move_rounds,move_proposed,move_accepted,move_acceptance_rate,"
+           "move_independent_proposed,move_independent_accepted,move_independent_share,"
+           "move_survivor_ess,move_step";
+  }
   out << '\n';
   for (const WaveRecord& w : h.waves) {
     out << WaveNumber(w);
@@ -221,6 +246,15 @@ void WriteWaves(OutputDirectory& dir, const RunMetadata& m, const RunHistory& h)
           << f.expensive_simulations << ',' << Number(f.cheap_seconds) << ','
           << Number(f.expensive_seconds) << ',' << Number(f.next_continue_if_accepted) << ','
           << Number(f.next_continue_if_rejected) << ',' << Number(f.cost_ratio);
+    }
+    if (moves && w.moves) {
+      const WaveMoves& v = *w.moves;
+      out << ',' << v.rounds << ',' << v.proposed << ',' << v.accepted << ','
+          << Number(MoveAcceptance(v)) << ',' << v.independent_proposed << ','
+          << v.independent_accepted << ',' << Number(IndependentShare(v)) << ','
+          << Number(v.survivor_ess) << ',' << Number(v.step);
+    } else if (moves) {
+      out << ",NaN,NaN,NaN,NaN,NaN,NaN,NaN,NaN,NaN";
     }
     out << '\n';
   }
@@ -283,6 +317,9 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
     out << ",multiplier,confirmed";
     for (const std::string& name : distance_columns) out << ",low_distance_" << name.substr(2);
   }
+  // A resample-move run's particles' ancestors (the previous wave's index; -1 drawn afresh), last.
+  const bool moves = Moves(h);
+  if (moves) out << ",ancestor";
   out << '\n';
   std::string bits;
   for (const WaveRecord& w : h.waves) {
@@ -304,6 +341,7 @@ void WriteParticles(OutputDirectory& dir, const RunMetadata& m, const RunHistory
           out << ',' << (c < p.low_distance.size() ? Number(p.low_distance[c]) : "NaN");
         }
       }
+      if (moves) out << ',' << p.ancestor;
       out << '\n';
     }
   }
@@ -373,6 +411,20 @@ void WriteExperiments(OutputDirectory& dir, const RunMetadata& m) {
         << x.measured << ',' << x.components << ',' << x.first_output << ',' << x.first_measured
         << '\n';
   }
+}
+
+// summary.json's "moves" of a resample-move wave (null for a rejection wave of such a run).
+std::string MovesJson(const std::optional<WaveMoves>& m) {
+  if (!m) return "null";
+  return "{\"rounds\": " + std::to_string(m->rounds) +
+         ", \"proposed\": " + std::to_string(m->proposed) +
+         ", \"accepted\": " + std::to_string(m->accepted) +
+         ", \"acceptance_rate\": " + JsonNumber(MoveAcceptance(*m)) +
+         ", \"independent_proposed\": " + std::to_string(m->independent_proposed) +
+         ", \"independent_accepted\": " + std::to_string(m->independent_accepted) +
+         ", \"independent_share\": " + JsonNumber(IndependentShare(*m)) +
+         ", \"survivor_ess\": " + JsonNumber(m->survivor_ess) +
+         ", \"step\": " + JsonNumber(m->step) + "}";
 }
 
 // summary.json's "multi_fidelity": per wave and in total the cheap simulations (every candidate
@@ -495,6 +547,7 @@ void WriteSummary(OutputDirectory& dir,
         << ", \"first_component\": " << x.first_component << "}";
   }
   out << "\n  ],\n  \"waves\": [";
+  const bool moves = Moves(h);
   for (std::size_t t = 0; t < h.waves.size(); ++t) {
     const WaveRecord& w = h.waves[t];
     out << (t ? "," : "") << "\n    {\"wave\": " << WaveNumber(w)
@@ -508,7 +561,10 @@ void WriteSummary(OutputDirectory& dir,
         << ",\n     \"marginals_paper\": " << JsonArray(w.marginals_paper)
         << ",\n     \"marginals_importance\": " << JsonArray(w.marginals_importance)
         << ",\n     \"reals_mean\": " << JsonArray(w.reals_mean)
-        << ", \"reals_sd\": " << JsonArray(w.reals_sd) << WaveErrorsJson(ErrorsOf(m, w)) << "}";
+        << ", \"reals_sd\": " << JsonArray(w.reals_sd) << WaveErrorsJson(ErrorsOf(m, w));
+    // A resample-move run's waves only: a rejection run's summary is what it was.
+    if (moves) out << ",\n     \"moves\": " << MovesJson(w.moves);
+    out << "}";
   }
   const Answer answer = SummariseAnswer(m, h, positions);
   out << "\n  ],";

@@ -1,4 +1,4 @@
-// Creating and opening a run history, and the schema itself (docs/history.md, version 8).
+// Creating and opening a run history, and the schema itself (docs/history.md, version 10).
 #include <unistd.h>
 
 #include <cerrno>
@@ -29,12 +29,13 @@ namespace fs = std::filesystem;
 using history::Statement;
 using history::Transaction;
 
-// Version 7 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
+// Version 10 of the schema (version 1 lacked wave.discarded, wave.content_hash and the checksums in
 // meta; version 2 the tables real and proposal, the reals columns and the fingerprint; version 3
 // the table failure and wave.failures, created apart as kSchemaV4Tables; version 4 the meta row
 // wave_count, which adds no table; version 5 the table experiment, created apart as
 // kSchemaV6Tables; version 6 the multi-fidelity columns, added to an older file by
-// kSchemaV7Columns; version 7 the pattern classes, added by kSchemaV8Columns). Every table and
+// kSchemaV7Columns; version 7 the pattern classes, added by kSchemaV8Columns; version 9 the
+// resample-move columns, added by kSchemaV10Columns). Every table and
 // index here is listed in ExpectedObjects (history_verify.cpp), which refuses any other schema
 // object in a history. Vectors of doubles are BLOBs of little-endian binary64 (exact, and +-inf /
 // NaN survive, which REAL columns and JSON would not guarantee); bits are packed.
@@ -110,7 +111,14 @@ CREATE TABLE wave (
   pattern_bits BLOB,
   pattern_mass BLOB,
   pattern_proposal BLOB,
-  pattern_flagged BLOB
+  pattern_flagged BLOB,
+  move_survivor_ess REAL,
+  move_step REAL,
+  move_rounds INTEGER,
+  move_proposed INTEGER,
+  move_accepted INTEGER,
+  move_independent_proposed INTEGER,
+  move_independent_accepted INTEGER
 );
 CREATE TABLE particle (
   wave INTEGER NOT NULL REFERENCES wave (wave),
@@ -124,6 +132,7 @@ CREATE TABLE particle (
   multiplier REAL,
   confirmed INTEGER,
   low_distance BLOB,
+  ancestor INTEGER,
   PRIMARY KEY (wave, candidate)
 );
 )sql";
@@ -204,6 +213,20 @@ ALTER TABLE wave ADD COLUMN pattern_bits BLOB;
 ALTER TABLE wave ADD COLUMN pattern_mass BLOB;
 ALTER TABLE wave ADD COLUMN pattern_proposal BLOB;
 ALTER TABLE wave ADD COLUMN pattern_flagged BLOB;
+)sql";
+
+// Added by version 10 to an older file (a new one has them in kSchema): what a resample-move
+// wave's moves did (WaveRecord::moves) and each of its particles' ancestor (Particle::ancestor);
+// NULL in a rejection wave and for a particle drawn afresh (docs/history.md, "Resample-move").
+constexpr const char* kSchemaV10Columns = R"sql(
+ALTER TABLE wave ADD COLUMN move_survivor_ess REAL;
+ALTER TABLE wave ADD COLUMN move_step REAL;
+ALTER TABLE wave ADD COLUMN move_rounds INTEGER;
+ALTER TABLE wave ADD COLUMN move_proposed INTEGER;
+ALTER TABLE wave ADD COLUMN move_accepted INTEGER;
+ALTER TABLE wave ADD COLUMN move_independent_proposed INTEGER;
+ALTER TABLE wave ADD COLUMN move_independent_accepted INTEGER;
+ALTER TABLE particle ADD COLUMN ancestor INTEGER;
 )sql";
 
 // What an older file upgraded to v6 (and a RunMetadata without experiments) holds: one unnamed
@@ -583,7 +606,8 @@ void HistoryStore::Impl::MigrateToCurrent() {
   // nor (before v4) any failed simulation; (before v6) it had a single, unnamed experiment; and
   // (before v7) it ran one simulator only (its multi-fidelity columns stay NULL); and (before v8)
   // it recorded no pattern classes (the columns stay NULL: none). v9 adds no column: a v8 wave's
-  // classes are whole patterns, stored as v9 stores a wave without classes of a few bits.
+  // classes are whole patterns, stored as v9 stores a wave without classes of a few bits. Before
+  // v10 every wave was a rejection wave (its move columns and its particles' ancestors stay NULL).
   Transaction transaction(db);
   const int from = schema_version;
   if (schema_version < 2) {
@@ -613,6 +637,7 @@ void HistoryStore::Impl::MigrateToCurrent() {
   }
   if (schema_version < 7) db.Exec(kSchemaV7Columns);
   if (schema_version < 8) db.Exec(kSchemaV8Columns);
+  if (schema_version < 10) db.Exec(kSchemaV10Columns);
   db.Exec(("UPDATE meta SET value = '" + std::to_string(kHistorySchemaVersion) +
            "' WHERE key = 'schema_version'; PRAGMA user_version = " +
            std::to_string(kHistorySchemaVersion))

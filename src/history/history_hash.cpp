@@ -22,8 +22,8 @@ void AddRows(Fnv1a64& hash, Database& db, const char* sql, int columns) {
 }
 
 // Columns [first, first + count) of `row` are all NULL: the multi-fidelity columns of a
-// single-fidelity run (schema v7), which its checksums skip, so that the checksum of a wave written
-// before v7 stands after the file is upgraded.
+// single-fidelity run (schema v7), or the move columns of a rejection wave (v10), which its
+// checksums skip, so that the checksum of a wave written before stands after the file is upgraded.
 bool AllNull(const Statement& row, int first, int count) {
   for (int c = first; c < first + count; ++c) {
     if (!row.IsNull(c)) return false;
@@ -169,6 +169,9 @@ void WaveHasher::AddParticle(const Statement& particle_row) {
   if (v7_ && !AllNull(particle_row, columns, kParticleColumnCount - columns)) {
     hash_.AddColumns(particle_row, columns, kParticleColumnCount - columns);
   }
+  if (v10_ && !particle_row.IsNull(kParticleAncestorColumn)) {
+    hash_.AddColumn(particle_row, kParticleAncestorColumn);
+  }
   ++count_;
 }
 
@@ -192,6 +195,9 @@ std::uint64_t WaveHasher::Finish(const Statement& wave_row) const {
   }
   if (v8_ && !AllNull(wave_row, kWavePatternColumn, kWavePatternColumnCount)) {
     hash.AddColumns(wave_row, kWavePatternColumn, kWavePatternColumnCount);
+  }
+  if (v10_ && !AllNull(wave_row, kWaveMovesColumn, kWaveMovesColumnCount)) {
+    hash.AddColumns(wave_row, kWaveMovesColumn, kWaveMovesColumnCount);
   }
   return hash.value();
 }

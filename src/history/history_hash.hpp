@@ -41,18 +41,20 @@ std::uint64_t RunStateHash(Database& db, int schema_version);
 // The particle rows of one wave, fed in candidate order (the state a wave's checksum starts from).
 // Schema v3 added `reals`, last, so that a v2 checksum is the same hash over the first six; v7
 // the multi-fidelity columns after it (NULL in a single-fidelity run, and then not hashed),
-// likewise.
+// likewise; v10 the ancestor (NULL for a particle drawn afresh, and then not hashed).
 inline constexpr const char* kParticleColumns =
     "candidate, bits, log_weight, weight, distance, output, reals, multiplier, confirmed, "
-    "low_distance";
+    "low_distance, ancestor";
 inline constexpr int kParticleColumnCountV2 = 6;
 inline constexpr int kParticleColumnCountV3 = 7;
-inline constexpr int kParticleColumnCount = 10;
+inline constexpr int kParticleColumnCount = 10;  // up to v9: the columns before the ancestor
+inline constexpr int kParticleAncestorColumn = 10;
 // The wave row's columns in checksum order: the first 21, then (v3) reals_mean and reals_sd after
 // content_hash, which is not hashed itself, then (v4) the failure count, then (v7) the
 // multi-fidelity columns (NULL in a single-fidelity run, and then not hashed), then (v8) the
-// pattern classes (NULL in a wave without any, and then not hashed). Older files select constants
-// in their place.
+// pattern classes (NULL in a wave without any, and then not hashed), then (v10) the move
+// statistics (NULL in a rejection wave, and then not hashed). Older files select constants in
+// their place.
 inline constexpr const char* kWaveColumns =
     "wave, thresholds, phi, proposal, started_at, accepted_needed, next_index, accepted_so_far, "
     "total_simulations, ended, complete, candidates, accepted, acceptance_rate, marginals_paper, "
@@ -61,7 +63,8 @@ inline constexpr const char* kWaveColumns =
     "expensive_simulations, cheap_seconds, expensive_seconds, unkept_false_positives, "
     "unkept_false_positive_log_w2, next_continue_if_accepted, "
     "next_continue_if_rejected, cost_ratio, pattern_bits, pattern_mass, pattern_proposal, "
-    "pattern_flagged";
+    "pattern_flagged, move_survivor_ess, move_step, move_rounds, move_proposed, move_accepted, "
+    "move_independent_proposed, move_independent_accepted";
 inline constexpr int kWaveHashedColumnCount = 21;
 inline constexpr int kWaveRealsColumn = 22;     // reals_mean, then reals_sd (hashed from v3)
 inline constexpr int kWaveFailuresColumn = 24;  // hashed from v4
@@ -69,6 +72,8 @@ inline constexpr int kWaveFidelityColumn = 25;  // the 10 multi-fidelity columns
 inline constexpr int kWaveFidelityColumnCount = 10;
 inline constexpr int kWavePatternColumn = 35;  // the 4 pattern-class columns (hashed from v8)
 inline constexpr int kWavePatternColumnCount = 4;
+inline constexpr int kWaveMovesColumn = 39;  // the 7 move columns (hashed from v10)
+inline constexpr int kWaveMovesColumnCount = 7;
 
 // The failure rows of one wave, fed in candidate order after its particles (schema v4).
 inline constexpr const char* kFailureColumns = "candidate, reason";
@@ -83,7 +88,8 @@ class WaveHasher {
       : v3_(schema_version >= 3),
         v4_(schema_version >= 4),
         v7_(schema_version >= 7),
-        v8_(schema_version >= 8) {}
+        v8_(schema_version >= 8),
+        v10_(schema_version >= 10) {}
   void AddParticle(const Statement& particle_row);
   // v4: after every particle; failures are hashed apart so that the two can be fed in turn.
   void AddFailure(const Statement& failure_row);
@@ -99,6 +105,7 @@ class WaveHasher {
   bool v4_ = true;
   bool v7_ = true;
   bool v8_ = true;
+  bool v10_ = true;
 };
 
 }  // namespace combabc::history

@@ -24,6 +24,8 @@ struct HistoryShape {
   // Free parameters (proposal length): not in the metadata, so taken from wave 1's proposal,
   // which every later wave's must match. Waves are always read in order from the first.
   std::size_t free_parameters = 0;
+  // The previous wave's candidates, which a particle's ancestor (v10) indexes; 0 before wave 1.
+  std::int64_t previous_candidates = 0;
 };
 
 struct HistoryStore::Impl {
@@ -63,6 +65,7 @@ struct HistoryStore::Impl {
   bool has_multi_fidelity() const { return schema_version >= 7; }
   bool has_pattern_classes() const { return schema_version >= 8; }
   bool has_pattern_masks() const { return schema_version >= 9; }
+  bool has_moves() const { return schema_version >= 10; }
   // Refuses a read-only store; otherwise PrepareWrite. Every writer calls it first.
   void RequireWritable(const char* what);
   // WAL mode and, for an older file, MigrateToCurrent: once, before the first write.

@@ -1,6 +1,7 @@
 // Reading a run history back: metadata, waves, the resume point, and truncation for resume.
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -55,6 +56,13 @@ enum WaveColumn {
   kPatternMass,
   kPatternProposal,
   kPatternFlagged,
+  kMoveSurvivorEss,
+  kMoveStep,
+  kMoveRounds,
+  kMoveProposed,
+  kMoveAccepted,
+  kMoveIndependentProposed,
+  kMoveIndependentAccepted,
 };
 
 // Columns of history::kParticleColumns.
@@ -69,6 +77,7 @@ enum ParticleColumn {
   kMultiplier,
   kConfirmed,
   kLowDistance,
+  kAncestor,
 };
 
 // Reads one wave's fields, each checked against what the run's metadata say it must measure.
@@ -327,10 +336,70 @@ std::vector<PatternClass> ReadPatternClasses(const WaveReader& check,
   return classes;
 }
 
+// A resample-move wave's move statistics (schema v10): nullopt when every column is NULL (a
+// rejection wave). The counts must nest: accepted and independent proposals within the proposals,
+// independent acceptances within both.
+std::optional<WaveMoves> ReadMoves(const WaveReader& check, const Statement& row) {
+  static constexpr const char* kNames[] = {"move_survivor_ess",
+                                           "move_step",
+                                           "move_rounds",
+                                           "move_proposed",
+                                           "move_accepted",
+                                           "move_independent_proposed",
+                                           "move_independent_accepted"};
+  int nulls = 0;
+  const char* null = nullptr;
+  for (int c = kMoveSurvivorEss; c <= kMoveIndependentAccepted; ++c) {
+    if (row.IsNull(c)) {
+      ++nulls;
+      null = null ? null : kNames[c - kMoveSurvivorEss];
+    }
+  }
+  if (nulls == kMoveIndependentAccepted - kMoveSurvivorEss + 1) return std::nullopt;
+  if (null) check.Corrupt(null, "is NULL where the wave's other move columns are not");
+  WaveMoves m;
+  m.survivor_ess = check.Real(
+      row, kMoveSurvivorEss, "move_survivor_ess", IsNonNegative, "an effective sample size >= 0");
+  m.step = check.Real(
+      row,
+      kMoveStep,
+      "move_step",
+      [](double value) { return value >= 0.0 && value <= 1.0; },
+      "a fraction of the schedule's step in [0, 1]");
+  const std::int64_t rounds = check.Count(row, kMoveRounds, "move_rounds");
+  // MoveOptions::max_rounds is at most 10000.
+  if (rounds > 10000) check.Corrupt("move_rounds", "is " + std::to_string(rounds) + ", over 10000");
+  m.rounds = static_cast<int>(rounds);
+  m.proposed = check.Count(row, kMoveProposed, "move_proposed");
+  m.accepted = check.Count(row, kMoveAccepted, "move_accepted");
+  m.independent_proposed = check.Count(row, kMoveIndependentProposed, "move_independent_proposed");
+  m.independent_accepted = check.Count(row, kMoveIndependentAccepted, "move_independent_accepted");
+  auto within = [&](std::int64_t part, std::int64_t whole, const char* field, const char* of) {
+    if (part > whole) {
+      check.Corrupt(
+          field,
+          "counts " + std::to_string(part) + ", more than the " + std::to_string(whole) + " " + of);
+    }
+  };
+  within(m.accepted, m.proposed, "move_accepted", "proposals");
+  within(m.independent_proposed, m.proposed, "move_independent_proposed", "proposals");
+  within(m.independent_accepted,
+         m.independent_proposed,
+         "move_independent_accepted",
+         "independent proposals");
+  within(m.independent_accepted, m.accepted, "move_independent_accepted", "accepted proposals");
+  return m;
+}
+
 }  // namespace
 
 std::string HistoryStore::Impl::WaveSelect() const {
   std::string columns = history::kWaveColumns;
+  // Before version 10 every wave was a rejection wave: its move columns are NULL.
+  const std::size_t moves = columns.find(", move_survivor_ess");
+  const std::string moves_tail =
+      has_moves() ? columns.substr(moves) : ", NULL, NULL, NULL, NULL, NULL, NULL, NULL";
+  columns.erase(moves);
   // Before version 8 no wave recorded pattern classes: its columns are NULL (none).
   const std::size_t patterns = columns.find(", pattern_bits");
   const std::string pattern_tail =
@@ -351,14 +420,16 @@ std::string HistoryStore::Impl::WaveSelect() const {
   } else if (!has_failures()) {
     columns.replace(columns.rfind("failures"), std::string::npos, "0");  // none recorded
   }
-  return "SELECT " + columns + tail + pattern_tail + " FROM wave";
+  return "SELECT " + columns + tail + pattern_tail + moves_tail + " FROM wave";
 }
 
 std::string HistoryStore::Impl::ParticleSelect() const {
   std::string columns = history::kParticleColumns;
-  // Before version 7 a particle had no multi-fidelity columns, and before version 3 no reals.
+  // Before version 10 every particle was drawn afresh (no ancestor), before version 7 a particle
+  // had no multi-fidelity columns, and before version 3 no reals.
+  if (!has_moves()) columns.replace(columns.rfind("ancestor"), std::string::npos, "NULL");
   if (!has_multi_fidelity()) {
-    columns.replace(columns.find("multiplier"), std::string::npos, "NULL, NULL, NULL");
+    columns.replace(columns.find("multiplier"), std::string::npos, "NULL, NULL, NULL, NULL");
   }
   if (!has_reals()) columns.replace(columns.find("reals"), 5, "NULL");
   return "SELECT " + columns + " FROM particle";
@@ -441,6 +512,14 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   wave.multi_fidelity = ReadFidelity(check, row, wave.candidates, ended);
   wave.pattern_classes =
       ReadPatternClasses(check, row, shape.dimension, has_pattern_masks(), db.path());
+  wave.moves = ReadMoves(check, row);
+  // A move wave's particles are numbered by their slot (0 .. n-1), not by a candidate: one whose
+  // proposals fell outside the prior (not simulated) may have fewer candidates than particles.
+  const std::int64_t indices =
+      wave.moves ? std::max(wave.candidates, wave.accepted) : wave.candidates;
+  // A particle's ancestor is one of the previous wave's particles (none before wave 1).
+  const std::int64_t ancestors = expected_wave == 0 ? 0 : shape.previous_candidates;
+  shape.previous_candidates = indices;
 
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);
@@ -455,9 +534,8 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
     Particle p;
     p.index = particles.Int(kCandidate);
     const std::string who = "particle " + std::to_string(p.index);
-    if (p.index < 0 || p.index >= wave.candidates) {
-      check.Corrupt(who,
-                    "lies outside the wave's " + std::to_string(wave.candidates) + " candidates");
+    if (p.index < 0 || p.index >= indices) {
+      check.Corrupt(who, "lies outside the wave's " + std::to_string(indices) + " candidates");
     }
     p.theta.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
     p.log_weight = particles.Real(kLogWeight);
@@ -486,6 +564,15 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
       }
     }
     ReadParticleFidelity(check, particles, wave.multi_fidelity, who, shape.components, p);
+    if (!particles.IsNull(kAncestor)) {
+      const std::string field = who + " ancestor";
+      p.ancestor = check.Count(particles, kAncestor, field.c_str());
+      if (p.ancestor >= ancestors) {
+        check.Corrupt(field,
+                      "is " + std::to_string(p.ancestor) + ", not one of the previous wave's " +
+                          std::to_string(ancestors) + " particle numbers");
+      }
+    }
     confirmed += p.confirmed ? 1 : 0;
     wave.particles.push_back(std::move(p));
   }
@@ -700,6 +787,9 @@ RunHistory HistoryStore::LoadHistory() const {
       break;  // at most one incomplete wave, and it is the last
     }
   }
+  // Not stored: the move waves' Eve indices, from their ancestors, which their Monte-Carlo errors
+  // (export, answer, Python) cluster by.
+  AssignEveIndices(history.waves);
 
   const RunMetadata metadata = LoadMetadata();
   if (!history.waves.empty() && history.waves.back().marginals_paper.empty() &&
@@ -777,7 +867,9 @@ ResumePoint HistoryStore::BeginResume(
             acceptance_rate = NULL, marginals_paper = NULL, marginals_importance = NULL,
             ess = NULL, distinct_count = NULL, wall_seconds = NULL, ended_at = NULL,
             reals_mean = NULL, reals_sd = NULL, next_continue_if_accepted = NULL,
-            next_continue_if_rejected = NULL, cost_ratio = NULL
+            next_continue_if_rejected = NULL, cost_ratio = NULL, move_survivor_ess = NULL,
+            move_step = NULL, move_rounds = NULL, move_proposed = NULL, move_accepted = NULL,
+            move_independent_proposed = NULL, move_independent_accepted = NULL
           WHERE wave = ?1)sql");
         reopen.Bind(1, partial->wave).Run();
         impl.chain.wave = -1;

@@ -15,32 +15,39 @@ using history::Statement;
 using history::Transaction;
 
 // A multi-fidelity wave starts with its continuation probabilities and no cost; recorded again
-// (resume, OnWaveEnd), it keeps the costs its batches recorded.
+// (resume, OnWaveEnd), it keeps the costs its batches recorded. A resample-move wave's move
+// statistics are the record's each time (OnWaveEnd's final).
 constexpr const char* kUpsertWave = R"sql(
 INSERT INTO wave (wave, thresholds, phi, proposal, started_at, continue_if_accepted,
   continue_if_rejected, expensive_simulations, cheap_seconds, expensive_seconds,
   unkept_false_positives, unkept_false_positive_log_w2, pattern_bits, pattern_mass,
-  pattern_proposal, pattern_flagged)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)
+  pattern_proposal, pattern_flagged, move_survivor_ess, move_step, move_rounds, move_proposed,
+  move_accepted, move_independent_proposed, move_independent_accepted)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19,
+  ?20, ?21, ?22, ?23)
 ON CONFLICT (wave) DO UPDATE SET
   thresholds = excluded.thresholds, phi = excluded.phi, proposal = excluded.proposal,
   continue_if_accepted = excluded.continue_if_accepted,
   continue_if_rejected = excluded.continue_if_rejected, pattern_bits = excluded.pattern_bits,
   pattern_mass = excluded.pattern_mass, pattern_proposal = excluded.pattern_proposal,
-  pattern_flagged = excluded.pattern_flagged
+  pattern_flagged = excluded.pattern_flagged, move_survivor_ess = excluded.move_survivor_ess,
+  move_step = excluded.move_step, move_rounds = excluded.move_rounds,
+  move_proposed = excluded.move_proposed, move_accepted = excluded.move_accepted,
+  move_independent_proposed = excluded.move_independent_proposed,
+  move_independent_accepted = excluded.move_independent_accepted
 )sql";
 
 // Re-sending a particle (OnWaveEnd's normalised weights) replaces it, but an output already stored
 // is kept when the new record carries none.
 constexpr const char* kUpsertParticle = R"sql(
 INSERT INTO particle (wave, candidate, bits, log_weight, weight, distance, output, reals,
-  multiplier, confirmed, low_distance)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)
+  multiplier, confirmed, low_distance, ancestor)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)
 ON CONFLICT (wave, candidate) DO UPDATE SET
   bits = excluded.bits, log_weight = excluded.log_weight, weight = excluded.weight,
   distance = excluded.distance, output = COALESCE(excluded.output, particle.output),
   reals = excluded.reals, multiplier = excluded.multiplier, confirmed = excluded.confirmed,
-  low_distance = excluded.low_distance
+  low_distance = excluded.low_distance, ancestor = excluded.ancestor
 )sql";
 
 // A multi-fidelity batch also records the wave's costs so far (BatchProgress::fidelity); a
@@ -63,7 +70,7 @@ INSERT OR REPLACE INTO failure (wave, candidate, reason) VALUES (?1, ?2, ?3)
 )sql";
 
 // A particle of a multi-fidelity run has a cheap distance; in a single-fidelity run its
-// multi-fidelity columns are NULL.
+// multi-fidelity columns are NULL. Its ancestor is NULL when it was drawn afresh (-1).
 void BindParticle(Statement& s, int wave, const Particle& p) {
   s.Bind(1, wave)
       .Bind(2, p.index)
@@ -78,6 +85,26 @@ void BindParticle(Statement& s, int wave, const Particle& p) {
   } else {
     s.BindNull(9).BindNull(10).BindNull(11);
   }
+  if (p.ancestor >= 0) {
+    s.Bind(12, p.ancestor);
+  } else {
+    s.BindNull(12);
+  }
+}
+
+// The move statistics from `first` on; NULL in a rejection wave.
+void BindMoves(Statement& s, int first, const std::optional<WaveMoves>& m) {
+  if (!m) {
+    for (int c = first; c < first + 7; ++c) s.BindNull(c);
+    return;
+  }
+  s.Bind(first, m->survivor_ess)
+      .Bind(first + 1, m->step)
+      .Bind(first + 2, m->rounds)
+      .Bind(first + 3, m->proposed)
+      .Bind(first + 4, m->accepted)
+      .Bind(first + 5, m->independent_proposed)
+      .Bind(first + 6, m->independent_accepted);
 }
 
 // The multi-fidelity columns from `first` on: the continuation probabilities, the expensive count
@@ -165,6 +192,7 @@ void UpsertWave(history::Database& db, const WaveRecord& wave) {
       .Bind(5, history::UtcNow());
   BindFidelity(s, 6, wave.multi_fidelity, /*ended=*/false);
   BindPatternClasses(s, 13, wave.pattern_classes);
+  BindMoves(s, 17, wave.moves);
   s.Run();
 }
 

@@ -95,6 +95,17 @@ std::string SamplerPart(const SmcOptions& s) {
       .Add("max_failure_fraction", s.max_failure_fraction)
       .Add("failure_fraction_after", static_cast<long long>(s.failure_fraction_after))
       .Add("keep_outputs", s.keep_outputs);
+  // A resample-move run only: a rejection run's digest is what it was before the method existed,
+  // so that its histories still resume (its move options are unused, and refused in a config).
+  if (s.method != SamplerMethod::kRejection) {
+    const MoveOptions& m = s.moves;
+    c.Add("method", ToString(s.method))
+        .Add("moves.ess_fraction", m.ess_fraction)
+        .Add("moves.stay_probability", m.stay_probability)
+        .Add("moves.max_rounds", m.max_rounds)
+        .Add("moves.independent_share", m.independent_share)
+        .Add("moves.min_survivor_fraction", m.min_survivor_fraction);
+  }
   return c.Digest();
 }
 
@@ -338,7 +349,7 @@ void CheckResumeFingerprint(const Fingerprint& stored,
               " or start a new run";
   } else {
     const std::map<std::string, std::string> what = {
-        {"sampler", "the sampler options ([sampler], [proposal])"},
+        {"sampler", "the sampler options ([sampler], [sampler.moves], [proposal])"},
         {"space", "the parameter space (bits, priors, ties, continuous parameters)"},
         {"metric", "the metric ([metric])"},
         {"simulator",

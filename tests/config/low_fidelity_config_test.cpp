@@ -194,6 +194,11 @@ TEST(LowFidelityConfig, MistakesAreLocatedAtTheirKey) {
                        "cheap simulator: add [simulator.low_fidelity]",
                        0),
             0u);
+  // Moves leave one simulator's target invariant: not a multi-fidelity run's.
+  EXPECT_EQ(
+      ConfigErrorOf(low + "[sampler]\nmethod = \"resample_move\"\n" + kRest)
+          .rfind("dir/run.toml:3: sampler.method: moves do not apply to multi-fidelity runs", 0),
+      0u);
   // [model] beside an external simulator only configures a cheap sensor.
   EXPECT_EQ(ConfigErrorOf("[model]\nlength = 1\n" + kCommand + kRest)
                 .rfind("dir/run.toml:1: model: [model] configures the built-in sensor", 0),

@@ -76,5 +76,65 @@ TEST(ScheduleConfig, AdaptiveScheduleErrorsNameTheKey) {
       << e;
 }
 
+// [sampler] method and [sampler.moves]: every MoveOptions key set, the defaults without them, and
+// each mistake located at its key (a move option in a rejection run too).
+TEST(ScheduleConfig, SamplerMethodAndMoveOptions) {
+  const std::string moves = kMinimal + "[sampler]\nmethod = \"resample_move\"\n[sampler.moves]\n";
+  const CalibrationConfig c =
+      ParseConfig(moves +
+                      "ess_fraction = 0.7\nstay_probability = 0.05\nmax_rounds = 12\n"
+                      "independent_share = 0.25\nmin_survivor_fraction = 0.1\n",
+                  "dir/run.toml");
+  EXPECT_EQ(c.smc.method, SamplerMethod::kResampleMove);
+  EXPECT_EQ(c.smc.moves.ess_fraction, 0.7);
+  EXPECT_EQ(c.smc.moves.stay_probability, 0.05);
+  EXPECT_EQ(c.smc.moves.max_rounds, 12);
+  EXPECT_EQ(c.smc.moves.independent_share, 0.25);
+  EXPECT_EQ(c.smc.moves.min_survivor_fraction, 0.1);
+  const MoveOptions defaults;
+  const CalibrationConfig plain = ParseConfig(kMinimal, "dir/run.toml");
+  EXPECT_EQ(plain.smc.method, SamplerMethod::kRejection);
+  EXPECT_EQ(plain.smc.moves.max_rounds, defaults.max_rounds);
+  EXPECT_EQ(
+      ParseConfig(kMinimal + "[sampler]\nmethod = \"rejection\"\n", "dir/run.toml").smc.method,
+      SamplerMethod::kRejection);
+
+  for (const std::string bad : {"ess_fraction = 1",
+                                "stay_probability = 0",
+                                "min_survivor_fraction = 1.5",
+                                "ess_fraction = -0.5"}) {
+    const std::string key = bad.substr(0, bad.find(' '));
+    EXPECT_EQ(ConfigErrorOf(moves + bad + "\n"),
+              "dir/run.toml:8: sampler.moves." + key + ": must be in (0, 1)")
+        << bad;
+  }
+  std::string e = ConfigErrorOf(moves + "max_rounds = 0\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:8: sampler.moves.max_rounds: is 0; must be in [1, 10000]", 0), 0u)
+      << e;
+  e = ConfigErrorOf(moves + "independent_share = 2\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:8: sampler.moves.independent_share: is 2", 0), 0u) << e;
+  e = ConfigErrorOf(moves + "rounds = 3\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:8: sampler.moves.rounds: unknown key", 0), 0u) << e;
+  e = ConfigErrorOf(kMinimal + "[sampler]\nmethod = \"mcmc\"\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:6: sampler.method: unknown sampler method 'mcmc'; expected "
+                    "one of \"rejection\", \"resample_move\"",
+                    0),
+            0u)
+      << e;
+  // SmcOptions::IsValid's complaint about the method is reported at its key.
+  e = ConfigErrorOf(kMinimal + "[sampler]\nestimator = \"paper\"\nmethod = \"resample_move\"\n");
+  EXPECT_EQ(e.rfind("dir/run.toml:7: sampler.method: ", 0), 0u) << e;
+  EXPECT_NE(e.find("estimator = importance"), std::string::npos) << e;
+  // Move options in a rejection run (by default or said) would be silently unused.
+  for (const std::string method : {"", "method = \"rejection\"\n"}) {
+    e = ConfigErrorOf(kMinimal + "[sampler]\n" + method + "[sampler.moves]\nmax_rounds = 5\n");
+    EXPECT_EQ(e.rfind("dir/run.toml:" + std::to_string(method.empty() ? 6 : 7) +
+                          ": sampler.moves: move options apply to resample-move runs only",
+                      0),
+              0u)
+        << e;
+  }
+}
+
 }  // namespace
 }  // namespace combabc

@@ -116,7 +116,7 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
            Case{"data",
                 "resume: the measured data changed since the run started (data.csv: "
                 "fingerprint_data differs); start a new run or restore the file"},
-           Case{"sampler", "the sampler options ([sampler], [proposal])"},
+           Case{"sampler", "the sampler options ([sampler], [sampler.moves], [proposal])"},
            Case{"space", "the parameter space"},
            Case{"metric", "the metric ([metric])"},
            Case{"simulator", "the simulator (its kind, and [model] for the sensor"},
@@ -147,6 +147,69 @@ TEST_F(ResumeFingerprint, AChangedPartIsRefusedNamingIt) {
   const auto r = RunCli({"resume", Started("two.sqlite", two), "--no-report"}, dir_.path());
   EXPECT_EQ(r.exit_code, 78);
   EXPECT_NE(r.err.find("(also fingerprint_simulator)"), std::string::npos) << r.err;
+}
+
+// The sampling method is part of the sampler's fingerprint: a rejection run whose stored
+// configuration now asks for resample-move waves (or other move options) is refused, since its
+// continuation would not be the run it started as. A rejection run's digest is the one it had
+// before the method existed (the resumes above, and OldDefaultTheory's history of an older
+// combabc).
+TEST_F(ResumeFingerprint, ARunResumedUnderAnotherMethodIsRefused) {
+  for (const char* method : {"method = \"resample_move\"\n",
+                             "method = \"resample_move\"\n[sampler.moves]\nmax_rounds = 3\n"}) {
+    SCOPED_TRACE(method);
+    RunMetadata changed = finished_;
+    const std::size_t sampler = changed.config_text.find("seed = 3\n");
+    ASSERT_NE(sampler, std::string::npos);
+    // [sampler.moves] must come after [sampler]'s own keys: at the end of the table's keys.
+    const std::size_t end = changed.config_text.find("accepted_per_wave = 5\n", sampler);
+    ASSERT_NE(end, std::string::npos);
+    changed.config_text.insert(end + std::string("accepted_per_wave = 5\n").size(), method);
+    const std::string path = Started("method.sqlite", changed);
+    const auto r = RunCli({"resume", path, "--no-report"}, dir_.path());
+    EXPECT_EQ(r.exit_code, 78) << r.err;
+    EXPECT_NE(r.err.find("fingerprint_sampler differs"), std::string::npos) << r.err;
+    fs::remove(path);
+  }
+}
+
+// A resample-move run through the CLI: each move wave's line says what its moves did, as its
+// history records it; a run stopped inside a move wave and resumed (its wave reopened, its move
+// columns written anew) gives the uninterrupted run's history, moves and ancestors included.
+TEST(ResampleMove, TheTerminalSaysWhatTheMovesDidAndAResumeGivesTheSameHistory) {
+  TempFolder dir("e2e-moves");
+  WriteData(dir, 1.0);
+  const std::string sampler =
+      "seed = 3\nwaves = 3\naccepted_per_wave = 10\nmethod = \"resample_move\"\n";
+  std::ofstream(dir / "whole.toml") << TinySensorConfig(
+      sampler, "[sampler.moves]\nmax_rounds = 4\n[output]\ndirectory = \"whole\"\n");
+  std::ofstream(dir / "cut.toml") << TinySensorConfig(
+      sampler + "max_simulations = 30\n",
+      "[sampler.moves]\nmax_rounds = 4\n[output]\ndirectory = \"cut\"\n");
+  const auto whole = RunCli({"run", dir / "whole.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const RunHistory h = HistoryStore::Open(dir / "whole/history.sqlite", true).LoadHistory();
+  ASSERT_EQ(h.waves.size(), 3u);
+  EXPECT_FALSE(h.waves[0].moves.has_value());
+  for (std::size_t t = 1; t < h.waves.size(); ++t) {
+    ASSERT_TRUE(h.waves[t].moves.has_value()) << "wave " << t + 1;
+    const WaveMoves& m = *h.waves[t].moves;
+    const std::string line = "moves: " + std::to_string(m.rounds) + " rounds, " +
+                             std::to_string(m.proposed) + " proposals, ";
+    EXPECT_NE(whole.err.find(line), std::string::npos) << line << " in " << whole.err;
+    for (const Particle& p : h.waves[t].particles) EXPECT_GE(p.ancestor, 0);
+  }
+
+  const auto cut = RunCli({"run", dir / "cut.toml", "--no-report"}, dir.path());
+  ASSERT_EQ(cut.exit_code, 0) << cut.err;
+  const std::string stopped = dir / "cut/history.sqlite";
+  ASSERT_EQ(HistoryStore::Open(stopped, true).LoadMetadata().termination, "budget_exhausted");
+  const auto resumed =
+      RunCli({"resume", stopped, "--no-report", "--max-simulations", "0"}, dir.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(h, HistoryStore::Open(stopped, true).LoadHistory(), &where)) << where;
+  EXPECT_TRUE(HistoryStore::Verify(stopped).problems.empty());
 }
 
 // Issue 35: the history's experiment table (names, descriptions and how its outputs, data and

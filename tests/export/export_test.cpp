@@ -220,6 +220,72 @@ TEST_F(ExportTest, AMultiFidelityRunGetsItsColumnsAndBlock) {
   EXPECT_EQ(plain.find("multi-fidelity"), std::string::npos) << plain;
 }
 
+// A resample-move run: particles.csv gains each particle's ancestor, waves.csv the moves'
+// statistics (NaN in a wave drawn by rejection), summary.json's waves their "moves"; a rejection
+// run's files keep their columns (WritesEveryTableWithHeaders).
+TEST_F(ExportTest, AResampleMoveRunGetsItsAncestorsAndMoveStatistics) {
+  options_.moves = true;
+  const std::string db = WriteRun(/*outputs=*/false);
+  const fs::path out = dir_ / "export";
+  ExportRun(db, out.string());
+  const RunHistory history = HistoryStore::Open(db, true).LoadHistory();
+  ASSERT_EQ(history.waves.size(), 2u);
+  ASSERT_TRUE(history.waves[1].moves.has_value());
+  const WaveMoves& m = *history.waves[1].moves;
+
+  const auto particles = Lines(out / "particles.csv");
+  EXPECT_EQ(particles[0],
+            "wave,index,bits,clamp 1,clamp 2,clamp 3,clamp 4,clamp 5,clamp 6,log_weight,weight,"
+            "d_least_squares,d_secondary_peak,ancestor");
+  ASSERT_EQ(particles.size(), 1u + 2u * 5u);
+  EXPECT_EQ(particles[1].substr(particles[1].rfind(',')), ",-1") << "wave 1 drew afresh";
+  const Particle& moved = history.waves[1].particles[2];
+  EXPECT_EQ(particles[8].substr(particles[8].rfind(',')), "," + std::to_string(moved.ancestor));
+  EXPECT_GE(moved.ancestor, 0);
+
+  const auto waves = Lines(out / "waves.csv");
+  ASSERT_EQ(waves.size(), 3u);
+  const std::string columns =
+      "move_rounds,move_proposed,move_accepted,move_acceptance_rate,move_independent_proposed,"
+      "move_independent_accepted,move_independent_share,move_survivor_ess,move_step";
+  EXPECT_EQ(waves[0].substr(waves[0].size() - columns.size()), columns);
+  EXPECT_EQ(waves[1].substr(waves[1].size() - 36), ",NaN,NaN,NaN,NaN,NaN,NaN,NaN,NaN,NaN");
+  const auto share = static_cast<double>(m.independent_proposed) / static_cast<double>(m.proposed);
+  const std::string row =
+      "," + std::to_string(m.rounds) + "," + std::to_string(m.proposed) + "," +
+      std::to_string(m.accepted) + "," +
+      export_text::Number(static_cast<double>(m.accepted) / static_cast<double>(m.proposed)) + "," +
+      std::to_string(m.independent_proposed) + "," + std::to_string(m.independent_accepted) + "," +
+      export_text::Number(share) + "," + export_text::Number(m.survivor_ess) + "," +
+      export_text::Number(m.step);
+  EXPECT_EQ(waves[2].substr(waves[2].size() - row.size()), row) << waves[2];
+
+  std::ifstream json(out / "summary.json");
+  std::stringstream read;
+  read << json.rdbuf();
+  const std::string text = read.str();
+  EXPECT_NE(text.find("\"moves\": null}"), std::string::npos) << "wave 1";
+  EXPECT_NE(text.find("\"moves\": {\"rounds\": " + std::to_string(m.rounds) + ", \"proposed\": " +
+                      std::to_string(m.proposed) + ", \"accepted\": " + std::to_string(m.accepted)),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("\"independent_share\": " + export_text::JsonNumber(share) +
+                      ", \"survivor_ess\": " + export_text::JsonNumber(m.survivor_ess) +
+                      ", \"step\": " + export_text::JsonNumber(m.step) + "}"),
+            std::string::npos)
+      << text;
+
+  options_.moves = false;
+  const fs::path plain = dir_ / "plain";
+  ExportRun(WriteRun(/*outputs=*/false, "plain.db"), plain.string());
+  EXPECT_EQ(Lines(plain / "particles.csv")[0].find("ancestor"), std::string::npos);
+  EXPECT_EQ(Lines(plain / "waves.csv")[0].find("move_"), std::string::npos);
+  std::ifstream plain_json(plain / "summary.json");
+  std::stringstream plain_text;
+  plain_text << plain_json.rdbuf();
+  EXPECT_EQ(plain_text.str().find("\"moves\""), std::string::npos);
+}
+
 // A run with continuous parameters: a column per real in particles.csv (after the bits), its mean
 // and sd per wave in waves.csv, and their priors, the proposal options and the fingerprint in
 // summary.json.

@@ -1,7 +1,7 @@
 // Writes a synthetic run history (36 clamps, 91-point curves by default) for trying the report
 // and export tools without running the FE model:
 //   combabc_fake_history OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves]
-//     [--reals N] [--multi-fidelity] [--pattern-classes] [--config FILE]
+//     [--reals N] [--multi-fidelity] [--pattern-classes] [--moves] [--config FILE]
 // --config: the run's config text is FILE's (e.g. an example's), so that the answer places the
 // sensor's clamps and the report draws the strip (or, for another simulator, does not).
 #include <cstdio>
@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: %s OUT.db [--waves N] [--per-wave N] [--incomplete] [--no-curves] "
-                 "[--reals N] [--multi-fidelity] [--pattern-classes] [--config FILE]\n",
+                 "[--reals N] [--multi-fidelity] [--pattern-classes] [--moves] [--config FILE]\n",
                  argv[0]);
     return 64;
   }
@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
       options.reals = std::atoi(argv[++i]);
     } else if (arg == "--multi-fidelity") {
       options.multi_fidelity = true;
+    } else if (arg == "--moves") {
+      options.moves = true;
     } else if (arg == "--pattern-classes") {
       options.pattern_classes = true;
     } else if (arg == "--config" && i + 1 < argc) {

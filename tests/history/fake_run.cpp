@@ -188,6 +188,21 @@ RunHistory MakeFakeHistory(const FakeRunOptions& options) {
     }
     wave.candidates = index;
     wave.complete = static_cast<int>(wave.particles.size()) == options.per_wave;
+    if (options.moves && t > 0 && !history.waves.back().particles.empty()) {
+      const auto& previous = history.waves.back().particles;
+      for (std::size_t k = 0; k < wave.particles.size(); ++k) {
+        wave.particles[k].ancestor = previous[k % previous.size()].index;
+      }
+      WaveMoves m;
+      m.survivor_ess = 0.5 * static_cast<double>(previous.size());
+      m.step = t == 1 ? 1.0 : 0.625;
+      m.rounds = kFakeMoveRounds;
+      m.proposed = kFakeMoveRounds * static_cast<std::int64_t>(wave.particles.size());
+      m.accepted = m.proposed / 3;
+      m.independent_proposed = m.proposed / 2;
+      m.independent_accepted = m.accepted / 4;
+      wave.moves = m;
+    }
     wave.wall_seconds = 0.01 * static_cast<double>(index);
     if (options.multi_fidelity) {
       WaveFidelity f;
@@ -235,6 +250,8 @@ void RecordWave(SmcObserver& observer,
     etas.continue_if_rejected = wave.multi_fidelity->continue_if_rejected;
     start.multi_fidelity = etas;
   }
+  // A resample-move wave knows its reweighting when it starts; its moves' counts when it ends.
+  if (start.moves) start.moves = WaveMoves{wave.moves->survivor_ess, wave.moves->step};
   observer.OnWaveStart(start);
   std::size_t next = 0;
   std::int64_t accepted = 0;

@@ -28,12 +28,19 @@ struct FakeRunOptions {
   // diagnostic): its first particle's bits (mass 0.6, proposal 0.5) and its second's (mass 0.05,
   // proposal 1e-6, flagged).
   bool pattern_classes = false;
+  // Each wave after the first is recorded as a resample-move wave: made-up move statistics
+  // (kFakeMoveRounds rounds of one proposal per particle, a third accepted, half of them
+  // independent) and each particle's ancestor, the previous wave's particles in turn. The
+  // particles themselves are drawn as in any other fake wave.
+  bool moves = false;
   std::uint64_t seed = 7;
 };
 
 // The continuation probabilities of a multi-fidelity fake run's waves: eta_1 = 0.8, eta_2 = 0.25.
 inline constexpr double kFakeContinueIfAccepted = 0.8;
 inline constexpr double kFakeContinueIfRejected = 0.25;
+
+inline constexpr int kFakeMoveRounds = 3;
 
 RunMetadata MakeFakeMetadata(const FakeRunOptions& options);
 // Complete waves with statistics from ComputeWaveStatistics (paper estimator).

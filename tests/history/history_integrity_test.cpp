@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -81,10 +82,34 @@ void RehashMetadataAndRunState(history::Database& db, int version) {
       .Run();
 }
 
+// What a v9 file (before resample-move waves) looks like, made from a v10 one: no move columns
+// and no ancestors, and its checksums as combabc computed them for v9. Made from a rejection run:
+// a wave's checksum skips move columns that are all NULL and NULL ancestors, so the waves' stand.
+void DowngradeToV9(const std::string& path) {
+  history::Database db(path, /*create=*/false, /*read_only=*/false);
+  history::Transaction transaction(db);
+  for (const char* column : {"move_survivor_ess",
+                             "move_step",
+                             "move_rounds",
+                             "move_proposed",
+                             "move_accepted",
+                             "move_independent_proposed",
+                             "move_independent_accepted"}) {
+    db.Exec((std::string("ALTER TABLE wave DROP COLUMN ") + column).c_str());
+  }
+  db.Exec(R"sql(
+    ALTER TABLE particle DROP COLUMN ancestor;
+    UPDATE meta SET value = '9' WHERE key = 'schema_version';
+    PRAGMA user_version = 9;)sql");
+  RehashMetadataAndRunState(db, 9);
+  transaction.Commit();
+}
+
 // What a v7 file (before pattern classes) looks like, made from a v8 one: no pattern-class
 // columns, and its checksums as combabc computed them for v7. Made from a run without pattern
 // classes: a wave's checksum skips pattern columns that are all NULL, so the waves' stand.
 void DowngradeToV7(const std::string& path) {
+  DowngradeToV9(path);
   history::Database db(path, /*create=*/false, /*read_only=*/false);
   history::Transaction transaction(db);
   for (const char* column :
@@ -213,7 +238,7 @@ void DowngradeToV3(const std::string& path) {
   while (waves.Step()) {
     history::WaveHasher hasher(3);
     std::string particle_columns = history::kParticleColumns;
-    particle_columns.erase(particle_columns.find(", multiplier"));  // v7
+    particle_columns.erase(particle_columns.find(", multiplier"));  // v7 and v10
     history::Statement particles(
         db,
         ("SELECT " + particle_columns + " FROM particle WHERE wave = ?1 ORDER BY candidate")
@@ -855,6 +880,134 @@ TEST_F(HistoryIntegrityTest, PatternClassesOfAFewBitsRoundTrip) {
   const Error error = Catch([&] { HistoryStore::Open(path, true).LoadHistory(); });
   EXPECT_EQ(error.kind(), ErrorKind::kData) << error.what();
   EXPECT_NE(std::string(error.what()).find("mask leaves free"), std::string::npos) << error.what();
+}
+
+// A resample-move wave's statistics and its particles' ancestors (schema v10) are stored with the
+// wave, read back exactly (SameHistory compares them; a rejection wave's are absent), survive a
+// resume, and are under the wave's checksum; damage is a data error naming the wave and field.
+TEST_F(HistoryIntegrityTest, MoveStatisticsAndAncestorsRoundTripAndAreChecksummed) {
+  FakeRunOptions options = SmallRun();
+  options.moves = true;
+  const RunHistory history = MakeFakeHistory(options);
+  ASSERT_EQ(history.waves.size(), 3u);
+  ASSERT_TRUE(history.waves[1].moves.has_value());
+  const std::string path = Path("moves.db");
+  {
+    HistoryStore store = HistoryStore::Create(path, MakeFakeMetadata(options));
+    for (const WaveRecord& wave : history.waves) RecordWave(store, wave, 5);
+    store.Finish(history.summary);
+  }
+  const RunHistory loaded = HistoryStore::Open(path, true).LoadHistory();
+  std::string where;
+  EXPECT_TRUE(SameHistory(history, loaded, &where)) << where;
+  EXPECT_FALSE(loaded.waves[0].moves.has_value()) << "wave 1 drew afresh";
+  EXPECT_EQ(loaded.waves[2].moves, history.waves[2].moves);
+  EXPECT_EQ(loaded.waves[0].particles[0].ancestor, -1);
+  EXPECT_EQ(loaded.waves[1].particles[1].ancestor, history.waves[0].particles[1].index);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  // The Eve indices (not stored) are derived on load: wave 2's from wave 1, drawn afresh, are its
+  // ancestors; wave 3's their ancestors' Eves.
+  for (std::size_t t = 1; t < 3; ++t) {
+    for (const Particle& p : loaded.waves[t].particles) {
+      const auto& previous = loaded.waves[t - 1].particles;
+      const auto parent = std::find_if(previous.begin(), previous.end(), [&](const Particle& q) {
+        return q.index == p.ancestor;
+      });
+      ASSERT_NE(parent, previous.end());
+      EXPECT_EQ(p.eve, t == 1 ? parent->index : parent->eve);
+    }
+  }
+  // A move wave's particles are numbered by their slot: it may have simulated fewer candidates
+  // than it has particles (proposals outside the prior are not simulated).
+  {
+    RunHistory few = history;
+    few.waves[2].candidates = 3;
+    for (std::size_t k = 0; k < few.waves[2].particles.size(); ++k) {
+      few.waves[2].particles[k].index = static_cast<std::int64_t>(k);
+    }
+    const std::string slots = Path("slots.db");
+    HistoryStore store = HistoryStore::Create(slots, MakeFakeMetadata(options));
+    for (const WaveRecord& wave : few.waves) RecordWave(store, wave, 5);
+    store.Finish(few.summary);
+    EXPECT_TRUE(SameHistory(few, HistoryStore::Open(slots, true).LoadHistory(), &where)) << where;
+  }
+  // SameHistory itself tells a changed move count or ancestor.
+  RunHistory other = loaded;
+  other.waves[1].moves->accepted += 1;
+  EXPECT_FALSE(SameHistory(history, other, &where));
+  other = loaded;
+  other.waves[2].particles[0].ancestor += 1;
+  EXPECT_FALSE(SameHistory(history, other, &where));
+
+  struct Damage {
+    const char* sql;
+    const char* field;
+  };
+  for (const Damage& d : {
+           // Valid values, caught by the wave's checksum.
+           Damage{"UPDATE wave SET move_rounds = move_rounds + 1 WHERE wave = 1", "content_hash"},
+           Damage{"UPDATE particle SET ancestor = NULL WHERE wave = 1 AND candidate = "
+                  "(SELECT min(candidate) FROM particle WHERE wave = 1)",
+                  "content_hash"},
+           // Invalid ones, by the reader.
+           Damage{"UPDATE wave SET move_accepted = move_proposed + 1 WHERE wave = 1",
+                  "move_accepted"},
+           Damage{"UPDATE wave SET move_step = NULL WHERE wave = 1", "move_step"},
+           Damage{"UPDATE wave SET move_step = 1.5 WHERE wave = 1", "move_step"},
+           Damage{"UPDATE wave SET move_proposed = -3 WHERE wave = 1", "move_proposed"},
+           Damage{"UPDATE particle SET ancestor = 1000000 WHERE wave = 1", "ancestor"},
+           Damage{"UPDATE particle SET ancestor = 0 WHERE wave = 0", "ancestor"},
+       }) {
+    SCOPED_TRACE(d.sql);
+    const std::string damaged = Path("damaged-moves.db");
+    fs::remove(damaged);
+    fs::copy_file(path, damaged);
+    Sql(damaged, d.sql);
+    const Error error = Catch([&] { HistoryStore::Open(damaged, true).LoadHistory(); });
+    EXPECT_EQ(error.kind(), ErrorKind::kData) << error.what();
+    EXPECT_NE(std::string(error.what()).find(d.field), std::string::npos) << error.what();
+    EXPECT_EQ(std::string(error.what()).find('\n'), std::string::npos) << error.what();
+  }
+}
+
+// A v9 file (before resample-move waves) reads as rejection waves whose particles were drawn
+// afresh; resuming it upgrades it to v10 without touching its waves' checksums (NULL move columns
+// and ancestors are not hashed).
+TEST_F(HistoryIntegrityTest, AV9RunReadsAsRejectionWavesAndIsUpgradedToV10OnResume) {
+  const std::string path = WriteKilled("killed.db");
+  const RunHistory before = HistoryStore::Open(path, true).LoadHistory();
+  DowngradeToV9(path);
+  HistoryCheck check = HistoryStore::Verify(path);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  EXPECT_EQ(check.schema_version, 9);
+  const RunHistory v9 = HistoryStore::Open(path, true).LoadHistory();
+  std::string where;
+  EXPECT_TRUE(SameHistory(before, v9, &where)) << where;
+  for (const WaveRecord& wave : v9.waves) {
+    EXPECT_FALSE(wave.moves.has_value());
+    for (const Particle& p : wave.particles) EXPECT_EQ(p.ancestor, -1);
+  }
+  std::string hashes;
+  {
+    history::Database db(path, /*create=*/false, /*read_only=*/true);
+    history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+    rows.Step();
+    hashes = rows.Text(0);
+    rows.Reset();
+  }
+  {
+    HistoryStore store = HistoryStore::Open(path);
+    ASSERT_TRUE(store.BeginResume().has_partial);
+  }
+  check = HistoryStore::Verify(path);
+  EXPECT_EQ(check.schema_version, kHistorySchemaVersion);
+  EXPECT_TRUE(check.problems.empty()) << check.problems.front();
+  history::Database db(path, /*create=*/false, /*read_only=*/true);
+  history::Statement rows(db, "SELECT group_concat(content_hash) FROM wave");
+  rows.Step();
+  EXPECT_EQ(rows.Text(0), hashes) << "the complete wave's checksum stands";
+  rows.Reset();
 }
 
 // A v7 file (before pattern classes) reads as waves without any; resuming it upgrades it to v8

@@ -30,6 +30,7 @@ def compact(text):
 class Wave:
     number, thresholds, candidates, failures, accepted = 2, [0.01], 700, 0, 500
     acceptance_rate, ess, distinct, wall_seconds, complete, curves = 0.7, 433.5, 90, 0.5, True, None
+    moves = None
 
 
 class AnswerTables(unittest.TestCase):
@@ -236,6 +237,21 @@ class Strip(unittest.TestCase):
         summary["answer"]["bits"] = [{"number": k, "verdict": "free"} for k in range(1, 14)]
         self.assertEqual(page.verdict_line(summary),
                          "fixed: none; free: 13 clamps; not determined: none")
+
+
+class MovesTable(unittest.TestCase):
+    def test_a_move_run_shows_each_waves_moves_and_a_rejection_run_none(self):
+        first, moved = Wave(), Wave()
+        first.number = 1
+        moved.moves = {"rounds": 6, "proposed": 3000, "accepted": 930, "acceptance_rate": 0.31,
+                       "independent_proposed": 1500, "independent_accepted": 210,
+                       "independent_share": 0.5, "survivor_ess": 241.26, "step": 0.625}
+        html = compact(page.moves_html([first, moved]))
+        self.assertIn("<h2>Moves</h2>", html)
+        self.assertIn('<tr><td>1</td><td colspan="8">drawn by rejection</td></tr>', html)
+        self.assertIn("<tr><td>2</td><td>6</td><td>3000</td><td>930</td><td>0.31</td>"
+                      "<td>0.5</td><td>210</td><td>241.3</td><td>0.625</td></tr>", html)
+        self.assertEqual(page.moves_html([first]), "")
 
 
 class WholePage(unittest.TestCase):

@@ -30,8 +30,10 @@ namespace combabc {
 // costs), NULL in a single-fidelity run; version 8 each wave's pattern classes (the mode-loss
 // diagnostic: pattern_bits, pattern_mass, pattern_proposal, pattern_flagged), NULL for none;
 // version 9 classes of one or two bits' values (pattern_bits then holds each class's bits and its
-// mask; no new column). An older file written to (resume) is upgraded to this version.
-inline constexpr int kHistorySchemaVersion = 9;
+// mask; no new column); version 10 resample-move waves (each wave's move statistics, move_*, and
+// each particle's ancestor), NULL in a rejection wave and for a particle drawn afresh. An older
+// file written to (resume) is upgraded to this version.
+inline constexpr int kHistorySchemaVersion = 10;
 
 enum class RunStatus {
   kRunning,      // being written, or killed before it could say otherwise
