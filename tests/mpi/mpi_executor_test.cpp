@@ -147,6 +147,32 @@ TEST(MpiExecutor, FailedSimulationsAreGatheredLikeAnyResult) {
   EXPECT_TRUE(SameHistory(reference, h, &where)) << where;
 }
 
+// Resample-move waves (docs/algorithm.md, "Resample-move") on 3 ranks: the same history as one
+// thread, failed simulations (rejected moves) included.
+TEST(MpiExecutor, ResampleMoveHistoryIsTheThreadPools) {
+  const ParameterSpace space(BinarySpace::Independent(6));
+  const FlakySimulator simulator;
+  const L1 distance;
+  SmcOptions o;
+  o.method = SamplerMethod::kResampleMove;
+  o.num_waves = 4;
+  o.accepted_per_wave = 40;
+  o.batch_size = 13;
+  o.max_failure_fraction = 1.0;
+  o.moves.max_rounds = 3;
+  ThresholdSchedule adaptive;
+  adaptive.target = 1.0;
+  o.thresholds = {adaptive};
+  ThreadPoolExecutor local(1);
+  const RunHistory reference =
+      RunCombinatorialSmc({&space, &simulator, &distance, nullptr, &local}, o);
+  ASSERT_TRUE(reference.waves.back().moves.has_value());
+  MpiExecutor executor(1);
+  const RunHistory h = RunCombinatorialSmc({&space, &simulator, &distance, nullptr, &executor}, o);
+  std::string where;
+  EXPECT_TRUE(SameHistory(reference, h, &where)) << where;
+}
+
 TEST(MpiExecutor, DecisionsAreThePrimarys) {
   MpiExecutor executor(1);
   EXPECT_EQ(executor.primary(), executor.rank() == 0);
