@@ -227,7 +227,7 @@ def _warned(history):
 
 
 def run(what, options=None, *, threads=None, output_directory=None, overwrite=False,
-        report=False):
+        report=False, start_from=None):
     """Runs a calibration and returns its History.
 
     what: a config file (str or path): the same run as `combabc run` (threads, output_directory,
@@ -237,8 +237,16 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
     file history.sqlite there (overwrite: replace one; report=True draws the report too), which
     combabc.export, combabc.load_history and combabc.resume(path, problem, options) read;
     without, nothing is written (History.path is None).
+
+    start_from (a config run only): a finished run's history file (or a History that has one)
+    whose posterior the run starts from instead of the prior, adding the config's other
+    experiments to it, as `combabc run CONFIG --from RUN.sqlite` (docs/algorithm.md, "Adding
+    data to a finished run").
     """
     if isinstance(what, Problem):
+        if start_from is not None:
+            raise TypeError("start_from applies to a config run (combabc.run(config_path, "
+                            "start_from=...)); a Problem run starts from its prior")
         if options is None:
             options = SmcOptions()
         if threads is not None:
@@ -255,7 +263,8 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")
     data = _core.run_config(os.fspath(what), -1 if threads is None else threads,
-                            os.fspath(output_directory or ""), overwrite, report)
+                            os.fspath(output_directory or ""), overwrite, report,
+                            "" if start_from is None else _history_path(start_from))
     return _warned(History(data))
 
 

@@ -247,9 +247,11 @@ py::dict RunConfig(const std::string& config_path,
                    int threads,
                    const std::string& output_directory,
                    bool overwrite,
-                   bool report) {
+                   bool report,
+                   const std::string& start_from) {
   services::RunRequest request;
   request.config_path = config_path;
+  request.start_from = start_from;
   request.output_directory = output_directory;
   request.threads = threads;
   request.overwrite = overwrite;
@@ -1102,7 +1104,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("threads") = -1,
         py::arg("output_directory") = std::string(),
         py::arg("overwrite") = false,
-        py::arg("report") = false);
+        py::arg("report") = false,
+        py::arg("start_from") = std::string());
   m.def("export",
         &Export,
         py::arg("history_path"),

@@ -175,3 +175,27 @@ def test_a_problem_has_one_unnamed_experiment():
     assert only.name == "" and only.description == ""
     np.testing.assert_array_equal(only.measured_value, [1.0, 0.0, 1.0])
     np.testing.assert_array_equal(history.curves(experiment=0), history.waves[-1].output)
+
+
+def test_start_from_a_finished_run_adds_an_experiment(tmp_path):
+    """combabc.run(config, start_from=...) as `combabc run --from`: the near experiment's finished
+    run, then both experiments from its posterior; wave 0 re-simulates its last wave."""
+    write_data(tmp_path / "near.csv", 0.45, 31, 60)
+    write_data(tmp_path / "far.csv", 0.7, 61, 80)
+    moving = CONFIG.replace("threads = 1\n", "threads = 1\nmethod = \"resample_move\"\n")
+    near_only = moving[:moving.index("[[experiment]]\nname = \"far\"")] + \
+        moving[moving.index("[sampler]"):]
+    (tmp_path / "near.toml").write_text(near_only.replace('directory = "out"',
+                                                          'directory = "near"'))
+    (tmp_path / "both.toml").write_text(moving)
+    finished = combabc.run(tmp_path / "near.toml")
+    both = combabc.run(tmp_path / "both.toml", start_from=finished)
+    assert [x.name for x in both.experiments] == ["near", "far"]
+    assert both.waves[0].candidates == finished.waves[-1].accepted
+    assert both.waves[-1].moves is not None
+    with pytest.raises(combabc.Error, match="adds no experiment"):
+        combabc.run(tmp_path / "near.toml", output_directory=tmp_path / "again",
+                    start_from=finished)
+    with pytest.raises(TypeError, match="config run"):
+        combabc.run(combabc.Problem(space=combabc.BinarySpace(dimension=2), simulator=lambda b, r: [0.0],
+                                    observed=[0.0]), start_from=finished)
