@@ -302,7 +302,8 @@ TEST(MoveExactness, DISABLED_CoverageOverSeeds) {
     double z2 = 0.0;
     int n = 0;
     for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-      const auto h = RunCombinatorialSmc({&space, &sim, &distance}, MovingOptions({eps}, 500, seed));
+      const auto h =
+          RunCombinatorialSmc({&space, &sim, &distance}, MovingOptions({eps}, 500, seed));
       const auto& last = h.waves.back();
       const WaveErrors errors = WaveMonteCarloErrors(last);
       const auto parents = AncestorClusters(last, false);
