@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/samplers/run_history.hpp"
 

@@ -22,6 +22,7 @@ StartPopulation StartFromFinishedRun(const std::string& history_path, const Prob
   const RunHistory history = store.LoadHistory();
   const BinarySpace& bits = p.space->binary();
   std::vector<std::string> names;
+  names.reserve(static_cast<std::size_t>(bits.dimension()));
   for (int k = 0; k < bits.dimension(); ++k) names.push_back(bits.name(k));
   if (m.bit_names != names) {
     Refuse("the finished run has " + std::to_string(m.bit_names.size()) + " bits, this config " +
