@@ -71,7 +71,7 @@ def experiment_table(x_cm, load_y, scan_y, csv_name=None):
                  "displacement_column": "max_displacement_um", "position_unit": "cm",
                  "displacement_unit": "um", "window": [0, 90]},
         "metric": {"component": [{"type": "least_squares", "window": [0, 90],
-                                  "noise": "gaussian", "quantile": 0.5, "target": 1}]},
+                                  "noise": "folded_normal", "quantile": 0.5, "target": 1}]},
     }
     return table
 
