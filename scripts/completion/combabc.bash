@@ -14,7 +14,8 @@ _combabc() {
   local opts files
   case $cmd in
     run)
-      opts="-h --help -o --output -j --threads --overwrite --no-report -q --quiet --no-cache"
+      opts="-h --help -o --output -j --threads --overwrite --from --no-report -q --quiet
+            --no-cache"
       files=toml ;;
     resume)
       opts="-h --help -j --threads --max-simulations --max-wall-time --min-acceptance-rate
@@ -42,6 +43,10 @@ _combabc() {
       else
         mapfile -t COMPREPLY < <(compgen -d -- "$cur")
       fi
+      return ;;
+    # A finished run's history: run --from, design --posterior.
+    --from | --posterior)
+      mapfile -t COMPREPLY < <(compgen -f -X '!*.sqlite' -- "$cur"; compgen -d -- "$cur")
       return ;;
     -j | --threads | --threshold | --top | --clamps | --max-*| --min-*) COMPREPLY=(); return ;;
   esac
