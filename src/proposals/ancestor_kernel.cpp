@@ -99,9 +99,9 @@ class AncestorProposal final : public JointProposal {
       }
       // Inside the bounds by construction when truncated (SampleInBox); else redrawn whole.
       if (truncate_) {
-        SampleInBox(factors_[g.factor], &centres_[j * r_], box_, rng, reals, z);
+        SampleInBox(factors_[g.factor], centres_.data() + j * r_, box_, rng, reals, z);
       } else {
-        SampleGaussian(factors_[g.factor], &centres_[j * r_], rng, reals);
+        SampleGaussian(factors_[g.factor], centres_.data() + j * r_, rng, reals);
       }
       if (InSupport(reals)) return;
     }
@@ -128,14 +128,14 @@ class AncestorProposal final : public JointProposal {
       // L_g^{-1} (r - c_first); the particles' whitened offsets are precomputed, so that each
       // costs O(r) here and nothing cancels when the reals are large with a small spread.
       const Factor& l = factors_[g.factor];
-      const double* c0 = &centres_[g.first * r_];
+      const double* c0 = centres_.data() + g.first * r_;
       for (std::size_t i = 0; i < r_; ++i) {
         double v = 0.0;
         for (std::size_t k = 0; k <= i; ++k) v += l.l_inv[Tri(i, k)] * (reals[k] - c0[k]);
         y[i] = v;
       }
       for (std::size_t j = g.first; j < g.end; ++j) {
-        const double* w = &whitened_[j * r_];
+        const double* w = whitened_.data() + j * r_;
         double q = 0.0;
         for (std::size_t i = 0; i < r_; ++i) q += (y[i] - w[i]) * (y[i] - w[i]);
         sum.Add(bits + log_normal_[j] - 0.5 * q -
@@ -244,7 +244,7 @@ class AncestorProposal final : public JointProposal {
     }
     for (const Pattern& g : patterns_) {
       const Factor& l = factors_[g.factor];
-      const double* c0 = &centres_[g.first * r_];
+      const double* c0 = centres_.data() + g.first * r_;
       for (std::size_t j = g.first; j < g.end; ++j) {
         // log w_j - (r/2) log 2 pi - log det L_g, and L_g^{-1} (c_j - c_first).
         log_normal_[j] -= static_cast<double>(r_) * kLogRootTwoPi + l.log_det;
