@@ -478,42 +478,29 @@ class SmcRun {
     return stochastic_ ? std::exp(log_accept) : 1.0;
   }
 
-  // The log of a resample-move wave's target, up to a constant: -inf when a threshold or
-  // indicator component rejects d, else -sum_k d_k / T_k over the likelihood components. Unlike
-  // LogAcceptance it needs no offset m_k (a Metropolis-Hastings ratio is not a probability and
-  // may exceed 1): a clamped exp(-max(d - m, 0) / T) would make every configuration better than
-  // the best seen so far equally likely.
+  // The log of a resample-move wave's target, up to a constant: LogWeight without offsets. A
+  // Metropolis-Hastings ratio is not a probability and may exceed 1, so it needs no offset m_k: a
+  // clamped exp(-max(d - m, 0) / T) would make every configuration better than the best seen so
+  // far equally likely.
   double LogTarget(std::span<const double> d, const std::vector<double>& eps) const {
-    constexpr double kReject = -std::numeric_limits<double>::infinity();
-    double log_target = 0.0;
-    std::size_t s = 0;
-    for (std::size_t k = 0; k < components_.size(); ++k) {
-      switch (components_[k].kind) {
-        case ComponentKind::kThreshold:
-          if (!(d[k] <= eps[s++])) return kReject;
-          break;
-        case ComponentKind::kIndicator:
-          if (d[k] != components_[k].required) return kReject;
-          break;
-        case ComponentKind::kNegLogLikelihood: {
-          const double temperature = eps[s++];
-          if (std::isinf(temperature)) break;
-          if (!(d[k] < std::numeric_limits<double>::infinity())) return kReject;
-          log_target -= d[k] / temperature;
-          break;
-        }
-      }
-    }
-    return log_target;
+    return LogWeight(d, eps, nullptr);
   }
 
-  // -inf when a threshold or indicator component rejects d; else the log of the likelihood
-  // components' acceptance probability (0 without any).
+  // The log of the likelihood components' acceptance probability (0 without any): LogWeight with
+  // the offsets m_k, the excess d - m clamped at 0.
   double LogAcceptance(std::span<const double> d,
                        const std::vector<double>& eps,
                        const std::vector<double>& offsets) const {
+    return LogWeight(d, eps, &offsets);
+  }
+
+  // -inf when a threshold or indicator component rejects d; else -sum_k e_k / T_k over the
+  // likelihood components, e_k = max(d_k - m_k, 0) with `offsets` (m_k), d_k without.
+  double LogWeight(std::span<const double> d,
+                   const std::vector<double>& eps,
+                   const std::vector<double>* offsets) const {
     constexpr double kReject = -std::numeric_limits<double>::infinity();
-    double log_accept = 0.0;
+    double log_weight = 0.0;
     std::size_t s = 0;
     for (std::size_t k = 0; k < components_.size(); ++k) {
       switch (components_[k].kind) {
@@ -525,15 +512,16 @@ class SmcRun {
           break;
         case ComponentKind::kNegLogLikelihood: {
           const double temperature = eps[s];
-          const double excess = d[k] - offsets[s++];
+          const double excess = offsets ? d[k] - (*offsets)[s] : d[k];
+          ++s;
           if (std::isinf(temperature)) break;  // T = inf: the prior's wave accepts all
           if (!(excess < std::numeric_limits<double>::infinity())) return kReject;
-          log_accept -= std::max(excess, 0.0) / temperature;
+          log_weight -= (offsets ? std::max(excess, 0.0) : excess) / temperature;
           break;
         }
       }
     }
-    return log_accept;
+    return log_weight;
   }
 
   // Candidate i's weight multiplier: without a low-fidelity simulator 1 if accepted, 0 if not;
