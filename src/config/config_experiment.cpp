@@ -173,6 +173,8 @@ void ParseOne(TableReader& t,
 
 }  // namespace
 
+}  // namespace config_internal
+
 // The name as an export column sees it (export.cpp's Identifier: lower case, each run of other
 // characters one '_'): two experiments or components must differ there too, or their columns
 // would collide.
@@ -188,6 +190,8 @@ std::string ColumnKey(const std::string& name) {
   while (!out.empty() && out.back() == '_') out.pop_back();
   return out;
 }
+
+namespace config_internal {
 
 void RefuseExperimentPlaceholders(const std::vector<std::string>& argv,
                                   int line,

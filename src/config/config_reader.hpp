@@ -129,8 +129,6 @@ void Note(std::map<std::string, Source>& map,
           const std::string& field,
           const TableReader& t,
           std::string_view key);
-// A name as its export columns write it (lower case, each run of other characters one '_').
-std::string ColumnKey(const std::string& name);
 // [from, to] in the data's position unit (from < to, finite), returned in metres.
 std::pair<double, double> WindowKey(TableReader& t, std::string_view key, double metres_per_unit);
 

@@ -48,20 +48,6 @@ std::string Quote(const std::string& s) {
   return out + "\"";
 }
 
-// The name as an export column sees it (config's ColumnKey): experiment names must differ there.
-std::string ColumnKeyOf(const std::string& name) {
-  std::string out;
-  for (char ch : name) {
-    if (std::isalnum(static_cast<unsigned char>(ch)) != 0) {
-      out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    } else if (!out.empty() && out.back() != '_') {
-      out += '_';
-    }
-  }
-  while (!out.empty() && out.back() == '_') out.pop_back();
-  return out;
-}
-
 fs::path AbsoluteNormal(const fs::path& p) { return fs::absolute(p).lexically_normal(); }
 
 // `target` as the next config, in `from`, names it: relative where it can be.
@@ -289,7 +275,7 @@ NextStep WriteNextConfig(const CalibrationConfig& c,
     const ExperimentConfig& x = c.experiments.front();
     const std::string name = ExperimentName(
         x.load.load_x, x.load.load_y_fraction, x.load.output_y_fraction, c.model.width);
-    names.insert(ColumnKeyOf(name));
+    names.insert(ColumnKey(name));
     std::vector<std::string>& lines = edits.lines();
     std::size_t first = lines.size();
     for (std::size_t i = 0; i < lines.size(); ++i) {
@@ -312,13 +298,13 @@ NextStep WriteNextConfig(const CalibrationConfig& c,
       rebase(root.at_path("experiment[" + std::to_string(e) + "].data.csv").node(),
              c.experiments.at(e).data.csv,
              key);
-      names.insert(ColumnKeyOf(c.experiments.at(e).name));
+      names.insert(ColumnKey(c.experiments.at(e).name));
     }
   }
   // The new experiment: its name unique among the others, its data beside the run's output
   // directory, where the campaign keeps its files.
   std::string name = ExperimentName(k.load_x, k.load_y_fraction, k.scan_y_fraction, c.model.width);
-  for (int n = 2; names.count(ColumnKeyOf(name)) != 0; ++n) {
+  for (int n = 2; names.count(ColumnKey(name)) != 0; ++n) {
     name = ExperimentName(k.load_x, k.load_y_fraction, k.scan_y_fraction, c.model.width) + "_" +
            std::to_string(n);
   }

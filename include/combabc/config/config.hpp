@@ -180,6 +180,10 @@ struct DesignMemory {
 };
 DesignMemory EstimateDesignMemory(const CalibrationConfig& config, double particles);
 
+// A name as its export columns write it (export.cpp's Identifier: lower case, each run of other
+// characters one '_'): experiment and component names must differ there, or columns collide.
+std::string ColumnKey(const std::string& name);
+
 // Largest config file accepted (docs/config.md, "Limits"): a real config is a few KiB.
 inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;  // 1 MiB
 
