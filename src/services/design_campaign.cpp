@@ -146,8 +146,9 @@ void ScheduleKeys(const ThresholdSchedule& s, std::ostream& out) {
   switch (s.kind) {
     case ThresholdKind::kList: {
       out << "threshold = [";
-      for (std::size_t i = 0; i < s.values.size(); ++i)
+      for (std::size_t i = 0; i < s.values.size(); ++i) {
         out << (i ? ", " : "") << NextNumber(s.values[i]);
+      }
       out << "]\n";
       return;
     }
@@ -230,8 +231,9 @@ std::string ExperimentBlock(const CalibrationConfig& c,
     } else {
       out << "sigma_noise = \"estimate\"  # from this experiment's data, as the others\n";
     }
-    if (ref->noise.sigma_model > 0.0)
+    if (ref->noise.sigma_model > 0.0) {
       out << "sigma_model = " << NextNumber(ref->noise.sigma_model) << "\n";
+    }
   }
   if (ref != nullptr) ScheduleKeys(ref->threshold, out);
   return out.str();
