@@ -197,8 +197,9 @@ class Scorer {
       o.signal.assign(d, kNaN);
       for (std::size_t k = 0; k < d; ++k) {
         const std::ptrdiff_t f = flip_[static_cast<std::size_t>(j)][k];
-        if (f >= 0)
+        if (f >= 0) {
           o.signal[k] = SquaredDistance(profiles, row, static_cast<std::size_t>(f)) * scale;
+        }
       }
     }
     return o;

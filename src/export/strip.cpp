@@ -220,7 +220,9 @@ std::string StripText(const Answer& a, const StripLayout& strip, const TextStyle
     line.resize(kStripLabel + 1, ' ');
     line[kStripLabel] = '|';
     for (int s = 0; s < n; ++s) {
-      const AnswerBit& bit = a.bits[static_cast<std::size_t>((number - 1) * n + s)];
+      const AnswerBit& bit =
+          a.bits[static_cast<std::size_t>(number - 1) * static_cast<std::size_t>(n) +
+                 static_cast<std::size_t>(s)];
       const int content = cell > 1 ? cell - 1 : 1;
       std::string text(static_cast<std::size_t>(content), ' ');
       const char symbol = SectionSymbol(bit);

@@ -56,8 +56,9 @@ bool LogisticKernelOptions::IsValid(std::string* why) const {
 bool ProposalOptions::IsValid(ValidationError* error) const {
   if (!LogisticOptionsValid(logistic, "ProposalOptions", "logistic.", error)) return false;
   if (!(scale > 0.0 && std::isfinite(scale))) {
-    if (error)
+    if (error) {
       *error = {"ProposalOptions", "scale", std::to_string(scale), "must be finite and > 0"};
+    }
     return false;
   }
   // The ancestor kernel proposes the reals itself, around each ancestor (the normal kernel's

@@ -204,6 +204,7 @@ Simulated SimulateRows(const CalibrationConfig& c,
   precompute.pool = &pool;
   precompute.cache_directory = plate::DefaultPrecomputeCache();
   std::vector<std::unique_ptr<plate::SensorModel>> models;
+  models.reserve(options.size());
   for (const plate::SensorOptions& o : options) {
     models.push_back(std::make_unique<plate::SensorModel>(o, precompute));
   }
@@ -339,8 +340,9 @@ design::LocalPopulation Neighbourhoods(const CalibrationConfig& c,
     if (fresh) {
       local.bits.insert(local.bits.end(), bits.begin(), bits.end());
       double log_prior = 0.0;
-      for (std::size_t k = 0; k < free; ++k)
+      for (std::size_t k = 0; k < free; ++k) {
         log_prior += std::log(f[k] ? prior[k] : 1.0 - prior[k]);
+      }
       local.log_weight.push_back(log_prior);
     }
     return it->second;
@@ -411,8 +413,9 @@ std::vector<double> RunLogLikelihood(const CalibrationConfig& c,
   const std::unique_ptr<JointDistance> distance = MakeDistance(c, profiles);
   const std::vector<DistanceComponent> components = distance->components();
   std::size_t threshold_count = 0;
-  for (const DistanceComponent& k : components)
+  for (const DistanceComponent& k : components) {
     threshold_count += k.kind != ComponentKind::kIndicator;
+  }
   if (threshold_count != thresholds.size()) {
     throw Error(ErrorKind::kUsage,
                 "the run has " + std::to_string(thresholds.size()) +
@@ -638,8 +641,9 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                     DesignNumber(o.candidates[best].load_x * 100) + " cm, adds " + adds + ")";
   }
   for (int k = 0; k < o.clamps; ++k) {
-    if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > options.identified_margin)
+    if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > options.identified_margin) {
       continue;
+    }
     // The strongest evidence any candidate alone gives against flipping it.
     double signal = std::numeric_limits<double>::quiet_NaN();
     for (const design::Score& score : o.result.scores) {
