@@ -67,8 +67,9 @@ void AddMoves(const WaveRecord& wave, py::dict& d) {
   const auto n = static_cast<py::ssize_t>(wave.particles.size());
   py::array_t<std::int64_t> ancestor(n);
   auto ancestor_w = ancestor.mutable_unchecked<1>();
-  for (py::ssize_t i = 0; i < n; ++i)
+  for (py::ssize_t i = 0; i < n; ++i) {
     ancestor_w(i) = wave.particles[static_cast<std::size_t>(i)].ancestor;
+  }
   d["ancestor"] = ancestor;
   if (!wave.moves) {
     d["moves"] = py::none();

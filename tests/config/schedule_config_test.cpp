@@ -127,7 +127,10 @@ TEST(ScheduleConfig, SamplerMethodAndMoveOptions) {
   EXPECT_NE(e.find("estimator = importance"), std::string::npos) << e;
   // Move options in a rejection run (by default or said) would be silently unused.
   for (const std::string method : {"", "method = \"rejection\"\n"}) {
-    e = ConfigErrorOf(kMinimal + "[sampler]\n" + method + "[sampler.moves]\nmax_rounds = 5\n");
+    std::string text = kMinimal + "[sampler]\n";
+    text += method;
+    text += "[sampler.moves]\nmax_rounds = 5\n";
+    e = ConfigErrorOf(text);
     EXPECT_EQ(e.rfind("dir/run.toml:" + std::to_string(method.empty() ? 6 : 7) +
                           ": sampler.moves: move options apply to resample-move runs only",
                       0),

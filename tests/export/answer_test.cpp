@@ -632,7 +632,7 @@ TEST(Strip, DrawsTheStripToScaleIn80ColumnsWithoutColour) {
   const std::string edge2 = row("edge 2 |");
   ASSERT_EQ(edge1.size(), 8u + 70u) << shown;
   const auto section = [](const std::string& line, int s) {
-    return line.substr(static_cast<std::size_t>(8 + 7 * s), 7);
+    return line.substr(8 + 7 * static_cast<std::size_t>(s), 7);
   };
   EXPECT_EQ(section(edge1, 2), "######|");  // clamp 3: fixed
   EXPECT_EQ(section(edge1, 3), "......|");  // clamp 4: free

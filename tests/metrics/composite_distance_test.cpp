@@ -564,6 +564,7 @@ TEST(FoldedNormal, ComponentIsTheAmplitudesNegLogLikelihood) {
   const std::vector<double> low = {0.004, 0.015, 0.009, 0.012};
   CompositeDistance floor({c}, pos, low, pos, {.normalise_simulated = false});
   std::vector<double> best;
+  best.reserve(low.size());
   double expected = 0.0;
   for (double y : low) best.push_back(FoldedNormalBestMean(y, 0.01));
   const std::vector<double> zero(4, 0.0);
