@@ -84,6 +84,9 @@ void ParseMoves(TableReader& s, SamplerMethod method, MoveOptions* moves, Source
   moves->max_rounds = t->IntegerIn("max_rounds", moves->max_rounds, 1, 10000);
   moves->independent_share = t->NumberIn("independent_share", moves->independent_share, 0.0, 1.0);
   open_fraction("min_survivor_fraction", &moves->min_survivor_fraction);
+  if (const auto final_wave = t->Choice<FinalWave>("final_wave", "final wave")) {
+    moves->final_wave = *final_wave;
+  }
   t->Finish();
 }
 

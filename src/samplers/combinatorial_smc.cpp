@@ -232,7 +232,7 @@ class SmcRun {
       first_wave = static_cast<int>(history.waves.size());
       // The next wave sizes its first batch from this rate, as the uninterrupted run did.
       if (!history.waves.empty()) last_rate_ = history.waves.back().acceptance_rate;
-      if (!history.waves.empty() && AllFinal(history.waves.back())) {
+      if (!history.waves.empty() && Done(history.waves.back())) {
         return Finish(std::move(history), Termination::kTargetReached, "target threshold reached");
       }
     }
@@ -254,7 +254,7 @@ class SmcRun {
         const auto stop = MoveWave(*moving, *previous);
         history.waves.push_back(std::move(*moving));
         if (stop) return Finish(std::move(history), stop->first, stop->second);
-        if (AllFinal(history.waves.back())) {
+        if (Done(history.waves.back())) {
           return Finish(
               std::move(history), Termination::kTargetReached, "target threshold reached");
         }
@@ -291,6 +291,30 @@ class SmcRun {
   }
 
  private:
+  // Whether the run ends after `wave`: it is at the target, and no final independent wave
+  // (MoveOptions::final_wave) is still to come after it.
+  bool Done(const WaveRecord& wave) const { return AllFinal(wave) && !RefreshAfter(wave); }
+
+  // Whether the final independent wave follows `wave`: a move wave at the target, with a wave
+  // left, and (FinalWave::kAuto) affordable. Its acceptance rate is predicted by that of the move
+  // wave's independent proposals, which come from kernels fitted to the same particles: on the
+  // sensor-design example 79 % predicted 36 %, on the chain toy 0.5 % predicted 0.6 %. Decided
+  // from the stored history alone, so that a resumed run decides alike.
+  bool RefreshAfter(const WaveRecord& wave) const {
+    const FinalWave mode = options_.moves.final_wave;
+    if (options_.method != SamplerMethod::kResampleMove || mode == FinalWave::kNever ||
+        !wave.moves || !AllFinal(wave) || wave.wave + 1 >= options_.num_waves) {
+      return false;
+    }
+    if (mode == FinalWave::kAlways) return true;
+    const WaveMoves& m = *wave.moves;
+    if (m.independent_accepted <= 0) return false;
+    const double rate =
+        static_cast<double>(m.independent_accepted) / static_cast<double>(m.independent_proposed);
+    const double cost = static_cast<double>(options_.AcceptedIn(wave.wave + 1)) / rate;
+    return cost <= MoveOptions::kFinalWaveShare * static_cast<double>(total_);
+  }
+
   bool AllFinal(const WaveRecord& wave) const {
     for (std::size_t s = 0; s < schedules_.size(); ++s) {
       if (!schedules_[s].IsFinal(wave.wave, wave.thresholds[s])) return false;
@@ -389,9 +413,13 @@ class SmcRun {
       from_prior_ = true;
     } else {
       // Eq. 2 generalised: the kernel fits the previous wave's weighted particles; the bits are
-      // tempered toward the prior (Eq. 3).
+      // tempered toward the prior (Eq. 3). The final independent wave redraws the moved
+      // particles with the ancestor kernel, a mixture around each of them, whose weights
+      // p A / q stay the most even: on the sensor-design example (4 experiments) its ESS was 475
+      // of 500 where the fitted product kernel's was 363 and the logistic one's 336.
       const Population population = MakePopulation(*previous, wave.thresholds);
-      proposal_ = kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
+      const JointKernel& kernel = RefreshAfter(*previous) ? AncestorKernel() : *kernel_;
+      proposal_ = kernel.Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
       from_prior_ = false;
       if (population.num_free_bits > 0) {
         wave.pattern_classes = FindPatternClasses(
@@ -921,7 +949,7 @@ class SmcRun {
                                           const WaveRecord* previous,
                                           const std::vector<WaveRecord>& done) {
     if (options_.method != SamplerMethod::kResampleMove || !previous || !previous->complete ||
-        previous->particles.empty()) {
+        previous->particles.empty() || RefreshAfter(*previous)) {
       return std::nullopt;
     }
     const std::span<const WaveRecord> earlier(done.data(), done.size() - 1);
@@ -1028,14 +1056,8 @@ class SmcRun {
     // The ancestor kernel beside the configured one (unless it is the configured one).
     ancestor_proposal_.reset();
     if (kernel_->name() != ToString(BinaryKernelKind::kAncestor)) {
-      if (!ancestor_kernel_) {
-        ProposalOptions ancestor = options_.proposal;
-        ancestor.binary = BinaryKernelKind::kAncestor;
-        ancestor.continuous = ContinuousKernelKind::kNormal;
-        ancestor_kernel_ = MakeJointKernel(ancestor, space_);
-      }
       ancestor_proposal_ =
-          ancestor_kernel_->Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
+          AncestorKernel().Fit(population, space_, Tempering{wave.phi, options_.tempering.form});
     }
     moves_ = std::make_unique<MoveProposals>(
         population, space_, proposal_.get(), ancestor_proposal_.get(), mo.independent_share);
@@ -1044,6 +1066,19 @@ class SmcRun {
     wave.moves = WaveMoves{.survivor_ess = survivor_ess, .step = step};
     if (observer_) observer_->OnWaveStart(wave);
     return wave;
+  }
+
+  // The ancestor kernel (docs/algorithm.md, "Joint: ancestor"), whatever the configured one: the
+  // moves' second independent proposal and the final independent wave's.
+  const JointKernel& AncestorKernel() {
+    if (kernel_->name() == ToString(BinaryKernelKind::kAncestor)) return *kernel_;
+    if (!ancestor_kernel_) {
+      ProposalOptions ancestor = options_.proposal;
+      ancestor.binary = BinaryKernelKind::kAncestor;
+      ancestor.continuous = ContinuousKernelKind::kNormal;
+      ancestor_kernel_ = MakeJointKernel(ancestor, space_);
+    }
+    return *ancestor_kernel_;
   }
 
   // The random streams of a move wave t's round r (r >= 1; r = kResampleRound for its

@@ -104,7 +104,8 @@ std::string SamplerPart(const SmcOptions& s) {
         .Add("moves.stay_probability", m.stay_probability)
         .Add("moves.max_rounds", m.max_rounds)
         .Add("moves.independent_share", m.independent_share)
-        .Add("moves.min_survivor_fraction", m.min_survivor_fraction);
+        .Add("moves.min_survivor_fraction", m.min_survivor_fraction)
+        .Add("moves.final_wave", ToString(m.final_wave));
   }
   return c.Digest();
 }

@@ -102,6 +102,55 @@ TEST(MoveDeterminism, MixedSpaceIsIndependentOfThreads) {
       << where;
 }
 
+// The final independent wave after the move wave that reaches the target: the same history for
+// any thread count, and from any checkpoint, the one just before it included (a run resumed
+// after its last move wave still draws it).
+TEST(MoveDeterminism, FinalIndependentWaveResumesLikeTheUninterruptedRun) {
+  // The noise-aware linear problem of move_exactness_test.cpp, whose final wave kAuto draws.
+  const testing::LinearSimulator sim{{{1.0, 0.5, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0},
+                                      {0.0, 1.0, 0.8, 0.0, 0.2, 0.0, 0.0, 0.0},
+                                      {0.3, 0.0, 1.0, 0.1, 0.0, 0.6, 0.0, 0.0},
+                                      {0.0, 0.0, 0.0, 0.1, 1.0, 0.4, 0.0, 0.0},
+                                      {0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 0.2, 0.0},
+                                      {0.0, 0.2, 0.0, 0.0, 0.0, 0.0, 0.7, 0.7}}};
+  const testing::GaussianNllDistance distance{{1.25, 0.7, 1.3, 0.2, 0.75, 0.6}, 0.3};
+  const ParameterSpace space{BinarySpace::Independent(8, 0.5)};
+  SmcOptions o;
+  o.method = SamplerMethod::kResampleMove;
+  o.moves.final_wave = FinalWave::kAuto;
+  o.num_waves = 30;
+  o.accepted_per_wave = 100;
+  o.seed = 7;
+  o.threads = 2;
+  o.batch_size = 64;
+  ThresholdSchedule s;
+  s.target = 1;
+  o.thresholds = {s};
+  testing::Checkpoints checkpoints;
+  const auto reference = RunCombinatorialSmc({&space, &sim, &distance}, o, &checkpoints);
+  ASSERT_EQ(reference.summary.termination, Termination::kTargetReached);
+  ASSERT_GE(reference.waves.size(), 3u);
+  ASSERT_FALSE(reference.waves.back().moves.has_value());
+  ASSERT_TRUE(reference.waves[reference.waves.size() - 2].moves.has_value());
+  auto one = o;
+  one.threads = 1;
+  one.batch_size = 0;
+  std::string where;
+  EXPECT_TRUE(SameHistory(reference, RunCombinatorialSmc({&space, &sim, &distance}, one), &where))
+      << where;
+  // The checkpoint after the last move wave: every wave but the final one complete.
+  bool before_final = false;
+  for (std::size_t i = 0; i < checkpoints.points.size(); ++i) {
+    const ResumePoint& point = checkpoints.points[i];
+    before_final = before_final || (point.completed.size() + 1 == reference.waves.size() &&
+                                    !point.has_partial);
+    if (i % 3 != 0 && point.completed.size() + 1 != reference.waves.size()) continue;
+    const auto h = RunCombinatorialSmc({&space, &sim, &distance}, one, nullptr, &point);
+    EXPECT_TRUE(SameHistory(reference, h, &where)) << "checkpoint " << i << ": " << where;
+  }
+  EXPECT_TRUE(before_final);
+}
+
 TEST(MoveDeterminism, PaperEstimatorIsRefused) {
   NoisyToy toy;
   auto o = toy.Options(1);

@@ -45,6 +45,22 @@ struct EnumNames<SamplerMethod> {
   };
 };
 
+// Whether a resample-move run ends with an independent wave (MoveOptions::final_wave).
+enum class FinalWave {
+  // When its predicted cost is at most MoveOptions::kFinalWaveShare of the run's simulations.
+  kAuto,
+  kAlways,
+  kNever,
+};
+template <>
+struct EnumNames<FinalWave> {
+  static constexpr std::pair<FinalWave, const char*> kNames[] = {
+      {FinalWave::kAuto, "auto"},
+      {FinalWave::kAlways, "always"},
+      {FinalWave::kNever, "never"},
+  };
+};
+
 // The resample-move waves' options (SamplerMethod::kResampleMove).
 struct MoveOptions {
   // Each wave's step toward the schedule's next thresholds or temperatures is shortened, where
@@ -64,6 +80,14 @@ struct MoveOptions {
   // Where the reweighted particles keep fewer than this fraction of n_t as their effective sample
   // size (a list schedule's step too large), the wave draws fresh candidates by rejection instead.
   double min_survivor_fraction = 0.02;
+  // Once a move wave reaches the target, one more wave at the same thresholds draws fresh
+  // candidates by rejection from the ancestor kernel fitted to the moved particles: independent
+  // draws given that population, so their Monte-Carlo errors need no clustering by ancestor,
+  // which moves never undo (docs/algorithm.md, "The final wave"). kAuto draws it when the last
+  // move wave's independent proposals predict that it costs at most kFinalWaveShare of the
+  // simulations so far.
+  FinalWave final_wave = FinalWave::kAuto;
+  static constexpr double kFinalWaveShare = 0.25;
 
   bool IsValid(std::string* why) const;
 };
