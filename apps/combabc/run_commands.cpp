@@ -31,10 +31,12 @@ struct ResumeArgs {
   double max_wall_time = 0.0;
   double min_acceptance_rate = 0.0;
   double max_failure_fraction = 0.0;
+  int waves = 0;
   CLI::Option* max_simulations_option = nullptr;
   CLI::Option* max_wall_time_option = nullptr;
   CLI::Option* min_acceptance_rate_option = nullptr;
   CLI::Option* max_failure_fraction_option = nullptr;
+  CLI::Option* waves_option = nullptr;
   bool no_report = false;
   bool quiet = false;
 };
@@ -141,6 +143,7 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   if (args.max_failure_fraction_option->count() > 0) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
+  if (args.waves_option->count() > 0) limits.num_waves = args.waves;
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
   const std::vector<bool> temperatures = TemperatureSlotsOfHistory(request.history_path);
@@ -209,6 +212,13 @@ Command AddResumeCommand(CLI::App& app) {
                        args->max_failure_fraction,
                        "Failed simulations tolerated, as a fraction; 1 = never stop")
           ->check(RealIn(0.0, 1.0));
+  args->waves_option =
+      resume
+          ->add_option("--waves",
+                       args->waves,
+                       "Waves in all, for a run that did all its waves (max_waves): more continue "
+                       "it as one longer run")
+          ->check(CLI::Range(1, 1000000));
   resume->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*resume);
