@@ -111,6 +111,21 @@ void NoteHistory(const Session& session, const std::string& path) {
       path + "; continue with: combabc resume " + path + "\n");
 }
 
+// A run or a resume under the progress display and Ctrl-C (Guarded), its outcome printed with the
+// answer; its exit code.
+int Calibrate(const Session& session,
+              bool quiet,
+              const std::vector<bool>& temperatures,
+              const ChecksPrinter& checks,
+              const std::function<services::RunOutcome(SmcObserver*)>& calibrate) {
+  return Guarded(session, quiet, temperatures, [&](SmcObserver* observer) {
+    const auto outcome = calibrate(observer);
+    const int code = Conclude(outcome, checks);
+    PrintAnswer(session, quiet, outcome.answer, outcome.strip);
+    return code;
+  });
+}
+
 int RunCommand(RunArgs& args, const Session& session) {
   services::RunRequest& request = args.request;
   request.executor = session.executor();
@@ -119,13 +134,12 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.on_report_progress = ReportProgressLine(session, args.quiet);
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
-  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
-  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
-    const auto outcome = services::RunCalibration(request, observer);
-    const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
-    return code;
-  });
+  return Calibrate(
+      session,
+      args.quiet,
+      TemperatureSlotsOfConfig(request.config_path),
+      checks,
+      [&](SmcObserver* observer) { return services::RunCalibration(request, observer); });
 }
 
 int ResumeCommand(ResumeArgs& args, const Session& session) {
@@ -146,13 +160,12 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   if (args.waves_option->count() > 0) limits.num_waves = args.waves;
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
-  const std::vector<bool> temperatures = TemperatureSlotsOfHistory(request.history_path);
-  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
-    const auto outcome = services::ResumeCalibration(request, observer);
-    const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
-    return code;
-  });
+  return Calibrate(
+      session,
+      args.quiet,
+      TemperatureSlotsOfHistory(request.history_path),
+      checks,
+      [&](SmcObserver* observer) { return services::ResumeCalibration(request, observer); });
 }
 
 }  // namespace

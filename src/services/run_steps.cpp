@@ -180,7 +180,7 @@ bool CheckResumable(const RunMetadata& metadata,
   std::string message = "the run has already finished (" + metadata.termination + ")";
   if (names == OptionNames::kCli) {
     message += "; nothing to resume. Use 'combabc report' or 'combabc export'";
-    if (t == Termination::kMaxWaves) message += ", or give it more waves: --waves N";
+    if (t == Termination::kMaxWaves) message += "; or give it more waves: --waves N";
   } else {
     message += "; nothing to resume";
     if (t == Termination::kMaxWaves) message += ": give it more waves with waves=N";
