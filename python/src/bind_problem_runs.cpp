@@ -190,7 +190,7 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
                                       : ContinueNote(file.history_path, ", problem, options");
   const auto outcome = RunReleased<services::RunOutcome>(
       [&](SmcObserver* signals) { return services::RunProblem(run, signals); },
-      [&](const services::RunOutcome&) { return interrupted; },
+      [&](const services::RunOutcome&) { return std::string(interrupted); },
       [&](const std::exception& e) {
         // A custom prior's own exception, else the simulator's or distance's, as itself.
         for (const auto& [names, prior] : request.priors) {

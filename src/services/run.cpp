@@ -12,6 +12,7 @@
 #include "combabc/services/report.hpp"
 #include "services/output_folders.hpp"
 #include "services/problem.hpp"
+#include "services/report_checks.hpp"
 #include "services/run_fingerprint.hpp"
 #include "services/run_steps.hpp"
 #include "services/start_from.hpp"
