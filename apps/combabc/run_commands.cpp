@@ -111,43 +111,38 @@ void NoteHistory(const Session& session, const std::string& path) {
       path + "; continue with: combabc resume " + path + "\n");
 }
 
-// A run or a resume under the progress display and Ctrl-C (Guarded), its outcome printed with the
-// answer; its exit code.
+// A run or a resume (its request: RunRequest or ResumeRequest) under the progress display and
+// Ctrl-C (Guarded), with what both print: the checks, the outcome and the answer; its exit code.
+template <typename Args, typename Request>
 int Calibrate(const Session& session,
-              bool quiet,
+              Args& args,
               const std::vector<bool>& temperatures,
-              const ChecksPrinter& checks,
-              const std::function<services::RunOutcome(SmcObserver*)>& calibrate) {
-  return Guarded(session, quiet, temperatures, [&](SmcObserver* observer) {
-    const auto outcome = calibrate(observer);
+              services::RunOutcome (*calibrate)(const Request&, SmcObserver*)) {
+  Request& request = args.request;
+  request.executor = session.executor();
+  request.report = !args.no_report;
+  request.on_report_progress = ReportProgressLine(session, args.quiet);
+  ChecksPrinter checks;
+  request.on_checks_before = checks.Callback();
+  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
+    const auto outcome = calibrate(request, observer);
     const int code = Conclude(outcome, checks);
-    PrintAnswer(session, quiet, outcome.answer, outcome.strip);
+    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
     return code;
   });
 }
 
 int RunCommand(RunArgs& args, const Session& session) {
-  services::RunRequest& request = args.request;
-  request.executor = session.executor();
-  request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
-  request.report = !args.no_report;
-  request.on_report_progress = ReportProgressLine(session, args.quiet);
-  ChecksPrinter checks;
-  request.on_checks_before = checks.Callback();
-  return Calibrate(
-      session,
-      args.quiet,
-      TemperatureSlotsOfConfig(request.config_path),
-      checks,
-      [&](SmcObserver* observer) { return services::RunCalibration(request, observer); });
+  args.request.on_history_path = [&session](const std::string& path) {
+    NoteHistory(session, path);
+  };
+  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(args.request.config_path);
+  return Calibrate(session, args, temperatures, &services::RunCalibration);
 }
 
 int ResumeCommand(ResumeArgs& args, const Session& session) {
   services::ResumeRequest& request = args.request;
   NoteHistory(session, request.history_path);
-  request.report = !args.no_report;
-  request.on_report_progress = ReportProgressLine(session, args.quiet);
-  request.executor = session.executor();
   services::StopLimits& limits = request.limits;
   if (args.max_simulations_option->count() > 0) limits.max_simulations = args.max_simulations;
   if (args.max_wall_time_option->count() > 0) limits.max_wall_time_s = args.max_wall_time;
@@ -158,14 +153,8 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
   if (args.waves_option->count() > 0) limits.num_waves = args.waves;
-  ChecksPrinter checks;
-  request.on_checks_before = checks.Callback();
-  return Calibrate(
-      session,
-      args.quiet,
-      TemperatureSlotsOfHistory(request.history_path),
-      checks,
-      [&](SmcObserver* observer) { return services::ResumeCalibration(request, observer); });
+  const std::vector<bool> temperatures = TemperatureSlotsOfHistory(request.history_path);
+  return Calibrate(session, args, temperatures, &services::ResumeCalibration);
 }
 
 }  // namespace
