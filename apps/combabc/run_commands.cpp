@@ -31,10 +31,12 @@ struct ResumeArgs {
   double max_wall_time = 0.0;
   double min_acceptance_rate = 0.0;
   double max_failure_fraction = 0.0;
+  int waves = 0;
   CLI::Option* max_simulations_option = nullptr;
   CLI::Option* max_wall_time_option = nullptr;
   CLI::Option* min_acceptance_rate_option = nullptr;
   CLI::Option* max_failure_fraction_option = nullptr;
+  CLI::Option* waves_option = nullptr;
   bool no_report = false;
   bool quiet = false;
 };
@@ -109,29 +111,38 @@ void NoteHistory(const Session& session, const std::string& path) {
       path + "; continue with: combabc resume " + path + "\n");
 }
 
-int RunCommand(RunArgs& args, const Session& session) {
-  services::RunRequest& request = args.request;
+// A run or a resume (its request: RunRequest or ResumeRequest) under the progress display and
+// Ctrl-C (Guarded), with what both print: the checks, the outcome and the answer; its exit code.
+template <typename Args, typename Request>
+int Calibrate(const Session& session,
+              Args& args,
+              const std::vector<bool>& temperatures,
+              services::RunOutcome (*calibrate)(const Request&, SmcObserver*)) {
+  Request& request = args.request;
   request.executor = session.executor();
-  request.on_history_path = [&session](const std::string& path) { NoteHistory(session, path); };
   request.report = !args.no_report;
   request.on_report_progress = ReportProgressLine(session, args.quiet);
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
-  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
   return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
-    const auto outcome = services::RunCalibration(request, observer);
+    const auto outcome = calibrate(request, observer);
     const int code = Conclude(outcome, checks);
     PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
     return code;
   });
 }
 
+int RunCommand(RunArgs& args, const Session& session) {
+  args.request.on_history_path = [&session](const std::string& path) {
+    NoteHistory(session, path);
+  };
+  const std::vector<bool> temperatures = TemperatureSlotsOfConfig(args.request.config_path);
+  return Calibrate(session, args, temperatures, &services::RunCalibration);
+}
+
 int ResumeCommand(ResumeArgs& args, const Session& session) {
   services::ResumeRequest& request = args.request;
   NoteHistory(session, request.history_path);
-  request.report = !args.no_report;
-  request.on_report_progress = ReportProgressLine(session, args.quiet);
-  request.executor = session.executor();
   services::StopLimits& limits = request.limits;
   if (args.max_simulations_option->count() > 0) limits.max_simulations = args.max_simulations;
   if (args.max_wall_time_option->count() > 0) limits.max_wall_time_s = args.max_wall_time;
@@ -141,15 +152,9 @@ int ResumeCommand(ResumeArgs& args, const Session& session) {
   if (args.max_failure_fraction_option->count() > 0) {
     limits.max_failure_fraction = args.max_failure_fraction;
   }
-  ChecksPrinter checks;
-  request.on_checks_before = checks.Callback();
+  if (args.waves_option->count() > 0) limits.num_waves = args.waves;
   const std::vector<bool> temperatures = TemperatureSlotsOfHistory(request.history_path);
-  return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
-    const auto outcome = services::ResumeCalibration(request, observer);
-    const int code = Conclude(outcome, checks);
-    PrintAnswer(session, args.quiet, outcome.answer, outcome.strip);
-    return code;
-  });
+  return Calibrate(session, args, temperatures, &services::ResumeCalibration);
 }
 
 }  // namespace
@@ -209,6 +214,13 @@ Command AddResumeCommand(CLI::App& app) {
                        args->max_failure_fraction,
                        "Failed simulations tolerated, as a fraction; 1 = never stop")
           ->check(RealIn(0.0, 1.0));
+  args->waves_option =
+      resume
+          ->add_option("--waves",
+                       args->waves,
+                       "Waves in all, for a run that did all its waves (max_waves): more continue "
+                       "it as one longer run")
+          ->check(CLI::Range(1, 1000000));
   resume->add_flag("--no-report", args->no_report, "Do not write figures at the end");
   resume->add_flag("-q,--quiet", args->quiet, "No progress display, no answer at the end");
   AddNoCacheFlag(*resume);

@@ -77,11 +77,16 @@ class Problem:
     them, in that order; each of those reals is declared ContinuousParameter(name, kind="joint",
     low=..., high=...) (bounds optional). The run checks each against its sampler before any
     simulation (docs/python.md, "Custom and joint priors").
+
+    positions: the outputs' coordinates (m numbers, e.g. metres along a scan), stored in the
+    history as a sensor run's output positions are, so that the report and the export draw the
+    outputs and the data against them; position_unit names their unit (e.g. "m"). None (the
+    default): the outputs are by index (unit "index").
     """
 
     def __init__(self, space, simulator, observed, reals=(), batch=False, rng=False, *,
                  distance=None, components=None, distance_batch=None, low_fidelity=None,
-                 parameters="arrays", priors=None):
+                 parameters="arrays", priors=None, positions=None, position_unit=""):
         self.space = space
         self.reals = list(reals)
         self.priors = _joint_priors(priors)
@@ -104,6 +109,15 @@ class Problem:
             raise TypeError("low_fidelity must be callable (a cheap simulator) or None, not "
                             f"{type(low_fidelity).__name__}")
         self.low_fidelity = _by_name(low_fidelity, self, "low_fidelity")
+        self.positions = None
+        if positions is not None:
+            self.positions = np.ascontiguousarray(positions, dtype=np.float64).ravel()
+            if len(self.positions) != len(self.observed):
+                raise ValueError(f"Problem: positions has {len(self.positions)} values; expected "
+                                 f"one per output ({len(self.observed)}, as observed)")
+            if not np.all(np.isfinite(self.positions)):
+                raise ValueError("Problem: positions must be finite numbers")
+        self.position_unit = str(position_unit)
 
 
 _PARAMETER_STYLES = ("arrays", "dict", "pandas")
@@ -200,17 +214,22 @@ def _smc_request(problem, options):
         simulator=problem.simulator,
         batch=problem.batch, rng=problem.rng, observed=problem.observed, options=options,
         distance=problem.distance, distance_batch=problem.distance_batch,
-        components=problem.components, low_fidelity=problem.low_fidelity)
+        components=problem.components, low_fidelity=problem.low_fidelity,
+        positions=[] if problem.positions is None else problem.positions,
+        position_unit="index" if problem.positions is None else problem.position_unit)
 
 
 def _problem_history(data, problem):
     # The data's coordinate is the output's index (the NetCDF export's observed_data), for the
     # outputs as for the data; a history file records the same.
-    positions = np.arange(len(problem.observed), dtype=np.float64)
+    positions = problem.positions
+    if positions is None:
+        positions = np.arange(len(problem.observed), dtype=np.float64)
     data.setdefault("measured_position", positions)
     data.setdefault("measured_value", problem.observed)
     data.setdefault("output_position", positions)
-    data.setdefault("position_unit", "index")
+    data.setdefault("position_unit", "index" if problem.positions is None else
+                    problem.position_unit)
     data.setdefault("combabc_version", __version__)
     return History(data)
 
@@ -238,15 +257,16 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
     combabc.export, combabc.load_history and combabc.resume(path, problem, options) read;
     without, nothing is written (History.path is None).
 
-    start_from (a config run only): a finished run's history file (or a History that has one)
-    whose posterior the run starts from instead of the prior, adding the config's other
-    experiments to it, as `combabc run CONFIG --from RUN.sqlite` (docs/algorithm.md, "Adding
-    data to a finished run").
+    start_from: a finished run's history file (or a History that has one) whose posterior the run
+    starts from instead of the prior: for a config, adding the config's other experiments to it,
+    as `combabc run CONFIG --from RUN.sqlite` (docs/algorithm.md, "Adding data to a finished
+    run"); for a Problem (which needs output_directory), with the same bits and reals by name,
+    its distance's components keeping the finished run's final thresholds by name.
     """
     if isinstance(what, Problem):
-        if start_from is not None:
-            raise TypeError("start_from applies to a config run (combabc.run(config_path, "
-                            "start_from=...)); a Problem run starts from its prior")
+        if start_from is not None and output_directory is None:
+            raise ValueError("start_from needs output_directory: the run records the run it "
+                             "started from in its history file")
         if options is None:
             options = SmcOptions()
         if threads is not None:
@@ -258,7 +278,8 @@ def run(what, options=None, *, threads=None, output_directory=None, overwrite=Fa
         if output_directory is not None:
             os.makedirs(output_directory, exist_ok=True)
             path = os.path.join(os.fspath(output_directory), "history.sqlite")
-        data = _core.run_smc(_smc_request(what, options), path, overwrite, False, report)
+        data = _core.run_smc(_smc_request(what, options), path, overwrite, False, report,
+                             "" if start_from is None else _history_path(start_from))
         return _warned(_problem_history(data, what))
     if options is not None:
         raise TypeError("options apply to a Problem; a config file carries its own")
@@ -299,13 +320,16 @@ def export(path, directory=None, *, overwrite=False, netcdf=True, all_waves=Fals
 
 def resume(path, problem=None, options=None, *, threads=None, report=False,
            max_simulations=None, max_wall_time=None, min_acceptance_rate=None,
-           max_failure_fraction=None):
+           max_failure_fraction=None, waves=None):
     """Continues an interrupted, killed or failed run from its history file (a path or a
     History), as `combabc resume` (the result equals an uninterrupted run's); returns its
     History. A run that stopped on a limit continues with that limit raised (the keywords are
     `combabc resume`'s --max-simulations, --max-wall-time (seconds), --min-acceptance-rate and
-    --max-failure-fraction). A finished run, or a stopped one whose limits would stop it again at
-    once, is a combabc.Error (usage).
+    --max-failure-fraction). A run that did all its waves (termination "max_waves") continues with
+    more: waves=N, the number in all, as `combabc resume --waves N`; the result equals one run of
+    N waves. The limits and waves given are recorded in the history; later resumes keep them. A
+    finished run otherwise, or a stopped one whose limits would stop it again at once, is a
+    combabc.Error (usage) that says which keyword to give.
 
     A run of a Problem (combabc.run(problem, options, output_directory=...)) is resumed with the
     same Problem (the same simulator and distance functions) and the same options passed again:
@@ -316,17 +340,14 @@ def resume(path, problem=None, options=None, *, threads=None, report=False,
             raise TypeError("options apply to a Problem's run; a config run carries its own")
         return _warned(History(_core.resume(path, -1 if threads is None else threads, report,
                                             max_simulations, max_wall_time, min_acceptance_rate,
-                                            max_failure_fraction)))
+                                            max_failure_fraction, waves)))
     if options is None:
         options = SmcOptions()
     if threads is not None:
         options.threads = threads
-    for name, value in (("max_simulations", max_simulations), ("max_wall_time_s", max_wall_time),
-                        ("min_acceptance_rate", min_acceptance_rate),
-                        ("max_failure_fraction", max_failure_fraction)):
-        if value is not None:
-            setattr(options, name, value)
-    data = _core.run_smc(_smc_request(problem, options), path, False, True, report)
+    data = _core.run_smc(_smc_request(problem, options), path, False, True, report, "",
+                         max_simulations, max_wall_time, min_acceptance_rate,
+                         max_failure_fraction, waves)
     return _warned(_problem_history(data, problem))
 
 

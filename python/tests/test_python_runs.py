@@ -2,7 +2,9 @@
 resume with the same problem after a failure (the uninterrupted run's history), and the user's own
 exception reaching the caller as theirs."""
 
+import math
 import os
+import shutil
 import subprocess
 import traceback
 
@@ -14,6 +16,7 @@ import combabc
 from test_smc import OBSERVED, options, per_sample, problem
 
 CLI = os.environ.get("COMBABC_CLI")
+EXAMPLE = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "custom-simulator")
 
 
 class Flaky:
@@ -133,3 +136,105 @@ def test_a_run_stopped_on_its_budget_resumes_with_a_raised_limit(tmp_path):
                              max_simulations=total + 1000)
     assert resumed.termination == whole.termination
     pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)
+
+
+def quantile_options(**fields):
+    """Adaptive thresholds that stay above their target: every run ends on its waves."""
+    schedule = combabc.ThresholdSchedule(kind="quantile", quantile=0.9)
+    return options(**{"accepted_per_wave": 50, "thresholds": [schedule], **fields})
+
+
+def test_a_finished_run_given_more_waves_equals_one_longer_run(tmp_path):
+    longer = combabc.run(problem(), quantile_options(num_waves=5),
+                         output_directory=tmp_path / "five")
+    assert longer.termination == "max_waves" and len(longer.waves) == 5
+    short = combabc.run(problem(), quantile_options(num_waves=3),
+                        output_directory=tmp_path / "three")
+    assert short.termination == "max_waves"
+    # Finished: the message says how to continue.
+    with pytest.raises(combabc.Error, match="give it more waves with waves=N"):
+        combabc.resume(short, problem(), quantile_options(num_waves=3))
+    with pytest.raises(combabc.Error, match="waves= above 3"):
+        combabc.resume(short, problem(), quantile_options(num_waves=3), waves=3)
+    more = combabc.resume(short, problem(), quantile_options(num_waves=3), waves=5)
+    assert more.termination == "max_waves" and len(more.waves) == 5
+    pd.testing.assert_frame_equal(more.particles(), longer.particles(), check_exact=True)
+    for a, b in zip(more.waves, longer.waves):
+        np.testing.assert_array_equal(a.thresholds, b.thresholds)
+        assert a.candidates == b.candidates
+
+
+def test_a_problem_run_starts_from_a_finished_runs_posterior(tmp_path):
+    first = combabc.run(problem(), quantile_options(num_waves=2), output_directory=tmp_path / "a")
+    with pytest.raises(ValueError, match="output_directory"):
+        combabc.run(problem(), quantile_options(num_waves=2), start_from=first)
+    then = combabc.run(problem(), quantile_options(num_waves=2, seed=5),
+                       output_directory=tmp_path / "b", start_from=first)
+    # Wave 1 is the finished run's last population, simulated again, not a draw from the prior.
+    assert sorted(map(tuple, first.waves[-1].bits)) == sorted(map(tuple, then.waves[0].bits))
+    # Other bits are refused, naming start_from.
+    other = combabc.Problem(combabc.BinarySpace(dimension=8, names=list("abcdefgh")),
+                            per_sample, OBSERVED)
+    with pytest.raises(combabc.Error, match="start_from"):
+        combabc.run(other, quantile_options(num_waves=2), output_directory=tmp_path / "c",
+                    start_from=first)
+
+
+def test_a_problem_stores_the_positions_of_its_outputs(tmp_path):
+    positions = np.linspace(0.0, 0.3, len(OBSERVED))
+    space = combabc.BinarySpace(dimension=8)
+    placed = combabc.Problem(space, per_sample, OBSERVED, positions=positions,
+                             position_unit="m")
+    history = combabc.run(placed, quantile_options(num_waves=1), output_directory=tmp_path)
+    loaded = combabc.load_history(history.path)
+    np.testing.assert_array_equal(loaded.output_position, positions)
+    np.testing.assert_array_equal(loaded.measured_position, positions)
+    assert loaded.position_unit == "m"
+    with pytest.raises(ValueError, match="one per output"):
+        combabc.Problem(space, per_sample, OBSERVED, positions=positions[:-1])
+
+
+def supports(bits):
+    """examples/custom-simulator/worker.py's model, as its worker computes it."""
+    coordinates = [0.03 * j for j in range(21)]
+    centres = [0.05 + 0.1 * k for k in range(6)]
+    return np.array([0.05 + sum(math.exp(-((x - c) / 0.06) ** 2)
+                                for b, c in zip(bits, centres) if b == 0) for x in coordinates])
+
+
+def least_squares(output, observed):
+    """The config's least_squares component on unnormalised data at the outputs' own positions:
+    the sum of squared residuals, added in the engine's order."""
+    total = 0.0
+    for y, o in zip(output.tolist(), observed.tolist()):
+        r = y - o
+        total += r * r
+    return np.array([total])
+
+
+@pytest.mark.skipif(not CLI, reason="COMBABC_CLI not set (run through ctest)")
+def test_a_cli_run_and_a_python_run_of_one_problem_write_the_same_rows(tmp_path):
+    for name in ("worker.py", "data.csv"):
+        shutil.copy(os.path.join(EXAMPLE, name), tmp_path / name)
+    config = (open(os.path.join(EXAMPLE, "worker.toml")).read()
+              .replace("waves = 5", "waves = 2").replace("accepted_per_wave = 40",
+                                                         "accepted_per_wave = 15")
+              .replace('displacement_unit = "m"', 'displacement_unit = "m"\nnormalise = false'))
+    (tmp_path / "run.toml").write_text(config)
+    done = subprocess.run([CLI, "run", str(tmp_path / "run.toml"), "-o", str(tmp_path / "cli"),
+                           "--no-report", "-q", "-j", "1"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    cli = combabc.load_history(tmp_path / "cli" / "history.sqlite")
+    data = pd.read_csv(tmp_path / "data.csv", comment="#")
+    space = combabc.BinarySpace(dimension=6, names=cli.bit_names)
+    mine = combabc.Problem(space, supports, data["deflection"].to_numpy(), distance=least_squares,
+                           components=cli.components, positions=data["position_m"].to_numpy(),
+                           position_unit="m")
+    schedule = combabc.ThresholdSchedule(kind="quantile", quantile=0.3)
+    python = combabc.run(mine, combabc.make_options(num_waves=2, accepted_per_wave=15, seed=11,
+                                                    threads=1, thresholds=[schedule]),
+                         output_directory=tmp_path / "python")
+    assert [w.candidates for w in python.waves] == [w.candidates for w in cli.waves]
+    pd.testing.assert_frame_equal(python.particles(), cli.particles(), check_exact=True)
+    for a, b in zip(python.waves, cli.waves):
+        np.testing.assert_array_equal(a.thresholds, b.thresholds)

@@ -135,7 +135,8 @@ def test_a_run_stopped_on_its_budget_resumes_with_a_raised_limit(tmp_path):
     assert stopped.termination == "budget_exhausted"
     with pytest.raises(combabc.Error) as raised:  # the same limit would stop it again at once
         combabc.resume(stopped.path)
-    assert raised.value.kind == "usage error" and "--max-simulations" in str(raised.value)
+    # Named as the keyword that raises it.
+    assert raised.value.kind == "usage error" and "max_simulations=" in str(raised.value)
     resumed = combabc.resume(stopped.path, max_simulations=total + 1000)
     assert resumed.termination == whole.termination
     pd.testing.assert_frame_equal(resumed.particles(), whole.particles(), check_exact=True)

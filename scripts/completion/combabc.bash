@@ -19,7 +19,7 @@ _combabc() {
       files=toml ;;
     resume)
       opts="-h --help -j --threads --max-simulations --max-wall-time --min-acceptance-rate
-            --max-failure-fraction --no-report -q --quiet --no-cache"
+            --max-failure-fraction --waves --no-report -q --quiet --no-cache"
       files=sqlite ;;
     enumerate)
       opts="-h --help --threshold -o --output -j --threads --overwrite --top --no-report -q --quiet

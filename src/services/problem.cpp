@@ -122,15 +122,22 @@ std::vector<StoredExperiment> ExperimentsOf(const Problem& p) {
   return experiments;
 }
 
-RunMetadata Describe(const Problem& p) {
+std::string CombabcVersion() { return COMBABC_VERSION; }
+
+RunMetadata StampedMetadata() {
   RunMetadata m;
   m.combabc_version = COMBABC_VERSION;
+  m.git_hash = COMBABC_GIT_HASH;
+  return m;
+}
+
+RunMetadata Describe(const Problem& p) {
+  RunMetadata m = StampedMetadata();
   m.config_text = p.config.text;
   // Absolute: a resume from another folder must find {config_dir} (and report paths) the same.
   std::error_code ec;
   const fs::path absolute = fs::absolute(p.config.path, ec);
   m.config_path = ec ? p.config.path : absolute.lexically_normal().string();
-  m.git_hash = COMBABC_GIT_HASH;
   m.seed = p.config.smc.seed;
   // 0 means all cores (as ThreadPool resolves it): record how many that was.
   m.threads = p.config.smc.threads > 0

@@ -71,4 +71,10 @@ std::vector<MeasuredProfile> StoredProfiles(const RunMetadata& m, const std::str
 // The run's metadata as its history stores it (the fingerprint included).
 RunMetadata Describe(const Problem& p);
 
+// This combabc's version, as histories and fingerprints record it.
+std::string CombabcVersion();
+
+// A new history's metadata, stamped with this combabc's version and git hash.
+RunMetadata StampedMetadata();
+
 }  // namespace combabc::services

@@ -299,13 +299,10 @@ Fingerprint ComputeFingerprint(const FingerprintInputs& in) {
   return parts;
 }
 
-void CheckResumeFingerprint(const Fingerprint& stored,
-                            const Fingerprint& now,
-                            const std::string& history_path,
-                            const std::string& data_source,
-                            const std::string& stored_version,
-                            const std::string& version,
-                            const std::string& handshake) {
+namespace {
+
+// The parts stored with the run that differ from `now`, in the order the run stored them.
+std::vector<std::string> ChangedParts(const Fingerprint& stored, const Fingerprint& now) {
   const std::map<std::string, std::string> current(now.begin(), now.end());
   const std::map<std::string, std::string> before(stored.begin(), stored.end());
   std::vector<std::string> changed;
@@ -320,7 +317,7 @@ void CheckResumeFingerprint(const Fingerprint& stored,
   }
   // A cheap simulator added to a single-fidelity run or taken from a multi-fidelity one.
   if (!before.empty() && before.count("low_fidelity") != current.count("low_fidelity") &&
-      before.count("simulator") != 0) {
+      (before.count("simulator") != 0 || before.count("python_problem") != 0)) {
     changed.emplace_back("low_fidelity");
   }
   for (const auto& [part, digest] : stored) {
@@ -333,6 +330,101 @@ void CheckResumeFingerprint(const Fingerprint& stored,
       changed.push_back(part);
     }
   }
+  return changed;
+}
+
+}  // namespace
+
+Fingerprint ComputeProblemFingerprint(const ProblemFingerprintInputs& in) {
+  // The stop limits as a default SmcOptions has them: a resume may change them.
+  SmcOptions sampled = *in.options;
+  const SmcOptions defaults;
+  sampled.max_simulations = defaults.max_simulations;
+  sampled.min_acceptance_rate = defaults.min_acceptance_rate;
+  sampled.max_failure_fraction = defaults.max_failure_fraction;
+  Canonical sampler;
+  sampler.Add("sampler", SamplerPart(sampled))
+      .Add("batch_size", static_cast<long long>(in.options->batch_size));
+  Canonical data;
+  data.Add("values", in.observed);
+  if (!in.positions.empty()) data.Add("positions", in.positions);
+  Canonical metric;
+  for (const DistanceComponent& d : in.components) {
+    metric.Add("component", d.name)
+        .Add("kind", static_cast<int>(d.kind))
+        .Add("required", d.required);
+  }
+  Canonical calling;
+  calling.Add("simulator", "python");
+  for (const auto& [key, value] : in.calling) calling.Add(key.c_str(), value);
+  Fingerprint parts = {{"sampler", sampler.Digest()},
+                       {"space", SpacePart(*in.space)},
+                       {"data", data.Digest()},
+                       {"metric", metric.Digest()},
+                       {"python_problem", calling.Digest()}};
+  if (in.low_fidelity) {
+    const MultiFidelityOptions& mf = in.options->multi_fidelity;
+    Canonical low;
+    low.Add("continue_if_accepted", mf.continue_if_accepted)
+        .Add("continue_if_rejected", mf.continue_if_rejected)
+        .Add("adapt", mf.adapt)
+        .Add("floor", mf.floor)
+        .Add("cost_ratio", mf.cost_ratio);
+    parts.emplace_back("low_fidelity", low.Digest());
+  }
+  parts.emplace_back("version", Canonical().Add("combabc", in.version).Digest());
+  Canonical combined;
+  for (const auto& [part, digest] : parts) combined.Add(part.c_str(), digest);
+  parts.emplace_back("combined", combined.Digest());
+  return parts;
+}
+
+void CheckProblemFingerprint(const Fingerprint& stored,
+                             const Fingerprint& now,
+                             const std::string& history_path,
+                             const std::string& stored_version,
+                             const std::string& version) {
+  const bool older = std::any_of(stored.begin(), stored.end(), [](const auto& part) {
+    return part.first == "python_options";
+  });
+  if (older) {
+    // Fingerprinted before a problem's run had the parts above (combabc before 2026-12).
+    throw Error(ErrorKind::kUsage,
+                "the run was written by an older combabc (" + stored_version +
+                    ") whose fingerprint this one does not compute; resume it with that combabc "
+                    "or start a new run",
+                history_path);
+  }
+  const std::vector<std::string> changed = ChangedParts(stored, now);
+  if (changed.empty()) return;
+  const auto has = [&](const char* part) {
+    return std::find(changed.begin(), changed.end(), part) != changed.end();
+  };
+  const bool problem = std::any_of(changed.begin(), changed.end(), [](const std::string& part) {
+    return part != "sampler" && part != "version";
+  });
+  if (!problem && !has("sampler")) {
+    throw Error(ErrorKind::kUsage,
+                "this combabc (" + version + ") is not the one that started the run (" +
+                    stored_version + "): fingerprint_version differs; resume with combabc " +
+                    stored_version + " or start a new run",
+                history_path);
+  }
+  throw Error(ErrorKind::kUsage,
+              std::string(problem ? "the problem (space, reals, data, distance)" : "the options") +
+                  " differ from the run's: resume it with the problem and options it started "
+                  "with (threads and stop limits may change)",
+              history_path);
+}
+
+void CheckResumeFingerprint(const Fingerprint& stored,
+                            const Fingerprint& now,
+                            const std::string& history_path,
+                            const std::string& data_source,
+                            const std::string& stored_version,
+                            const std::string& version,
+                            const std::string& handshake) {
+  const std::vector<std::string> changed = ChangedParts(stored, now);
   if (changed.empty()) return;
   const std::string& part = changed.front();
   const std::string key = "fingerprint_" + part;

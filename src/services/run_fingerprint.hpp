@@ -13,6 +13,7 @@
 #include "combabc/config/distance_from_config.hpp"
 #include "combabc/distances/distance.hpp"
 #include "combabc/params/parameter_space.hpp"
+#include "combabc/samplers/smc_options.hpp"
 
 namespace combabc::services {
 
@@ -33,6 +34,32 @@ struct FingerprintInputs {
 // simulator adds "simulator_outputs" (its declared outputs) and a worker "simulator_handshake"; a
 // multi-fidelity run adds "low_fidelity" (its cheap simulator and [sampler.multi_fidelity]).
 Fingerprint ComputeFingerprint(const FingerprintInputs& inputs);
+
+// A problem the caller built around a simulator it owns (services::RunProblem: a Python
+// function), whose code cannot be fingerprinted: how it is called stands for it.
+struct ProblemFingerprintInputs {
+  const SmcOptions* options = nullptr;  // as given: its stop limits do not count
+  const ParameterSpace* space = nullptr;
+  std::span<const double> observed;
+  std::span<const double> positions;  // the outputs' coordinates, when given
+  std::vector<DistanceComponent> components;
+  std::vector<std::pair<std::string, std::string>> calling;  // how the simulator is called
+  bool low_fidelity = false;  // a multi-fidelity run (a cheap simulator)
+  std::string version;        // combabc version
+};
+
+// The same canonical text and parts as ComputeFingerprint: "sampler" (with batch_size, without
+// the stop limits), "space", "data", "metric", "python_problem" (the calling), "low_fidelity"
+// (multi-fidelity runs: their options), "version", then "combined".
+Fingerprint ComputeProblemFingerprint(const ProblemFingerprintInputs& inputs);
+
+// As CheckResumeFingerprint, in a caller's words (kUsage: the caller passed other functions or
+// options): "the problem (...) differ" or "the options differ".
+void CheckProblemFingerprint(const Fingerprint& stored,
+                             const Fingerprint& now,
+                             const std::string& history_path,
+                             const std::string& stored_version,
+                             const std::string& version);
 
 // Throws combabc::Error(kConfig), one line naming the history file and what changed, when a part
 // stored with the run differs from `now`. A run stored without a fingerprint (schema v1/v2) is

@@ -4,6 +4,7 @@
 // run of `p` starts from. Private to src/services.
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "services/problem.hpp"
@@ -16,6 +17,13 @@ namespace combabc::services {
 // reals, a component or experiment of the finished run missing from p or with other data, no
 // new experiment, no complete wave.
 StartPopulation StartFromFinishedRun(const std::string& history_path, const Problem& p);
+
+// A caller-built problem's start (services::RunProblem, start_from=): the same bits and reals by
+// name, any data and distance; the finished run's components keep their final thresholds by name.
+// Its simulator may be stochastic: wave 0 does not compare the distances again.
+StartPopulation StartFromFinishedRun(const std::string& history_path,
+                                     const ParameterSpace& space,
+                                     const std::vector<DistanceComponent>& components);
 
 // The fingerprint part that records which run a run started from: ("start", that run's combined
 // fingerprint). A resume keeps it (the start population is the run's wave 0 by then).

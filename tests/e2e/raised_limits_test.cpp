@@ -139,6 +139,8 @@ TEST_F(RaisedLimits, AWallTimeStopResumesAndARunThatEndedOnItsOwnIsRefused) {
   EXPECT_EQ(refused.exit_code, 64) << refused.err;
   EXPECT_NE(refused.err.find("the run has already finished (max_waves)"), std::string::npos)
       << refused.err;
+  // With the next step.
+  EXPECT_NE(refused.err.find("give it more waves: --waves N"), std::string::npos) << refused.err;
   // A bad limit is a usage error before anything is read.
   const auto bad = RunCli({"resume", whole, "--max-failure-fraction", "2"}, dir_.path());
   EXPECT_EQ(bad.exit_code, 64) << bad.err;
@@ -154,6 +156,32 @@ TEST_F(RaisedLimits, AWallTimeStopResumesAndARunThatEndedOnItsOwnIsRefused) {
       RunCli({"resume", stopped, "--no-report", "--max-wall-time", "0"}, dir_.path());
   ASSERT_EQ(unlimited.exit_code, 0) << unlimited.err;
   ExpectSameRun(whole, stopped);
+}
+
+// Issue 36: a run that did all its waves continues with more (--waves, recorded like a raised
+// limit) to the history of one longer run; as many waves as it did would stop it at once.
+TEST_F(RaisedLimits, AFinishedRunGivenMoreWavesIsOneLongerRun) {
+  const std::string whole = Run("whole", "");
+  std::string shorter = kConfig;
+  shorter.replace(shorter.find("waves = 3"), 9, "waves = 2");
+  shorter.replace(shorter.find("LIMITS"), 6, "");
+  std::ofstream(dir_ / "two.toml") << shorter;
+  const auto run =
+      RunCli({"run", dir_ / "two.toml", "-o", dir_ / "two", "--no-report"}, dir_.path());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string two = (dir_.path() / "two" / "history.sqlite").string();
+  ASSERT_EQ(Metadata(two).termination, "max_waves");
+  const auto same = RunCli({"resume", two, "--no-report", "--waves", "2"}, dir_.path());
+  EXPECT_EQ(same.exit_code, 64) << same.err;
+  EXPECT_NE(same.err.find("has done its 2 waves and would stop again at once; give it more with "
+                          "--waves above 2"),
+            std::string::npos)
+      << same.err;
+  const auto more = RunCli({"resume", two, "--no-report", "--waves", "3"}, dir_.path());
+  ASSERT_EQ(more.exit_code, 0) << more.err;
+  EXPECT_EQ(Metadata(two).stop_limits,
+            (std::vector<std::pair<std::string, std::string>>{{"waves", "3"}}));
+  ExpectSameRun(whole, two);
 }
 
 // tests/e2e/data/kirchhoff_default_history.sqlite: a budget-stopped run written by combabc
