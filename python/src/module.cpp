@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "answer_binding.hpp"
 #include "batch_random.hpp"
 #include "combabc/config/config.hpp"
 #include "combabc/core/error.hpp"
@@ -1096,6 +1097,7 @@ PYBIND11_MODULE(_core, m) {
   static_cast<void>(failed_type);
 
   BindTypes(m);
+  BindAnswer(m);  // answer(path): History.answer()
   RegisterPriors(m);
   m.def("load_history", &LoadHistory, py::arg("path"));
   m.def("run_config",
