@@ -147,6 +147,9 @@ class History:
         self.termination = self.summary["termination"]
         self.waves = [Wave(w, self.estimator) for w in data["waves"]]
         self.path = data.get("path")
+        # The answer as _core.answer gives it, when the run handed it over (a run without a
+        # history file); else answer() reads it from the file.
+        self._answer = data.get("answer")
         self.status = data.get("status")
         self.report_directory = data.get("report_directory") or None
         self.seed = data.get("seed")
@@ -238,14 +241,18 @@ class History:
         no interpolation); NaN (verdict None) where a column does not apply. attrs: wave (the
         answer's, from 1; posterior_wave), waves, complete, exact, estimator, termination,
         verdict_level, particles, distinct, tempered, temperatures, top_configurations (dicts:
-        bits, mass, mass_se, fixed) and text (the terminal's answer). Needs the history file
-        (History.path): a Problem run without output_directory has none."""
+        bits, mass, mass_se, fixed) and text (the terminal's answer). Read from the history file
+        (History.path), unless the run handed its answer over: a Problem run without
+        output_directory does not yet."""
         import pandas as pd
-        if not self.path:
+        if self._answer is not None:
+            data = self._answer
+        elif not self.path:
             raise ValueError("History.answer(): this History has no history file; run the "
                              "problem with output_directory=... (or load one with "
                              "combabc.load_history)")
-        data = _core.answer(os.fspath(self.path))
+        else:
+            data = _core.answer(os.fspath(self.path))
         if data["waves"] != len(self.waves):
             raise ValueError(f"History.answer(): {self.path} now holds {data['waves']} waves, "
                              f"this History {len(self.waves)}; load it again "

@@ -205,6 +205,13 @@ def test_answer_is_the_terminal_and_summary_json_numbers(tmp_path):
     assert reals.iloc[0]["q05"] < 1.0 < reals.iloc[0]["q95"]
 
 
-def test_answer_needs_the_history_file():
+def test_answer_needs_the_history_file_or_the_runs_answer(tmp_path):
     with pytest.raises(ValueError, match="output_directory"):
         combabc.run(problem(), options(accepted_per_wave=50)).answer()
+    # A run that hands its answer over (_core.answer's dict) needs no file.
+    path = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path).path
+    data = combabc._core.load_history(path)
+    data.update(path=None, answer=combabc._core.answer(path))
+    handed = combabc.History(data).answer()
+    pd.testing.assert_frame_equal(handed, combabc.load_history(path).answer())
+    assert handed.attrs["text"] == data["answer"]["text"]
