@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from . import _netcdf
+from . import _core, _netcdf
 
 
 class ModeLossWarning(UserWarning):
@@ -125,6 +125,11 @@ def _fidelity_columns(w, distance_columns):
     return columns
 
 
+# History.answer()'s columns, in order.
+_ANSWER_COLUMNS = ("name", "kind", "P", "se", "verdict", "mean", "sd", "sd_se", "ess", "q05",
+                   "median", "q95")
+
+
 class History:
     """A run's waves and summary. `waves` is a list of Wave; the methods return DataFrames."""
 
@@ -142,6 +147,9 @@ class History:
         self.termination = self.summary["termination"]
         self.waves = [Wave(w, self.estimator) for w in data["waves"]]
         self.path = data.get("path")
+        # The answer as _core.answer gives it, when the run handed it over (a run without a
+        # history file); else answer() reads it from the file.
+        self._answer = data.get("answer")
         self.status = data.get("status")
         self.report_directory = data.get("report_directory") or None
         self.seed = data.get("seed")
@@ -220,6 +228,48 @@ class History:
         """posterior's Monte-Carlo standard errors, per bit (posterior_wave.marginals_se: the
         answer's mc_se in summary.json and on the terminal); NaN for an enumeration (exact)."""
         return self.posterior_wave.marginals_se
+
+    def answer(self):
+        """The run's answer as a DataFrame, one row per parameter, with the numbers the terminal
+        prints at the end of a run and summary.json's "answer" holds (docs/history.md, "The
+        answer"): computed by combabc's one function for them, not again here. Columns: name,
+        kind ("bit" or "real"); for a bit P (P(bit = 1) under the run's estimator; the sensor's
+        P(fixed)), se (its Monte-Carlo standard error, the delta method's; 0 when exact) and
+        verdict ("fixed" (bit = 1), "free" (bit = 0) or "not determined", at attrs["verdict_level"]
+        0.95); for a continuous parameter mean, se (the mean's standard error), sd, sd_se, ess (the
+        mean's effective sample size) and its posterior quantiles q05, median and q95 (weighted,
+        no interpolation); NaN (verdict None) where a column does not apply. attrs: wave (the
+        answer's, from 1; posterior_wave), waves, complete, exact, estimator, termination,
+        verdict_level, particles, distinct, tempered, temperatures, top_configurations (dicts:
+        bits, mass, mass_se, fixed) and text (the terminal's answer). Read from the history file
+        (History.path), unless the run handed its answer over: a Problem run without
+        output_directory does not yet."""
+        import pandas as pd
+        if self._answer is not None:
+            data = self._answer
+        elif not self.path:
+            raise ValueError("History.answer(): this History has no history file; run the "
+                             "problem with output_directory=... (or load one with "
+                             "combabc.load_history)")
+        else:
+            data = _core.answer(os.fspath(self.path))
+        if data["waves"] != len(self.waves):
+            raise ValueError(f"History.answer(): {self.path} now holds {data['waves']} waves, "
+                             f"this History {len(self.waves)}; load it again "
+                             "(combabc.load_history)")
+        nan = float("nan")
+        rows = [{"name": b["name"], "kind": "bit", "P": b["p_one"], "se": b["mc_se"],
+                 "verdict": b["verdict"]} for b in data["bits"]]
+        rows += [{"name": r["name"], "kind": "real", "P": nan, "se": r["mc_se"], "verdict": None,
+                  "mean": r["mean"], "sd": r["sd"], "sd_se": r["sd_se"], "ess": r["ess"],
+                  "q05": r["q05"], "median": r["median"], "q95": r["q95"]}
+                 for r in data["reals"]]
+        frame = pd.DataFrame(rows, columns=list(_ANSWER_COLUMNS))
+        for column in _ANSWER_COLUMNS[5:]:
+            frame[column] = frame[column].astype(np.float64)
+        frame.attrs.update({key: value for key, value in data.items()
+                            if key not in ("bits", "reals")})
+        return frame
 
     def experiment(self, which):
         """An experiment by name or index."""

@@ -6,9 +6,12 @@ pyABC's visualisation: the caller shows or saves them (fig.savefig("marginals.pn
     combabc.plot.curves(history)             # the posterior wave's accepted curves and the data
     combabc.plot.thresholds(history)         # thresholds and acceptance rate per wave
     combabc.plot.predictive_band(history)    # the posterior predictive band and the data
+    combabc.plot.densities(history)          # each continuous parameter's density, every wave
+    combabc.plot.pairs(history)              # the continuous parameters two by two
 
 Waves are numbered from 1 (wave=None: every wave in marginals; in curves and predictive_band
-History.posterior_wave, the last complete one), bits are labelled by their names;
+History.posterior_wave, the last complete one; in pairs too), bits and continuous parameters are
+labelled by their names;
 experiments by name or index. Needs matplotlib (python3-matplotlib); nothing here picks a
 backend.
 """
@@ -142,4 +145,110 @@ def predictive_band(history, wave=None, experiment=None, level=0.9):
         ax.set_xlabel(f"position ({history.position_unit})")
         ax.set_title(f"Posterior predictive, wave {w.number}" + (f": {x.name}" if x.name else ""))
         ax.legend(fontsize="small")
+    return fig
+
+
+def _reals(history, parameters):
+    """The columns (from 0) of the continuous parameters asked for: every one for None, else
+    names (or a name)."""
+    if not history.real_names:
+        raise ValueError("the run has no continuous parameters: nothing to draw")
+    if parameters is None:
+        return list(range(len(history.real_names)))
+    if isinstance(parameters, str):
+        parameters = [parameters]
+    columns = []
+    for name in parameters:
+        if name not in history.real_names:
+            raise KeyError(f"no continuous parameter named {name!r} (the run has "
+                           f"{', '.join(history.real_names)})")
+        columns.append(history.real_names.index(name))
+    return columns
+
+
+def _density(values, weights, grid):
+    """A weighted Gaussian kernel density estimate on `grid`, its bandwidth by Silverman's rule
+    at the weights' effective sample size; negative (multi-fidelity) weights count as 0. A spike
+    (a single value) gets a narrow bump a thousandth of its magnitude wide."""
+    weights = np.clip(weights, 0.0, None)
+    total = weights.sum()
+    if not values.size or not total > 0:
+        return np.zeros_like(grid)
+    weights = weights / total
+    mean = np.sum(weights * values)
+    sd = np.sqrt(np.sum(weights * (values - mean) ** 2))
+    ess = 1.0 / np.sum(weights ** 2)
+    width = 1.06 * sd * ess ** -0.2
+    if not width > 0:
+        width = 1e-3 * max(abs(mean), 1.0)
+    z = (grid[:, None] - values[None, :]) / width
+    return np.exp(-0.5 * z ** 2) @ weights / (width * np.sqrt(2.0 * np.pi))
+
+
+def _span(values):
+    """The x range of a parameter's panels: its values, padded by a tenth."""
+    lo, hi = float(np.min(values)), float(np.max(values))
+    pad = 0.1 * (hi - lo) if hi > lo else 0.5 * max(abs(lo), 1.0)
+    return lo - pad, hi + pad
+
+
+def densities(history, wave=None, parameters=None, points=200):
+    """Each continuous parameter's posterior density per wave (a weighted Gaussian kernel estimate
+    under the run's estimator's weights), one panel per parameter, one line per wave (the later
+    the darker) and the last thick; wave: a wave's number (from 1) for that wave alone.
+    parameters: names (default every continuous parameter)."""
+    columns = _reals(history, parameters)
+    shown = history.waves if wave is None else [history.wave(wave)]
+    shown = [w for w in shown if len(w.index)]
+    fig, axes = _figure(len(columns))
+    colours = np.linspace(0.8, 0.0, len(shown)) if len(shown) > 1 else [0.0]
+    for ax, j in zip(axes, columns):
+        every = np.concatenate([w.reals[:, j] for w in shown]) if shown else np.zeros(1)
+        grid = np.linspace(*_span(every), points)
+        for w, grey in zip(shown, colours):
+            last = w is shown[-1]
+            ax.plot(grid, _density(w.reals[:, j], _weights(history, w), grid),
+                    color="tab:blue" if last else str(grey), lw=1.8 if last else 0.9,
+                    label=f"wave {w.number}")
+        ax.set_xlabel(history.real_names[j])
+        ax.set_ylabel("density")
+        ax.set_title(f"{history.real_names[j]}: posterior density per wave ({history.estimator})")
+        ax.legend(fontsize="small", ncol=2)
+    return fig
+
+
+def pairs(history, wave=None, parameters=None, points=200):
+    """The continuous parameters two by two in a wave (default posterior_wave): on the diagonal
+    each one's density (as densities), below it the particles of each pair (their size and
+    shade by weight), above it nothing. parameters: names (default every one)."""
+    columns = _reals(history, parameters)
+    w = history.wave(wave)
+    weights = _weights(history, w)
+    k = len(columns)
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(2.4 * k + 0.8, 2.4 * k + 0.6), layout="constrained")
+    grid = fig.subplots(k, k, squeeze=False)
+    shade = np.clip(weights, 0.0, None)
+    shade = shade / shade.max() if shade.size and shade.max() > 0 else shade
+    spans = [_span(w.reals[:, j]) if len(w.index) else (0.0, 1.0) for j in columns]
+    for row, j in enumerate(columns):
+        for col, i in enumerate(columns):
+            ax = grid[row][col]
+            if col > row:
+                ax.set_axis_off()
+                continue
+            if col == row:
+                x = np.linspace(*spans[col], points)
+                ax.plot(x, _density(w.reals[:, j], weights, x), color="tab:blue")
+                ax.set_yticks([])
+            else:
+                ax.scatter(w.reals[:, i], w.reals[:, j], s=4 + 16 * shade, c=shade,
+                           cmap="Blues", vmin=-0.3, vmax=1.0, linewidths=0)
+                ax.set_ylim(*spans[row])
+            ax.set_xlim(*spans[col])
+            if row == k - 1:
+                ax.set_xlabel(history.real_names[i])
+            if col == 0 and row > 0:
+                ax.set_ylabel(history.real_names[j])
+    fig.suptitle(f"Continuous parameters, wave {w.number} ({history.estimator})")
     return fig

@@ -8,11 +8,13 @@
 //   python_prior.cpp                    custom and joint priors
 //   bind_jobs.cpp                       config runs, resume, enumerate, export, the simulator
 //   bind_problem_runs.cpp               runs of problems written in Python
+//   answer_binding.cpp                  the answer (History.answer())
 #include <pybind11/pybind11.h>
 
 #include <exception>
 #include <string>
 
+#include "answer_binding.hpp"
 #include "bindings.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/params/binary_space.hpp"
@@ -48,6 +50,7 @@ PYBIND11_MODULE(_core, m) {
   static_cast<void>(failed_type);
 
   BindTypes(m);
+  BindAnswer(m);  // answer(path): History.answer()
   RegisterPriors(m);
   BindJobs(m);
   BindProblemRuns(m);

@@ -56,3 +56,53 @@ def test_predictive_band(history):
     assert band.min() >= curves.min() and band.max() <= curves.max()
     median = [line for line in ax.lines if line.get_label() == "median"][0].get_ydata()
     assert np.all(median >= curves.min(axis=0)) and np.all(median <= curves.max(axis=0))
+
+
+@pytest.fixture(scope="module")
+def mixed():
+    from test_python_runs import mixed_options, mixed_problem
+    return combabc.run(mixed_problem(), mixed_options())
+
+
+def test_densities_per_wave(mixed):
+    fig = combabc.plot.densities(mixed)
+    assert [ax.get_xlabel() for ax in fig.axes] == ["gain", "offset"]
+    assert all(ax.get_ylabel() == "density" for ax in fig.axes)
+    for j, ax in enumerate(fig.axes):
+        assert [line.get_label() for line in ax.lines] == ["wave 1", "wave 2", "wave 3"]
+        assert ax.get_legend() is not None
+        # Each is a density: it integrates to 1 over the drawn range (the values lie well
+        # inside it), and the last wave's peaks among the wave's particles.
+        for line in ax.lines:
+            x, y = line.get_xdata(), line.get_ydata()
+            assert np.sum((y[1:] + y[:-1]) / 2 * np.diff(x)) == pytest.approx(1.0, abs=0.02)
+        x, y = ax.lines[-1].get_xdata(), ax.lines[-1].get_ydata()
+        values = mixed.waves[-1].reals[:, j]
+        assert values.min() <= x[np.argmax(y)] <= values.max()
+    one = combabc.plot.densities(mixed, wave=1, parameters="offset")
+    (ax,) = one.axes
+    assert ax.get_xlabel() == "offset" and len(ax.lines) == 1
+    with pytest.raises(KeyError, match="no continuous parameter named 'speed'"):
+        combabc.plot.densities(mixed, parameters=["speed"])
+    fig.canvas.draw()  # renders
+
+
+def test_pairs(mixed):
+    fig = combabc.plot.pairs(mixed)
+    axes = np.array(fig.axes).reshape(2, 2)
+    assert [ax.get_xlabel() for ax in axes[1]] == ["gain", "offset"]
+    assert axes[1][0].get_ylabel() == "offset"
+    assert not axes[0][1].axison  # above the diagonal: nothing
+    w = mixed.posterior_wave
+    (points,) = axes[1][0].collections
+    np.testing.assert_array_equal(points.get_offsets(), w.reals[:, [0, 1]])
+    assert len(axes[0][0].lines) == 1 and len(axes[1][1].lines) == 1  # the diagonal densities
+    assert f"wave {w.number}" in fig._suptitle.get_text()
+    fig.canvas.draw()
+
+
+def test_continuous_plots_need_continuous_parameters(history):
+    with pytest.raises(ValueError, match="no continuous parameters"):
+        combabc.plot.densities(history)
+    with pytest.raises(ValueError, match="no continuous parameters"):
+        combabc.plot.pairs(history)

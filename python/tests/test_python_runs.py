@@ -238,3 +238,85 @@ def test_a_cli_run_and_a_python_run_of_one_problem_write_the_same_rows(tmp_path)
     pd.testing.assert_frame_equal(python.particles(), cli.particles(), check_exact=True)
     for a, b in zip(python.waves, cli.waves):
         np.testing.assert_array_equal(a.thresholds, b.thresholds)
+
+
+# Two named bits and two continuous parameters, batched: y = gain * [1, 2, 3, 4] + offset +
+# valve * [3, 0, 0, 3] + pump * [0, 2, 2, 0], observed at valve = 1, pump = 0, gain = 1,
+# offset = 0.5. No line a + b x comes within 1.5 of either bit's bend: the final wave has valve
+# = 1 and pump = 0.
+SLOPE = np.array([1.0, 2.0, 3.0, 4.0])
+VALVE, PUMP = np.array([3.0, 0.0, 0.0, 3.0]), np.array([0.0, 2.0, 2.0, 0.0])
+MIXED_OBSERVED = SLOPE + 0.5 + VALVE
+
+
+def mixed_simulator(bits, reals):
+    return (reals[:, :1] * SLOPE + reals[:, 1:2] + bits[:, :1] * VALVE + bits[:, 1:2] * PUMP)
+
+
+def mixed_problem():
+    space = combabc.BinarySpace(dimension=2, names=["valve", "pump"])
+    reals = [combabc.ContinuousParameter("gain", kind="uniform", low=0.0, high=2.0),
+             combabc.ContinuousParameter("offset", kind="normal", mean=0.0, sd=1.0)]
+    return combabc.Problem(space, mixed_simulator, MIXED_OBSERVED, reals=reals, batch=True)
+
+
+def mixed_options():
+    return combabc.make_options(num_waves=3, accepted_per_wave=150, seed=5, threads=1,
+                                thresholds=[8.0, 3.0, 1.5], estimator="importance")
+
+
+def test_answer_is_the_terminal_and_summary_json_numbers(tmp_path):
+    import json
+    history = combabc.run(mixed_problem(), mixed_options(), output_directory=tmp_path)
+    answer = history.answer()
+    out = combabc.export(history, tmp_path / "export", netcdf=False)
+    with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+        stored = json.load(f)["answer"]
+    assert list(answer["name"]) == ["valve", "pump", "gain", "offset"]
+    assert list(answer["kind"]) == ["bit", "bit", "real", "real"]
+    bits, reals = answer[answer.kind == "bit"], answer[answer.kind == "real"]
+    # The same numbers, to the last bit (summary.json writes the shortest round-trip form).
+    assert list(bits["P"]) == [b["p_one"] for b in stored["bits"]]
+    assert list(bits["se"]) == [b["mc_se"] for b in stored["bits"]]
+    assert list(bits["verdict"]) == [b["verdict"] for b in stored["bits"]]
+    for column, key in (("mean", "mean"), ("se", "mc_se"), ("sd", "sd"), ("sd_se", "sd_se"),
+                        ("ess", "ess"), ("q05", "q05"), ("median", "median"), ("q95", "q95")):
+        assert list(reals[column]) == [r[key] for r in stored["reals"]], column
+    assert bits[["mean", "q05"]].isna().all().all() and reals["P"].isna().all()
+    assert answer.attrs["wave"] == stored["wave"] == 3
+    assert answer.attrs["estimator"] == "importance"
+    assert [c["bits"] for c in answer.attrs["top_configurations"]] == \
+        [c["bits"] for c in stored["top_configurations"]]
+    # The terminal's text, as `combabc run` prints it: each bit's P ± its error and verdict, each
+    # real's mean ± its error.
+    lines = answer.attrs["text"].splitlines()
+    for _, row in answer.iterrows():
+        (line,) = [line for line in lines if line.startswith(f" {row['name']} ")]
+        if row["kind"] == "bit":
+            assert f"{row['P']:.2f}±{row['se']:.2f}" in line and line.endswith(row["verdict"])
+        else:
+            assert f"{row['mean']:.6g} ± {row['se']:.2g}, sd {row['sd']:.4g}" in line
+    # The quantiles are those of the answer wave's particles under their weights.
+    w = history.posterior_wave
+    for j, (_, row) in enumerate(reals.iterrows()):
+        order = np.argsort(w.reals[:, j], kind="stable")
+        cdf = np.cumsum(w.weight[order]) / np.sum(w.weight)
+        for q, column in ((0.05, "q05"), (0.5, "median"), (0.95, "q95")):
+            expected = w.reals[order, j][np.searchsorted(cdf, q - 1e-12)]
+            assert row[column] == pytest.approx(expected), (row["name"], column)
+        assert row["q05"] < row["median"] < row["q95"]
+    # The posterior is where the data are: valve fixed, pump free, gain near 1.
+    assert list(bits["verdict"]) == ["fixed", "free"]
+    assert reals.iloc[0]["q05"] < 1.0 < reals.iloc[0]["q95"]
+
+
+def test_answer_needs_the_history_file_or_the_runs_answer(tmp_path):
+    with pytest.raises(ValueError, match="output_directory"):
+        combabc.run(problem(), options(accepted_per_wave=50)).answer()
+    # A run that hands its answer over (_core.answer's dict) needs no file.
+    path = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path).path
+    data = combabc._core.load_history(path)
+    data.update(path=None, answer=combabc._core.answer(path))
+    handed = combabc.History(data).answer()
+    pd.testing.assert_frame_equal(handed, combabc.load_history(path).answer())
+    assert handed.attrs["text"] == data["answer"]["text"]

@@ -15,7 +15,9 @@ missing; refused unless empty), in each format of the run's [output] figures (de
                                 (paper Figures 3, 5, 8, 10); one panel per experiment when the
                                 run has named experiments ([[experiment]] tables), and below each
                                 a panel zoomed on the measured window when the simulated peak
-                                lies outside it
+                                lies outside it; a Problem's run (a simulator written in Python,
+                                no config): against the output index, curves and data as the
+                                simulator gives them
   wave_<k>_marginals.<fmt>      P(bit = 1) per bit: for the sensor, each clamp being fixed, one
                                 panel per edge (paper Figures 4, 6, 9, 11); otherwise one bar per
                                 bit, labelled with its name
@@ -210,6 +212,8 @@ def load_export(folder, history=None):
                      number(r["prior"].get("sd"))) for r in summary.get("reals", [])]
     scale = CM_PER_UNIT.get(run.get("position_unit") or "m", 1.0)
     run["cm_per_unit"] = scale
+    # The outputs' positions: a Problem's run without positions stores their index ("index").
+    run["position_unit"] = run.get("position_unit") or "m"
     _, rows = read_csv(os.path.join(folder, "positions.csv"))
     run["x_cm"] = np.array([float(r[1]) for r in rows if r], dtype=float) * scale
     _, rows = read_csv(os.path.join(folder, "measured.csv"))
@@ -260,9 +264,18 @@ def run_config(run):
         return {}
 
 
+def python_run(run):
+    """Whether the run is a Problem's, whose simulator is written in Python: its history has no
+    config (docs/python.md)."""
+    return not (run["config_text"] or "").strip()
+
+
 def normalised(run):
     """Whether the run's data (and so its curves) are normalised: [data] normalise, or with
-    [[experiment]] tables their data.normalise (the same in every experiment)."""
+    [[experiment]] tables their data.normalise (the same in every experiment). A Problem's run
+    has no config: its distance compares the simulator's outputs with the data as they are."""
+    if python_run(run):
+        return False
     config = run["config"]
     experiments = config.get("experiment")
     if isinstance(experiments, list) and experiments and isinstance(experiments[0], dict):
@@ -271,7 +284,10 @@ def normalised(run):
 
 
 def is_sensor(run):
-    """Whether the run's simulator is the built-in sensor (bits are clamps on two edges)."""
+    """Whether the run's simulator is the built-in sensor (bits are clamps on two edges); a
+    Problem's run (no config) never is."""
+    if python_run(run):
+        return False
     return run["config"].get("simulator", {}).get("kind", "sensor") == "sensor"
 
 

@@ -23,6 +23,8 @@ from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator  # noqa: E4
 from combabc_report_page import FIXED_RGB, FREE_RGB  # noqa: E402  the strip's colour scale
 
 DPI = 150
+# The position units the report draws in centimetres (combabc_report.CM_PER_UNIT).
+CM_UNITS = ("m", "cm", "mm", "um", "nm")
 # The simulated peak "lies outside the measured window" when the accepted curves rise above the
 # measured window's values by more than this factor: then the curve figures add a panel zoomed on
 # the window (the 70 cm example's normalised peak of 80-120 against data at most 1).
@@ -81,12 +83,16 @@ def curve_handles(n, run):
 
 
 def output_labels(run):
-    """Axis labels from the simulator's declaration: the sensor's |w| along the sensor, or an
-    external simulator's declared output name ([simulator.outputs] name) at its coordinates."""
+    """Axis labels from the simulator's declaration: the sensor's |w| along the sensor, an
+    external simulator's declared output name ([simulator.outputs] name) at its coordinates, or
+    a Problem's outputs at their positions, or by their index when it gave none."""
     if run["sensor"]:
         return "Position along sensor (cm)", "Normalised |w|"
     name = str(run["config"].get("simulator", {}).get("outputs", {}).get("name", "output"))
-    return "Position (cm)", ("Normalised " if run["normalised"] else "") + name
+    unit = run.get("position_unit", "m")
+    xlabel = ("Output index" if unit == "index" else
+              "Position (cm)" if unit in CM_UNITS else f"Position ({unit})")
+    return xlabel, ("Normalised " if run["normalised"] else "") + name
 
 
 def experiment_title(experiment, width=60):

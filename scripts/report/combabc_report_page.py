@@ -121,7 +121,7 @@ def answer_html(summary, sensor=True):
         # say nothing of a configuration's probability (the terminal says the same).
         parts.append("<h3>Most probable configurations</h3>\n<p>None stands out: the "
                      f"{particles} particles are {particles} distinct configurations; read the "
-                     "clamps above.</p>\n")
+                     f"{'clamps' if sensor else 'bits'} above.</p>\n")
     elif configurations:
         rows = []
         for rank, c in enumerate(configurations, 1):

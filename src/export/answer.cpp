@@ -136,6 +136,29 @@ std::vector<AnswerConfiguration> TopConfigurations(const WaveRecord& w,
 
 }  // namespace
 
+double AnswerQuantile(const std::vector<double>& values,
+                      const std::vector<double>& weights,
+                      double alpha) {
+  std::vector<std::size_t> order;
+  order.reserve(values.size());
+  double total = 0.0;
+  for (std::size_t i = 0; i < values.size() && i < weights.size(); ++i) {
+    order.push_back(i);
+    total += std::max(weights[i], 0.0);
+  }
+  if (!(total > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  // Ties by position, so that the quantile never depends on the sort.
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return values[a] < values[b] || (values[a] == values[b] && a < b);
+  });
+  double cumulative = 0.0;
+  for (std::size_t i : order) {
+    cumulative += std::max(weights[i], 0.0);
+    if (cumulative >= alpha * total) return values[i];
+  }
+  return values[order.back()];  // alpha * total a rounding error above the sum
+}
+
 Verdict VerdictOf(double p_one, double level) {
   if (p_one >= level) return Verdict::kFixed;
   if (p_one <= 1.0 - level) return Verdict::kFree;
@@ -146,6 +169,27 @@ std::string BitPosition::Text() const {
   return "edge " + std::to_string(edge) + ", " + Centimetres(start_m) + "-" + Centimetres(end_m) +
          " cm";
 }
+
+namespace {
+
+// Real r's 5 %, 50 % and 95 % quantiles among the wave's particles, under their stored weights
+// (the estimator's, as the means).
+void RealQuantiles(const WaveRecord& w, std::size_t r, AnswerReal& real) {
+  std::vector<double> values;
+  std::vector<double> weights;
+  values.reserve(w.particles.size());
+  weights.reserve(w.particles.size());
+  for (const Particle& p : w.particles) {
+    if (r >= p.theta.reals.size()) continue;
+    values.push_back(p.theta.reals[r]);
+    weights.push_back(p.weight);
+  }
+  real.q05 = AnswerQuantile(values, weights, 0.05);
+  real.median = AnswerQuantile(values, weights, 0.5);
+  real.q95 = AnswerQuantile(values, weights, 0.95);
+}
+
+}  // namespace
 
 Answer SummariseAnswer(const RunMetadata& m,
                        const RunHistory& h,
@@ -216,6 +260,7 @@ Answer SummariseAnswer(const RunMetadata& m,
         real.sd_se = errors.real_sds[r].se;
       }
     }
+    RealQuantiles(*w, r, real);
     a.reals.push_back(std::move(real));
   }
   return a;
@@ -262,7 +307,8 @@ std::string AnswerJson(const Answer& a, int indent) {
       out += std::string(r ? "," : "") + "\n" + in2 + "  {\"name\": " + JsonString(x.name) +
              ", \"mean\": " + JsonNumber(x.mean) + ", \"mc_se\": " + JsonNumber(x.mc_se) +
              ", \"sd\": " + JsonNumber(x.sd) + ", \"sd_se\": " + JsonNumber(x.sd_se) +
-             ", \"ess\": " + JsonNumber(x.ess) + "}";
+             ", \"ess\": " + JsonNumber(x.ess) + ", \"q05\": " + JsonNumber(x.q05) +
+             ", \"median\": " + JsonNumber(x.median) + ", \"q95\": " + JsonNumber(x.q95) + "}";
     }
     out += "\n" + in2 + "],\n";
   }

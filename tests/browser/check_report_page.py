@@ -5,11 +5,15 @@ exception, a resource that failed to load).
 
     check_report_page.py INDEX_HTML [--min-images N]
     check_report_page.py --self-test --combabc CLI --fake-history EXE --workdir DIR
+                         [--python-path DIR]
 
 The first form prints each problem on one line and exits 1 if there is any. The second is the
 CTest test (label browser): it writes a synthetic run's report with the real CLI, checks it, and
 then proves that the check can fail, on scratch copies with one image broken and with an error
-logged to the console. Exit 77 (CTest SKIP_RETURN_CODE) only when Chromium is not installed.
+logged to the console. With --python-path (where the combabc Python module is built) it also
+runs a small Problem (a simulator written in Python), reports it with the CLI and checks that
+the page speaks of its named bits, not of the sensor's clamps. Exit 77 (CTest
+SKIP_RETURN_CODE) only when Chromium is not installed.
 
 Chromium is driven through the DevTools protocol over --remote-debugging-pipe (fd 3: commands
 in, fd 4: replies out, messages separated by NUL), so nothing listens on a port; Python stdlib
@@ -137,6 +141,37 @@ STRIP_JS = """JSON.stringify({
   rows: Array.from(document.querySelectorAll("tr")).map(
     r => Array.from(r.cells).map(c => c.textContent))})"""
 
+# What the page says in words: its text as rendered, and the tables' headers.
+LABELS_JS = """JSON.stringify({
+  text: document.body.innerText,
+  headers: Array.from(document.querySelectorAll("th")).map(h => h.textContent)})"""
+
+# The Problem the Python-run check reports: two named bits and a real; the simulator gives 5
+# outputs (by index: no positions) around 40, far from a normalised profile.
+PROBLEM = """
+import sys
+import numpy as np
+import combabc
+bend = np.array([4.0, 0.0, 0.0, 0.0, 4.0])
+def simulate(bits, reals):
+    return 40.0 + reals[:, :1] * np.arange(5.0) + bits[:, :1] * bend + bits[:, 1:2] * bend[::-1]
+space = combabc.BinarySpace(dimension=2, names=["inlet valve", "pump B"])
+reals = [combabc.ContinuousParameter("gain", kind="uniform", low=0.0, high=2.0)]
+problem = combabc.Problem(space, simulate, simulate(np.array([[1, 0]]), np.array([[1.0]]))[0],
+                          reals=reals, batch=True)
+options = combabc.make_options(num_waves=2, accepted_per_wave=40, seed=3, threads=1,
+                               thresholds=[6.0, 3.0])
+combabc.run(problem, options, output_directory=sys.argv[1])
+"""
+
+
+def label_problems(index_html, drawn, must, must_not):
+    """The page's words: each of `must` in its text and none of `must_not`."""
+    text = drawn["text"] + " " + " ".join(drawn["headers"])
+    return ([f"{index_html}: no {w!r} on the page" for w in must if w not in text] +
+            [f"{index_html}: {w!r} on the page" for w in must_not if w in text])
+
+
 # The documented colour scale of the strip (docs/history.md, "The strip"): P(fixed) = 0 is
 # rgb(242, 242, 242), 1 is rgb(27, 120, 55), linear between them.
 FREE_RGB, FIXED_RGB = (242, 242, 242), (27, 120, 55)
@@ -150,10 +185,11 @@ def find_chromium():
     return None
 
 
-def check_page(index_html, chromium, min_images=1, strip=None):
+def check_page(index_html, chromium, min_images=1, strip=None, labels=None):
     """Returns the problems found on the page, one line each; with `strip` (a dict: the page must
     draw the sensor strip, coloured by the answer's P(fixed), with loads at strip["loads"], as
-    fractions of the length; False: it must not) those of the strip too."""
+    fractions of the length; False: it must not) those of the strip too; with `labels` (a pair:
+    words the page must show, words it must not) those of its words."""
     url = pathlib.Path(index_html).resolve().as_uri()
     with tempfile.TemporaryDirectory(prefix="combabc-chromium-") as profile:
         with Browser(chromium, profile) as browser:
@@ -170,10 +206,15 @@ def check_page(index_html, chromium, min_images=1, strip=None):
             drawn = json.loads(browser.send(
                 "Runtime.evaluate", {"expression": STRIP_JS, "returnByValue": True},
                 session=session)["result"]["value"])
+            words = json.loads(browser.send(
+                "Runtime.evaluate", {"expression": LABELS_JS, "returnByValue": True},
+                session=session)["result"]["value"])
             # A round trip after the load, so that messages logged during it have arrived.
             browser.send("Runtime.evaluate", {"expression": "1"}, session=session)
             events = list(browser.events)
     problems = [] if strip is None else strip_problems(index_html, drawn, strip)
+    if labels is not None:
+        problems += label_problems(index_html, words, *labels)
     if len(images) < min_images:
         problems.append(f"{index_html}: {len(images)} images, expected at least {min_images}")
     for image in images:
@@ -285,6 +326,14 @@ def self_test(args, chromium):
         return 1
     print("a Python simulator's report: no strip")
 
+    if args.python_path:
+        problems = python_run_problems(args, chromium, work)
+        for line in problems:
+            print(line)
+        if problems:
+            return 1
+        print("a Python Problem's report: its bits by name, P(bit = 1), no clamps or strip")
+
     # The check must be able to fail: one image broken, then an error logged by the page.
     broken = work / "broken_image"
     shutil.copytree(report, broken)
@@ -317,6 +366,23 @@ def self_test(args, chromium):
     return 0
 
 
+def python_run_problems(args, chromium, work):
+    """A Problem's run (PROBLEM), reported by the CLI and read in the browser: its bits by their
+    names with P(bit = 1), no word of the sensor's. (The figures' words, which a PNG does not show
+    the browser, are tests/report/report_script_test.py's, on such a run's export drawn as SVG.)"""
+    run = work / "python_problem"
+    env = dict(os.environ, PYTHONPATH=args.python_path, PYTHONDONTWRITEBYTECODE="1")
+    subprocess.run([sys.executable, "-c", PROBLEM, str(run)], check=True, env=env)
+    report = run / "report"
+    subprocess.run([args.combabc, "report", str(run / "history.sqlite"), "-o", str(report)],
+                   check=True)
+    figures = len(list(report.glob("*.png")))
+    must = ["P(bit = 1) ± SE", "inlet valve", "pump B", "Verdict — bit = 1:", "gain"]
+    must_not = ["clamp", "Clamp", "P(fixed)"]
+    return check_page(report / "index.html", chromium, min_images=figures, strip=False,
+                      labels=(must, must_not))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("index_html", nargs="?")
@@ -325,6 +391,8 @@ def main():
     parser.add_argument("--combabc")
     parser.add_argument("--fake-history")
     parser.add_argument("--workdir")
+    parser.add_argument("--python-path",
+                        help="where the combabc Python module is built (adds a Problem's run)")
     args = parser.parse_args()
     chromium = find_chromium()
     if not chromium:

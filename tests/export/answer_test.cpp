@@ -296,6 +296,28 @@ TEST(Answer, RealsGetDeltaMethodErrorsAndEveryQuantityItsEss) {
   for (const char* expected : {"\"sd_se\": ", "\"ess_bits\": ", "\"ess_reals\": ["}) {
     EXPECT_NE(json.find(expected), std::string::npos) << expected << " in\n" << json;
   }
+  // The quantiles: of the same particles under the same weights (AnswerQuantile, checked below).
+  EXPECT_EQ(a.reals[1].q05, AnswerQuantile(values, weights, 0.05));
+  EXPECT_EQ(a.reals[1].median, AnswerQuantile(values, weights, 0.5));
+  EXPECT_EQ(a.reals[1].q95, AnswerQuantile(values, weights, 0.95));
+  EXPECT_LT(a.reals[1].q05, a.reals[1].median);
+  EXPECT_LT(a.reals[1].median, a.reals[1].q95);
+  EXPECT_NE(json.find("\"q05\": "), std::string::npos) << json;
+  EXPECT_NE(json.find("\"median\": "), std::string::npos) << json;
+  EXPECT_NE(json.find("\"q95\": "), std::string::npos) << json;
+}
+
+// The weighted quantile by hand: values 3, 1, 2 weighing 1, 1, 2 sort to 1 (1), 2 (2), 3 (1) of
+// 4; a negative weight counts as 0, and without a positive weight there is no quantile.
+TEST(Answer, QuantilesInvertTheWeightedDistribution) {
+  const std::vector<double> values = {3.0, 1.0, 2.0};
+  EXPECT_EQ(AnswerQuantile(values, {1.0, 1.0, 2.0}, 0.25), 1.0);  // 1 of 4 at or below 1
+  EXPECT_EQ(AnswerQuantile(values, {1.0, 1.0, 2.0}, 0.26), 2.0);
+  EXPECT_EQ(AnswerQuantile(values, {1.0, 1.0, 2.0}, 0.75), 2.0);  // 3 of 4 at or below 2
+  EXPECT_EQ(AnswerQuantile(values, {1.0, 1.0, 2.0}, 0.95), 3.0);
+  EXPECT_EQ(AnswerQuantile(values, {1.0, -5.0, 2.0}, 0.05), 2.0);  // 1 carries nothing
+  EXPECT_TRUE(std::isnan(AnswerQuantile(values, {0.0, -1.0, 0.0}, 0.5)));
+  EXPECT_TRUE(std::isnan(AnswerQuantile({}, {}, 0.5)));
 }
 
 // Signed (multi-fidelity) weights: every standard error is the delta-method one of the

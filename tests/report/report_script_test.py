@@ -30,6 +30,7 @@ except ImportError:
 NAMES = ["inlet valve", "pump B", "sensor <3>"]
 X = np.linspace(0.0, 90.0, 31)            # positions, cm
 WINDOW = (X >= 40.0) & (X <= 60.0)         # what was measured
+PYTHON_SCALE = 7.5                          # a Problem's data and outputs, as the simulator gives
 
 
 def curve(bits, peak):
@@ -38,8 +39,11 @@ def curve(bits, peak):
         np.exp(-((X - 50.0) / 8.0) ** 2)
 
 
-def write_export(folder, *, peak, bit_columns="names", checks=None, simulator="command"):
-    """A 3-bit run of two complete waves of 12 particles each, with curves."""
+def write_export(folder, *, peak, bit_columns="names", checks=None, simulator="command",
+                 python=False):
+    """A 3-bit run of two complete waves of 12 particles each, with curves. python: as a
+    Problem's run (a simulator written in Python) stores it: no config, outputs at their index
+    (position unit "index"), the data as observed (7.5 times the true curve: not normalised)."""
     if os.path.exists(folder):
         shutil.rmtree(folder)
     os.makedirs(folder)
@@ -62,27 +66,34 @@ def write_export(folder, *, peak, bit_columns="names", checks=None, simulator="c
         w = csv.writer(f)
         w.writerow(["wave", "index", "bits", *columns, "log_weight", "weight", "d_least_squares"])
         w.writerows(particles)
+    truth = curve(np.array([1, 0, 0]), peak)
+    if python:  # the data are the true curve as the simulator gives it: particle 0's of wave 2
+        curves[12][2:] = truth
+        for row in curves:
+            row[2:] = PYTHON_SCALE * np.asarray(row[2:])
     with open(os.path.join(folder, "curves.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["wave", "index", *[f"y_{i}" for i in range(X.size)]])
         w.writerows(curves)
+    xs, unit = (np.arange(X.size, dtype=float), "index") if python else (X, "cm")
     with open(os.path.join(folder, "positions.csv"), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["column", "position_cm"])
-        w.writerows([f"y_{i}", x] for i, x in enumerate(X))
-    truth = curve(np.array([1, 0, 0]), peak)
+        w.writerow(["column", f"position_{unit}"])
+        w.writerows([f"y_{i}", x] for i, x in enumerate(xs))
+    scale = PYTHON_SCALE if python else 1.0 / truth[WINDOW].max()
     with open(os.path.join(folder, "measured.csv"), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["position_cm", "value"])
-        w.writerows([x, y / truth[WINDOW].max()] for x, y in zip(X[WINDOW], truth[WINDOW]))
+        w.writerow([f"position_{unit}", "value"])
+        w.writerows([x, y * scale] for x, y in zip(xs[WINDOW], truth[WINDOW]))
     summary = {
         "format": "combabc-export", "schema_version": 6,
         "run": {"status": "finished", "termination": "max_waves", "message": "", "config_path": "",
                 "combabc_version": "test", "git_hash": "", "seed": 1, "threads": 1,
                 "start_time": "", "end_time": "", "resume_count": 0, "estimator": "paper",
-                "dimension": 3, "position_unit": "cm", "waves_completed": 2, "simulations": 80,
+                "dimension": 3, "position_unit": unit, "waves_completed": 2, "simulations": 80,
                 "simulations_discarded": 0, "failures": 0, "wall_seconds": 0.2},
-        "config_text": f'[simulator]\nkind = "{simulator}"\n[output]\nfigures = ["svg"]\n',
+        "config_text": "" if python else
+        f'[simulator]\nkind = "{simulator}"\n[output]\nfigures = ["svg"]\n',
         "bit_names": NAMES, "bit_prior_one": [0.5, 0.5, 0.5],
         "distance_components": [{"name": "least squares", "kind": "threshold", "required": 1}],
         "reals": [], "stop_limits": {},
@@ -92,12 +103,24 @@ def write_export(folder, *, peak, bit_columns="names", checks=None, simulator="c
         "waves": waves}
     if checks is not None:
         summary["checks"] = checks
+    if python:  # the answer of its last wave, as the export writes it
+        summary["answer"] = {
+            "wave": 2, "complete": True, "estimator": "paper", "verdict_level": 0.95,
+            "bits": [{"number": k + 1, "name": name, "position": None, "edge": None,
+                      "start_m": None, "end_m": None, "p_one": p, "mc_se": 0.05,
+                      "verdict": verdict}
+                     for k, (name, p, verdict) in enumerate(zip(
+                         NAMES, waves[1]["marginals_paper"], ("fixed", "not determined",
+                                                              "free")))],
+            "top_configurations": [], "exact": False, "particles": 12, "distinct": 4,
+            "per_wave": []}
     with open(os.path.join(folder, "summary.json"), "w") as f:
         json.dump(summary, f)
 
 
-def report(export, out):
-    result = subprocess.run([sys.executable, SCRIPT, "--out", out, export],
+def report(export, out, formats=()):
+    result = subprocess.run([sys.executable, SCRIPT, "--out", out, export,
+                             *(["--formats", ",".join(formats)] if formats else [])],
                             capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
     return result
 
@@ -121,10 +144,10 @@ CHECKS = {"before": [], "after": [], "fit": [{"experiment": "", "best_rms": 0.02
                           "best": [0.2, 1.0, 0.2], "residuals": [0.0, 0.0, 0.0]}]}
 
 
-def draw(name, **export_options):
+def draw(name, formats=(), **export_options):
     export, out = os.path.join(WORKDIR, name, "export"), os.path.join(WORKDIR, name, "out")
     write_export(export, **export_options)
-    result = report(export, out)
+    result = report(export, out, formats)
     if result.returncode != 0:
         raise AssertionError(f"{name}: exit {result.returncode}: {result.stderr}")
     return out
@@ -183,6 +206,48 @@ class ReportScript(unittest.TestCase):
         self.assertEqual(len(result.stderr.strip().splitlines()), 1, result.stderr)
         result = report(os.path.join(WORKDIR, "no-such-export"), os.path.join(WORKDIR, "x"))
         self.assertEqual(result.returncode, 66, result.stderr)
+
+
+class ProblemRun(unittest.TestCase):
+    """A Problem's run (a simulator written in Python; no config): bits, outputs and data in the
+    problem's terms, not the sensor's."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.out = draw("python", formats=("svg",), peak=0.0, python=True)
+
+    def has(self, name, *words, absent=()):
+        """Whether the drawn file holds every one of `words` and none of `absent` (said short:
+        an SVG is long)."""
+        text = read(os.path.join(self.out, name))
+        self.assertEqual([w for w in words if w not in text], [], f"{name} lacks them")
+        self.assertEqual([w for w in absent if w in text], [], f"{name} has them")
+
+    def test_bits_are_bits_with_their_names(self):
+        sensor_words = ("clamp", "Clamp", "Edge 1", "P(fixed)")
+        for name in ("wave_2_marginals.svg", "overview.svg", "answer.svg"):
+            self.has(name, "pump B", "P(bit = 1)", absent=sensor_words)
+        self.has("wave_2_marginals.svg", "P(bit = 1) per bit")
+        self.has("index.html", "P(bit = 1) ± SE", "bit = 1: inlet valve",
+                 absent=sensor_words + ('class="strip"',))
+
+    def test_outputs_against_their_index_unscaled(self):
+        self.has("wave_2_curves.svg", "Output index",
+                 absent=("Position along sensor", "Normalised", "(cm)"))
+
+    def test_the_data_and_the_curves_share_one_scale(self):
+        # A perfect fit (wave 2's particle 0 is the data) is drawn on the data: the curves are not
+        # rescaled to peak 1 while the data keep the simulator's scale.
+        sys.path.insert(0, SCRIPTS)
+        try:
+            import combabc_report as script
+        finally:
+            sys.path.pop(0)
+        run, waves = script.load_export(os.path.join(WORKDIR, "python", "export"))
+        script.scale_like_the_metric(run, waves)
+        at_data = np.interp(run["measured_x_cm"], run["x_cm"], waves[1].curves[0])
+        np.testing.assert_allclose(at_data, run["measured_y"], rtol=1e-12)
+        self.assertGreater(run["measured_y"].max(), 2.0)  # not a normalised profile
 
 
 if __name__ == "__main__":

@@ -70,6 +70,11 @@ struct AnswerReal {
   double sd = 0.0;
   double sd_se = 0.0;
   double ess = 0.0;
+  // The 5 %, 50 % and 95 % quantiles of its posterior: the answer wave's particles under their
+  // weights, negative (multi-fidelity) ones as 0 (AnswerQuantile); NaN when no weight is positive.
+  double q05 = 0.0;
+  double median = 0.0;
+  double q95 = 0.0;
 };
 
 struct WaveEffort {
@@ -143,6 +148,14 @@ struct Answer {
 Answer SummariseAnswer(const RunMetadata& metadata,
                        const RunHistory& history,
                        const std::vector<std::optional<BitPosition>>& positions = {});
+
+// The weighted `alpha`-quantile (the inverse of the weighted empirical CDF, no interpolation: the
+// smallest value whose values at or below it carry at least a fraction alpha of the weight, ties
+// by position) with negative weights counted as 0; NaN when no weight is positive. The answer's
+// quantiles of a continuous parameter.
+double AnswerQuantile(const std::vector<double>& values,
+                      const std::vector<double>& weights,
+                      double alpha);
 
 // The answer as summary.json's "answer" object (docs/history.md), indented by `indent` spaces
 // after its first line; "reals" only for a run with continuous parameters.
