@@ -9,6 +9,7 @@
 
 #include "combabc/services/run.hpp"
 #include "interrupt.hpp"
+#include "model_choice_command.hpp"
 #include "subcommands.hpp"
 
 namespace combabc::cli {
@@ -117,6 +118,9 @@ int RunCommand(RunArgs& args, const Session& session) {
   request.on_report_progress = ReportProgressLine(session, args.quiet);
   ChecksPrinter checks;
   request.on_checks_before = checks.Callback();
+  if (IsModelChoiceConfig(request.config_path)) {
+    return RunModelChoiceCommand(request, args.quiet, session);
+  }
   const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
   return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
     const auto outcome = services::RunCalibration(request, observer);

@@ -237,7 +237,7 @@ std::vector<std::pair<std::string, std::string>> ApplyStopLimits(
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   OutputFolders folders;  // outlives the problem: its simulator may work inside them
   Problem p;
-  LoadProblem(request.config_path, request.threads, p);
+  LoadProblem(request.config_path, request.threads, p, request.config_text);
   MakeExecutor(p, request.executor);
 
   std::string directory = request.output_directory.empty()
