@@ -30,16 +30,19 @@ bool ValidName(const std::string& name) {
 // source lines (a copy would lose them), and returns the key of a value that would replace a table
 // or be replaced by one (refused by the caller), or "".
 std::string MergeInto(toml::table& base, toml::table& over, const std::string& prefix) {
-  for (auto&& [key, node] : over) {
-    const std::string name = prefix + "." + std::string(key.str());
-    toml::node* existing = base.get(key.str());
+  for (auto it = over.begin(); it != over.end(); ++it) {
+    const std::string key(it->first.str());
+    toml::node& node = it->second;
+    std::string name = prefix;
+    name.append(".").append(key);
+    toml::node* existing = base.get(key);
     if (existing != nullptr && existing->is_table() && node.is_table()) {
-      const std::string bad = MergeInto(*existing->as_table(), *node.as_table(), name);
+      std::string bad = MergeInto(*existing->as_table(), *node.as_table(), name);
       if (!bad.empty()) return bad;
       continue;
     }
     if (existing != nullptr && existing->is_table() != node.is_table()) return name;
-    node.visit([&](auto&& concrete) { base.insert_or_assign(key.str(), std::move(concrete)); });
+    node.visit([&base, &key](auto& concrete) { base.insert_or_assign(key, std::move(concrete)); });
   }
   return "";
 }
@@ -146,8 +149,7 @@ void BuildCandidateConfigs(CalibrationConfig* c) {
   std::vector<CandidateModel>& models = c->model_choice->models;
   std::vector<CalibrationConfig> configs;
   for (std::size_t k = 0; k < models.size(); ++k) {
-    const std::string where =
-        "model_choice.model[" + std::to_string(k) + "] (" + models[k].name + ")";
+    std::string where = "model_choice.model[" + std::to_string(k) + "] (" + models[k].name + ")";
     // A fresh parse per model: the nodes moved below leave it.
     toml::table root = toml::parse(c->text, c->path);
     toml::table& entry = *root["model_choice"]["model"].as_array()->get(k)->as_table();
@@ -159,7 +161,7 @@ void BuildCandidateConfigs(CalibrationConfig* c) {
                     "is a table in one of [model] and " + where + " and a value in the other",
                     c->path,
                     models[k].line,
-                    where + "." + bad);
+                    where.append(".").append(bad));
       }
     }
     if (toml::node* sim = entry.get("simulator")) {

@@ -61,7 +61,7 @@ std::string Output(const std::string& requested, const CalibrationConfig& c) {
 std::string WriteModelChoice(const std::string& directory,
                              bool overwrite,
                              const ModelChoiceOutcome& o) {
-  const std::string folder = (fs::path(directory) / "model_choice").string();
+  std::string folder = (fs::path(directory) / "model_choice").string();
   OutputDirectory out(folder, overwrite);
   const ModelEvidence& reference = o.evidence[o.reference];
   std::ostream& json = out.Add("summary.json");

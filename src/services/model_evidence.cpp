@@ -164,6 +164,7 @@ WaveEvidence MoveWave(std::span<const WaveRecord> waves,
     weights.push_back(std::max(p.weight, 0.0));
   }
   if (top == kMinusInf) return e;
+  ratios.reserve(log_ratio.size());
   for (double lr : log_ratio) ratios.push_back(lr == kMinusInf ? 0.0 : std::exp(lr - top));
   const std::vector<std::size_t> clusters = AncestorClusters(previous, false);
   const WeightedMoment m = WeightedMean(weights, ratios, clusters);
