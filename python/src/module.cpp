@@ -35,6 +35,7 @@
 #include "python_call.hpp"
 #include "python_distance.hpp"
 #include "python_history.hpp"
+#include "python_model_choice.hpp"
 #include "python_prior.hpp"
 #include "python_simulator.hpp"
 
@@ -1097,6 +1098,7 @@ PYBIND11_MODULE(_core, m) {
 
   BindTypes(m);
   RegisterPriors(m);
+  RegisterModelChoice(m);
   m.def("load_history", &LoadHistory, py::arg("path"));
   m.def("run_config",
         &RunConfig,
