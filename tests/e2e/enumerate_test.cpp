@@ -198,7 +198,7 @@ name = "pinned"
 prior = 0.6
 model.clamps.fixed_support = "simply_supported"
 )";
-  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 300\nseed = 5\n", models);
+  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 200\nseed = 5\n", models);
   config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [4.0, 3.0, 2.4]\n");
   std::ofstream(dir / "run.toml") << config;
   auto r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
@@ -229,6 +229,28 @@ model.clamps.fixed_support = "simply_supported"
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("wave 1:"), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(dir.path() / "out/model_choice/models.csv"), run);
+
+  // Any thread count gives the same models; a model stopped on its budget is resumed alone, and
+  // the model choice run again then equals the uninterrupted one.
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-q", "-j", "2", "-o", dir / "j2"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "j2/model_choice/models.csv"), run);
+  std::string budget = config;
+  budget.replace(budget.find("seed = 5"), 8, "seed = 5\nmax_simulations = 500");
+  std::ofstream(dir / "budget.toml") << budget;
+  r = RunCli({"run", dir / "budget.toml", "--no-report", "-q", "-j", "1", "-o", dir / "b"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string model : {"clamped", "pinned"}) {
+    const std::string history = dir / ("b/models/" + model + "/history.sqlite");
+    r = RunCli({"resume", history, "--max-simulations", "0", "--no-report", "-q"}, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  r = RunCli({"run", dir / "budget.toml", "--no-report", "-q", "-j", "1", "-o", dir / "b"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "b/model_choice/models.csv"), run);
 
   // Bad input: priors that do not sum to one.
   config.replace(config.find("prior = 0.6"), 11, "prior = 0.5");
