@@ -57,6 +57,19 @@ std::string Output(const std::string& requested, const CalibrationConfig& c) {
   return requested.empty() ? ResolvePath(c.directory, c.output.directory) : requested;
 }
 
+// <directory>/models/, where each model's run gets its folder.
+void CreateModelsFolder(const std::string& directory) {
+  const fs::path models = fs::path(directory) / "models";
+  std::error_code ec;
+  fs::create_directories(models, ec);
+  if (ec || !fs::is_directory(models, ec)) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot create the models' folder: " +
+                    (ec ? ec.message() : std::string("a file of that name is in the way")),
+                models.string());
+  }
+}
+
 // summary.json and models.csv in <directory>/model_choice/.
 std::string WriteModelChoice(const std::string& directory,
                              bool overwrite,
@@ -163,7 +176,7 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
   const CalibrationConfig c = LoadModelChoice(request.config_path);
   const std::vector<double> final_thresholds = CommonFinalThresholds(c);
   const std::string directory = Output(request.output_directory, c);
-  fs::create_directories(fs::path(directory) / "models");
+  CreateModelsFolder(directory);
   ModelChoiceOutcome o;
   for (const CandidateModel& model : c.model_choice->models) {
     if (before_model) before_model(model.name);
@@ -194,7 +207,7 @@ ModelChoiceOutcome EnumerateModelChoice(
   const std::string directory = request.output_directory.empty()
                                     ? (fs::path(Output("", c)) / kEnumerationFolder).string()
                                     : request.output_directory;
-  fs::create_directories(fs::path(directory) / "models");
+  CreateModelsFolder(directory);
   ModelChoiceOutcome o;
   o.exact = true;
   for (const CandidateModel& model : c.model_choice->models) {

@@ -252,6 +252,11 @@ model.clamps.fixed_support = "simply_supported"
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadFile(dir.path() / "b/model_choice/models.csv"), run);
 
+  // An output folder that cannot be made: exit 73, not an internal error.
+  std::ofstream(dir / "a-file") << "not a folder\n";
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-q", "-o", dir / "a-file"}, dir.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+
   // Bad input: priors that do not sum to one.
   config.replace(config.find("prior = 0.6"), 11, "prior = 0.5");
   std::ofstream(dir / "bad.toml") << config;
