@@ -5,6 +5,7 @@
 
 #include "combabc/services/enumerate.hpp"
 #include "interrupt.hpp"
+#include "model_choice_command.hpp"
 #include "subcommands.hpp"
 
 namespace combabc::cli {
@@ -26,6 +27,9 @@ int EnumerateCommand(EnumerateArgs& args, const Session& session) {
   }
   request.report = !args.no_report;
   request.on_report_progress = ReportProgressLine(session, args.quiet);
+  if (IsModelChoiceConfig(request.config_path)) {
+    return EnumerateModelChoiceCommand(request, args.quiet, session);
+  }
   const std::vector<bool> temperatures = TemperatureSlotsOfConfig(request.config_path);
   return Guarded(session, args.quiet, temperatures, [&](SmcObserver* observer) {
     const auto outcome = services::RunEnumeration(request, observer);

@@ -9,6 +9,7 @@
 
 #include "combabc/services/run.hpp"
 #include "interrupt.hpp"
+#include "model_choice_command.hpp"
 #include "subcommands.hpp"
 
 namespace combabc::cli {
@@ -136,6 +137,13 @@ int RunCommand(RunArgs& args, const Session& session) {
   args.request.on_history_path = [&session](const std::string& path) {
     NoteHistory(session, path);
   };
+  if (IsModelChoiceConfig(args.request.config_path)) {
+    services::RunRequest& request = args.request;
+    request.executor = session.executor();
+    request.report = !args.no_report;
+    request.on_report_progress = ReportProgressLine(session, args.quiet);
+    return RunModelChoiceCommand(request, args.quiet, session);
+  }
   const std::vector<bool> temperatures = TemperatureSlotsOfConfig(args.request.config_path);
   return Calibrate(session, args, temperatures, &services::RunCalibration);
 }

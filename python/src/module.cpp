@@ -9,6 +9,7 @@
 //   bind_jobs.cpp                       config runs, resume, enumerate, export, the simulator
 //   bind_problem_runs.cpp               runs of problems written in Python
 //   answer_binding.cpp                  the answer (History.answer())
+//   python_model_choice.cpp             model choice (docs/algorithm.md, "Model choice")
 #include <pybind11/pybind11.h>
 
 #include <exception>
@@ -19,6 +20,7 @@
 #include "combabc/core/error.hpp"
 #include "combabc/params/binary_space.hpp"
 #include "combabc/samplers/simulator.hpp"
+#include "python_model_choice.hpp"
 #include "python_prior.hpp"
 
 namespace py = pybind11;
@@ -52,6 +54,7 @@ PYBIND11_MODULE(_core, m) {
   BindTypes(m);
   BindAnswer(m);  // answer(path): History.answer()
   RegisterPriors(m);
+  RegisterModelChoice(m);
   BindJobs(m);
   BindProblemRuns(m);
 }

@@ -13,6 +13,7 @@
 #include "combabc/params/binary_space.hpp"
 #include "combabc/samplers/multi_fidelity.hpp"
 #include "combabc/samplers/run_history.hpp"
+#include "config_model_choice.hpp"
 #include "config_reader.hpp"
 
 namespace combabc {
@@ -244,11 +245,6 @@ void CheckRunMemory(const CalibrationConfig& c, const Sources& sources) {
 }  // namespace
 
 CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
-  CalibrationConfig c;
-  c.path = path;
-  c.directory = std::filesystem::path(path).parent_path().string();
-  c.text = std::string(text);
-
   toml::table table;
   try {
     table = toml::parse(text, path);
@@ -258,6 +254,18 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
                 path,
                 static_cast<int>(e.source().begin.line));
   }
+  CalibrationConfig c = config_internal::ParseConfigTable(table, text, path);
+  config_internal::BuildCandidateConfigs(&c);
+  return c;
+}
+
+CalibrationConfig config_internal::ParseConfigTable(const toml::table& table,
+                                                    std::string_view text,
+                                                    const std::string& path) {
+  CalibrationConfig c;
+  c.path = path;
+  c.directory = std::filesystem::path(path).parent_path().string();
+  c.text = std::string(text);
   TableReader root(table, "", c.path);
   Sources sources;
   sources.sampler = {"sampler", 1};
@@ -309,6 +317,7 @@ CalibrationConfig ParseConfig(std::string_view text, const std::string& path) {
   }
   ParseOutput(root, &c);
   config_internal::ParseDesignSection(root, &c, model_sources);
+  config_internal::ParseModelChoice(root, &c);
   root.Finish();
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 

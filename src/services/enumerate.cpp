@@ -200,7 +200,7 @@ void WriteEnumeration(const EnumerateRequest& request,
 EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* progress) {
   OutputFolders folders;  // kept once the enumeration's results are written
   Problem p;
-  LoadProblem(request.config_path, request.threads, p);
+  LoadProblem(request.config_path, request.threads, p, request.config_text);
   CheckEnumerable(p.config);
   // The exact posterior is the expensive simulator's: a cheap one ([simulator.low_fidelity]) is
   // neither built nor used.
@@ -259,6 +259,10 @@ EnumerateOutcome RunEnumeration(const EnumerateRequest& request, SmcObserver* pr
   outcome.enumerated = result.enumerated;
   outcome.accepted = result.accepted;
   outcome.evidence = result.evidence;
+  // The heaviest configuration's log mass over its share: exact where the evidence underflows.
+  if (!result.top.empty() && result.top.front().weight > 0.0) {
+    outcome.log_evidence = result.top.front().log_weight - std::log(result.top.front().weight);
+  }
   outcome.wall_seconds = result.wall_seconds;
   outcome.interrupted = result.interrupted;
   if (result.interrupted) return outcome;

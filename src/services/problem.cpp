@@ -49,8 +49,18 @@ std::string ExperimentDescription(const CalibrationConfig& c, const ExperimentCo
 
 }  // namespace
 
-void LoadProblem(const std::string& config_path, int threads, Problem& p) {
-  p.config = LoadConfig(config_path);
+void LoadProblem(const std::string& config_path,
+                 int threads,
+                 Problem& p,
+                 const std::string& config_text) {
+  p.config = config_text.empty() ? LoadConfig(config_path) : ParseConfig(config_text, config_path);
+  // A model choice is several runs (services/model_choice_run.hpp), never the file's own [model].
+  if (p.config.model_choice) {
+    throw Error(ErrorKind::kUsage,
+                "has [model_choice]: run its models with combabc run / enumerate, or "
+                "combabc._core.model_choice from Python",
+                config_path);
+  }
   if (threads >= 0) p.config.smc.threads = threads;
   p.data = ProfilesOf(LoadExperimentData(p.config));
   p.distance = MakeDistance(p.config, p.data);

@@ -45,8 +45,12 @@ struct Problem {
 
 // A new run's problem from its config file: the config (threads >= 0 overrides the config's), the
 // measured data read from disk and the metric; BuildModelIn follows once the output folder
-// exists. (A resume takes the data stored in its history.)
-void LoadProblem(const std::string& config_path, int threads, Problem& p);
+// exists. (A resume takes the data stored in its history.) `config_text`, when not empty, is read
+// in place of the file (a model choice's candidate model).
+void LoadProblem(const std::string& config_path,
+                 int threads,
+                 Problem& p,
+                 const std::string& config_text = {});
 
 // The executor for the problem's threads (after LoadProblem or the resume's config).
 void MakeExecutor(Problem& p, const ExecutorFactory& factory);

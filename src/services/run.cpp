@@ -103,7 +103,7 @@ Fingerprint RebuildAsStored(Problem& p, const Fingerprint& stored, const std::st
 RunOutcome RunCalibration(const RunRequest& request, SmcObserver* progress) {
   OutputFolders folders;  // outlives the problem: its simulator may work inside them
   Problem p;
-  LoadProblem(request.config_path, request.threads, p);
+  LoadProblem(request.config_path, request.threads, p, request.config_text);
   MakeExecutor(p, request.executor);
 
   std::string directory = request.output_directory.empty()

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "cli_runner.hpp"
+#include "tiny_sensor.hpp"
 
 namespace combabc::testing {
 namespace {
@@ -167,6 +168,103 @@ TEST(Enumerate, TooManyFreeBitsAreRefusedAtTheKeyThatSetsThem) {
   EXPECT_NE(r.err.find("at most 2^24: tie bits ([sampler] tie"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("SmcProblem"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+// Model choice through the CLI (docs/config.md, "Model choice"): two tiny sensors, clamped or
+// simply supported clamps, 2^6 configurations each. `combabc run` writes each model's history
+// and the model probabilities, which agree with `combabc enumerate`'s exact ones within 4
+// Monte-Carlo errors; a second `run` reads the finished models instead of running them again.
+double Column(const std::string& csv, const std::string& model, int column) {
+  const auto at = csv.find("\n" + model + ",");
+  EXPECT_NE(at, std::string::npos) << csv;
+  std::string row = csv.substr(at + 1, csv.find('\n', at + 1) - at - 1);
+  for (int c = 0; c < column; ++c) row = row.substr(row.find(',') + 1);
+  return std::atof(row.c_str());
+}
+
+TEST(Enumerate, ModelChoiceRunAgreesWithTheExactModelProbabilities) {
+  TempFolder dir("model-choice");
+  WriteTinySensorData(dir.path());
+  const std::string models = R"(
+[output]
+directory = "out"
+
+[model_choice]
+[[model_choice.model]]
+name = "clamped"
+prior = 0.4
+[[model_choice.model]]
+name = "pinned"
+prior = 0.6
+model.clamps.fixed_support = "simply_supported"
+)";
+  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 200\nseed = 5\n", models);
+  config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [4.0, 3.0, 2.4]\n");
+  std::ofstream(dir / "run.toml") << config;
+  auto r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The model probabilities first, then each model's answer.
+  const auto first = r.out.find("Model probabilities");
+  ASSERT_NE(first, std::string::npos) << r.out;
+  EXPECT_LT(first, r.out.find("answer:")) << r.out;
+  EXPECT_NE(r.out.find("== model \"pinned\" =="), std::string::npos) << r.out;
+  const std::string run = ReadFile(dir.path() / "out/model_choice/models.csv");
+  ASSERT_TRUE(fs::exists(dir.path() / "out/models/pinned/history.sqlite"));
+  ASSERT_TRUE(fs::exists(dir.path() / "out/model_choice/summary.json"));
+
+  r = RunCli({"enumerate", dir / "run.toml", "--no-report", "-q"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string exact = ReadFile(dir.path() / "out/enumeration/model_choice/models.csv");
+  for (const std::string model : {"clamped", "pinned"}) {
+    const double p = Column(run, model, 2);
+    const double se = Column(run, model, 3);
+    const double truth = Column(exact, model, 2);
+    EXPECT_GT(truth, 0.05) << exact;  // both models fit some configurations
+    EXPECT_GT(se, 0.0) << run;
+    EXPECT_NEAR(p, truth, 4.0 * se) << model << "\n" << run << exact;
+  }
+
+  // Again: the finished models are read, not run (same numbers, no progress lines).
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("wave 1:"), std::string::npos) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "out/model_choice/models.csv"), run);
+
+  // Any thread count gives the same models; a model stopped on its budget is resumed alone, and
+  // the model choice run again then equals the uninterrupted one.
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-q", "-j", "2", "-o", dir / "j2"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "j2/model_choice/models.csv"), run);
+  std::string budget = config;
+  budget.replace(budget.find("seed = 5"), 8, "seed = 5\nmax_simulations = 500");
+  std::ofstream(dir / "budget.toml") << budget;
+  r = RunCli({"run", dir / "budget.toml", "--no-report", "-q", "-j", "1", "-o", dir / "b"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string model : {"clamped", "pinned"}) {
+    const std::string history = dir / ("b/models/" + model + "/history.sqlite");
+    r = RunCli({"resume", history, "--max-simulations", "0", "--no-report", "-q"}, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  r = RunCli({"run", dir / "budget.toml", "--no-report", "-q", "-j", "1", "-o", dir / "b"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "b/model_choice/models.csv"), run);
+
+  // An output folder that cannot be made: exit 73, not an internal error.
+  std::ofstream(dir / "a-file") << "not a folder\n";
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-q", "-o", dir / "a-file"}, dir.path());
+  EXPECT_EQ(r.exit_code, kCantCreate) << r.err;
+
+  // Bad input: priors that do not sum to one.
+  config.replace(config.find("prior = 0.6"), 11, "prior = 0.5");
+  std::ofstream(dir / "bad.toml") << config;
+  r = RunCli({"run", dir / "bad.toml", "--no-report"}, dir.path());
+  EXPECT_EQ(r.exit_code, kConfig) << r.err;
+  EXPECT_NE(r.err.find("model_choice.model[1].prior: the models' priors sum to 0.9"),
+            std::string::npos)
+      << r.err;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "combabc/config/model_choice_config.hpp"
 #include "combabc/data/measured_data.hpp"
 #include "combabc/metrics/metric_component.hpp"
 #include "combabc/params/binary_space.hpp"
@@ -148,6 +149,8 @@ struct CalibrationConfig {
   std::vector<JointPriorGroup> joint_priors;
   OutputConfig output;
   std::optional<DesignConfig> design;  // [design], for `combabc design` only
+  // [model_choice]: the candidate models of an ABC model choice (docs/config.md, "Model choice").
+  std::optional<ModelChoiceConfig> model_choice;
 };
 
 // The sensor models a run builds (kind = "sensor"): one per distinct frequency among the

@@ -2,6 +2,7 @@
 // `combabc enumerate`: the exact ABC posterior of a config's problem by simulating every
 // configuration of its free bits.
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,9 @@ namespace combabc::services {
 
 struct EnumerateRequest {
   std::string config_path;
+  // When not empty, the config's text, read in place of the file at config_path (a model choice's
+  // candidate model), as RunRequest's.
+  std::string config_text;
   // The folder of the enumeration's history, tables and report when not empty; by default the
   // folder enumeration/ inside [output] directory (beside, never on, `combabc run`'s history).
   std::string output_directory;
@@ -38,6 +42,9 @@ struct EnumerateOutcome {
   std::int64_t enumerated = 0;
   std::int64_t accepted = 0;
   double evidence = 0.0;
+  // log evidence, which does not underflow where a likelihood component's evidence would (-inf
+  // when nothing was accepted).
+  double log_evidence = -std::numeric_limits<double>::infinity();
   double wall_seconds = 0.0;
   bool interrupted = false;
   // The config has a cheap simulator ([simulator.low_fidelity]): the enumeration left it out

@@ -24,6 +24,9 @@ namespace combabc::services {
 
 struct RunRequest {
   std::string config_path;
+  // When not empty, the config's text, read in place of the file at config_path (which still
+  // names it and sets its directory): a candidate model of a model choice (services/model_choice).
+  std::string config_text;
   std::string output_directory;  // overrides [output] directory when not empty
   int threads = -1;              // overrides [sampler] threads when >= 0
   bool overwrite = false;        // replace an existing history file

@@ -1,0 +1,26 @@
+#pragma once
+// [model_choice] (docs/config.md, "Model choice"): the candidate models of an ABC model choice,
+// each the config's [model] (or [simulator]) with some keys changed, and its prior probability.
+#include <string>
+#include <vector>
+
+namespace combabc {
+
+struct CandidateModel {
+  std::string name;    // unique, [A-Za-z0-9_.-]+: its history's folder, models/<name>/
+  double prior = 0.0;  // P(M_k) before the data; the priors sum to 1
+  int line = 0;        // its [[model_choice.model]] header
+  // The whole config of this model, as TOML: the file with the model's [model] keys set over the
+  // file's and its [simulator] (if it gives one) in place of the file's, without [model_choice].
+  // Its run's history records it, so `combabc resume` rebuilds the model from it.
+  std::string config_text;
+};
+
+struct ModelChoiceConfig {
+  std::vector<CandidateModel> models;  // at least two
+  // The model the Bayes factors are against (`reference`; default the first).
+  std::size_t reference = 0;
+  int line = 0;  // the [model_choice] table's line
+};
+
+}  // namespace combabc

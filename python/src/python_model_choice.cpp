@@ -1,0 +1,91 @@
+// combabc._core.model_choice (python_model_choice.hpp).
+#include "python_model_choice.hpp"
+
+#include <pybind11/stl.h>
+
+#include <string>
+#include <vector>
+
+#include "combabc/services/model_choice_run.hpp"
+
+namespace combabc::python {
+namespace {
+
+namespace py = pybind11;
+
+// The outcome as plain Python values: per model its probability, error, bound and evidence, and
+// its history's path.
+py::dict ModelChoice(const std::string& config_path,
+                     int threads,
+                     const std::string& output_directory,
+                     bool overwrite,
+                     bool report,
+                     bool exact) {
+  services::ModelChoiceOutcome outcome;
+  std::vector<std::string> histories;
+  {
+    const py::gil_scoped_release release;
+    if (exact) {
+      services::EnumerateRequest request;
+      request.config_path = config_path;
+      request.threads = threads;
+      request.output_directory = output_directory;
+      request.overwrite = overwrite;
+      request.report = report;
+      outcome = services::EnumerateModelChoice(request);
+      for (const auto& e : outcome.enumerations) histories.push_back(e.history_path);
+    } else {
+      services::RunRequest request;
+      request.config_path = config_path;
+      request.threads = threads;
+      request.output_directory = output_directory;
+      request.overwrite = overwrite;
+      request.report = report;
+      outcome = services::RunModelChoice(request);
+      for (const auto& r : outcome.runs) histories.push_back(r.history_path);
+    }
+  }
+  py::list models;
+  for (std::size_t k = 0; k < outcome.models.size(); ++k) {
+    const ModelProbability& p = outcome.models[k];
+    const ModelEvidence& e = outcome.evidence[k];
+    py::dict model;
+    model["name"] = p.name;
+    model["prior"] = p.prior;
+    model["probability"] = p.probability;
+    model["se"] = p.se;
+    model["upper_bound_only"] = p.upper_bound_only;
+    model["upper"] = p.upper;
+    model["log_evidence"] = e.log_evidence;
+    model["relative_se"] = e.relative_se;
+    model["reached"] = e.reached;
+    model["simulations"] = e.simulations;
+    model["termination"] = e.termination;
+    model["history"] = k < histories.size() ? histories[k] : std::string();
+    models.append(model);
+  }
+  py::dict result;
+  result["exact"] = outcome.exact;
+  result["reference"] =
+      outcome.models.empty() ? std::string() : outcome.models[outcome.reference].name;
+  result["models"] = models;
+  result["directory"] = outcome.directory;
+  return result;
+}
+
+}  // namespace
+
+void RegisterModelChoice(py::module_& m) {
+  m.def("model_choice",
+        &ModelChoice,
+        "Runs (or with exact=True enumerates) every model of the config's [model_choice]; returns "
+        "the model probabilities (docs/config.md, \"Model choice\")",
+        py::arg("config_path"),
+        py::arg("threads") = -1,
+        py::arg("output_directory") = std::string(),
+        py::arg("overwrite") = false,
+        py::arg("report") = false,
+        py::arg("exact") = false);
+}
+
+}  // namespace combabc::python

@@ -1,0 +1,284 @@
+// `combabc run` / `combabc enumerate` on a config with [model_choice]
+// (include/combabc/services/model_choice_run.hpp).
+#include "combabc/services/model_choice_run.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "combabc/config/config.hpp"
+#include "combabc/core/error.hpp"
+#include "combabc/core/output_files.hpp"
+#include "combabc/history/history_store.hpp"
+#include "export/json_text.hpp"
+#include "services/read_back.hpp"
+
+namespace combabc::services {
+namespace fs = std::filesystem;
+namespace {
+
+using export_text::JsonNumber;
+using export_text::JsonString;
+
+// Where every model's run ends: the evidences are comparable only at common final thresholds
+// (a list schedule's last value, an adaptive schedule's target).
+std::vector<double> CommonFinalThresholds(const CalibrationConfig& config) {
+  std::vector<double> eps;
+  for (std::size_t s = 0; s < config.smc.thresholds.size(); ++s) {
+    const ThresholdSchedule& schedule = config.smc.thresholds[s];
+    if (schedule.kind == ThresholdKind::kList && !schedule.values.empty()) {
+      eps.push_back(schedule.values.back());
+    } else if (schedule.kind != ThresholdKind::kList && schedule.target > 0) {
+      eps.push_back(schedule.target);
+    } else {
+      throw Error(ErrorKind::kConfig,
+                  "threshold component " + std::to_string(s + 1) +
+                      " has no final threshold (an adaptive schedule without target): model "
+                      "choice compares the models' evidences at common final thresholds; give "
+                      "it a target",
+                  config.path,
+                  config.model_choice->line,
+                  "model_choice");
+    }
+  }
+  return eps;
+}
+
+CalibrationConfig LoadModelChoice(const std::string& config_path) {
+  CalibrationConfig c = LoadConfig(config_path);
+  if (!c.model_choice) {
+    throw Error(ErrorKind::kConfig, "has no [model_choice] table", config_path);
+  }
+  return c;
+}
+
+std::string Output(const std::string& requested, const CalibrationConfig& c) {
+  return requested.empty() ? ResolvePath(c.directory, c.output.directory) : requested;
+}
+
+// <directory>/models/, where each model's run gets its folder.
+void CreateModelsFolder(const std::string& directory) {
+  const fs::path models = fs::path(directory) / "models";
+  std::error_code ec;
+  fs::create_directories(models, ec);
+  if (ec || !fs::is_directory(models, ec)) {
+    throw Error(ErrorKind::kCantCreate,
+                "cannot create the models' folder: " +
+                    (ec ? ec.message() : std::string("a file of that name is in the way")),
+                models.string());
+  }
+}
+
+// summary.json and models.csv in <directory>/model_choice/.
+std::string WriteModelChoice(const std::string& directory,
+                             bool overwrite,
+                             const ModelChoiceOutcome& o) {
+  std::string folder = (fs::path(directory) / "model_choice").string();
+  OutputDirectory out(folder, overwrite);
+  const ModelEvidence& reference = o.evidence[o.reference];
+  std::ostream& json = out.Add("summary.json");
+  json << "{\n  \"exact\": " << (o.exact ? "true" : "false")
+       << ",\n  \"reference\": " << JsonString(reference.name) << ",\n  \"models\": [\n";
+  std::ostream& csv = out.Add("models.csv");
+  csv << "model,prior,probability,se,upper_bound_only,upper,log_evidence,relative_se,"
+         "log10_bayes_factor,reached,wave,simulations,termination\n";
+  for (std::size_t k = 0; k < o.models.size(); ++k) {
+    const ModelProbability& p = o.models[k];
+    const ModelEvidence& e = o.evidence[k];
+    const double log10_bf = (e.log_evidence - reference.log_evidence) / std::log(10.0);
+    json << "    {\"name\": " << JsonString(p.name) << ", \"prior\": " << JsonNumber(p.prior)
+         << ", \"probability\": " << JsonNumber(p.probability) << ", \"se\": " << JsonNumber(p.se)
+         << ", \"upper_bound_only\": " << (p.upper_bound_only ? "true" : "false")
+         << ", \"upper\": " << JsonNumber(p.upper)
+         << ", \"log_evidence\": " << JsonNumber(e.log_evidence)
+         << ", \"relative_se\": " << JsonNumber(e.relative_se)
+         << ", \"log10_bayes_factor\": " << JsonNumber(log10_bf)
+         << ", \"reached\": " << (e.reached ? "true" : "false") << ", \"wave\": " << e.wave + 1
+         << ", \"simulations\": " << e.simulations
+         << ", \"termination\": " << JsonString(e.termination) << "}"
+         << (k + 1 < o.models.size() ? ",\n" : "\n");
+    csv << p.name << ',' << export_text::Number(p.prior) << ','
+        << export_text::Number(p.probability) << ',' << export_text::Number(p.se) << ','
+        << (p.upper_bound_only ? 1 : 0) << ',' << export_text::Number(p.upper) << ','
+        << export_text::Number(e.log_evidence) << ',' << export_text::Number(e.relative_se) << ','
+        << export_text::Number(log10_bf) << ',' << (e.reached ? 1 : 0) << ',' << e.wave + 1 << ','
+        << e.simulations << ',' << e.termination << '\n';
+  }
+  json << "  ]\n}\n";
+  out.Commit();
+  return folder;
+}
+
+// A model's run: a new one, or its history found in place (read when finished, else resumed).
+RunOutcome RunModel(const RunRequest& request,
+                    const CandidateModel& model,
+                    const std::string& model_directory,
+                    const std::string& database,
+                    SmcObserver* progress) {
+  const std::string history_path = (fs::path(model_directory) / database).string();
+  std::error_code ec;
+  if (!request.overwrite && fs::exists(fs::symlink_status(history_path, ec))) {
+    const RunMetadata metadata = HistoryStore::Open(history_path, true).LoadMetadata();
+    if (metadata.config_text != model.config_text) {
+      throw Error(ErrorKind::kCantCreate,
+                  "holds a run of model \"" + model.name +
+                      "\" from another config; use --overwrite to start the models afresh, or -o "
+                      "DIR",
+                  history_path);
+    }
+    if (metadata.status == RunStatus::kFinished) {
+      RunOutcome outcome;
+      outcome.history_path = history_path;
+      const HistoryStore store = HistoryStore::Open(history_path, true);
+      outcome.history = store.LoadHistory();
+      ReadBack back = ReadBackHistory(store);
+      outcome.checks = std::move(back.checks);
+      outcome.answer = std::move(back.answer);
+      outcome.strip = std::move(back.strip);
+      return outcome;
+    }
+    ResumeRequest resume;
+    resume.history_path = history_path;
+    resume.threads = request.threads;
+    resume.report = request.report;
+    resume.executor = request.executor;
+    resume.on_checks_before = request.on_checks_before;
+    resume.on_report_progress = request.on_report_progress;
+    return ResumeCalibration(resume, progress);
+  }
+  RunRequest r = request;
+  r.config_text = model.config_text;
+  r.output_directory = model_directory;
+  return RunCalibration(r, progress);
+}
+
+ModelChoiceOutcome Combine(ModelChoiceOutcome o, const CalibrationConfig& c) {
+  o.reference = c.model_choice->reference;
+  o.models = ModelProbabilities(o.evidence);
+  return o;
+}
+
+}  // namespace
+
+bool HasModelChoice(const std::string& config_path) {
+  return LoadConfig(config_path).model_choice.has_value();
+}
+
+ModelChoiceOutcome RunModelChoice(const RunRequest& request,
+                                  SmcObserver* progress,
+                                  const std::function<void(const std::string&)>& before_model) {
+  if (!request.start_from.empty()) {
+    throw Error(ErrorKind::kUsage,
+                "--from does not apply to a model choice ([model_choice]): each model starts from "
+                "its prior");
+  }
+  const CalibrationConfig c = LoadModelChoice(request.config_path);
+  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
+  const std::string directory = Output(request.output_directory, c);
+  CreateModelsFolder(directory);
+  ModelChoiceOutcome o;
+  for (const CandidateModel& model : c.model_choice->models) {
+    if (before_model) before_model(model.name);
+    const std::string model_directory = (fs::path(directory) / "models" / model.name).string();
+    RunOutcome run = RunModel(request, model, model_directory, c.output.database, progress);
+    if (run.history.summary.termination == Termination::kInterrupted) {
+      o.interrupted = true;
+      o.runs.push_back(std::move(run));
+      return o;
+    }
+    const RunMetadata metadata = HistoryStore::Open(run.history_path, true).LoadMetadata();
+    ModelEvidence e = EstimateEvidence(run.history, metadata.distance_components, final_thresholds);
+    e.name = model.name;
+    e.prior = model.prior;
+    o.evidence.push_back(e);
+    o.runs.push_back(std::move(run));
+  }
+  o = Combine(std::move(o), c);
+  o.directory = WriteModelChoice(directory, request.overwrite, o);
+  return o;
+}
+
+ModelChoiceOutcome EnumerateModelChoice(
+    const EnumerateRequest& request,
+    SmcObserver* progress,
+    const std::function<void(const std::string&)>& before_model) {
+  const CalibrationConfig c = LoadModelChoice(request.config_path);
+  const std::string directory = request.output_directory.empty()
+                                    ? (fs::path(Output("", c)) / kEnumerationFolder).string()
+                                    : request.output_directory;
+  CreateModelsFolder(directory);
+  ModelChoiceOutcome o;
+  o.exact = true;
+  for (const CandidateModel& model : c.model_choice->models) {
+    if (before_model) before_model(model.name);
+    EnumerateRequest r = request;
+    r.config_text = model.config_text;
+    r.output_directory = (fs::path(directory) / "models" / model.name).string();
+    EnumerateOutcome outcome = RunEnumeration(r, progress);
+    if (outcome.interrupted) {
+      o.interrupted = true;
+      o.enumerations.push_back(std::move(outcome));
+      return o;
+    }
+    ModelEvidence e;
+    e.name = model.name;
+    e.prior = model.prior;
+    e.exact = true;
+    e.reached = outcome.log_evidence > -std::numeric_limits<double>::infinity();
+    e.log_evidence = outcome.log_evidence;
+    e.log_upper = outcome.log_evidence;
+    e.wave = 0;
+    e.simulations = outcome.enumerated;
+    e.termination = ToString(Termination::kEnumerated);
+    o.evidence.push_back(e);
+    o.enumerations.push_back(std::move(outcome));
+  }
+  o = Combine(std::move(o), c);
+  o.directory = WriteModelChoice(directory, request.overwrite, o);
+  return o;
+}
+
+std::string FormatModelProbabilities(const ModelChoiceOutcome& o) {
+  std::ostringstream out;
+  out << (o.exact ? "Model probabilities (exact, by enumeration):\n"
+                  : "Model probabilities (each model's evidence from its own run; +- one "
+                    "Monte-Carlo standard error):\n");
+  char line[256];
+  const ModelEvidence& reference = o.evidence[o.reference];
+  for (std::size_t k = 0; k < o.models.size(); ++k) {
+    const ModelProbability& p = o.models[k];
+    const ModelEvidence& e = o.evidence[k];
+    if (p.upper_bound_only) {
+      std::snprintf(line,
+                    sizeof line,
+                    "  %-20s prior %.3f  P < %.3g  (no particle at the final thresholds: %s)\n",
+                    p.name.c_str(),
+                    p.prior,
+                    p.upper,
+                    e.termination.c_str());
+    } else if (o.exact) {
+      std::snprintf(line,
+                    sizeof line,
+                    "  %-20s prior %.3f  P = %.4f  log10 B = %+.2f\n",
+                    p.name.c_str(),
+                    p.prior,
+                    p.probability,
+                    (e.log_evidence - reference.log_evidence) / std::log(10.0));
+    } else {
+      std::snprintf(line,
+                    sizeof line,
+                    "  %-20s prior %.3f  P = %.4f +- %.4f  log10 B = %+.2f\n",
+                    p.name.c_str(),
+                    p.prior,
+                    p.probability,
+                    p.se,
+                    (e.log_evidence - reference.log_evidence) / std::log(10.0));
+    }
+    out << line;
+  }
+  out << "  (B: the Bayes factor against \"" << reference.name << "\")\n";
+  return out.str();
+}
+
+}  // namespace combabc::services

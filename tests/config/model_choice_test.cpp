@@ -1,0 +1,291 @@
+// ABC model choice (docs/algorithm.md, "Model choice"): each model's evidence estimated from its
+// own run against the exact evidence by enumeration, on tiny binary toys whose every
+// configuration can be summed: models of different dimension, a pair that gives identical data
+// (its probabilities must be its prior ratio), a model that dies out (reported with an upper
+// bound), noise-aware and resample-move runs, and the coverage of the reported errors over seeds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "combabc/samplers/combinatorial_smc.hpp"
+#include "combabc/samplers/enumeration.hpp"
+#include "combabc/services/model_choice.hpp"
+#include "config/config_error.hpp"
+#include "e2e/tiny_sensor.hpp"
+#include "samplers/toy_models.hpp"
+
+namespace combabc {
+namespace {
+
+// A binary toy model: identity outputs of d bits (padded with 0 to kOutputs), L1 distance to
+// the data; `shift` is added to every output (a model that cannot fit).
+constexpr int kOutputs = 5;
+const std::vector<double> kData = {1, 0, 1, 1, 0};
+
+class PaddedSimulator : public Simulator {
+ public:
+  PaddedSimulator(int d, double shift) : d_(d), shift_(shift) {}
+  int output_size() const override { return kOutputs; }
+  void Simulate(const ParameterView& theta,
+                RandomStream& /*rng*/,
+                std::span<double> out) const override {
+    for (int k = 0; k < kOutputs; ++k) out[k] = (k < d_ ? theta.bits[k] : 0.0) + shift_;
+  }
+
+ private:
+  int d_;
+  double shift_;
+};
+
+struct Toy {
+  Toy(int d, std::vector<double> prior, double shift = 0.0)
+      : space([&] {
+          BinarySpaceOptions o;
+          o.dimension = d;
+          o.prior_one = std::move(prior);
+          return ParameterSpace(BinarySpace(o));
+        }()),
+        sim(d, shift) {}
+  ParameterSpace space;
+  PaddedSimulator sim;
+  testing::WeightedL1Distance dist{kData, {1.0, 1.0, 0.7, 0.5, 0.3}};
+  SmcProblem Problem() const { return {&space, &sim, &dist}; }
+};
+
+constexpr double kFinal = 0.8;
+
+SmcOptions Options(std::uint64_t seed, int per_wave = 400) {
+  SmcOptions o;
+  o.num_waves = 3;
+  o.accepted_per_wave = per_wave;
+  o.seed = seed;
+  o.threads = 1;
+  ThresholdSchedule s;
+  s.kind = ThresholdKind::kList;
+  s.values = {2.5, 1.5, kFinal};
+  o.thresholds = {s};
+  // A model that cannot fit stops at once, cheaply.
+  o.min_acceptance_rate = 1e-3;
+  o.acceptance_floor_after = 3000;
+  return o;
+}
+
+ModelEvidence Estimate(const Toy& toy, const SmcOptions& o, const std::string& name, double prior) {
+  const RunHistory h = RunCombinatorialSmc(toy.Problem(), o);
+  const auto components = toy.dist.components();
+  ModelEvidence e = EstimateEvidence(h, components, {kFinal});
+  e.name = name;
+  e.prior = prior;
+  return e;
+}
+
+double ExactEvidence(const Toy& toy, double eps) {
+  EnumerationOptions o;
+  o.thresholds = {eps};
+  return Enumerate(toy.Problem(), o).evidence;
+}
+
+std::vector<double> ExactProbabilities(const std::vector<double>& priors,
+                                       const std::vector<double>& evidence) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < priors.size(); ++k) sum += priors[k] * evidence[k];
+  std::vector<double> p;
+  for (std::size_t k = 0; k < priors.size(); ++k) p.push_back(priors[k] * evidence[k] / sum);
+  return p;
+}
+
+TEST(ModelEvidence, RunsOfDifferentDimensionMatchTheEnumeratedEvidence) {
+  const Toy small(3, {0.5, 0.4, 0.6});
+  const Toy large(5, {0.5, 0.4, 0.6, 0.9, 0.3});
+  const double z_small = ExactEvidence(small, kFinal);
+  const double z_large = ExactEvidence(large, kFinal);
+  ASSERT_GT(z_small, 0.0);
+  ASSERT_GT(z_large, 0.0);
+  ASSERT_GT(std::abs(std::log(z_small / z_large)), 0.3);  // the models do differ
+  const std::vector<ModelEvidence> runs = {Estimate(small, Options(11), "small", 0.4),
+                                           Estimate(large, Options(12), "large", 0.6)};
+  for (const ModelEvidence& e : runs) {
+    ASSERT_TRUE(e.reached) << e.name;
+    EXPECT_GT(e.relative_se, 0.0);
+  }
+  EXPECT_NEAR(std::exp(runs[0].log_evidence), z_small, 4.0 * runs[0].relative_se * z_small);
+  EXPECT_NEAR(std::exp(runs[1].log_evidence), z_large, 4.0 * runs[1].relative_se * z_large);
+  const auto exact = ExactProbabilities({0.4, 0.6}, {z_small, z_large});
+  const auto p = ModelProbabilities(runs);
+  ASSERT_EQ(p.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(p[k].probability, exact[k], 4.0 * p[k].se) << p[k].name;
+    EXPECT_GT(p[k].se, 0.0);
+  }
+  EXPECT_NEAR(p[0].probability + p[1].probability, 1.0, 1e-12);
+}
+
+TEST(ModelEvidence, ModelsGivingIdenticalDataComeOutAtTheirPriorRatio) {
+  const Toy a(4, {0.5, 0.4, 0.6, 0.5});
+  const Toy b(4, {0.5, 0.4, 0.6, 0.5});
+  const std::vector<ModelEvidence> runs = {Estimate(a, Options(3), "a", 0.25),
+                                           Estimate(b, Options(4), "b", 0.75)};
+  const auto p = ModelProbabilities(runs);
+  EXPECT_NEAR(p[0].probability, 0.25, 4.0 * p[0].se);
+  EXPECT_NEAR(p[1].probability, 0.75, 4.0 * p[1].se);
+  EXPECT_LT(p[0].se, 0.05);
+}
+
+TEST(ModelEvidence, AModelThatDiesOutStaysReportedWithAnUpperBound) {
+  const Toy fits(3, {0.5, 0.4, 0.6});
+  const Toy dies(3, {0.5, 0.4, 0.6}, 5.0);  // every output 5 too high: nothing within 2.5
+  const ModelEvidence dead = Estimate(dies, Options(5), "dies", 0.5);
+  EXPECT_FALSE(dead.reached);
+  EXPECT_EQ(dead.termination, "acceptance_rate_too_low");
+  // None of the prior's candidates was accepted: Z < 3 / N.
+  EXPECT_NEAR(std::exp(dead.log_upper), 3.0 / 3000.0, 1e-12);
+  const std::vector<ModelEvidence> runs = {Estimate(fits, Options(6), "fits", 0.5), dead};
+  const auto p = ModelProbabilities(runs);
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_FALSE(p[0].upper_bound_only);
+  EXPECT_DOUBLE_EQ(p[0].probability, 1.0);
+  EXPECT_TRUE(p[1].upper_bound_only);
+  EXPECT_EQ(p[1].name, "dies");
+  EXPECT_GT(p[1].upper, 0.0);
+  EXPECT_LT(p[1].upper, 0.05);
+}
+
+TEST(ModelEvidence, NoiseAwareRunsEstimateTheLikelihoodEvidence) {
+  // The offsets m_k make the last wave accept with exp(-(d - m)): the estimate must undo them.
+  const std::vector<double> prior = {0.5, 0.3, 0.6, 0.5};
+  const auto make_space = [&] {
+    BinarySpaceOptions o;
+    o.dimension = 4;
+    o.prior_one = prior;
+    return ParameterSpace(BinarySpace(o));
+  };
+  const ParameterSpace space = make_space();
+  const testing::LinearSimulator sim{
+      {{1.0, 0.5, 0.0, 0.1}, {0.0, 1.0, 0.8, 0.0}, {0.3, 0.0, 1.0, 0.1}}};
+  const testing::GaussianNllDistance dist{{1.1, 0.7, 1.3}, 0.3};
+  const SmcProblem problem{&space, &sim, &dist};
+  EnumerationOptions eo;
+  eo.thresholds = {1.0};
+  const double exact = Enumerate(problem, eo).evidence;
+  for (const SamplerMethod method : {SamplerMethod::kRejection, SamplerMethod::kResampleMove}) {
+    SmcOptions o;
+    o.num_waves = 12;
+    o.accepted_per_wave = 500;
+    o.seed = 77;
+    o.threads = 1;
+    o.method = method;
+    ThresholdSchedule s;
+    s.target = 1.0;
+    o.thresholds = {s};
+    const RunHistory h = RunCombinatorialSmc(problem, o);
+    ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
+    const ModelEvidence e = EstimateEvidence(h, dist.components(), {1.0});
+    ASSERT_TRUE(e.reached);
+    std::printf("%s: exact %.5g, estimate %.5g +- %.2g %%, %zu waves\n",
+                ToString(method),
+                exact,
+                std::exp(e.log_evidence),
+                100.0 * e.relative_se,
+                h.waves.size());
+    EXPECT_NEAR(std::exp(e.log_evidence), exact, 4.0 * e.relative_se * exact);
+  }
+}
+
+// The reported errors against the seed-to-seed spread: mean z^2 over 20 seeds is 1 for honest
+// errors (chi-square with 20 degrees of freedom: between 0.3 and 2.1 with probability 0.998).
+TEST(ModelEvidence, ReportedErrorsCoverTheSpreadOverSeeds) {
+  const Toy small(3, {0.5, 0.4, 0.6});
+  const Toy large(5, {0.5, 0.4, 0.6, 0.5, 0.3});
+  const auto exact =
+      ExactProbabilities({0.5, 0.5}, {ExactEvidence(small, kFinal), ExactEvidence(large, kFinal)});
+  double z2 = 0.0;
+  constexpr int kSeeds = 20;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    const std::vector<ModelEvidence> runs = {
+        Estimate(small, Options(1000 + seed, 200), "small", 0.5),
+        Estimate(large, Options(2000 + seed, 200), "large", 0.5)};
+    const auto p = ModelProbabilities(runs);
+    const double z = (p[0].probability - exact[0]) / p[0].se;
+    z2 += z * z;
+  }
+  z2 /= kSeeds;
+  std::printf("mean z^2 over %d seeds: %.3f\n", kSeeds, z2);
+  EXPECT_GT(z2, 0.3);
+  EXPECT_LT(z2, 2.1);
+}
+
+// [model_choice]: two sensor models that differ in what a fixed clamp does.
+std::string TwoModels(const std::string& models) {
+  return testing::TinySensorConfig("waves = 2\naccepted_per_wave = 50\nseed = 9\n", models);
+}
+
+const char* kTwoSupports = R"([model_choice]
+[[model_choice.model]]
+name = "clamped"
+prior = 0.5
+[[model_choice.model]]
+name = "pinned"
+prior = 0.5
+model.clamps.fixed_support = "simply_supported"
+model.foundation_stiffness = 1.0e5
+)";
+
+TEST(ModelChoiceConfig, EachModelIsTheFileWithItsKeysSet) {
+  const CalibrationConfig c = ParseConfig(TwoModels(kTwoSupports), "dir/run.toml");
+  ASSERT_TRUE(c.model_choice);
+  const auto& models = c.model_choice->models;
+  ASSERT_EQ(models.size(), 2u);
+  EXPECT_EQ(models[1].name, "pinned");
+  EXPECT_DOUBLE_EQ(models[1].prior, 0.5);
+  const CalibrationConfig a = ParseConfig(models[0].config_text, c.path);
+  const CalibrationConfig b = ParseConfig(models[1].config_text, c.path);
+  EXPECT_FALSE(a.model_choice);
+  EXPECT_EQ(a.model.fixed_support, plate::Support::kClamped);
+  EXPECT_EQ(b.model.fixed_support, plate::Support::kSimplySupported);
+  EXPECT_DOUBLE_EQ(b.model.foundation_stiffness, 1.0e5);
+  EXPECT_EQ(b.model.clamps_per_edge, 3);  // the file's other [model] keys stay
+  EXPECT_EQ(a.smc.seed, 9u);              // model k runs on seed + k: independent runs
+  EXPECT_EQ(b.smc.seed, 10u);
+  EXPECT_EQ(b.directory, "dir");
+}
+
+TEST(ModelChoiceConfig, BadModelsAreRefusedAtTheirKey) {
+  using testing::ConfigErrorOf;
+  const std::string two = R"([[model_choice.model]]
+name = "a"
+prior = 0.5
+[[model_choice.model]]
+name = "b"
+)";
+  // Priors not summing to one.
+  EXPECT_EQ(ConfigErrorOf(TwoModels(two + "prior = 0.4\n")),
+            "dir/run.toml:30: model_choice.model[1].prior: the models' priors sum to 0.9; they "
+            "must sum to 1");
+  EXPECT_EQ(ConfigErrorOf(TwoModels(two)),
+            "dir/run.toml:28: model_choice.model[1].prior: is missing: give every model a prior, "
+            "or none");
+  // A reference to a model not defined.
+  EXPECT_EQ(ConfigErrorOf(TwoModels("[model_choice]\nreference = \"c\"\n" + two + "prior = 0.5\n")),
+            "dir/run.toml:26: model_choice.reference: model 'c' is not defined; the models are "
+            "\"a\", \"b\"");
+  // A model defined twice, one model, a bad key inside a model at its own line.
+  EXPECT_NE(ConfigErrorOf(TwoModels("[[model_choice.model]]\nname = \"a\"\n"
+                                    "[[model_choice.model]]\nname = \"a\"\n"))
+                .find("model 'a' is defined twice"),
+            std::string::npos);
+  EXPECT_NE(ConfigErrorOf(TwoModels("[[model_choice.model]]\nname = \"a\"\n"))
+                .find("model choice needs at least two"),
+            std::string::npos);
+  EXPECT_EQ(ConfigErrorOf(TwoModels(two + "prior = 0.5\nmodel.clamps.fixed_support = \"glued\"\n")),
+            "dir/run.toml:31: model.clamps.fixed_support: unknown support 'glued'; expected one "
+            "of \"free\", \"simply_supported\", \"clamped\" (in model_choice.model[1] (b))");
+  // Models with conflicting outputs: the experiments (load, scan) are common to all.
+  EXPECT_EQ(ConfigErrorOf(TwoModels(two + "prior = 0.5\nmodel.output.spacing = 0.02\n")),
+            "dir/run.toml:31: model_choice.model[1].model.output: the experiments are common to "
+            "all models: set [model.output] at the top of the file, not per model");
+}
+
+}  // namespace
+}  // namespace combabc
