@@ -84,7 +84,8 @@ def campaign(rows, argv):
                       interpolation="nearest")
     for (i, k), p in np.ndenumerate(values):
         if abs(p - 0.5) > 0.4:
-            ax.text(k, i, "F" if p > 0.5 else "f", ha="center", va="center", fontsize=6)
+            ax.text(k, i, "F" if p > 0.5 else "f", ha="center", va="center", fontsize=6,
+                    color="white")
     ax.set_yticks(range(len(labels)), labels, fontsize=7)
     ax.set_xticks(range(len(names)), names, fontsize=6)
     ax.set_xlabel("clamp (edge 1, then edge 2); F fixed, f free: decided")

@@ -770,7 +770,9 @@ DesignOutcome RunDesign(const DesignRequest& request) {
     if (!o.view.empty()) tables.emplace_back("campaign");
     for (const std::string& format : c.output.figure_formats) {
       for (const std::string& table : tables) {
-        const std::string name = table + "." + format;
+        std::string name = table;
+        name += ".";
+        name += format;
         dir.Add(name);
         const ProcessResult result = RunProcess({script.python,
                                                  script.script,

@@ -474,8 +474,9 @@ TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
   for (const ExperimentConfig& x : c.experiments) {
     std::ofstream out(folder / (x.name + ".csv"));
     out << "x_cm,w_um\n";
-    for (double position : x.output_coordinates)
+    for (double position : x.output_coordinates) {
       out << position * 100 << "," << w[at++] * 1e6 << "\n";
+    }
   }
   services::RunRequest run;
   run.config_path = folder / "campaign.toml";
