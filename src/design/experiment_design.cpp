@@ -253,41 +253,7 @@ class LocalScorer {
       lw[p] = pop_.log_weight[static_cast<std::size_t>(nb.rows[p])] + ll[p];
       top = std::max(top, lw[p]);
     }
-    auto at = [&](int position) {
-      return position < 0 ? kMinusInf : lw[static_cast<std::size_t>(position)];
-    };
-    // P(free parameter = the truth's value): the two-state posterior against its flip, then the
-    // four-state one of each pair it is in; the least of them (the most confusable alternative).
-    const std::size_t free = nb.single.size();
-    std::vector<double> correct(free, 1.0);
-    for (std::size_t f = 0; f < free; ++f) {
-      const double a0 = lw[0], a1 = at(nb.single[f]);
-      const double m = std::max(a0, a1);
-      if (m == kMinusInf) continue;
-      const double w0 = std::exp(a0 - m), w1 = std::exp(a1 - m);
-      correct[f] = std::min(correct[f], w0 / (w0 + w1));
-    }
-    for (const Neighbourhood::Swap& s : nb.swaps) {
-      const auto f = static_cast<std::size_t>(s.first), g = static_cast<std::size_t>(s.second);
-      const double a0 = lw[0], af = at(nb.single[f]), ag = at(nb.single[g]), afg = at(s.position);
-      const double m = std::max({a0, af, ag, afg});
-      if (m == kMinusInf) continue;
-      const double w0 = std::exp(a0 - m), wf = std::exp(af - m), wg = std::exp(ag - m),
-                   wfg = std::exp(afg - m);
-      const double total = w0 + wf + wg + wfg;
-      correct[f] = std::min(correct[f], (w0 + wg) / total);
-      correct[g] = std::min(correct[g], (w0 + wf) / total);
-    }
-    for (const Neighbourhood::Group& group : nb.groups) {
-      const double a0 = lw[0], a1 = at(group.position);
-      const double m = std::max(a0, a1);
-      if (m == kMinusInf) continue;
-      const double w0 = std::exp(a0 - m), w1 = std::exp(a1 - m);
-      for (int f : group.flipped) {
-        correct[static_cast<std::size_t>(f)] =
-            std::min(correct[static_cast<std::size_t>(f)], w0 / (w0 + w1));
-      }
-    }
+    const std::vector<double> correct = ProbabilityOfTruth(nb, lw);
     TruthOutcome o;
     double total = 0.0, squares = 0.0;
     for (double a : lw) {
@@ -435,6 +401,48 @@ void CheckOptions(const DesignOptions& options) {
 }
 
 }  // namespace
+
+std::vector<double> ProbabilityOfTruth(const Neighbourhood& nb, std::span<const double> lw) {
+  if (lw.size() != nb.rows.size() || lw.empty()) {
+    throw std::invalid_argument("design: one log weight per neighbourhood row");
+  }
+  auto at = [&](int position) {
+    return position < 0 ? kMinusInf : lw[static_cast<std::size_t>(position)];
+  };
+  // P(free parameter = the truth's value): the two-state posterior against its flip, then the
+  // four-state one of each pair it is in; the least of them (the most confusable alternative).
+  const std::size_t free = nb.single.size();
+  std::vector<double> correct(free, 1.0);
+  for (std::size_t f = 0; f < free; ++f) {
+    const double a0 = lw[0], a1 = at(nb.single[f]);
+    const double m = std::max(a0, a1);
+    if (m == kMinusInf) continue;
+    const double w0 = std::exp(a0 - m), w1 = std::exp(a1 - m);
+    correct[f] = std::min(correct[f], w0 / (w0 + w1));
+  }
+  for (const Neighbourhood::Swap& s : nb.swaps) {
+    const auto f = static_cast<std::size_t>(s.first), g = static_cast<std::size_t>(s.second);
+    const double a0 = lw[0], af = at(nb.single[f]), ag = at(nb.single[g]), afg = at(s.position);
+    const double m = std::max({a0, af, ag, afg});
+    if (m == kMinusInf) continue;
+    const double w0 = std::exp(a0 - m), wf = std::exp(af - m), wg = std::exp(ag - m),
+                 wfg = std::exp(afg - m);
+    const double total = w0 + wf + wg + wfg;
+    correct[f] = std::min(correct[f], (w0 + wg) / total);
+    correct[g] = std::min(correct[g], (w0 + wf) / total);
+  }
+  for (const Neighbourhood::Group& group : nb.groups) {
+    const double a0 = lw[0], a1 = at(group.position);
+    const double m = std::max(a0, a1);
+    if (m == kMinusInf) continue;
+    const double w0 = std::exp(a0 - m), w1 = std::exp(a1 - m);
+    for (int f : group.flipped) {
+      correct[static_cast<std::size_t>(f)] =
+          std::min(correct[static_cast<std::size_t>(f)], w0 / (w0 + w1));
+    }
+  }
+  return correct;
+}
 
 std::vector<double> Marginals(const Population& population) {
   const auto d = static_cast<std::size_t>(population.dimension);

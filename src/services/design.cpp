@@ -404,10 +404,12 @@ design::LocalPopulation Neighbourhoods(const CalibrationConfig& c,
 // log of the run's acceptance of each row at its last complete wave: -d_k / T_k for a noise-aware
 // component, 0 or -inf for a threshold (d_k <= eps_k) or indicator one; -inf for a singular row.
 // The run's posterior is the prior times this (docs/algorithm.md, "Noise-aware acceptance").
+// per_experiment (when given): the same, each experiment's components alone (experiments x rows).
 std::vector<double> RunLogLikelihood(const CalibrationConfig& c,
                                      const Simulated& s,
                                      const std::vector<double>& thresholds,
-                                     const std::string& posterior_path) {
+                                     const std::string& posterior_path,
+                                     std::vector<std::vector<double>>* per_experiment) {
   const std::vector<MeasuredData> data = LoadExperimentData(c);
   const std::vector<MeasuredProfile> profiles = ProfilesOf(data);
   const std::unique_ptr<JointDistance> distance = MakeDistance(c, profiles);
@@ -426,29 +428,90 @@ std::vector<double> RunLogLikelihood(const CalibrationConfig& c,
                 "--posterior");
   }
   const std::size_t rows = s.singular.size();
-  std::vector<double> out(rows, -std::numeric_limits<double>::infinity());
+  constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
+  // The experiments' components lie one after the other in the distance (config.hpp).
+  std::vector<std::size_t> experiment_of;
+  for (std::size_t e = 0; e < c.experiments.size(); ++e) {
+    experiment_of.insert(experiment_of.end(), c.experiments[e].metric.components.size(), e);
+  }
+  if (experiment_of.size() != components.size()) {
+    throw Error(ErrorKind::kSoftware,
+                std::to_string(components.size()) + " distance components for " +
+                    std::to_string(experiment_of.size()) + " metric components",
+                c.path);
+  }
+  std::vector<double> out(rows, kMinusInf);
+  if (per_experiment != nullptr) {
+    per_experiment->assign(c.experiments.size(), std::vector<double>(rows, kMinusInf));
+  }
   std::vector<double> d(components.size());
+  std::vector<double> each(c.experiments.size());
   for (std::size_t r = 0; r < rows; ++r) {
     if (!s.singular[r].empty()) continue;
     distance->Evaluate(std::span(s.run).subspan(r * s.run_size, s.run_size), d);
-    double ll = 0.0;
+    std::fill(each.begin(), each.end(), 0.0);
     std::size_t t = 0;
     for (std::size_t k = 0; k < components.size(); ++k) {
+      double& ll = each[experiment_of[k]];
       switch (components[k].kind) {
         case ComponentKind::kNegLogLikelihood:
           ll -= d[k] / thresholds[t++];
           break;
         case ComponentKind::kThreshold:
-          if (!(d[k] <= thresholds[t++])) ll = -std::numeric_limits<double>::infinity();
+          if (!(d[k] <= thresholds[t++])) ll = kMinusInf;
           break;
         case ComponentKind::kIndicator:
-          if (d[k] != components[k].required) ll = -std::numeric_limits<double>::infinity();
+          if (d[k] != components[k].required) ll = kMinusInf;
           break;
       }
+    }
+    double ll = 0.0;
+    for (std::size_t e = 0; e < each.size(); ++e) {
+      ll += each[e];
+      if (per_experiment != nullptr) (*per_experiment)[e][r] = each[e];
     }
     out[r] = ll;
   }
   return out;
+}
+
+// The campaign view (docs/algorithm.md, "Which experiment decided which clamp"): each clamp's
+// P(fixed) with each experiment's likelihood alone, and with all of them, over the truths'
+// neighbourhoods (the other clamps held at each truth's values), averaged over the truths. The
+// run's particles cannot give it: where the joint data decide a clamp the population holds no
+// particle with it flipped, and reweighting them by one experiment would credit that experiment
+// with what the others decided.
+void CampaignView(const CalibrationConfig& c,
+                  const design::LocalPopulation& local,
+                  const std::vector<double>& log_prior,
+                  const std::vector<std::vector<double>>& per_experiment,
+                  const std::vector<double>& joint,
+                  DesignOutcome& o) {
+  const auto d = static_cast<std::size_t>(local.dimension);
+  auto p_fixed = [&](const std::vector<double>& ll) {
+    std::vector<double> p(d, 0.0);
+    for (const design::Neighbourhood& nb : local.truths) {
+      std::vector<double> lw(nb.rows.size());
+      for (std::size_t i = 0; i < lw.size(); ++i) {
+        const auto row = static_cast<std::size_t>(nb.rows[i]);
+        lw[i] = log_prior[row] + ll[row];
+      }
+      const std::vector<double> correct = design::ProbabilityOfTruth(nb, lw);
+      const std::uint8_t* truth = local.bits.data() + static_cast<std::size_t>(nb.rows.front()) * d;
+      for (std::size_t k = 0; k < d; ++k) {
+        const double q = correct[static_cast<std::size_t>(local.free_of_bit[k])];
+        p[k] += truth[k] ? q : 1.0 - q;
+      }
+    }
+    for (double& v : p) v /= static_cast<double>(local.truths.size());
+    return p;
+  };
+  o.view_together = p_fixed(joint);
+  for (std::size_t e = 0; e < c.experiments.size(); ++e) {
+    const std::string& name = c.experiments[e].name;
+    o.view.push_back(
+        {name.empty() ? "experiment " + std::to_string(e + 1) : name, p_fixed(per_experiment[e])});
+  }
 }
 
 void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationConfig& c) {
@@ -504,6 +567,21 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     ident << '\n';
   }
   if (!o.next_config.empty()) dir.Add("next.toml") << o.next_config;
+  if (o.view.empty()) return;
+  std::ostream& view = dir.Add("campaign.csv");
+  const int n = c.model.clamps_per_edge;
+  const double section = c.model.length / n * 100;
+  view << "clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together";
+  for (const DesignOutcome::Evidence& e : o.view) view << ",\"p_fixed_alone:" << e.name << '"';
+  view << ",decided_by\n";
+  for (std::size_t k = 0; k < o.run_p_fixed.size(); ++k) {
+    const int s = static_cast<int>(k) % n;
+    view << k + 1 << ",\"" << c.space.names[k] << "\"," << (static_cast<int>(k) < n ? 1 : 2) << ','
+         << DesignNumber(s * section) << ',' << DesignNumber((s + 1) * section) << ','
+         << DesignNumber(o.run_p_fixed[k]) << ',' << DesignNumber(o.view_together[k]);
+    for (const DesignOutcome::Evidence& e : o.view) view << ',' << DesignNumber(e.p_fixed[k]);
+    view << ",\"" << DecidedBy(o, k) << "\"\n";
+  }
 }
 
 }  // namespace
@@ -558,6 +636,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   options.truths = c.design->truths;
   options.select = c.design->select;
   options.identified_margin = c.design->identified_margin;
+  o.identified_margin = c.design->identified_margin;
   options.seed = c.smc.seed;
   options.threads = threads;
   auto decided = [&](const std::vector<double>& marginals) {
@@ -606,7 +685,11 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                   "--posterior");
     }
     const Simulated s = SimulateRows(c, local.bits, local.rows(), threads, true);
-    const std::vector<double> ll = RunLogLikelihood(c, s, thresholds, request.posterior_path);
+    std::vector<std::vector<double>> per_experiment;
+    const std::vector<double> ll =
+        RunLogLikelihood(c, s, thresholds, request.posterior_path, &per_experiment);
+    o.run_p_fixed = marginals;
+    CampaignView(c, local, local.log_weight, per_experiment, ll, o);
     for (std::size_t r = 0; r < local.rows(); ++r) {
       local.log_weight[r] += ll[r];
       if (!s.singular[r].empty()) {
@@ -682,18 +765,25 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   if (request.figure) {
     const PythonScript script = FindPythonScript(
         "combabc_design.py", "COMBABC_DESIGN_SCRIPT", "python3-numpy and python3-matplotlib");
+    // identifiability.<fmt>; with --posterior also campaign.<fmt>, which experiment decided what.
+    std::vector<std::string> tables{"identifiability"};
+    if (!o.view.empty()) tables.emplace_back("campaign");
     for (const std::string& format : c.output.figure_formats) {
-      const std::string name = "identifiability." + format;
-      dir.Add(name);
-      const ProcessResult result = RunProcess({script.python,
-                                               script.script,
-                                               dir.StagedPath("identifiability.csv"),
-                                               dir.StagedPath(name),
-                                               format},
-                                              "python3-numpy and python3-matplotlib");
-      if (result.status != 0) {
-        throw Error(KindOfScriptStatus(result.status),
-                    name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
+      for (const std::string& table : tables) {
+        std::string name = table;
+        name += ".";
+        name += format;
+        dir.Add(name);
+        const ProcessResult result = RunProcess({script.python,
+                                                 script.script,
+                                                 dir.StagedPath(table + ".csv"),
+                                                 dir.StagedPath(name),
+                                                 format},
+                                                "python3-numpy and python3-matplotlib");
+        if (result.status != 0) {
+          throw Error(KindOfScriptStatus(result.status),
+                      name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
+        }
       }
     }
   }

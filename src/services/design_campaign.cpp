@@ -168,14 +168,15 @@ void ScheduleKeys(const ThresholdSchedule& s, std::ostream& out) {
 }
 
 // The component whose noise treatment and schedule the new experiment takes: the first
-// noise-aware least_squares one of the experiments so far, else the first least_squares one, else
-// the first threshold one (the new one is a least_squares over its scan).
+// noise-aware least_squares one of the experiments so far (gaussian or folded normal), else the
+// first least_squares one, else the first threshold one (the new one is a least_squares over its
+// scan).
 const MetricComponentConfig* Reference(const CalibrationConfig& c) {
   const MetricComponentConfig* first_ls = nullptr;
   const MetricComponentConfig* first = nullptr;
   for (const ExperimentConfig& x : c.experiments) {
     for (const MetricComponentConfig& m : x.metric.components) {
-      if (m.type == MetricType::kLeastSquares && m.noise.model == NoiseModel::kGaussian) return &m;
+      if (m.type == MetricType::kLeastSquares && m.noise.model != NoiseModel::kNone) return &m;
       if (m.type == MetricType::kLeastSquares && !first_ls) first_ls = &m;
       if (KindOf(m.type) == ComponentKind::kThreshold && !first) first = &m;
     }
@@ -223,8 +224,11 @@ std::string ExperimentBlock(const CalibrationConfig& c,
       << "window = " << window << "  # " << position_unit << "\n";
   const MetricComponentConfig* ref = Reference(c);
   if (ref != nullptr && ref->type == MetricType::kLeastSquares &&
-      ref->noise.model == NoiseModel::kGaussian) {
-    out << "noise = \"gaussian\"\n";
+      ref->noise.model != NoiseModel::kNone) {
+    // An amplitude scan's noise folds at zero as the others' does (docs/algorithm.md).
+    out << "noise = "
+        << (ref->noise.model == NoiseModel::kFoldedNormal ? "\"folded_normal\"" : "\"gaussian\"")
+        << "\n";
     if (ref->noise.sigma_noise) {
       out << "sigma_noise = " << NextNumber(*ref->noise.sigma_noise)
           << "  # as the experiments before\n";
@@ -251,6 +255,20 @@ std::string ClampWhere(const CalibrationConfig& c, int bit) {
   const int s = bit % n;
   return "clamp " + std::to_string(bit + 1) + " (edge " + std::to_string(bit < n ? 1 : 2) + ", " +
          NextNumber(s * section * 100) + "-" + NextNumber((s + 1) * section * 100) + " cm)";
+}
+
+std::string DecidedBy(const DesignOutcome& o, std::size_t k) {
+  const double run = o.run_p_fixed.at(k);
+  if (!(std::abs(run - 0.5) > o.identified_margin)) return "";
+  std::string out;
+  for (const DesignOutcome::Evidence& e : o.view) {
+    const double p = e.p_fixed.at(k);
+    if (std::abs(p - 0.5) > o.identified_margin && (p > 0.5) == (run > 0.5)) {
+      if (!out.empty()) out += ", ";
+      out += e.name;
+    }
+  }
+  return out.empty() ? "together" : out;
 }
 
 NextStep WriteNextConfig(const CalibrationConfig& c,

@@ -17,6 +17,7 @@
 #include "combabc/rng/random_stream.hpp"
 #include "combabc/services/design.hpp"
 #include "combabc/services/run.hpp"
+#include "combabc/services/simulate.hpp"
 #include "support/test_support.hpp"
 
 namespace combabc {
@@ -411,6 +412,97 @@ TEST(Design, TheStopRuleFiresWhenNoCandidateHelps) {
     EXPECT_NE(u.reason.find("below the noise"), std::string::npos) << u.where << ": " << u.reason;
   }
   EXPECT_FALSE(std::filesystem::exists(folder / "results/design/next.toml"));
+}
+
+// The next experiment takes the others' noise treatment: an amplitude scan's folded normal stays
+// folded (before, design wrote a plain least_squares, the run then not noise-aware, for any noise
+// model but the gaussian).
+TEST(Design, TheNextExperimentKeepsTheFoldedNormal) {
+  const testing::TempFolder folder("design-folded");
+  std::string config = CampaignConfig("", "load_x = [30]\n");
+  const std::string gaussian = "noise = \"gaussian\"";
+  config.replace(config.find(gaussian), gaussian.size(), "noise = \"folded_normal\"");
+  std::ofstream(folder / "campaign.toml") << config;
+  WriteProfile(folder.path() / "data" / "first.csv", 45);
+  const services::DesignOutcome o = services::RunDesign(Request(folder));
+  ASSERT_FALSE(o.stop) << o.stop_reason;
+  const CalibrationConfig next = LoadConfig(o.next_config_path);
+  ASSERT_EQ(next.experiments.size(), 2U);
+  EXPECT_EQ(next.experiments[1].metric.components.at(0).noise.model, NoiseModel::kFoldedNormal)
+      << o.next_config;
+}
+
+// The campaign view (which experiment decided which clamp): two experiments on the tiny sensor,
+// each loading one end and scanning only that end, their data the model's own profiles of one
+// configuration. A clamp at the left end is decided by the left experiment alone and not by the
+// right one, and the other way round; campaign.csv says so. Reweighting the joint run's particles
+// instead would credit both: none of them has either clamp flipped.
+TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
+  const testing::TempFolder folder("design-campaign-view");
+  auto experiment = [](const std::string& name, double load_cm, const std::string& window) {
+    return "[[experiment]]\nname = \"" + name +
+           "\"\n[experiment.load]\nx = " + std::to_string(load_cm / 100) +
+           "\n[experiment.output]\nspacing = 0.03\n"
+           "[experiment.data]\ncsv = \"" +
+           name +
+           ".csv\"\nposition_column = \"x_cm\"\n"
+           "displacement_column = \"w_um\"\nposition_unit = \"cm\"\n"
+           "displacement_unit = \"um\"\nwindow = " +
+           window +
+           "\n"
+           "[experiment.metric]\n[[experiment.metric.component]]\ntype = \"least_squares\"\n"
+           "window = " +
+           window +
+           "\nnoise = \"gaussian\"\nsigma_noise = 0.02\n"
+           "threshold = [1]\n";
+  };
+  const std::string config =
+      "[model]\n[model.clamps]\nper_edge = 3\n"
+      "[model.mesh]\nelements_per_section = 2\nelements_across_width = 2\n" +
+      experiment("left", 15, "[0, 30]") + experiment("right", 75, "[60, 90]") +
+      "[sampler]\nwaves = 1\naccepted_per_wave = 4\nseed = 3\nthreads = 1\n"
+      "[design]\nload_x = [45]\ntruths = 2\nselect = 1\n[output]\ndirectory = \"results\"\n";
+  std::ofstream(folder / "campaign.toml") << config;
+  for (const char* name : {"left", "right"}) {
+    std::ofstream(folder / (std::string(name) + ".csv")) << "x_cm,w_um\n0,1\n";
+  }
+  // The data: the model's profiles of one configuration (both ends fixed, the middle free).
+  const CalibrationConfig c = LoadConfig(folder / "campaign.toml");
+  const services::NominalSimulator simulator(c, folder.path().string());
+  const std::vector<double> w = simulator.Simulate(std::vector<std::uint8_t>{1, 0, 1, 1, 0, 1});
+  std::size_t at = 0;
+  for (const ExperimentConfig& x : c.experiments) {
+    std::ofstream out(folder / (x.name + ".csv"));
+    out << "x_cm,w_um\n";
+    for (double position : x.output_coordinates) {
+      out << position * 100 << "," << w[at++] * 1e6 << "\n";
+    }
+  }
+  services::RunRequest run;
+  run.config_path = folder / "campaign.toml";
+  run.report = false;
+  const services::RunOutcome outcome = services::RunCalibration(run);
+  services::DesignRequest request = Request(folder);
+  request.posterior_path = outcome.history_path;
+  const services::DesignOutcome o = services::RunDesign(request);
+  ASSERT_EQ(o.view.size(), 2U);
+  EXPECT_EQ(o.view[0].name, "left");
+  // Clamp 1 (edge 1, 0-30 cm): the left experiment alone decides it, the right one cannot.
+  EXPECT_GT(o.view[0].p_fixed[0], 0.9);
+  EXPECT_LT(std::abs(o.view[1].p_fixed[0] - 0.5), 0.4) << o.view[1].p_fixed[0];
+  EXPECT_EQ(services::DecidedBy(o, 0), "left");
+  // Clamp 3 (edge 1, 60-90 cm): the other way round.
+  EXPECT_GT(o.view[1].p_fixed[2], 0.9);
+  EXPECT_LT(std::abs(o.view[0].p_fixed[2] - 0.5), 0.4) << o.view[0].p_fixed[2];
+  EXPECT_EQ(services::DecidedBy(o, 2), "right");
+  std::ifstream csv(folder / "results/design/campaign.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  EXPECT_EQ(header,
+            "clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together,\"p_fixed_alone:left\","
+            "\"p_fixed_alone:right\",decided_by");
+  EXPECT_EQ(first.substr(first.rfind(',')), ",\"left\"") << first;
 }
 
 }  // namespace

@@ -127,6 +127,13 @@ struct LocalPopulation {
   std::size_t rows() const { return log_weight.size(); }
 };
 
+// Per free parameter, its P(the truth's value) in one neighbourhood given each row's log weight
+// (lw[p] for nb.rows[p]): the least of its two-state posterior against its flip, the four-state
+// posteriors of its pairs and the two-state posteriors against the groups that flip it (the most
+// confusable alternative). 1 where no alternative is in the neighbourhood. Throws
+// std::invalid_argument unless lw has one entry per row.
+std::vector<double> ProbabilityOfTruth(const Neighbourhood& nb, std::span<const double> lw);
+
 // As ScoreCandidates, over the neighbourhoods (candidates' profiles: rows() x points); the
 // number of truths is truths.size(). prior_entropy and prior_identified are the neighbourhoods'
 // before any new data, from which the gains count.
