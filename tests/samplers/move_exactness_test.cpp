@@ -357,7 +357,7 @@ TEST(MoveExactness, DISABLED_CoverageOverSeeds) {
     int n = 0;
     for (std::uint64_t seed = 1; seed <= 20; ++seed) {
       auto o = MovingOptions({eps}, 500, seed);
-      o.moves.final_wave = final_wave ? FinalWave::kAuto : FinalWave::kNever;
+      o.moves.final_wave = final_wave ? FinalWave::kAlways : FinalWave::kNever;
       const auto h = RunCombinatorialSmc({&space, &sim, &distance}, o);
       const auto& last = h.waves.back();
       const WaveErrors errors = WaveMonteCarloErrors(last);
