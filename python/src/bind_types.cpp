@@ -318,12 +318,14 @@ void BindOptions(py::module_& m) {
                        double stay_probability,
                        int max_rounds,
                        double independent_share,
-                       double min_survivor_fraction) {
+                       double min_survivor_fraction,
+                       const std::string& final_wave) {
              const MoveOptions o{ess_fraction,
                                  stay_probability,
                                  max_rounds,
                                  independent_share,
-                                 min_survivor_fraction};
+                                 min_survivor_fraction,
+                                 Parse<FinalWave>(final_wave, "final_wave")};
              CheckMoves(o);
              return o;
            }),
@@ -332,12 +334,20 @@ void BindOptions(py::module_& m) {
            py::arg("stay_probability") = move_defaults.stay_probability,
            py::arg("max_rounds") = move_defaults.max_rounds,
            py::arg("independent_share") = move_defaults.independent_share,
-           py::arg("min_survivor_fraction") = move_defaults.min_survivor_fraction)
+           py::arg("min_survivor_fraction") = move_defaults.min_survivor_fraction,
+           py::arg("final_wave") = std::string(ToString(move_defaults.final_wave)))
       .def_readwrite("ess_fraction", &MoveOptions::ess_fraction)
       .def_readwrite("stay_probability", &MoveOptions::stay_probability)
       .def_readwrite("max_rounds", &MoveOptions::max_rounds)
       .def_readwrite("independent_share", &MoveOptions::independent_share)
-      .def_readwrite("min_survivor_fraction", &MoveOptions::min_survivor_fraction);
+      .def_readwrite("min_survivor_fraction", &MoveOptions::min_survivor_fraction)
+      // "auto", "always" or "never" (docs/algorithm.md, "The final wave").
+      .def_property(
+          "final_wave",
+          [](const MoveOptions& o) { return ToString(o.final_wave); },
+          [](MoveOptions& o, const std::string& text) {
+            o.final_wave = Parse<FinalWave>(text, "final_wave");
+          });
 
   py::class_<SmcOptions>(m, "SmcOptions")
       .def(py::init<>())

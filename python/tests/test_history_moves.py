@@ -42,8 +42,12 @@ def test_method_and_move_options_are_settable_as_the_config_names_them():
     # The keywords' defaults are the engine's (SmcOptions' own MoveOptions).
     defaults, engine = combabc.MoveOptions(), combabc.SmcOptions().moves
     for name in ("ess_fraction", "stay_probability", "max_rounds", "independent_share",
-                 "min_survivor_fraction"):
+                 "min_survivor_fraction", "final_wave"):
         assert getattr(defaults, name) == getattr(engine, name), name
+    assert defaults.final_wave == "auto"
+    assert combabc.MoveOptions(final_wave="never").final_wave == "never"
+    with pytest.raises(combabc.Error, match="always"):
+        combabc.MoveOptions(final_wave="sometimes")
     assert combabc.SmcOptions().method == "rejection"
     options.moves.independent_share = 0.25  # nested fields are written in place
     assert options.moves.independent_share == 0.25
