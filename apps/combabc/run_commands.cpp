@@ -1,4 +1,5 @@
 // `combabc run` and `combabc resume`.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <iostream>
@@ -63,6 +64,18 @@ class ChecksPrinter {
   bool before_printed_ = false;
 };
 
+// A rejection run (no wave moved) stopped on its acceptance floor or its budget after its first
+// wave: what resample-move is for (several experiments: docs/algorithm.md, "Resample-move").
+bool SlowingRejectionRun(const RunHistory& history, Termination stop) {
+  if (stop != Termination::kAcceptanceRateTooLow && stop != Termination::kBudgetExhausted) {
+    return false;
+  }
+  return history.waves.size() >= 2 &&
+         std::none_of(history.waves.begin(), history.waves.end(), [](const WaveRecord& w) {
+           return w.moves.has_value();
+         });
+}
+
 void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& checks) {
   const RunSummary& summary = outcome.history.summary;
   checks.AtEnd(outcome.checks);
@@ -81,6 +94,11 @@ void PrintOutcome(const services::RunOutcome& outcome, const ChecksPrinter& chec
                 << "finished waves are kept; to go on, raise the limit: combabc resume "
                 << outcome.history_path << " " << services::LimitOption(summary.termination)
                 << " ...\n";
+      if (SlowingRejectionRun(outcome.history, summary.termination)) {
+        std::cerr << "fresh candidates are rarely accepted any more; a sampler that keeps and "
+                     "moves the particles that fit needs far fewer simulations: [sampler] method = "
+                     "\"resample_move\" (docs/algorithm.md, \"Resample-move\")\n";
+      }
       break;
     case Termination::kTooManyParticles:  // final: no limit to raise
       std::cerr << "stopped: " << summary.message << "\n";

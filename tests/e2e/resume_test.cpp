@@ -38,6 +38,21 @@ TEST(Stopping, TheReasonIsOnScreen) {
   const RunMetadata m = HistoryStore::Open(dir / "out/history.sqlite", true).LoadMetadata();
   EXPECT_EQ(m.termination, "budget_exhausted");
   EXPECT_EQ(m.summary_message, "simulation budget of 300 reached in wave 1");
+  // In wave 1 nothing says the waves grow dear: no advice on the sampler.
+  EXPECT_EQ(r.err.find("resample_move"), std::string::npos) << r.err;
+
+  // A rejection run stopped on its acceptance floor after its first wave is pointed to
+  // resample-move.
+  config = kConfig;
+  config.replace(config.find("accepted_per_wave = 5"),
+                 std::string("accepted_per_wave = 5").size(),
+                 "accepted_per_wave = 5\nmin_acceptance_rate = 0.9\nacceptance_floor_after = 20");
+  std::ofstream(dir / "floor.toml") << config;
+  const auto floor = RunCli({"run", dir / "floor.toml", "--no-report", "-o", "floor"}, dir.path());
+  ASSERT_EQ(floor.exit_code, 0) << floor.err;
+  EXPECT_NE(floor.err.find("stopped: wave 2 accepted"), std::string::npos) << floor.err;
+  EXPECT_NE(floor.err.find("[sampler] method = \"resample_move\""), std::string::npos)
+      << floor.err;
 }
 
 class ResumeFingerprint : public ::testing::Test {
