@@ -51,8 +51,7 @@ TEST(Stopping, TheReasonIsOnScreen) {
   const auto floor = RunCli({"run", dir / "floor.toml", "--no-report", "-o", "floor"}, dir.path());
   ASSERT_EQ(floor.exit_code, 0) << floor.err;
   EXPECT_NE(floor.err.find("stopped: wave 2 accepted"), std::string::npos) << floor.err;
-  EXPECT_NE(floor.err.find("[sampler] method = \"resample_move\""), std::string::npos)
-      << floor.err;
+  EXPECT_NE(floor.err.find("[sampler] method = \"resample_move\""), std::string::npos) << floor.err;
 }
 
 class ResumeFingerprint : public ::testing::Test {

@@ -142,8 +142,8 @@ TEST(MoveDeterminism, FinalIndependentWaveResumesLikeTheUninterruptedRun) {
   bool before_final = false;
   for (std::size_t i = 0; i < checkpoints.points.size(); ++i) {
     const ResumePoint& point = checkpoints.points[i];
-    before_final = before_final || (point.completed.size() + 1 == reference.waves.size() &&
-                                    !point.has_partial);
+    before_final = before_final ||
+                   (point.completed.size() + 1 == reference.waves.size() && !point.has_partial);
     if (i % 3 != 0 && point.completed.size() + 1 != reference.waves.size()) continue;
     const auto h = RunCombinatorialSmc({&space, &sim, &distance}, one, nullptr, &point);
     EXPECT_TRUE(SameHistory(reference, h, &where)) << "checkpoint " << i << ": " << where;

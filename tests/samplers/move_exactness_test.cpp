@@ -341,10 +341,8 @@ TEST(MoveExactness, DISABLED_CoverageOverSeeds) {
   for (int problem = 0; problem < 4; ++problem) {
     // Problems 2 and 3: 0 and 1 again, ending with a final independent wave.
     const bool final_wave = problem >= 2;
-    const Distance& distance =
-        problem % 2 == 0 ? static_cast<const Distance&>(chain) : complement;
-    const std::vector<double> prior =
-        problem % 2 == 0 ? chain_prior : std::vector<double>(16, 0.5);
+    const Distance& distance = problem % 2 == 0 ? static_cast<const Distance&>(chain) : complement;
+    const std::vector<double> prior = problem % 2 == 0 ? chain_prior : std::vector<double>(16, 0.5);
     const double eps = problem % 2 == 0 ? 1.5 : 1.0;
     BinarySpaceOptions so;
     so.dimension = static_cast<int>(prior.size());
