@@ -89,24 +89,25 @@ void PrintDesign(const services::DesignOutcome& o) {
         least);
   }
   // The campaign view: which experiment decided which clamp (campaign.csv has the numbers).
-  if (!o.view.empty()) {
+  if (!o.campaign.alone.empty()) {
     std::printf(
         "decided by (P(fixed) with each experiment alone, the other clamps at the run's values; "
         "campaign.csv):\n");
-    std::vector<std::string> by(o.view.size() + 1);
-    for (std::size_t k = 0; k < o.run_p_fixed.size(); ++k) {
+    std::vector<std::string> by(o.campaign.alone.size() + 1);
+    for (std::size_t k = 0; k < o.campaign.run_p_fixed.size(); ++k) {
       const std::string who = services::DecidedBy(o, k);
-      for (std::size_t e = 0; e < o.view.size(); ++e) {
+      for (std::size_t e = 0; e < o.campaign.alone.size(); ++e) {
         if (who.empty() || who == "together") continue;
         // Names are [A-Za-z0-9_.-]: ", " separates them.
-        if ((", " + who + ", ").find(", " + o.view[e].name + ", ") == std::string::npos) continue;
+        const std::string& name = o.campaign.alone[e].name;
+        if ((", " + who + ", ").find(", " + name + ", ") == std::string::npos) continue;
         by[e] += (by[e].empty() ? "" : ", ") + std::to_string(k + 1);
       }
       if (who == "together") by.back() += (by.back().empty() ? "" : ", ") + std::to_string(k + 1);
     }
-    for (std::size_t e = 0; e < o.view.size(); ++e) {
+    for (std::size_t e = 0; e < o.campaign.alone.size(); ++e) {
       std::printf("  %s alone: clamps %s\n",
-                  o.view[e].name.c_str(),
+                  o.campaign.alone[e].name.c_str(),
                   by[e].empty() ? "none" : by[e].c_str());
     }
     if (!by.back().empty()) std::printf("  only together: clamps %s\n", by.back().c_str());

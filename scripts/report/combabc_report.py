@@ -38,7 +38,8 @@ missing; refused unless empty), in each format of the run's [output] figures (de
                                 centimetre axis, one panel per edge
   index.html                    the sensor's strip to scale (summary.json's "strip": each clamp
                                 section coloured by P(fixed), the loads and scan lines), the
-                                verdict line, the answer and the checks of summary.json, all of
+                                verdict line, the answer, which experiment decided which clamp
+                                (a joint run's campaign.csv), the checks of summary.json, all of
                                 the above with the run's provenance, and the per-wave table
 
 Modules: this file (arguments, reading the export), combabc_report_figures.py (the figures),
@@ -222,6 +223,7 @@ def load_export(folder, history=None):
     run["experiments"] = experiments_of(summary, run)
     run["named"] = any(x["name"] for x in run["experiments"])
     run["config"] = run_config(run)
+    run["campaign"] = load_campaign(os.path.join(folder, "campaign.csv"))
     # A multi-fidelity run's costs and continuation probabilities per wave, and their total.
     fidelity = summary.get("multi_fidelity") or {}
     run["multi_fidelity"] = list(fidelity.get("waves") or ())
@@ -233,6 +235,26 @@ def load_export(folder, history=None):
                    [r[0] for r in run["reals"]])
     load_curves(os.path.join(folder, "curves.csv"), waves, run["x_cm"].size)
     return run, waves
+
+
+def load_campaign(path):
+    """campaign.csv (a joint run of the sensor: which experiment decided which clamp;
+    docs/history.md, "Export") as {"experiments": names, "rows": one dict per clamp}, or None
+    without the file."""
+    if not os.path.isfile(path):
+        return None
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        alone = [c[len("p_fixed_alone:"):] for c in reader.fieldnames or ()
+                 if c.startswith("p_fixed_alone:")]
+        rows = []
+        for r in reader:
+            rows.append({"clamp": int(r["clamp"]), "name": r["name"], "edge": int(r["edge"]),
+                         "from_cm": float(r["from_cm"]), "to_cm": float(r["to_cm"]),
+                         "run": float(r["p_fixed_run"]), "together": float(r["p_fixed_together"]),
+                         "alone": [float(r["p_fixed_alone:" + x]) for x in alone],
+                         "decided_by": r["decided_by"]})
+    return {"experiments": alone, "rows": rows}
 
 
 def one_experiment(run):

@@ -345,6 +345,42 @@ def _findings(title, items):
     return f"<h3>{e(title)}</h3>\n<ul>\n{lines}\n</ul>\n"
 
 
+def campaign_html(campaign):
+    """A joint run's campaign.csv: which experiment decided which clamp. Per experiment the clamps
+    it decides alone (|P(fixed) - 0.5| above the margin on the run's side), those only the
+    experiments together decide, and per clamp its P(fixed) in the run, with each experiment's
+    likelihood alone and with all of them. Empty without the file (one experiment, or not the
+    sensor)."""
+    if not campaign or not campaign["rows"]:
+        return ""
+    names = campaign["experiments"]
+    rows = campaign["rows"]
+
+    def listed(clamps):
+        return ", ".join(str(c) for c in clamps) if clamps else "none"
+
+    by = [[r["clamp"] for r in rows if x in [w.strip() for w in r["decided_by"].split(",")]]
+          for x in names]
+    together = [r["clamp"] for r in rows if r["decided_by"] == "together"]
+    undecided = [r["clamp"] for r in rows if not r["decided_by"]]
+    items = [f"<li>{e(x)} alone: clamps {e(listed(c))}</li>" for x, c in zip(names, by)]
+    if together:
+        items.append(f"<li>only together: clamps {e(listed(together))}</li>")
+    if undecided:
+        items.append(f"<li>undecided in the run: clamps {e(listed(undecided))}</li>")
+    head = (["Clamp", "Where", "P(fixed) in the run"] + [f"{x} alone" for x in names]
+            + ["Together", "Decided by"])
+    body = [[e(str(r["clamp"])), e(f"edge {r['edge']}, {r['from_cm']:g}-{r['to_cm']:g} cm"),
+             fmt(r["run"], ".2f")] + [fmt(p, ".2f") for p in r["alone"]]
+            + [fmt(r["together"], ".2f"), e(r["decided_by"] or "—")] for r in rows]
+    numeric = range(2, 3 + len(names) + 1)
+    return ('<h2 id="campaign">Which experiment decided which clamp</h2>\n'
+            "<p>Each clamp's P(fixed) with each experiment's likelihood alone, the other clamps "
+            "held at the run's likely values (docs/algorithm.md, \"Which experiment decided which "
+            "clamp\"; campaign.csv of <code>combabc export</code>).</p>\n"
+            f"<ul>{''.join(items)}</ul>\n" + table(head, body, numeric))
+
+
 def checks_html(summary):
     """summary.json's "checks": the warnings before and after sampling, the noise level and the
     fit verdict per experiment. Empty when the export has no checks."""
@@ -501,6 +537,7 @@ def page_html(waves, run, estimator, written, formats, history):
     sensor = run.get("sensor", True)
     verdicts = verdict_line(summary, sensor)
     verdicts = f'<p class="verdict"><b>Verdict</b> &mdash; {e(verdicts)}</p>\n' if verdicts else ""
+    campaign = campaign_html(run.get("campaign")) if sensor else ""
     # What the engineer asked first: the strip, the verdicts and the answer; the run's provenance
     # after them.
     return f"""<!DOCTYPE html>
@@ -508,7 +545,7 @@ def page_html(waves, run, estimator, written, formats, history):
 <style>{STYLE}</style></head><body>
 <h1>combabc run report</h1>
 {strip_html(summary) if sensor else ""}{verdicts}{answer_html(summary, sensor)}{bars}
-{checks_html(summary)}<h2>Run</h2><table>{rows}</table>
+{campaign}{checks_html(summary)}<h2>Run</h2><table>{rows}</table>
 {experiments}<h2>Waves</h2><table>{head}{body}</table>
 {moves_html(waves)}{fidelity}{note}
 <h2>Figures</h2>

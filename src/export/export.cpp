@@ -587,6 +587,7 @@ void WriteAll(OutputDirectory& dir, const HistoryStore& store, const ExportOptio
     if (options.curves) WriteCurves(dir, m, h);
     WriteMeasured(dir, m);
     WriteExperiments(dir, m);
+    if (options.campaign) WriteCampaignCsv(dir.Add("campaign.csv"), *options.campaign);
   }
   if (options.json) WriteSummary(dir, m, h, options);
 }

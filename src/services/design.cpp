@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -175,7 +176,12 @@ Simulated SimulateRows(const CalibrationConfig& c,
   struct Place {
     std::size_t model = 0, load_case = 0, offset = 0;
   };
-  std::vector<plate::SensorOptions> options{DesignSensorOptions(c)};
+  // Without [design] (the campaign view of an export or report): no candidates, the experiments
+  // only, those the candidates' model would share merged into it as usual.
+  plate::SensorOptions no_candidates = c.model;
+  no_candidates.normalise = true;
+  no_candidates.load_cases.clear();
+  std::vector<plate::SensorOptions> options{c.design ? DesignSensorOptions(c) : no_candidates};
   const std::size_t candidates = options.front().load_cases.size();
   std::vector<Place> places(c.experiments.size());
   Simulated s;
@@ -206,7 +212,9 @@ Simulated SimulateRows(const CalibrationConfig& c,
   std::vector<std::unique_ptr<plate::SensorModel>> models;
   models.reserve(options.size());
   for (const plate::SensorOptions& o : options) {
-    models.push_back(std::make_unique<plate::SensorModel>(o, precompute));
+    // No model for a load-case list left empty (no candidates, and no experiment merged into it).
+    models.push_back(o.load_cases.empty() ? nullptr
+                                          : std::make_unique<plate::SensorModel>(o, precompute));
   }
   const plate::SensorOptions& design = options.front();
   const auto d = static_cast<std::size_t>(c.space.dimension);
@@ -221,12 +229,12 @@ Simulated SimulateRows(const CalibrationConfig& c,
   pool.ParallelFor(rows, 16, [&](std::size_t begin, std::size_t end) {
     std::vector<std::vector<double>> out(models.size());
     for (std::size_t m = 0; m < models.size(); ++m) {
-      out[m].resize(static_cast<std::size_t>(models[m]->num_outputs()));
+      if (models[m]) out[m].resize(static_cast<std::size_t>(models[m]->num_outputs()));
     }
     for (std::size_t i = begin; i < end; ++i) {
       try {
         for (std::size_t m = 0; m < models.size(); ++m) {
-          models[m]->Profile(bits.subspan(i * d, d), out[m]);
+          if (models[m]) models[m]->Profile(bits.subspan(i * d, d), out[m]);
         }
       } catch (const plate::SingularSystem& e) {
         s.singular[i] = e.message();
@@ -481,12 +489,13 @@ std::vector<double> RunLogLikelihood(const CalibrationConfig& c,
 // run's particles cannot give it: where the joint data decide a clamp the population holds no
 // particle with it flipped, and reweighting them by one experiment would credit that experiment
 // with what the others decided.
-void CampaignView(const CalibrationConfig& c,
-                  const design::LocalPopulation& local,
-                  const std::vector<double>& log_prior,
-                  const std::vector<std::vector<double>>& per_experiment,
-                  const std::vector<double>& joint,
-                  DesignOutcome& o) {
+CampaignView MakeCampaignView(const CalibrationConfig& c,
+                              const design::LocalPopulation& local,
+                              const std::vector<double>& log_prior,
+                              const std::vector<std::vector<double>>& per_experiment,
+                              const std::vector<double>& joint,
+                              std::vector<double> run_p_fixed,
+                              double identified_margin) {
   const auto d = static_cast<std::size_t>(local.dimension);
   auto p_fixed = [&](const std::vector<double>& ll) {
     std::vector<double> p(d, 0.0);
@@ -506,12 +515,19 @@ void CampaignView(const CalibrationConfig& c,
     for (double& v : p) v /= static_cast<double>(local.truths.size());
     return p;
   };
-  o.view_together = p_fixed(joint);
+  CampaignView view;
+  view.clamp_names = c.space.names;
+  view.clamps_per_edge = c.model.clamps_per_edge;
+  view.length_m = c.model.length;
+  view.identified_margin = identified_margin;
+  view.run_p_fixed = std::move(run_p_fixed);
+  view.together = p_fixed(joint);
   for (std::size_t e = 0; e < c.experiments.size(); ++e) {
     const std::string& name = c.experiments[e].name;
-    o.view.push_back(
+    view.alone.push_back(
         {name.empty() ? "experiment " + std::to_string(e + 1) : name, p_fixed(per_experiment[e])});
   }
+  return view;
 }
 
 void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationConfig& c) {
@@ -567,21 +583,7 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
     ident << '\n';
   }
   if (!o.next_config.empty()) dir.Add("next.toml") << o.next_config;
-  if (o.view.empty()) return;
-  std::ostream& view = dir.Add("campaign.csv");
-  const int n = c.model.clamps_per_edge;
-  const double section = c.model.length / n * 100;
-  view << "clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together";
-  for (const DesignOutcome::Evidence& e : o.view) view << ",\"p_fixed_alone:" << e.name << '"';
-  view << ",decided_by\n";
-  for (std::size_t k = 0; k < o.run_p_fixed.size(); ++k) {
-    const int s = static_cast<int>(k) % n;
-    view << k + 1 << ",\"" << c.space.names[k] << "\"," << (static_cast<int>(k) < n ? 1 : 2) << ','
-         << DesignNumber(s * section) << ',' << DesignNumber((s + 1) * section) << ','
-         << DesignNumber(o.run_p_fixed[k]) << ',' << DesignNumber(o.view_together[k]);
-    for (const DesignOutcome::Evidence& e : o.view) view << ',' << DesignNumber(e.p_fixed[k]);
-    view << ",\"" << DecidedBy(o, k) << "\"\n";
-  }
+  if (!o.campaign.alone.empty()) WriteCampaignCsv(dir.Add("campaign.csv"), o.campaign);
 }
 
 }  // namespace
@@ -636,7 +638,6 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   options.truths = c.design->truths;
   options.select = c.design->select;
   options.identified_margin = c.design->identified_margin;
-  o.identified_margin = c.design->identified_margin;
   options.seed = c.smc.seed;
   options.threads = threads;
   auto decided = [&](const std::vector<double>& marginals) {
@@ -688,8 +689,8 @@ DesignOutcome RunDesign(const DesignRequest& request) {
     std::vector<std::vector<double>> per_experiment;
     const std::vector<double> ll =
         RunLogLikelihood(c, s, thresholds, request.posterior_path, &per_experiment);
-    o.run_p_fixed = marginals;
-    CampaignView(c, local, local.log_weight, per_experiment, ll, o);
+    o.campaign = MakeCampaignView(
+        c, local, local.log_weight, per_experiment, ll, marginals, c.design->identified_margin);
     for (std::size_t r = 0; r < local.rows(); ++r) {
       local.log_weight[r] += ll[r];
       if (!s.singular[r].empty()) {
@@ -767,7 +768,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
         "combabc_design.py", "COMBABC_DESIGN_SCRIPT", "python3-numpy and python3-matplotlib");
     // identifiability.<fmt>; with --posterior also campaign.<fmt>, which experiment decided what.
     std::vector<std::string> tables{"identifiability"};
-    if (!o.view.empty()) tables.emplace_back("campaign");
+    if (!o.campaign.alone.empty()) tables.emplace_back("campaign");
     for (const std::string& format : c.output.figure_formats) {
       for (const std::string& table : tables) {
         std::string name = table;
@@ -791,6 +792,41 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   o.directory = directory;
   o.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return o;
+}
+
+std::optional<CampaignView> RunCampaignView(const std::string& history_path, std::string* why_not) {
+  const RunMetadata metadata = HistoryStore::Open(history_path, /*read_only=*/true).LoadMetadata();
+  CalibrationConfig c;
+  try {
+    c = ParseConfig(metadata.config_text, metadata.config_path);
+  } catch (const Error&) {
+    return std::nullopt;  // a config this version no longer reads: no sensor to simulate
+  }
+  if (c.simulator.kind != SimulatorKind::kSensor || c.experiments.size() < 2) return std::nullopt;
+  try {
+    if (!c.reals.empty()) {
+      throw Error(ErrorKind::kUsage,
+                  "the run has continuous parameters ([parameters]); the view judges the bits "
+                  "with them fixed");
+    }
+    design::DesignOptions defaults;
+    const int truths = c.design ? c.design->truths : defaults.truths;
+    const double margin = c.design ? c.design->identified_margin : defaults.identified_margin;
+    std::string what;
+    std::vector<double> thresholds;
+    const design::Population known = FromPosterior(history_path, c, &what, &thresholds);
+    design::LocalPopulation local =
+        Neighbourhoods(c, known, design::DrawTruths(known.weights, truths, c.smc.seed));
+    const Simulated s = SimulateRows(c, local.bits, local.rows(), c.smc.threads, true);
+    std::vector<std::vector<double>> per_experiment;
+    const std::vector<double> ll =
+        RunLogLikelihood(c, s, thresholds, history_path, &per_experiment);
+    return MakeCampaignView(
+        c, local, local.log_weight, per_experiment, ll, design::Marginals(known), margin);
+  } catch (const Error& e) {
+    if (why_not != nullptr) *why_not = e.what();
+    return std::nullopt;
+  }
 }
 
 }  // namespace combabc::services

@@ -257,20 +257,6 @@ std::string ClampWhere(const CalibrationConfig& c, int bit) {
          NextNumber(s * section * 100) + "-" + NextNumber((s + 1) * section * 100) + " cm)";
 }
 
-std::string DecidedBy(const DesignOutcome& o, std::size_t k) {
-  const double run = o.run_p_fixed.at(k);
-  if (!(std::abs(run - 0.5) > o.identified_margin)) return "";
-  std::string out;
-  for (const DesignOutcome::Evidence& e : o.view) {
-    const double p = e.p_fixed.at(k);
-    if (std::abs(p - 0.5) > o.identified_margin && (p > 0.5) == (run > 0.5)) {
-      if (!out.empty()) out += ", ";
-      out += e.name;
-    }
-  }
-  return out.empty() ? "together" : out;
-}
-
 NextStep WriteNextConfig(const CalibrationConfig& c,
                          const DesignCandidate& k,
                          const fs::path& design_directory) {

@@ -4,10 +4,12 @@
 // [[experiment]] table, and the chosen candidate's, with the data file it expects), the plain
 // instructions for the bench, and where each clamp is. Private to src/services.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "combabc/config/config.hpp"
+#include "combabc/export/campaign.hpp"
 #include "combabc/services/design.hpp"
 
 namespace combabc::services {
@@ -38,5 +40,14 @@ std::vector<std::string> Instructions(const CalibrationConfig& c,
                                       const DesignCandidate& k,
                                       const NextStep& next,
                                       const std::string& next_config_path);
+
+// The campaign view of a finished joint run of the sensor (docs/algorithm.md, "Which experiment
+// decided which clamp"), as `combabc design --posterior` computes it: from the run's config (the
+// history's copy) and its data files, with its [design]'s truths and identified_margin, or their
+// defaults without one; its own simulations of the truths' neighbourhoods. For `combabc export`
+// and the report. nullopt for a run with one experiment or another simulator (nothing to say);
+// also where it cannot be computed (the data files gone, continuous parameters, signed
+// multi-fidelity weights), then with why in *why_not: an export goes on without it.
+std::optional<CampaignView> RunCampaignView(const std::string& history_path, std::string* why_not);
 
 }  // namespace combabc::services

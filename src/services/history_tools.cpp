@@ -10,6 +10,7 @@
 #include "combabc/export/answer.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
+#include "services/design_campaign.hpp"
 #include "services/python_script.hpp"
 #include "services/read_back.hpp"
 
@@ -133,7 +134,14 @@ ExportOutcome ExportHistory(const std::string& history_path,
   options.bit_positions = BitPositions(metadata);
   options.strip = StripOf(metadata);
   options.checks = CheckOptions(metadata);
+  // A joint run of the sensor: which experiment decided which clamp (simulates the truths'
+  // neighbourhoods). Where it cannot be had, the rest is exported and the note says why.
+  std::string why_not;
+  options.campaign = RunCampaignView(history_path, &why_not);
   ExportRun(store, outcome.directory, options);
+  if (!why_not.empty()) {
+    outcome.note += (outcome.note.empty() ? "" : "; ") + std::string("no campaign.csv: ") + why_not;
+  }
   return outcome;
 }
 

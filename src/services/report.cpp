@@ -19,6 +19,7 @@
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/report.hpp"
+#include "services/design_campaign.hpp"
 #include "services/python_script.hpp"
 #include "services/read_back.hpp"
 #include "services/report_checks.hpp"
@@ -143,6 +144,9 @@ std::string WriteReport(const std::string& history_path,
   export_options.bit_positions = BitPositions(metadata);
   export_options.strip = StripOf(metadata);
   export_options.checks = CheckOptions(metadata);
+  // The section "Which experiment decided which clamp" of a joint run of the sensor; without it
+  // where it cannot be had (the report draws what the export holds).
+  export_options.campaign = RunCampaignView(history_path, nullptr);
   ExportRun(store, exported.string(), export_options);
   std::vector<std::string> args = {tools.python,
                                    tools.script,

@@ -16,6 +16,7 @@
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
 #include "combabc/services/design.hpp"
+#include "combabc/services/history_tools.hpp"
 #include "combabc/services/run.hpp"
 #include "combabc/services/simulate.hpp"
 #include "support/test_support.hpp"
@@ -432,13 +433,10 @@ TEST(Design, TheNextExperimentKeepsTheFoldedNormal) {
       << o.next_config;
 }
 
-// The campaign view (which experiment decided which clamp): two experiments on the tiny sensor,
-// each loading one end and scanning only that end, their data the model's own profiles of one
-// configuration. A clamp at the left end is decided by the left experiment alone and not by the
-// right one, and the other way round; campaign.csv says so. Reweighting the joint run's particles
-// instead would credit both: none of them has either clamp flipped.
-TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
-  const testing::TempFolder folder("design-campaign-view");
+// The joint run of the tiny sensor the campaign-view tests share: experiments "left" and "right",
+// the data the model's own profiles of clamps 1 0 1 / 1 0 1; `design` the config's [design] table
+// (or none). Returns the run's history.
+std::string JointTinySensorRun(const testing::TempFolder& folder, const std::string& design) {
   auto experiment = [](const std::string& name, double load_cm, const std::string& window) {
     return "[[experiment]]\nname = \"" + name +
            "\"\n[experiment.load]\nx = " + std::to_string(load_cm / 100) +
@@ -460,8 +458,8 @@ TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
       "[model]\n[model.clamps]\nper_edge = 3\n"
       "[model.mesh]\nelements_per_section = 2\nelements_across_width = 2\n" +
       experiment("left", 15, "[0, 30]") + experiment("right", 75, "[60, 90]") +
-      "[sampler]\nwaves = 1\naccepted_per_wave = 4\nseed = 3\nthreads = 1\n"
-      "[design]\nload_x = [45]\ntruths = 2\nselect = 1\n[output]\ndirectory = \"results\"\n";
+      "[sampler]\nwaves = 1\naccepted_per_wave = 4\nseed = 3\nthreads = 1\n" + design +
+      "[output]\ndirectory = \"results\"\n";
   std::ofstream(folder / "campaign.toml") << config;
   for (const char* name : {"left", "right"}) {
     std::ofstream(folder / (std::string(name) + ".csv")) << "x_cm,w_um\n0,1\n";
@@ -481,19 +479,30 @@ TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
   services::RunRequest run;
   run.config_path = folder / "campaign.toml";
   run.report = false;
-  const services::RunOutcome outcome = services::RunCalibration(run);
+  return services::RunCalibration(run).history_path;
+}
+
+// The campaign view (which experiment decided which clamp): two experiments on the tiny sensor,
+// each loading one end and scanning only that end, their data the model's own profiles of one
+// configuration. A clamp at the left end is decided by the left experiment alone and not by the
+// right one, and the other way round; campaign.csv says so. Reweighting the joint run's particles
+// instead would credit both: none of them has either clamp flipped.
+TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
+  const testing::TempFolder folder("design-campaign-view");
+  const std::string history =
+      JointTinySensorRun(folder, "[design]\nload_x = [45]\ntruths = 2\nselect = 1\n");
   services::DesignRequest request = Request(folder);
-  request.posterior_path = outcome.history_path;
+  request.posterior_path = history;
   const services::DesignOutcome o = services::RunDesign(request);
-  ASSERT_EQ(o.view.size(), 2U);
-  EXPECT_EQ(o.view[0].name, "left");
+  ASSERT_EQ(o.campaign.alone.size(), 2U);
+  EXPECT_EQ(o.campaign.alone[0].name, "left");
   // Clamp 1 (edge 1, 0-30 cm): the left experiment alone decides it, the right one cannot.
-  EXPECT_GT(o.view[0].p_fixed[0], 0.9);
-  EXPECT_LT(std::abs(o.view[1].p_fixed[0] - 0.5), 0.4) << o.view[1].p_fixed[0];
+  EXPECT_GT(o.campaign.alone[0].p_fixed[0], 0.9);
+  EXPECT_LT(std::abs(o.campaign.alone[1].p_fixed[0] - 0.5), 0.4) << o.campaign.alone[1].p_fixed[0];
   EXPECT_EQ(services::DecidedBy(o, 0), "left");
   // Clamp 3 (edge 1, 60-90 cm): the other way round.
-  EXPECT_GT(o.view[1].p_fixed[2], 0.9);
-  EXPECT_LT(std::abs(o.view[0].p_fixed[2] - 0.5), 0.4) << o.view[0].p_fixed[2];
+  EXPECT_GT(o.campaign.alone[1].p_fixed[2], 0.9);
+  EXPECT_LT(std::abs(o.campaign.alone[0].p_fixed[2] - 0.5), 0.4) << o.campaign.alone[0].p_fixed[2];
   EXPECT_EQ(services::DecidedBy(o, 2), "right");
   std::ifstream csv(folder / "results/design/campaign.csv");
   std::string header, first;
@@ -503,6 +512,41 @@ TEST(Design, TheCampaignViewSaysWhichExperimentDecidedWhichClamp) {
             "clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together,\"p_fixed_alone:left\","
             "\"p_fixed_alone:right\",decided_by");
   EXPECT_EQ(first.substr(first.rfind(',')), ",\"left\"") << first;
+}
+
+// `combabc export` of the same joint run, whose config has no [design] (the defaults: 200 truths,
+// margin 0.4): campaign.csv beside marginals.csv, each end's clamp decided by its own experiment.
+TEST(Design, TheExportOfAJointRunSaysWhichExperimentDecidedWhichClamp) {
+  const testing::TempFolder folder("design-campaign-export");
+  const std::string history = JointTinySensorRun(folder, "");
+  const services::ExportOutcome exported =
+      services::ExportHistory(history, folder / "export", false, /*netcdf=*/false);
+  EXPECT_EQ(exported.note, "");
+  ASSERT_TRUE(std::filesystem::exists(folder / "export/marginals.csv"));
+  std::ifstream csv(folder / "export/campaign.csv");
+  ASSERT_TRUE(csv) << "no campaign.csv";
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header,
+            "clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together,\"p_fixed_alone:left\","
+            "\"p_fixed_alone:right\",decided_by");
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(csv, line);) {
+    std::vector<std::string> fields;
+    std::stringstream in(line);
+    for (std::string f; std::getline(in, f, ',');) fields.push_back(f);
+    rows.push_back(fields);
+  }
+  ASSERT_EQ(rows.size(), 6U);
+  for (const std::vector<std::string>& r : rows) ASSERT_EQ(r.size(), 10U) << r.front();
+  // Clamp 1 (edge 1, 0-30 cm) by the left experiment alone, clamp 3 (60-90 cm) by the right one.
+  EXPECT_EQ(rows[0][4], "30");
+  EXPECT_GT(std::stod(rows[0][7]), 0.9);
+  EXPECT_LT(std::abs(std::stod(rows[0][8]) - 0.5), 0.4) << rows[0][8];
+  EXPECT_EQ(rows[0][9], "\"left\"");
+  EXPECT_GT(std::stod(rows[2][8]), 0.9);
+  EXPECT_LT(std::abs(std::stod(rows[2][7]) - 0.5), 0.4) << rows[2][7];
+  EXPECT_EQ(rows[2][9], "\"right\"");
 }
 
 }  // namespace

@@ -172,6 +172,43 @@ class ReportScript(unittest.TestCase):
             # The P = 0 bar: a thick line on the axis in the bars' colour.
             self.assertIn("stroke: #3a7d44; stroke-width: 2.5", svg)
 
+    def test_a_joint_run_says_which_experiment_decided_which_clamp_and_one_run_does_not(self):
+        # campaign.csv, which `combabc export` writes for a joint run of the sensor only, makes
+        # the section; without it (one experiment) the page has none.
+        sys.path.insert(0, SCRIPTS)
+        try:
+            import combabc_report as script
+            import combabc_report_page as page
+        finally:
+            sys.path.pop(0)
+        single = os.path.join(WORKDIR, "peaked", "export")
+        joint = os.path.join(WORKDIR, "joint", "export")
+        shutil.rmtree(joint, ignore_errors=True)
+        shutil.copytree(single, joint)
+        with open(os.path.join(joint, "campaign.csv"), "w", newline="") as f:
+            f.write('clamp,name,edge,from_cm,to_cm,p_fixed_run,p_fixed_together,'
+                    '"p_fixed_alone:left","p_fixed_alone:right",decided_by\n'
+                    '1,"inlet valve",1,0,30,0.98,0.99,0.97,0.52,"left"\n'
+                    '2,"pump B",1,30,60,0.5,0.55,0.5,0.5,""\n'
+                    '3,"sensor <3>",1,60,90,0.02,0.01,0.6,0.03,"right"\n')
+        pages = {}
+        for name, export in (("single", single), ("joint", joint)):
+            run, waves = script.load_export(export)
+            run["sensor"] = True
+            pages[name] = page.page_html(waves, run, "paper", [], ("svg",), "history.sqlite")
+        self.assertNotIn("Which experiment decided which clamp", pages["single"])
+        html = pages["joint"]
+        self.assertIn("Which experiment decided which clamp", html)
+        self.assertIn("<li>left alone: clamps 1</li>", html)
+        self.assertIn("<li>right alone: clamps 3</li>", html)
+        self.assertIn("<li>undecided in the run: clamps 2</li>", html)
+        self.assertIn("<th>left alone</th><th>right alone</th>", html)
+        self.assertIn("edge 1, 60-90 cm", html)
+        # The page is the single run's with the section added, nothing else changed.
+        start = html.index('<h2 id="campaign">')
+        end = html.index("</table>", start) + len("</table>\n")
+        self.assertEqual(html[:start] + html[end:], pages["single"])
+
     def test_a_peak_outside_the_window_gets_a_zoom_panel(self):
         svg = read(os.path.join(self.peaked, "wave_2_curves.svg"))
         self.assertEqual(axes_in(os.path.join(self.peaked, "wave_2_curves.svg")), 2)
@@ -248,7 +285,6 @@ class ProblemRun(unittest.TestCase):
         at_data = np.interp(run["measured_x_cm"], run["x_cm"], waves[1].curves[0])
         np.testing.assert_allclose(at_data, run["measured_y"], rtol=1e-12)
         self.assertGreater(run["measured_y"].max(), 2.0)  # not a normalised profile
-
 
 if __name__ == "__main__":
     shutil.rmtree(WORKDIR, ignore_errors=True)

@@ -9,6 +9,7 @@
 
 #include "combabc/core/output_files.hpp"
 #include "combabc/export/answer.hpp"
+#include "combabc/export/campaign.hpp"
 #include "combabc/export/fit_checks.hpp"
 #include "combabc/export/strip.hpp"
 #include "combabc/history/history_store.hpp"
@@ -32,6 +33,9 @@ struct ExportOptions {
   // summary.json's "checks" (export/fit_checks.hpp): their options, with the stated noise of the
   // run's noise-aware components, which the services layer reads from the run's config.
   FitCheckOptions checks;
+  // campaign.csv (export/campaign.hpp): which experiment decided which clamp, for a joint run of
+  // the sensor, which the services layer computes from the run's config and data. None: no file.
+  std::optional<CampaignView> campaign;
   // Called with the CSV and JSON files staged, before anything is committed: adds files made
   // from them (the NetCDF file, written by a script: services/history_tools.cpp). Empty: none.
   std::function<void(OutputDirectory&)> add_files;

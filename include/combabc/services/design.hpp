@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "combabc/design/experiment_design.hpp"
+#include "combabc/export/campaign.hpp"
 
 namespace combabc::services {
 
@@ -69,23 +70,18 @@ struct DesignOutcome {
   std::string next_config;       // next.toml: the config with every experiment, the new one last
   std::string next_config_path;  // where it was written
   std::string next_data_path;    // where the new experiment's data file is expected
-  // The campaign view of the run (--posterior only): per clamp, its P(fixed) in the run, and over
-  // the truths' neighbourhoods with all the run's experiments and with each one's likelihood
-  // alone (docs/algorithm.md, "Which experiment decided which clamp").
-  struct Evidence {
-    std::string name;             // the experiment's, "experiment 1" for the shorthand's
-    std::vector<double> p_fixed;  // per clamp
-  };
-  std::vector<double> run_p_fixed;
-  std::vector<double> view_together;
-  double identified_margin = 0.4;  // [design]'s: |P(fixed) - 0.5| above it decides a clamp
-  std::vector<Evidence> view;
+  // The campaign view of the run (--posterior only; its `alone` empty otherwise): per clamp, its
+  // P(fixed) in the run, and over the truths' neighbourhoods with all the run's experiments and
+  // with each one's likelihood alone (docs/algorithm.md, "Which experiment decided which clamp").
+  CampaignView campaign;
   double wall_seconds = 0.0;
 };
 
 // The experiments that decide clamp k (0-based) alone, on the run's side, joined by ", ";
 // "together" where the run decides it and none alone does; "" where the run leaves it undecided.
-std::string DecidedBy(const DesignOutcome& o, std::size_t k);
+inline std::string DecidedBy(const DesignOutcome& o, std::size_t k) {
+  return CampaignDecidedBy(o.campaign, k);
+}
 
 DesignOutcome RunDesign(const DesignRequest& request);
 
