@@ -44,13 +44,16 @@ TEST(Stopping, TheReasonIsOnScreen) {
   // A rejection run stopped on its acceptance floor after its first wave is pointed to
   // resample-move.
   config = kConfig;
-  config.replace(config.find("accepted_per_wave = 5"),
-                 std::string("accepted_per_wave = 5").size(),
-                 "accepted_per_wave = 5\nmin_acceptance_rate = 0.9\nacceptance_floor_after = 20");
+  const std::string waves = "waves = 2\naccepted_per_wave = 5";
+  config.replace(config.find(waves),
+                 waves.size(),
+                 "waves = 3\naccepted_per_wave = 20\nmin_acceptance_rate = 0.9\n"
+                 "acceptance_floor_after = 20");
   std::ofstream(dir / "floor.toml") << config;
-  const auto floor = RunCli({"run", dir / "floor.toml", "--no-report", "-o", "floor"}, dir.path());
+  const auto floor =
+      RunCli({"run", dir / "floor.toml", "--no-report", "-o", dir / "floor"}, dir.path());
   ASSERT_EQ(floor.exit_code, 0) << floor.err;
-  EXPECT_NE(floor.err.find("stopped: wave 2 accepted"), std::string::npos) << floor.err;
+  EXPECT_NE(floor.err.find("below min_acceptance_rate = 0.9"), std::string::npos) << floor.err;
   EXPECT_NE(floor.err.find("[sampler] method = \"resample_move\""), std::string::npos) << floor.err;
 }
 
