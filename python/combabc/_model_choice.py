@@ -5,6 +5,7 @@ indexed by model name, with each model's history file added."""
 
 import json
 import os
+import warnings
 
 from . import _core
 
@@ -66,10 +67,13 @@ def model_choice(config, *, exact=False, threads=None, output_directory=None, ov
     `combabc enumerate CONFIG`, the exact probabilities). Each model is calibrated (enumerated) on
     its own into <directory>/models/<name>/ (<directory>/enumeration/models/<name>/); running it
     again reads the finished models and resumes unfinished ones, overwrite=True starts afresh.
-    threads, output_directory and report as combabc.run's. Returns load_model_choice's DataFrame:
+    threads, output_directory and report as combabc.run's (report=True also draws
+    model_choice/model_probabilities.png; a UserWarning says why when it cannot). Returns load_model_choice's DataFrame:
     table.loc["clamped", "probability"], table["se"], combabc.load_history(table["history"][k])."""
     data = _core.model_choice(os.fspath(config), -1 if threads is None else threads,
                               os.fspath(output_directory or ""), overwrite, report, exact)
+    if data.get("note"):
+        warnings.warn(data["note"], stacklevel=2)
     table = load_model_choice(data["directory"])
     # The histories as the service names them (the same files; this keeps its spelling).
     table["history"] = [m["history"] or path
