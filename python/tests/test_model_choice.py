@@ -91,8 +91,15 @@ def test_public_model_choice_reads_back_the_tables(tmp_path):
         assert row["simulations"] == model["simulations"]
         assert os.path.samefile(row["history"], model["history"])
     assert table["probability"].sum() == pytest.approx(1.0)
+    # The probabilities per wave (waves.csv): its last wave is the table's (both models reached
+    # the final thresholds at their third wave).
+    waves = table.attrs["waves"]
+    assert list(waves["wave"].unique()) == [1, 2, 3]
+    last = waves[waves["wave"] == 3].set_index("model")
+    assert list(last["probability"]) == pytest.approx(list(table["probability"]), rel=1e-12)
     exact = combabc.model_choice(tmp_path / "run.toml", exact=True)
     assert exact.attrs["exact"] and (exact["se"] == 0).all()
+    assert exact.attrs["waves"] is None  # one exact evidence per model, no waves
     # A model's History finds its model choice; a plain run's has none.
     history = combabc.load_history(table.loc["pinned", "history"])
     assert list(history.model_probabilities["probability"]) == list(table["probability"])
