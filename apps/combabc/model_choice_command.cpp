@@ -19,7 +19,9 @@ void PrintModelChoice(const Session& session,
                       const Answer& answer_of) {
   if (!session.primary()) return;
   std::cout << services::FormatModelProbabilities(outcome);
-  std::cout << "tables:  " << outcome.directory << "/summary.json, models.csv\n";
+  std::cout << "tables:  " << outcome.directory << "/summary.json, models.csv"
+            << (outcome.exact ? "" : ", waves.csv") << "\n";
+  if (!outcome.note.empty()) std::cerr << "combabc: note: " << outcome.note << "\n";
   for (std::size_t k = 0; k < per_model.size(); ++k) {
     std::cout << "\n== model \"" << outcome.models[k].name << "\" ==\n";
     answer_of(per_model[k]);

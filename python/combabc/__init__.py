@@ -10,6 +10,7 @@
     history = combabc.run(problem, options, output_directory="out")  # writes out/history.sqlite
     history = combabc.resume(history.path, problem, options)  # a Problem's run, continued
     history = combabc.enumerate("config.toml")            # as `combabc enumerate`
+    models = combabc.model_choice("choice.toml")          # [model_choice]: P(model) per model
     figure = combabc.plot.marginals(history)              # matplotlib figures (combabc.plot)
     model = combabc.SensorModel("config.toml")            # as `combabc simulate`
     y = model.profile("0110...")
@@ -29,14 +30,15 @@ from ._core import (MAX_BITS, BatchRandom, BinarySpace, ContinuousParameter, Cus
                     ThresholdSchedule)
 from . import plot
 from .history import Experiment, History, ModeLossWarning, Wave
+from ._model_choice import load_model_choice, model_choice
 
 __version__ = _core.__version__
 __all__ = ["MAX_BITS", "BatchRandom", "BinarySpace", "ContinuousParameter", "CustomPrior", "Error",
            "Experiment", "History", "LogisticKernelOptions", "MoveOptions", "MultiFidelityOptions",
            "ModeLossWarning", "MultivariateNormalPrior", "Problem", "ProposalOptions",
            "SensorModel", "SimulationFailed", "SmcOptions", "TemperingSchedule",
-           "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "make_options",
-           "plot", "resume", "run"]
+           "ThresholdSchedule", "Wave", "enumerate", "export", "load_history", "load_model_choice",
+           "make_options", "model_choice", "plot", "resume", "run"]
 
 
 class Problem:

@@ -174,6 +174,21 @@ class History:
                             ("combabc_version", "config_path", "config_text", "end_time")}
 
     @property
+    def model_probabilities(self):
+        """For one model's run in a model choice (its history in <directory>/models/<name>/):
+        the whole choice's table, combabc.load_model_choice(<directory>); None for any other
+        run, or before the model choice has written its model_choice/models.csv."""
+        if not self.path:
+            return None
+        models = os.path.dirname(os.path.dirname(os.path.abspath(self.path)))
+        folder = os.path.join(os.path.dirname(models), "model_choice")
+        if os.path.basename(models) != "models" or not os.path.isfile(
+                os.path.join(folder, "models.csv")):
+            return None
+        from ._model_choice import load_model_choice
+        return load_model_choice(folder)
+
+    @property
     def binary_kernel(self):
         """The binary proposal kernel the run used, `auto` resolved ("independent", "logistic",
         ...), as summary.json's proposal.binary_kernel."""

@@ -70,6 +70,7 @@ py::dict ModelChoice(const std::string& config_path,
       outcome.models.empty() ? std::string() : outcome.models[outcome.reference].name;
   result["models"] = models;
   result["directory"] = outcome.directory;
+  result["note"] = outcome.note;  // why the figure per wave was not drawn ("" if it was)
   return result;
 }
 

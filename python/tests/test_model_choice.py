@@ -2,6 +2,8 @@
 model of a [model_choice] config, and with exact=True enumerates them; the run's probabilities
 agree with the exact ones within 4 Monte-Carlo errors (two tiny sensors, 2^6 configurations)."""
 
+import os
+
 import pytest
 
 import combabc
@@ -66,3 +68,42 @@ def test_model_choice_run_agrees_with_enumeration(tmp_path):
     # A model-choice config is not one run: combabc.run refuses it.
     with pytest.raises(combabc.Error, match="model_choice"):
         combabc.run(str(tmp_path / "run.toml"), output_directory=str(tmp_path / "plain"))
+
+
+def test_public_model_choice_reads_back_the_tables(tmp_path):
+    """combabc.model_choice and load_model_choice: the service's probabilities as a DataFrame by
+    model, each model's history, and History.model_probabilities from a model's history."""
+    with open(tmp_path / "data.csv", "w") as f:
+        f.write("position_m,displacement_m\n")
+        for i in range(31, 60, 3):
+            f.write(f"{i / 100},{1.0 - abs(i / 100 - 0.45)}\n")
+    (tmp_path / "run.toml").write_text(CONFIG.replace("accepted_per_wave = 300",
+                                                      "accepted_per_wave = 100"))
+    raw = combabc._core.model_choice(str(tmp_path / "run.toml"))
+    # Again through the public wrapper: the finished models are read, not run again.
+    table = combabc.model_choice(tmp_path / "run.toml")
+    assert list(table.index) == ["clamped", "pinned"]
+    assert table.attrs["reference"] == "clamped" and not table.attrs["exact"]
+    for model in raw["models"]:
+        row = table.loc[model["name"]]
+        assert row["probability"] == pytest.approx(model["probability"], rel=1e-12)
+        assert row["se"] == pytest.approx(model["se"], rel=1e-12)
+        assert row["simulations"] == model["simulations"]
+        assert os.path.samefile(row["history"], model["history"])
+    assert table["probability"].sum() == pytest.approx(1.0)
+    # The probabilities per wave (waves.csv): its last wave is the table's (both models reached
+    # the final thresholds at their third wave).
+    waves = table.attrs["waves"]
+    assert list(waves["wave"].unique()) == [1, 2, 3]
+    last = waves[waves["wave"] == 3].set_index("model")
+    assert list(last["probability"]) == pytest.approx(list(table["probability"]), rel=1e-12)
+    exact = combabc.model_choice(tmp_path / "run.toml", exact=True)
+    assert exact.attrs["exact"] and (exact["se"] == 0).all()
+    assert exact.attrs["waves"] is None  # one exact evidence per model, no waves
+    # A model's History finds its model choice; a plain run's has none.
+    history = combabc.load_history(table.loc["pinned", "history"])
+    assert list(history.model_probabilities["probability"]) == list(table["probability"])
+    assert combabc.load_history(exact.loc["pinned", "history"]).model_probabilities.attrs["exact"]
+    assert combabc.load_history(exact.loc["pinned", "history"]).model_probabilities is not None
+    with pytest.raises(FileNotFoundError, match="no model choice"):
+        combabc.load_model_choice(tmp_path)

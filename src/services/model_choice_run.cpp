@@ -2,9 +2,11 @@
 // (include/combabc/services/model_choice_run.hpp).
 #include "combabc/services/model_choice_run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "combabc/config/config.hpp"
@@ -12,6 +14,7 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
 #include "export/json_text.hpp"
+#include "services/python_script.hpp"
 #include "services/read_back.hpp"
 
 namespace combabc::services {
@@ -70,10 +73,64 @@ void CreateModelsFolder(const std::string& directory) {
   }
 }
 
-// summary.json and models.csv in <directory>/model_choice/.
+// waves.csv: the model probabilities after each wave (ModelProbabilitiesByWave), each model's
+// evidence at its own wave's thresholds (its last wave's once its run has ended).
+void WriteWaves(std::ostream& csv, const ModelChoiceOutcome& o) {
+  csv << "wave,model,log_evidence,relative_se,probability,se,upper_bound_only,upper\n";
+  const std::vector<std::vector<ModelProbability>> by_wave = ModelProbabilitiesByWave(o.evidence);
+  for (std::size_t t = 0; t < by_wave.size(); ++t) {
+    for (std::size_t k = 0; k < by_wave[t].size(); ++k) {
+      const ModelProbability& p = by_wave[t][k];
+      const ModelEvidence& e = o.evidence[k];
+      const std::size_t n = e.wave_log_evidence.size();
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      const double log_z = n == 0 ? nan : e.wave_log_evidence[std::min(t, n - 1)];
+      const double r = n == 0 ? nan : e.wave_relative_se[std::min(t, n - 1)];
+      csv << t + 1 << ',' << p.name << ',' << export_text::Number(log_z) << ','
+          << export_text::Number(r) << ',' << export_text::Number(p.probability) << ','
+          << export_text::Number(p.se) << ',' << (p.upper_bound_only ? 1 : 0) << ','
+          << export_text::Number(p.upper) << '\n';
+    }
+  }
+}
+
+constexpr const char* kFigureNeeds =
+    "the figure needs Python 3 with matplotlib (Debian: apt-get install python3 "
+    "python3-matplotlib), or COMBABC_PYTHON naming such a python";
+
+// model_probabilities.png, drawn from the staged waves.csv by scripts/report/
+// combabc_model_choice.py. Returns "" when drawn, else why not: the tables are written all the
+// same (a missing python is a note, as the export's NetCDF file).
+std::string DrawWaves(OutputDirectory& out) {
+  const std::string figure = "model_probabilities.png";
+  out.Add(figure);
+  std::string why;
+  try {
+    const PythonScript tools =
+        FindPythonScript("combabc_model_choice.py", "COMBABC_MODEL_CHOICE_SCRIPT", kFigureNeeds);
+    const ProcessResult result = RunProcess({tools.python,
+                                             tools.script,
+                                             "--out",
+                                             out.StagedPath(figure),
+                                             "--",
+                                             out.StagedPath("waves.csv")},
+                                            kFigureNeeds);
+    if (result.status == 0) return {};
+    why = ScriptMessage(result.err, result.status, "combabc_model_choice");
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::kCantCreate) throw;  // an interrupt, not a missing python
+    why = e.message();
+  }
+  out.Discard(figure);
+  return "the figure of the model probabilities per wave (" + figure + ") was not drawn: " + why;
+}
+
+// summary.json and models.csv in <directory>/model_choice/; for a run, waves.csv, and with
+// `figure` its figure (ModelChoiceOutcome::note says why one was not drawn).
 std::string WriteModelChoice(const std::string& directory,
                              bool overwrite,
-                             const ModelChoiceOutcome& o) {
+                             ModelChoiceOutcome& o,
+                             bool figure) {
   std::string folder = (fs::path(directory) / "model_choice").string();
   OutputDirectory out(folder, overwrite);
   const ModelEvidence& reference = o.evidence[o.reference];
@@ -106,6 +163,10 @@ std::string WriteModelChoice(const std::string& directory,
         << e.simulations << ',' << e.termination << '\n';
   }
   json << "  ]\n}\n";
+  if (!o.exact) {
+    WriteWaves(out.Add("waves.csv"), o);
+    if (figure) o.note = DrawWaves(out);
+  }
   out.Commit();
   return folder;
 }
@@ -195,7 +256,7 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
     o.runs.push_back(std::move(run));
   }
   o = Combine(std::move(o), c);
-  o.directory = WriteModelChoice(directory, request.overwrite, o);
+  o.directory = WriteModelChoice(directory, request.overwrite, o, request.report);
   return o;
 }
 
@@ -235,7 +296,7 @@ ModelChoiceOutcome EnumerateModelChoice(
     o.enumerations.push_back(std::move(outcome));
   }
   o = Combine(std::move(o), c);
-  o.directory = WriteModelChoice(directory, request.overwrite, o);
+  o.directory = WriteModelChoice(directory, request.overwrite, o, false);
   return o;
 }
 

@@ -12,6 +12,7 @@ namespace combabc {
 namespace {
 
 constexpr double kMinusInf = -std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The log of a candidate's acceptance as the sampler computes it (CombinatorialSmc's LogWeight):
 // -inf when a threshold or indicator component rejects d, else -sum_k e_k / T_k over the
@@ -187,6 +188,8 @@ ModelEvidence EstimateEvidence(const RunHistory& history,
   out.termination = ToString(history.summary.termination);
   const std::span<const WaveRecord> waves(history.waves);
   std::vector<WaveEvidence> evidence(waves.size());
+  out.wave_log_evidence.assign(waves.size(), kNaN);
+  out.wave_relative_se.assign(waves.size(), kNaN);
   double best_upper = std::numeric_limits<double>::infinity();  // log
   for (std::size_t t = 0; t < waves.size(); ++t) {
     const WaveRecord& wave = waves[t];
@@ -202,6 +205,8 @@ ModelEvidence EstimateEvidence(const RunHistory& history,
       evidence[t] = RejectionWave(wave, components, OffsetsAfter(components, waves.first(t)));
     }
     const WaveEvidence& e = evidence[t];
+    out.wave_log_evidence[t] = e.valid ? e.log_true : kNaN;
+    out.wave_relative_se[t] = e.valid ? std::sqrt(e.relative_var) : kNaN;
     if (!e.valid) continue;
     // Z can only fall as the thresholds tighten (d >= 0 for a likelihood component, so
     // exp(-d / T) falls with T too): every wave's estimate bounds the final evidence.
@@ -275,6 +280,29 @@ std::vector<ModelProbability> ModelProbabilities(std::span<const ModelEvidence> 
     }
     p.se = std::sqrt(var);
     p.upper = std::min(1.0, p.probability + 2.0 * p.se);
+  }
+  return out;
+}
+
+std::vector<std::vector<ModelProbability>> ModelProbabilitiesByWave(
+    std::span<const ModelEvidence> models) {
+  std::size_t waves = 0;
+  for (const ModelEvidence& m : models) waves = std::max(waves, m.wave_log_evidence.size());
+  std::vector<std::vector<ModelProbability>> out;
+  out.reserve(waves);
+  std::vector<ModelEvidence> at(models.begin(), models.end());
+  for (std::size_t t = 0; t < waves; ++t) {
+    for (std::size_t k = 0; k < models.size(); ++k) {
+      const ModelEvidence& m = models[k];
+      const std::size_t n = m.wave_log_evidence.size();
+      const std::size_t last = n == 0 ? 0 : std::min(t, n - 1);
+      const double log_z = n == 0 ? kNaN : m.wave_log_evidence[last];
+      at[k].reached = std::isfinite(log_z);
+      at[k].log_evidence = at[k].reached ? log_z : kMinusInf;
+      at[k].relative_se = at[k].reached ? m.wave_relative_se[last] : 0.0;
+      at[k].log_upper = 0.0;  // Z <= 1, used only where there is no estimate
+    }
+    out.push_back(ModelProbabilities(at));
   }
   return out;
 }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
@@ -120,6 +121,41 @@ TEST(ModelEvidence, RunsOfDifferentDimensionMatchTheEnumeratedEvidence) {
     EXPECT_GT(p[k].se, 0.0);
   }
   EXPECT_NEAR(p[0].probability + p[1].probability, 1.0, 1e-12);
+}
+
+// The probabilities per wave (waves.csv): each model's evidence at its own wave t, its last
+// wave's once its run has ended; a wave without an estimate gives only an upper bound.
+TEST(ModelEvidence, ProbabilitiesByWaveCarryAnEndedRunsLastEvidence) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ModelEvidence a;
+  a.name = "a";
+  a.prior = 0.25;
+  a.wave_log_evidence = {nan, std::log(0.2), std::log(0.1)};  // a resample-move run's wave 0
+  a.wave_relative_se = {nan, 0.1, 0.2};
+  ModelEvidence b;
+  b.name = "b";
+  b.prior = 0.75;
+  b.wave_log_evidence = {std::log(0.5), std::log(0.1)};  // ended after two waves
+  b.wave_relative_se = {0.05, 0.1};
+  const std::vector<ModelEvidence> models = {a, b};
+  const auto by_wave = ModelProbabilitiesByWave(models);
+  ASSERT_EQ(by_wave.size(), 3u);
+  EXPECT_TRUE(by_wave[0][0].upper_bound_only);  // Z_a <= 1: P_a < 0.25 / (0.25 + 0.375)
+  EXPECT_NEAR(by_wave[0][0].upper, 0.25 / (0.25 + 0.75 * 0.5), 1e-12);
+  EXPECT_DOUBLE_EQ(by_wave[0][1].probability, 1.0);
+  EXPECT_NEAR(by_wave[1][0].probability, 0.25 * 0.2 / (0.25 * 0.2 + 0.75 * 0.1), 1e-12);
+  EXPECT_NEAR(by_wave[2][0].probability, 0.25 * 0.1 / (0.25 * 0.1 + 0.75 * 0.1), 1e-12);
+  // Wave 3 is ModelProbabilities at each model's last estimate, errors included.
+  a.reached = b.reached = true;
+  a.log_evidence = std::log(0.1);
+  a.relative_se = 0.2;
+  b.log_evidence = std::log(0.1);
+  b.relative_se = 0.1;
+  const auto last = ModelProbabilities(std::vector<ModelEvidence>{a, b});
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_DOUBLE_EQ(by_wave[2][k].probability, last[k].probability);
+    EXPECT_DOUBLE_EQ(by_wave[2][k].se, last[k].se);
+  }
 }
 
 TEST(ModelEvidence, ModelsGivingIdenticalDataComeOutAtTheirPriorRatio) {

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "cli_runner.hpp"
+#include "output_test_support.hpp"
 #include "tiny_sensor.hpp"
 
 namespace combabc::testing {
@@ -224,11 +225,31 @@ model.clamps.fixed_support = "simply_supported"
     EXPECT_NEAR(p, truth, 4.0 * se) << model << "\n" << run << exact;
   }
 
-  // Again: the finished models are read, not run (same numbers, no progress lines).
-  r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
+  // Again: the finished models are read, not run (same numbers, no progress lines); with the
+  // report on, the figure of the probabilities per wave is drawn.
+  r = RunCli({"run", dir / "run.toml", "-j", "1"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("wave 1:"), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(dir.path() / "out/model_choice/models.csv"), run);
+  EXPECT_TRUE(fs::exists(dir.path() / "out/model_choice/model_probabilities.png")) << r.err;
+  // waves.csv: one row per wave and model; its last wave is the table's estimate (both models
+  // reached the final thresholds at their last wave).
+  const std::string waves = ReadFile(dir.path() / "out/model_choice/waves.csv");
+  for (const std::string model : {"clamped", "pinned"}) {
+    EXPECT_NE(waves.find("\n3," + model + ","), std::string::npos) << waves;
+    const std::string row = "\n" + waves.substr(waves.find("\n3," + model + ",") + 3);
+    EXPECT_NEAR(Column(row, model, 3), Column(run, model, 2), 1e-9) << waves;
+  }
+  {
+    // Without a python for the figure: a note, and the tables all the same.
+    const ScopedEnv no_python("COMBABC_PYTHON", (dir.path() / "no-python").string());
+    r = RunCli({"run", dir / "run.toml", "-j", "1"}, dir.path());
+  }
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: the figure of the model probabilities per wave"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "out/model_choice/model_probabilities.png"));
+  EXPECT_EQ(ReadFile(dir.path() / "out/model_choice/waves.csv"), waves);
 
   // Any thread count gives the same models; a model stopped on its budget is resumed alone, and
   // the model choice run again then equals the uninterrupted one.

@@ -4,7 +4,9 @@
 // examples/generate_data.py writes ("# truth <one 0/1 per clamp> ..."), so it is stated once.
 // And no example may draw a warning from the fit and sanity checks. An example too slow to run as
 // shipped has a reduced test of its own instead, and the CalculiX one is run as shipped by its own
-// test, through the CLI, with these checks (OwnTest).
+// test, through the CLI, with these checks (OwnTest). A model-choice config (examples/
+// sensor-model-choice) has these checks on each model's run, and must give the model named by the
+// data's header ("# truth ... support <model>") P >= 0.95.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include "combabc/config/config.hpp"
 #include "combabc/data/measured_data.hpp"
 #include "combabc/export/fit_checks.hpp"
+#include "combabc/services/model_choice_run.hpp"
 #include "combabc/services/run.hpp"
 #include "examples/calculix_support.hpp"
 #include "support/test_support.hpp"
@@ -76,11 +79,59 @@ std::string TruthOf(const std::string& csv) {
   return {};
 }
 
+// The word after `key` in the data file's header lines ("# truth 0110... support clamped ...").
+std::string HeaderWord(const std::string& csv, const std::string& key) {
+  std::ifstream in(csv);
+  std::string line;
+  while (std::getline(in, line) && line.rfind('#', 0) == 0) {
+    std::istringstream words(line);
+    std::string word;
+    while (words >> word) {
+      if (word == key && words >> word) return word;
+    }
+  }
+  return {};
+}
+
 std::string List(const std::vector<int>& clamps) {
   if (clamps.empty()) return "none";
   std::string out;
   for (int c : clamps) out += (out.empty() ? "" : ", ") + std::to_string(c);
   return out;
+}
+
+// A run's posterior against the truth: no clamp confidently wrong, at least two recovered, and
+// with `fit_checks` no warning from the fit and sanity checks (a model choice's losing model may
+// well fit badly: that is why it loses).
+void CheckRun(const std::string& name,
+              const std::string& truth,
+              Estimator estimator,
+              const services::RunOutcome& outcome,
+              bool fit_checks = true) {
+  ASSERT_FALSE(outcome.history.waves.empty());
+  const auto& marginals = outcome.history.waves.back().marginals(estimator);
+  ASSERT_EQ(marginals.size(), truth.size());
+
+  std::vector<int> recovered, wrong;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    if (std::abs(marginals[k] - 0.5) <= kConfident) continue;
+    const bool says_fixed = marginals[k] > 0.5;
+    (says_fixed == (truth[k] == '1') ? recovered : wrong).push_back(static_cast<int>(k) + 1);
+  }
+  std::cout << name << ": recovered clamps " << List(recovered) << "; confidently wrong "
+            << List(wrong) << " (" << outcome.history.summary.simulations << " simulations)\n";
+  EXPECT_TRUE(wrong.empty()) << "confidently wrong about clamps " << List(wrong);
+  // And not merely uninformative: each example identifies the clamps next to its load.
+  EXPECT_GE(recovered.size(), 2u) << "recovered only " << List(recovered);
+  // Nor do the fit and sanity checks (docs/history.md, "Checks") find fault with an example.
+  const std::string checks = FormatFitChecks(outcome.checks, "m");
+  std::cout << checks;
+  if (!fit_checks) return;
+  for (const auto* list : {&outcome.checks.before, &outcome.checks.after}) {
+    for (const CheckMessage& m : *list) {
+      EXPECT_NE(m.severity, "warning") << m.code << ": " << m.message;
+    }
+  }
 }
 
 TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
@@ -111,6 +162,31 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
     request.output_directory = scratch / name;
     request.threads = 2;
     request.report = false;
+    if (services::HasModelChoice(path.string())) {
+      const std::string support =
+          HeaderWord(ResolvePath(config.directory, config.experiments[0].data.csv), "support");
+      services::ModelChoiceOutcome choice;
+      try {
+        choice = services::RunModelChoice(request);
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << e.what();
+        continue;
+      }
+      bool found = false;
+      for (std::size_t k = 0; k < choice.models.size(); ++k) {
+        const bool true_model = choice.models[k].name == support;
+        CheckRun(name + " (" + choice.models[k].name + ")",
+                 truth,
+                 config.smc.estimator,
+                 choice.runs[k],
+                 true_model);
+        if (!true_model) continue;
+        found = true;
+        EXPECT_GE(choice.models[k].probability, 0.95) << "the true model " << support;
+      }
+      EXPECT_TRUE(found) << "no model named '" << support << "' (the data's '# ... support')";
+      continue;
+    }
     services::RunOutcome outcome;
     try {
       outcome = services::RunCalibration(request);
@@ -118,29 +194,7 @@ TEST(ExamplePosteriors, NoExampleIsConfidentlyWrongAboutItsGroundTruth) {
       ADD_FAILURE() << e.what();
       continue;
     }
-    ASSERT_FALSE(outcome.history.waves.empty());
-    const auto& marginals = outcome.history.waves.back().marginals(config.smc.estimator);
-    ASSERT_EQ(marginals.size(), truth.size());
-
-    std::vector<int> recovered, wrong;
-    for (std::size_t k = 0; k < truth.size(); ++k) {
-      if (std::abs(marginals[k] - 0.5) <= kConfident) continue;
-      const bool says_fixed = marginals[k] > 0.5;
-      (says_fixed == (truth[k] == '1') ? recovered : wrong).push_back(static_cast<int>(k) + 1);
-    }
-    std::cout << name << ": recovered clamps " << List(recovered) << "; confidently wrong "
-              << List(wrong) << " (" << outcome.history.summary.simulations << " simulations)\n";
-    EXPECT_TRUE(wrong.empty()) << "confidently wrong about clamps " << List(wrong);
-    // And not merely uninformative: each example identifies the clamps next to its load.
-    EXPECT_GE(recovered.size(), 2u) << "recovered only " << List(recovered);
-    // Nor do the fit and sanity checks (docs/history.md, "Checks") find fault with an example.
-    const std::string checks = FormatFitChecks(outcome.checks, "m");
-    std::cout << checks;
-    for (const auto* list : {&outcome.checks.before, &outcome.checks.after}) {
-      for (const CheckMessage& m : *list) {
-        EXPECT_NE(m.severity, "warning") << m.code << ": " << m.message;
-      }
-    }
+    CheckRun(name, truth, config.smc.estimator, outcome);
   }
 }
 

@@ -31,6 +31,11 @@ struct ModelEvidence {
   int wave = -1;                 // the wave it was estimated from (-1: none)
   std::int64_t simulations = 0;  // the run's simulations, all waves
   std::string termination;       // the run's, for the report ("" for an enumeration)
+  // Per wave t of the run: log Z at wave t's own thresholds (NaN where the wave gives no
+  // estimate: a resample-move run's wave 0, an incomplete wave) and its relative standard error;
+  // ModelProbabilitiesByWave's input (empty for an enumeration).
+  std::vector<double> wave_log_evidence;
+  std::vector<double> wave_relative_se;
 };
 
 // The evidence of a run's history at `final_thresholds` (one per threshold or likelihood slot:
@@ -66,5 +71,14 @@ struct ModelProbability {
   double upper = 1.0;  // upper_bound_only: P(M_k | D) is below this (95 %)
 };
 std::vector<ModelProbability> ModelProbabilities(std::span<const ModelEvidence> models);
+
+// The model probabilities after each wave t = 0, 1, ... of the longest run (model_choice/
+// waves.csv and its figure): each model's evidence at its own wave-t thresholds (its last wave's
+// once its run has ended) combined as ModelProbabilities does; a model without an estimate at
+// wave t is given Z <= 1 (nothing known) as its upper bound. Each run adapts its own thresholds,
+// so before the common final ones the models' evidences are at different epsilons (or
+// temperatures): the rows show how the probabilities settled, not probabilities at one epsilon.
+std::vector<std::vector<ModelProbability>> ModelProbabilitiesByWave(
+    std::span<const ModelEvidence> models);
 
 }  // namespace combabc

@@ -23,6 +23,7 @@ struct ModelChoiceOutcome {
   std::vector<EnumerateOutcome> enumerations;  // enumerate: per model
   std::string directory;                       // model_choice/ (summary.json, models.csv)
   bool interrupted = false;                    // a model's run or enumeration was interrupted
+  std::string note;  // why model_probabilities.png was not drawn ("" when it was, or not asked)
 };
 
 // Whether the config file has [model_choice] (reads and checks the whole config).
