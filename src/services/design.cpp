@@ -20,8 +20,8 @@
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
+#include "services/adapters/python_script.hpp"
 #include "services/design_campaign.hpp"
-#include "services/python_script.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

@@ -10,13 +10,13 @@
 #include "combabc/history/history_store.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/report.hpp"
-#include "services/output_folders.hpp"
-#include "services/problem.hpp"
-#include "services/report_checks.hpp"
-#include "services/run_fingerprint.hpp"
-#include "services/run_steps.hpp"
-#include "services/start_from.hpp"
-#include "services/worker_steps.hpp"
+#include "services/steps/output_folders.hpp"
+#include "services/steps/problem.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/run_fingerprint.hpp"
+#include "services/steps/run_steps.hpp"
+#include "services/steps/start_from.hpp"
+#include "services/steps/worker_steps.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

@@ -7,11 +7,11 @@
 #include "combabc/core/executor.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/run.hpp"
-#include "services/problem.hpp"
-#include "services/report_checks.hpp"
-#include "services/run_fingerprint.hpp"
-#include "services/run_steps.hpp"
-#include "services/start_from.hpp"
+#include "services/steps/problem.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/run_fingerprint.hpp"
+#include "services/steps/run_steps.hpp"
+#include "services/steps/start_from.hpp"
 
 namespace combabc::services {
 namespace {

@@ -1,4 +1,4 @@
-#include "services/selected_outputs.hpp"
+#include "simulators/selected_outputs.hpp"
 
 #include <cstddef>
 #include <utility>

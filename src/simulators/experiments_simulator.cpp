@@ -1,4 +1,4 @@
-#include "services/experiments_simulator.hpp"
+#include "simulators/experiments_simulator.hpp"
 
 #include <algorithm>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "services/run_fingerprint.hpp"
+#include "services/steps/run_fingerprint.hpp"
 
 #include <algorithm>
 #include <cstdint>
