@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace combabc::services {
+namespace combabc {
 
 ExperimentsSimulator::ExperimentsSimulator(std::vector<std::unique_ptr<Simulator>> parts)
     : parts_(std::move(parts)) {
@@ -52,4 +52,4 @@ void ExperimentsSimulator::SimulateBatch(const ParameterBatch& batch,
   }
 }
 
-}  // namespace combabc::services
+}  // namespace combabc
