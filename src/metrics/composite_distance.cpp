@@ -49,6 +49,54 @@ void CheckIncreasing(std::span<const double> x, const char* what) {
   }
 }
 
+// A noise model's sigma: sigma_noise, or the one estimated from the measured data, combined with
+// sigma_model; Error(kConfig) at the component when it is not finite and > 0.
+double NoiseSigma(const MetricComponentConfig& c,
+                  std::size_t i,
+                  bool folded,
+                  std::span<const double> data_positions,
+                  std::span<const double> data_values) {
+  double noise = 0.0;
+  if (c.noise.sigma_noise) {
+    noise = *c.noise.sigma_noise;
+  } else if (data_positions.size() >= 3) {
+    noise = folded ? EstimateAmplitudeNoise(data_positions, data_values).sigma
+                   : EstimateNoiseSigma(data_positions, data_values);
+  }
+  const double sigma = std::hypot(noise, c.noise.sigma_model);
+  if (!(sigma > 0.0) || !std::isfinite(sigma)) {
+    throw Error(ErrorKind::kConfig,
+                std::string("the ") + ToString(c.noise.model) + " noise model's sigma is " +
+                    std::to_string(sigma) +
+                    (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
+                    "; it must be finite and > 0: give sigma_noise or sigma_model",
+                {},
+                c.config_line,
+                Field(i));
+  }
+  return sigma;
+}
+
+// A(Y): the trapezoid area of the measured points in an area component's window; Error(kConfig)
+// at the component when it is not positive (Eq. 4 divides by it).
+double ObservedArea(const MetricComponentConfig& c,
+                    std::size_t i,
+                    const std::vector<double>& positions,
+                    const std::vector<double>& observed) {
+  double area = 0.0;
+  for (std::size_t j = 1; j < positions.size(); ++j) {
+    area += 0.5 * (observed[j] + observed[j - 1]) * (positions[j] - positions[j - 1]);
+  }
+  if (!(area > 0.0)) {
+    throw Error(ErrorKind::kConfig,
+                "the measured area over the window is not positive; Eq. 4 divides by it",
+                {},
+                c.config_line,
+                Field(i));
+  }
+  return area;
+}
+
 }  // namespace
 
 CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> components,
@@ -126,24 +174,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     if (c.noise.model != NoiseModel::kNone) {
       compiled.folded = c.noise.model == NoiseModel::kFoldedNormal;
       if (compiled.folded) CheckAmplitudes(c, i, data_positions, data_values);
-      double noise = 0.0;
-      if (c.noise.sigma_noise) {
-        noise = *c.noise.sigma_noise;
-      } else if (data_positions.size() >= 3) {
-        noise = compiled.folded ? EstimateAmplitudeNoise(data_positions, data_values).sigma
-                                : EstimateNoiseSigma(data_positions, data_values);
-      }
-      compiled.sigma = std::hypot(noise, c.noise.sigma_model);
-      if (!(compiled.sigma > 0.0) || !std::isfinite(compiled.sigma)) {
-        throw Error(ErrorKind::kConfig,
-                    std::string("the ") + ToString(c.noise.model) + " noise model's sigma is " +
-                        std::to_string(compiled.sigma) +
-                        (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
-                        "; it must be finite and > 0: give sigma_noise or sigma_model",
-                    {},
-                    c.config_line,
-                    Field(i));
-      }
+      compiled.sigma = NoiseSigma(c, i, compiled.folded, data_positions, data_values);
     }
     if (KindOf(c.type) == ComponentKind::kIndicator) {
       if (!data_positions.empty()) {
@@ -174,18 +205,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
                     Field(i));
       }
       if (c.type == MetricType::kArea) {
-        for (std::size_t j = 1; j < compiled.positions.size(); ++j) {
-          compiled.observed_area += 0.5 * (compiled.observed[j] + compiled.observed[j - 1]) *
-                                    (compiled.positions[j] - compiled.positions[j - 1]);
-        }
-        // Eq. 4 divides by A(Y).
-        if (!(compiled.observed_area > 0.0)) {
-          throw Error(ErrorKind::kConfig,
-                      "the measured area over the window is not positive; Eq. 4 divides by it",
-                      {},
-                      c.config_line,
-                      Field(i));
-        }
+        compiled.observed_area = ObservedArea(c, i, compiled.positions, compiled.observed);
       }
     }
     compiled_.push_back(std::move(compiled));
