@@ -22,8 +22,8 @@ TEST(StopLimits, GivenOverrideRecordedAndUnknownKeysAreSkipped) {
   const Limits recorded = {
       {"max_simulations", "100"}, {"min_acceptance_rate", "0.05"}, {"from_the_future", "1"}};
   const Limits set = ApplyStopLimits(recorded, given, options);
-  EXPECT_EQ(set, (Limits{{"max_simulations", "5000"}, {"min_acceptance_rate", "0.05"},
-                         {"waves", "7"}}));
+  EXPECT_EQ(set,
+            (Limits{{"max_simulations", "5000"}, {"min_acceptance_rate", "0.05"}, {"waves", "7"}}));
   EXPECT_EQ(options.max_simulations, 5000);
   EXPECT_DOUBLE_EQ(options.min_acceptance_rate, 0.05);
   EXPECT_EQ(options.num_waves, 7);
