@@ -14,11 +14,13 @@
 namespace combabc {
 namespace {
 
-using metrics_internal::kPositionTolerance;
+// Named apart from src/data/'s own kPositionTolerance and Metres, which a unity batch may put in
+// the same translation unit.
+constexpr double kTolerance = metrics_internal::kPositionTolerance;
 
 std::string Field(std::size_t i) { return metrics_internal::ComponentField(i); }
 
-std::string Metres(double x) {
+std::string InMetres(double x) {
   std::ostringstream out;
   out << x << " m";
   return out.str();
@@ -34,7 +36,7 @@ void CheckAmplitudes(const MetricComponentConfig& c,
     if (values[j] >= 0.0) continue;
     std::ostringstream what;
     what << "noise = \"folded_normal\" models amplitudes (>= 0), but the measured value at "
-         << Metres(positions[j]) << " is " << values[j]
+         << InMetres(positions[j]) << " is " << values[j]
          << ": give amplitudes in [data] displacement_column, or noise = \"gaussian\" for "
             "signed data";
     throw Error(ErrorKind::kConfig, what.str(), {}, c.config_line, Field(i));
@@ -119,10 +121,10 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
   const double out_hi = output_positions.back();
   // Precompute where Y* is read for position x: the bracketing output indices and weight.
   auto sample_at = [&](double x, std::size_t i) {
-    if (x < out_lo - kPositionTolerance || x > out_hi + kPositionTolerance) {
+    if (x < out_lo - kTolerance || x > out_hi + kTolerance) {
       throw Error(ErrorKind::kConfig,
-                  "position " + Metres(x) + " lies outside the simulator's output positions [" +
-                      Metres(out_lo) + ", " + Metres(out_hi) + "]",
+                  "position " + InMetres(x) + " lies outside the simulator's output positions [" +
+                      InMetres(out_lo) + ", " + InMetres(out_hi) + "]",
                   {},
                   configs_[i].config_line,
                   Field(i));
@@ -141,7 +143,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
   if (options_.normalise_over == NormaliseOver::kData) {
     for (double x : data_positions) {
       // Measured points beyond the simulated range cannot take part in the maximum.
-      if (x < out_lo - kPositionTolerance || x > out_hi + kPositionTolerance) continue;
+      if (x < out_lo - kTolerance || x > out_hi + kTolerance) continue;
       data_samples_.push_back(sample_at(x, 0));
     }
   }
@@ -150,7 +152,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     const MetricComponentConfig& c = configs_[i];
     if (!(c.from < c.to) || !std::isfinite(c.from) || !std::isfinite(c.to)) {
       throw Error(ErrorKind::kConfig,
-                  "window [" + Metres(c.from) + ", " + Metres(c.to) + "] must have from < to",
+                  "window [" + InMetres(c.from) + ", " + InMetres(c.to) + "] must have from < to",
                   {},
                   c.config_line,
                   Field(i));
@@ -184,7 +186,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     } else {
       for (std::size_t j = 0; j < data_positions.size(); ++j) {
         const double x = data_positions[j];
-        if (x < c.from - kPositionTolerance || x > c.to + kPositionTolerance) continue;
+        if (x < c.from - kTolerance || x > c.to + kTolerance) continue;
         compiled.positions.push_back(x);
         compiled.observed.push_back(data_values[j]);
         compiled.samples.push_back(sample_at(x, i));
@@ -197,7 +199,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
       const std::size_t needed = c.type == MetricType::kArea ? 2 : 1;
       if (compiled.positions.size() < needed) {
         throw Error(ErrorKind::kConfig,
-                    "window [" + Metres(c.from) + ", " + Metres(c.to) + "] holds " +
+                    "window [" + InMetres(c.from) + ", " + InMetres(c.to) + "] holds " +
                         std::to_string(compiled.positions.size()) + " data points; " +
                         ToString(c.type) + " needs at least " + std::to_string(needed),
                     {},

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "combabc/core/enum_names.hpp"
 #include "combabc/core/error.hpp"
 #include "services/steps/run_steps.hpp"
 
@@ -42,10 +44,10 @@ TEST(StopLimits, AnInvalidLimitIsAUsageErrorNamingTheField) {
   }
 }
 
-RunMetadata Finished(const std::string& termination) {
+RunMetadata Finished(std::string_view termination) {
   RunMetadata m;
   m.status = RunStatus::kFinished;
-  m.termination = termination;
+  m.termination = std::string(termination);
   return m;
 }
 
@@ -62,16 +64,20 @@ std::string Refusal(const RunMetadata& m, OptionNames names) {
 TEST(StopLimits, CheckResumableSaysWhatToDoNext) {
   RunMetadata running;
   EXPECT_FALSE(CheckResumable(running, {}, OptionNames::kCli, "run.db"));
-  EXPECT_TRUE(CheckResumable(Finished("max_simulations"), {}, OptionNames::kCli, "run.db"));
+  EXPECT_TRUE(CheckResumable(
+      Finished(ToString(Termination::kBudgetExhausted)), {}, OptionNames::kCli, "run.db"));
   StopLimits more;
   more.num_waves = 9;
-  EXPECT_TRUE(CheckResumable(Finished("max_waves"), more, OptionNames::kCli, "run.db"));
-  EXPECT_EQ(Refusal(Finished("max_waves"), OptionNames::kCli),
-            "the run has already finished (max_waves); nothing to resume. Use 'combabc report' "
-            "or 'combabc export'; or give it more waves: --waves N");
-  EXPECT_EQ(Refusal(Finished("max_waves"), OptionNames::kPython),
-            "the run has already finished (max_waves); nothing to resume: give it more waves "
-            "with waves=N");
+  EXPECT_TRUE(CheckResumable(
+      Finished(ToString(Termination::kMaxWaves)), more, OptionNames::kCli, "run.db"));
+  EXPECT_EQ(
+      Refusal(Finished(ToString(Termination::kMaxWaves)), OptionNames::kCli),
+      "run.db: the run has already finished (max_waves); nothing to resume. Use 'combabc report' "
+      "or 'combabc export'; or give it more waves: --waves N");
+  EXPECT_EQ(
+      Refusal(Finished(ToString(Termination::kMaxWaves)), OptionNames::kPython),
+      "run.db: the run has already finished (max_waves); nothing to resume: give it more waves "
+      "with waves=N");
 }
 
 }  // namespace
