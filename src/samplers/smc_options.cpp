@@ -21,8 +21,9 @@ bool MoveOptions::IsValid(ValidationError* error) const {
     return fail("stay_probability", stay_probability, "must be in (0, 1)");
   }
   if (max_rounds < 1 || max_rounds > 10'000) {
-    if (error)
+    if (error) {
       *error = {"MoveOptions", "max_rounds", std::to_string(max_rounds), "must be in [1, 10000]"};
+    }
     return false;
   }
   if (!(independent_share >= 0.0 && independent_share <= 1.0)) {
@@ -55,8 +56,9 @@ bool SmcOptions::IsValid(ValidationError* error) const {
   };
   auto text = [](auto v) { return std::to_string(v); };
   if (num_waves < 1) return fail("num_waves", text(num_waves), "must be >= 1");
-  if (accepted_per_wave < 1)
+  if (accepted_per_wave < 1) {
     return fail("accepted_per_wave", text(accepted_per_wave), "must be >= 1");
+  }
   if (!accepted_by_wave.empty() && static_cast<int>(accepted_by_wave.size()) != num_waves) {
     return fail("accepted_by_wave",
                 "",
