@@ -35,9 +35,19 @@ declare -A deps=(
 # plate: the element kernels (and the laminate they take) <- the assembled plate (grid,
 # constraints, loads, full solves, modes) <- the fast paths (condensations and their solves) <- the
 # sensor model at the top (docs/architecture.md).
+# services: the adapters (the sensor model as a Simulator, the simulator factory, the Python
+# script runner) <- the steps several jobs share (the problem, the run steps, the fingerprint, the
+# output folders, the read-back) <- the jobs at the top (run, resume, enumerate, design,
+# simulate, report, history tools, model choice).
 declare -A sublayers=(
   [plate]="elements assembly fast_path"
+  [services]="adapters steps"
 )
+# Layers whose public top headers (include/combabc/<layer>/*.hpp) every sub-layer may include:
+# the services' headers are their interface, the requests, outcomes and types the steps
+# implement (ExecutorFactory, StopLimits, RunOutcome); the jobs' private files (src/<layer>/*)
+# stay out of the sub-layers' reach.
+declare -A public_top=([services]=1)
 status=0
 declare -A rank=()
 for i in "${!order[@]}"; do rank[${order[$i]}]=$i; done
@@ -83,8 +93,13 @@ for layer in "${!sublayers[@]}"; do
     fi
     [[ "$own" == top ]] && continue  # the top may include every sub-layer
     for used in $(grep -hoE "#include \"(combabc/)?$layer/[a-z0-9_./]+\"" "$f" |
-        sed -E "s|#include \"(combabc/)?$layer/||; s|\"\$||"); do
+        sed -E "s|#include \"||; s|\"\$||"); do
+      public=0
+      [[ "$used" == combabc/* ]] && public=1
+      used=${used#combabc/}
+      used=${used#"$layer"/}
       rank=$(sub_rank "$layer" "$used")
+      [[ "$rank" == top && $public == 1 && -n "${public_top[$layer]-}" ]] && continue
       if [[ "$rank" == top || "$rank" == none || $rank -gt $own ]]; then
         echo "layering: $f ($layer/${subs[$own]}) includes $layer/$used, not a lower sub-layer"
         status=1

@@ -18,27 +18,9 @@ struct DesignArgs {
   bool no_figure = false;
 };
 
-// The ranking (best ten), the greedy selection, where the campaign stands and what to do next.
-void PrintDesign(const services::DesignOutcome& o) {
+// The ten candidates of most information gain, best first.
+void PrintRanking(const services::DesignOutcome& o) {
   const auto& r = o.result;
-  std::printf("design from %s; %zu candidates, noise sigma %.3g of the normalised profile's peak\n",
-              o.population.c_str(),
-              o.candidates.size(),
-              o.noise_sigma);
-  std::printf("predictions from %s: %zu configurations simulated in %.1f s\n",
-              o.method.c_str(),
-              o.simulated,
-              o.simulate_seconds);
-  if (o.singular > 0) {
-    // Dropped, as a run fails them: the ranking is over the configurations the plate can be
-    // solved in.
-    std::printf(
-        "note: %zu of the %zu configurations left out, the plate being singular in them "
-        "(the first: %s)\n",
-        o.singular,
-        o.simulated,
-        o.singular_reason.c_str());
-  }
   // Across the strip: mm from edge 1 (y = 0, clamps 1 to n), as the bench measures it.
   std::printf(
       "rank  load cm  load mm  scan cm      line mm  gain bits (se)  identified  wrong    ess\n");
@@ -63,6 +45,30 @@ void PrintDesign(const services::DesignOutcome& o) {
                 s.wrong,
                 s.effective_particles);
   }
+}
+
+// The ranking (best ten), the greedy selection, where the campaign stands and what to do next.
+void PrintDesign(const services::DesignOutcome& o) {
+  const auto& r = o.result;
+  std::printf("design from %s; %zu candidates, noise sigma %.3g of the normalised profile's peak\n",
+              o.population.c_str(),
+              o.candidates.size(),
+              o.noise_sigma);
+  std::printf("predictions from %s: %zu configurations simulated in %.1f s\n",
+              o.method.c_str(),
+              o.simulated,
+              o.simulate_seconds);
+  if (o.singular > 0) {
+    // Dropped, as a run fails them: the ranking is over the configurations the plate can be
+    // solved in.
+    std::printf(
+        "note: %zu of the %zu configurations left out, the plate being singular in them "
+        "(the first: %s)\n",
+        o.singular,
+        o.simulated,
+        o.singular_reason.c_str());
+  }
+  PrintRanking(o);
   std::printf("greedy selection (mm from edge 1):\n");
   for (std::size_t step = 0; step < r.selected.size(); ++step) {
     const auto& c = o.candidates[static_cast<std::size_t>(r.selected[step])];

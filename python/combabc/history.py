@@ -257,8 +257,8 @@ class History:
         answer's, from 1; posterior_wave), waves, complete, exact, estimator, termination,
         verdict_level, particles, distinct, tempered, temperatures, top_configurations (dicts:
         bits, mass, mass_se, fixed) and text (the terminal's answer). Read from the history file
-        (History.path), unless the run handed its answer over: a Problem run without
-        output_directory does not yet."""
+        (History.path), unless the run handed its answer over (a Problem run without
+        output_directory: the same numbers a history file of it would give)."""
         import pandas as pd
         if self._answer is not None:
             data = self._answer

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "answer_binding.hpp"
 #include "bindings.hpp"
 #include "combabc/distances/euclidean_distance.hpp"
 #include "combabc/params/parameter_space.hpp"
@@ -208,6 +209,8 @@ py::dict RunSmc(const SmcRequest& request, const PythonRunFile& file) {
   result["seed"] = run.options.seed;
   result["bit_prior_one"] = metadata.bit_prior_one;
   result["real_priors"] = RealPriors(metadata.reals);
+  // The answer the run handed over (History.answer() reads it, as it would read the file's).
+  if (outcome.answer) result["answer"] = AnswerToDict(*outcome.answer);
   return result;
 }
 

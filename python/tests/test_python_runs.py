@@ -311,11 +311,21 @@ def test_answer_is_the_terminal_and_summary_json_numbers(tmp_path):
 
 
 def test_answer_needs_the_history_file_or_the_runs_answer(tmp_path):
-    with pytest.raises(ValueError, match="output_directory"):
-        combabc.run(problem(), options(accepted_per_wave=50)).answer()
-    # A run that hands its answer over (_core.answer's dict) needs no file.
+    # A run without output_directory hands its answer over: the answer the same run with a history
+    # file reads from it, to the last bit.
+    in_memory = combabc.run(problem(), options(accepted_per_wave=50))
+    assert in_memory.path is None
     path = combabc.run(problem(), options(accepted_per_wave=50), output_directory=tmp_path).path
+    on_file = combabc.load_history(path).answer()
+    pd.testing.assert_frame_equal(in_memory.answer(), on_file)
+    assert in_memory.answer().attrs["text"] == on_file.attrs["text"]
+    assert in_memory.answer().attrs["termination"] == on_file.attrs["termination"]
+    # A History with neither a file nor an answer says how to get one.
     data = combabc._core.load_history(path)
+    data.update(path=None)
+    with pytest.raises(ValueError, match="output_directory"):
+        combabc.History(data).answer()
+    # A run that hands its answer over (_core.answer's dict) needs no file.
     data.update(path=None, answer=combabc._core.answer(path))
     handed = combabc.History(data).answer()
     pd.testing.assert_frame_equal(handed, combabc.load_history(path).answer())

@@ -321,9 +321,8 @@ CalibrationConfig config_internal::ParseConfigTable(const toml::table& table,
   root.Finish();
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 
-  // SmcOptions gives its check as a sentence only (src/samplers): read back into its parts.
-  if (std::string why; !c.smc.IsValid(&why)) {
-    ThrowAttributed(ValidationError::FromMessage(why), sources.smc, sources.sampler, c.path);
+  if (ValidationError error; !c.smc.IsValid(&error)) {
+    ThrowAttributed(error, sources.smc, sources.sampler, c.path);
   }
   if (!c.reals.empty() && c.smc.estimator == Estimator::kPaper) {
     throw Error(ErrorKind::kConfig,

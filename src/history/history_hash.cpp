@@ -8,8 +8,6 @@
 namespace combabc::history {
 namespace {
 
-constexpr std::uint64_t kFnvPrime = 1099511628211ull;
-
 // Every row of `sql`, then the row count (so that rows cannot shift between tables unnoticed).
 void AddRows(Fnv1a64& hash, Database& db, const char* sql, int columns) {
   Statement rows(db, sql);
@@ -34,11 +32,7 @@ bool AllNull(const Statement& row, int first, int count) {
 }  // namespace
 
 void Fnv1a64::Add(const void* data, std::size_t size) {
-  const auto* bytes = static_cast<const std::uint8_t*>(data);
-  for (std::size_t i = 0; i < size; ++i) {
-    hash_ ^= bytes[i];
-    hash_ *= kFnvPrime;
-  }
+  hash_ = Fnv1a({static_cast<const unsigned char*>(data), size}, hash_);
 }
 
 void Fnv1a64::AddInt(std::int64_t value) {

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "combabc/core/fnv1a.hpp"
 #include "history/history_sqlite.hpp"
 
 namespace combabc::history {
@@ -23,7 +24,7 @@ class Fnv1a64 {
   std::uint64_t value() const { return hash_; }
 
  private:
-  std::uint64_t hash_ = 14695981039346656037ull;  // FNV-1a 64-bit offset basis
+  std::uint64_t hash_ = kFnv1aOffsetBasis;
 };
 
 // As stored: 16 lower-case hex digits. nullopt for anything else.

@@ -391,6 +391,98 @@ std::optional<WaveMoves> ReadMoves(const WaveReader& check, const Statement& row
   return m;
 }
 
+// The wave row's counts and summaries: all of them for a wave that ended, its progress only for
+// one cut short before OnWaveEnd (LoadHistory derives the rest from the particles).
+void ReadWaveCounts(const WaveReader& check,
+                    const Statement& row,
+                    const HistoryShape& shape,
+                    bool ended,
+                    std::int64_t next_index,
+                    WaveRecord& wave) {
+  const auto d = static_cast<std::size_t>(shape.dimension);
+  if (ended) {
+    wave.complete = row.Int(kComplete) != 0;
+    wave.candidates = check.Count(row, kCandidates, "candidates");
+    wave.accepted = check.Count(row, kAccepted, "accepted");
+    wave.acceptance_rate = row.Real(kAcceptanceRate);
+    // A wave that accepted nothing has no marginals.
+    const std::size_t min = wave.accepted == 0 ? 0 : d;
+    const std::string per_bit = std::to_string(d) + " (one per bit)";
+    wave.marginals_paper = check.Doubles(row, kMarginalsPaper, min, d, "marginals_paper", per_bit);
+    wave.marginals_importance =
+        check.Doubles(row, kMarginalsImportance, min, d, "marginals_importance", per_bit);
+    wave.ess = row.Real(kEss);
+    wave.distinct = check.Count(row, kDistinct, "distinct_count");
+    wave.wall_seconds = row.Real(kWallSeconds);
+    const std::size_t r = shape.reals;
+    const std::size_t min_reals = wave.accepted == 0 ? 0 : r;
+    const std::string per_real = std::to_string(r) + " (one per real parameter)";
+    wave.reals_mean = check.Doubles(row, kRealsMean, min_reals, r, "reals_mean", per_real);
+    wave.reals_sd = check.Doubles(row, kRealsSd, min_reals, r, "reals_sd", per_real);
+  } else {
+    // A wave cut short before OnWaveEnd: only its progress is known (LoadHistory derives the
+    // rest from the particles).
+    wave.candidates = next_index;
+    wave.accepted = check.Count(row, kAcceptedSoFar, "accepted_so_far");
+    wave.acceptance_rate = wave.candidates > 0 ? static_cast<double>(wave.accepted) /
+                                                     static_cast<double>(wave.candidates)
+                                               : 0.0;
+  }
+}
+
+// One particle row, every vector checked against the shape: its index one of the wave's
+// `indices`, its ancestor (when stored) one of the previous wave's `ancestors`.
+Particle ReadParticle(const WaveReader& check,
+                      const Statement& particles,
+                      const HistoryShape& shape,
+                      const std::optional<WaveFidelity>& fidelity,
+                      std::int64_t indices,
+                      std::int64_t ancestors) {
+  const std::string distance_count =
+      std::to_string(shape.components) + " (one per distance component)";
+  const std::string output_count =
+      "0 or " + std::to_string(shape.outputs) + " (one per output position)";
+  Particle p;
+  p.index = particles.Int(kCandidate);
+  const std::string who = "particle " + std::to_string(p.index);
+  if (p.index < 0 || p.index >= indices) {
+    check.Corrupt(who, "lies outside the wave's " + std::to_string(indices) + " candidates");
+  }
+  p.theta.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
+  p.log_weight = particles.Real(kLogWeight);
+  p.weight = particles.Real(kWeight);
+  p.distance = check.Doubles(
+      particles, kDistance, shape.components, shape.components, who + " distance", distance_count);
+  p.output = check.Doubles(particles, kOutput, 0, shape.outputs, who + " output", output_count);
+  if (!p.output.empty() && p.output.size() != shape.outputs) {
+    check.Corrupt(who + " output",
+                  "has " + std::to_string(p.output.size()) + " values, expected " + output_count);
+  }
+  p.theta.reals = check.Doubles(particles,
+                                kReals,
+                                shape.reals,
+                                shape.reals,
+                                who + " reals",
+                                std::to_string(shape.reals) + " (one per real parameter)");
+  for (std::size_t i = 0; i < p.theta.reals.size(); ++i) {
+    // A particle's reals were drawn inside their prior's support: never NaN or infinite.
+    if (!std::isfinite(p.theta.reals[i])) {
+      check.Corrupt(who + " reals", "value " + std::to_string(i + 1) + " is not finite");
+    }
+  }
+  ReadParticleFidelity(check, particles, fidelity, who, shape.components, p);
+  if (!particles.IsNull(kAncestor)) {
+    const std::string field = who + " ancestor";
+    p.ancestor = check.Count(particles, kAncestor, field.c_str());
+    if (p.ancestor >= ancestors) {
+      check.Corrupt(field,
+                    "is " + std::to_string(p.ancestor) + ", not one of the previous wave's " +
+                        std::to_string(ancestors) + " particle numbers");
+    }
+  }
+  return p;
+}
+
 }  // namespace
 
 std::string HistoryStore::Impl::WaveSelect() const {
@@ -480,34 +572,7 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   const std::int64_t next_index = check.Count(row, kNextIndex, "next_index");
   wave.discarded = check.Count(row, kDiscarded, "discarded");
   const bool ended = row.Int(kEnded) != 0;
-  if (ended) {
-    wave.complete = row.Int(kComplete) != 0;
-    wave.candidates = check.Count(row, kCandidates, "candidates");
-    wave.accepted = check.Count(row, kAccepted, "accepted");
-    wave.acceptance_rate = row.Real(kAcceptanceRate);
-    // A wave that accepted nothing has no marginals.
-    const std::size_t min = wave.accepted == 0 ? 0 : d;
-    const std::string per_bit = std::to_string(d) + " (one per bit)";
-    wave.marginals_paper = check.Doubles(row, kMarginalsPaper, min, d, "marginals_paper", per_bit);
-    wave.marginals_importance =
-        check.Doubles(row, kMarginalsImportance, min, d, "marginals_importance", per_bit);
-    wave.ess = row.Real(kEss);
-    wave.distinct = check.Count(row, kDistinct, "distinct_count");
-    wave.wall_seconds = row.Real(kWallSeconds);
-    const std::size_t r = shape.reals;
-    const std::size_t min_reals = wave.accepted == 0 ? 0 : r;
-    const std::string per_real = std::to_string(r) + " (one per real parameter)";
-    wave.reals_mean = check.Doubles(row, kRealsMean, min_reals, r, "reals_mean", per_real);
-    wave.reals_sd = check.Doubles(row, kRealsSd, min_reals, r, "reals_sd", per_real);
-  } else {
-    // A wave cut short before OnWaveEnd: only its progress is known (LoadHistory derives the
-    // rest from the particles).
-    wave.candidates = next_index;
-    wave.accepted = check.Count(row, kAcceptedSoFar, "accepted_so_far");
-    wave.acceptance_rate = wave.candidates > 0 ? static_cast<double>(wave.accepted) /
-                                                     static_cast<double>(wave.candidates)
-                                               : 0.0;
-  }
+  ReadWaveCounts(check, row, shape, ended, next_index, wave);
 
   wave.multi_fidelity = ReadFidelity(check, row, wave.candidates, ended);
   wave.pattern_classes =
@@ -524,55 +589,10 @@ WaveRecord HistoryStore::Impl::ReadWave(Statement& row, int expected_wave) {
   Statement particles(db, (ParticleSelect() + " WHERE wave = ?1 ORDER BY candidate").c_str());
   particles.Bind(1, expected_wave);
   history::WaveHasher hasher(schema_version);
-  const std::string distance_count =
-      std::to_string(shape.components) + " (one per distance component)";
-  const std::string output_count =
-      "0 or " + std::to_string(shape.outputs) + " (one per output position)";
   std::int64_t confirmed = 0;
   while (particles.Step()) {
     hasher.AddParticle(particles);
-    Particle p;
-    p.index = particles.Int(kCandidate);
-    const std::string who = "particle " + std::to_string(p.index);
-    if (p.index < 0 || p.index >= indices) {
-      check.Corrupt(who, "lies outside the wave's " + std::to_string(indices) + " candidates");
-    }
-    p.theta.bits = check.Bits(particles, kBits, shape.dimension, who + " bits");
-    p.log_weight = particles.Real(kLogWeight);
-    p.weight = particles.Real(kWeight);
-    p.distance = check.Doubles(particles,
-                               kDistance,
-                               shape.components,
-                               shape.components,
-                               who + " distance",
-                               distance_count);
-    p.output = check.Doubles(particles, kOutput, 0, shape.outputs, who + " output", output_count);
-    if (!p.output.empty() && p.output.size() != shape.outputs) {
-      check.Corrupt(who + " output",
-                    "has " + std::to_string(p.output.size()) + " values, expected " + output_count);
-    }
-    p.theta.reals = check.Doubles(particles,
-                                  kReals,
-                                  shape.reals,
-                                  shape.reals,
-                                  who + " reals",
-                                  std::to_string(shape.reals) + " (one per real parameter)");
-    for (std::size_t i = 0; i < p.theta.reals.size(); ++i) {
-      // A particle's reals were drawn inside their prior's support: never NaN or infinite.
-      if (!std::isfinite(p.theta.reals[i])) {
-        check.Corrupt(who + " reals", "value " + std::to_string(i + 1) + " is not finite");
-      }
-    }
-    ReadParticleFidelity(check, particles, wave.multi_fidelity, who, shape.components, p);
-    if (!particles.IsNull(kAncestor)) {
-      const std::string field = who + " ancestor";
-      p.ancestor = check.Count(particles, kAncestor, field.c_str());
-      if (p.ancestor >= ancestors) {
-        check.Corrupt(field,
-                      "is " + std::to_string(p.ancestor) + ", not one of the previous wave's " +
-                          std::to_string(ancestors) + " particle numbers");
-      }
-    }
+    Particle p = ReadParticle(check, particles, shape, wave.multi_fidelity, indices, ancestors);
     confirmed += p.confirmed ? 1 : 0;
     wave.particles.push_back(std::move(p));
   }

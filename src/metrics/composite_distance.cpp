@@ -14,11 +14,13 @@
 namespace combabc {
 namespace {
 
-using metrics_internal::kPositionTolerance;
+// Named apart from src/data/'s own kPositionTolerance and Metres, which a unity batch may put in
+// the same translation unit.
+constexpr double kTolerance = metrics_internal::kPositionTolerance;
 
 std::string Field(std::size_t i) { return metrics_internal::ComponentField(i); }
 
-std::string Metres(double x) {
+std::string InMetres(double x) {
   std::ostringstream out;
   out << x << " m";
   return out.str();
@@ -34,7 +36,7 @@ void CheckAmplitudes(const MetricComponentConfig& c,
     if (values[j] >= 0.0) continue;
     std::ostringstream what;
     what << "noise = \"folded_normal\" models amplitudes (>= 0), but the measured value at "
-         << Metres(positions[j]) << " is " << values[j]
+         << InMetres(positions[j]) << " is " << values[j]
          << ": give amplitudes in [data] displacement_column, or noise = \"gaussian\" for "
             "signed data";
     throw Error(ErrorKind::kConfig, what.str(), {}, c.config_line, Field(i));
@@ -47,6 +49,54 @@ void CheckIncreasing(std::span<const double> x, const char* what) {
       throw Error(ErrorKind::kConfig, std::string(what) + " must be strictly increasing");
     }
   }
+}
+
+// A noise model's sigma: sigma_noise, or the one estimated from the measured data, combined with
+// sigma_model; Error(kConfig) at the component when it is not finite and > 0.
+double NoiseSigma(const MetricComponentConfig& c,
+                  std::size_t i,
+                  bool folded,
+                  std::span<const double> data_positions,
+                  std::span<const double> data_values) {
+  double noise = 0.0;
+  if (c.noise.sigma_noise) {
+    noise = *c.noise.sigma_noise;
+  } else if (data_positions.size() >= 3) {
+    noise = folded ? EstimateAmplitudeNoise(data_positions, data_values).sigma
+                   : EstimateNoiseSigma(data_positions, data_values);
+  }
+  const double sigma = std::hypot(noise, c.noise.sigma_model);
+  if (!(sigma > 0.0) || !std::isfinite(sigma)) {
+    throw Error(ErrorKind::kConfig,
+                std::string("the ") + ToString(c.noise.model) + " noise model's sigma is " +
+                    std::to_string(sigma) +
+                    (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
+                    "; it must be finite and > 0: give sigma_noise or sigma_model",
+                {},
+                c.config_line,
+                Field(i));
+  }
+  return sigma;
+}
+
+// A(Y): the trapezoid area of the measured points in an area component's window; Error(kConfig)
+// at the component when it is not positive (Eq. 4 divides by it).
+double ObservedArea(const MetricComponentConfig& c,
+                    std::size_t i,
+                    const std::vector<double>& positions,
+                    const std::vector<double>& observed) {
+  double area = 0.0;
+  for (std::size_t j = 1; j < positions.size(); ++j) {
+    area += 0.5 * (observed[j] + observed[j - 1]) * (positions[j] - positions[j - 1]);
+  }
+  if (!(area > 0.0)) {
+    throw Error(ErrorKind::kConfig,
+                "the measured area over the window is not positive; Eq. 4 divides by it",
+                {},
+                c.config_line,
+                Field(i));
+  }
+  return area;
 }
 
 }  // namespace
@@ -71,10 +121,10 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
   const double out_hi = output_positions.back();
   // Precompute where Y* is read for position x: the bracketing output indices and weight.
   auto sample_at = [&](double x, std::size_t i) {
-    if (x < out_lo - kPositionTolerance || x > out_hi + kPositionTolerance) {
+    if (x < out_lo - kTolerance || x > out_hi + kTolerance) {
       throw Error(ErrorKind::kConfig,
-                  "position " + Metres(x) + " lies outside the simulator's output positions [" +
-                      Metres(out_lo) + ", " + Metres(out_hi) + "]",
+                  "position " + InMetres(x) + " lies outside the simulator's output positions [" +
+                      InMetres(out_lo) + ", " + InMetres(out_hi) + "]",
                   {},
                   configs_[i].config_line,
                   Field(i));
@@ -93,7 +143,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
   if (options_.normalise_over == NormaliseOver::kData) {
     for (double x : data_positions) {
       // Measured points beyond the simulated range cannot take part in the maximum.
-      if (x < out_lo - kPositionTolerance || x > out_hi + kPositionTolerance) continue;
+      if (x < out_lo - kTolerance || x > out_hi + kTolerance) continue;
       data_samples_.push_back(sample_at(x, 0));
     }
   }
@@ -102,7 +152,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     const MetricComponentConfig& c = configs_[i];
     if (!(c.from < c.to) || !std::isfinite(c.from) || !std::isfinite(c.to)) {
       throw Error(ErrorKind::kConfig,
-                  "window [" + Metres(c.from) + ", " + Metres(c.to) + "] must have from < to",
+                  "window [" + InMetres(c.from) + ", " + InMetres(c.to) + "] must have from < to",
                   {},
                   c.config_line,
                   Field(i));
@@ -126,24 +176,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     if (c.noise.model != NoiseModel::kNone) {
       compiled.folded = c.noise.model == NoiseModel::kFoldedNormal;
       if (compiled.folded) CheckAmplitudes(c, i, data_positions, data_values);
-      double noise = 0.0;
-      if (c.noise.sigma_noise) {
-        noise = *c.noise.sigma_noise;
-      } else if (data_positions.size() >= 3) {
-        noise = compiled.folded ? EstimateAmplitudeNoise(data_positions, data_values).sigma
-                                : EstimateNoiseSigma(data_positions, data_values);
-      }
-      compiled.sigma = std::hypot(noise, c.noise.sigma_model);
-      if (!(compiled.sigma > 0.0) || !std::isfinite(compiled.sigma)) {
-        throw Error(ErrorKind::kConfig,
-                    std::string("the ") + ToString(c.noise.model) + " noise model's sigma is " +
-                        std::to_string(compiled.sigma) +
-                        (c.noise.sigma_noise ? "" : " (estimated from the measured data)") +
-                        "; it must be finite and > 0: give sigma_noise or sigma_model",
-                    {},
-                    c.config_line,
-                    Field(i));
-      }
+      compiled.sigma = NoiseSigma(c, i, compiled.folded, data_positions, data_values);
     }
     if (KindOf(c.type) == ComponentKind::kIndicator) {
       if (!data_positions.empty()) {
@@ -153,7 +186,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
     } else {
       for (std::size_t j = 0; j < data_positions.size(); ++j) {
         const double x = data_positions[j];
-        if (x < c.from - kPositionTolerance || x > c.to + kPositionTolerance) continue;
+        if (x < c.from - kTolerance || x > c.to + kTolerance) continue;
         compiled.positions.push_back(x);
         compiled.observed.push_back(data_values[j]);
         compiled.samples.push_back(sample_at(x, i));
@@ -166,7 +199,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
       const std::size_t needed = c.type == MetricType::kArea ? 2 : 1;
       if (compiled.positions.size() < needed) {
         throw Error(ErrorKind::kConfig,
-                    "window [" + Metres(c.from) + ", " + Metres(c.to) + "] holds " +
+                    "window [" + InMetres(c.from) + ", " + InMetres(c.to) + "] holds " +
                         std::to_string(compiled.positions.size()) + " data points; " +
                         ToString(c.type) + " needs at least " + std::to_string(needed),
                     {},
@@ -174,18 +207,7 @@ CompositeDistance::CompositeDistance(std::vector<MetricComponentConfig> componen
                     Field(i));
       }
       if (c.type == MetricType::kArea) {
-        for (std::size_t j = 1; j < compiled.positions.size(); ++j) {
-          compiled.observed_area += 0.5 * (compiled.observed[j] + compiled.observed[j - 1]) *
-                                    (compiled.positions[j] - compiled.positions[j - 1]);
-        }
-        // Eq. 4 divides by A(Y).
-        if (!(compiled.observed_area > 0.0)) {
-          throw Error(ErrorKind::kConfig,
-                      "the measured area over the window is not positive; Eq. 4 divides by it",
-                      {},
-                      c.config_line,
-                      Field(i));
-        }
+        compiled.observed_area = ObservedArea(c, i, compiled.positions, compiled.observed);
       }
     }
     compiled_.push_back(std::move(compiled));

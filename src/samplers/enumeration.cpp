@@ -245,6 +245,50 @@ void CheckOptions(const SmcProblem& problem,
   }
 }
 
+// The log of a configuration's likelihood at the thresholds: -inf where a threshold or
+// indicator component rejects it, else -sum_k d_k / T_k over the likelihood components (the
+// noise-aware posterior p(theta) exp(-d / T), docs/algorithm.md "Noise-aware acceptance").
+double LogLikelihood(const std::vector<DistanceComponent>& components,
+                     const std::vector<double>& thresholds,
+                     std::span<const double> dist) {
+  constexpr double kReject = -std::numeric_limits<double>::infinity();
+  double log_l = 0.0;
+  std::size_t s = 0;
+  for (std::size_t k = 0; k < components.size(); ++k) {
+    if (components[k].kind == ComponentKind::kThreshold) {
+      if (!(dist[k] <= thresholds[s++])) return kReject;
+    } else if (components[k].kind == ComponentKind::kNegLogLikelihood) {
+      const double temperature = thresholds[s++];
+      if (std::isinf(temperature)) continue;
+      if (!(dist[k] < std::numeric_limits<double>::infinity())) return kReject;
+      log_l -= dist[k] / temperature;
+    } else if (dist[k] != components[k].required) {
+      return kReject;
+    }
+  }
+  return log_l;
+}
+
+// The top configurations and the kept particles, each weighted by its share of the mass (the top
+// ones of all the mass, the kept ones of theirs), the kept ones in configuration order.
+void KeepParticles(std::vector<Particle> sorted,
+                   const EnumerationOptions& options,
+                   double shift,
+                   double mass_sum,
+                   EnumerationResult& result) {
+  const auto top = std::min(sorted.size(), static_cast<std::size_t>(options.top));
+  result.top.assign(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(top));
+  for (auto& p : result.top) p.weight = std::exp(p.log_weight - shift) / mass_sum;
+  sorted.resize(std::min(sorted.size(), static_cast<std::size_t>(options.max_particles)));
+  double kept_mass = 0.0;
+  for (const auto& p : sorted) kept_mass += std::exp(p.log_weight - shift);
+  for (auto& p : sorted) p.weight = std::exp(p.log_weight - shift) / kept_mass;
+  std::sort(sorted.begin(), sorted.end(), [](const Particle& a, const Particle& b) {
+    return a.index < b.index;
+  });
+  result.particles = std::move(sorted);
+}
+
 }  // namespace
 
 WaveRecord EnumerationResult::Wave(const std::vector<double>& thresholds,
@@ -288,28 +332,6 @@ EnumerationResult Enumerate(const SmcProblem& problem,
   EnumerationResult result;
   result.configurations = std::int64_t{1} << space.num_free_bits();
 
-  // The log of a configuration's likelihood at the thresholds: -inf where a threshold or
-  // indicator component rejects it, else -sum_k d_k / T_k over the likelihood components (the
-  // noise-aware posterior p(theta) exp(-d / T), docs/algorithm.md "Noise-aware acceptance").
-  auto log_likelihood = [&](std::span<const double> dist) {
-    constexpr double kReject = -std::numeric_limits<double>::infinity();
-    double log_l = 0.0;
-    std::size_t s = 0;
-    for (std::size_t k = 0; k < components.size(); ++k) {
-      if (components[k].kind == ComponentKind::kThreshold) {
-        if (!(dist[k] <= options.thresholds[s++])) return kReject;
-      } else if (components[k].kind == ComponentKind::kNegLogLikelihood) {
-        const double temperature = options.thresholds[s++];
-        if (std::isinf(temperature)) continue;
-        if (!(dist[k] < std::numeric_limits<double>::infinity())) return kReject;
-        log_l -= dist[k] / temperature;
-      } else if (dist[k] != components[k].required) {
-        return kReject;
-      }
-    }
-    return log_l;
-  };
-
   WaveRecord start_record;
   start_record.thresholds = options.thresholds;
   start_record.proposal = space.binary().free_prior_one();
@@ -333,7 +355,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     batch.Evaluate(*executor, next, n);
     for (std::int64_t i = 0; i < n; ++i) {
       const auto u = static_cast<std::size_t>(i);
-      const double log_l = log_likelihood(batch.distance(u));
+      const double log_l = LogLikelihood(components, options.thresholds, batch.distance(u));
       if (log_l == -std::numeric_limits<double>::infinity()) continue;
       const double log_prior = batch.log_prior(u) + log_l;
       // A configuration of prior mass 0 (a bit or tied group of prior 0 or 1 set the other way)
@@ -389,18 +411,7 @@ EnumerationResult Enumerate(const SmcProblem& problem,
     result.correlations = moments.Correlations();
     result.ess = mass_sum * mass_sum / mass_sq_sum;
   }
-  auto sorted = best.Sorted();
-  const auto top = std::min(sorted.size(), static_cast<std::size_t>(options.top));
-  result.top.assign(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(top));
-  for (auto& p : result.top) p.weight = std::exp(p.log_weight - shift) / mass_sum;
-  sorted.resize(std::min(sorted.size(), static_cast<std::size_t>(options.max_particles)));
-  double kept_mass = 0.0;
-  for (const auto& p : sorted) kept_mass += std::exp(p.log_weight - shift);
-  for (auto& p : sorted) p.weight = std::exp(p.log_weight - shift) / kept_mass;
-  std::sort(sorted.begin(), sorted.end(), [](const Particle& a, const Particle& b) {
-    return a.index < b.index;
-  });
-  result.particles = std::move(sorted);
+  KeepParticles(best.Sorted(), options, shift, mass_sum, result);
   result.wall_seconds = SecondsSince(start);
   if (observer) observer->OnWaveEnd(result.Wave(options.thresholds, start_record.proposal));
   return result;

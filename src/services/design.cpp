@@ -21,8 +21,8 @@
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/sensor_model.hpp"
 #include "combabc/rng/random_stream.hpp"
+#include "services/adapters/python_script.hpp"
 #include "services/design_campaign.hpp"
-#include "services/python_script.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -586,11 +586,9 @@ void WriteFiles(OutputDirectory& dir, const DesignOutcome& o, const CalibrationC
   if (!o.campaign.alone.empty()) WriteCampaignCsv(dir.Add("campaign.csv"), o.campaign);
 }
 
-}  // namespace
-
-DesignOutcome RunDesign(const DesignRequest& request) {
-  const auto start = std::chrono::steady_clock::now();
-  CalibrationConfig c = LoadConfig(request.config_path);
+// What design needs of the config: a [design] table, the built-in sensor and no continuous
+// unknowns.
+void CheckDesignConfig(const CalibrationConfig& c) {
   if (!c.design) {
     throw Error(ErrorKind::kConfig,
                 "missing required table [design] (the candidate experiments to rank; "
@@ -614,6 +612,149 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                 "(the continuous unknowns) or fix them at nominal values",
                 c.path);
   }
+}
+
+// The stop rule (every clamp decided, or no candidate expected to decide another one) and why
+// each clamp the run leaves undecided stays so.
+void JudgeClamps(const CalibrationConfig& c,
+                 const std::vector<double>& marginals,
+                 double identified_margin,
+                 std::size_t best,
+                 DesignOutcome& o) {
+  // The stop rule: every clamp decided, or no candidate expected to decide another one.
+  if (o.decided_now >= o.clamps) {
+    o.stop = true;
+    o.stop_reason = "every clamp is decided";
+  } else if (o.expected_decided - o.decided_now < 0.5) {
+    o.stop = true;
+    char adds[32];
+    std::snprintf(adds, sizeof adds, "%.1f", o.expected_decided - o.decided_now);
+    o.stop_reason = "no candidate is expected to decide another clamp (the best, the load at " +
+                    DesignNumber(o.candidates[best].load_x * 100) + " cm, adds " + adds + ")";
+  }
+  for (int k = 0; k < o.clamps; ++k) {
+    if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > identified_margin) {
+      continue;
+    }
+    // The strongest evidence any candidate alone gives against flipping it.
+    double signal = std::numeric_limits<double>::quiet_NaN();
+    for (const design::Score& score : o.result.scores) {
+      const double v = score.flip_signal[static_cast<std::size_t>(k)];
+      if (std::isfinite(v) && !(v <= signal)) signal = v;
+    }
+    UndecidedClamp u;
+    u.bit = k;
+    u.where = ClampWhere(c, k);
+    u.reason = !std::isfinite(signal) ? "no candidate's data were simulated against its flip"
+               : signal < 2.0
+                   ? "flipping it changes no candidate's profile by more than the noise (the "
+                     "response there is below the noise)"
+                   : "its flip shows in a profile, but another clamp (its mirror across the strip "
+                     "or a neighbour) can be flipped with it for nearly the same profile";
+    o.undecided.push_back(std::move(u));
+  }
+}
+
+// identifiability.<fmt> for each figure format; with --posterior also campaign.<fmt>, which
+// experiment decided what: drawn by combabc_design.py into the staged folder.
+void DrawFigures(const CalibrationConfig& c, const DesignOutcome& o, OutputDirectory& dir) {
+  const PythonScript script = FindPythonScript(
+      "combabc_design.py", "COMBABC_DESIGN_SCRIPT", "python3-numpy and python3-matplotlib");
+  std::vector<std::string> tables{"identifiability"};
+  if (!o.campaign.alone.empty()) tables.emplace_back("campaign");
+  for (const std::string& format : c.output.figure_formats) {
+    for (const std::string& table : tables) {
+      std::string name = table;
+      name += ".";
+      name += format;
+      dir.Add(name);
+      const ProcessResult result = RunProcess({script.python,
+                                               script.script,
+                                               dir.StagedPath(table + ".csv"),
+                                               dir.StagedPath(name),
+                                               format},
+                                              "python3-numpy and python3-matplotlib");
+      if (result.status != 0) {
+        throw Error(KindOfScriptStatus(result.status),
+                    name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
+      }
+    }
+  }
+}
+
+// The clamps the marginals decide: P(fixed) farther than `margin` from 0.5.
+int Decided(const std::vector<double>& marginals, double margin) {
+  int count = 0;
+  for (double p : marginals) count += std::abs(p - 0.5) > margin;
+  return count;
+}
+
+// Design from a finished run's posterior (--posterior): the truths' neighbourhoods simulated and
+// scored. Returns the run's marginals.
+std::vector<double> DesignFromPosterior(const DesignRequest& request,
+                                        const CalibrationConfig& c,
+                                        const design::DesignOptions& options,
+                                        int threads,
+                                        std::chrono::steady_clock::time_point simulate_start,
+                                        DesignOutcome& o) {
+  // The run's particles are too few to stand for what a new experiment's data would leave
+  // (reweighted, they collapse onto a handful and every clamp looks decided): the truths'
+  // neighbourhoods under the prior and the run's own likelihood instead (docs/algorithm.md,
+  // "Honest predictions").
+  std::vector<double> thresholds;
+  const design::Population known =
+      FromPosterior(request.posterior_path, c, &o.population, &thresholds);
+  std::vector<double> marginals = design::Marginals(known);
+  o.decided_now = Decided(marginals, options.identified_margin);
+  design::LocalPopulation local =
+      Neighbourhoods(c, known, design::DrawTruths(known.weights, options.truths, options.seed));
+  const DesignMemory memory = EstimateDesignMemory(c, static_cast<double>(local.rows()));
+  if (memory.total() > c.model.memory_limit_bytes) {
+    throw Error(ErrorKind::kUsage,
+                "the truths' neighbourhoods hold " + std::to_string(local.rows()) +
+                    " configurations, which would need about " +
+                    DesignNumber(memory.total() / 1e9) + " GB of memory to design from (limit " +
+                    DesignNumber(c.model.memory_limit_bytes / 1e9) +
+                    " GB); fewer truths or scan points in [design], or raise memory_limit_gb",
+                request.posterior_path,
+                0,
+                "--posterior");
+  }
+  const Simulated s = SimulateRows(c, local.bits, local.rows(), threads, true);
+  std::vector<std::vector<double>> per_experiment;
+  const std::vector<double> ll =
+      RunLogLikelihood(c, s, thresholds, request.posterior_path, &per_experiment);
+  o.campaign = MakeCampaignView(
+      c, local, local.log_weight, per_experiment, ll, marginals, c.design->identified_margin);
+  for (std::size_t r = 0; r < local.rows(); ++r) {
+    local.log_weight[r] += ll[r];
+    if (!s.singular[r].empty()) {
+      if (o.singular == 0) o.singular_reason = s.singular[r];
+      ++o.singular;
+    }
+  }
+  o.simulated = local.rows();
+  o.simulate_seconds = SecondsSince(simulate_start);
+  o.particles = known.size();
+  o.method =
+      "each truth's neighbourhood (the truths, their one-bit flips, the swaps of mirror and "
+      "neighbouring clamps and their mirror images) under the prior and the run's likelihood";
+  o.result = design::ScoreNeighbourhoods(local, s.profiles, options);
+  // The neighbourhoods' own count before any new data stands in for the run's (each truth's
+  // flips are judged with the others held at the truth's values): what a candidate adds to it
+  // is added to what the run decided.
+  o.expected_decided =
+      o.decided_now +
+      std::max(0.0, o.result.cumulative.front().identified - o.result.prior_identified);
+  return marginals;
+}
+
+}  // namespace
+
+DesignOutcome RunDesign(const DesignRequest& request) {
+  const auto start = std::chrono::steady_clock::now();
+  CalibrationConfig c = LoadConfig(request.config_path);
+  CheckDesignConfig(c);
   const int threads = request.threads >= 0 ? request.threads : c.smc.threads;
   const std::string directory =
       request.output_directory.empty()
@@ -640,11 +781,6 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   options.identified_margin = c.design->identified_margin;
   options.seed = c.smc.seed;
   options.threads = threads;
-  auto decided = [&](const std::vector<double>& marginals) {
-    int count = 0;
-    for (double p : marginals) count += std::abs(p - 0.5) > options.identified_margin;
-    return count;
-  };
   std::vector<double> marginals;
   const auto simulate_start = std::chrono::steady_clock::now();
   if (request.posterior_path.empty()) {
@@ -659,92 +795,13 @@ DesignOutcome RunDesign(const DesignRequest& request) {
                             : "the prior draws, reweighted by each truth's data";
     o.result = design::ScoreCandidates(population, profiles, options);
     marginals = design::Marginals(population);
-    o.decided_now = decided(marginals);
+    o.decided_now = Decided(marginals, options.identified_margin);
     o.expected_decided = o.result.cumulative.front().identified;
   } else {
-    // The run's particles are too few to stand for what a new experiment's data would leave
-    // (reweighted, they collapse onto a handful and every clamp looks decided): the truths'
-    // neighbourhoods under the prior and the run's own likelihood instead (docs/algorithm.md,
-    // "Honest predictions").
-    std::vector<double> thresholds;
-    const design::Population known =
-        FromPosterior(request.posterior_path, c, &o.population, &thresholds);
-    marginals = design::Marginals(known);
-    o.decided_now = decided(marginals);
-    design::LocalPopulation local =
-        Neighbourhoods(c, known, design::DrawTruths(known.weights, options.truths, options.seed));
-    const DesignMemory memory = EstimateDesignMemory(c, static_cast<double>(local.rows()));
-    if (memory.total() > c.model.memory_limit_bytes) {
-      throw Error(ErrorKind::kUsage,
-                  "the truths' neighbourhoods hold " + std::to_string(local.rows()) +
-                      " configurations, which would need about " +
-                      DesignNumber(memory.total() / 1e9) + " GB of memory to design from (limit " +
-                      DesignNumber(c.model.memory_limit_bytes / 1e9) +
-                      " GB); fewer truths or scan points in [design], or raise memory_limit_gb",
-                  request.posterior_path,
-                  0,
-                  "--posterior");
-    }
-    const Simulated s = SimulateRows(c, local.bits, local.rows(), threads, true);
-    std::vector<std::vector<double>> per_experiment;
-    const std::vector<double> ll =
-        RunLogLikelihood(c, s, thresholds, request.posterior_path, &per_experiment);
-    o.campaign = MakeCampaignView(
-        c, local, local.log_weight, per_experiment, ll, marginals, c.design->identified_margin);
-    for (std::size_t r = 0; r < local.rows(); ++r) {
-      local.log_weight[r] += ll[r];
-      if (!s.singular[r].empty()) {
-        if (o.singular == 0) o.singular_reason = s.singular[r];
-        ++o.singular;
-      }
-    }
-    o.simulated = local.rows();
-    o.simulate_seconds = SecondsSince(simulate_start);
-    o.particles = known.size();
-    o.method =
-        "each truth's neighbourhood (the truths, their one-bit flips, the swaps of mirror and "
-        "neighbouring clamps and their mirror images) under the prior and the run's likelihood";
-    o.result = design::ScoreNeighbourhoods(local, s.profiles, options);
-    // The neighbourhoods' own count before any new data stands in for the run's (each truth's
-    // flips are judged with the others held at the truth's values): what a candidate adds to it
-    // is added to what the run decided.
-    o.expected_decided =
-        o.decided_now +
-        std::max(0.0, o.result.cumulative.front().identified - o.result.prior_identified);
+    marginals = DesignFromPosterior(request, c, options, threads, simulate_start, o);
   }
   const std::size_t best = static_cast<std::size_t>(o.result.selected.front());
-  // The stop rule: every clamp decided, or no candidate expected to decide another one.
-  if (o.decided_now >= o.clamps) {
-    o.stop = true;
-    o.stop_reason = "every clamp is decided";
-  } else if (o.expected_decided - o.decided_now < 0.5) {
-    o.stop = true;
-    char adds[32];
-    std::snprintf(adds, sizeof adds, "%.1f", o.expected_decided - o.decided_now);
-    o.stop_reason = "no candidate is expected to decide another clamp (the best, the load at " +
-                    DesignNumber(o.candidates[best].load_x * 100) + " cm, adds " + adds + ")";
-  }
-  for (int k = 0; k < o.clamps; ++k) {
-    if (std::abs(marginals[static_cast<std::size_t>(k)] - 0.5) > options.identified_margin) {
-      continue;
-    }
-    // The strongest evidence any candidate alone gives against flipping it.
-    double signal = std::numeric_limits<double>::quiet_NaN();
-    for (const design::Score& score : o.result.scores) {
-      const double v = score.flip_signal[static_cast<std::size_t>(k)];
-      if (std::isfinite(v) && !(v <= signal)) signal = v;
-    }
-    UndecidedClamp u;
-    u.bit = k;
-    u.where = ClampWhere(c, k);
-    u.reason = !std::isfinite(signal) ? "no candidate's data were simulated against its flip"
-               : signal < 2.0
-                   ? "flipping it changes no candidate's profile by more than the noise (the "
-                     "response there is below the noise)"
-                   : "its flip shows in a profile, but another clamp (its mirror across the strip "
-                     "or a neighbour) can be flipped with it for nearly the same profile";
-    o.undecided.push_back(std::move(u));
-  }
+  JudgeClamps(c, marginals, options.identified_margin, best, o);
   const fs::path design_directory = fs::absolute(directory);
   if (!o.stop) {
     const NextStep next = WriteNextConfig(c, o.candidates[best], design_directory);
@@ -763,31 +820,7 @@ DesignOutcome RunDesign(const DesignRequest& request) {
   }
   OutputDirectory dir(directory, request.overwrite);
   WriteFiles(dir, o, c);
-  if (request.figure) {
-    const PythonScript script = FindPythonScript(
-        "combabc_design.py", "COMBABC_DESIGN_SCRIPT", "python3-numpy and python3-matplotlib");
-    // identifiability.<fmt>; with --posterior also campaign.<fmt>, which experiment decided what.
-    std::vector<std::string> tables{"identifiability"};
-    if (!o.campaign.alone.empty()) tables.emplace_back("campaign");
-    for (const std::string& format : c.output.figure_formats) {
-      for (const std::string& table : tables) {
-        std::string name = table;
-        name += ".";
-        name += format;
-        dir.Add(name);
-        const ProcessResult result = RunProcess({script.python,
-                                                 script.script,
-                                                 dir.StagedPath(table + ".csv"),
-                                                 dir.StagedPath(name),
-                                                 format},
-                                                "python3-numpy and python3-matplotlib");
-        if (result.status != 0) {
-          throw Error(KindOfScriptStatus(result.status),
-                      name + ": " + ScriptMessage(result.err, result.status, "combabc_design"));
-        }
-      }
-    }
-  }
+  if (request.figure) DrawFigures(c, o, dir);
   dir.Commit();
   o.directory = directory;
   o.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

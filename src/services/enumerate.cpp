@@ -13,11 +13,11 @@
 #include "combabc/history/history_store.hpp"
 #include "combabc/samplers/enumeration.hpp"
 #include "combabc/services/report.hpp"
-#include "services/output_folders.hpp"
-#include "services/problem.hpp"
-#include "services/read_back.hpp"
-#include "services/report_checks.hpp"
-#include "services/worker_steps.hpp"
+#include "services/steps/output_folders.hpp"
+#include "services/steps/problem.hpp"
+#include "services/steps/read_back.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/worker_steps.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

@@ -10,9 +10,9 @@
 #include "combabc/export/answer.hpp"
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
+#include "services/adapters/python_script.hpp"
 #include "services/design_campaign.hpp"
-#include "services/python_script.hpp"
-#include "services/read_back.hpp"
+#include "services/steps/read_back.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

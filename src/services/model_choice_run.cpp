@@ -14,8 +14,8 @@
 #include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
 #include "export/json_text.hpp"
-#include "services/python_script.hpp"
-#include "services/read_back.hpp"
+#include "services/adapters/python_script.hpp"
+#include "services/steps/read_back.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

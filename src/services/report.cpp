@@ -19,10 +19,10 @@
 #include "combabc/export/export.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/report.hpp"
+#include "services/adapters/python_script.hpp"
 #include "services/design_campaign.hpp"
-#include "services/python_script.hpp"
-#include "services/read_back.hpp"
-#include "services/report_checks.hpp"
+#include "services/steps/read_back.hpp"
+#include "services/steps/report_checks.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

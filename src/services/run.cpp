@@ -10,13 +10,13 @@
 #include "combabc/history/history_store.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/report.hpp"
-#include "services/output_folders.hpp"
-#include "services/problem.hpp"
-#include "services/report_checks.hpp"
-#include "services/run_fingerprint.hpp"
-#include "services/run_steps.hpp"
-#include "services/start_from.hpp"
-#include "services/worker_steps.hpp"
+#include "services/steps/output_folders.hpp"
+#include "services/steps/problem.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/run_fingerprint.hpp"
+#include "services/steps/run_steps.hpp"
+#include "services/steps/start_from.hpp"
+#include "services/steps/worker_steps.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -69,28 +69,18 @@ void CheckStoredExperiments(const std::vector<StoredExperiment>& stored,
   }
 }
 
-// The same parts with the same digests, in any order (the history stores them sorted).
-bool SameFingerprint(Fingerprint a, Fingerprint b) {
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
-  return a == b;
-}
-
-// A sensor run written before RZT became the default (combabc before 2026-11-23) has no
-// [model] theory in its config because it was Kirchhoff then: its stored fingerprint says so, and
-// it resumes as the run it was (its finished waves stay usable). The model is rebuilt only when
-// that reading is the one the fingerprint matches. Returns the fingerprint of p as rebuilt.
+// The problem rebuilt as the stored fingerprint reads its config, when that is a legacy reading
+// (LegacyReading: a sensor run written before RZT became the default), so that it resumes as the
+// run it was. Returns the fingerprint of p as rebuilt.
 Fingerprint RebuildAsStored(Problem& p, const Fingerprint& stored, const std::string& path) {
   Fingerprint now = FingerprintOf(p);
-  if (p.config.simulator.kind != SimulatorKind::kSensor ||
-      p.config.model.theory != plate::PlateTheory::kRzt || SameFingerprint(now, stored)) {
-    return now;
-  }
-  CalibrationConfig kirchhoff = p.config;
-  kirchhoff.model.theory = plate::PlateTheory::kKirchhoff;
-  if (!SameFingerprint(FingerprintOf(p, &kirchhoff), stored)) return now;
+  std::optional<CalibrationConfig> legacy =
+      LegacyReading(p.config, now, stored, [&](const CalibrationConfig& config) {
+        return FingerprintOf(p, &config);
+      });
+  if (!legacy) return now;
   Problem old;
-  old.config = std::move(kirchhoff);
+  old.config = std::move(*legacy);
   old.data = p.data;
   old.executor = std::move(p.executor);
   BuildModel(old, path);

@@ -7,11 +7,12 @@
 #include "combabc/core/executor.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/services/run.hpp"
-#include "services/problem.hpp"
-#include "services/report_checks.hpp"
-#include "services/run_fingerprint.hpp"
-#include "services/run_steps.hpp"
-#include "services/start_from.hpp"
+#include "services/steps/problem.hpp"
+#include "services/steps/read_back.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/run_fingerprint.hpp"
+#include "services/steps/run_steps.hpp"
+#include "services/steps/start_from.hpp"
 
 namespace combabc::services {
 namespace {
@@ -119,15 +120,23 @@ RunOutcome RunProblem(const ProblemRunRequest& request, SmcObserver* progress) {
       store.emplace(HistoryStore::Create(path, metadata, request.overwrite));
     }
   }
-  return Execute({.problem = problem,
-                  .options = &options,
-                  .store = store ? &*store : nullptr,
-                  .history_path = path,
-                  .resume = resume ? &*resume : nullptr,
-                  .report = request.report,
-                  .report_progress = {},
-                  .on_checks_before = {}},
-                 progress);
+  RunOutcome outcome = Execute({.problem = problem,
+                                .options = &options,
+                                .store = store ? &*store : nullptr,
+                                .history_path = path,
+                                .resume = resume ? &*resume : nullptr,
+                                .report = request.report,
+                                .report_progress = {},
+                                .on_checks_before = {}},
+                               progress);
+  if (!store) {
+    // No history to read the answer back from: the same function on the metadata the history
+    // would hold (its termination recorded as HistoryStore::Finish records it) and the run as it
+    // ended, so that a run without a file answers as one with a file would.
+    metadata.termination = ToString(outcome.history.summary.termination);
+    outcome.answer = SummariseAnswer(metadata, outcome.history, BitPositions(metadata));
+  }
+  return outcome;
 }
 
 }  // namespace combabc::services

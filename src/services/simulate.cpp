@@ -7,7 +7,7 @@
 
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
-#include "services/simulator_factory.hpp"
+#include "services/adapters/simulator_factory.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

@@ -77,35 +77,6 @@ TEST(ValidationError, MessageFromItsParts) {
   EXPECT_EQ((ValidationError{"SmcOptions", "tempering.values", "", "x"}).Member(), "tempering");
 }
 
-// FromMessage reads a sentence of that form back into the same parts.
-TEST(ValidationError, FromMessageInvertsMessage) {
-  const std::vector<ValidationError> errors = {
-      {"SmcOptions", "num_waves", "0", "must be >= 1"},
-      {"SmcOptions", "accepted_by_wave[1]", "0", "must be >= 1"},
-      {"SmcOptions",
-       "accepted_by_wave",
-       "",
-       "has 3 entries; must have one per wave (num_waves = 2)"},
-      {"SmcOptions",
-       "tempering.values",
-       "",
-       "has 1 entries; must have 3 (one per wave after the first)"},
-      {"SmcOptions",
-       "thresholds[0].values[1]",
-       "0.500000 > values[0]",
-       "thresholds must not increase"},
-      {"SmcOptions", "proposal.logistic.clip", "0.500000", "must be in (0, 0.5)"},
-      {"SmcOptions", "multi_fidelity.cost_ratio", "-1.000000", "must be > 0, or 0 to measure it"},
-  };
-  for (const ValidationError& e : errors) {
-    const ValidationError back = ValidationError::FromMessage(e.Message());
-    EXPECT_EQ(back.owner, e.owner) << e.Message();
-    EXPECT_EQ(back.field, e.field) << e.Message();
-    EXPECT_EQ(back.value, e.value) << e.Message();
-    EXPECT_EQ(back.constraint, e.constraint) << e.Message();
-  }
-}
-
 TEST(ValidationError, ExplainWritesTheSentenceOnlyOnFailure) {
   const ValidationError e{"X", "y", "1", "must be 0"};
   std::string why = "untouched";

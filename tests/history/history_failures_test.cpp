@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "combabc/core/fnv1a.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "support/test_support.hpp"
@@ -24,11 +25,7 @@ class FlakySimulator : public Simulator {
  public:
   int output_size() const override { return kBits; }
   void Simulate(const ParameterView& theta, RandomStream&, std::span<double> out) const override {
-    std::uint64_t h = 14695981039346656037ull;
-    for (std::uint8_t b : theta.bits) {
-      h ^= b;
-      h *= 1099511628211ull;
-    }
+    const std::uint64_t h = Fnv1a(theta.bits);
     if (h % 4 == 0) throw SimulationFailed("exit status 3 (\"quoted\", 'single'; ümlaut)");
     for (int k = 0; k < kBits; ++k) out[k] = theta.bits[k];
   }

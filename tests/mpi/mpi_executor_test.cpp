@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/fnv1a.hpp"
 #include "combabc/mpi/mpi_executor.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 
@@ -106,8 +107,7 @@ class FlakySimulator : public Simulator {
  public:
   int output_size() const override { return 6; }
   void Simulate(const ParameterView& theta, RandomStream&, std::span<double> out) const override {
-    std::uint64_t h = 14695981039346656037ull;
-    for (std::uint8_t b : theta.bits) h = (h ^ b) * 1099511628211ull;
+    const std::uint64_t h = Fnv1a(theta.bits);
     if (h % 4 == 0) throw SimulationFailed("no convergence (" + std::to_string(h % 1000) + ")");
     for (std::size_t k = 0; k < 6; ++k) out[k] = theta.bits[k];
   }

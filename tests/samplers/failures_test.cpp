@@ -10,6 +10,7 @@
 #include <string>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/fnv1a.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "toy_models.hpp"
 
@@ -21,14 +22,7 @@ using testing::WeightedL1Distance;
 constexpr int kBits = 8;
 
 // A deterministic quarter or so of the configurations: FNV-1a of the bits, 0 mod 4.
-bool Fails(std::span<const std::uint8_t> bits) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (std::uint8_t b : bits) {
-    h ^= b;
-    h *= 1099511628211ull;
-  }
-  return h % 4 == 0;
-}
+bool Fails(std::span<const std::uint8_t> bits) { return Fnv1a(bits) % 4 == 0; }
 
 enum class Mode {
   kThrow,   // SimulationFailed from Simulate

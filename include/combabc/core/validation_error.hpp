@@ -29,12 +29,6 @@ struct ValidationError {
   // The member of the owner that `field` lies in: "layers" for "layers[2]::thickness",
   // "tempering" for "tempering.values[1]".
   std::string Member() const;
-
-  // The inverse of Message() for messages of that form ("Owner::field = value; constraint" or
-  // "Owner::field constraint", the field made of letters, digits, '_', '[', ']' and '.'). For the
-  // checks that still give only a sentence (SmcOptions, MultiFidelityOptions: src/samplers), so
-  // that the config reports them like the others.
-  static ValidationError FromMessage(const std::string& message);
 };
 
 // The string form of an IsValid check: returns `valid`; when it is false and `why` is not null,

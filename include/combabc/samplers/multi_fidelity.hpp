@@ -6,6 +6,8 @@
 // "Multi-fidelity sampling".
 #include <string>
 
+#include "combabc/core/validation_error.hpp"
+
 namespace combabc {
 
 struct MultiFidelityOptions {
@@ -31,6 +33,9 @@ struct MultiFidelityOptions {
 
   // The continuation probabilities and the floor in (0, 1] (a continuation probability of 0
   // would leave the estimator biased: the weight divides by it); cost_ratio finite and >= 0.
+  // On failure `error` names the field (owner "MultiFidelityOptions").
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "MultiFidelityOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
 };
 

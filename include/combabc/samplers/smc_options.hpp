@@ -89,6 +89,9 @@ struct MoveOptions {
   FinalWave final_wave = FinalWave::kAuto;
   static constexpr double kFinalWaveShare = 0.25;
 
+  // Fills `error` (may be null) with the first field that fails.
+  bool IsValid(ValidationError* error) const;
+  // The same check as a sentence ("MoveOptions::field = value; constraint").
   bool IsValid(std::string* why) const;
 };
 
@@ -141,6 +144,10 @@ struct SmcOptions {
   // (SmcProblem::low_fidelity), their tuning, floor and cost ratio; unused without one.
   MultiFidelityOptions multi_fidelity;
 
+  // On failure `error` names the field (owner "SmcOptions"), with the member path below it:
+  // "accepted_by_wave[2]", "thresholds[1].values", "proposal.logistic.clip".
+  bool IsValid(ValidationError* error) const;
+  // The same as one sentence: "SmcOptions::field = value; constraint".
   bool IsValid(std::string* why) const;
   // n_t of wave t: accepted_by_wave[t] when given, else accepted_per_wave.
   int AcceptedIn(int wave) const {

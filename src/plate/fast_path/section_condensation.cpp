@@ -11,6 +11,24 @@
 #include "combabc/core/thread_pool.hpp"
 
 namespace combabc::plate {
+namespace {
+
+// Group g's outputs: its sections' output positions, section after section, in each set.
+OutputLayout GroupOutputs(const SectionLayout& sections, int g, int group_size) {
+  OutputLayout layout;
+  layout.positions.resize(static_cast<std::size_t>(sections.sets().num_sets()));
+  for (int k = 0; k < group_size; ++k) {
+    const OutputLayout& section = sections.SectionOutputs(g * group_size + k);
+    for (std::size_t set = 0; set < layout.positions.size(); ++set) {
+      const std::vector<int>& p = section.positions[set];
+      layout.positions[set].insert(layout.positions[set].end(), p.begin(), p.end());
+    }
+  }
+  layout.Finish(sections.sets());
+  return layout;
+}
+
+}  // namespace
 
 SectionCondensation::SectionCondensation(const Plate& plate,
                                          std::shared_ptr<const SectionLayout> section_layout,
@@ -78,16 +96,7 @@ SectionCondensation::SectionCondensation(const Plate& plate,
   std::vector<std::vector<int>> class_keys;
   int pieces = 0;
   for (int g = 0; g < num_groups; ++g) {
-    OutputLayout& layout = group_layout_[g];
-    layout.positions.resize(static_cast<std::size_t>(sections.sets().num_sets()));
-    for (int k = 0; k < group_size; ++k) {
-      const OutputLayout& section = sections.SectionOutputs(g * group_size + k);
-      for (std::size_t set = 0; set < layout.positions.size(); ++set) {
-        const std::vector<int>& p = section.positions[set];
-        layout.positions[set].insert(layout.positions[set].end(), p.begin(), p.end());
-      }
-    }
-    layout.Finish(sections.sets());
+    group_layout_[g] = GroupOutputs(sections, g, group_size);
     int twin = -1;
     for (int h = 0; h < g && twin < 0; ++h) {
       if (same_group(g, h)) twin = h;

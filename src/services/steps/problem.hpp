@@ -15,8 +15,8 @@
 #include "combabc/params/parameter_space.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "combabc/services/executor_factory.hpp"
-#include "services/run_fingerprint.hpp"
-#include "services/simulator_factory.hpp"
+#include "services/adapters/simulator_factory.hpp"
+#include "services/steps/run_fingerprint.hpp"
 
 namespace combabc::services {
 

@@ -1,11 +1,11 @@
-#include "services/problem.hpp"
+#include "services/steps/problem.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
 
-#include "services/worker_steps.hpp"
+#include "services/steps/worker_steps.hpp"
 
 #ifndef COMBABC_GIT_HASH
 #define COMBABC_GIT_HASH ""

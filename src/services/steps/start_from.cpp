@@ -1,4 +1,4 @@
-#include "services/start_from.hpp"
+#include "services/steps/start_from.hpp"
 
 #include <cmath>
 #include <limits>

@@ -4,6 +4,8 @@
 // data, metric, simulator, combabc version -- and a combined one. Stored with the run; resume
 // recomputes it from the problem it rebuilt and refuses to continue a run whose inputs changed,
 // since the continuation would no longer equal an uninterrupted run. Private to src/services.
+#include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -60,6 +62,21 @@ void CheckProblemFingerprint(const Fingerprint& stored,
                              const std::string& history_path,
                              const std::string& stored_version,
                              const std::string& version);
+
+// The same parts with the same digests, in any order (the history stores them sorted).
+bool SameFingerprint(Fingerprint a, Fingerprint b);
+
+// How a stored run's config reads when today's reading of it (`now`, its fingerprint) does not
+// match the stored fingerprint but an older default does: a sensor run written before RZT became
+// the default (combabc before 2026-11-23) has no [model] theory in its config because it was
+// Kirchhoff then, and its stored fingerprint says so; it resumes as the run it was (its finished
+// waves stay usable). Returns the config as that older reading has it when `fingerprint_of` it
+// matches `stored`; nullopt when `now` matches, or no legacy reading does.
+std::optional<CalibrationConfig> LegacyReading(
+    const CalibrationConfig& config,
+    const Fingerprint& now,
+    const Fingerprint& stored,
+    const std::function<Fingerprint(const CalibrationConfig&)>& fingerprint_of);
 
 // Throws combabc::Error(kConfig), one line naming the history file and what changed, when a part
 // stored with the run differs from `now`. A run stored without a fingerprint (schema v1/v2) is

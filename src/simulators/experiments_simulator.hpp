@@ -1,13 +1,15 @@
 #pragma once
 // Several simulators run one after the other on the same candidate, their outputs concatenated:
 // an external simulator's experiments, each an instance told which experiment it simulates.
-// A candidate fails if any experiment's simulation fails. Private to src/services.
+// A candidate fails if any experiment's simulation fails. It combines simulators through the
+// Simulator interface only, so it sits with them; private to src (the simulator factory in
+// src/services/adapters builds it).
 #include <memory>
 #include <vector>
 
 #include "combabc/samplers/simulator.hpp"
 
-namespace combabc::services {
+namespace combabc {
 
 class ExperimentsSimulator : public Simulator {
  public:
@@ -26,4 +28,4 @@ class ExperimentsSimulator : public Simulator {
   int output_size_ = 0;
 };
 
-}  // namespace combabc::services
+}  // namespace combabc

@@ -1,4 +1,4 @@
-#include "services/run_steps.hpp"
+#include "services/steps/run_steps.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -6,10 +6,10 @@
 #include <exception>
 
 #include "combabc/core/error.hpp"
-#include "services/fan_out_observer.hpp"
-#include "services/read_back.hpp"
-#include "services/report_checks.hpp"
-#include "services/worker_steps.hpp"
+#include "services/steps/fan_out_observer.hpp"
+#include "services/steps/read_back.hpp"
+#include "services/steps/report_checks.hpp"
+#include "services/steps/worker_steps.hpp"
 
 namespace combabc::services {
 namespace {

@@ -1,9 +1,9 @@
-#include "services/selected_outputs.hpp"
+#include "simulators/selected_outputs.hpp"
 
 #include <cstddef>
 #include <utility>
 
-namespace combabc::services {
+namespace combabc {
 
 SelectedOutputs::SelectedOutputs(std::unique_ptr<Simulator> inner, std::vector<int> picks)
     : inner_(std::move(inner)), picks_(std::move(picks)) {}
@@ -33,4 +33,4 @@ void SelectedOutputs::SimulateBatch(const ParameterBatch& batch,
   }
 }
 
-}  // namespace combabc::services
+}  // namespace combabc

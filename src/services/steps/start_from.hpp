@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "combabc/samplers/combinatorial_smc.hpp"
-#include "services/problem.hpp"
+#include "services/steps/problem.hpp"
 
 namespace combabc::services {
 

@@ -1,9 +1,9 @@
-#include "services/experiments_simulator.hpp"
+#include "simulators/experiments_simulator.hpp"
 
 #include <algorithm>
 #include <cstring>
 
-namespace combabc::services {
+namespace combabc {
 
 ExperimentsSimulator::ExperimentsSimulator(std::vector<std::unique_ptr<Simulator>> parts)
     : parts_(std::move(parts)) {
@@ -52,4 +52,4 @@ void ExperimentsSimulator::SimulateBatch(const ParameterBatch& batch,
   }
 }
 
-}  // namespace combabc::services
+}  // namespace combabc

@@ -1,4 +1,4 @@
-#include "combabc/services/sensor_simulator.hpp"
+#include "combabc/services/adapters/sensor_simulator.hpp"
 
 #include "combabc/core/check.hpp"
 #include "combabc/core/error.hpp"

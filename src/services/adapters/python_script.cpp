@@ -1,5 +1,5 @@
 // Running the scripts of scripts/report/ (the report, the NetCDF export) with Debian's python.
-#include "services/python_script.hpp"
+#include "services/adapters/python_script.hpp"
 
 #include <fcntl.h>
 #include <poll.h>

@@ -1,14 +1,15 @@
 #pragma once
 // A multi-fidelity run's cheap simulator as the sampler sees it: its outputs picked so that they
 // stand for the expensive simulator's, one for one (LowFidelityConfig::output_map); the cheap
-// simulator's other outputs are dropped. Private to src/services.
+// simulator's other outputs are dropped. Private to src (the simulator factory in
+// src/services/adapters builds it).
 #include <memory>
 #include <span>
 #include <vector>
 
 #include "combabc/samplers/simulator.hpp"
 
-namespace combabc::services {
+namespace combabc {
 
 class SelectedOutputs : public Simulator {
  public:
@@ -28,4 +29,4 @@ class SelectedOutputs : public Simulator {
   std::vector<int> picks_;
 };
 
-}  // namespace combabc::services
+}  // namespace combabc

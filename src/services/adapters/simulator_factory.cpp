@@ -1,16 +1,16 @@
-#include "services/simulator_factory.hpp"
+#include "services/adapters/simulator_factory.hpp"
 
 #include <filesystem>
 #include <map>
 #include <mutex>
 
 #include "combabc/core/error.hpp"
-#include "combabc/services/sensor_simulator.hpp"
+#include "combabc/services/adapters/sensor_simulator.hpp"
 #include "combabc/simulators/command_simulator.hpp"
 #include "combabc/simulators/work_directory.hpp"
 #include "combabc/simulators/worker_simulator.hpp"
-#include "services/experiments_simulator.hpp"
-#include "services/selected_outputs.hpp"
+#include "simulators/experiments_simulator.hpp"
+#include "simulators/selected_outputs.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-#include "services/output_folders.hpp"
+#include "services/steps/output_folders.hpp"
 
 #include <system_error>
 

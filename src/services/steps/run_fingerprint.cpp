@@ -1,4 +1,4 @@
-#include "services/run_fingerprint.hpp"
+#include "services/steps/run_fingerprint.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -6,6 +6,7 @@
 #include <map>
 
 #include "combabc/core/error.hpp"
+#include "combabc/core/fnv1a.hpp"
 
 namespace combabc::services {
 namespace {
@@ -39,11 +40,8 @@ class Canonical {
     return *this;
   }
   std::string Digest() const {
-    std::uint64_t hash = 14695981039346656037ull;
-    for (unsigned char c : text_) {
-      hash ^= c;
-      hash *= 1099511628211ull;
-    }
+    const std::uint64_t hash =
+        Fnv1a({reinterpret_cast<const unsigned char*>(text_.data()), text_.size()});
     char text[17];
     std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
     return text;
@@ -415,6 +413,27 @@ void CheckProblemFingerprint(const Fingerprint& stored,
                   " differ from the run's: resume it with the problem and options it started "
                   "with (threads and stop limits may change)",
               history_path);
+}
+
+bool SameFingerprint(Fingerprint a, Fingerprint b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  return a == b;
+}
+
+std::optional<CalibrationConfig> LegacyReading(
+    const CalibrationConfig& config,
+    const Fingerprint& now,
+    const Fingerprint& stored,
+    const std::function<Fingerprint(const CalibrationConfig&)>& fingerprint_of) {
+  if (config.simulator.kind != SimulatorKind::kSensor ||
+      config.model.theory != plate::PlateTheory::kRzt || SameFingerprint(now, stored)) {
+    return std::nullopt;
+  }
+  CalibrationConfig kirchhoff = config;
+  kirchhoff.model.theory = plate::PlateTheory::kKirchhoff;
+  if (!SameFingerprint(fingerprint_of(kirchhoff), stored)) return std::nullopt;
+  return kirchhoff;
 }
 
 void CheckResumeFingerprint(const Fingerprint& stored,
