@@ -14,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy
   clang-14 libclang-rt-14-dev  # libFuzzer + sanitizer runtimes for scripts/fuzz.sh (docs/fuzzing.md)
+  lld-14                 # the sanitizer build's linker: a quarter of GNU ld's CPU there (docs/ci.md)
   python3 python3-numpy python3-matplotlib  # report figures (Debian's python3, not a pyenv one)
   calculix-ccx           # the CalculiX example (examples/sensor-calculix) and its test
   python3-dev pybind11-dev python3-pybind11  # the Python module (COMBABC_PYTHON, docs/python.md)

@@ -46,7 +46,10 @@ trap 'kill -- "-$tidy_pid" 2> /dev/null || true; rm -f "$tidy_log"' EXIT
 
 # COMBABC_UNITY: the library's components as unity builds (docs/ci.md), here and below.
 stage "== Release build, warnings as errors"
-cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON -DCOMBABC_UNITY=ON
+# The tests' own code at -O1 and with one precompiled header (docs/ci.md): the library, the CLI and
+# the Python module keep -O3, and the tests spend their time in them.
+cmake -S . -B build-ci -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOMBABC_WERROR=ON -DCOMBABC_UNITY=ON \
+  -DCOMBABC_TEST_PCH=ON -DCOMBABC_TEST_OPTIMIZE=-O1
 cmake --build build-ci -j "$jobs"
 # Each build's tests share one precompute cache of their own (docs/model.md), not the user's.
 COMBABC_CACHE_DIR="$PWD/build-ci/precompute-cache" \
@@ -61,10 +64,12 @@ stage "== clang build with AddressSanitizer + UndefinedBehaviorSanitizer: the un
 # advises for reasonable speed (Eigen's templates are slow at -O0); line tables are all that a
 # sanitizer's report needs; assertions stay on (no NDEBUG). Warnings are the Release build's job
 # (GCC, -Werror above). Only the executables with tests labelled unit, and the fuzz targets.
+# lld links an instrumented test in a quarter of GNU ld's CPU (docs/ci.md); the tests share one
+# precompiled header.
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" \
+  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld \
   -DCOMBABC_SANITIZE=ON -DCOMBABC_FUZZ=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_PYTHON=OFF \
-  -DCOMBABC_UNITY=ON > /dev/null
+  -DCOMBABC_UNITY=ON -DCOMBABC_TEST_PCH=ON > /dev/null
 cmake --build build-asan -j "$jobs" --target combabc_unit_tests combabc_fuzzers
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   COMBABC_CACHE_DIR="$PWD/build-asan/precompute-cache" \
@@ -80,7 +85,7 @@ stage "== ThreadSanitizer build (tests labelled threads)"
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOMBABC_WERROR=ON \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
   -DCOMBABC_TSAN=ON -DCOMBABC_BUILD_BENCH=OFF -DCOMBABC_BUILD_EXAMPLES=OFF -DCOMBABC_PYTHON=OFF \
-  -DCOMBABC_UNITY=ON
+  -DCOMBABC_UNITY=ON -DCOMBABC_TEST_PCH=ON -DCOMBABC_TEST_OPTIMIZE=-O1
 cmake --build build-tsan -j "$jobs" --target combabc_threads_tests
 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
   COMBABC_CACHE_DIR="$PWD/build-tsan/precompute-cache" \
