@@ -27,14 +27,9 @@ namespace {
 std::vector<double> FinalThresholds(const CalibrationConfig& config) {
   std::vector<double> eps;
   for (std::size_t s = 0; s < config.smc.thresholds.size(); ++s) {
-    const ThresholdSchedule& schedule = config.smc.thresholds[s];
-    if (schedule.kind == ThresholdKind::kList && !schedule.values.empty()) {
-      eps.push_back(schedule.values.back());
-    } else if (schedule.kind != ThresholdKind::kList && schedule.target > 0) {
-      eps.push_back(schedule.target);
+    if (const std::optional<double> end = FinalThreshold(config.smc.thresholds[s])) {
+      eps.push_back(*end);
     } else {
-      // An adaptive schedule without a target (0, its default) adapts down forever: there is no
-      // final threshold to enumerate at.
       throw Error(ErrorKind::kUsage,
                   "threshold component " + std::to_string(s + 1) +
                       " has no final threshold in the config (an adaptive schedule without "

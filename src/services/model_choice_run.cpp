@@ -15,6 +15,7 @@
 #include "combabc/history/history_store.hpp"
 #include "export/json_text.hpp"
 #include "services/adapters/python_script.hpp"
+#include "services/steps/problem.hpp"
 #include "services/steps/read_back.hpp"
 
 namespace combabc::services {
@@ -29,11 +30,8 @@ using export_text::JsonString;
 std::vector<double> CommonFinalThresholds(const CalibrationConfig& config) {
   std::vector<double> eps;
   for (std::size_t s = 0; s < config.smc.thresholds.size(); ++s) {
-    const ThresholdSchedule& schedule = config.smc.thresholds[s];
-    if (schedule.kind == ThresholdKind::kList && !schedule.values.empty()) {
-      eps.push_back(schedule.values.back());
-    } else if (schedule.kind != ThresholdKind::kList && schedule.target > 0) {
-      eps.push_back(schedule.target);
+    if (const std::optional<double> end = FinalThreshold(config.smc.thresholds[s])) {
+      eps.push_back(*end);
     } else {
       throw Error(ErrorKind::kConfig,
                   "threshold component " + std::to_string(s + 1) +

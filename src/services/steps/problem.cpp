@@ -134,6 +134,15 @@ std::vector<StoredExperiment> ExperimentsOf(const Problem& p) {
 
 std::string CombabcVersion() { return COMBABC_VERSION; }
 
+std::optional<double> FinalThreshold(const ThresholdSchedule& schedule) {
+  if (schedule.kind == ThresholdKind::kList) {
+    if (schedule.values.empty()) return std::nullopt;
+    return schedule.values.back();
+  }
+  if (schedule.target > 0) return schedule.target;
+  return std::nullopt;
+}
+
 RunMetadata StampedMetadata() {
   RunMetadata m;
   m.combabc_version = COMBABC_VERSION;

@@ -78,6 +78,11 @@ RunMetadata Describe(const Problem& p);
 // This combabc's version, as histories and fingerprints record it.
 std::string CombabcVersion();
 
+// Where a threshold schedule ends: a list's last value, an adaptive schedule's target; none for an
+// adaptive schedule without a target (0, its default), which adapts down forever. Enumeration and
+// model choice both compare at these.
+std::optional<double> FinalThreshold(const ThresholdSchedule& schedule);
+
 // A new history's metadata, stamped with this combabc's version and git hash.
 RunMetadata StampedMetadata();
 
