@@ -156,6 +156,7 @@ WaveEvidence ChainedWave(std::span<const WaveRecord> waves,
   e.valid = true;
   const std::vector<double> last_offsets = OffsetsAfter(components, waves.first(t - 1));
   std::vector<double> log_last;
+  log_last.reserve(previous.particles.size());
   double top_weight = kMinusInf;
   for (const Particle& p : previous.particles) {
     log_last.push_back(previous.moves
@@ -173,6 +174,7 @@ WaveEvidence ChainedWave(std::span<const WaveRecord> waves,
   // log sum_i W_i A_t(d_i) / A_{t-1}(d_i) and its relative variance (-inf: no particle in A_t).
   auto factor = [&](const std::vector<double>* next_offsets, double* relative_var) {
     std::vector<double> log_ratio;
+    log_ratio.reserve(previous.particles.size());
     double top = kMinusInf;
     for (std::size_t i = 0; i < previous.particles.size(); ++i) {
       const double next =
@@ -183,6 +185,7 @@ WaveEvidence ChainedWave(std::span<const WaveRecord> waves,
     }
     if (top == kMinusInf) return kMinusInf;
     std::vector<double> ratios;
+    ratios.reserve(log_ratio.size());
     for (double lr : log_ratio) ratios.push_back(lr == kMinusInf ? 0.0 : std::exp(lr - top));
     const WeightedMoment m = WeightedMean(weights, ratios, clusters);
     if (!(m.value > 0.0)) return kMinusInf;
