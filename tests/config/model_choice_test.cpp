@@ -2,7 +2,8 @@
 // own run against the exact evidence by enumeration, on tiny binary toys whose every
 // configuration can be summed: models of different dimension, a pair that gives identical data
 // (its probabilities must be its prior ratio), a model that dies out (reported with an upper
-// bound), noise-aware and resample-move runs, and the coverage of the reported errors over seeds.
+// bound), noise-aware and resample-move runs, the coverage of the reported errors over seeds, and
+// mixed spaces (bits and a bounded real: enumeration over the bits x quadrature over the real).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -375,6 +376,59 @@ TEST(ModelEvidence, MixedSpacesOfBitsAndABoundedRealMatchEnumerationTimesQuadrat
     const auto p = ModelProbabilities(std::vector<ModelEvidence>{mixed_run, bits_run});
     EXPECT_GT(p[0].se, 0.0) << name;
     EXPECT_NEAR(p[0].probability, exact[0], 4.0 * p[0].se) << name;
+  }
+}
+
+// The mixed model noise-aware: y = w.b + theta without noise, a Gaussian likelihood of sd 0.3 at
+// temperature 1, so Z = sum_b p(b) int_0^1 exp(-(w.b + theta - y*)^2 / (2 0.3^2)) dtheta. A
+// rejection wave accepts with the sampler's offsets, which the chained evidence must undo.
+TEST(ModelEvidence, NoiseAwareMixedRunsEstimateTheLikelihoodEvidence) {
+  BinarySpaceOptions so;
+  so.dimension = 3;
+  so.prior_one = kMixedPrior;
+  ContinuousPrior uniform;
+  uniform.kind = PriorKind::kUniform;
+  uniform.low = 0.0;
+  uniform.high = 1.0;
+  const ParameterSpace space(BinarySpace(so), {{"theta", uniform}});
+  const testing::LinearGaussianSimulator sim(kMixedW, 0.0);
+  const testing::GaussianNllDistance dist({kMixedY}, kMixedSigma);
+  double exact = 0.0;
+  constexpr int kSteps = 4000;
+  for (unsigned c = 0; c < 8; ++c) {
+    double pb = 1.0;
+    double shift = 0.0;
+    for (unsigned k = 0; k < 3; ++k) {
+      const bool one = ((c >> k) & 1U) != 0;
+      pb *= one ? kMixedPrior[k] : 1.0 - kMixedPrior[k];
+      shift += one ? kMixedW[k] : 0.0;
+    }
+    for (int i = 0; i < kSteps; ++i) {
+      const double r = shift + (i + 0.5) / kSteps - kMixedY;
+      exact += pb * std::exp(-r * r / (2.0 * kMixedSigma * kMixedSigma)) / kSteps;
+    }
+  }
+  for (const SamplerMethod method : {SamplerMethod::kRejection, SamplerMethod::kResampleMove}) {
+    SmcOptions o;
+    o.num_waves = 10;
+    o.accepted_per_wave = 300;
+    o.seed = 41;
+    o.threads = 1;
+    o.method = method;
+    ThresholdSchedule s;
+    s.target = 1.0;
+    o.thresholds = {s};
+    const RunHistory h = RunCombinatorialSmc({&space, &sim, &dist}, o);
+    ASSERT_EQ(h.summary.termination, Termination::kTargetReached) << ToString(method);
+    const ModelEvidence e = EstimateEvidence(h, dist.components(), {1.0});
+    ASSERT_TRUE(e.reached) << ToString(method);
+    std::printf("%s: exact %.5g, estimate %.5g +- %.2g %%, %zu waves\n",
+                ToString(method),
+                exact,
+                std::exp(e.log_evidence),
+                100.0 * e.relative_se,
+                h.waves.size());
+    EXPECT_NEAR(std::exp(e.log_evidence), exact, 4.0 * e.relative_se * exact) << ToString(method);
   }
 }
 
