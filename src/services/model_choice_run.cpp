@@ -17,6 +17,7 @@
 #include "services/adapters/python_script.hpp"
 #include "services/steps/problem.hpp"
 #include "services/steps/read_back.hpp"
+#include "services/steps/worker_steps.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
@@ -125,12 +126,11 @@ std::string DrawWaves(OutputDirectory& out) {
 
 // summary.json and models.csv in <directory>/model_choice/; for a run, waves.csv, and with
 // `figure` its figure (ModelChoiceOutcome::note says why one was not drawn).
-std::string WriteModelChoice(const std::string& directory,
-                             bool overwrite,
-                             ModelChoiceOutcome& o,
-                             bool figure) {
-  std::string folder = (fs::path(directory) / "model_choice").string();
-  OutputDirectory out(folder, overwrite);
+void WriteModelChoice(const std::string& directory,
+                      bool overwrite,
+                      ModelChoiceOutcome& o,
+                      bool figure) {
+  OutputDirectory out((fs::path(directory) / "model_choice").string(), overwrite);
   const ModelEvidence& reference = o.evidence[o.reference];
   std::ostream& json = out.Add("summary.json");
   json << "{\n  \"exact\": " << (o.exact ? "true" : "false")
@@ -166,7 +166,6 @@ std::string WriteModelChoice(const std::string& directory,
     if (figure) o.note = DrawWaves(out);
   }
   out.Commit();
-  return folder;
 }
 
 // A model's run: a new one, or its history found in place (read when finished, else resumed).
@@ -212,6 +211,12 @@ RunOutcome RunModel(const RunRequest& request,
   return RunCalibration(r, progress);
 }
 
+// The request's executor, for the steps that only its primary does (under MPI every rank runs the
+// model choice; the models' runs cross the ranks, the tables are rank 0's alone).
+std::unique_ptr<Executor> ExecutorOf(const ExecutorFactory& factory) {
+  return factory ? factory(1) : std::make_unique<ThreadPoolExecutor>(1);
+}
+
 ModelChoiceOutcome Combine(ModelChoiceOutcome o, const CalibrationConfig& c) {
   o.reference = c.model_choice->reference;
   o.models = ModelProbabilities(o.evidence);
@@ -235,7 +240,8 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
   const CalibrationConfig c = LoadModelChoice(request.config_path);
   const std::vector<double> final_thresholds = CommonFinalThresholds(c);
   const std::string directory = Output(request.output_directory, c);
-  CreateModelsFolder(directory);
+  const std::unique_ptr<Executor> executor = ExecutorOf(request.executor);
+  OnPrimary(*executor, [&] { CreateModelsFolder(directory); });
   ModelChoiceOutcome o;
   for (const CandidateModel& model : c.model_choice->models) {
     if (before_model) before_model(model.name);
@@ -254,7 +260,8 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
     o.runs.push_back(std::move(run));
   }
   o = Combine(std::move(o), c);
-  o.directory = WriteModelChoice(directory, request.overwrite, o, request.report);
+  o.directory = (fs::path(directory) / "model_choice").string();
+  OnPrimary(*executor, [&] { WriteModelChoice(directory, request.overwrite, o, request.report); });
   return o;
 }
 
@@ -266,7 +273,8 @@ ModelChoiceOutcome EnumerateModelChoice(
   const std::string directory = request.output_directory.empty()
                                     ? (fs::path(Output("", c)) / kEnumerationFolder).string()
                                     : request.output_directory;
-  CreateModelsFolder(directory);
+  const std::unique_ptr<Executor> executor = ExecutorOf(request.executor);
+  OnPrimary(*executor, [&] { CreateModelsFolder(directory); });
   ModelChoiceOutcome o;
   o.exact = true;
   for (const CandidateModel& model : c.model_choice->models) {
@@ -294,7 +302,8 @@ ModelChoiceOutcome EnumerateModelChoice(
     o.enumerations.push_back(std::move(outcome));
   }
   o = Combine(std::move(o), c);
-  o.directory = WriteModelChoice(directory, request.overwrite, o, false);
+  o.directory = (fs::path(directory) / "model_choice").string();
+  OnPrimary(*executor, [&] { WriteModelChoice(directory, request.overwrite, o, false); });
   return o;
 }
 

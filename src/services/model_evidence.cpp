@@ -139,42 +139,63 @@ WaveEvidence RejectionWave(const WaveRecord& wave,
   return e;
 }
 
-// Wave t, a resample-move wave: the previous wave's evidence times the mean incremental weight.
-WaveEvidence MoveWave(std::span<const WaveRecord> waves,
-                      std::size_t t,
-                      const WaveEvidence& before,
-                      std::span<const DistanceComponent> components) {
+// Wave t from the wave before: its evidence times the mean incremental weight over its weighted
+// particles, sum_i W_i A_t(d_i) / A_{t-1}(d_i), with W_i from the stored p / q (self-normalised,
+// so that q's normalising constant cancels). A resample-move wave's target has no offsets; a
+// rejection wave's (`offsets`, non-null) has, and its evidence without them is what models are
+// compared by: both are estimated.
+WaveEvidence ChainedWave(std::span<const WaveRecord> waves,
+                         std::size_t t,
+                         const WaveEvidence& before,
+                         std::span<const DistanceComponent> components,
+                         const std::vector<double>* offsets) {
   WaveEvidence e;
   const WaveRecord& previous = waves[t - 1];
   const WaveRecord& wave = waves[t];
   if (!before.valid || previous.particles.empty()) return e;
   e.valid = true;
   const std::vector<double> last_offsets = OffsetsAfter(components, waves.first(t - 1));
-  std::vector<double> weights;
-  std::vector<double> ratios;
-  double top = kMinusInf;
-  std::vector<double> log_ratio;
+  std::vector<double> log_last;
+  log_last.reserve(previous.particles.size());
+  double top_weight = kMinusInf;
   for (const Particle& p : previous.particles) {
-    const double last = previous.moves
-                            ? LogAccept(components, p.distance, previous.thresholds, nullptr)
-                            : LogAccept(components, p.distance, previous.thresholds, &last_offsets);
-    const double next = LogAccept(components, p.distance, wave.thresholds, nullptr);
-    const double lr = last == kMinusInf || next == kMinusInf ? kMinusInf : next - last;
-    log_ratio.push_back(lr);
-    top = std::max(top, lr);
-    weights.push_back(std::max(p.weight, 0.0));
+    log_last.push_back(previous.moves
+                           ? LogAccept(components, p.distance, previous.thresholds, nullptr)
+                           : LogAccept(components, p.distance, previous.thresholds, &last_offsets));
+    top_weight = std::max(top_weight, p.log_weight);
   }
-  if (top == kMinusInf) return e;
-  ratios.reserve(log_ratio.size());
-  for (double lr : log_ratio) ratios.push_back(lr == kMinusInf ? 0.0 : std::exp(lr - top));
+  if (top_weight == kMinusInf) return e;
+  std::vector<double> weights;
+  weights.reserve(previous.particles.size());
+  for (const Particle& p : previous.particles) {
+    weights.push_back(std::exp(p.log_weight - top_weight));
+  }
   const std::vector<std::size_t> clusters = AncestorClusters(previous, false);
-  const WeightedMoment m = WeightedMean(weights, ratios, clusters);
-  if (!(m.value > 0.0)) return e;
-  const double r = m.se / m.value;
-  e.log_target = before.log_target + top + std::log(m.value);
-  e.log_true = e.log_target;  // a move wave's target has no offsets
-  e.relative_var = before.target_relative_var + r * r;
-  e.target_relative_var = e.relative_var;
+  // log sum_i W_i A_t(d_i) / A_{t-1}(d_i) and its relative variance (-inf: no particle in A_t).
+  auto factor = [&](const std::vector<double>* next_offsets, double* relative_var) {
+    std::vector<double> log_ratio;
+    log_ratio.reserve(previous.particles.size());
+    double top = kMinusInf;
+    for (std::size_t i = 0; i < previous.particles.size(); ++i) {
+      const double next =
+          LogAccept(components, previous.particles[i].distance, wave.thresholds, next_offsets);
+      log_ratio.push_back(log_last[i] == kMinusInf || next == kMinusInf ? kMinusInf
+                                                                        : next - log_last[i]);
+      top = std::max(top, log_ratio.back());
+    }
+    if (top == kMinusInf) return kMinusInf;
+    std::vector<double> ratios;
+    ratios.reserve(log_ratio.size());
+    for (double lr : log_ratio) ratios.push_back(lr == kMinusInf ? 0.0 : std::exp(lr - top));
+    const WeightedMoment m = WeightedMean(weights, ratios, clusters);
+    if (!(m.value > 0.0)) return kMinusInf;
+    const double r = m.se / m.value;
+    *relative_var = before.target_relative_var + r * r;
+    return before.log_target + top + std::log(m.value);
+  };
+  e.log_true = factor(nullptr, &e.relative_var);
+  e.log_target = offsets ? factor(offsets, &e.target_relative_var) : e.log_true;
+  if (!offsets) e.target_relative_var = e.relative_var;
   return e;
 }
 
@@ -198,11 +219,18 @@ ModelEvidence EstimateEvidence(const RunHistory& history,
                   "model choice needs single-fidelity runs: wave " + std::to_string(t + 1) +
                       " is a multi-fidelity wave, whose signed weights estimate no evidence");
     }
+    const std::vector<double> offsets = OffsetsAfter(components, waves.first(t));
     if (wave.moves) {
       if (t == 0) continue;
-      evidence[t] = MoveWave(waves, t, evidence[t - 1], components);
+      evidence[t] = ChainedWave(waves, t, evidence[t - 1], components, nullptr);
+    } else if (t > 0 && !wave.particles.empty() && !wave.particles[0].theta.reals.empty()) {
+      // A proposal over reals is normalised only up to the mass of their support (its draws
+      // outside are drawn again: proposal.hpp), a constant of the wave that self-normalised
+      // weights do not see but the Horvitz-Thompson mean below would: the evidence is carried
+      // from the wave before instead, whose particles the new thresholds reweight.
+      evidence[t] = ChainedWave(waves, t, evidence[t - 1], components, &offsets);
     } else {
-      evidence[t] = RejectionWave(wave, components, OffsetsAfter(components, waves.first(t)));
+      evidence[t] = RejectionWave(wave, components, offsets);
     }
     const WaveEvidence& e = evidence[t];
     out.wave_log_evidence[t] = e.valid ? e.log_true : kNaN;

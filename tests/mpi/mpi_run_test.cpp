@@ -180,6 +180,71 @@ TEST_F(MpiRun, AMultiFidelityRunIsTheSameForAnyThreadsAndRanks) {
   }
 }
 
+// A model choice ([model_choice], docs/config.md): two tiny sensors, clamped or simply supported
+// clamps. Each model's run crosses the ranks as a plain run does, so under mpirun its history,
+// and the model probabilities from them, are those of the run without MPI; only rank 0 writes
+// the tables (both ranks wrote them, and one refused the other's files: exit 73). A model
+// stopped on its budget and resumed under mpirun, then the model choice run again (it reads the
+// finished models), give the uninterrupted model choice.
+TEST_F(MpiRun, AModelChoiceIsTheSameForAnyRanksAndResumes) {
+  // Data of tests/e2e/enumerate_test.cpp's model choice, where both models fit some clamps.
+  const fs::path mc = dir_ / "mc";
+  fs::create_directories(mc);
+  WriteTinySensorData(mc);
+  const std::string models = R"(
+[model_choice]
+[[model_choice.model]]
+name = "clamped"
+prior = 0.4
+[[model_choice.model]]
+name = "pinned"
+prior = 0.6
+model.clamps.fixed_support = "simply_supported"
+)";
+  std::string text = TinySensorConfig("seed = 5\nwaves = 2\naccepted_per_wave = 60\n", models);
+  text.replace(text.find("[metric]\n"), 9, "[metric]\nthreshold = [3.0, 2.4]\n");
+  std::ofstream(mc / "run.toml") << text;
+  std::string budget = text;
+  budget.replace(budget.find("seed = 5"), 8, "seed = 5\nmax_simulations = 250");
+  std::ofstream(mc / "budget.toml") << budget;
+  auto run = [&](int np, const std::string& config, const std::string& out) {
+    const CliResult r =
+        Launch(np, {"run", mc / config, "-o", mc / out, "-j", "1", "-q", "--no-report"}, mc);
+    EXPECT_EQ(r.exit_code, 0) << out << ": " << r.err;
+    const std::string line = "Model probabilities";
+    EXPECT_NE(r.out.find(line), std::string::npos) << out << ": " << r.out;
+    EXPECT_EQ(r.out.find(line), r.out.rfind(line)) << out << ": printed by more than rank 0";
+  };
+  run(0, "run.toml", "np0");
+  run(2, "run.toml", "np2");
+  const std::string summary = ReadFile(mc / "np0/model_choice/summary.json");
+  // Both models have an estimate: their probabilities are numbers, not upper bounds.
+  EXPECT_NE(summary.find("\"reached\": true"), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("\"reached\": false"), std::string::npos) << summary;
+  EXPECT_EQ(ReadFile(mc / "np2/model_choice/summary.json"), summary);
+  EXPECT_EQ(ReadFile(mc / "np2/model_choice/waves.csv"),
+            ReadFile(mc / "np0/model_choice/waves.csv"));
+  for (const std::string model : {"clamped", "pinned"}) {
+    std::string where;
+    EXPECT_TRUE(SameHistory(Load(mc / ("np0/models/" + model + "/history.sqlite")),
+                            Load(mc / ("np2/models/" + model + "/history.sqlite")),
+                            &where))
+        << model << ": " << where;
+  }
+
+  // The budget stops "clamped" (337 simulations) and not "pinned" (177).
+  run(2, "budget.toml", "budget");
+  EXPECT_EQ(Load(mc / "budget/models/pinned/history.sqlite").summary.termination,
+            Termination::kTargetReached);
+  const std::string stopped = mc / "budget/models/clamped/history.sqlite";
+  EXPECT_EQ(Load(stopped).summary.termination, Termination::kBudgetExhausted);
+  const CliResult r =
+      Launch(2, {"resume", stopped, "--max-simulations", "0", "-q", "--no-report"}, mc);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  run(2, "budget.toml", "budget");
+  EXPECT_EQ(ReadFile(mc / "budget/model_choice/summary.json"), summary);
+}
+
 TEST_F(MpiRun, AFailureOnRankZeroEndsEveryRankWithItsExitCode) {
   WriteConfig("run.toml", 2, 10);
   const std::string config = dir_ / "run.toml";

@@ -49,7 +49,9 @@ struct ModelEvidence {
 //  - A resample-move wave: Z_t = Z_{t-1} x sum_i W_i A_t(d_i) / A_{t-1}(d_i) over the previous
 //    wave's weighted particles (Del Moral, Doucet & Jasra 2006), the relative variances of the
 //    factors added (each factor's from the cluster-robust delta method; waves taken as
-//    independent, an approximation).
+//    independent, an approximation). A rejection wave after the first with reals too: its
+//    proposal's density omits the mass of the reals' support (draws outside are drawn again),
+//    which would scale the estimate above by a constant, but not the self-normalised W_i.
 // The estimate is taken at the last complete wave whose thresholds are the final ones; a run that
 // never got there gives its upper bound only. `components` are the distance's, in order.
 // Refused (Error kUsage): a multi-fidelity history (signed weights of two simulators).
