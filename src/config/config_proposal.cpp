@@ -79,8 +79,9 @@ ContinuousPrior ParsePrior(TableReader& t, const plate::SensorVariationField& in
   prior.sd = number("sd", prior.kind != PriorKind::kUniform);
   if (bounded && !(prior.low < prior.high)) t.Fail("high", "must be above low = " + Num(prior.low));
   if (prior.kind != PriorKind::kUniform && !(prior.sd > 0.0)) t.Fail("sd", "must be > 0");
-  std::string why;
-  if (!prior.IsValid(&why)) t.Fail("prior", why);
+  // The prior's own check (the interval's width, the lognormal's moments, the truncated normal's
+  // mass): at the prior key, since it weighs several keys together.
+  if (ValidationError error; !prior.IsValid(&error)) t.Fail("prior", error.Message());
   // The prior may only propose physically meaningful values: its support, or for the unbounded
   // normal and lognormal the interval holding all but 1e-12 of its mass (mean +- 7.1 sd), must lie
   // within the parameter's physical range.

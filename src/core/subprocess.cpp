@@ -121,26 +121,35 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   int in[2] = {-1, -1};
   int out[2] = {-1, -1};
   int err[2] = {-1, -1};
-  auto fail = [&](const std::string& what, int error) {
+  auto close_all = [&] {
     for (int* fd : {&in[0], &in[1], &out[0], &out[1], &err[0], &err[1], &stderr_file_}) {
       CloseFd(*fd);
     }
+  };
+  auto fail = [&](const std::string& what, int error) {
+    close_all();
     throw std::runtime_error(what + ": " + std::strerror(error));
   };
   if (options.pipe_stdin &&
       ::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, static_cast<int*>(in)) != 0) {
     fail("cannot create a pipe", errno);
   }
-  if (::pipe2(static_cast<int*>(out), O_CLOEXEC) != 0) fail("cannot create a pipe", errno);
-  if (!options.stderr_path.empty()) {
-    // stderr: a pipe that combabc drains into the file, keeping its tail (kMaxStderrBytes), so
-    // that a program writing without end fills neither the disk nor combabc's memory.
+  if (options.pipe_stdout && ::pipe2(static_cast<int*>(out), O_CLOEXEC) != 0) {
+    fail("cannot create a pipe", errno);
+  }
+  if (!options.stderr_path.empty() || options.capture_stderr) {
+    // stderr: a pipe that combabc drains into memory and the file, keeping its tail
+    // (kMaxStderrBytes), so that a program writing without end fills neither the disk nor
+    // combabc's memory.
     if (::pipe2(static_cast<int*>(err), O_CLOEXEC) != 0) fail("cannot create a pipe", errno);
     if (::fcntl(err[0], F_SETFL, O_NONBLOCK) != 0) fail("cannot create a pipe", errno);
+  }
+  if (!options.stderr_path.empty()) {
     stderr_file_ =
         ::open(options.stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (stderr_file_ < 0) fail("cannot create " + options.stderr_path, errno);
   }
+  on_stderr_line_ = options.on_stderr_line;
   SpawnSetup s;
   // A new process group (pgid = the child's pid), default signal dispositions (combabc's
   // ignored SIGPIPE must not leak into the program) and an empty signal mask.
@@ -159,7 +168,11 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   } else {
     posix_spawn_file_actions_addopen(&s.actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   }
-  posix_spawn_file_actions_adddup2(&s.actions, out[1], STDOUT_FILENO);
+  if (options.pipe_stdout) {
+    posix_spawn_file_actions_adddup2(&s.actions, out[1], STDOUT_FILENO);
+  } else {
+    posix_spawn_file_actions_addopen(&s.actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  }
   if (err[1] >= 0) {
     posix_spawn_file_actions_adddup2(&s.actions, err[1], STDERR_FILENO);
   } else {
@@ -172,11 +185,14 @@ Subprocess::Subprocess(const SubprocessOptions& options) {
   argv.reserve(options.argv.size() + 1);
   for (const std::string& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  const int rc = ::posix_spawnp(&pid_, argv[0], &s.actions, &s.attr, argv.data(), environ);
+  const int rc = options.search_path
+                     ? ::posix_spawnp(&pid_, argv[0], &s.actions, &s.attr, argv.data(), environ)
+                     : ::posix_spawn(&pid_, argv[0], &s.actions, &s.attr, argv.data(), environ);
   if (rc != 0) {
     pid_ = -1;
     reaped_ = true;
-    fail("cannot start " + options.argv.front(), rc);
+    close_all();
+    throw SpawnError("cannot start " + options.argv.front() + ": " + std::strerror(rc), rc);
   }
   CloseFd(in[1]);
   CloseFd(out[1]);
@@ -261,14 +277,42 @@ void Subprocess::DrainStderr() {
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
     if (n <= 0) {
-      CloseFd(stderr_fd_);  // end of file (every writer gone) or an error: nothing more comes
+      CloseStderr();  // end of file (every writer gone) or an error: nothing more comes
       return;
     }
-    KeepStderr(static_cast<const char*>(chunk), static_cast<std::size_t>(n));
+    HearStderr(static_cast<const char*>(chunk), static_cast<std::size_t>(n));
   }
 }
 
+void Subprocess::HearStderr(const char* data, std::size_t size) {
+  if (!on_stderr_line_) {
+    KeepStderr(data, size);
+    return;
+  }
+  stderr_line_.append(data, size);
+  std::size_t start = 0;
+  for (std::size_t end = 0; (end = stderr_line_.find('\n', start)) != std::string::npos;
+       start = end + 1) {
+    if (!on_stderr_line_(stderr_line_.substr(start, end - start))) {
+      KeepStderr(stderr_line_.data() + start, end + 1 - start);
+    }
+  }
+  stderr_line_.erase(0, start);
+  // A line longer than what is kept is no progress line: kept as it comes.
+  if (stderr_line_.size() > kMaxStderrBytes) {
+    KeepStderr(stderr_line_.data(), stderr_line_.size());
+    stderr_line_.clear();
+  }
+}
+
+void Subprocess::CloseStderr() {
+  CloseFd(stderr_fd_);
+  KeepStderr(stderr_line_.data(), stderr_line_.size());
+  stderr_line_.clear();
+}
+
 void Subprocess::KeepStderr(const char* data, std::size_t size) {
+  if (size == 0) return;
   stderr_tail_.append(data, size);
   if (stderr_tail_.size() > kMaxStderrBytes) {
     stderr_tail_.erase(0, stderr_tail_.size() - kMaxStderrBytes);
@@ -295,6 +339,11 @@ void Subprocess::KeepStderr(const char* data, std::size_t size) {
       ::ftruncate(stderr_file_, static_cast<off_t>(stderr_tail_.size())) == 0) {
     stderr_file_size_ = stderr_tail_.size();
   }
+}
+
+std::string Subprocess::Stderr() {
+  DrainStderr();
+  return stderr_tail_;
 }
 
 std::string Subprocess::LastStderrLine() {
@@ -413,7 +462,7 @@ ExitStatus Subprocess::Reap() {
   reaped_ = true;
   // The group is dead: what its stderr pipe still holds is the end of what it wrote.
   DrainStderr();
-  CloseFd(stderr_fd_);
+  CloseStderr();
   if (r == pid_) {
     if (WIFSIGNALED(raw)) {
       status_.signal = WTERMSIG(raw);

@@ -665,37 +665,45 @@ void MessagesJson(std::ostream& out,
 }  // namespace
 
 bool FitCheckOptions::IsValid(std::string* why) const {
-  auto fail = [why](const char* field) {
-    if (why != nullptr) *why = field;
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
+}
+
+bool FitCheckOptions::IsValid(ValidationError* error) const {
+  // No owner and no value: "scale_factor must be > 1".
+  auto fail = [error](const std::string& field, const char* constraint) {
+    if (error != nullptr) *error = {"", field, "", constraint};
     return false;
   };
-  if (!(scale_factor > 1.0)) return fail("scale_factor must be > 1");
-  if (!(poor_fit_ratio > 0.0)) return fail("poor_fit_ratio must be > 0");
-  if (!(poor_fit_p >= 0.0 && poor_fit_p < 1.0)) return fail("poor_fit_p must lie in [0, 1)");
+  if (!(scale_factor > 1.0)) return fail("scale_factor", "must be > 1");
+  if (!(poor_fit_ratio > 0.0)) return fail("poor_fit_ratio", "must be > 0");
+  if (!(poor_fit_p >= 0.0 && poor_fit_p < 1.0)) return fail("poor_fit_p", "must lie in [0, 1)");
   if (!(doubtful_fit_p >= poor_fit_p && doubtful_fit_p < 1.0)) {
-    return fail("doubtful_fit_p must lie in [poor_fit_p, 1)");
+    return fail("doubtful_fit_p", "must lie in [poor_fit_p, 1)");
   }
-  if (!(noise_below_fraction >= 0.0)) return fail("noise_below_fraction must be >= 0");
-  for (const StatedNoise& s : stated_noise) {
+  if (!(noise_below_fraction >= 0.0)) return fail("noise_below_fraction", "must be >= 0");
+  for (std::size_t k = 0; k < stated_noise.size(); ++k) {
+    const StatedNoise& s = stated_noise[k];
+    const std::string at = "stated_noise[" + std::to_string(k) + "].";
     if (s.sigma_noise && !(*s.sigma_noise > 0.0 && std::isfinite(*s.sigma_noise))) {
-      return fail("stated_noise: sigma_noise must be finite and > 0");
+      return fail(at + "sigma_noise", "must be finite and > 0");
     }
     if (!(s.sigma_model >= 0.0 && std::isfinite(s.sigma_model))) {
-      return fail("stated_noise: sigma_model must be finite and >= 0");
+      return fail(at + "sigma_model", "must be finite and >= 0");
     }
-    if (!(s.from <= s.to)) return fail("stated_noise: from must be <= to");
+    if (!(s.from <= s.to)) return fail(at + "from", "must be <= to");
   }
   if (!(stall_reduction > 0.0 && stall_reduction < 1.0)) {
-    return fail("stall_reduction must lie in (0, 1)");
+    return fail("stall_reduction", "must lie in (0, 1)");
   }
-  if (stall_waves < 1) return fail("stall_waves must be >= 1");
+  if (stall_waves < 1) return fail("stall_waves", "must be >= 1");
   if (!(negative_fraction >= 0.0 && negative_fraction < 1.0)) {
-    return fail("negative_fraction must lie in [0, 1)");
+    return fail("negative_fraction", "must lie in [0, 1)");
   }
-  if (!(shape_fraction > 0.0)) return fail("shape_fraction must be > 0");
-  if (!(overfit_loglik >= 0.0)) return fail("overfit_loglik must be >= 0");
+  if (!(shape_fraction > 0.0)) return fail("shape_fraction", "must be > 0");
+  if (!(overfit_loglik >= 0.0)) return fail("overfit_loglik", "must be >= 0");
   if (!(band_low >= 0.0 && band_low < band_high && band_high <= 1.0)) {
-    return fail("band_low < band_high must lie in [0, 1]");
+    return fail("band_low", "< band_high must lie in [0, 1]");
   }
   return true;
 }

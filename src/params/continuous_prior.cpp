@@ -35,36 +35,38 @@ StandardTruncation TruncateStandardised(const ContinuousPrior& p) {
 }  // namespace
 
 bool ContinuousPrior::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& msg) {
-    if (why) *why = msg;
+  ValidationError error;
+  return ExplainValidation(IsValid(&error), error, why);
+}
+
+bool ContinuousPrior::IsValid(ValidationError* error) const {
+  // No owner: the callers name the prior ("uniform prior: ", the config's key).
+  auto fail = [&](const std::string& field, const std::string& value, const std::string& rest) {
+    if (error) *error = {"", field, value, rest};
     return false;
   };
   auto finite = [&](const char* field, double value) {
-    return std::isfinite(value)
-               ? true
-               : fail(std::string(field) + " = " + Num(value) + "; must be finite");
+    return std::isfinite(value) ? true : fail(field, Num(value), "must be finite");
+  };
+  auto ordered = [&] {
+    return low < high ? true
+                      : fail("low", Num(low) + " >= high = " + Num(high), "low must be below high");
   };
   if (kind == PriorKind::kJoint) {
-    if (!(low < high)) {
-      return fail("low = " + Num(low) + " >= high = " + Num(high) + "; low must be below high");
-    }
-    if (!finite("mean", mean) || !finite("sd", sd)) return false;
-    return sd > 0.0 ? true : fail("sd = " + Num(sd) + "; must be > 0");
+    if (!ordered() || !finite("mean", mean) || !finite("sd", sd)) return false;
+    return sd > 0.0 ? true : fail("sd", Num(sd), "must be > 0");
   }
   const bool uses_bounds = kind == PriorKind::kUniform || kind == PriorKind::kTruncatedNormal;
   const bool uses_normal = kind != PriorKind::kUniform;
   if (uses_bounds) {
-    if (!finite("low", low) || !finite("high", high)) return false;
-    if (!(low < high)) {
-      return fail("low = " + Num(low) + " >= high = " + Num(high) + "; low must be below high");
-    }
+    if (!finite("low", low) || !finite("high", high) || !ordered()) return false;
     if (!std::isfinite(high - low)) {
-      return fail("high - low = " + Num(high - low) + "; the interval must have a finite width");
+      return fail("high - low", Num(high - low), "the interval must have a finite width");
     }
   }
   if (uses_normal) {
     if (!finite("mean", mean) || !finite("sd", sd)) return false;
-    if (!(sd > 0.0)) return fail("sd = " + Num(sd) + "; must be > 0");
+    if (!(sd > 0.0)) return fail("sd", Num(sd), "must be > 0");
   }
   switch (kind) {
     case PriorKind::kUniform:
@@ -73,22 +75,24 @@ bool ContinuousPrior::IsValid(std::string* why) const {
       return true;
     case PriorKind::kLogNormal:
       if (mean + sd * sd >= kMaxLogMoment) {
-        return fail("sd = " + Num(sd) + " with mean = " + Num(mean) +
-                    "; mean + sd^2 must be below " + Num(kMaxLogMoment) +
-                    " for the lognormal's mean and variance to be finite");
+        return fail("sd",
+                    Num(sd) + " with mean = " + Num(mean),
+                    "mean + sd^2 must be below " + Num(kMaxLogMoment) +
+                        " for the lognormal's mean and variance to be finite");
       }
       return true;
     case PriorKind::kTruncatedNormal: {
       const double mass = TruncateStandardised(*this).mass;
       if (!(mass >= kMinTruncatedMass)) {
-        return fail("low = " + Num(low) + ", high = " + Num(high) + "; N(mean = " + Num(mean) +
-                    ", sd = " + Num(sd) + ") has mass " + Num(mass) +
-                    " on [low, high], must be >= " + Num(kMinTruncatedMass));
+        return fail("low",
+                    Num(low) + ", high = " + Num(high),
+                    "N(mean = " + Num(mean) + ", sd = " + Num(sd) + ") has mass " + Num(mass) +
+                        " on [low, high], must be >= " + Num(kMinTruncatedMass));
       }
       return true;
     }
   }
-  return fail("kind = " + std::to_string(static_cast<int>(kind)) + "; not a prior kind");
+  return fail("kind", std::to_string(static_cast<int>(kind)), "not a prior kind");
 }
 
 bool ContinuousPrior::InSupport(double x) const {

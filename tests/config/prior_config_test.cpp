@@ -107,5 +107,27 @@ TEST(PriorConfig, JointPriorErrorsNameTheKeyAndTheParameter) {
   EXPECT_TRUE(Contains(e, "parameters.loss_factor.high: must be above low = 0.5")) << e;
 }
 
+// ContinuousPrior::IsValid's own failures (those the config's key checks do not catch first) are
+// one line at the parameter's prior key, in the library's words: the same text, file:line and key
+// since the check fills a ValidationError.
+TEST(PriorConfig, ThePriorsOwnCheckIsOneLineAtItsKey) {
+  const std::string head =
+      "[data]\ncsv = \"p.csv\"\n[metric]\npreset = \"area\"\n[parameters.stiffness_scale]\n";
+  const std::string at = "dir/run.toml:6: parameters.stiffness_scale.prior: ";
+  std::string e = ConfigErrorOf(head + "prior = \"lognormal\"\nmean = 0.0\nsd = 30.0\n");
+  EXPECT_TRUE(Contains(e,
+                       at + "sd = 30 with mean = 0; mean + sd^2 must be below 700 for the "
+                            "lognormal's mean and variance to be finite"))
+      << e;
+  e = ConfigErrorOf(head + "prior = \"uniform\"\nlow = -1.7e308\nhigh = 1.7e308\n");
+  EXPECT_TRUE(Contains(e, at + "high - low = inf; the interval must have a finite width")) << e;
+  e = ConfigErrorOf(head +
+                    "prior = \"truncated_normal\"\nmean = 0.0\nsd = 1.0\nlow = 8.0\nhigh = 9.0\n");
+  EXPECT_TRUE(Contains(e,
+                       at + "low = 8, high = 9; N(mean = 0, sd = 1) has mass "
+                            "6.219831985865805e-16 on [low, high], must be >= 1e-12"))
+      << e;
+}
+
 }  // namespace
 }  // namespace combabc

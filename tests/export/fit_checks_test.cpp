@@ -521,5 +521,75 @@ TEST(FitChecks, OptionsAreChecked) {
   EXPECT_NE(why.find("doubtful_fit_p"), std::string::npos);
 }
 
+// Each level's check fills a ValidationError naming its field; the sentence is the one the
+// string form has always given (no owner, no value), a stated noise's check names its index.
+TEST(FitChecks, EachBadLevelNamesItsField) {
+  struct Case {
+    void (*spoil)(FitCheckOptions&);
+    std::string field;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {[](FitCheckOptions& o) { o.scale_factor = 1.0; },
+       "scale_factor",
+       "scale_factor must be > 1"},
+      {[](FitCheckOptions& o) { o.poor_fit_ratio = 0.0; },
+       "poor_fit_ratio",
+       "poor_fit_ratio must be > 0"},
+      {[](FitCheckOptions& o) { o.poor_fit_p = 1.0; },
+       "poor_fit_p",
+       "poor_fit_p must lie in [0, 1)"},
+      {[](FitCheckOptions& o) { o.doubtful_fit_p = 1.0; },
+       "doubtful_fit_p",
+       "doubtful_fit_p must lie in [poor_fit_p, 1)"},
+      {[](FitCheckOptions& o) { o.noise_below_fraction = -1.0; },
+       "noise_below_fraction",
+       "noise_below_fraction must be >= 0"},
+      {[](FitCheckOptions& o) {
+         o.stated_noise = {{}, {0, 0.0}};
+       },
+       "stated_noise[1].sigma_noise",
+       "stated_noise[1].sigma_noise must be finite and > 0"},
+      {[](FitCheckOptions& o) {
+         o.stated_noise = {{0, std::nullopt, -1.0}};
+       },
+       "stated_noise[0].sigma_model",
+       "stated_noise[0].sigma_model must be finite and >= 0"},
+      {[](FitCheckOptions& o) {
+         o.stated_noise = {{0, std::nullopt, 0.0, 1.0, 0.0}};
+       },
+       "stated_noise[0].from",
+       "stated_noise[0].from must be <= to"},
+      {[](FitCheckOptions& o) { o.stall_reduction = 1.0; },
+       "stall_reduction",
+       "stall_reduction must lie in (0, 1)"},
+      {[](FitCheckOptions& o) { o.stall_waves = 0; }, "stall_waves", "stall_waves must be >= 1"},
+      {[](FitCheckOptions& o) { o.negative_fraction = 1.0; },
+       "negative_fraction",
+       "negative_fraction must lie in [0, 1)"},
+      {[](FitCheckOptions& o) { o.shape_fraction = 0.0; },
+       "shape_fraction",
+       "shape_fraction must be > 0"},
+      {[](FitCheckOptions& o) { o.overfit_loglik = -1.0; },
+       "overfit_loglik",
+       "overfit_loglik must be >= 0"},
+      {[](FitCheckOptions& o) { o.band_high = 1.5; },
+       "band_low",
+       "band_low < band_high must lie in [0, 1]"},
+  };
+  for (const Case& c : cases) {
+    FitCheckOptions options;
+    c.spoil(options);
+    ValidationError error;
+    EXPECT_FALSE(options.IsValid(&error)) << c.field;
+    EXPECT_EQ(error.field, c.field);
+    EXPECT_EQ(error.Member(), c.field.substr(0, c.field.find('[')));
+    EXPECT_EQ(error.Message(), c.message);
+    std::string why;
+    EXPECT_FALSE(options.IsValid(&why));
+    EXPECT_EQ(why, c.message);
+  }
+}
+
 }  // namespace
 }  // namespace combabc

@@ -229,37 +229,44 @@ TEST(ContinuousPrior, IsValidNamesTheBadField) {
   struct Case {
     ContinuousPrior prior;
     std::string expected;  // a substring of `why`
+    std::string field;     // the structured error's field
   };
   const std::vector<Case> cases = {
-      {Uniform(2.0, 1.0), "low = 2 >= high = 1; low must be below high"},
-      {Uniform(1.0, 1.0), "low = 1 >= high = 1"},
-      {Uniform(NAN, 1.0), "low = nan; must be finite"},
-      {Uniform(0.0, INFINITY), "high = inf; must be finite"},
-      {Uniform(-1.7e308, 1.7e308), "high - low = inf"},
-      {Normal(0.0, -1.0), "sd = -1; must be > 0"},
-      {Normal(0.0, 0.0), "sd = 0; must be > 0"},
-      {Normal(NAN, 1.0), "mean = nan; must be finite"},
-      {Normal(0.0, INFINITY), "sd = inf; must be finite"},
-      {LogNormal(0.0, -0.5), "sd = -0.5; must be > 0"},
-      {LogNormal(0.0, 30.0), "mean + sd^2 must be below 700"},
-      {Truncated(0.0, 0.0, -1.0, 1.0), "sd = 0; must be > 0"},
-      {Truncated(0.0, 1.0, 1.0, -1.0), "low = 1 >= high = -1"},
-      {Truncated(0.0, 1.0, -INFINITY, 1.0), "low = -inf; must be finite"},
-      {Truncated(0.0, 1.0, 8.0, 9.0), "on [low, high], must be >= 1e-12"},
-      {Truncated(0.0, 1.0, 0.0, 1e-13), "on [low, high], must be >= 1e-12"},
+      {Uniform(2.0, 1.0), "low = 2 >= high = 1; low must be below high", "low"},
+      {Uniform(1.0, 1.0), "low = 1 >= high = 1", "low"},
+      {Uniform(NAN, 1.0), "low = nan; must be finite", "low"},
+      {Uniform(0.0, INFINITY), "high = inf; must be finite", "high"},
+      {Uniform(-1.7e308, 1.7e308), "high - low = inf", "high - low"},
+      {Normal(0.0, -1.0), "sd = -1; must be > 0", "sd"},
+      {Normal(0.0, 0.0), "sd = 0; must be > 0", "sd"},
+      {Normal(NAN, 1.0), "mean = nan; must be finite", "mean"},
+      {Normal(0.0, INFINITY), "sd = inf; must be finite", "sd"},
+      {LogNormal(0.0, -0.5), "sd = -0.5; must be > 0", "sd"},
+      {LogNormal(0.0, 30.0), "mean + sd^2 must be below 700", "sd"},
+      {Truncated(0.0, 0.0, -1.0, 1.0), "sd = 0; must be > 0", "sd"},
+      {Truncated(0.0, 1.0, 1.0, -1.0), "low = 1 >= high = -1", "low"},
+      {Truncated(0.0, 1.0, -INFINITY, 1.0), "low = -inf; must be finite", "low"},
+      {Truncated(0.0, 1.0, 8.0, 9.0), "on [low, high], must be >= 1e-12", "low"},
+      {Truncated(0.0, 1.0, 0.0, 1e-13), "on [low, high], must be >= 1e-12", "low"},
   };
   for (const auto& c : cases) {
     std::string why;
     EXPECT_FALSE(c.prior.IsValid(&why)) << Describe(c.prior);
     EXPECT_NE(why.find(c.expected), std::string::npos) << "why = " << why;
+    // The structured form: the field, no owner (the caller names the prior), the same sentence.
+    ValidationError error;
+    EXPECT_FALSE(c.prior.IsValid(&error));
+    EXPECT_EQ(error.field, c.field) << why;
+    EXPECT_EQ(error.owner, "");
+    EXPECT_EQ(error.Message(), why);
   }
   // Fields a kind does not use are not checked: a normal ignores low/high.
   ContinuousPrior normal = Normal(0.0, 1.0);
   normal.low = 5.0;
   normal.high = -5.0;
-  EXPECT_TRUE(normal.IsValid(nullptr));
+  EXPECT_TRUE(normal.IsValid(static_cast<ValidationError*>(nullptr)));
   // Just above the mass floor is valid: N(0, 1) on [7, 8] has 1.28e-12.
-  EXPECT_TRUE(Truncated(0.0, 1.0, 7.0, 8.0).IsValid(nullptr));
+  EXPECT_TRUE(Truncated(0.0, 1.0, 7.0, 8.0).IsValid(static_cast<ValidationError*>(nullptr)));
 }
 
 // log Q(x) for large x from the asymptotic series Q(x) = phi(x) / x (1 - 1/x^2 + 3/x^4 - 15/x^6

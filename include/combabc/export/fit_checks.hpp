@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "combabc/core/validation_error.hpp"
 #include "combabc/history/history_store.hpp"
 #include "combabc/metrics/metric_component.hpp"
 
@@ -67,6 +68,10 @@ struct FitCheckOptions {
   // Not a level: the run's noise-aware components as its config states them (none for a run
   // without a config, or without such components).
   std::vector<StatedNoise> stated_noise;
+  // Fills `error` (may be null) with the first field that fails, without an owner or a value
+  // ("band_low" "< band_high must lie in [0, 1]").
+  bool IsValid(ValidationError* error) const;
+  // The same check as a sentence: "scale_factor must be > 1", "stated_noise[0].from must be <= to".
   bool IsValid(std::string* why) const;
 };
 

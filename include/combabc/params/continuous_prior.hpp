@@ -7,6 +7,7 @@
 #include <string>
 
 #include "combabc/core/enum_names.hpp"
+#include "combabc/core/validation_error.hpp"
 #include "combabc/rng/random_stream.hpp"
 
 namespace combabc {
@@ -39,8 +40,10 @@ struct ContinuousPrior {
   // set by ParameterSpace (for reports, the history and the kernels' initial scales).
 
   // Finite parameters, low < high, sd > 0, and for kTruncatedNormal a truncation interval with
-  // enough normal mass to sample (at least 1e-12); kJoint allows infinite bounds. `why` reads
-  // "field = value; constraint".
+  // enough normal mass to sample (at least 1e-12); kJoint allows infinite bounds. Fills `error`
+  // (may be null) with the first field that fails, without an owner (the caller names the prior).
+  bool IsValid(ValidationError* error) const;
+  // The same check as a sentence: "field = value; constraint".
   bool IsValid(std::string* why) const;
   // Normalised log density; -infinity outside the support. Not for kJoint (a coordinate of a joint
   // prior has no density of its own: ParameterSpace::LogPriorReals).

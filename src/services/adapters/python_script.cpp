@@ -1,70 +1,26 @@
 // Running the scripts of scripts/report/ (the report, the NetCDF export) with Debian's python.
 #include "services/adapters/python_script.hpp"
 
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <optional>
+#include <stdexcept>
 
 #include "combabc/core/install_paths.hpp"
-
-extern char** environ;
+#include "combabc/core/subprocess.hpp"
 
 namespace combabc::services {
 namespace fs = std::filesystem;
 namespace {
 
-// The most of a script's stderr kept: its message is the last line.
-constexpr std::size_t kMaxScriptStderrBytes = std::size_t{64} << 10;
 // How long a script interrupted by SIGINT gets to stop (on KeyboardInterrupt; what it wrote is in
 // a staging folder the caller removes) before its process group is killed.
 constexpr std::chrono::seconds kInterruptGrace{5};
-
-std::atomic<int> interrupt_signal{0};
-static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void RecordInterrupt(int signal_number) { interrupt_signal.store(signal_number); }
-
-// While a script runs, SIGINT and SIGTERM (unless ignored) are recorded instead of taking their
-// course at once: the script is interrupted and waited for first, so that it never publishes
-// after combabc is gone. The previous handlers come back when the guard goes.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    interrupt_signal.store(0);
-    struct sigaction action = {};
-    action.sa_handler = RecordInterrupt;
-    sigemptyset(&action.sa_mask);
-    for (std::size_t k = 0; k < 2; ++k) {
-      ::sigaction(kSignals[k], nullptr, &old_[k]);
-      installed_[k] = old_[k].sa_handler != SIG_IGN;
-      if (installed_[k]) ::sigaction(kSignals[k], &action, nullptr);
-    }
-  }
-  ~InterruptGuard() {
-    for (std::size_t k = 0; k < 2; ++k) {
-      if (installed_[k]) ::sigaction(kSignals[k], &old_[k], nullptr);
-    }
-  }
-  InterruptGuard(const InterruptGuard&) = delete;
-  InterruptGuard& operator=(const InterruptGuard&) = delete;
-  static int signal() { return interrupt_signal.load(); }
-
- private:
-  static constexpr int kSignals[2] = {SIGINT, SIGTERM};
-  struct sigaction old_[2] = {};
-  bool installed_[2] = {false, false};
-};
 
 }  // namespace
 
@@ -170,108 +126,30 @@ ProcessResult RunProcess(std::vector<std::string> args,
                          const std::string& needs,
                          const std::function<void()>& before_signal,
                          const std::function<bool(const std::string&)>& on_line) {
-  std::vector<char*> argv;
-  argv.reserve(args.size() + 1);
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  int pipe_fds[2];
-  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw Error(ErrorKind::kSoftware, "pipe failed");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 2);
-  // A process group of its own: Ctrl-C at the terminal reaches combabc alone, which interrupts the
-  // script and waits for it (below); default signal dispositions.
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  sigset_t defaults;
-  sigset_t empty;
-  sigfillset(&defaults);
-  sigemptyset(&empty);
-  posix_spawnattr_setsigdefault(&attr, &defaults);
-  posix_spawnattr_setsigmask(&attr, &empty);
-  posix_spawnattr_setpgroup(&attr, 0);
-  posix_spawnattr_setflags(
-      &attr,
-      static_cast<short>(POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK));
+  SubprocessOptions options;
+  options.argv = std::move(args);
+  options.search_path = false;  // the python FindPythonScript checked, not one in PATH
+  options.pipe_stdout = false;
+  options.capture_stderr = true;  // the script's message is its last line
+  options.on_stderr_line = on_line;
   // Before the spawn: no signal may end combabc while the script is alive.
-  std::optional<InterruptGuard> guard(std::in_place);
-  pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, argv[0], &actions, &attr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attr);
-  ::close(pipe_fds[1]);
-  if (spawned != 0) {
-    ::close(pipe_fds[0]);
-    throw Error(ErrorKind::kCantCreate,
-                "cannot start " + args[0] + " (" + std::strerror(spawned) + "); " + needs);
+  SignalHold hold;
+  std::optional<Subprocess> script;
+  try {
+    script.emplace(options);
+  } catch (const SpawnError& e) {
+    throw Error(
+        ErrorKind::kCantCreate,
+        "cannot start " + options.argv.front() + " (" + std::strerror(e.error()) + "); " + needs);
+  } catch (const std::runtime_error& e) {
+    throw Error(ErrorKind::kSoftware, e.what());
   }
-  ProcessResult result;
-  // Interrupted: SIGINT to the script's group (Python cleans up on KeyboardInterrupt), SIGKILL
-  // after kInterruptGrace.
-  bool interrupted = false;
-  bool killed = false;
-  std::chrono::steady_clock::time_point kill_at;
-  auto forward_interrupt = [&] {
-    if (InterruptGuard::signal() == 0 || killed) return;
-    if (!interrupted) {
-      interrupted = true;
-      ::kill(-pid, SIGINT);
-      kill_at = std::chrono::steady_clock::now() + kInterruptGrace;
-    } else if (std::chrono::steady_clock::now() >= kill_at) {
-      killed = true;
-      ::kill(-pid, SIGKILL);
-    }
-  };
-  char buffer[4096];
-  std::string pending;  // with on_line: the start of a line not yet ended
-  const auto keep = [&](const char* text, std::size_t size) {
-    result.err.append(text, size);
-    // Only the end is kept: the script's message is its last line.
-    if (result.err.size() > 2 * kMaxScriptStderrBytes) {
-      result.err.erase(0, result.err.size() - kMaxScriptStderrBytes);
-    }
-  };
-  for (;;) {
-    forward_interrupt();
-    pollfd p{pipe_fds[0], POLLIN, 0};
-    const int ready = ::poll(&p, 1, 100);  // ms: how soon an interrupt is forwarded
-    if (ready <= 0) continue;              // timeout or EINTR: check for an interrupt again
-    const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    if (!on_line) {
-      keep(buffer, static_cast<std::size_t>(n));
-      continue;
-    }
-    pending.append(buffer, static_cast<std::size_t>(n));
-    std::size_t start = 0;
-    for (std::size_t end; (end = pending.find('\n', start)) != std::string::npos; start = end + 1) {
-      const std::string line = pending.substr(start, end - start);
-      if (!on_line(line)) keep(pending.data() + start, end + 1 - start);
-    }
-    pending.erase(0, start);
-    // A line longer than the kept end is no progress line: kept as it comes.
-    if (pending.size() > kMaxScriptStderrBytes) {
-      keep(pending.data(), pending.size());
-      pending.clear();
-    }
-  }
-  keep(pending.data(), pending.size());
-  ::close(pipe_fds[0]);
-  int status = 0;
-  for (;;) {
-    const pid_t r = ::waitpid(pid, &status, interrupted && !killed ? WNOHANG : 0);
-    if (r == pid) break;
-    if (r < 0 && errno != EINTR) throw Error(ErrorKind::kSoftware, "waitpid failed");
-    forward_interrupt();
-    if (r == 0) ::usleep(20000);
-  }
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  if (const int signal_number = InterruptGuard::signal(); signal_number != 0) {
+  const ExitStatus status = script->WaitForwarding(hold, kInterruptGrace);
+  ProcessResult result{status.signal != 0 ? 128 + status.signal : status.code, script->Stderr()};
+  if (const int signal_number = hold.signal(); signal_number != 0) {
     // The script is gone; the signal now takes the course it would have taken (for the CLI:
     // ending combabc by it, exit status 130 for SIGINT). A handler that returns gets an error.
-    guard.reset();
+    hold.Release();
     if (before_signal) before_signal();
     ::raise(signal_number);
     throw Error(ErrorKind::kSoftware, "interrupted (the script was stopped)");

@@ -24,18 +24,20 @@ PythonScript FindPythonScript(const std::string& file_name,
                               const std::string& needs);
 
 struct ProcessResult {
-  int status = 0;
-  std::string err;  // everything the process wrote on stderr
+  int status = 0;   // the exit status, or 128 + the signal that ended it
+  std::string err;  // what the process wrote on stderr: its last kMaxStderrBytes (64 KiB)
 };
 
-// Runs args[0] in a process group of its own with stdout discarded and stderr captured (its last
-// 64 KiB or more); kCantCreate (with `needs`) when it cannot start. A SIGINT or SIGTERM that
-// arrives meanwhile (not ignored) interrupts the script (SIGINT to its group, SIGKILL 5 s later)
-// and is waited for; then `before_signal` runs (the report removes its staging folder there: the
-// signal may end combabc without unwinding), the signal takes its course with combabc's own
-// handlers (for the CLI: combabc ends by it), and if that handler returns, Error(kSoftware)
-// "interrupted". `on_line`, when set, hears each line of stderr (without its newline) as it
-// comes; a line it returns true for was a progress line and is not kept in `err`.
+// Runs args[0] (a path, not looked up in PATH) through core's Subprocess: in a process group of
+// its own, stdin and stdout /dev/null, stderr captured; what is left of the group is killed when
+// it ends. kCantCreate "cannot start <args[0]> (<reason>); <needs>" when it cannot start. A SIGINT
+// or SIGTERM that arrives meanwhile (not ignored) is held (SignalHold) and interrupts the script
+// (SIGINT to its group, SIGKILL 5 s later), which is reaped; then `before_signal` runs (the report
+// removes its staging folder there: the signal may end combabc without unwinding), the signal takes
+// its course with combabc's own handlers (for the CLI: combabc ends by it), and if that handler
+// returns, Error(kSoftware) "interrupted". `on_line`, when set, hears each line of stderr (without
+// its newline) as it comes; a line it returns true for was a progress line and is not kept in
+// `err`.
 ProcessResult RunProcess(std::vector<std::string> args,
                          const std::string& needs,
                          const std::function<void()>& before_signal = {},
