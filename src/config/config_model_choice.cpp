@@ -60,7 +60,15 @@ void ParseModelChoice(TableReader& root, CalibrationConfig* c) {
   choice.line = table->line();
   std::vector<TableReader> models = table->Tables("model");
   const auto reference = table->String("reference");
+  const auto method = table->String("method");
   table->Finish();
+  if (method && *method != "evidence" && *method != "joint") {
+    table->Fail("method",
+                "unknown method " + Excerpt(*method) +
+                    "; expected \"evidence\" (each model's own run) or \"joint\" (one run over "
+                    "the models and their parameters)");
+  }
+  choice.joint = method && *method == "joint";
   if (models.size() < 2) {
     table->Fail("model",
                 "lists " + std::to_string(models.size()) +
