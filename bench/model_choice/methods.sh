@@ -4,9 +4,10 @@
 # clamps, clamped against simply supported, prior 1/2 each, least squares to 4, 3, 2.4. For each
 # method and size (accepted per wave), 20 seeds: mean simulations, mean and largest |P - exact|,
 # seeds within 0.02, mean z^2 and mean reported se of P(simply supported).
-# Usage: bench/model_choice/methods.sh [combabc binary] [sizes...]   (default build/apps/combabc/combabc)
+# Usage: [METHODS="evidence joint"] bench/model_choice/methods.sh [combabc binary] [sizes...]
+# (default build/apps/combabc and sizes 100 200 400 800)
 set -euo pipefail
-combabc=$(realpath "${1:-build/apps/combabc/combabc}")
+combabc=$(realpath "${1:-build/apps/combabc}")
 shift || true
 sizes=("${@:-100 200 400 800}")
 work=$(mktemp -d)
@@ -59,7 +60,7 @@ exact=$(awk -F, '$1 == "pinned" {print $3}' exact/model_choice/models.csv)
 echo "exact P(pinned) = $exact"
 echo "method size simulations mean_abs_err max_abs_err within_0.02 mean_z2 mean_se"
 for size in ${sizes[*]}; do
-  for method in evidence joint; do
+  for method in ${METHODS:-evidence joint}; do
     rows=""
     for seed in $(seq 1 20); do
       config "$method" "$size" "$seed" > run.toml

@@ -312,6 +312,16 @@ ModelChoiceOutcome RunJointModelChoice(
     while (at > 0 && waves[at].particles.empty()) --at;
   }
   o.models = waves.empty() ? std::vector<ModelProbability>{} : o.by_wave[at];
+  if (z.wave < 0) {
+    // No wave at the final thresholds (a limit stopped the run): the wider thresholds'
+    // probabilities are no answer, so each model has only the bound that says nothing.
+    for (ModelProbability& p : o.models) {
+      p.probability = std::numeric_limits<double>::quiet_NaN();
+      p.se = 0.0;
+      p.upper_bound_only = true;
+      p.upper = 1.0;
+    }
+  }
   for (std::size_t k = 0; k < o.models.size(); ++k) {
     o.evidence.push_back(JointEvidence(z, o.models[k]));
     for (std::size_t t = 0; t < waves.size(); ++t) {
