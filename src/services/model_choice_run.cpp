@@ -247,6 +247,7 @@ JointModels JointModelsOf(const CalibrationConfig& c) {
     parameters.push_back({m.space, m.reals, m.joint_priors});
     const BinarySpace bits(m.space);
     std::vector<std::string> bit_names;
+    bit_names.reserve(static_cast<std::size_t>(bits.dimension()));
     for (int b = 0; b < bits.dimension(); ++b) bit_names.push_back(bits.name(b));
     out.bit_names.push_back(std::move(bit_names));
   }

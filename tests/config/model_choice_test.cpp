@@ -275,6 +275,7 @@ struct JointToy {
         sim(
             [&] {
               std::vector<std::unique_ptr<Simulator>> sims;
+              sims.reserve(toys.size());
               for (const Toy* t : toys) sims.push_back(std::make_unique<PaddedSimulator>(t->sim));
               return sims;
             }(),
@@ -406,12 +407,14 @@ TEST(JointModelChoice, DISABLED_EvidenceAgainstJoint) {
     joint_sims += static_cast<double>(h.summary.simulations);
     joint_upper += JointModelProbabilities(h.waves.back(), dying.joint.layout)[1].upper;
   }
-  std::printf("a model that dies out, 400 a wave: evidence %.0f simulations (P < %.4f), joint %.0f "
-              "(P < %.4f)\n",
-              evidence_sims / 20,
-              evidence_upper / 20,
-              joint_sims / 20,
-              joint_upper / 20);}
+  std::printf(
+      "a model that dies out, 400 a wave: evidence %.0f simulations (P < %.4f), joint %.0f "
+      "(P < %.4f)\n",
+      evidence_sims / 20,
+      evidence_upper / 20,
+      joint_sims / 20,
+      joint_upper / 20);
+}
 
 // [model_choice]: two sensor models that differ in what a fixed clamp does.
 std::string TwoModels(const std::string& models) {
