@@ -132,6 +132,15 @@ void ParseModelChoice(TableReader& root, CalibrationConfig* c) {
     os << sum;
     models.back().Fail("prior", "the models' priors sum to " + os.str() + "; they must sum to 1");
   }
+  for (std::size_t k = 0; choice.joint && k + 1 < choice.models.size(); ++k) {
+    // The stick-breaking indicator gives model k the bit P = pi_k / (1 - pi_1 - ... - pi_{k-1}):
+    // a model of prior 0 before the last would end the stick.
+    if (!(choice.models[k].prior > 0.0)) {
+      models[k].Fail("prior",
+                     "is 0: with method = \"joint\" every model but the last needs a prior above "
+                     "0 (or leave the model out)");
+    }
+  }
   if (reference) {
     bool found = false;
     for (std::size_t k = 0; k < choice.models.size(); ++k) {

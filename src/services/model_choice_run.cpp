@@ -251,7 +251,11 @@ JointModels JointModelsOf(const CalibrationConfig& c) {
     for (int b = 0; b < bits.dimension(); ++b) bit_names.push_back(bits.name(b));
     out.bit_names.push_back(std::move(bit_names));
   }
-  out.layout = BuildJointSpace(names, prior, parameters).layout;
+  try {
+    out.layout = BuildJointSpace(names, prior, parameters).layout;
+  } catch (const Error& e) {
+    throw Error(e.kind(), e.message(), c.path, c.model_choice->line, "model_choice");
+  }
   return out;
 }
 

@@ -481,6 +481,15 @@ name = "b"
   EXPECT_EQ(ConfigErrorOf(TwoModels(two + "prior = 0.5\nmodel.clamps.fixed_support = \"glued\"\n")),
             "dir/run.toml:31: model.clamps.fixed_support: unknown support 'glued'; expected one "
             "of \"free\", \"simply_supported\", \"clamped\" (in model_choice.model[1] (b))");
+  // method = "joint": a model of prior 0 before the last would end the stick-breaking indicator.
+  EXPECT_EQ(ConfigErrorOf(TwoModels("[model_choice]\nmethod = \"joint\"\n[[model_choice.model]]\n"
+                                    "name = \"a\"\nprior = 0.0\n[[model_choice.model]]\n"
+                                    "name = \"b\"\nprior = 1.0\n")),
+            "dir/run.toml:29: model_choice.model[0].prior: is 0: with method = \"joint\" every "
+            "model but the last needs a prior above 0 (or leave the model out)");
+  EXPECT_NE(ConfigErrorOf(TwoModels("[model_choice]\nmethod = \"jump\"\n" + two + "prior = 0.5\n"))
+                .find("dir/run.toml:26: model_choice.method: unknown method 'jump'"),
+            std::string::npos);
   // Models with conflicting outputs: the experiments (load, scan) are common to all.
   EXPECT_EQ(ConfigErrorOf(TwoModels(two + "prior = 0.5\nmodel.output.spacing = 0.02\n")),
             "dir/run.toml:31: model_choice.model[1].model.output: the experiments are common to "

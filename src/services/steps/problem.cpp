@@ -69,7 +69,15 @@ void BuildJointModel(Problem& p, const std::string& history_path) {
     folders->push_back(std::move(built.folder));
     simulators.push_back(std::move(built.simulator));
   }
-  JointSpace joint = BuildJointSpace(names, prior, parameters);
+  JointSpace joint = [&] {
+    try {
+      return BuildJointSpace(names, prior, parameters);
+    } catch (const Error& e) {
+      // Where the models are: BuildJointSpace knows only their names.
+      throw Error(
+          e.kind(), e.message(), p.config.path, p.config.model_choice->line, "model_choice");
+    }
+  }();
   p.simulator.simulator = std::make_unique<ModelSwitch>(std::move(simulators), joint.layout);
   p.simulator.folder = std::move(folders);
   p.space.emplace(std::move(joint.space));
