@@ -290,6 +290,71 @@ struct JointToy {
   }
 };
 
+// A model that writes what it was given: its model number, then its bits and reals; a candidate
+// whose first real is negative fails.
+class EchoSimulator : public Simulator {
+ public:
+  explicit EchoSimulator(double id) : id_(id) {}
+  int output_size() const override { return 4; }
+  void Simulate(const ParameterView& theta,
+                RandomStream& /*rng*/,
+                std::span<double> out) const override {
+    if (!theta.reals.empty() && theta.reals[0] < 0.0) throw SimulationFailed("negative");
+    out[0] = id_;
+    out[1] = static_cast<double>(theta.bits.size());
+    out[2] = theta.bits.empty() ? -1.0 : theta.bits[0];
+    out[3] = theta.reals.empty() ? -1.0 : theta.reals[0];
+  }
+
+ private:
+  double id_;
+};
+
+TEST(JointModelChoice, EachModelIsGivenItsOwnBitsAndReals) {
+  ModelParameters a;
+  a.bits.dimension = 2;
+  a.reals = {{"k", {.kind = PriorKind::kUniform, .low = -1.0, .high = 1.0}}};
+  ModelParameters b;
+  b.bits.dimension = 1;
+  b.reals = {{"k", {.kind = PriorKind::kUniform, .low = -1.0, .high = 2.0}}};  // another prior
+  JointSpace joint = BuildJointSpace({"a", "b", "c"}, {0.5, 0.3, 0.2}, {a, b, b});
+  EXPECT_FALSE(joint.layout.shared);
+  // Two indicator bits, then a's 2 bits, b's and c's one each; a real per model.
+  ASSERT_EQ(joint.space.num_bits(), 2 + 2 + 1 + 1);
+  EXPECT_EQ(joint.space.binary().name(0), "model a");
+  EXPECT_EQ(joint.space.binary().name(4), "b.bit 1");
+  EXPECT_EQ(joint.space.reals()[2].name, "c.k");
+  EXPECT_NEAR(joint.space.binary().bit_prior_one()[1], 0.3 / 0.5, 1e-12);
+  std::vector<std::unique_ptr<Simulator>> sims;
+  sims.reserve(3);
+  for (int k = 0; k < 3; ++k) sims.push_back(std::make_unique<EchoSimulator>(k));
+  const ModelSwitch sw(std::move(sims), joint.layout);
+  // Candidates of models c, a, b, a (the last failing): bits [b_a b_b | a1 a2 | b1 | c1].
+  const std::vector<std::uint8_t> bits = {0, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0,
+                                          0, 1, 0, 0, 1, 0, 1, 0, 0, 1, 0, 0};
+  const std::vector<double> reals = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, -1.0, 0.0, 0.0};
+  ParameterBatch batch{4, 6, 3, bits, reals};
+  std::vector<RandomStream> rngs;
+  for (std::uint64_t i = 0; i < 4; ++i) rngs.emplace_back(1, 0, i);
+  std::vector<double> out(16);  // 4 candidates x 4 outputs
+  std::vector<std::uint8_t> status(4, 0);
+  std::vector<char> reasons(4 * kFailureReasonBytes, '\0');
+  BatchFailures failures(status, reasons);
+  sw.SimulateBatch(batch, rngs, out, failures);
+  const std::vector<double> want = {2, 1, 1, 0.3, 0, 2, 1, 0.4, 1, 1, 1, 0.8};
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_DOUBLE_EQ(out[i], want[i]) << i;
+  EXPECT_FALSE(failures.failed(0));
+  EXPECT_TRUE(failures.failed(3));
+  EXPECT_EQ(failures.reason(3).substr(0, 8), "negative");
+  // One at a time: the same.
+  std::vector<double> one(4);
+  sw.Simulate(batch[1], rngs[1], one);
+  EXPECT_EQ(one, std::vector<double>(out.begin() + 4, out.begin() + 8));
+  // Models of identical parameters share them.
+  EXPECT_TRUE(BuildJointSpace({"b", "c"}, {0.5, 0.5}, {b, b}).layout.shared);
+  EXPECT_EQ(BuildJointSpace({"b", "c"}, {0.5, 0.5}, {b, b}).space.num_reals(), 1);
+}
+
 TEST(JointModelChoice, RunsOfDifferentDimensionMatchTheEnumeratedProbabilities) {
   const Toy small(3, {0.5, 0.4, 0.6});
   const Toy large(5, {0.5, 0.4, 0.6, 0.9, 0.3});
