@@ -20,7 +20,7 @@ void PrintModelChoice(const Session& session,
   if (!session.primary()) return;
   std::cout << services::FormatModelProbabilities(outcome);
   std::cout << "tables:  " << outcome.directory << "/summary.json, models.csv"
-            << (outcome.exact ? "" : ", waves.csv") << "\n";
+            << (outcome.exact ? "" : ", waves.csv") << (outcome.joint ? ", bits.csv" : "") << "\n";
   if (!outcome.note.empty()) std::cerr << "combabc: note: " << outcome.note << "\n";
   for (std::size_t k = 0; k < per_model.size(); ++k) {
     std::cout << "\n== model \"" << outcome.models[k].name << "\" ==\n";
@@ -51,11 +51,26 @@ int RunModelChoiceCommand(services::RunRequest& request, bool quiet, const Sessi
                 << " (each model's history goes on where it stopped)\n";
       return kExitInterrupted;
     }
-    PrintModelChoice(session, quiet, outcome, outcome.runs, [&](const services::RunOutcome& run) {
+    const auto print_run = [&](const services::RunOutcome& run) {
       std::cout << run.history.summary.BriefReport() << "\n"
                 << "history: " << run.history_path << "\n";
       PrintAnswer(session, quiet, run.answer, run.strip);
-    });
+    };
+    if (!outcome.joint) {
+      PrintModelChoice(session, quiet, outcome, outcome.runs, print_run);
+      return 0;
+    }
+    // One joint run: its answer (the indicator bits and every model's bits), then each model's
+    // bits given the model.
+    const std::vector<services::RunOutcome> none;
+    PrintModelChoice(session, quiet, outcome, none, print_run);
+    if (!session.primary()) return 0;
+    std::cout << "\n== the joint run (all models) ==\n";
+    print_run(outcome.runs.front());
+    for (std::size_t k = 0; k < outcome.models.size(); ++k) {
+      std::cout << "\n== model \"" << outcome.models[k].name << "\" ==\n"
+                << services::FormatJointModelBits(outcome, k);
+    }
     return 0;
   });
 }

@@ -30,8 +30,10 @@ def load_model_choice(path):
     models.csv. Returns a DataFrame indexed by model: prior, probability, se, upper_bound_only,
     upper (a model that died out: P is below it), log_evidence, relative_se, log10_bayes_factor
     (against attrs["reference"]), reached, wave, simulations, termination, history (the model's
-    history file, for combabc.load_history). attrs: reference, exact (by enumeration), directory
-    (model_choice/); and
+    history file, for combabc.load_history; the joint run's for every model with method "joint").
+    attrs: reference, exact (by enumeration), method ("evidence", "joint" or "enumeration"),
+    directory (model_choice/); bits, each model's P(bit = 1 | model, data) (bits.csv, method
+    "joint"), or None; and
     waves, the probabilities after each wave (waves.csv; docs/algorithm.md, "Model choice"), or
     None where the run wrote none."""
     import pandas as pd
@@ -49,15 +51,23 @@ def load_model_choice(path):
     for column in _INTEGER:
         table[column] = table[column].astype("int64")
     table["termination"] = table["termination"].astype(str)
-    models = os.path.join(os.path.dirname(os.path.abspath(folder)), "models")
-    table["history"] = [os.path.join(models, name, "history.sqlite") for name in table.index]
     with open(os.path.join(folder, "summary.json")) as f:
         summary = json.load(f)
+    top = os.path.dirname(os.path.abspath(folder))
+    method = summary.get("method", "enumeration" if summary["exact"] else "evidence")
+    if method == "joint":  # one run for all models
+        table["history"] = [os.path.join(top, "joint", "history.sqlite")] * len(table.index)
+    else:
+        table["history"] = [os.path.join(top, "models", name, "history.sqlite")
+                            for name in table.index]
     table.attrs["reference"] = summary["reference"]
     table.attrs["exact"] = bool(summary["exact"])
+    table.attrs["method"] = method
     table.attrs["directory"] = folder
     waves = os.path.join(folder, "waves.csv")
     table.attrs["waves"] = pd.read_csv(waves) if os.path.isfile(waves) else None
+    bits = os.path.join(folder, "bits.csv")
+    table.attrs["bits"] = pd.read_csv(bits) if os.path.isfile(bits) else None
     return table
 
 

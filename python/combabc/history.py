@@ -175,15 +175,21 @@ class History:
 
     @property
     def model_probabilities(self):
-        """For one model's run in a model choice (its history in <directory>/models/<name>/):
-        the whole choice's table, combabc.load_model_choice(<directory>); None for any other
-        run, or before the model choice has written its model_choice/models.csv."""
+        """For one model's run in a model choice (its history in <directory>/models/<name>/, or
+        a joint model choice's in <directory>/joint/): the whole choice's table,
+        combabc.load_model_choice(<directory>); None for any other run, or before the model
+        choice has written its model_choice/models.csv."""
         if not self.path:
             return None
-        models = os.path.dirname(os.path.dirname(os.path.abspath(self.path)))
-        folder = os.path.join(os.path.dirname(models), "model_choice")
-        if os.path.basename(models) != "models" or not os.path.isfile(
-                os.path.join(folder, "models.csv")):
+        run = os.path.dirname(os.path.abspath(self.path))
+        models = os.path.dirname(run)
+        if os.path.basename(run) == "joint":
+            folder = os.path.join(models, "model_choice")
+        elif os.path.basename(models) == "models":
+            folder = os.path.join(os.path.dirname(models), "model_choice")
+        else:
+            return None
+        if not os.path.isfile(os.path.join(folder, "models.csv")):
             return None
         from ._model_choice import load_model_choice
         return load_model_choice(folder)

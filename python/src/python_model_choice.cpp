@@ -61,7 +61,9 @@ py::dict ModelChoice(const std::string& config_path,
     model["reached"] = e.reached;
     model["simulations"] = e.simulations;
     model["termination"] = e.termination;
-    model["history"] = k < histories.size() ? histories[k] : std::string();
+    // A joint model choice is one run: every model's history is it.
+    const std::size_t h = outcome.joint ? 0 : k;
+    model["history"] = h < histories.size() ? histories[h] : std::string();
     models.append(model);
   }
   py::dict result;

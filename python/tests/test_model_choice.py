@@ -107,3 +107,25 @@ def test_public_model_choice_reads_back_the_tables(tmp_path):
     assert combabc.load_history(exact.loc["pinned", "history"]).model_probabilities is not None
     with pytest.raises(FileNotFoundError, match="no model choice"):
         combabc.load_model_choice(tmp_path)
+
+
+def test_joint_model_choice_agrees_with_enumeration(tmp_path):
+    """method = "joint": one run over both models; the same exact probabilities within 4
+    Monte-Carlo errors, every model's history the joint run's, and each model's bits."""
+    with open(tmp_path / "data.csv", "w") as f:
+        f.write("position_m,displacement_m\n")
+        for i in range(31, 60, 3):
+            f.write(f"{i / 100},{1.0 - abs(i / 100 - 0.45)}\n")
+    (tmp_path / "run.toml").write_text(CONFIG.replace("[model_choice]\n",
+                                                      "[model_choice]\nmethod = \"joint\"\n"))
+    table = combabc.model_choice(tmp_path / "run.toml")
+    exact = combabc.model_choice(tmp_path / "run.toml", exact=True)
+    assert table.attrs["method"] == "joint" and exact.attrs["method"] == "enumeration"
+    for name in ("clamped", "pinned"):
+        row = table.loc[name]
+        assert abs(row["probability"] - exact.loc[name, "probability"]) < 4 * row["se"]
+        assert row["history"].endswith(os.path.join("joint", "history.sqlite"))
+    bits = table.attrs["bits"]
+    assert list(bits[bits["model"] == "pinned"]["bit"]) == [1, 2, 3, 4, 5, 6]
+    history = combabc.load_history(table.loc["pinned", "history"])
+    assert list(history.model_probabilities["probability"]) == list(table["probability"])

@@ -60,7 +60,15 @@ void ParseModelChoice(TableReader& root, CalibrationConfig* c) {
   choice.line = table->line();
   std::vector<TableReader> models = table->Tables("model");
   const auto reference = table->String("reference");
+  const auto method = table->String("method");
   table->Finish();
+  if (method && *method != "evidence" && *method != "joint") {
+    table->Fail("method",
+                "unknown method " + Excerpt(*method) +
+                    "; expected \"evidence\" (each model's own run) or \"joint\" (one run over "
+                    "the models and their parameters)");
+  }
+  choice.joint = method && *method == "joint";
   if (models.size() < 2) {
     table->Fail("model",
                 "lists " + std::to_string(models.size()) +
@@ -123,6 +131,15 @@ void ParseModelChoice(TableReader& root, CalibrationConfig* c) {
     os.precision(12);
     os << sum;
     models.back().Fail("prior", "the models' priors sum to " + os.str() + "; they must sum to 1");
+  }
+  for (std::size_t k = 0; choice.joint && k + 1 < choice.models.size(); ++k) {
+    // The stick-breaking indicator gives model k the bit P = pi_k / (1 - pi_1 - ... - pi_{k-1}):
+    // a model of prior 0 before the last would end the stick.
+    if (!(choice.models[k].prior > 0.0)) {
+      models[k].Fail("prior",
+                     "is 0: with method = \"joint\" every model but the last needs a prior above "
+                     "0 (or leave the model out)");
+    }
   }
   if (reference) {
     bool found = false;

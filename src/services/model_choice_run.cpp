@@ -15,6 +15,7 @@
 #include "combabc/history/history_store.hpp"
 #include "export/json_text.hpp"
 #include "services/adapters/python_script.hpp"
+#include "services/model_joint.hpp"
 #include "services/steps/problem.hpp"
 #include "services/steps/read_back.hpp"
 #include "services/steps/worker_steps.hpp"
@@ -76,7 +77,8 @@ void CreateModelsFolder(const std::string& directory) {
 // evidence at its own wave's thresholds (its last wave's once its run has ended).
 void WriteWaves(std::ostream& csv, const ModelChoiceOutcome& o) {
   csv << "wave,model,log_evidence,relative_se,probability,se,upper_bound_only,upper\n";
-  const std::vector<std::vector<ModelProbability>> by_wave = ModelProbabilitiesByWave(o.evidence);
+  const std::vector<std::vector<ModelProbability>> by_wave =
+      o.joint ? o.by_wave : ModelProbabilitiesByWave(o.evidence);
   for (std::size_t t = 0; t < by_wave.size(); ++t) {
     for (std::size_t k = 0; k < by_wave[t].size(); ++k) {
       const ModelProbability& p = by_wave[t][k];
@@ -89,6 +91,18 @@ void WriteWaves(std::ostream& csv, const ModelChoiceOutcome& o) {
           << export_text::Number(r) << ',' << export_text::Number(p.probability) << ','
           << export_text::Number(p.se) << ',' << (p.upper_bound_only ? 1 : 0) << ','
           << export_text::Number(p.upper) << '\n';
+    }
+  }
+}
+
+// bits.csv of a joint model choice: each model's bits given the model.
+void WriteJointBits(std::ostream& csv, const ModelChoiceOutcome& o) {
+  csv << "model,bit,name,probability,se\n";
+  for (std::size_t k = 0; k < o.model_bits.size(); ++k) {
+    for (std::size_t b = 0; b < o.model_bits[k].size(); ++b) {
+      csv << o.models[k].name << ',' << b + 1 << ',' << o.model_bit_names[k][b] << ','
+          << export_text::Number(o.model_bits[k][b].value) << ','
+          << export_text::Number(o.model_bits[k][b].se) << '\n';
     }
   }
 }
@@ -133,7 +147,10 @@ void WriteModelChoice(const std::string& directory,
   OutputDirectory out((fs::path(directory) / "model_choice").string(), overwrite);
   const ModelEvidence& reference = o.evidence[o.reference];
   std::ostream& json = out.Add("summary.json");
-  json << "{\n  \"exact\": " << (o.exact ? "true" : "false")
+  json << "{\n  \"exact\": " << (o.exact ? "true" : "false") << ",\n  \"method\": "
+       << (o.exact   ? "\"enumeration\""
+           : o.joint ? "\"joint\""
+                     : "\"evidence\"")
        << ",\n  \"reference\": " << JsonString(reference.name) << ",\n  \"models\": [\n";
   std::ostream& csv = out.Add("models.csv");
   csv << "model,prior,probability,se,upper_bound_only,upper,log_evidence,relative_se,"
@@ -161,6 +178,7 @@ void WriteModelChoice(const std::string& directory,
         << e.simulations << ',' << e.termination << '\n';
   }
   json << "  ]\n}\n";
+  if (o.joint) WriteJointBits(out.Add("bits.csv"), o);
   if (!o.exact) {
     WriteWaves(out.Add("waves.csv"), o);
     if (figure) o.note = DrawWaves(out);
@@ -217,6 +235,122 @@ std::unique_ptr<Executor> ExecutorOf(const ExecutorFactory& factory) {
   return factory ? factory(1) : std::make_unique<ThreadPoolExecutor>(1);
 }
 
+// The joint space's layout and each model's own bit names, from the models' configs.
+struct JointModels {
+  JointLayout layout;
+  std::vector<std::vector<std::string>> bit_names;
+};
+JointModels JointModelsOf(const CalibrationConfig& c) {
+  std::vector<std::string> names;
+  std::vector<double> prior;
+  std::vector<ModelParameters> parameters;
+  JointModels out;
+  for (const CandidateModel& model : c.model_choice->models) {
+    const CalibrationConfig m = ParseConfig(model.config_text, c.path);
+    names.push_back(model.name);
+    prior.push_back(model.prior);
+    parameters.push_back({m.space, m.reals, m.joint_priors});
+    const BinarySpace bits(m.space);
+    std::vector<std::string> bit_names;
+    bit_names.reserve(static_cast<std::size_t>(bits.dimension()));
+    for (int b = 0; b < bits.dimension(); ++b) bit_names.push_back(bits.name(b));
+    out.bit_names.push_back(std::move(bit_names));
+  }
+  try {
+    out.layout = BuildJointSpace(names, prior, parameters).layout;
+  } catch (const Error& e) {
+    throw Error(e.kind(), e.message(), c.path, c.model_choice->line, "model_choice");
+  }
+  return out;
+}
+
+// Model k's evidence from the joint run: Z_k = Z P(M_k | D) / pi_k, Z the joint run's evidence
+// (sum_k pi_k Z_k), its relative error that of Z and of P(M_k | D) added in quadrature (taken as
+// independent: an approximation).
+ModelEvidence JointEvidence(const ModelEvidence& z, const ModelProbability& p) {
+  ModelEvidence e = z;
+  e.name = p.name;
+  e.prior = p.prior;
+  const double log_ratio = std::log(p.probability / p.prior);
+  e.reached = z.reached && !p.upper_bound_only;
+  e.log_evidence =
+      e.reached ? z.log_evidence + log_ratio : -std::numeric_limits<double>::infinity();
+  const double r = p.probability > 0.0 ? p.se / p.probability : 0.0;
+  e.relative_se = std::sqrt(z.relative_se * z.relative_se + r * r);
+  e.log_upper = z.log_upper + std::log(std::max(p.upper, p.probability) / p.prior);
+  e.wave_log_evidence.clear();
+  e.wave_relative_se.clear();
+  return e;
+}
+
+// method = "joint": one run over the joint space (services/steps/problem.cpp's BuildJointModel),
+// in <directory>/joint/, and the model probabilities read off its particles.
+ModelChoiceOutcome RunJointModelChoice(
+    const RunRequest& request,
+    const CalibrationConfig& c,
+    const std::string& directory,
+    SmcObserver* progress,
+    const std::function<void(const std::string&)>& before_model) {
+  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
+  const JointModels models = JointModelsOf(c);
+  CandidateModel joint;
+  joint.name = "joint";
+  joint.config_text = c.text;
+  if (before_model) before_model("joint");
+  ModelChoiceOutcome o;
+  o.joint = true;
+  const std::string run_directory = (fs::path(directory) / "joint").string();
+  RunOutcome run = RunModel(request, joint, run_directory, c.output.database, progress);
+  if (run.history.summary.termination == Termination::kInterrupted) {
+    o.interrupted = true;
+    o.runs.push_back(std::move(run));
+    return o;
+  }
+  const RunMetadata metadata = HistoryStore::Open(run.history_path, true).LoadMetadata();
+  const ModelEvidence z =
+      EstimateEvidence(run.history, metadata.distance_components, final_thresholds);
+  const std::vector<WaveRecord>& waves = run.history.waves;
+  for (const WaveRecord& wave : waves) {
+    o.by_wave.push_back(JointModelProbabilities(wave, models.layout));
+  }
+  // The wave at the final thresholds; a run that never reached them answers from its last wave
+  // with particles, and no model's evidence is reached.
+  std::size_t at = waves.empty() ? 0 : waves.size() - 1;
+  if (z.wave >= 0) {
+    at = static_cast<std::size_t>(z.wave);
+  } else {
+    while (at > 0 && waves[at].particles.empty()) --at;
+  }
+  o.models = waves.empty() ? std::vector<ModelProbability>{} : o.by_wave[at];
+  if (z.wave < 0) {
+    // No wave at the final thresholds (a limit stopped the run): the wider thresholds'
+    // probabilities are no answer, so each model has only the bound that says nothing.
+    for (ModelProbability& p : o.models) {
+      p.probability = std::numeric_limits<double>::quiet_NaN();
+      p.se = 0.0;
+      p.upper_bound_only = true;
+      p.upper = 1.0;
+    }
+  }
+  for (std::size_t k = 0; k < o.models.size(); ++k) {
+    o.evidence.push_back(JointEvidence(z, o.models[k]));
+    for (std::size_t t = 0; t < waves.size(); ++t) {
+      const ModelProbability& p = o.by_wave[t][k];
+      o.evidence[k].wave_log_evidence.push_back(z.wave_log_evidence[t] +
+                                                std::log(p.probability / p.prior));
+      o.evidence[k].wave_relative_se.push_back(z.wave_relative_se[t]);
+    }
+    o.model_bits.push_back(JointModelBits(waves[at], models.layout, k));
+    o.model_bit_names.push_back(models.bit_names[k]);
+  }
+  o.reference = c.model_choice->reference;
+  o.runs.push_back(std::move(run));
+  o.directory = (fs::path(directory) / "model_choice").string();
+  const std::unique_ptr<Executor> executor = ExecutorOf(request.executor);
+  OnPrimary(*executor, [&] { WriteModelChoice(directory, request.overwrite, o, request.report); });
+  return o;
+}
+
 ModelChoiceOutcome Combine(ModelChoiceOutcome o, const CalibrationConfig& c) {
   o.reference = c.model_choice->reference;
   o.models = ModelProbabilities(o.evidence);
@@ -238,8 +372,11 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
                 "its prior");
   }
   const CalibrationConfig c = LoadModelChoice(request.config_path);
-  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
   const std::string directory = Output(request.output_directory, c);
+  if (c.model_choice->joint) {
+    return RunJointModelChoice(request, c, directory, progress, before_model);
+  }
+  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
   const std::unique_ptr<Executor> executor = ExecutorOf(request.executor);
   OnPrimary(*executor, [&] { CreateModelsFolder(directory); });
   ModelChoiceOutcome o;
@@ -309,9 +446,11 @@ ModelChoiceOutcome EnumerateModelChoice(
 
 std::string FormatModelProbabilities(const ModelChoiceOutcome& o) {
   std::ostringstream out;
-  out << (o.exact ? "Model probabilities (exact, by enumeration):\n"
-                  : "Model probabilities (each model's evidence from its own run; +- one "
-                    "Monte-Carlo standard error):\n");
+  out << (o.exact   ? "Model probabilities (exact, by enumeration):\n"
+          : o.joint ? "Model probabilities (one joint run over the models; +- one Monte-Carlo "
+                      "standard error):\n"
+                    : "Model probabilities (each model's evidence from its own run; +- one "
+                      "Monte-Carlo standard error):\n");
   char line[256];
   const ModelEvidence& reference = o.evidence[o.reference];
   for (std::size_t k = 0; k < o.models.size(); ++k) {
@@ -346,6 +485,24 @@ std::string FormatModelProbabilities(const ModelChoiceOutcome& o) {
     out << line;
   }
   out << "  (B: the Bayes factor against \"" << reference.name << "\")\n";
+  return out.str();
+}
+
+std::string FormatJointModelBits(const ModelChoiceOutcome& o, std::size_t model) {
+  if (!o.joint || model >= o.model_bits.size() || o.model_bits[model].empty()) return "";
+  std::ostringstream out;
+  out << "P(bit = 1 | model \"" << o.models[model].name << "\", data):\n";
+  char line[256];
+  for (std::size_t b = 0; b < o.model_bits[model].size(); ++b) {
+    const WeightedMoment& m = o.model_bits[model][b];
+    std::snprintf(line,
+                  sizeof line,
+                  "  %-20s %.3f +- %.3f\n",
+                  o.model_bit_names[model][b].c_str(),
+                  m.value,
+                  m.se);
+    out << line;
+  }
   return out.str();
 }
 

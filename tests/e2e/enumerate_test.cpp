@@ -288,5 +288,58 @@ model.clamps.fixed_support = "simply_supported"
       << r.err;
 }
 
+// method = "joint": one run over the model indicator and the clamps the two models share; the
+// same exact probabilities (by enumerating each model) within 4 Monte-Carlo errors, each model's
+// clamps given the model in bits.csv, and the same numbers for any thread count.
+TEST(Enumerate, JointModelChoiceRunAgreesWithTheExactModelProbabilities) {
+  TempFolder dir("joint-model-choice");
+  WriteTinySensorData(dir.path());
+  const std::string models = R"(
+[output]
+directory = "out"
+
+[model_choice]
+method = "joint"
+[[model_choice.model]]
+name = "clamped"
+prior = 0.4
+[[model_choice.model]]
+name = "pinned"
+prior = 0.6
+model.clamps.fixed_support = "simply_supported"
+)";
+  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 300\nseed = 5\n", models);
+  config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [4.0, 3.0, 2.4]\n");
+  std::ofstream(dir / "run.toml") << config;
+  auto r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("one joint run"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("== model \"pinned\" ==\nP(bit = 1 | model \"pinned\""), std::string::npos)
+      << r.out;
+  ASSERT_TRUE(fs::exists(dir.path() / "out/joint/history.sqlite"));
+  const std::string run = ReadFile(dir.path() / "out/model_choice/models.csv");
+  const std::string bits = ReadFile(dir.path() / "out/model_choice/bits.csv");
+  EXPECT_NE(bits.find("\npinned,6,"), std::string::npos) << bits;
+  r = RunCli({"enumerate", dir / "run.toml", "--no-report", "-q"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string exact = ReadFile(dir.path() / "out/enumeration/model_choice/models.csv");
+  for (const std::string model : {"clamped", "pinned"}) {
+    const double p = Column(run, model, 2);
+    const double se = Column(run, model, 3);
+    EXPECT_GT(se, 0.0) << run;
+    EXPECT_NEAR(p, Column(exact, model, 2), 4.0 * se) << model << "\n" << run << exact;
+  }
+  r = RunCli({"run", dir / "run.toml", "--no-report", "-q", "-j", "2", "-o", dir / "j2"},
+             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.path() / "j2/model_choice/models.csv"), run);
+  // An unknown method is refused at its key.
+  config.replace(config.find("method = \"joint\""), 16, "method = \"jump\"");
+  std::ofstream(dir / "bad.toml") << config;
+  r = RunCli({"run", dir / "bad.toml", "--no-report"}, dir.path());
+  EXPECT_EQ(r.exit_code, kConfig) << r.err;
+  EXPECT_NE(r.err.find("model_choice.method: unknown method 'jump'"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace combabc::testing

@@ -20,6 +20,9 @@ struct ModelChoiceConfig {
   std::vector<CandidateModel> models;  // at least two
   // The model the Bayes factors are against (`reference`; default the first).
   std::size_t reference = 0;
+  // `method`: "evidence" (default), each model's own run and its evidence; "joint", one run over
+  // the model indicator and the models' parameters (docs/algorithm.md, "Model choice").
+  bool joint = false;
   int line = 0;  // the [model_choice] table's line
 };
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "combabc/samplers/monte_carlo_error.hpp"
 #include "combabc/services/enumerate.hpp"
 #include "combabc/services/model_choice.hpp"
 #include "combabc/services/run.hpp"
@@ -24,16 +25,26 @@ struct ModelChoiceOutcome {
   std::string directory;                       // model_choice/ (summary.json, models.csv)
   bool interrupted = false;                    // a model's run or enumeration was interrupted
   std::string note;  // why model_probabilities.png was not drawn ("" when it was, or not asked)
+  // method = "joint": one run (runs[0]) over the models and their parameters. Each model's
+  // evidence is then the joint run's evidence times P(M_k | D) / pi_k.
+  bool joint = false;
+  // joint: the model probabilities after each wave, from that wave's particles (waves.csv).
+  std::vector<std::vector<ModelProbability>> by_wave;
+  // joint: per model, P(bit = 1 | M_k, D) of each of its bits (bits.csv), and the bits' names.
+  std::vector<std::vector<WeightedMoment>> model_bits;
+  std::vector<std::vector<std::string>> model_bit_names;
 };
 
 // Whether the config file has [model_choice] (reads and checks the whole config).
 bool HasModelChoice(const std::string& config_path);
 
-// Runs every model of the config's [model_choice] in turn, each as `combabc run` would run its
-// config, with its history in <output>/models/<name>/. A model whose history is there already,
-// from the same model config, is not run again: a finished one is read, an unfinished one resumed
-// (so that `combabc run` again continues an interrupted model choice); `overwrite` starts every
-// model afresh. `before_model` (may be empty) hears each model's name before it runs.
+// Runs every model of the config's [model_choice] in turn (method "evidence"; with method "joint"
+// one run over all models, its history in <output>/joint/, resumed or read as a model's below),
+// each as `combabc run` would run its config, with its history in <output>/models/<name>/. A model
+// whose history is there already, from the same model config, is not run again: a finished one is
+// read, an unfinished one resumed (so that `combabc run` again continues an interrupted model
+// choice); `overwrite` starts every model afresh. `before_model` (may be empty) hears each model's
+// name before it runs.
 ModelChoiceOutcome RunModelChoice(const RunRequest& request,
                                   SmcObserver* progress = nullptr,
                                   const std::function<void(const std::string&)>& before_model = {});
@@ -48,5 +59,9 @@ ModelChoiceOutcome EnumerateModelChoice(
 // The model probabilities as the terminal shows them (one line a model, then the Bayes factors'
 // reference), ending in a newline.
 std::string FormatModelProbabilities(const ModelChoiceOutcome& outcome);
+
+// A joint model choice's bit table of model k: P(bit = 1 | M_k, D) +- se per bit ("" when the
+// model has no particle, or for method "evidence", whose models' own answers say it).
+std::string FormatJointModelBits(const ModelChoiceOutcome& outcome, std::size_t model);
 
 }  // namespace combabc::services

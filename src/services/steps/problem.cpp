@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "services/steps/worker_steps.hpp"
+#include "simulators/model_switch.hpp"
 
 #ifndef COMBABC_GIT_HASH
 #define COMBABC_GIT_HASH ""
@@ -47,6 +48,41 @@ std::string ExperimentDescription(const CalibrationConfig& c, const ExperimentCo
   return text;
 }
 
+// A joint model choice: the models' simulators behind a ModelSwitch, over the joint space of the
+// model indicator and the models' parameters (simulators/model_switch.hpp). Every model's config
+// is the file with its keys set (CandidateModel::config_text); the models' outputs agree (checked
+// with the config), so the file's data and metric serve all.
+void BuildJointModel(Problem& p, const std::string& history_path) {
+  std::vector<std::string> names;
+  std::vector<double> prior;
+  std::vector<ModelParameters> parameters;
+  std::vector<std::unique_ptr<Simulator>> simulators;
+  auto folders = std::make_shared<std::vector<std::shared_ptr<const void>>>();
+  for (const CandidateModel& model : p.config.model_choice->models) {
+    const CalibrationConfig c = ParseConfig(model.config_text, p.config.path);
+    names.push_back(model.name);
+    prior.push_back(model.prior);
+    parameters.push_back({c.space, c.reals, c.joint_priors});
+    BuiltSimulator built =
+        MakeSimulator(c, WorkDirectoryOf(history_path), p.executor->thread_pool());
+    if (p.simulator.handshake.empty()) p.simulator.handshake = built.handshake;
+    folders->push_back(std::move(built.folder));
+    simulators.push_back(std::move(built.simulator));
+  }
+  JointSpace joint = [&] {
+    try {
+      return BuildJointSpace(names, prior, parameters);
+    } catch (const Error& e) {
+      // Where the models are: BuildJointSpace knows only their names.
+      throw Error(
+          e.kind(), e.message(), p.config.path, p.config.model_choice->line, "model_choice");
+    }
+  }();
+  p.simulator.simulator = std::make_unique<ModelSwitch>(std::move(simulators), joint.layout);
+  p.simulator.folder = std::move(folders);
+  p.space.emplace(std::move(joint.space));
+}
+
 }  // namespace
 
 void LoadProblem(const std::string& config_path,
@@ -54,8 +90,9 @@ void LoadProblem(const std::string& config_path,
                  Problem& p,
                  const std::string& config_text) {
   p.config = config_text.empty() ? LoadConfig(config_path) : ParseConfig(config_text, config_path);
-  // A model choice is several runs (services/model_choice_run.hpp), never the file's own [model].
-  if (p.config.model_choice) {
+  // A model choice by evidence is several runs (services/model_choice_run.hpp), never the file's
+  // own [model]; a joint one is one run over the joint space (BuildModel).
+  if (p.config.model_choice && !p.config.model_choice->joint) {
     throw Error(ErrorKind::kUsage,
                 "has [model_choice]: run its models with combabc run / enumerate, or "
                 "combabc._core.model_choice from Python",
@@ -75,6 +112,10 @@ void BuildModel(Problem& p, const std::string& history_path) {
   // First, as it is cheap: checks the metric's windows and indicators against the simulator's
   // output coordinates and the data before the model is built or anything simulated or stored.
   if (!p.distance) p.distance = MakeDistance(p.config, p.data);
+  if (p.config.model_choice && p.config.model_choice->joint) {
+    BuildJointModel(p, history_path);
+    return;
+  }
   p.simulator = MakeSimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());
   p.low_fidelity =
       MakeLowFidelitySimulator(p.config, WorkDirectoryOf(history_path), p.executor->thread_pool());

@@ -45,7 +45,7 @@ inline std::vector<std::optional<BitPosition>> BitPositions(const RunMetadata& m
 // sections, and each experiment's load and scan line: from its first to its last measured point
 // (the history's, in metres; within its data window, when given), or its output positions when the
 // history has no points for it.
-// None for other simulators, or for a config this version no longer reads.
+// None for other simulators, a joint model choice, or a config this version no longer reads.
 inline std::optional<StripLayout> StripOf(const RunMetadata& metadata) {
   CalibrationConfig config;
   try {
@@ -54,6 +54,8 @@ inline std::optional<StripLayout> StripOf(const RunMetadata& metadata) {
     return std::nullopt;
   }
   if (config.simulator.kind != SimulatorKind::kSensor) return std::nullopt;
+  // A joint model choice's bits are the model indicator and the models' clamps, not one strip's.
+  if (config.model_choice) return std::nullopt;
   StripLayout strip;
   strip.length_m = config.model.length;
   strip.width_m = config.model.width;
