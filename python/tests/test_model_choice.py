@@ -1,4 +1,4 @@
-"""Model choice from Python (docs/config.md, "Model choice"): combabc._core.model_choice runs every
+"""Model choice from Python (docs/config.md, "Model choice"): combabc.model_choice runs every
 model of a [model_choice] config, and with exact=True enumerates them; the run's probabilities
 agree with the exact ones within 4 Monte-Carlo errors (two tiny sensors, 2^6 configurations)."""
 
@@ -129,3 +129,6 @@ def test_joint_model_choice_agrees_with_enumeration(tmp_path):
     assert list(bits[bits["model"] == "pinned"]["bit"]) == [1, 2, 3, 4, 5, 6]
     history = combabc.load_history(table.loc["pinned", "history"])
     assert list(history.model_probabilities["probability"]) == list(table["probability"])
+    # combabc.run is not the way to a model choice, whatever its method: it says which is.
+    with pytest.raises(combabc.Error, match=r"has \[model_choice\].*combabc\.model_choice from"):
+        combabc.run(tmp_path / "run.toml")

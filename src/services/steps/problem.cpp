@@ -90,12 +90,14 @@ void LoadProblem(const std::string& config_path,
                  Problem& p,
                  const std::string& config_text) {
   p.config = config_text.empty() ? LoadConfig(config_path) : ParseConfig(config_text, config_path);
-  // A model choice by evidence is several runs (services/model_choice_run.hpp), never the file's
-  // own [model]; a joint one is one run over the joint space (BuildModel).
-  if (p.config.model_choice && !p.config.model_choice->joint) {
+  // A model choice is run by services/model_choice_run.hpp, whatever its method: by evidence it
+  // is several runs, never the file's own [model]; a joint one is one run over the joint space
+  // (BuildModel), which that service starts with the config's text, and whose history alone would
+  // lack the model-choice tables. A file given directly is refused either way.
+  if (p.config.model_choice && (config_text.empty() || !p.config.model_choice->joint)) {
     throw Error(ErrorKind::kUsage,
                 "has [model_choice]: run its models with combabc run / enumerate, or "
-                "combabc._core.model_choice from Python",
+                "combabc.model_choice from Python",
                 config_path);
   }
   if (threads >= 0) p.config.smc.threads = threads;
