@@ -284,6 +284,7 @@ CalibrationConfig config_internal::ParseConfigTable(const toml::table& table,
   const bool uncertain = c.space.IsValid(&space_error)
                              ? AnyUncertainBit(BinarySpace(c.space).free_prior_one())
                              : c.space.dimension > 0;
+  const bool auto_kernel = c.smc.proposal.binary == BinaryKernelKind::kAuto;
   c.smc.proposal = ResolvedProposal(c.smc.proposal, uncertain && !c.reals.empty());
   for (const ContinuousParameter& r : c.reals) c.simulator.external.real_names.push_back(r.name);
   if (c.space.dimension == 0 && c.reals.empty()) {
@@ -319,6 +320,14 @@ CalibrationConfig config_internal::ParseConfigTable(const toml::table& table,
   config_internal::ParseDesignSection(root, &c, model_sources);
   config_internal::ParseModelChoice(root, &c);
   root.Finish();
+  // A joint model choice's default kernel is the ancestor kernel, bits alone or not: its defensive
+  // prior proposes every model at a rate of at least 0.05 pi_k, so a model that loses its last
+  // particle in one wave can come back in the next; a product kernel fitted without a floor would
+  // propose it with probability 0 from then on (docs/algorithm.md, "Model choice").
+  if (auto_kernel && c.model_choice && c.model_choice->joint &&
+      c.smc.proposal.continuous == ContinuousKernelKind::kNormal) {
+    c.smc.proposal.binary = BinaryKernelKind::kAncestor;
+  }
   c.smc.keep_outputs = c.output.keep_simulated_curves;
 
   if (ValidationError error; !c.smc.IsValid(&error)) {

@@ -79,6 +79,14 @@ SmcOptions Options(std::uint64_t seed, int per_wave = 400) {
   return o;
 }
 
+// A joint run's options: its kernel is the ancestor kernel, as the joint method's `auto` resolves
+// (services/steps/problem.cpp: its defensive prior keeps proposing every model).
+SmcOptions JointOptions(std::uint64_t seed, int per_wave = 400) {
+  SmcOptions o = Options(seed, per_wave);
+  o.proposal.binary = BinaryKernelKind::kAncestor;
+  return o;
+}
+
 ModelEvidence Estimate(const Toy& toy, const SmcOptions& o, const std::string& name, double prior) {
   const RunHistory h = RunCombinatorialSmc(toy.Problem(), o);
   const auto components = toy.dist.components();
@@ -549,7 +557,7 @@ TEST(JointModelChoice, RunsOfDifferentDimensionMatchTheEnumeratedProbabilities) 
   eo.thresholds = {kFinal};
   const EnumerationResult e = Enumerate(toy.Problem(), eo);
   EXPECT_NEAR(e.marginals[0], exact[0], 1e-12);
-  const auto p = toy.Run(Options(11));
+  const auto p = toy.Run(JointOptions(11));
   ASSERT_EQ(p.size(), 2u);
   for (int k = 0; k < 2; ++k) {
     EXPECT_FALSE(p[k].upper_bound_only);
@@ -566,7 +574,7 @@ TEST(JointModelChoice, ModelsGivingIdenticalDataComeOutAtTheirPriorRatio) {
   EXPECT_TRUE(toy.joint.layout.shared);
   EXPECT_EQ(toy.joint.space.num_bits(), 2 + 4);
   EXPECT_NEAR(toy.joint.space.binary().bit_prior_one()[1], 0.5 / 0.8, 1e-12);
-  const auto p = toy.Run(Options(3));
+  const auto p = toy.Run(JointOptions(3));
   const double prior[] = {0.2, 0.5, 0.3};
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(p[k].probability, prior[k], 4.0 * p[k].se) << p[k].name;
@@ -578,7 +586,7 @@ TEST(JointModelChoice, AModelThatDiesOutStaysReportedWithAnUpperBound) {
   const Toy fits(3, {0.5, 0.4, 0.6});
   const Toy dies(3, {0.5, 0.4, 0.6}, 5.0);
   const JointToy toy({&fits, &dies}, {"fits", "dies"}, {0.5, 0.5});
-  const auto p = toy.Run(Options(6));
+  const auto p = toy.Run(JointOptions(6));
   EXPECT_DOUBLE_EQ(p[0].probability, 1.0);
   EXPECT_FALSE(p[0].upper_bound_only);
   EXPECT_TRUE(p[1].upper_bound_only);
@@ -609,7 +617,8 @@ TEST(JointModelChoice, DISABLED_EvidenceAgainstJoint) {
       for (int seed = 1; seed <= kSeeds; ++seed) {
         ModelProbability p;
         if (is_joint) {
-          const RunHistory h = RunCombinatorialSmc(joint.Problem(), Options(3000 + seed, per_wave));
+          const RunHistory h =
+              RunCombinatorialSmc(joint.Problem(), JointOptions(3000 + seed, per_wave));
           p = JointModelProbabilities(h.waves.back(), joint.joint.layout)[0];
           sims += static_cast<double>(h.summary.simulations);
         } else {
@@ -648,7 +657,7 @@ TEST(JointModelChoice, DISABLED_EvidenceAgainstJoint) {
                                              Estimate(dies, Options(2000 + seed), "dies", 0.5)};
     evidence_sims += static_cast<double>(runs[0].simulations + runs[1].simulations);
     evidence_upper += ModelProbabilities(runs)[1].upper;
-    const RunHistory h = RunCombinatorialSmc(dying.Problem(), Options(3000 + seed));
+    const RunHistory h = RunCombinatorialSmc(dying.Problem(), JointOptions(3000 + seed));
     joint_sims += static_cast<double>(h.summary.simulations);
     joint_upper += JointModelProbabilities(h.waves.back(), dying.joint.layout)[1].upper;
   }
@@ -694,6 +703,20 @@ TEST(ModelChoiceConfig, EachModelIsTheFileWithItsKeysSet) {
   EXPECT_EQ(a.smc.seed, 9u);              // model k runs on seed + k: independent runs
   EXPECT_EQ(b.smc.seed, 10u);
   EXPECT_EQ(b.directory, "dir");
+}
+
+// The joint method's default kernel keeps proposing every model (the ancestor kernel's defensive
+// prior); an evidence model choice's runs keep the usual default, and a kernel given is kept.
+TEST(ModelChoiceConfig, TheJointMethodsDefaultKernelIsTheAncestorKernel) {
+  const std::string joint =
+      std::string(kTwoSupports).replace(0, 15, "[model_choice]\nmethod = \"joint\"\n");
+  EXPECT_EQ(ParseConfig(TwoModels(joint), "dir/run.toml").smc.proposal.binary,
+            BinaryKernelKind::kAncestor);
+  EXPECT_EQ(ParseConfig(TwoModels(kTwoSupports), "dir/run.toml").smc.proposal.binary,
+            BinaryKernelKind::kIndependent);
+  EXPECT_EQ(ParseConfig(TwoModels("[proposal]\nkind = \"independent\"\n\n" + joint), "dir/run.toml")
+                .smc.proposal.binary,
+            BinaryKernelKind::kIndependent);
 }
 
 TEST(ModelChoiceConfig, BadModelsAreRefusedAtTheirKey) {
