@@ -167,8 +167,8 @@ def test_ctrl_c_stops_a_config_run_resumably(tmp_path):
     resume gives the uninterrupted run's history."""
     config = tmp_path / "long.toml"
     config.write_text(replaced(small_config(tmp_path).read_text(), [
-        (r"(?m)^waves = \d+", "waves = 5"),
-        (r"(?m)^accepted_per_wave = \d+", "accepted_per_wave = 8000")]))
+        (r"(?m)^waves = \d+", "waves = 3"),
+        (r"(?m)^accepted_per_wave = \d+", "accepted_per_wave = 3000")]))
     path = tmp_path / "out" / "history.sqlite"
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(config)], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True, env=os.environ.copy())
@@ -183,6 +183,6 @@ def test_ctrl_c_stops_a_config_run_resumably(tmp_path):
     interrupted = combabc.load_history(path)
     assert interrupted.status == "interrupted"
     resumed = combabc.resume(path, threads=1)
-    assert resumed.status == "finished" and len(resumed.waves) == 5
+    assert resumed.status == "finished" and len(resumed.waves) == 3
     straight = combabc.run(config, threads=2, output_directory=tmp_path / "straight")
     pd.testing.assert_frame_equal(resumed.particles(), straight.particles(), check_exact=True)

@@ -114,6 +114,17 @@ TEST_F(ExternalSimulatorCli, ThePythonCommandRunsResumesAndAChangedCommandIsRefu
                                "{config_dir}/other_model.py",
                                "resume: the simulator (its kind, and [model] for the sensor or the "
                                "program, argv");
+  // model.py is worker.py's model as a program per simulation: the same seed gives the worker's
+  // history. So the worker's run stands for the command's in ExamplePosteriors, which runs the
+  // shipped configs as shipped (the command's 397 python3 processes are about a minute of CPU).
+  const RunHistory command = HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadHistory();
+  fs::rename(dir_ / "out", dir_ / "out-command");
+  const auto r = RunCli({"run", Config("worker.toml", 6), "--no-report"}, dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string where;
+  EXPECT_TRUE(SameHistory(
+      command, HistoryStore::Open(dir_ / "out/history.sqlite", true).LoadHistory(), &where))
+      << where;
 }
 
 TEST_F(ExternalSimulatorCli, AWorkerThatFailsItsHandshakeIsAConfigErrorAndLeavesNothing) {

@@ -38,7 +38,7 @@ using testing::RandomClamps;
 std::vector<std::vector<std::uint8_t>> Configurations(int count, int clamps, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::vector<std::vector<std::uint8_t>> all;
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0; i < testing::Repetitions(count); ++i) {
     all.push_back(RandomClamps(rng, clamps));
     if (i < 2) std::fill(all.back().begin(), all.back().end(), i == 0 ? 1 : 0);
   }

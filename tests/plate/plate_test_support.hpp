@@ -16,8 +16,11 @@
 
 #include "combabc/plate/assembly/plate.hpp"
 #include "combabc/plate/elements/laminate.hpp"
+#include "support/test_support.hpp"
 
 namespace combabc::plate::testing {
+
+using combabc::testing::Repetitions;
 
 // n clamps, each fixed (1) or free (0) with probability 1/2.
 inline std::vector<std::uint8_t> RandomClamps(std::mt19937_64& rng, int n) {

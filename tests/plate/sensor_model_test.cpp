@@ -36,6 +36,7 @@ void ExpectFastEqualsFull(const SensorOptions& options,
   std::vector<double> fast(model.num_outputs());
   std::vector<double> full(model.num_outputs());
   double worst = 0.0;
+  configurations = testing::Repetitions(configurations);
   for (int i = 0; i < configurations; ++i) {
     std::vector<std::uint8_t> clamps = RandomClamps(rng, model.num_clamps());
     if (i == 0) std::fill(clamps.begin(), clamps.end(), 1);
@@ -283,7 +284,7 @@ void ExpectKernelsBitIdentical(SensorOptions o,
       }
     }
   };
-  for (int i = 0; i < configurations; ++i) {
+  for (int i = 0; i < testing::Repetitions(configurations); ++i) {
     const std::vector<std::uint8_t> clamps = RandomClamps(rng, vectorised.num_clamps());
     vectorised.ComplexProfile(clamps, a);
     portable.ComplexProfile(clamps, b);

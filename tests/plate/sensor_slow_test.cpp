@@ -1,6 +1,9 @@
-// The fast paths against the full sparse solve at the default (converged) mesh, over many random
+// The fast paths against the full sparse solve at the default (converged) mesh, over random
 // configurations: clamp-only, and with continuous unknowns (SensorVariation). Labelled `slow`: each
-// full solve factors about 13,000 complex unknowns.
+// full solve factors about 13,000 complex unknowns (0.5-1 s), so the configurations are what the
+// test costs. The identity is algebraic: the worst difference is round-off, the same order over 50
+// configurations as over 200 (the count before 2026-12-07; docs/ci.md), and the all-fixed and
+// all-free configurations are always among them.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -25,10 +28,11 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
   std::vector<double> fast(model.num_outputs());
   std::vector<double> full(model.num_outputs());
   double worst = 0.0;
-  constexpr int kConfigurations = 200;
+  constexpr int kConfigurations = 50;
   for (int i = 0; i < kConfigurations; ++i) {
     std::vector<std::uint8_t> clamps(model.num_clamps());
     for (auto& v : clamps) v = static_cast<std::uint8_t>(rng() & 1);
+    if (i < 2) std::fill(clamps.begin(), clamps.end(), i == 0 ? 1 : 0);
     model.Profile(clamps, fast);
     model.ProfileFullSolve(clamps, full);
     double diff = 0.0;
@@ -44,7 +48,7 @@ TEST(PlateSensorSlow, FastPathEqualsFullSolveDefaultMesh) {
 }
 
 // FSDT (MITC4) and RZT (RZT4) at twice the default mesh in each direction (20 x 12 per section,
-// closer to what their bilinear elements need: docs/model.md, "Plate theories"), 40
+// closer to what their bilinear elements need: docs/model.md, "Plate theories"), 16
 // configurations each; and the quadratic elements (element order 2) at the meshes of
 // docs/model.md, "Quadratic elements".
 void ExpectFastEqualsFullRefinedMesh(PlateTheory theory,
@@ -61,11 +65,11 @@ void ExpectFastEqualsFullRefinedMesh(PlateTheory theory,
   std::vector<double> fast(model.num_outputs());
   std::vector<double> full(model.num_outputs());
   double worst = 0.0;
-  constexpr int kConfigurations = 40;
+  constexpr int kConfigurations = 16;
   for (int i = 0; i < kConfigurations; ++i) {
     std::vector<std::uint8_t> clamps(model.num_clamps());
     for (auto& v : clamps) v = static_cast<std::uint8_t>(rng() & 1);
-    if (i == 0) std::fill(clamps.begin(), clamps.end(), 0);
+    if (i < 2) std::fill(clamps.begin(), clamps.end(), i == 0 ? 0 : 1);
     model.Profile(clamps, fast);
     model.ProfileFullSolve(clamps, full);
     double diff = 0.0;
@@ -123,13 +127,13 @@ TEST(PlateSensorSlow, VariationEqualsFullSolveDefaultMesh) {
   std::vector<double> fast(model.num_outputs());
   std::vector<double> full(model.num_outputs());
   std::vector<double> differences;
-  constexpr int kConfigurations = 12;
+  constexpr int kConfigurations = 5;
   for (const SensorVariation& v : variations) {
     const SensorModel reference(ApplyVariation(model.options(), v));
     for (int i = 0; i < kConfigurations; ++i) {
       std::vector<std::uint8_t> clamps(model.num_clamps());
       for (auto& c : clamps) c = static_cast<std::uint8_t>(rng() & 1);
-      if (i == 0) std::fill(clamps.begin(), clamps.end(), 0);
+      if (i < 2) std::fill(clamps.begin(), clamps.end(), i == 0 ? 0 : 1);
       model.Profile(clamps, v, fast);
       reference.ProfileFullSolve(clamps, full);
       double diff = 0.0;

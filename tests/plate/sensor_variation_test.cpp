@@ -64,7 +64,7 @@ double WorstAgainstFullSolve(const SensorModel& model,
   std::vector<double> fast(model.num_outputs());
   std::vector<double> full(model.num_outputs());
   double worst = 0.0;
-  for (int i = 0; i < configurations; ++i) {
+  for (int i = 0; i < testing::Repetitions(configurations); ++i) {
     std::vector<std::uint8_t> clamps = RandomClamps(rng, model.num_clamps());
     if (i == 0) std::fill(clamps.begin(), clamps.end(), 1);
     if (i == 1) std::fill(clamps.begin(), clamps.end(), 0);

@@ -10,6 +10,7 @@
 #include "checkpoints.hpp"
 #include "combabc/samplers/combinatorial_smc.hpp"
 #include "minor_modes.hpp"
+#include "support/test_support.hpp"
 #include "toy_models.hpp"
 
 namespace combabc {
@@ -153,7 +154,7 @@ TEST(Determinism, AncestorKernelHistoryIsIndependentOfThreadsBatchesAndResume) {
     }
   }
   ASSERT_GT(checkpoints.points.size(), 4u);
-  for (std::size_t i = 1; i < checkpoints.points.size(); i += 4) {
+  for (std::size_t i = 1; i < checkpoints.points.size(); i += testing::Stride(4)) {
     auto resumed = o;
     resumed.threads = 2;
     const auto h =

@@ -13,6 +13,23 @@
 
 namespace combabc::testing {
 
+// Under a sanitizer (ASan + UBSan, TSan: COMBABC_TEST_SANITIZED) a test's repeated random draws
+// check memory, undefined behaviour and races on code paths that the first few draws already
+// take; their number is for the optimised build, where it is the test's statistical power.
+// Under a sanitizer: a quarter of `n`, never fewer than min(n, at_least) (docs/ci.md).
+#ifdef COMBABC_TEST_SANITIZED
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+constexpr int Repetitions(int n, int at_least = 3) {
+  if (!kSanitized) return n;
+  const int floor = n < at_least ? n : at_least;
+  return n / 4 > floor ? n / 4 : floor;
+}
+// A loop's step over checkpoints, bytes, ...: four times wider under a sanitizer.
+constexpr int Stride(int step) { return kSanitized ? 4 * step : step; }
+
 // A fresh, empty folder under the system's temporary directory, "combabc-<name>-<pid>" (the pid:
 // ctest runs the tests of one executable as parallel processes), removed with everything in it
 // when it goes out of scope, folders the test made read-only included.
