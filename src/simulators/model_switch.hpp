@@ -7,8 +7,11 @@
 //    b_k = 1, else K, and P(b_k = 1) = pi_k / (1 - pi_1 - ... - pi_{k-1}), which gives model k
 //    the prior pi_k while the prior stays a product of independent bits (what the binary
 //    proposal needs). The bits after the first 1 are ignored by the simulator and stay at their
-//    prior. The proposal's tempering toward the prior (Eq. 3) is then a model-jump kernel that
-//    never lets a model's proposal probability reach 0.
+//    prior. The binary proposal is then the model-jump kernel. The joint method's default, the
+//    ancestor kernel, keeps every model's proposal probability at least 0.05 pi_k (its defensive
+//    prior); a product kernel fitted without a floor proposes a model that has lost its last
+//    particle with probability 0 unless mixture tempering (phi > 0) mixes the prior back in
+//    (docs/algorithm.md, "Model choice").
 //  - Models with identical parameters (names and priors) share them: then each particle's
 //    parameters are those of its model. Otherwise each model's parameters appear once per model,
 //    named "<model>.<name>"; a model's parameters are ignored while another model is active, so
