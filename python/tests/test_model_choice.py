@@ -202,6 +202,8 @@ def test_model_choice_over_problems_refuses_before_running(tmp_path):
                              output_directory=tmp_path)
     with pytest.raises(combabc.Error, match="not a valid model name"):
         combabc.model_choice({"a/b": a, "b": b}, _options(), output_directory=tmp_path)
+    with pytest.raises(combabc.Error, match='model "a" is given twice'):
+        combabc.model_choice([("a", a), ("a", b)], _options(), output_directory=tmp_path)
     adaptive = _options()
     adaptive.thresholds = [combabc.ThresholdSchedule()]
     with pytest.raises(combabc.Error, match="no final threshold"):

@@ -356,8 +356,12 @@ void CheckModelRuns(std::span<const ModelRun> models) {
   for (std::size_t k = 0; k < models.size(); ++k) {
     const ModelRun& m = models[k];
     if (!ValidModelName(m.name)) {
+      std::string shown = m.name.substr(0, 64);
+      // One line, whatever the name holds.
+      std::replace_if(
+          shown.begin(), shown.end(), [](char ch) { return ch == '\n' || ch == '\r'; }, '?');
       throw Error(ErrorKind::kUsage,
-                  "\"" + m.name + "\" is not a valid model name: " + kModelNameRule);
+                  "\"" + shown + "\" is not a valid model name: " + kModelNameRule);
     }
     for (std::size_t j = 0; j < k; ++j) {
       if (models[j].name == m.name) {
