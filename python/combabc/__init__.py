@@ -11,6 +11,7 @@
     history = combabc.resume(history.path, problem, options)  # a Problem's run, continued
     history = combabc.enumerate("config.toml")            # as `combabc enumerate`
     models = combabc.model_choice("choice.toml")          # [model_choice]: P(model) per model
+    models = combabc.model_choice({"a": problem, "b": other}, options, output_directory="mc")
     figure = combabc.plot.marginals(history)              # matplotlib figures (combabc.plot)
     model = combabc.SensorModel("config.toml")            # as `combabc simulate`
     y = model.profile("0110...")

@@ -132,3 +132,89 @@ def test_joint_model_choice_agrees_with_enumeration(tmp_path):
     # combabc.run is not the way to a model choice, whatever its method: it says which is.
     with pytest.raises(combabc.Error, match=r"has \[model_choice\].*combabc\.model_choice from"):
         combabc.run(tmp_path / "run.toml")
+
+
+# Model choice over Problems: two deterministic linear simulators on 4 bits (16 configurations,
+# prior 1/2 each), so each model's exact ABC evidence is Z_k = #{bits: |W_k bits - y| <= eps} / 16
+# and P(M_k | y) = pi_k Z_k / sum_j pi_j Z_j, counted here by enumeration.
+import itertools
+
+import numpy as np
+
+W_A = np.array([[1.0, 2.0, 0.0, 1.0], [0.0, 1.0, 3.0, 1.0]])
+W_B = np.array([[3.0, 0.0, 1.0, 1.0], [1.0, 2.0, 1.0, 0.0]])
+Y = np.array([2.0, 3.0])
+EPS = 1.5  # no configuration of either model lies at exactly 1.5 from Y
+
+
+def _problem(w):
+    space = combabc.BinarySpace(dimension=4, default_prior_one=0.5)
+    return combabc.Problem(space, lambda bits: bits.astype(float) @ w.T, observed=Y, batch=True)
+
+
+def _options(seed=3):
+    return combabc.make_options(num_waves=2, accepted_per_wave=300, seed=seed, threads=1,
+                                thresholds=[3.0, EPS])
+
+
+def _exact(priors, ws):
+    z = []
+    for w in ws:
+        d = [np.linalg.norm(w @ np.array(b, dtype=float) - Y)
+             for b in itertools.product((0, 1), repeat=4)]
+        assert min(abs(x - EPS) for x in d) > 1e-6
+        z.append(sum(x <= EPS for x in d) / 16)
+    total = sum(p * v for p, v in zip(priors, z))
+    return [p * v / total for p, v in zip(priors, z)]
+
+
+def test_model_choice_over_problems_agrees_with_enumeration(tmp_path):
+    options = _options()
+    table = combabc.model_choice({"a": _problem(W_A), "b": _problem(W_B)}, options,
+                                 priors={"a": 0.3, "b": 0.7}, output_directory=tmp_path)
+    assert list(table.index) == ["a", "b"] and options.seed == 3
+    exact = _exact([0.3, 0.7], [W_A, W_B])  # Z_a = 6/16, Z_b = 4/16: P(a | y) = 0.39
+    for name, truth, prior in zip(["a", "b"], exact, [0.3, 0.7]):
+        # The data move the probability away from the prior by more than the test's tolerance.
+        assert abs(truth - prior) > 4 * table.loc[name, "se"] > 0
+        assert abs(table.loc[name, "probability"] - truth) < 4 * table.loc[name, "se"]
+        assert table.loc[name, "reached"]
+    assert table.attrs["method"] == "evidence"
+    # Each model's history, on seed + k, in models/<name>/; read back as a config's model choice.
+    history = combabc.load_history(table.loc["b", "history"])
+    assert history.path == str(tmp_path / "models" / "b" / "history.sqlite")
+    assert list(history.model_probabilities.index) == ["a", "b"]
+    assert combabc.load_model_choice(tmp_path)["probability"].tolist() == \
+        table["probability"].tolist()
+
+
+def test_identical_problems_give_the_prior_ratio(tmp_path):
+    table = combabc.model_choice([("same", _problem(W_A), 0.25), ("again", _problem(W_A), 0.75)],
+                                 _options(seed=8), output_directory=tmp_path)
+    assert table.loc["same", "se"] > 0
+    assert abs(table.loc["same", "probability"] - 0.25) < 4 * table.loc["same", "se"]
+
+
+def test_model_choice_over_problems_refuses_before_running(tmp_path):
+    a, b = _problem(W_A), _problem(W_B)
+    with pytest.raises(combabc.Error, match="priors sum to 0.9; they must sum to 1"):
+        combabc.model_choice({"a": a, "b": b}, _options(), priors=[0.4, 0.5],
+                             output_directory=tmp_path)
+    with pytest.raises(combabc.Error, match="not a valid model name"):
+        combabc.model_choice({"a/b": a, "b": b}, _options(), output_directory=tmp_path)
+    with pytest.raises(combabc.Error, match='model "a" is given twice'):
+        combabc.model_choice([("a", a), ("a", b)], _options(), output_directory=tmp_path)
+    adaptive = _options()
+    adaptive.thresholds = [combabc.ThresholdSchedule()]
+    with pytest.raises(combabc.Error, match="no final threshold"):
+        combabc.model_choice({"a": a, "b": b}, adaptive, output_directory=tmp_path)
+    named = combabc.Problem(b.space, b.simulator, observed=Y, batch=True,
+                            distance=lambda out, y: np.abs(out - y).sum(axis=1))
+    with pytest.raises(ValueError, match="components"):
+        combabc.model_choice({"a": a, "b": named}, _options(), output_directory=tmp_path)
+    other = combabc.Problem(b.space, b.simulator, observed=Y + 1, batch=True)
+    with pytest.raises(ValueError, match="observed data differ"):
+        combabc.model_choice({"a": a, "b": other}, _options(), output_directory=tmp_path)
+    with pytest.raises(ValueError, match="output_directory"):
+        combabc.model_choice({"a": a, "b": b}, _options())
+    assert not os.listdir(tmp_path)  # nothing ran

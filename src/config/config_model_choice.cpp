@@ -16,16 +16,6 @@
 namespace combabc::config_internal {
 namespace {
 
-bool ValidName(const std::string& name) {
-  if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
-  for (const char ch : name) {
-    const bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
-                    (ch >= '0' && ch <= '9') || ch == '_' || ch == '-' || ch == '.';
-    if (!ok) return false;
-  }
-  return true;
-}
-
 // Sets `over`'s keys into `base`, table into table, moving the nodes so that they keep their
 // source lines (a copy would lose them), and returns the key of a value that would replace a table
 // or be replaced by one (refused by the caller), or "".
@@ -82,11 +72,8 @@ void ParseModelChoice(TableReader& root, CalibrationConfig* c) {
     model.line = m.line();
     const auto name = m.String("name");
     if (!name) m.Fail("name", "is required (a name for the model, e.g. \"clamped\")");
-    if (!ValidName(*name)) {
-      m.Fail("name",
-             Excerpt(*name) +
-                 " is not a valid model name: use 1-64 letters, digits, '_', '-' or "
-                 "'.' (it names the model's history folder)");
+    if (!ValidModelName(*name)) {
+      m.Fail("name", Excerpt(*name) + " is not a valid model name: " + kModelNameRule);
     }
     for (const CandidateModel& other : choice.models) {
       if (other.name == *name) {
@@ -229,3 +216,17 @@ void BuildCandidateConfigs(CalibrationConfig* c) {
 }
 
 }  // namespace combabc::config_internal
+
+namespace combabc {
+
+bool ValidModelName(const std::string& name) {
+  if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
+  for (const char ch : name) {
+    const bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+                    (ch >= '0' && ch <= '9') || ch == '_' || ch == '-' || ch == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+}  // namespace combabc

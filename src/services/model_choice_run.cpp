@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "combabc/config/config.hpp"
+#include "combabc/config/model_choice_config.hpp"
 #include "combabc/core/error.hpp"
 #include "combabc/core/output_files.hpp"
 #include "combabc/history/history_store.hpp"
@@ -27,25 +28,18 @@ namespace {
 using export_text::JsonNumber;
 using export_text::JsonString;
 
-// Where every model's run ends: the evidences are comparable only at common final thresholds
-// (a list schedule's last value, an adaptive schedule's target).
-std::vector<double> CommonFinalThresholds(const CalibrationConfig& config) {
-  std::vector<double> eps;
-  for (std::size_t s = 0; s < config.smc.thresholds.size(); ++s) {
-    if (const std::optional<double> end = FinalThreshold(config.smc.thresholds[s])) {
-      eps.push_back(*end);
-    } else {
-      throw Error(ErrorKind::kConfig,
-                  "threshold component " + std::to_string(s + 1) +
-                      " has no final threshold (an adaptive schedule without target): model "
-                      "choice compares the models' evidences at common final thresholds; give "
-                      "it a target",
-                  config.path,
-                  config.model_choice->line,
-                  "model_choice");
-    }
+// The config's common final thresholds (CommonFinalThresholds), a missing one named at
+// [model_choice].
+std::vector<double> ConfigFinalThresholds(const CalibrationConfig& config) {
+  try {
+    return CommonFinalThresholds(config.smc.thresholds);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::kConfig,
+                e.message() + "; give it a target",
+                config.path,
+                config.model_choice->line,
+                "model_choice");
   }
-  return eps;
 }
 
 CalibrationConfig LoadModelChoice(const std::string& config_path) {
@@ -291,7 +285,7 @@ ModelChoiceOutcome RunJointModelChoice(
     const std::string& directory,
     SmcObserver* progress,
     const std::function<void(const std::string&)>& before_model) {
-  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
+  const std::vector<double> final_thresholds = ConfigFinalThresholds(c);
   const JointModels models = JointModelsOf(c);
   CandidateModel joint;
   joint.name = "joint";
@@ -351,13 +345,87 @@ ModelChoiceOutcome RunJointModelChoice(
   return o;
 }
 
-ModelChoiceOutcome Combine(ModelChoiceOutcome o, const CalibrationConfig& c) {
-  o.reference = c.model_choice->reference;
-  o.models = ModelProbabilities(o.evidence);
-  return o;
+}  // namespace
+
+void CheckModelRuns(std::span<const ModelRun> models) {
+  if (models.size() < 2) {
+    throw Error(ErrorKind::kUsage,
+                "model choice needs at least two models; got " + std::to_string(models.size()));
+  }
+  double sum = 0.0;
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    const ModelRun& m = models[k];
+    if (!ValidModelName(m.name)) {
+      std::string shown = m.name.substr(0, 64);
+      // One line, whatever the name holds.
+      std::replace_if(
+          shown.begin(), shown.end(), [](char ch) { return ch == '\n' || ch == '\r'; }, '?');
+      throw Error(ErrorKind::kUsage,
+                  "\"" + shown + "\" is not a valid model name: " + kModelNameRule);
+    }
+    for (std::size_t j = 0; j < k; ++j) {
+      if (models[j].name == m.name) {
+        throw Error(ErrorKind::kUsage, "model \"" + m.name + "\" is given twice");
+      }
+    }
+    // Not a model of prior 0 either: its run could only cost simulations.
+    if (!(m.prior > 0.0 && m.prior <= 1.0)) {
+      std::ostringstream os;
+      os << m.prior;
+      throw Error(ErrorKind::kUsage,
+                  "the prior of model \"" + m.name + "\" is " + os.str() +
+                      "; each model's prior must be above 0 and at most 1");
+    }
+    sum += m.prior;
+  }
+  if (std::abs(sum - 1.0) > 1e-9) {
+    std::ostringstream os;
+    os.precision(12);
+    os << sum;
+    throw Error(ErrorKind::kUsage,
+                "the models' priors sum to " + os.str() + "; they must sum to 1");
+  }
 }
 
-}  // namespace
+std::vector<double> CommonFinalThresholds(std::span<const ThresholdSchedule> schedules) {
+  std::vector<double> eps;
+  for (std::size_t s = 0; s < schedules.size(); ++s) {
+    const std::optional<double> end = FinalThreshold(schedules[s]);
+    if (!end) {
+      throw Error(ErrorKind::kUsage,
+                  "threshold component " + std::to_string(s + 1) +
+                      " has no final threshold (an adaptive schedule without target): model "
+                      "choice compares the models' evidences at common final thresholds");
+    }
+    eps.push_back(*end);
+  }
+  return eps;
+}
+
+ModelChoiceOutcome CombineModelRuns(std::span<const ModelRun> models,
+                                    std::size_t reference,
+                                    const std::vector<double>& final_thresholds,
+                                    const std::string& directory,
+                                    bool overwrite,
+                                    bool figure,
+                                    const ExecutorFactory& executor) {
+  ModelChoiceOutcome o;
+  for (const ModelRun& model : models) {
+    const HistoryStore store = HistoryStore::Open(model.history_path, true);
+    const RunMetadata metadata = store.LoadMetadata();
+    ModelEvidence e =
+        EstimateEvidence(store.LoadHistory(), metadata.distance_components, final_thresholds);
+    e.name = model.name;
+    e.prior = model.prior;
+    o.evidence.push_back(std::move(e));
+  }
+  o.reference = reference;
+  o.models = ModelProbabilities(o.evidence);
+  o.directory = (fs::path(directory) / "model_choice").string();
+  const std::unique_ptr<Executor> primary = ExecutorOf(executor);
+  OnPrimary(*primary, [&] { WriteModelChoice(directory, overwrite, o, figure); });
+  return o;
+}
 
 bool HasModelChoice(const std::string& config_path) {
   return LoadConfig(config_path).model_choice.has_value();
@@ -376,29 +444,33 @@ ModelChoiceOutcome RunModelChoice(const RunRequest& request,
   if (c.model_choice->joint) {
     return RunJointModelChoice(request, c, directory, progress, before_model);
   }
-  const std::vector<double> final_thresholds = CommonFinalThresholds(c);
+  const std::vector<double> final_thresholds = ConfigFinalThresholds(c);
   const std::unique_ptr<Executor> executor = ExecutorOf(request.executor);
   OnPrimary(*executor, [&] { CreateModelsFolder(directory); });
-  ModelChoiceOutcome o;
+  std::vector<RunOutcome> runs;
+  std::vector<ModelRun> made;
   for (const CandidateModel& model : c.model_choice->models) {
     if (before_model) before_model(model.name);
     const std::string model_directory = (fs::path(directory) / "models" / model.name).string();
     RunOutcome run = RunModel(request, model, model_directory, c.output.database, progress);
     if (run.history.summary.termination == Termination::kInterrupted) {
+      ModelChoiceOutcome o;
       o.interrupted = true;
+      o.runs = std::move(runs);
       o.runs.push_back(std::move(run));
       return o;
     }
-    const RunMetadata metadata = HistoryStore::Open(run.history_path, true).LoadMetadata();
-    ModelEvidence e = EstimateEvidence(run.history, metadata.distance_components, final_thresholds);
-    e.name = model.name;
-    e.prior = model.prior;
-    o.evidence.push_back(e);
-    o.runs.push_back(std::move(run));
+    made.push_back({model.name, model.prior, run.history_path});
+    runs.push_back(std::move(run));
   }
-  o = Combine(std::move(o), c);
-  o.directory = (fs::path(directory) / "model_choice").string();
-  OnPrimary(*executor, [&] { WriteModelChoice(directory, request.overwrite, o, request.report); });
+  ModelChoiceOutcome o = CombineModelRuns(made,
+                                          c.model_choice->reference,
+                                          final_thresholds,
+                                          directory,
+                                          request.overwrite,
+                                          request.report,
+                                          request.executor);
+  o.runs = std::move(runs);
   return o;
 }
 
@@ -438,7 +510,8 @@ ModelChoiceOutcome EnumerateModelChoice(
     o.evidence.push_back(e);
     o.enumerations.push_back(std::move(outcome));
   }
-  o = Combine(std::move(o), c);
+  o.reference = c.model_choice->reference;
+  o.models = ModelProbabilities(o.evidence);
   o.directory = (fs::path(directory) / "model_choice").string();
   OnPrimary(*executor, [&] { WriteModelChoice(directory, request.overwrite, o, false); });
   return o;

@@ -26,4 +26,10 @@ struct ModelChoiceConfig {
   int line = 0;  // the [model_choice] table's line
 };
 
+// Whether `name` may name a model: 1-64 of [A-Za-z0-9_.-], not "." or "..", since it names the
+// model's history folder, models/<name>/ (config_model_choice.cpp).
+bool ValidModelName(const std::string& name);
+constexpr const char* kModelNameRule =
+    "use 1-64 letters, digits, '_', '-' or '.' (it names the model's history folder)";
+
 }  // namespace combabc

@@ -5,10 +5,12 @@
 // probabilities are computed from the models' evidences and written to model_choice/.
 #include <cstddef>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "combabc/samplers/monte_carlo_error.hpp"
+#include "combabc/schedules/threshold_schedule.hpp"
 #include "combabc/services/enumerate.hpp"
 #include "combabc/services/model_choice.hpp"
 #include "combabc/services/run.hpp"
@@ -55,6 +57,39 @@ ModelChoiceOutcome EnumerateModelChoice(
     const EnumerateRequest& request,
     SmcObserver* progress = nullptr,
     const std::function<void(const std::string&)>& before_model = {});
+
+// One model's run for CombineModelRuns: its name (ValidModelName), prior and history file.
+struct ModelRun {
+  std::string name;
+  double prior = 0.0;
+  std::string history_path;
+};
+
+// Refuses (Error kUsage, one line) the models of a model choice made outside a config (the Python
+// module's Problems): fewer than two, a name that is not ValidModelName or given twice, a prior
+// not above 0, or priors that do not sum to 1 (as [model_choice] refuses them).
+void CheckModelRuns(std::span<const ModelRun> models);
+
+// Where every model's run must end: each schedule's final threshold (a list's last value, an
+// adaptive schedule's target), one per threshold component, since the evidences are comparable
+// only at common final thresholds. Error kUsage for a schedule without one (an adaptive schedule
+// without target).
+std::vector<double> CommonFinalThresholds(std::span<const ThresholdSchedule> schedules);
+
+// Method "evidence" over the models' runs, made: each model's evidence from its history at
+// `final_thresholds` (EstimateEvidence, with the distance components its metadata records), the
+// probabilities (ModelProbabilities, Bayes factors against models[reference]), and the tables in
+// <directory>/model_choice/ (summary.json, models.csv, waves.csv, and with `figure` its figure;
+// written by the executor's primary alone, under MPI). RunModelChoice ends with it, and the
+// Python module's model choice over Problems calls it once its runs are done. `runs` is left
+// empty.
+ModelChoiceOutcome CombineModelRuns(std::span<const ModelRun> models,
+                                    std::size_t reference,
+                                    const std::vector<double>& final_thresholds,
+                                    const std::string& directory,
+                                    bool overwrite,
+                                    bool figure,
+                                    const ExecutorFactory& executor = {});
 
 // The model probabilities as the terminal shows them (one line a model, then the Bayes factors'
 // reference), ending in a newline.
