@@ -1095,19 +1095,23 @@ class SmcRun {
   // acceptance of Accept (an indicator for thresholds, exp(-(d - m) / T) for a likelihood: a
   // pseudo-marginal ratio where the simulator is stochastic, Andrieu & Roberts 2009). Rounds go
   // on until a particle has moved with probability 1 - stay_probability (RoundsNeeded).
-  Stop MoveWave(WaveRecord& wave, const WaveRecord& previous) {
-    const auto wave_start = Clock::now();
-    const int n = options_.AcceptedIn(wave.wave);
-    const auto nz = static_cast<std::size_t>(n);
+  // The chains a move wave starts from: n_t of the previous wave's particles resampled by their
+  // move_weights_ (wave.particles), with each one's free bits, reals, log target and log prior.
+  struct MoveChains {
+    std::vector<std::uint8_t> free;
+    std::vector<double> reals;
+    std::vector<double> log_accept;
+    std::vector<double> log_prior;
+  };
+  MoveChains ResampleChains(WaveRecord& wave, const WaveRecord& previous, std::size_t nz) const {
     const std::size_t f = static_cast<std::size_t>(space_.num_free_bits());
     const std::size_t r = static_cast<std::size_t>(space_.num_reals());
-    WaveMoves& moves = *wave.moves;
     RandomStream resample(options_.seed, MoveStream(wave.wave, kResampleRound, false), 0);
     const auto picked = SystematicResample(move_weights_, nz, resample.Uniform());
-    std::vector<std::uint8_t> free(nz * f);
-    std::vector<double> reals(nz * r);
-    std::vector<double> log_accept(nz);
-    std::vector<double> log_prior(nz);
+    MoveChains c{std::vector<std::uint8_t>(nz * f),
+                 std::vector<double>(nz * r),
+                 std::vector<double>(nz),
+                 std::vector<double>(nz)};
     wave.particles.reserve(nz);
     for (std::size_t i = 0; i < nz; ++i) {
       Particle p = previous.particles[picked[i]];
@@ -1116,13 +1120,43 @@ class SmcRun {
       p.index = static_cast<std::int64_t>(i);
       p.log_weight = 0.0;
       p.multiplier = 1.0;
-      auto fi = std::span(free.data() + i * f, f);
+      auto fi = std::span(c.free.data() + i * f, f);
       COMBABC_CHECK(space_.binary().Reduce(p.theta.bits, fi));
-      std::copy(p.theta.reals.begin(), p.theta.reals.end(), reals.begin() + i * r);
-      log_accept[i] = LogTarget(p.distance, wave.thresholds);
-      log_prior[i] = space_.LogPriorBits(fi) + (r > 0 ? space_.LogPriorReals(p.theta.reals) : 0.0);
+      std::copy(p.theta.reals.begin(), p.theta.reals.end(), c.reals.begin() + i * r);
+      c.log_accept[i] = LogTarget(p.distance, wave.thresholds);
+      c.log_prior[i] =
+          space_.LogPriorBits(fi) + (r > 0 ? space_.LogPriorReals(p.theta.reals) : 0.0);
       wave.particles.push_back(std::move(p));
     }
+    return c;
+  }
+
+  // The observer's view of a move round's batch (its failures: those since failures_before).
+  void ReportMoveBatch(const WaveRecord& wave, std::size_t failures_before, int n) const {
+    if (!observer_) return;
+    BatchProgress progress{
+        wave.wave,
+        wave.candidates,
+        0,
+        0,
+        n,
+        total_,
+        Seconds(start_),
+        static_cast<std::int64_t>(wave.failures.size()),
+        std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
+        std::nullopt};
+    observer_->OnBatch(progress, {});
+  }
+
+  Stop MoveWave(WaveRecord& wave, const WaveRecord& previous) {
+    const auto wave_start = Clock::now();
+    const int n = options_.AcceptedIn(wave.wave);
+    const auto nz = static_cast<std::size_t>(n);
+    const std::size_t f = static_cast<std::size_t>(space_.num_free_bits());
+    const std::size_t r = static_cast<std::size_t>(space_.num_reals());
+    WaveMoves& moves = *wave.moves;
+    MoveChains chains = ResampleChains(wave, previous, nz);
+    auto& [free, reals, log_accept, log_prior] = chains;
     CandidateBatch batch(space_, simulator_, distance_, components_.size());
     std::vector<std::uint8_t> new_free(nz * f);
     std::vector<double> new_reals(nz * r);
@@ -1208,20 +1242,7 @@ class SmcRun {
           if (stop) break;
         }
         next += size;
-        if (observer_) {
-          BatchProgress progress{
-              wave.wave,
-              wave.candidates,
-              0,
-              0,
-              n,
-              total_,
-              Seconds(start_),
-              static_cast<std::int64_t>(wave.failures.size()),
-              std::span<const SimulationFailure>(wave.failures).subspan(failures_before),
-              std::nullopt};
-          observer_->OnBatch(progress, {});
-        }
+        ReportMoveBatch(wave, failures_before, n);
         if (stop) break;
         stop = WallTimeOrInterrupt(wave);
         if (stop) break;
