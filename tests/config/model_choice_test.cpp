@@ -80,10 +80,24 @@ SmcOptions Options(std::uint64_t seed, int per_wave = 400) {
 }
 
 // A joint run's options: its kernel is the ancestor kernel, as the joint method's `auto` resolves
-// (services/steps/problem.cpp: its defensive prior keeps proposing every model).
+// (config.cpp: its defensive prior keeps proposing every model).
 SmcOptions JointOptions(std::uint64_t seed, int per_wave = 400) {
   SmcOptions o = Options(seed, per_wave);
   o.proposal.binary = BinaryKernelKind::kAncestor;
+  return o;
+}
+
+// A run by `method` down to temperature 1 (a likelihood component's target).
+SmcOptions ToTemperatureOne(SamplerMethod method, int waves, int per_wave, std::uint64_t seed) {
+  SmcOptions o;
+  o.num_waves = waves;
+  o.accepted_per_wave = per_wave;
+  o.seed = seed;
+  o.threads = 1;
+  o.method = method;
+  ThresholdSchedule s;
+  s.target = 1.0;
+  o.thresholds = {s};
   return o;
 }
 
@@ -220,15 +234,7 @@ TEST(ModelEvidence, NoiseAwareRunsEstimateTheLikelihoodEvidence) {
   eo.thresholds = {1.0};
   const double exact = Enumerate(problem, eo).evidence;
   for (const SamplerMethod method : {SamplerMethod::kRejection, SamplerMethod::kResampleMove}) {
-    SmcOptions o;
-    o.num_waves = 12;
-    o.accepted_per_wave = 500;
-    o.seed = 77;
-    o.threads = 1;
-    o.method = method;
-    ThresholdSchedule s;
-    s.target = 1.0;
-    o.thresholds = {s};
+    const SmcOptions o = ToTemperatureOne(method, 12, 500, 77);
     const RunHistory h = RunCombinatorialSmc(problem, o);
     ASSERT_EQ(h.summary.termination, Termination::kTargetReached);
     const ModelEvidence e = EstimateEvidence(h, dist.components(), {1.0});
@@ -421,15 +427,7 @@ TEST(ModelEvidence, NoiseAwareMixedRunsEstimateTheLikelihoodEvidence) {
     }
   }
   for (const SamplerMethod method : {SamplerMethod::kRejection, SamplerMethod::kResampleMove}) {
-    SmcOptions o;
-    o.num_waves = 10;
-    o.accepted_per_wave = 300;
-    o.seed = 41;
-    o.threads = 1;
-    o.method = method;
-    ThresholdSchedule s;
-    s.target = 1.0;
-    o.thresholds = {s};
+    const SmcOptions o = ToTemperatureOne(method, 10, 300, 41);
     const RunHistory h = RunCombinatorialSmc({&space, &sim, &dist}, o);
     ASSERT_EQ(h.summary.termination, Termination::kTargetReached) << ToString(method);
     const ModelEvidence e = EstimateEvidence(h, dist.components(), {1.0});

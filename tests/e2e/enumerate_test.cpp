@@ -186,21 +186,10 @@ double Column(const std::string& csv, const std::string& model, int column) {
 TEST(Enumerate, ModelChoiceRunAgreesWithTheExactModelProbabilities) {
   TempFolder dir("model-choice");
   WriteTinySensorData(dir.path());
-  const std::string models = R"(
-[output]
-directory = "out"
-
-[model_choice]
-[[model_choice.model]]
-name = "clamped"
-prior = 0.4
-[[model_choice.model]]
-name = "pinned"
-prior = 0.6
-model.clamps.fixed_support = "simply_supported"
-)";
-  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 200\nseed = 5\n", models);
-  config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [4.0, 3.0, 2.4]\n");
+  std::string config = TinySensorModelChoice("waves = 3\naccepted_per_wave = 200\nseed = 5\n",
+                                             "4.0, 3.0, 2.4",
+                                             "",
+                                             "[output]\ndirectory = \"out\"\n\n");
   std::ofstream(dir / "run.toml") << config;
   auto r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -294,22 +283,10 @@ model.clamps.fixed_support = "simply_supported"
 TEST(Enumerate, JointModelChoiceRunAgreesWithTheExactModelProbabilities) {
   TempFolder dir("joint-model-choice");
   WriteTinySensorData(dir.path());
-  const std::string models = R"(
-[output]
-directory = "out"
-
-[model_choice]
-method = "joint"
-[[model_choice.model]]
-name = "clamped"
-prior = 0.4
-[[model_choice.model]]
-name = "pinned"
-prior = 0.6
-model.clamps.fixed_support = "simply_supported"
-)";
-  std::string config = TinySensorConfig("waves = 3\naccepted_per_wave = 300\nseed = 5\n", models);
-  config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [4.0, 3.0, 2.4]\n");
+  std::string config = TinySensorModelChoice("waves = 3\naccepted_per_wave = 300\nseed = 5\n",
+                                             "4.0, 3.0, 2.4",
+                                             "method = \"joint\"\n",
+                                             "[output]\ndirectory = \"out\"\n\n");
   std::ofstream(dir / "run.toml") << config;
   auto r = RunCli({"run", dir / "run.toml", "--no-report", "-j", "1"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -36,6 +36,24 @@ window = [0.31, 0.58]
          "\n" + tables;
 }
 
+// The tiny sensors' model choice: clamped (prior 0.4) against simply supported ("pinned", 0.6),
+// least squares to the list `thresholds` ("4.0, 3.0, 2.4"); `method` is [model_choice]'s line
+// (e.g. "method = \"joint\"\n"), `tables` come before it ([output] ...).
+inline std::string TinySensorModelChoice(const std::string& sampler,
+                                         const std::string& thresholds,
+                                         const std::string& method = "",
+                                         const std::string& tables = "") {
+  std::string config =
+      TinySensorConfig(sampler,
+                       tables + "[model_choice]\n" + method +
+                           "[[model_choice.model]]\nname = \"clamped\"\n"
+                           "prior = 0.4\n[[model_choice.model]]\nname = \"pinned\"\n"
+                           "prior = 0.6\nmodel.clamps.fixed_support = "
+                           "\"simply_supported\"\n");
+  config.replace(config.find("[metric]\n"), 9, "[metric]\nthreshold = [" + thresholds + "]\n");
+  return config;
+}
+
 // data.csv in `dir`: a tent of height `peak` at 0.45 m, every 3 cm on [0.31, 0.58] m.
 inline void WriteTinySensorData(const std::filesystem::path& dir, double peak = 1.0) {
   std::ofstream out(dir / "data.csv");

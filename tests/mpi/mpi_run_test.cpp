@@ -191,18 +191,8 @@ TEST_F(MpiRun, AModelChoiceIsTheSameForAnyRanksAndResumes) {
   const fs::path mc = dir_ / "mc";
   fs::create_directories(mc);
   WriteTinySensorData(mc);
-  const std::string models = R"(
-[model_choice]
-[[model_choice.model]]
-name = "clamped"
-prior = 0.4
-[[model_choice.model]]
-name = "pinned"
-prior = 0.6
-model.clamps.fixed_support = "simply_supported"
-)";
-  std::string text = TinySensorConfig("seed = 5\nwaves = 2\naccepted_per_wave = 60\n", models);
-  text.replace(text.find("[metric]\n"), 9, "[metric]\nthreshold = [3.0, 2.4]\n");
+  const std::string text =
+      TinySensorModelChoice("seed = 5\nwaves = 2\naccepted_per_wave = 60\n", "3.0, 2.4");
   std::ofstream(mc / "run.toml") << text;
   std::string budget = text;
   budget.replace(budget.find("seed = 5"), 8, "seed = 5\nmax_simulations = 250");
